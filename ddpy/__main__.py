@@ -1,0 +1,5 @@
+"""Allow ``python -m ddpy``."""
+
+from ddpy.cli import main
+
+raise SystemExit(main())

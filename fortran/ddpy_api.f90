@@ -1,0 +1,208 @@
+!> The doorway of the core: flat arrays and C-bound procedures that f2py wraps
+!> (fortran/ddpy_core.pyf). Scalars in are passed by value, everything else by reference.
+!> Indices arriving from Python are 0-based and converted here; nothing here prints or stops.
+module ddpy_api
+  use, intrinsic :: iso_c_binding, only: c_int, c_double
+  use ddpy_kinds, only: wp
+  use ddpy_bezier, only: max_bezier_degree, bezier_power_coefficients, bezier_de_casteljau
+  use ddpy_nagata, only: nagata_patch_coefficients, nagata_edge_coefficient, &
+                         nagata_coefficient_count
+  use ddpy_surface, only: bezier_evaluate_batch, nagata_evaluate_batch
+  use ddpy_linear_solver, only: solver_create, solver_analyse, solver_factorize, &
+                                solver_solve, solver_destroy, solver_info
+  !$ use omp_lib, only: omp_get_max_threads, omp_set_num_threads
+  implicit none
+  private
+  public :: api_max_threads, api_set_threads, api_bezier_power_coefficients, &
+            api_bezier_evaluate, api_bezier_de_casteljau, api_nagata_coefficients, &
+            api_nagata_evaluate, api_nagata_edge_coefficient, api_solver_create, &
+            api_solver_analyse, api_solver_factorize, api_solver_solve, api_solver_info, &
+            api_solver_destroy
+
+  integer, parameter :: nb = max_bezier_degree
+  integer, parameter :: nc = nagata_coefficient_count
+
+contains
+
+  !> Threads an OpenMP region of the core would use (1 when built without OpenMP).
+  subroutine api_max_threads(n) bind(C, name="ddpy_max_threads")
+    integer(c_int), intent(out) :: n
+    n = 1
+    !$ n = omp_get_max_threads()
+  end subroutine api_max_threads
+
+  !> Set the number of threads of the core's OpenMP regions.
+  subroutine api_set_threads(n) bind(C, name="ddpy_set_threads")
+    integer(c_int), value, intent(in) :: n
+    !$ if (n > 0) call omp_set_num_threads(n)
+  end subroutine api_set_threads
+
+  !> Power-basis coefficients of Bezier patches from their Bernstein control nets.
+  !> info = 0, or the 1-based index of the first patch with a degree outside 1..6.
+  subroutine api_bezier_power_coefficients(npatch, degrees, control, coef, info) &
+    bind(C, name="ddpy_bezier_power_coefficients")
+    integer(c_int), value, intent(in) :: npatch
+    integer(c_int), intent(in) :: degrees(2, npatch)
+    real(c_double), intent(in) :: control(3, 0:nb, 0:nb, npatch)
+    real(c_double), intent(out) :: coef(3, 0:nb, 0:nb, npatch)
+    integer(c_int), intent(out) :: info
+    integer :: p
+    info = 0
+    do p = 1, npatch
+      if (any(degrees(:, p) < 1) .or. any(degrees(:, p) > nb)) then
+        info = p
+        coef = 0.0_wp
+        return
+      end if
+    end do
+    !$omp parallel do schedule(static)
+    do p = 1, npatch
+      call bezier_power_coefficients(degrees(1, p), degrees(2, p), control(:, :, :, p), &
+                                     coef(:, :, :, p))
+    end do
+    !$omp end parallel do
+  end subroutine api_bezier_power_coefficients
+
+  !> Point, derivatives, unit normal and second derivatives of Bezier patches at k points.
+  subroutine api_bezier_evaluate(npatch, degrees, coef, k, patch, params, points, derivs, &
+                                 normals, second, info) bind(C, name="ddpy_bezier_evaluate")
+    integer(c_int), value, intent(in) :: npatch, k
+    integer(c_int), intent(in) :: degrees(2, npatch), patch(k)
+    real(c_double), intent(in) :: coef(3, 0:nb, 0:nb, npatch), params(2, k)
+    real(c_double), intent(out) :: points(3, k), derivs(3, 2, k), normals(3, k), &
+                                   second(3, 3, k)
+    integer(c_int), intent(out) :: info
+    call bezier_evaluate_batch(npatch, degrees, coef, k, patch + 1, params, points, derivs, &
+                               normals, second, info)
+  end subroutine api_bezier_evaluate
+
+  !> Points of Bezier patches by de Casteljau on the control nets (cross-check).
+  subroutine api_bezier_de_casteljau(npatch, degrees, control, k, patch, params, points, &
+                                     info) bind(C, name="ddpy_bezier_de_casteljau")
+    integer(c_int), value, intent(in) :: npatch, k
+    integer(c_int), intent(in) :: degrees(2, npatch), patch(k)
+    real(c_double), intent(in) :: control(3, 0:nb, 0:nb, npatch), params(2, k)
+    real(c_double), intent(out) :: points(3, k)
+    integer(c_int), intent(out) :: info
+    integer :: i, p
+    info = 0
+    points = 0.0_wp
+    do i = 1, k
+      p = patch(i) + 1
+      if (p < 1 .or. p > npatch) then
+        info = i
+        return
+      end if
+      call bezier_de_casteljau(degrees(1, p), degrees(2, p), control(:, :, :, p), &
+                               params(1, i), params(2, i), points(:, i))
+    end do
+  end subroutine api_bezier_de_casteljau
+
+  !> Nagata (smooth /= 0) or facet (smooth = 0) coefficients of every face.
+  !> faces(:, f) holds 0-based vertex indices, faces(4, f) = -1 for a triangle;
+  !> corner_normals(:, c, f) is the unit normal of face f at its corner c.
+  !> info = 0, or the 1-based index of the first face with a vertex index out of range.
+  subroutine api_nagata_coefficients(nvert, vertices, nface, faces, corner_normals, smooth, &
+                                     tol, coef, info) bind(C, name="ddpy_nagata_coefficients")
+    integer(c_int), value, intent(in) :: nvert, nface, smooth
+    real(c_double), value, intent(in) :: tol
+    real(c_double), intent(in) :: vertices(3, nvert), corner_normals(3, 4, nface)
+    integer(c_int), intent(in) :: faces(4, nface)
+    real(c_double), intent(out) :: coef(3, nc, nface)
+    integer(c_int), intent(out) :: info
+    integer :: f, nv, c
+    real(wp) :: x(3, 4)
+    info = 0
+    do f = 1, nface
+      nv = merge(3, 4, faces(4, f) < 0)
+      if (any(faces(1:nv, f) < 0) .or. any(faces(1:nv, f) >= nvert)) then
+        info = f
+        coef = 0.0_wp
+        return
+      end if
+    end do
+    !$omp parallel do schedule(static) private(nv, x, c)
+    do f = 1, nface
+      nv = merge(3, 4, faces(4, f) < 0)
+      x = 0.0_wp
+      do c = 1, nv
+        x(:, c) = vertices(:, faces(c, f) + 1)
+      end do
+      call nagata_patch_coefficients(nv, x, corner_normals(:, :, f), smooth /= 0, tol, &
+                                     coef(:, :, f))
+    end do
+    !$omp end parallel do
+  end subroutine api_nagata_coefficients
+
+  !> Point, derivatives, unit normal and second derivatives of Nagata patches at k points.
+  subroutine api_nagata_evaluate(npatch, coef, k, patch, params, points, derivs, normals, &
+                                 second, info) bind(C, name="ddpy_nagata_evaluate")
+    integer(c_int), value, intent(in) :: npatch, k
+    integer(c_int), intent(in) :: patch(k)
+    real(c_double), intent(in) :: coef(3, nc, npatch), params(2, k)
+    real(c_double), intent(out) :: points(3, k), derivs(3, 2, k), normals(3, k), &
+                                   second(3, 3, k)
+    integer(c_int), intent(out) :: info
+    call nagata_evaluate_batch(npatch, coef, k, patch + 1, params, points, derivs, normals, &
+                               second, info)
+  end subroutine api_nagata_evaluate
+
+  !> Nagata edge coefficients of m edges (x0 -> x1 with end normals n0, n1).
+  subroutine api_nagata_edge_coefficient(m, x0, x1, n0, n1, tol, c) &
+    bind(C, name="ddpy_nagata_edge_coefficient")
+    integer(c_int), value, intent(in) :: m
+    real(c_double), intent(in) :: x0(3, m), x1(3, m), n0(3, m), n1(3, m)
+    real(c_double), value, intent(in) :: tol
+    real(c_double), intent(out) :: c(3, m)
+    integer :: i
+    do i = 1, m
+      c(:, i) = nagata_edge_coefficient(x0(:, i), x1(:, i), n0(:, i), n1(:, i), tol)
+    end do
+  end subroutine api_nagata_edge_coefficient
+
+  subroutine api_solver_create(sym, ordering, handle, status) &
+    bind(C, name="ddpy_solver_create")
+    integer(c_int), value, intent(in) :: sym, ordering
+    integer(c_int), intent(out) :: handle, status
+    call solver_create(sym, ordering, handle, status)
+  end subroutine api_solver_create
+
+  !> Analyse the structure given by 0-based (row, col) coordinates.
+  subroutine api_solver_analyse(handle, n, nz, irn, jcn, status) &
+    bind(C, name="ddpy_solver_analyse")
+    integer(c_int), value, intent(in) :: handle, n, nz
+    integer(c_int), intent(in) :: irn(nz), jcn(nz)
+    integer(c_int), intent(out) :: status
+    call solver_analyse(handle, n, nz, irn + 1, jcn + 1, status)
+  end subroutine api_solver_analyse
+
+  subroutine api_solver_factorize(handle, nz, a, status) bind(C, name="ddpy_solver_factorize")
+    integer(c_int), value, intent(in) :: handle, nz
+    real(c_double), intent(in) :: a(nz)
+    integer(c_int), intent(out) :: status
+    call solver_factorize(handle, nz, a, status)
+  end subroutine api_solver_factorize
+
+  subroutine api_solver_solve(handle, n, rhs, x, status) bind(C, name="ddpy_solver_solve")
+    integer(c_int), value, intent(in) :: handle, n
+    real(c_double), intent(in) :: rhs(n)
+    real(c_double), intent(out) :: x(n)
+    integer(c_int), intent(out) :: status
+    call solver_solve(handle, n, rhs, x, status)
+  end subroutine api_solver_solve
+
+  subroutine api_solver_info(handle, values, flops, status) bind(C, name="ddpy_solver_info")
+    integer(c_int), value, intent(in) :: handle
+    integer(c_int), intent(out) :: values(4)
+    real(c_double), intent(out) :: flops
+    integer(c_int), intent(out) :: status
+    call solver_info(handle, values, flops, status)
+  end subroutine api_solver_info
+
+  subroutine api_solver_destroy(handle, status) bind(C, name="ddpy_solver_destroy")
+    integer(c_int), value, intent(in) :: handle
+    integer(c_int), intent(out) :: status
+    call solver_destroy(handle, status)
+  end subroutine api_solver_destroy
+
+end module ddpy_api

@@ -44,10 +44,15 @@ class MumpsSolver:
     """One MUMPS instance: analyse a structure once, then factorize and solve repeatedly.
 
     ``symmetry`` is "unsymmetric", "symmetric" or "spd" (for the last two give one triangle);
-    ``ordering`` a MUMPS ordering name ("metis" by default, measured best for sheets).
+    ``ordering`` a MUMPS ordering name ("metis" by default, measured best for sheets; MUMPS
+    falls back to its own choice when the library lacks it); ``controls`` sets further MUMPS
+    ICNTL entries by their 1-based index, e.g. ``{10: -2}`` for two refinement steps.
     """
 
-    def __init__(self, symmetry: str = "unsymmetric", ordering: str = "metis") -> None:
+    def __init__(
+        self, symmetry: str = "unsymmetric", ordering: str = "metis",
+        controls: dict[int, int] | None = None,
+    ) -> None:
         if symmetry not in _SYMMETRY:
             raise ValueError(f"symmetry must be one of {sorted(_SYMMETRY)}, got {symmetry!r}")
         if ordering not in _ORDERING:
@@ -56,6 +61,10 @@ class MumpsSolver:
         if status < 0:
             raise LinearSolverError(int(status), "initialization")
         self._handle = int(handle)
+        for position, value in (controls or {}).items():
+            if _core.solver_set_control(self._handle, int(position), int(value)) < 0:
+                self.close()
+                raise ValueError(f"MUMPS has no control ICNTL({position})")
         self.n = 0
         self.nnz = 0
 

@@ -9,7 +9,7 @@ module ddpy_linear_solver
   implicit none
   private
   public :: max_solvers, solver_create, solver_analyse, solver_factorize, solver_solve, &
-            solver_destroy, solver_info
+            solver_destroy, solver_info, solver_set_control
 
   include 'dmumps_struc.h'
 
@@ -187,6 +187,22 @@ contains
     end associate
     status = 0
   end subroutine solver_info
+
+  !> Set MUMPS control ICNTL(index) = value (advanced use: ordering, refinement, memory).
+  subroutine solver_set_control(handle, index, value, status)
+    integer, intent(in) :: handle, index, value
+    integer, intent(out) :: status
+    if (.not. valid_handle(handle)) then
+      status = status_bad_handle
+      return
+    end if
+    if (index < 1 .or. index > size(instance(handle)%icntl)) then
+      status = status_size_mismatch
+      return
+    end if
+    instance(handle)%icntl(index) = value
+    status = 0
+  end subroutine solver_set_control
 
   !> Free a MUMPS instance and its arrays.
   subroutine solver_destroy(handle, status)

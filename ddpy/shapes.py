@@ -61,10 +61,6 @@ def _grid_faces(ids: NDArray[np.int64], kind: str) -> NDArray[np.int32]:
     first = np.where(flip[:, None], np.column_stack([a, b, d]), np.column_stack([a, b, c]))
     second = np.where(flip[:, None], np.column_stack([b, c, d]), np.column_stack([a, c, d]))
     tris = np.stack([first, second], axis=1).reshape(-1, 3)
-    # Rotate (same orientation, same Nagata patch) so the largest index comes last:
-    # NagataSurface wrongly refuses a triangle whose third index is not its largest.
-    shift = (tris.argmax(axis=1) + 1)[:, None]
-    tris = np.take_along_axis(tris, (np.arange(3) + shift) % 3, axis=1)
     return np.column_stack([tris, np.full(len(tris), -1)]).astype(np.int32)
 
 

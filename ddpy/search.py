@@ -40,7 +40,9 @@ class Projection:
     point: NDArray[np.float64]  #: (k, 3) closest point, at the tool's current position
     normal: NDArray[np.float64]  #: (k, 3) unit outward normal there
     tangents: NDArray[np.float64]  #: (k, 2, 3) S_,1 and S_,2 there
-    distance: NDArray[np.float64]  #: (k,) signed normal distance, negative = penetration
+    #: (k,) signed normal distance, negative = penetration; at an EDGE point the Euclidean
+    #: distance signed by the side of the patch normal
+    distance: NDArray[np.float64]
     status: NDArray[np.int32]  #: NONE, INSIDE or EDGE
     iterations: NDArray[np.int32]  #: Newton iterations spent on the node (all candidates)
     candidates: NDArray[np.int32]  #: candidate patches projected on
@@ -136,14 +138,17 @@ class ContactSearch:
             nn = np.zeros_like(x)
         else:
             nn = float_array(node_normals, "node_normals", (k, 3))
+        if k == 0:
+            empty = np.zeros(0, dtype=np.int32)
+            return Projection(empty, np.zeros((0, 2)), np.zeros((0, 3)), np.zeros((0, 3)),
+                              np.zeros((0, 2, 3)), np.zeros(0), empty, empty, empty)
         mode = _MODE["brute"] if brute_force else self.mode
-        ncand = self.surface.n_patches if brute_force else self.candidates
         out = _core.contact_search(
             self.kind, self._stride, self.surface.coefficients, self._degrees, self._triangle,
             mode, self._index_points.ravel(), self._group, self._origin, self._h, self._dims,
             self._cell_start, self._cell_items, self.grid_start, self.grid_params.ravel(),
             self.grid_normals.ravel(), self.grid_points.ravel(), self._vertex_start,
-            self._vertex_patches, x.ravel(), nn.ravel(), u, min(ncand, _MAX_CANDIDATES),
+            self._vertex_patches, x.ravel(), nn.ravel(), u, self.candidates,
             self.vertices_per_query, self.max_iterations, self.tol,
         )
         patch, params, point, normal, tangents, distance, status, iterations, ncand_out = out

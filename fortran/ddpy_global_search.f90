@@ -50,53 +50,80 @@ contains
                             ncandidates(nnode)
     real(wp), intent(out) :: params(2, nnode), points(3, nnode), normals(3, nnode), &
                              tangents(3, 2, nnode), distance(nnode)
-    integer :: i, j, nc, cand(max_candidates), item(max_candidates), its, best_status
-    real(wp) :: x(3), dist(max_candidates), alpha(2), p(3), d1(3, 2), n(3), d, best_measure
-    real(wp) :: measure
-    logical :: inside, converged
-    integer :: k
+    integer :: i, j, nc, cand(max_candidates), item(max_candidates), best_status, k, pp
+    real(wp) :: x(3), dist(max_candidates), start(2), best_measure
+    logical :: filter
     k = min(max(ncand, 1), max_candidates)
     !$omp parallel do schedule(dynamic, 64) default(shared) if(nnode > 64) &
-    !$omp private(x, nc, cand, item, dist, j, alpha, p, d1, n, d, inside, converged, its, &
-    !$omp best_status, best_measure, measure)
+    !$omp private(x, nc, cand, item, dist, j, pp, start, best_status, best_measure, filter)
     do i = 1, nnode
       x = nodes(:, i) - tool_displacement
-      call find_candidates(x, node_normals(:, i), k, nc, cand, item, dist)
-      ncandidates(i) = nc
       patch(i) = 0; params(:, i) = 0.0_wp; points(:, i) = 0.0_wp; normals(:, i) = 0.0_wp
       tangents(:, :, i) = 0.0_wp; distance(i) = huge(1.0_wp); status(i) = contact_none
       iterations(i) = 0
       best_status = contact_none
       best_measure = huge(1.0_wp)
-      do j = 1, nc
-        call project_point(kind, stride, coef(:, cand(j)), degrees(:, cand(j)), &
-                           triangle(cand(j)) /= 0, x, grid_params(:, item(j)), &
-                           max_iterations, tol, alpha, p, d1, n, d, inside, its, converged)
-        iterations(i) = iterations(i) + its
-        ! Inside projections first, by normal distance; then boundary points, by distance.
-        if (inside) then
-          measure = abs(d)
-          if (best_status == contact_inside .and. measure >= best_measure) cycle
-          best_status = contact_inside
-        else
-          if (best_status == contact_inside) cycle
-          measure = norm2(x - p)
-          if (measure >= best_measure) cycle
-          best_status = contact_edge
-        end if
-        best_measure = measure
-        patch(i) = cand(j)
-        params(:, i) = alpha
-        points(:, i) = p + tool_displacement
-        normals(:, i) = n
-        tangents(:, :, i) = d1
-        distance(i) = d
-        status(i) = best_status
-      end do
+      if (mode == search_mode_brute) then
+        ! The reference: every patch, each from its own nearest grid point.
+        filter = any(node_normals(:, i) /= 0.0_wp)
+        nc = 0
+        do pp = 1, npatch
+          j = 0
+          call offer_grid(pp, x, node_normals(:, i), filter, npatch, ngrid, grid_start, &
+                          grid_points, grid_normals, 1, cand(1:1), item(1:1), dist(1:1), j)
+          if (j == 0) cycle
+          nc = nc + 1
+          start = grid_params(:, item(1))
+          call try_patch(i, pp, start, best_status, best_measure)
+        end do
+      else
+        call find_candidates(x, node_normals(:, i), k, nc, cand, item, dist)
+        do j = 1, nc
+          start = grid_params(:, item(j))
+          call try_patch(i, cand(j), start, best_status, best_measure)
+        end do
+      end if
+      ncandidates(i) = nc
     end do
     !$omp end parallel do
 
   contains
+
+    !> Project node i on patch pp from start; keep it if it beats the best so far.
+    !> Inside projections first, by normal distance; then boundary points, by distance.
+    !> At a boundary point the distance is the Euclidean one, signed by the normal side.
+    subroutine try_patch(i, pp, start, best_status, best_measure)
+      integer, intent(in) :: i, pp
+      real(wp), intent(in) :: start(2)
+      integer, intent(inout) :: best_status
+      real(wp), intent(inout) :: best_measure
+      real(wp) :: alpha(2), p(3), d1(3, 2), n(3), d, measure, y(3)
+      logical :: inside, converged
+      integer :: its
+      y = nodes(:, i) - tool_displacement
+      call project_point(kind, stride, coef(:, pp), degrees(:, pp), triangle(pp) /= 0, y, &
+                         start, max_iterations, tol, alpha, p, d1, n, d, inside, its, converged)
+      iterations(i) = iterations(i) + its
+      if (inside) then
+        measure = abs(d)
+        if (best_status == contact_inside .and. measure >= best_measure) return
+        best_status = contact_inside
+      else
+        if (best_status == contact_inside) return
+        measure = norm2(y - p)
+        if (measure >= best_measure) return
+        best_status = contact_edge
+        d = sign(measure, d)
+      end if
+      best_measure = measure
+      patch(i) = pp
+      params(:, i) = alpha
+      points(:, i) = p + tool_displacement
+      normals(:, i) = n
+      tangents(:, :, i) = d1
+      distance(i) = d
+      status(i) = best_status
+    end subroutine try_patch
 
     !> Up to k candidate patches of x, nearest first, with their nearest grid point.
     subroutine find_candidates(x, node_normal, k, nc, cand, item, dist)

@@ -25,12 +25,15 @@ from numpy.typing import ArrayLike, NDArray
 from ddpy import _core
 from ddpy._validate import float_array, int_array
 
-__all__ = ["BezierSurface", "NagataSurface", "MAX_BEZIER_DEGREE", "NAGATA_DEGENERATE_TOL"]
+__all__ = ["BezierSurface", "NagataSurface", "MAX_BEZIER_DEGREE", "NAGATA_DEGENERATE_RATIO",
+           "nagata_edge_coefficient"]
 
 #: Highest Bezier degree in each direction (the paper's cap for a stable power basis).
 MAX_BEZIER_DEGREE = 6
-#: Edge normals with 1 - |n0 . n1| below this give a straight edge (about 0.8 degrees).
-NAGATA_DEGENERATE_TOL = 1.0e-4
+#: An edge is straight when its Nagata coefficient exceeds this many times that of a circular
+#: arc with the same angle between its end normals (the formula's blow-up near parallel
+#: normals); smooth edges stay below 1 to about 5 (docs/theory/surfaces.md).
+NAGATA_DEGENERATE_RATIO = 8.0
 #: Allowed deviation of a given normal from unit length.
 UNIT_TOL = 1.0e-6
 
@@ -157,8 +160,10 @@ class NagataSurface(_Surface):
     triangle, ordered counter-clockwise seen from the side the normals point to;
     ``normals`` the unit normals, either one per vertex (n, 3) or one per face corner
     (m, 4, 3) so that vertices on a crease carry the normal of each face (the fourth row
-    of a triangle is ignored). Edges whose end normals are within about 0.8 degrees of
-    parallel (1 - |n0.n1| < ``degenerate_tol``) stay straight.
+    of a triangle is ignored). An edge stays straight when its end normals are parallel, or
+    when its Nagata coefficient would exceed ``degenerate_ratio`` times that of a circular
+    arc with the same angle between the normals (nearly parallel normals on an edge that is
+    not perpendicular to them, where the formula blows up).
     """
 
     def __init__(
@@ -167,14 +172,12 @@ class NagataSurface(_Surface):
         normals: ArrayLike,
         faces: ArrayLike,
         smooth: bool = True,
-        degenerate_tol: float = NAGATA_DEGENERATE_TOL,
+        degenerate_ratio: float = NAGATA_DEGENERATE_RATIO,
     ) -> None:
         self.vertices = float_array(vertices, "vertices", (None, 3))
         self.faces = int_array(faces, "faces", (None, 4))
         self.smooth = bool(smooth)
-        self.degenerate_tol = float(degenerate_tol)
-        if not 0.0 <= self.degenerate_tol < 1.0:
-            raise ValueError(f"degenerate_tol must be in [0, 1), got {degenerate_tol}")
+        self.degenerate_ratio = _check_ratio(degenerate_ratio)
         n_vertices, n_faces = len(self.vertices), len(self.faces)
         if n_faces == 0:
             raise ValueError("faces is empty: a Nagata surface needs at least one face")
@@ -185,7 +188,7 @@ class NagataSurface(_Surface):
         self._check_orientation()
         coef, info = _core.nagata_coefficients(
             self.vertices.ravel(), self.faces.ravel(), self.corner_normals.ravel(),
-            int(self.smooth), self.degenerate_tol,
+            int(self.smooth), self.degenerate_ratio,
         )
         if info != 0:
             raise RuntimeError(f"core refused face {info - 1}")
@@ -264,7 +267,7 @@ class NagataSurface(_Surface):
 
 def nagata_edge_coefficient(
     x0: ArrayLike, x1: ArrayLike, n0: ArrayLike, n1: ArrayLike,
-    degenerate_tol: float = NAGATA_DEGENERATE_TOL,
+    degenerate_ratio: float = NAGATA_DEGENERATE_RATIO,
 ) -> NDArray[np.float64]:
     """Quadratic coefficient c of the Nagata curve C(s) = x0 + (x1 - x0 - c) s + c s^2.
 
@@ -276,12 +279,18 @@ def nagata_edge_coefficient(
     arrays = [float_array(a, name, (m, 3)) for a, name in zip(arrays, names, strict=True)]
     for a, name in zip(arrays[2:], names[2:], strict=True):
         _check_unit(a, name, "edge end")
-    if not 0.0 <= degenerate_tol < 1.0:
-        raise ValueError(f"degenerate_tol must be in [0, 1), got {degenerate_tol}")
+    ratio = _check_ratio(degenerate_ratio)
     if m == 0:
         return np.zeros((0, 3))
-    c = _core.nagata_edge_coefficient(*(a.ravel() for a in arrays), float(degenerate_tol))
+    c = _core.nagata_edge_coefficient(*(a.ravel() for a in arrays), ratio)
     return c.reshape(m, 3) if np.ndim(x0) == 2 else c.reshape(3)
+
+
+def _check_ratio(ratio: float) -> float:
+    value = float(ratio)
+    if not 1.0 <= value < np.inf:
+        raise ValueError(f"degenerate_ratio must be a finite number >= 1, got {ratio}")
+    return value
 
 
 def _check_unit(normals: NDArray[np.float64], name: str, what: str, per: int = 0) -> None:

@@ -101,12 +101,13 @@ contains
 
   !> Nagata (smooth /= 0) or facet (smooth = 0) coefficients of every face.
   !> faces(:, f) holds 0-based vertex indices, faces(4, f) = -1 for a triangle;
-  !> corner_normals(:, c, f) is the unit normal of face f at its corner c.
+  !> corner_normals(:, c, f) is the unit normal of face f at its corner c; ratio_limit is
+  !> the degenerate-normal limit of nagata_edge_coefficient.
   !> info = 0, or the 1-based index of the first face with a vertex index out of range.
   subroutine api_nagata_coefficients(nvert, vertices, nface, faces, corner_normals, smooth, &
-                                     tol, coef, info) bind(C, name="ddpy_nagata_coefficients")
+                                     ratio_limit, coef, info) bind(C, name="ddpy_nagata_coefficients")
     integer(c_int), value, intent(in) :: nvert, nface, smooth
-    real(c_double), value, intent(in) :: tol
+    real(c_double), value, intent(in) :: ratio_limit
     real(c_double), intent(in) :: vertices(3, nvert), corner_normals(3, 4, nface)
     integer(c_int), intent(in) :: faces(4, nface)
     real(c_double), intent(out) :: coef(3, nc, nface)
@@ -129,8 +130,8 @@ contains
       do c = 1, nv
         x(:, c) = vertices(:, faces(c, f) + 1)
       end do
-      call nagata_patch_coefficients(nv, x, corner_normals(:, :, f), smooth /= 0, tol, &
-                                     coef(:, :, f))
+      call nagata_patch_coefficients(nv, x, corner_normals(:, :, f), smooth /= 0, &
+                                     ratio_limit, coef(:, :, f))
     end do
     !$omp end parallel do
   end subroutine api_nagata_coefficients
@@ -149,15 +150,15 @@ contains
   end subroutine api_nagata_evaluate
 
   !> Nagata edge coefficients of m edges (x0 -> x1 with end normals n0, n1).
-  subroutine api_nagata_edge_coefficient(m, x0, x1, n0, n1, tol, c) &
+  subroutine api_nagata_edge_coefficient(m, x0, x1, n0, n1, ratio_limit, c) &
     bind(C, name="ddpy_nagata_edge_coefficient")
     integer(c_int), value, intent(in) :: m
     real(c_double), intent(in) :: x0(3, m), x1(3, m), n0(3, m), n1(3, m)
-    real(c_double), value, intent(in) :: tol
+    real(c_double), value, intent(in) :: ratio_limit
     real(c_double), intent(out) :: c(3, m)
     integer :: i
     do i = 1, m
-      c(:, i) = nagata_edge_coefficient(x0(:, i), x1(:, i), n0(:, i), n1(:, i), tol)
+      c(:, i) = nagata_edge_coefficient(x0(:, i), x1(:, i), n0(:, i), n1(:, i), ratio_limit)
     end do
   end subroutine api_nagata_edge_coefficient
 

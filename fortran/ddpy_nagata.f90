@@ -16,30 +16,34 @@ module ddpy_nagata
 contains
 
   !> Quadratic coefficient c of the Nagata curve C(s) = x0 + (d - c) s + c s^2 (paper Eq. 5).
-  !> When the end normals are (anti)parallel within tol (1 - |n0.n1| <= tol) the curve is the
-  !> straight edge: the formula divides by 1 - a^2 and blows up for a wavy edge. Exactly
-  !> parallel normals give a straight edge even for tol = 0.
-  pure function nagata_edge_coefficient(x0, x1, n0, n1, tol) result(c)
-    real(wp), intent(in) :: x0(3), x1(3), n0(3), n1(3), tol
+  !> Degenerate-normal rule (ours, docs/theory/surfaces.md): the edge is straight when the
+  !> end normals are parallel or antiparallel, or when |c| exceeds ratio_limit times the
+  !> coefficient of a circular arc with the same angle phi between its end normals,
+  !> |d| tan(phi/2). The second case is the blow-up of the formula, like 1/(1 - a^2), on an
+  !> edge whose nearly parallel normals are not perpendicular to it (an inflexion, poor
+  !> normals); a smooth edge with nearly parallel normals keeps its small curvature. Normals
+  !> 120 degrees or more apart (a fold, no quadratic can follow it) give a straight edge too.
+  pure function nagata_edge_coefficient(x0, x1, n0, n1, ratio_limit) result(c)
+    real(wp), intent(in) :: x0(3), x1(3), n0(3), n1(3), ratio_limit
     real(wp) :: c(3)
-    real(wp) :: d(3), a, d0, d1
+    real(wp) :: d(3), a, d0, d1, arc
     a = dot_product(n0, n1)
-    if (1.0_wp - abs(a) <= tol .or. 1.0_wp - a*a <= 0.0_wp) then
-      c = 0.0_wp
-      return
-    end if
+    c = 0.0_wp
+    if (1.0_wp - a*a <= 0.0_wp .or. a <= -0.5_wp) return
     d = x1 - x0
     d0 = dot_product(n0, d)
     d1 = dot_product(n1, d)
     c = ((d0 + a*d1)*n0 - (a*d0 + d1)*n1)/(1.0_wp - a*a)
+    arc = norm2(d)*sqrt(max(1.0_wp - a, 0.0_wp)/(1.0_wp + a))
+    if (norm2(c) > ratio_limit*arc) c = 0.0_wp
   end function nagata_edge_coefficient
 
   !> Coefficients of one patch from its corner positions x(:, 1:nv) and normals n(:, 1:nv).
   !> Triangle corners at (eta, zeta) = (0,0), (1,0), (1,1); quadrilateral corners at
   !> (xi, eta) = (0,0), (1,0), (1,1), (0,1). smooth = .false. gives the facet (all c = 0).
-  pure subroutine nagata_patch_coefficients(nv, x, n, smooth, tol, coef)
+  pure subroutine nagata_patch_coefficients(nv, x, n, smooth, ratio_limit, coef)
     integer, intent(in) :: nv
-    real(wp), intent(in) :: x(3, 4), n(3, 4), tol
+    real(wp), intent(in) :: x(3, 4), n(3, 4), ratio_limit
     logical, intent(in) :: smooth
     real(wp), intent(out) :: coef(3, nagata_coefficient_count)
     real(wp) :: c1(3), c2(3), c3(3), c4(3)
@@ -47,9 +51,9 @@ contains
     coef = 0.0_wp
     if (nv == 3) then
       if (smooth) then
-        c1 = nagata_edge_coefficient(x(:, 1), x(:, 2), n(:, 1), n(:, 2), tol)
-        c2 = nagata_edge_coefficient(x(:, 2), x(:, 3), n(:, 2), n(:, 3), tol)
-        c3 = nagata_edge_coefficient(x(:, 1), x(:, 3), n(:, 1), n(:, 3), tol)
+        c1 = nagata_edge_coefficient(x(:, 1), x(:, 2), n(:, 1), n(:, 2), ratio_limit)
+        c2 = nagata_edge_coefficient(x(:, 2), x(:, 3), n(:, 2), n(:, 3), ratio_limit)
+        c3 = nagata_edge_coefficient(x(:, 1), x(:, 3), n(:, 1), n(:, 3), ratio_limit)
       end if
       coef(:, 1) = x(:, 1)
       coef(:, 2) = x(:, 2) - x(:, 1) - c1
@@ -59,10 +63,10 @@ contains
       coef(:, 6) = c2
     else
       if (smooth) then
-        c1 = nagata_edge_coefficient(x(:, 1), x(:, 2), n(:, 1), n(:, 2), tol)
-        c2 = nagata_edge_coefficient(x(:, 2), x(:, 3), n(:, 2), n(:, 3), tol)
-        c3 = nagata_edge_coefficient(x(:, 4), x(:, 3), n(:, 4), n(:, 3), tol)
-        c4 = nagata_edge_coefficient(x(:, 1), x(:, 4), n(:, 1), n(:, 4), tol)
+        c1 = nagata_edge_coefficient(x(:, 1), x(:, 2), n(:, 1), n(:, 2), ratio_limit)
+        c2 = nagata_edge_coefficient(x(:, 2), x(:, 3), n(:, 2), n(:, 3), ratio_limit)
+        c3 = nagata_edge_coefficient(x(:, 4), x(:, 3), n(:, 4), n(:, 3), ratio_limit)
+        c4 = nagata_edge_coefficient(x(:, 1), x(:, 4), n(:, 1), n(:, 4), ratio_limit)
       end if
       coef(:, 1) = x(:, 1)
       coef(:, 2) = x(:, 2) - x(:, 1) - c1

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ddpy.surfaces import NAGATA_DEGENERATE_TOL, NagataSurface, nagata_edge_coefficient
+from ddpy.surfaces import NAGATA_DEGENERATE_RATIO, NagataSurface, nagata_edge_coefficient
 
 RADIUS = 10.0
 TRIANGLE_CORNERS = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]])
@@ -28,13 +28,18 @@ def unit(v: np.ndarray) -> np.ndarray:
     return v / np.linalg.norm(v, axis=-1, keepdims=True)
 
 
-def reference_coefficient(x0, x1, n0, n1, tol=NAGATA_DEGENERATE_TOL):
-    """math.md section 1, written out for one edge."""
+def reference_coefficient(x0, x1, n0, n1, ratio=NAGATA_DEGENERATE_RATIO):
+    """math.md section 1, written out for one edge, with the degenerate rule of
+    docs/theory/surfaces.md (straight when |c| > ratio |d| tan(phi / 2))."""
     d = x1 - x0
     a = n0 @ n1
-    if 1.0 - abs(a) < tol:
+    if 1.0 - a * a <= 0.0 or a <= -0.5:  # parallel, or a fold of 120 degrees or more
         return np.zeros(3)
-    return ((n0 @ d + a * (n1 @ d)) * n0 - (a * (n0 @ d) + n1 @ d) * n1) / (1.0 - a * a)
+    c = ((n0 @ d + a * (n1 @ d)) * n0 - (a * (n0 @ d) + n1 @ d) * n1) / (1.0 - a * a)
+    phi = np.arccos(np.clip(a, -1.0, 1.0))
+    if np.linalg.norm(c) > ratio * np.linalg.norm(d) * np.tan(phi / 2):
+        return np.zeros(3)
+    return c
 
 
 def random_cells(rng, n_cells: int, perturb: bool):
@@ -147,32 +152,33 @@ def random_edges(rng, m: int):
 
 
 def test_edge_coefficient_matches_closed_formula():
+    # Random edges are not from a surface: switch the degenerate rule off (ratio 1e300).
     x0, x1, n0, n1 = random_edges(np.random.default_rng(1), 200)
-    c = nagata_edge_coefficient(x0, x1, n0, n1)
+    c = nagata_edge_coefficient(x0, x1, n0, n1, degenerate_ratio=1e300)
     assert c.shape == (len(x0), 3) and len(x0) > 150
-    expected = np.array([reference_coefficient(*edge) for edge in zip(x0, x1, n0, n1,
-                                                                       strict=True)])
+    expected = np.array([reference_coefficient(*edge, ratio=np.inf)
+                         for edge in zip(x0, x1, n0, n1, strict=True)])
     assert np.all(np.linalg.norm(expected, axis=1) > 0.0)
     scale = np.linalg.norm(expected, axis=1, keepdims=True) + np.linalg.norm(x1 - x0, axis=1,
                                                                              keepdims=True)
     assert np.all(np.abs(c - expected) < 1e-12 * scale)
     # single edges give (3,) vectors
-    single = nagata_edge_coefficient(x0[0], x1[0], n0[0], n1[0])
+    single = nagata_edge_coefficient(x0[0], x1[0], n0[0], n1[0], degenerate_ratio=1e300)
     assert single.shape == (3,)
     np.testing.assert_allclose(single, c[0], rtol=1e-14, atol=0)
 
 
 def test_edge_coefficient_is_symmetric_under_reversal():
     x0, x1, n0, n1 = random_edges(np.random.default_rng(2), 200)
-    forward = nagata_edge_coefficient(x0, x1, n0, n1)
-    backward = nagata_edge_coefficient(x1, x0, n1, n0)
+    forward = nagata_edge_coefficient(x0, x1, n0, n1, degenerate_ratio=1e300)
+    backward = nagata_edge_coefficient(x1, x0, n1, n0, degenerate_ratio=1e300)
     scale = np.abs(forward).max(axis=1, keepdims=True)
     assert np.all(np.abs(backward - forward) <= 1e-12 * scale)
 
 
 def test_edge_tangents_lie_in_end_tangent_planes():
     x0, x1, n0, n1 = random_edges(np.random.default_rng(3), 200)
-    c = nagata_edge_coefficient(x0, x1, n0, n1)
+    c = nagata_edge_coefficient(x0, x1, n0, n1, degenerate_ratio=1e300)
     d = x1 - x0
     scale = np.linalg.norm(c, axis=1) + np.linalg.norm(d, axis=1)
     assert np.all(np.abs(np.einsum("kx,kx->k", n0, d - c)) < 1e-12 * scale)
@@ -186,30 +192,45 @@ def rotated(n0: np.ndarray, axis: np.ndarray, one_minus_cos: float) -> np.ndarra
 
 
 @pytest.mark.parametrize("sign", [1.0, -1.0], ids=["parallel", "antiparallel"])
-def test_edge_coefficient_degenerate_tolerance(sign):
+def test_edge_coefficient_degenerate_rule(sign):
     x0, x1 = np.zeros(3), np.array([1.0, 0.3, 0.2])  # n . d != 0: the formula would blow up
     n0 = np.array([0.0, 0.0, 1.0])
     axis = np.array([0.0, 1.0, 0.0])
-    tol = NAGATA_DEGENERATE_TOL
     assert np.all(nagata_edge_coefficient(x0, x1, n0, sign * n0) == 0.0)
-    for inside in (1e-9, 0.1 * tol, 0.9 * tol):
-        n1 = sign * rotated(n0, axis, inside)
-        assert np.all(nagata_edge_coefficient(x0, x1, n0, n1) == 0.0), inside
-    for outside in (1.1 * tol, 2.0 * tol, 0.1):
-        n1 = sign * rotated(n0, axis, outside)
-        c = nagata_edge_coefficient(x0, x1, n0, n1)
-        np.testing.assert_allclose(c, reference_coefficient(x0, x1, n0, n1), rtol=1e-8)
-        assert np.linalg.norm(c) > 1.0, outside  # large: 1 / (1 - a^2) near parallel normals
+    # Nearly parallel normals on an edge not perpendicular to them: straight.
+    for angle in (1e-9, 1e-5, 1e-3, 0.01):
+        n1 = sign * rotated(n0, axis, angle)
+        assert np.all(nagata_edge_coefficient(x0, x1, n0, n1) == 0.0), angle
+    # The same normals on a big enough angle: the formula, whose |c| is far above |d|.
+    n1 = rotated(n0, axis, 0.5)
+    c = nagata_edge_coefficient(x0, x1, n0, n1)
+    np.testing.assert_allclose(c, reference_coefficient(x0, x1, n0, n1), rtol=1e-12)
+    assert np.linalg.norm(c) > 0.1
 
 
-def test_edge_coefficient_custom_tolerance():
-    x0, x1 = np.zeros(3), np.array([1.0, 0.0, 0.1])
+@pytest.mark.parametrize("angle_deg", [0.01, 0.1, 0.5, 5.0, 30.0, 90.0])
+def test_circular_edge_keeps_its_curvature_at_any_angle(angle_deg):
+    # A circular arc of any opening: c = |d| tan(phi / 2), perpendicular to d. Nearly
+    # parallel normals on a smooth edge are not degenerate (a torus top, a large die radius).
+    phi = np.radians(angle_deg)
+    x0, x1 = np.array([1.0, 0, 0]), np.array([np.cos(phi), np.sin(phi), 0])
+    c = nagata_edge_coefficient(x0, x1, x0, x1)
+    d = np.linalg.norm(x1 - x0)
+    assert np.linalg.norm(c) == pytest.approx(d * np.tan(phi / 2), rel=1e-6)
+    assert abs(c @ (x1 - x0)) < 1e-12
+
+
+def test_edge_coefficient_custom_ratio():
+    # An edge tilted out of the normals' symmetric position (z = -tan 0.1 would be the arc):
+    # its coefficient is a few times that of the arc with the same normal angle.
+    x0, x1 = np.zeros(3), np.array([1.0, 0.0, -0.06])
     n0 = np.array([0.0, 0.0, 1.0])
-    n1 = rotated(n0, np.array([0.0, 1.0, 0.0]), 1e-3)
-    assert np.linalg.norm(nagata_edge_coefficient(x0, x1, n0, n1)) > 0.0
-    assert np.all(nagata_edge_coefficient(x0, x1, n0, n1, degenerate_tol=2e-3) == 0.0)
-    np.testing.assert_allclose(nagata_edge_coefficient(x0, x1, n0, n1, degenerate_tol=0.0),
-                               reference_coefficient(x0, x1, n0, n1, tol=0.0), rtol=1e-12)
+    n1 = np.array([np.sin(0.2), 0.0, np.cos(0.2)])
+    c = reference_coefficient(x0, x1, n0, n1, ratio=np.inf)
+    ratio = np.linalg.norm(c) / (np.linalg.norm(x1 - x0) * np.tan(0.1))
+    assert 1.5 < ratio < 8.0
+    np.testing.assert_allclose(nagata_edge_coefficient(x0, x1, n0, n1), c, rtol=1e-12)
+    assert np.all(nagata_edge_coefficient(x0, x1, n0, n1, degenerate_ratio=1.0) == 0.0)
 
 
 def test_edge_coefficient_of_straight_and_circular_edges():

@@ -75,8 +75,10 @@ NAGATA_CASES = {
     "non-unit corner normal": (dict(normals=with_row(np.tile([0.0, 0, 1], (1, 4, 1)), (0, 2),
                                                      [0, 0, 2])),
                                ValueError, "face 0, corner 2 is of length 2"),
-    "degenerate_tol 1": (dict(degenerate_tol=1.0), ValueError, r"degenerate_tol must be in"),
-    "degenerate_tol NaN": (dict(degenerate_tol=float("nan")), ValueError, "degenerate_tol"),
+    "degenerate_ratio 0.5": (dict(degenerate_ratio=0.5), ValueError,
+                             r"degenerate_ratio must be a finite number >= 1"),
+    "degenerate_ratio NaN": (dict(degenerate_ratio=float("nan")), ValueError, "degenerate_ratio"),
+    "degenerate_ratio inf": (dict(degenerate_ratio=float("inf")), ValueError, "degenerate_ratio"),
 }
 
 
@@ -93,9 +95,9 @@ def test_good_nagata_input_is_accepted():
     assert nagata(normals=np.tile([0.0, 0, 1], (1, 4, 1))).n_patches == 1
 
 
-def test_zero_degenerate_tolerance_keeps_parallel_normals_finite():
-    # degenerate_tol = 0 is documented as allowed ([0, 1)); a flat face must stay finite.
-    surface = nagata(degenerate_tol=0.0)
+def test_smallest_degenerate_ratio_keeps_parallel_normals_finite():
+    # degenerate_ratio = 1 is allowed; a flat face (parallel normals) must stay finite.
+    surface = nagata(degenerate_ratio=1.0)
     points, derivs, normals = surface.evaluate([0], [[0.5, 0.5]])
     assert np.all(np.isfinite(surface.coefficients))
     np.testing.assert_allclose(points, [[0.5, 0.5, 0.0]], atol=1e-15)
@@ -223,13 +225,11 @@ def test_empty_edge_batch():
     assert nagata_edge_coefficient(empty, empty, empty, empty).shape == (0, 3)
 
 
-def test_edge_coefficient_refuses_a_tolerance_that_divides_by_zero():
-    # NagataSurface refuses degenerate_tol outside [0, 1); the edge function must not return
-    # NaN for parallel normals, whatever tolerance it accepts.
-    for tol in (0.0, -1.0):
-        try:
-            c = nagata_edge_coefficient([0.0, 0, 0], [1.0, 0, 0], [0.0, 0, 1], [0.0, 0, 1],
-                                        degenerate_tol=tol)
-        except ValueError:
-            continue
-        assert np.all(np.isfinite(c)), tol
+def test_edge_coefficient_refuses_a_bad_ratio_and_stays_finite():
+    for ratio in (0.0, -1.0, float("nan")):
+        with pytest.raises(ValueError, match="degenerate_ratio"):
+            nagata_edge_coefficient([0.0, 0, 0], [1.0, 0, 0], [0.0, 0, 1], [0.0, 0, 1],
+                                    degenerate_ratio=ratio)
+    c = nagata_edge_coefficient([0.0, 0, 0], [1.0, 0, 0], [0.0, 0, 1], [0.0, 0, 1],
+                                degenerate_ratio=1.0)
+    assert np.all(c == 0.0)

@@ -80,16 +80,16 @@ contains
     status = material_ok
 
     trial = stress_old + matmul(tangent, strain_increment)
-    call hill48_modes(props(3:8), shear, modes, q, c, mu)
-    a = matmul(trial, modes)
-    pressure = sum(trial(1:3))/3.0_wp
-    sigma_trial = sqrt(sum(c*a*a))
+    sigma_trial = hill48_equivalent_stress(props(3:8), trial)
     call material_hardening(props, ep_old, y_old, h)
     if (sigma_trial <= y_old*(1.0_wp + yield_tol)) then
       stress = trial
       return
     end if
     plastic = .true.
+    call hill48_modes(props(3:8), shear, modes, q, c, mu)
+    a = matmul(trial, modes)
+    pressure = sum(trial(1:3))/3.0_wp
 
     ! g(x) = Y(ep(x))/sigma(x) - 1 rises from g(0) < 0; x = 2 shear dlambda is dimensionless.
     ! Since sigma(x) <= sigma_trial/(1 + x min(q)) and Y >= y_old, g(x_hi) >= 0.
@@ -140,10 +140,15 @@ contains
     xi_n = matmul(modes, mu*c*w/(1.0_wp + x*q))
     beta = (1.0_wp - hdl)/(h*sigma*sigma + (1.0_wp - hdl)*sum(mu*(c*w)**2/(1.0_wp + x*q)))
     tangent = 0.0_wp
-    do k = 1, 5
-      tangent = tangent + mu(k)/(1.0_wp + x*q(k))*outer(modes(:, k), modes(:, k))
+    tangent(1:3, 1:3) = bulk
+    do k = 1, 2
+      tangent(1:3, 1:3) = tangent(1:3, 1:3) &
+                          + mu(k)/(1.0_wp + x*q(k))*outer(modes(1:3, k), modes(1:3, k))
     end do
-    tangent = tangent + bulk*outer(unit_normal, unit_normal) - beta*outer(xi_n, xi_n)
+    do k = 3, 5
+      tangent(k + 1, k + 1) = mu(k)/(1.0_wp + x*q(k))
+    end do
+    tangent = tangent - beta*outer(xi_n, xi_n)
     if (.not. all(ieee_is_finite(tangent))) then
       plastic = .false.
       stress = stress_old
@@ -347,7 +352,10 @@ contains
   pure function outer(u, v) result(m)
     real(wp), intent(in) :: u(:), v(:)
     real(wp) :: m(size(u), size(v))
-    m = spread(u, 2, size(v))*spread(v, 1, size(u))
+    integer :: j
+    do j = 1, size(v)
+      m(:, j) = u*v(j)
+    end do
   end function outer
 
 end module ddpy_material

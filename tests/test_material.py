@@ -211,6 +211,32 @@ def test_large_increments_converge(name: str) -> None:
     assert np.all(np.isfinite(tangent))
 
 
+EDGE_MATERIALS = {
+    "perfectly-plastic": Material(E, NU, DDQ, Swift(K=300.0, eps0=0.01, n=0.0)),
+    "strong-voce": Material(E, NU, DDQ, Voce(Y0=50.0, Q=500.0, b=30.0)),  # H dlambda > 1
+    "linear-swift": Material(E, NU, HSS, Swift(K=1000.0, eps0=0.2, n=1.0)),
+    "near-singular-hill": Material(E, NU, Hill48(F=0.001, G=0.001, H=1.0, N=1.5), SWIFT),
+    "auxetic": Material(E, -0.9, Hill48.von_mises(), VOCE),
+}
+
+
+@pytest.mark.parametrize("name", sorted(EDGE_MATERIALS))
+def test_edge_materials(name: str) -> None:
+    """Limits of the accepted parameters: the mapping still converges, the tangent is right."""
+    material = EDGE_MATERIALS[name]
+    rng = np.random.default_rng(19)
+    s, ep = random_states(material, 1000, rng, level=(0.0, 1.0))
+    de = random_increments(material, 1000, rng, np.geomspace(2, 1e3, 1000)[:, None])
+    stress, ep_new, tangent, plastic = material.update(s, ep, de)
+    assert plastic.mean() > 0.7
+    np.testing.assert_allclose(hill_stress(material.yield_criterion, stress[plastic]),
+                               flow_stress(material, ep_new[plastic]), rtol=1e-10)
+    pick = np.flatnonzero(plastic)[::50]
+    fd = finite_difference_tangent(material, s[pick], ep[pick], de[pick])
+    error = np.abs(fd - tangent[pick]).max(axis=(1, 2)) / np.abs(tangent[pick]).max(axis=(1, 2))
+    assert error.max() < 1e-6
+
+
 def test_threads_give_identical_results() -> None:
     material = MATERIALS["ddq-swift"]
     rng = np.random.default_rng(17)

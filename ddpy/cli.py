@@ -33,6 +33,119 @@ def _info(args: argparse.Namespace) -> int:
     return 0
 
 
+def _triple(text: str) -> tuple[float, float, float]:
+    try:
+        values = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        values = ()
+    if len(values) != 3:
+        raise argparse.ArgumentTypeError(f"expected X,Y,Z (three numbers), got '{text}'")
+    return values  # type: ignore[return-value]
+
+
+def _int_list(text: str) -> list[int]:
+    try:
+        return [int(v) for v in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected integers separated by commas, got '{text}'")\
+            from None
+
+
+def _fail(command: str, error: Exception) -> int:
+    print(f"ddpy {command}: error: {error}", file=sys.stderr)
+    return 1
+
+
+def _tools_build(args: argparse.Namespace) -> int:
+    from ddpy.cad import CadError, build_tool_models
+
+    models = [m.strip() for m in args.models.split(",") if m.strip()]
+    try:
+        paths = build_tool_models(
+            args.cad, args.out, args.name or Path(args.cad).stem,
+            patches_per_arc=args.patches_per_arc, facets_per_arc=args.facets_per_arc,
+            element=args.element, size=args.size, blank_side=args.blank_side,
+            blank_point=args.blank_point, bezier_tol=args.bezier_tol,
+            bezier_angle_tol=args.bezier_angle_tol, faces=args.faces, models=models)
+    except (CadError, ValueError) as error:
+        return _fail("tools build", error)
+    for path in paths.values():
+        print(path)
+    return 0
+
+
+def _tools_error(args: argparse.Namespace) -> int:
+    from ddpy.cad import CadError
+    from ddpy.shape_error import plot_shape_error, shape_error
+    from ddpy.toolfile import read_tool
+
+    rows = []
+    try:
+        for file in args.tools:
+            result = shape_error(read_tool(file), args.cad, samples=args.samples)
+            rows.append({"file": file, **result.summary()})
+            if args.png:
+                Path(args.png).mkdir(parents=True, exist_ok=True)
+                png = plot_shape_error(result, Path(args.png) / (Path(file).name + ".png"))
+                print(f"wrote {png}", file=sys.stderr)
+    except (CadError, ValueError) as error:
+        return _fail("tools error", error)
+    if args.json:
+        print(json.dumps(rows, indent=2))
+        return 0
+    print(f"{'tool file':40s} {'patches':>8s} {'max |d| um':>11s} {'mean |d| um':>12s} "
+          f"{'max angle deg':>14s}")
+    for row in rows:
+        print(f"{row['file']:40s} {row['patches']:8d} {row['max_distance_um']:11.4g} "
+              f"{row['mean_distance_um']:12.4g} {row['max_angle_deg']:14.4g}")
+    return 0
+
+
+def _add_tools(commands: argparse._SubParsersAction) -> None:
+    tools = commands.add_parser("tools", help="tool models from CAD (Bezier, Nagata, facets) "
+                                "and their shape error")
+    group = tools.add_subparsers(dest="tools_command", metavar="TOOLS_COMMAND", required=True)
+    build = group.add_parser(
+        "build", help="write <name>.nagata.tool, <name>.facets.tool and <name>.bezier.tool",
+        description="Read a CAD file (STEP, IGES, BREP) and write Nagata, facet and Bezier tool "
+        "files (docs/tool-files.md). Densities count patches per 90 degrees of arc. Give "
+        "negative vectors with '=', e.g. --blank-side=0,0,-1.")
+    build.add_argument("cad", metavar="CAD", help="STEP, IGES or BREP file")
+    build.add_argument("--name", help="tool name (default: the CAD file's stem)")
+    build.add_argument("--out", default=".", metavar="DIR", help="output folder (default: .)")
+    build.add_argument("--patches-per-arc", type=int, default=4, metavar="N",
+                       help="Nagata patches per 90 degrees along curved edges (default 4)")
+    build.add_argument("--facets-per-arc", type=int, default=30, metavar="N",
+                       help="facets per 90 degrees along curved edges (default 30)")
+    build.add_argument("--element", choices=("quad", "tri"), default="quad")
+    build.add_argument("--size", type=float, metavar="MM",
+                       help="largest element along straight edges (default: one element)")
+    build.add_argument("--blank-side", type=_triple, default=(0.0, 0.0, 1.0), metavar="X,Y,Z",
+                       help="direction towards the blank (default 0,0,1)")
+    build.add_argument("--blank-point", type=_triple, metavar="X,Y,Z",
+                       help="a point on the blank side (instead of --blank-side)")
+    build.add_argument("--bezier-tol", type=float, default=1.0e-3, metavar="MM",
+                       help="largest Bezier deviation from the CAD (default 0.001 mm)")
+    build.add_argument("--bezier-angle-tol", type=float, default=0.01, metavar="DEG",
+                       help="largest Bezier normal error (default 0.01 degrees)")
+    build.add_argument("--faces", type=_int_list, metavar="TAGS",
+                       help="CAD faces to use, e.g. 1,2,5 (default: all)")
+    build.add_argument("--models", default="nagata,facets,bezier", metavar="LIST",
+                       help="models to write (default nagata,facets,bezier)")
+    build.set_defaults(handler=_tools_build)
+
+    error = group.add_parser("error", help="shape error of tool files against their CAD",
+                             description="Distance and normal errors of tool files against "
+                             "the CAD they were built from (paper Fig. 8).")
+    error.add_argument("tools", nargs="+", metavar="TOOL", help="tool files")
+    error.add_argument("--cad", help="CAD file (default: the 'source' of each tool file)")
+    error.add_argument("--samples", type=int, default=9, metavar="N",
+                       help="samples per patch direction (default 9)")
+    error.add_argument("--png", metavar="DIR", help="also write error maps (PNG) here")
+    error.add_argument("--json", action="store_true", help="print the numbers as JSON")
+    error.set_defaults(handler=_tools_error)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="ddpy",
@@ -49,6 +162,8 @@ def build_parser() -> argparse.ArgumentParser:
     accuracy.add_argument("--json", action="store_true", help="print the numbers as JSON")
     accuracy.add_argument("--figures", metavar="DIR", help="also write the figures (PNG) here")
     accuracy.set_defaults(handler=_accuracy)
+
+    _add_tools(commands)
 
     info = commands.add_parser("info", help="version, threads and linked libraries")
     info.set_defaults(handler=_info)

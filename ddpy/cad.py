@@ -37,7 +37,7 @@ CAD_SUFFIXES = {".step": "STEP", ".stp": "STEP", ".iges": "IGES", ".igs": "IGES"
                 ".brep": "BREP", ".brp": "BREP"}
 #: Face normals at a shared vertex within this angle (degrees) are one normal (tangent faces).
 TANGENT_ANGLE = 0.1
-#: A face whose normals all point away from the blank by more than this (n . d < -tol) fails.
+#: A face whose normals point away from the blank on average (mean n . d < -tol) fails.
 AWAY_TOL = 1.0e-3
 MODELS = ("nagata", "facets", "bezier")
 
@@ -255,7 +255,7 @@ class ToolBuilder:
             parity = _propagate(self, seed, component, relations)
             for face in component:
                 flips[face] = parity[face] * (1 if mean > 0 else -1)
-                if float(np.max(flips[face] * alignment[face])) < -AWAY_TOL:
+                if flips[face] * float(alignment[face].mean()) < -AWAY_TOL:
                     raise self.error(face, f"points away from the blank once oriented like face "
                                      f"{seed} (they share edges): the tool cannot face the blank"
                                      f" side {self._blank_text()} everywhere; check blank_side or"

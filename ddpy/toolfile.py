@@ -34,6 +34,7 @@ DESCRIPTIONS = ("bezier", "nagata", "facets")
 #: Normals in a file may be off unit length by this much (6 written digits); they are
 #: normalized on reading. Anything further is refused.
 NORMAL_LENGTH_TOL = 1.0e-4
+_KEYWORDS = ("vertices", "normals", "faces", "patches", "patch")
 
 
 class ToolFileError(ValueError):
@@ -206,8 +207,11 @@ class _Lines:
         return number, count
 
     def rows(self, count: int, what: str) -> Iterator[tuple[int, list[str]]]:
-        for _ in range(count):
+        for i in range(count):
             number, words, _ = self.take(f"{what} ({count} expected)")
+            if words[0] in _KEYWORDS:
+                raise self.error(number, f"expected {count} {what}, got {i} before "
+                                 f"'{words[0]}'")
             yield number, words
 
 
@@ -322,7 +326,8 @@ def _read_nagata(lines: _Lines, smooth: bool) -> tuple[NagataSurface, NDArray[np
         length = float(np.linalg.norm(normal))
         if abs(length - 1.0) > NORMAL_LENGTH_TOL:
             raise lines.error(k, f"expected a unit normal, got one of length {length:.6g}")
-        normals[i] = normal / length
+        # Normals written by ddpy read back bit for bit; shorter ones are normalized.
+        normals[i] = normal if abs(length - 1.0) < 1e-12 else normal / length
     _, n_faces = lines.block("faces")
     faces = np.empty((n_faces, 4), dtype=np.int64)
     face_normals = np.empty((n_faces, 4), dtype=np.int64)

@@ -1,0 +1,90 @@
+"""Small CAD models built with gmsh's OpenCASCADE, for the benchmark, tests and examples.
+
+Each function adds the faces to the current gmsh model (inside :func:`ddpy.cad.gmsh_session`)
+and, given a path, writes them as STEP (or IGES, BREP by the suffix).
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from ddpy.cad import quiet
+
+__all__ = ["cylinder_segment", "die_profile", "sphere_patch", "write_cad"]
+
+
+def write_cad(path: str | os.PathLike[str] | None) -> Path | None:
+    """Write the current gmsh model's geometry to ``path`` (format by suffix), if given."""
+    import gmsh
+
+    if path is None:
+        return None
+    gmsh.model.occ.synchronize()
+    with quiet():
+        gmsh.write(str(path))
+    return Path(path)
+
+
+def die_profile(path: str | os.PathLike[str] | None = None, land: float = 20.0,
+                fillet: float = 4.0, radius: float = 23.5, width: float = 30.0) -> list[int]:
+    """The plane-fillet-cylinder tool: a die-like profile in the xz-plane extruded along y.
+
+    A flat land z = 0 for -land <= x <= 0, a convex fillet of radius ``fillet`` turning down
+    by 90 degrees, then a concave quarter cylinder of radius ``radius`` turning back to
+    horizontal (its axis along y through x = fillet + radius, z = -fillet). All joints are
+    tangent. The blank lies above (+z). Returns the face tags (land, fillet, cylinder).
+    """
+    import gmsh
+
+    occ = gmsh.model.occ
+    centre_x = fillet + radius
+    p0, p1 = occ.addPoint(-land, 0, 0), occ.addPoint(0, 0, 0)
+    c1, p2 = occ.addPoint(0, 0, -fillet), occ.addPoint(fillet, 0, -fillet)
+    c2, p3 = occ.addPoint(centre_x, 0, -fillet), occ.addPoint(centre_x, 0, -fillet - radius)
+    curves = [occ.addLine(p0, p1), occ.addCircleArc(p1, c1, p2), occ.addCircleArc(p2, c2, p3)]
+    out = occ.extrude([(1, c) for c in curves], 0, width, 0)
+    occ.synchronize()
+    write_cad(path)
+    return [t for d, t in out if d == 2]
+
+
+def _keep_faces(volume: int, kind: str) -> list[int]:
+    """Copy the faces of ``kind`` (e.g. 'Cylinder') of a solid, delete the solid."""
+    import gmsh
+
+    occ = gmsh.model.occ
+    occ.synchronize()
+    faces = [t for _, t in gmsh.model.getBoundary([(3, volume)], oriented=False)
+             if gmsh.model.getType(2, t) == kind]
+    copies = occ.copy([(2, t) for t in faces])
+    occ.remove([(3, volume)], recursive=True)
+    occ.synchronize()
+    return [t for _, t in copies]
+
+
+def cylinder_segment(path: str | os.PathLike[str] | None = None, radius: float = 10.0,
+                     length: float = 20.0, angle: float = np.pi / 2) -> list[int]:
+    """A cylindrical face: axis z from the origin, ``length`` long, ``angle`` of arc from +x."""
+    import gmsh
+
+    volume = gmsh.model.occ.addCylinder(0, 0, 0, 0, 0, length, radius, angle=angle)
+    faces = _keep_faces(volume, "Cylinder")
+    write_cad(path)
+    return faces
+
+
+def sphere_patch(path: str | os.PathLike[str] | None = None, radius: float = 10.0,
+                 latitudes: tuple[float, float] = (0.2, 1.0),
+                 longitude: float = 1.0) -> list[int]:
+    """A spherical face centred at the origin between two latitudes (radians), over
+    ``longitude`` radians from +x."""
+    import gmsh
+
+    volume = gmsh.model.occ.addSphere(0, 0, 0, radius, angle1=latitudes[0],
+                                      angle2=latitudes[1], angle3=longitude)
+    faces = _keep_faces(volume, "Sphere")
+    write_cad(path)
+    return faces

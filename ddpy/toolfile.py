@@ -86,8 +86,7 @@ class ToolModel:
             raise ValueError("only a Nagata model has a facet version (same mesh, c = 0)")
         s = self.surface
         assert isinstance(s, NagataSurface)
-        flat = NagataSurface(s.vertices, s.corner_normals, s.faces, smooth=False,
-                             degenerate_tol=s.degenerate_tol)
+        flat = NagataSurface(s.vertices, s.corner_normals, s.faces, smooth=False)
         return ToolModel(self.name, "facets", flat, self.face_tags.copy(), self.source)
 
 

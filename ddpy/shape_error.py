@@ -35,6 +35,7 @@ class ShapeError:
     patch: NDArray[np.int64]       # (k,) patch of each sample
     distance: NDArray[np.float64]  # (k,) signed distance to the CAD surface, mm
     angle: NDArray[np.float64]     # (k,) normal angle error, degrees
+    cells: NDArray[np.int64]       # (c, 4) samples around each cell of the grids (for maps)
 
     @property
     def max_distance(self) -> float:
@@ -81,12 +82,17 @@ def shape_error(model: ToolModel, cad: str | os.PathLike[str] | None = None,
         raise ValueError(f"samples must be >= 2, got {samples}")
     surface = model.surface
     triangles = getattr(surface, "is_triangle", np.zeros(surface.n_patches, dtype=bool))
-    ids, params = [], []
+    ids, params, cells = [], [], []
+    start = 0
     for triangle in (False, True):
         patches = np.flatnonzero(triangles == triangle)
         uv = sample_parameters(samples, triangle)
         ids.append(np.repeat(patches, len(uv)))
         params.append(np.tile(uv, (len(patches), 1)))
+        grid = _grid_cells(samples, triangle)
+        cells.append((start + len(uv) * np.arange(len(patches))[:, None, None] + grid
+                      ).reshape(-1, 4))
+        start += len(uv) * len(patches)
     patch = np.concatenate(ids)
     points, _, normals = surface.evaluate(patch, np.concatenate(params))
     tags = model.face_tags[patch]
@@ -110,7 +116,22 @@ def shape_error(model: ToolModel, cad: str | os.PathLike[str] | None = None,
             cosine = np.clip(np.einsum("ij,ij->i", exact, normals[rows]), -1.0, 1.0)
             angle[rows] = np.degrees(np.arccos(cosine))
     return ShapeError(model.name, model.description, model.n_patches, points,
-                      patch.astype(np.int64), distance, angle)
+                      patch.astype(np.int64), distance, angle, np.concatenate(cells))
+
+
+def _grid_cells(samples: int, triangle: bool) -> NDArray[np.int64]:
+    """Cells (c, 4) of the sample grid of one patch, as indices into its samples; the cells
+    along the diagonal of a triangle repeat a corner."""
+    index = np.full((samples, samples), -1, dtype=np.int64)
+    uv = sample_parameters(samples, triangle)
+    ij = np.rint(uv * (samples - 1)).astype(np.int64)
+    index[ij[:, 0], ij[:, 1]] = np.arange(len(uv))
+    i, j = np.meshgrid(np.arange(samples - 1), np.arange(samples - 1), indexing="ij")
+    quads = np.stack([index[i, j], index[i + 1, j], index[i + 1, j + 1], index[i, j + 1]], -1)
+    quads = quads.reshape(-1, 4)
+    diagonal = quads[:, 3] < 0     # triangle patches: (i, i), (i+1, i), (i+1, i+1)
+    quads[diagonal, 3] = quads[diagonal, 0]
+    return quads[(quads >= 0).all(axis=1)]
 
 
 @contextlib.contextmanager
@@ -134,7 +155,11 @@ def plot_shape_error(result: ShapeError, path: str | os.PathLike[str],
                      view: tuple[float, float] = (25.0, -60.0),
                      limit_um: float | None = None) -> Path:
     """PNG map of the distance (um) and normal (degrees) errors over the tool; the path."""
+    from matplotlib import colormaps
+    from matplotlib.cm import ScalarMappable
+    from matplotlib.colors import Normalize
     from matplotlib.figure import Figure
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
     x = result.points
     span = np.maximum(np.ptp(x, axis=0), 1e-3 * max(float(np.ptp(x, axis=0).max()), 1e-12))
@@ -144,16 +169,18 @@ def plot_shape_error(result: ShapeError, path: str | os.PathLike[str],
     panels = ((um, "coolwarm", -limit, limit, "distance error [um]"),
               (result.angle, "viridis", 0.0, max(result.max_angle, 1e-9),
                "normal error [degrees]"))
+    polygons = x[result.cells]
     for k, (values, cmap, lo, hi, label) in enumerate(panels):
         ax = fig.add_subplot(1, 2, k + 1, projection="3d")
-        art = ax.scatter(x[:, 0], x[:, 1], x[:, 2], c=values, cmap=cmap, vmin=lo, vmax=hi,
-                         s=2.0, linewidths=0)
+        norm = Normalize(lo, hi)
+        colours = colormaps[cmap](norm(values[result.cells].mean(axis=1)))
+        ax.add_collection3d(Poly3DCollection(polygons, facecolors=colours, linewidths=0))
+        for axis, lo_x, hi_x in zip("xyz", x.min(axis=0), x.max(axis=0), strict=True):
+            getattr(ax, f"set_{axis}lim")(lo_x, hi_x)
+            getattr(ax, f"set_{axis}label")(f"{axis} [mm]")
         ax.set_box_aspect(tuple(span))
         ax.view_init(*view)
-        ax.set_xlabel("x [mm]")
-        ax.set_ylabel("y [mm]")
-        ax.set_zlabel("z [mm]")
-        fig.colorbar(art, ax=ax, shrink=0.7, label=label)
+        fig.colorbar(ScalarMappable(norm, cmap), ax=ax, shrink=0.7, label=label)
     fig.suptitle(f"{result.name} ({result.description}, {result.n_patches} patches): max |d| = "
                  f"{1e3 * result.max_distance:.3g} um, mean |d| = "
                  f"{1e3 * result.mean_distance:.3g} um, max normal error = "

@@ -1,13 +1,16 @@
 """Non-rational Bezier patches fitted to CAD faces (gmsh's OpenCASCADE, degree <= 6).
 
 A face is mapped from the unit square (s, t): by its parameter rectangle when the face fills
-it, or by a Coons patch of its four edges in the parameter plane when it is a trimmed 4-sided
-face. On each region of the square, every degree pair (n, m) <= 6 is fitted by least squares
+it, by a Coons patch of its four edges in the parameter plane when it is a trimmed 4-sided
+face, or by an O-grid of five Coons patches (a square in the middle, four around it) when it is
+bounded by one closed edge, like the flat bottom of a cylindrical punch. On each region of the
+square, every degree pair (n, m) <= 6 is fitted by least squares
 to exact CAD points on a 13 x 13 Chebyshev grid, and its error measured on a finer 31 x 31 grid
 as the distance to the CAD point of the same parameters (a bound of the distance to the surface
 that also keeps patch edges on the face edges). The cheapest pair within the tolerance wins;
 when none is, the region is split in two across its worse direction. The accepted patches are
-checked again with the true point-to-surface distance on a third grid.
+checked again with the true point-to-surface distance on a third grid
+(:func:`ddpy.cad.closest_points`).
 """
 
 from __future__ import annotations
@@ -65,8 +68,31 @@ _PINV = {n: np.linalg.pinv(bernstein(n, _FIT)) for n in DEGREES}
 _CHECK_BASIS = {n: bernstein(n, _CHECK) for n in range(MAX_BEZIER_DEGREE + 1)}
 
 
-def _face_mapping(builder: ToolBuilder, face: int) -> Mapping:
-    """(s, t) in [0, 1]^2 -> (u, v) on the face: its parameter box or a Coons patch."""
+Curve = Callable[[NDArray[np.float64]], NDArray[np.float64]]
+
+
+def _coons(bottom: Curve, right: Curve, top: Curve, left: Curve) -> Mapping:
+    """Coons patch of four curves of the parameter plane: bottom and top run with s (left to
+    right), left and right with t (bottom to top)."""
+    ends = np.array([0.0, 1.0])
+    a, b = bottom(ends)
+    d, c = top(ends)
+
+    def mapping(s: NDArray[np.float64], t: NDArray[np.float64]) -> NDArray[np.float64]:
+        s_, t_ = s[:, None], t[:, None]
+        return ((1 - t_) * bottom(s) + t_ * top(s) + (1 - s_) * left(t) + s_ * right(t)
+                - (1 - s_) * (1 - t_) * a - s_ * (1 - t_) * b - s_ * t_ * c - (1 - s_) * t_ * d)
+    return mapping
+
+
+def _segment(p: NDArray[np.float64], q: NDArray[np.float64]) -> Curve:
+    return lambda f: p + np.asarray(f)[:, None] * (q - p)
+
+
+def _face_mappings(builder: ToolBuilder, face: int) -> list[Mapping]:
+    """Maps (s, t) in [0, 1]^2 -> (u, v) covering the face: its parameter box; a Coons patch of
+    its edges if it is a trimmed 4-sided face; an O-grid of five Coons patches if it is
+    bounded by one closed edge (a disc)."""
     import gmsh
 
     lo, hi = (np.asarray(b, dtype=np.float64) for b in gmsh.model.getParametrizationBounds(2, face))
@@ -77,32 +103,47 @@ def _face_mapping(builder: ToolBuilder, face: int) -> Mapping:
     if gmsh.model.isInside(2, face, grid.ravel(), parametric=True) == k * k:
         def box(s: NDArray[np.float64], t: NDArray[np.float64]) -> NDArray[np.float64]:
             return np.column_stack([lo[0] + s * (hi[0] - lo[0]), lo[1] + t * (hi[1] - lo[1])])
-        return box
+        return [box]
     edges = gmsh.model.getBoundary([(2, face)], combined=False, oriented=True)
-    if len(edges) != 4:
-        raise builder.error(face, f"is trimmed and has {len(edges)} edges: Bezier patches need "
-                            "a face that fills its parameter rectangle or a 4-sided face; split "
-                            "the face in the CAD")
 
-    def edge(i: int, f: NDArray[np.float64]) -> NDArray[np.float64]:
-        """uv of edge i at fractions f along the face's loop direction."""
+    def edge(i: int, offset: float = 0.0, length: float = 1.0) -> Curve:
+        """uv of edge i at fractions offset + length f along the face's loop direction."""
         tag = edges[i][1]
         a, b = (float(x[0]) for x in gmsh.model.getParametrizationBounds(1, abs(tag)))
-        p = a + f * (b - a) if tag > 0 else b - f * (b - a)
-        return np.asarray(gmsh.model.reparametrizeOnSurface(1, abs(tag), p, face)).reshape(-1, 2)
 
-    ends = np.array([0.0, 1.0])
-    corner_a, corner_b = edge(0, ends)
-    corner_c, corner_d = edge(2, ends)   # edge 2 runs from C to D
+        def curve(f: NDArray[np.float64]) -> NDArray[np.float64]:
+            f = offset + length * np.asarray(f, dtype=np.float64)
+            p = a + f * (b - a) if tag > 0 else b - f * (b - a)
+            uv = gmsh.model.reparametrizeOnSurface(1, abs(tag), p, face)
+            return np.asarray(uv).reshape(-1, 2)
+        return curve
 
-    def coons(s: NDArray[np.float64], t: NDArray[np.float64]) -> NDArray[np.float64]:
-        s_, t_ = s[:, None], t[:, None]
-        bottom, right = edge(0, s), edge(1, t)
-        top, left = edge(2, 1.0 - s), edge(3, 1.0 - t)
-        return ((1 - t_) * bottom + t_ * top + (1 - s_) * left + s_ * right
-                - (1 - s_) * (1 - t_) * corner_a - s_ * (1 - t_) * corner_b
-                - s_ * t_ * corner_c - (1 - s_) * t_ * corner_d)
-    return coons
+    def reverse(curve: Curve) -> Curve:
+        return lambda f: curve(1.0 - np.asarray(f))
+
+    if len(edges) == 4:
+        mappings = [_coons(edge(0), edge(1), reverse(edge(2)), reverse(edge(3)))]
+    elif len(edges) == 1:
+        loop = edge(0)
+        centre = loop(np.linspace(0.0, 1.0, 64, endpoint=False)).mean(axis=0)
+        rim = loop(np.arange(5) / 4.0)
+        inner = centre + 0.5 * (rim - centre)
+        mappings = [_coons(_segment(inner[0], inner[1]), _segment(inner[1], inner[2]),
+                           _segment(inner[3], inner[2]), _segment(inner[0], inner[3]))]
+        for q in range(4):
+            mappings.append(_coons(_segment(inner[q], inner[q + 1]),
+                                   _segment(inner[q + 1], rim[q + 1]),
+                                   edge(0, q / 4.0, 0.25), _segment(inner[q], rim[q])))
+    else:
+        raise builder.error(face, f"is trimmed and has {len(edges)} edges: Bezier patches need "
+                            "a face that fills its parameter rectangle, a 4-sided face or a "
+                            "face bounded by one closed edge; split the face in the CAD")
+    for mapping in mappings:
+        uv = mapping(np.repeat(g, k), np.tile(g, k))
+        if gmsh.model.isInside(2, face, uv.ravel(), parametric=True) != k * k:
+            raise builder.error(face, "is trimmed and its edges do not map it onto a square "
+                                "(a concave or folded outline): split the face in the CAD")
+    return mappings
 
 
 def _points(face: int, mapping: Mapping, s: NDArray[np.float64],
@@ -142,8 +183,11 @@ def _fit_region(face: int, mapping: Mapping, region: tuple[float, float, float, 
             dv = m * np.einsum("ai,ijk,bj->abk", _CHECK_BASIS[n], np.diff(net, axis=1),
                                _CHECK_BASIS[m - 1])
             cross = np.cross(du, dv)
-            length = np.maximum(np.linalg.norm(cross, axis=2), 1e-300)
-            cosine = np.abs(np.einsum("abk,abk->ab", cross, normal)) / length
+            length = np.linalg.norm(cross, axis=2)
+            tangent = np.maximum(np.linalg.norm(du, axis=2), np.linalg.norm(dv, axis=2))
+            defined = length > 1e-6 * tangent**2   # not at a point collapsed to a pole
+            cosine = np.einsum("abk,abk->ab", cross, normal)[defined] / length[defined]
+            cosine = cosine * (1.0 if cosine.sum() >= 0.0 else -1.0)
             # Angle error relative to its tolerance, through 1 - cos ~ angle^2 / 2.
             angle = float(np.sqrt(max(1.0 - cosine.min(), 0.0) / (1.0 - cos_tol)))
             errors[n, m] = max(distance, angle)
@@ -161,11 +205,10 @@ def fit_face(builder: ToolBuilder, face: int, tol: float, angle_tol: float,
     degrees, their normals along ``flip`` times the CAD normal."""
     import gmsh
 
-    mapping = _face_mapping(builder, face)
     nets: list[NDArray[np.float64]] = []
-    regions = [(0.0, 1.0, 0.0, 1.0)]
+    regions = [(mapping, (0.0, 1.0, 0.0, 1.0)) for mapping in _face_mappings(builder, face)]
     while regions:
-        region = regions.pop(0)
+        mapping, region = regions.pop(0)
         net, errors = _fit_region(face, mapping, region, tol, angle_tol)
         s0, s1, t0, t1 = region
         if net is None:
@@ -181,10 +224,10 @@ def fit_face(builder: ToolBuilder, face: int, tol: float, angle_tol: float,
                                     "face or raise the tolerances")
             if split_s:
                 mid = 0.5 * (s0 + s1)
-                regions += [(s0, mid, t0, t1), (mid, s1, t0, t1)]
+                regions += [(mapping, (s0, mid, t0, t1)), (mapping, (mid, s1, t0, t1))]
             else:
                 mid = 0.5 * (t0 + t1)
-                regions += [(s0, s1, t0, mid), (s0, s1, mid, t1)]
+                regions += [(mapping, (s0, s1, t0, mid)), (mapping, (s0, s1, mid, t1))]
             continue
         centre = mapping(np.array([0.5 * (s0 + s1)]), np.array([0.5 * (t0 + t1)]))
         cad_normal = flip * np.asarray(gmsh.model.getNormal(face, centre.ravel()))
@@ -201,8 +244,8 @@ def fit_face(builder: ToolBuilder, face: int, tol: float, angle_tol: float,
 
 def surface_distance(face: int, net: NDArray[np.float64]) -> float:
     """Largest distance from a 40 x 40 grid of the patch to the CAD face's surface."""
-    import gmsh
+    from ddpy.cad import closest_points
 
     points = evaluate_net(net, _VERIFY, _VERIFY).reshape(-1, 3)
-    closest = np.asarray(gmsh.model.getClosestPoint(2, face, points.ravel())[0]).reshape(-1, 3)
+    closest = closest_points(face, points)[0]
     return float(np.linalg.norm(points - closest, axis=1).max())

@@ -27,11 +27,12 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ddpy.cad_mesh import element_array, grid_mesh, point_text, prepare_mesh
 from ddpy.surfaces import BezierSurface, NagataSurface
 from ddpy.toolfile import ToolModel, write_tool
 
-__all__ = ["CadError", "CAD_SUFFIXES", "ToolBuilder", "build_tool_models", "gmsh_session",
-           "load_cad", "quiet"]
+__all__ = ["CadError", "CAD_SUFFIXES", "ToolBuilder", "build_tool_models", "closest_points",
+           "gmsh_session", "load_cad", "quiet"]
 
 CAD_SUFFIXES = {".step": "STEP", ".stp": "STEP", ".iges": "IGES", ".igs": "IGES",
                 ".brep": "BREP", ".brp": "BREP"}
@@ -116,6 +117,110 @@ def load_cad(path: str | os.PathLike[str]) -> list[int]:
     return tags
 
 
+def closest_points(face: int, points: ArrayLike) -> tuple[NDArray[np.float64],
+                                                          NDArray[np.float64]]:
+    """Closest points (k, 3) on a face's surface and their parameters (k, 2).
+
+    ``gmsh.model.getClosestPoint`` keeps to the face's parameter range and, for a point whose
+    foot lies just beyond it, may answer a far stationary point (the antipode on a sphere).
+    Where its answer is farther than 1e-4 of the face's size and than the nearest node of a
+    33 x 33 grid of the face, the point is projected again from that node by Gauss-Newton
+    with backtracking, wrapped around a seam and kept within the parameter range otherwise
+    (beyond a pole the extended surface turns its normal over).
+    """
+    import gmsh
+
+    x = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    if len(x) == 0:
+        return np.zeros((0, 3)), np.zeros((0, 2))
+    closest, uv = gmsh.model.getClosestPoint(2, face, x.ravel())
+    closest, uv = np.asarray(closest).reshape(-1, 3), np.asarray(uv).reshape(-1, 2)
+    distance = np.linalg.norm(x - closest, axis=1)
+    lo, hi = (np.asarray(b, dtype=np.float64) for b in gmsh.model.getParametrizationBounds(2, face))
+    g = np.linspace(0.0, 1.0, 33)
+    grid_uv = np.column_stack([np.repeat(lo[0] + g * (hi[0] - lo[0]), len(g)),
+                               np.tile(lo[1] + g * (hi[1] - lo[1]), len(g))])
+    grid_x = np.asarray(gmsh.model.getValue(2, face, grid_uv.ravel())).reshape(-1, 3)
+    # An answer within 1e-4 of the face's size cannot be a far stationary point: only the
+    # others are checked against the grid.
+    size = float(np.linalg.norm(np.ptp(grid_x, axis=0)))
+    check = np.flatnonzero(distance > 1e-4 * size)
+    centre = grid_x.mean(axis=0)
+    gx, xx = grid_x - centre, x[check] - centre
+    nearest = np.empty(len(check), dtype=np.int64)
+    for start in range(0, len(check), 4096):   # |x - g|^2 = |x|^2 - 2 x.g + |g|^2
+        d2 = (gx**2).sum(axis=1)[None, :] - 2.0 * xx[start:start + 4096] @ gx.T
+        nearest[start:start + 4096] = d2.argmin(axis=1)
+    grid_d2 = ((x[check] - grid_x[nearest]) ** 2).sum(axis=1)
+    worse = distance[check] ** 2 > grid_d2 * (1.0 + 1e-9) + 1e-24
+    bad, nearest = check[worse], nearest[worse]
+    if bad.size:
+        uv_bad, x_bad = _gauss_newton(face, x[bad], grid_uv[nearest], lo, hi)
+        closest[bad], uv[bad] = x_bad, uv_bad
+    return closest, uv
+
+
+def _periods(face: int, lo: NDArray[np.float64], hi: NDArray[np.float64]) -> NDArray[np.bool_]:
+    """Whether the face closes on itself along u and along v (a seam)."""
+    import gmsh
+
+    f = np.linspace(0.0, 1.0, 5)
+    closed = []
+    for k in range(2):
+        a, b = np.empty((5, 2)), np.empty((5, 2))
+        a[:, k], b[:, k] = lo[k], hi[k]
+        a[:, 1 - k] = b[:, 1 - k] = lo[1 - k] + f * (hi[1 - k] - lo[1 - k])
+        xa = np.asarray(gmsh.model.getValue(2, face, a.ravel())).reshape(-1, 3)
+        xb = np.asarray(gmsh.model.getValue(2, face, b.ravel())).reshape(-1, 3)
+        size = np.ptp(np.vstack([xa, xb]), axis=0).max()
+        closed.append(bool(np.linalg.norm(xa - xb, axis=1).max() <= 1e-9 * max(size, 1e-12)))
+    return np.array(closed)
+
+
+def _gauss_newton(face: int, x: NDArray[np.float64], uv: NDArray[np.float64],
+                  lo: NDArray[np.float64], hi: NDArray[np.float64]
+                  ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Minimize |S(uv) - x| from ``uv`` within [lo, hi]: (uv, S(uv))."""
+    import gmsh
+
+    def value(uv: NDArray[np.float64]) -> NDArray[np.float64]:
+        return np.asarray(gmsh.model.getValue(2, face, uv.ravel())).reshape(-1, 3)
+
+    periodic = _periods(face, lo, hi)
+    period = hi - lo
+
+    def keep(uv: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Wrapped along a closed direction, clipped along an open one."""
+        return np.where(periodic, lo + np.mod(uv - lo, period), np.clip(uv, lo, hi))
+
+    uv = uv.copy()
+    s = value(uv)
+    d2 = ((x - s) ** 2).sum(axis=1)
+    tol = 1e-13 * np.maximum(hi - lo, 1e-12)
+    for _ in range(30):
+        d = np.asarray(gmsh.model.getDerivative(2, face, uv.ravel())).reshape(-1, 2, 3)
+        jtj = np.einsum("kai,kbi->kab", d, d)
+        jtj += (1e-12 * np.trace(jtj, axis1=1, axis2=2) + 1e-300)[:, None, None] * np.eye(2)
+        step = np.linalg.solve(jtj, np.einsum("kai,ki->ka", d, x - s)[..., None])[..., 0]
+        step = np.where(periodic, step, np.clip(uv + step, lo, hi) - uv)
+        active = np.any(np.abs(step) > tol, axis=1)
+        if not active.any():
+            break
+        for _ in range(20):   # halve the step where it does not bring the point closer
+            rows = np.flatnonzero(active)
+            trial = keep(uv[rows] + step[rows])
+            s_trial = value(trial)
+            d2_trial = ((x[rows] - s_trial) ** 2).sum(axis=1)
+            better = d2_trial <= d2[rows]
+            ok = rows[better]
+            uv[ok], s[ok], d2[ok] = trial[better], s_trial[better], d2_trial[better]
+            active[ok] = False
+            if not active.any():
+                break
+            step[active] *= 0.5
+    return uv, s
+
+
 # --------------------------------------------------------------------------------- builder
 
 
@@ -175,16 +280,27 @@ class ToolBuilder:
             raise ValueError(f"the number of patches per arc must be >= 1, got {per_arc}")
         if size is not None and not size > 0.0:
             raise ValueError(f"size must be positive (mm), got {size}")
-        _set_mesh_sizes(self.faces, per_arc, element, size)
+        plan = prepare_mesh(self.faces, per_arc, element, size)
         gmsh.model.mesh.clear()
         failure = ""
         try:
             gmsh.model.mesh.generate(2)
         except Exception as error:
             failure = f": {error}"
+        next_tag = int(gmsh.model.mesh.getMaxNodeTag()) + 1
         nodes: dict[int, tuple[NDArray, NDArray, NDArray]] = {}
         elements: dict[int, NDArray[np.int64]] = {}
         for face in self.faces:
+            if face in plan.grids:
+                try:
+                    tags, coord, uv, conn = grid_mesh(face, plan.grids[face], element, next_tag)
+                except ValueError as error:
+                    text = str(error)
+                    raise self.error(face, text if text.startswith("the surface normal")
+                                     else f"cannot be meshed: {text}") from None
+                next_tag = max(next_tag, int(tags.max()) + 1)
+                nodes[face], elements[face] = (tags, coord, uv), conn
+                continue
             tags, coord, uv = gmsh.model.mesh.getNodes(2, face, includeBoundary=True,
                                                        returnParametricCoord=True)
             types, _, connectivity = gmsh.model.mesh.getElements(2, face)
@@ -195,7 +311,10 @@ class ToolBuilder:
             if uv.size != 2 * len(tags):
                 uv = np.asarray(gmsh.model.getParametrization(2, face, coord.ravel()))
             nodes[face] = (np.asarray(tags, dtype=np.int64), coord, uv.reshape(-1, 2))
-            elements[face] = _element_array(self, face, types, connectivity)
+            try:
+                elements[face] = element_array(types, connectivity)
+            except ValueError as error:
+                raise self.error(face, str(error)) from None
         return self._assemble(nodes, elements)
 
     def _assemble(self, nodes: dict[int, tuple[NDArray, NDArray, NDArray]],
@@ -215,9 +334,9 @@ class ToolBuilder:
             length = np.linalg.norm(normal, axis=1)
             bad = np.flatnonzero(~(np.abs(length - 1.0) < 1e-6))
             if bad.size:
-                x = coord[bad[0]]
-                raise self.error(face, f"the surface normal is undefined at ({x[0]:.6g}, "
-                                 f"{x[1]:.6g}, {x[2]:.6g}) (a singular point): split the face")
+                raise self.error(face, f"the surface normal is undefined at "
+                                 f"{point_text(coord[bad[0]])} (a singular point such as a cone "
+                                 "apex): split the face")
             raw[face], local[face] = normal, index
             conn = elements[face]
             order = np.argsort(tags)
@@ -343,89 +462,6 @@ def _vector(value: ArrayLike, name: str) -> NDArray[np.float64]:
     return v
 
 
-def _curve_shape(curve: int) -> tuple[float, float]:
-    """(turning angle in radians, length) of a curve, from 129 samples."""
-    import gmsh
-
-    lo, hi = gmsh.model.getParametrizationBounds(1, curve)
-    t = np.linspace(lo[0], hi[0], 129)
-    x = np.asarray(gmsh.model.getValue(1, curve, t)).reshape(-1, 3)
-    length = float(np.linalg.norm(np.diff(x, axis=0), axis=1).sum())
-    d = np.asarray(gmsh.model.getDerivative(1, curve, t)).reshape(-1, 3)
-    norm = np.linalg.norm(d, axis=1)
-    if length == 0.0 or not np.all(norm > 0.0):
-        return 0.0, length
-    tangent = d / norm[:, None]
-    cosines = np.clip(np.einsum("ij,ij->i", tangent[1:], tangent[:-1]), -1.0, 1.0)
-    return float(np.arccos(cosines).sum()), length
-
-
-def _set_mesh_sizes(faces: list[int], per_arc: int, element: str, size: float | None) -> None:
-    """Divisions of every edge, structured 4-sided faces, recombination for quadrilaterals."""
-    import gmsh
-
-    boundary: dict[int, list[int]] = {}
-    shape: dict[int, tuple[float, float]] = {}
-    for face in faces:
-        curves = [abs(c) for _, c in gmsh.model.getBoundary([(2, face)], combined=False,
-                                                            oriented=True)]
-        boundary[face] = curves
-        for c in curves:
-            if c not in shape:
-                shape[c] = _curve_shape(c)
-    scale = max((s[1] for s in shape.values()), default=1.0)
-    divisions: dict[int, int] = {}
-    for c, (angle, length) in shape.items():
-        if length <= 1e-9 * scale:
-            continue  # a degenerate edge (the pole of a sphere)
-        if angle > 1e-6:  # curved: by the angle only
-            divisions[c] = max(1, int(np.ceil(per_arc * angle / (np.pi / 2) - 1e-6)))
-        else:             # straight: by the size, one element without it
-            divisions[c] = 1 if size is None else max(1, int(np.ceil(length / size - 1e-6)))
-    structured = [f for f, cs in boundary.items()
-                  if len(cs) == 4 and all(c in divisions for c in cs)]
-    changed = True
-    while changed:  # opposite edges of a structured face need the same division
-        changed = False
-        for f in structured:
-            cs = boundary[f]
-            for a, b in ((cs[0], cs[2]), (cs[1], cs[3])):
-                if divisions[a] != divisions[b]:
-                    divisions[a] = divisions[b] = max(divisions[a], divisions[b])
-                    changed = True
-    for c, n in divisions.items():
-        gmsh.model.mesh.setTransfiniteCurve(c, n + 1)
-    for f in faces:
-        if f in structured:
-            gmsh.model.mesh.setTransfiniteSurface(f)
-        if element == "quad":
-            gmsh.model.mesh.setRecombine(2, f)
-    gmsh.option.setNumber("Mesh.Algorithm", 8 if element == "quad" else 6)
-    gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 4 * per_arc)
-    gmsh.option.setNumber("Mesh.MeshSizeMax", size if size is not None else 1e22)
-    gmsh.option.setNumber("Mesh.ElementOrder", 1)
-    # Only the selected faces (and their edges) are meshed.
-    gmsh.model.setVisibility(gmsh.model.getEntities(), 0)
-    gmsh.model.setVisibility([(2, f) for f in faces], 1, recursive=True)
-    gmsh.option.setNumber("Mesh.MeshOnlyVisible", 1)
-
-
-def _element_array(builder: ToolBuilder, face: int, types: Sequence[int],
-                   connectivity: Sequence[NDArray]) -> NDArray[np.int64]:
-    blocks = []
-    for kind, conn in zip(types, connectivity, strict=True):
-        conn = np.asarray(conn, dtype=np.int64)
-        if kind == 3:      # 4-node quadrangle
-            blocks.append(conn.reshape(-1, 4))
-        elif kind == 2:    # 3-node triangle
-            tri = conn.reshape(-1, 3)
-            blocks.append(np.column_stack([tri, np.full(len(tri), -1)]))
-        else:
-            raise builder.error(face, f"gmsh made elements of type {kind}: expected linear "
-                                "triangles and quadrangles")
-    return np.concatenate(blocks)
-
-
 def _reverse(elems: NDArray[np.int64]) -> NDArray[np.int64]:
     """The same elements ordered the other way round (first vertex kept)."""
     tri = elems[:, 3] < 0
@@ -439,11 +475,17 @@ def _orient_elements(builder: ToolBuilder, face: int, coord: NDArray, normal: ND
     x = coord[np.where(tri[:, None], conn[:, [0, 1, 2, 2]], conn)]
     cross = np.cross(x[:, 2] - x[:, 0], np.where(tri[:, None], x[:, 2] - x[:, 1],
                                                   x[:, 3] - x[:, 1]))
-    mean_normal = normal[np.where(tri[:, None], conn[:, [0, 1, 2, 2]], conn)].sum(axis=1)
-    dots = np.einsum("ij,ij->i", cross, mean_normal)
-    scale = np.linalg.norm(cross, axis=1) * np.linalg.norm(mean_normal, axis=1)
-    if np.any(np.abs(dots) <= 1e-12 * np.maximum(scale, 1e-300)):
-        raise builder.error(face, "has a degenerate (flat or folded) element: mesh it finer")
+    corner_normals = normal[np.where(tri[:, None], conn[:, [0, 1, 2, 2]], conn)]
+    corner_dots = np.einsum("icj,ij->ic", corner_normals, cross)
+    dots = corner_dots.sum(axis=1)
+    scale = np.linalg.norm(cross, axis=1)
+    folded = (corner_dots.max(axis=1) > 1e-9 * scale) & (corner_dots.min(axis=1) < -1e-9 * scale)
+    if np.any(scale == 0.0) or np.any(folded):
+        bad = int(np.flatnonzero((scale == 0.0) | folded)[0])
+        raise builder.error(face, f"the mesh has a degenerate or folded element near "
+                            f"{point_text(x[bad].mean(axis=0))}: the surface turns too much "
+                            "within one element; raise the number of patches per arc or give a "
+                            "size")
     result = np.where(conn < 0, -1, index[np.maximum(conn, 0)])
     backwards = dots < 0
     result[backwards] = _reverse(result[backwards])

@@ -13,7 +13,7 @@ import numpy as np
 
 from ddpy.cad import quiet
 
-__all__ = ["cylinder_segment", "die_profile", "sphere_patch", "write_cad"]
+__all__ = ["cylinder_segment", "cylindrical_punch", "die_profile", "sphere_patch", "write_cad"]
 
 
 def write_cad(path: str | os.PathLike[str] | None) -> Path | None:
@@ -88,3 +88,23 @@ def sphere_patch(path: str | os.PathLike[str] | None = None, radius: float = 10.
     faces = _keep_faces(volume, "Sphere")
     write_cad(path)
     return faces
+
+
+def cylindrical_punch(path: str | os.PathLike[str] | None = None, radius: float = 48.0,
+                      fillet: float = 8.0, height: float = 32.0) -> list[int]:
+    """A cylindrical punch of deep drawing, nose down at z = 0: a flat disc of radius
+    ``radius - fillet``, a toroidal fillet and a cylindrical wall ``height`` high, all full
+    revolutions about z (faces closed on a seam). The blank lies below (-z). Returns the
+    face tags (disc, fillet, wall)."""
+    import gmsh
+
+    occ = gmsh.model.occ
+    inner = radius - fillet
+    p0, p1 = occ.addPoint(0, 0, 0), occ.addPoint(inner, 0, 0)
+    centre, p2 = occ.addPoint(inner, 0, fillet), occ.addPoint(radius, 0, fillet)
+    p3 = occ.addPoint(radius, 0, fillet + height)
+    curves = [occ.addLine(p0, p1), occ.addCircleArc(p1, centre, p2), occ.addLine(p2, p3)]
+    out = occ.revolve([(1, c) for c in curves], 0, 0, 0, 0, 0, 1, 2 * np.pi)
+    occ.synchronize()
+    write_cad(path)
+    return [t for d, t in out if d == 2]

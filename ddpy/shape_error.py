@@ -1,11 +1,12 @@
 """Shape error of a tool model against its CAD (paper Fig. 8 and 14-16).
 
-Every patch is sampled on a grid of parameters; each sample is projected on the CAD face the
-patch came from (``gmsh.model.getClosestPoint``). The distance error is signed by the CAD normal
-oriented like the tool (towards the blank): positive where the model stands out of the CAD
-surface towards the blank, negative where it lies inside the tool. The normal error is the angle
-between the model's normal and the exact CAD normal at the projection.
-"""
+Every patch is sampled on a grid of parameters; each sample is projected on the surface of the
+CAD face the patch came from (:func:`ddpy.cad.closest_points`). The distance error is signed by
+the CAD normal oriented like the tool (towards the blank): positive where the model stands out
+of the CAD surface towards the blank, negative where it lies inside the tool. The normal error
+is the angle between the model's normal and the exact CAD normal at the projection; samples
+where the model's normal is undefined (a Bezier patch collapsed to a pole) are left out of it
+and counted."""
 
 from __future__ import annotations
 
@@ -18,7 +19,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from ddpy.cad import CadError, gmsh_session, load_cad
+from ddpy.cad import CadError, closest_points, gmsh_session, load_cad
 from ddpy.toolfile import ToolModel
 
 __all__ = ["ShapeError", "plot_shape_error", "sample_parameters", "shape_error"]
@@ -49,8 +50,13 @@ class ShapeError:
 
     @property
     def max_angle(self) -> float:
-        """Largest normal angle error (degrees)."""
-        return float(self.angle.max())
+        """Largest normal angle error (degrees), where the model's normal is defined."""
+        return float(np.nanmax(self.angle)) if np.isfinite(self.angle).any() else float("nan")
+
+    @property
+    def undefined_normals(self) -> int:
+        """Samples where the model's normal is undefined (a patch collapsed to a point)."""
+        return int(np.isnan(self.angle).sum())
 
     def summary(self) -> dict[str, float | int | str]:
         """The numbers per tool: patches, max and mean |distance| (um), max angle (degrees)."""
@@ -60,7 +66,8 @@ class ShapeError:
                 "mean_distance_um": 1e3 * self.mean_distance,
                 "min_signed_um": 1e3 * float(self.distance.min()),
                 "max_signed_um": 1e3 * float(self.distance.max()),
-                "max_angle_deg": self.max_angle}
+                "max_angle_deg": self.max_angle,
+                "undefined_normals": self.undefined_normals}
 
 
 def sample_parameters(samples: int, triangle: bool) -> NDArray[np.float64]:
@@ -94,7 +101,10 @@ def shape_error(model: ToolModel, cad: str | os.PathLike[str] | None = None,
                       ).reshape(-1, 4))
         start += len(uv) * len(patches)
     patch = np.concatenate(ids)
-    points, _, normals = surface.evaluate(patch, np.concatenate(params))
+    points, derivatives, normals = surface.evaluate(patch, np.concatenate(params))
+    tangent = np.linalg.norm(derivatives, axis=2).max(axis=1)
+    cross = np.linalg.norm(np.cross(derivatives[:, 0], derivatives[:, 1]), axis=1)
+    undefined = cross <= 1e-6 * tangent**2
     tags = model.face_tags[patch]
     distance = np.empty(len(patch))
     angle = np.empty(len(patch))
@@ -107,14 +117,13 @@ def shape_error(model: ToolModel, cad: str | os.PathLike[str] | None = None,
                 raise CadError(f"{label}: face {int(face)} of tool '{model.name}' is not in the "
                                "CAD model (was the tool built from another file?)")
             rows = np.flatnonzero(tags == face)
-            closest, uv = gmsh.model.getClosestPoint(2, int(face), points[rows].ravel())
-            closest = np.asarray(closest).reshape(-1, 3)
-            exact = np.asarray(gmsh.model.getNormal(int(face), uv)).reshape(-1, 3)
+            closest, uv = closest_points(int(face), points[rows])
+            exact = np.asarray(gmsh.model.getNormal(int(face), uv.ravel())).reshape(-1, 3)
             dots = np.einsum("ij,ij->i", exact, normals[rows])
-            exact *= 1.0 if dots.sum() >= 0.0 else -1.0
+            exact *= 1.0 if dots[~undefined[rows]].sum() >= 0.0 else -1.0
             distance[rows] = np.einsum("ij,ij->i", points[rows] - closest, exact)
             cosine = np.clip(np.einsum("ij,ij->i", exact, normals[rows]), -1.0, 1.0)
-            angle[rows] = np.degrees(np.arccos(cosine))
+            angle[rows] = np.where(undefined[rows], np.nan, np.degrees(np.arccos(cosine)))
     return ShapeError(model.name, model.description, model.n_patches, points,
                       patch.astype(np.int64), distance, angle, np.concatenate(cells))
 
@@ -166,8 +175,9 @@ def plot_shape_error(result: ShapeError, path: str | os.PathLike[str],
     um = 1e3 * result.distance
     limit = limit_um if limit_um is not None else max(float(np.abs(um).max()), 1e-6)
     fig = Figure(figsize=(11.0, 4.6), layout="constrained")
+    angle = np.nan_to_num(result.angle, nan=0.0)
     panels = ((um, "coolwarm", -limit, limit, "distance error [um]"),
-              (result.angle, "viridis", 0.0, max(result.max_angle, 1e-9),
+              (angle, "viridis", 0.0, max(float(angle.max()), 1e-9),
                "normal error [degrees]"))
     polygons = x[result.cells]
     for k, (values, cmap, lo, hi, label) in enumerate(panels):

@@ -10,8 +10,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ddpy.cad import CadError, build_tool_models, gmsh_session
-from ddpy.cad_examples import cylinder_segment, die_profile, sphere_patch, write_cad
+from ddpy.cad import CadError, build_tool_models, closest_points, gmsh_session, load_cad
+from ddpy.cad_examples import (
+    cylinder_segment,
+    cylindrical_punch,
+    die_profile,
+    sphere_patch,
+    write_cad,
+)
 from ddpy.shape_error import plot_shape_error, shape_error
 from ddpy.toolfile import ToolModel, read_tool
 
@@ -48,6 +54,9 @@ def cad(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
         "cylinder.step": lambda p: cylinder_segment(p, radius=R_CYL),
         "sphere.step": lambda p: sphere_patch(p, radius=R_SPHERE),
         "die.step": die_profile,
+        "punch.step": cylindrical_punch,
+        "hemisphere.step": lambda p: sphere_patch(p, radius=R_SPHERE, latitudes=(0, np.pi / 2),
+                                                  longitude=2 * np.pi),
         "crease.step": _creased,
         "trapezoid.step": lambda p: _polygon(p, [(0, 0), (10, 0), (8, 5), (2, 5)]),
         "pentagon.step": lambda p: _polygon(p, [(0, 0), (10, 0), (12, 5), (5, 9), (-2, 5)]),
@@ -80,7 +89,9 @@ def built(cad: dict[str, Path], tmp_path_factory: pytest.TempPathFactory
     """The three models of the cylinder, sphere, die and crease tools."""
     out = tmp_path_factory.mktemp("tools")
     options = {"cylinder": {"blank_point": (0, 0, 10)}, "sphere": {"blank_point": (0, 0, 0)},
-               "die": {"size": 10.0}, "crease": {"size": 5.0}}
+               "die": {"size": 10.0}, "crease": {"size": 5.0},
+               "punch": {"blank_side": (0, 0, -1), "size": 10.0, "facets_per_arc": 8},
+               "hemisphere": {"facets_per_arc": 8}}
     models = {}
     for name, kw in options.items():
         paths = build_tool_models(cad[name], out, name, **kw)
@@ -179,6 +190,70 @@ def test_crease_vertices_carry_one_normal_per_face(
             assert len(np.unique(normals[at_v].round(9), axis=0)) == 2
 
 
+def test_revolved_punch_structured_on_seams_and_disc_in_bezier(
+        built: dict[str, dict[str, ToolModel]]) -> None:
+    """Full revolutions (faces closed on a seam) get structured quadrilaterals; the disc of the
+    punch nose gets an O-grid of Bezier patches."""
+    def exact(x: np.ndarray, tags: np.ndarray, order: list[int]) -> np.ndarray:
+        disc, fillet, wall = order
+        rho = np.hypot(x[:, 0], x[:, 1])
+        radial = np.column_stack([x[:, 0], x[:, 1], 0 * rho]) / np.maximum(rho, 1e-300)[:, None]
+        n = np.zeros_like(x)
+        n[tags == disc] = [0, 0, -1]
+        f = tags == fillet
+        n[f] = (x[f] - (40.0 * radial[f] + [0, 0, 8])) / 8.0
+        n[tags == wall] = radial[tags == wall]
+        return n
+
+    for kind in ("nagata", "facets"):
+        model = built["punch"][kind]
+        x, normals, tags = _corners(model)
+        mean_z = {int(t): x[tags == t, 2].mean() for t in np.unique(tags)}
+        order = sorted(mean_z, key=mean_z.get)           # disc (z = 0), fillet, wall
+        np.testing.assert_allclose(normals, exact(x, tags, order), atol=1e-8)
+        rows = np.isin(model.face_tags, order[1:])
+        assert not model.surface.is_triangle[rows].any()  # structured around the seams
+    nagata = built["punch"]["nagata"]
+    assert np.sum(nagata.face_tags == order[2]) == 16 * 4   # 16 round, 32 mm / 10 mm
+    errors = {k: shape_error(m) for k, m in built["punch"].items()}
+    bezier = built["punch"]["bezier"]
+    assert np.sum(bezier.face_tags == order[0]) == 5        # the O-grid of the disc
+    assert errors["bezier"].max_distance < 1e-3 and errors["bezier"].max_angle < 0.01
+    assert errors["nagata"].max_distance < errors["facets"].max_distance
+
+
+def test_hemisphere_pole(built: dict[str, dict[str, ToolModel]]) -> None:
+    """A pole: triangles around it, one normal there; Bezier patches collapse to it."""
+    for kind in ("nagata", "facets"):
+        model = built["hemisphere"][kind]
+        x, normals, _ = _corners(model)
+        radius = np.linalg.norm(x, axis=1)
+        np.testing.assert_allclose(radius, R_SPHERE, atol=1e-9)
+        np.testing.assert_allclose(normals, x / radius[:, None], atol=1e-8)
+        s = model.surface
+        pole = np.flatnonzero(np.isclose(s.vertices[:, 2], R_SPHERE, atol=1e-9))
+        assert len(pole) == 1
+        around = np.any(s.faces == pole[0], axis=1)
+        assert s.is_triangle[around].all() and not s.is_triangle[~around].any()
+    bezier = shape_error(built["hemisphere"]["bezier"])
+    assert bezier.max_distance < 1e-3 and bezier.max_angle < 0.01
+    assert bezier.undefined_normals > 0        # the collapsed row at the pole
+
+
+def test_closest_points_beyond_the_face(cad: dict[str, Path]) -> None:
+    """Below the equator of a hemisphere gmsh answers the antipode; ddpy the equator."""
+    angles = np.radians(np.arange(0, 360, 30))
+    points = np.column_stack([10.0 * np.cos(angles), 10.0 * np.sin(angles),
+                              np.full(len(angles), -1e-4)])
+    with gmsh_session():
+        face = load_cad(cad["hemisphere"])[0]
+        raw = np.reshape(gmsh.model.getClosestPoint(2, face, points.ravel())[0], (-1, 3))
+        closest, _ = closest_points(face, points)
+        gmsh.model.remove()
+    assert np.linalg.norm(raw - points, axis=1).max() > 19.0   # the antipode
+    np.testing.assert_allclose(closest, points * [1, 1, 0], atol=1e-9)
+
+
 def test_in_memory_gmsh_model(tmp_path: Path) -> None:
     with gmsh_session():
         gmsh.model.add("memory")
@@ -265,7 +340,7 @@ def test_triangles(cad: dict[str, Path], tmp_path: Path) -> None:
     ("missing", {}, "missing.step: no such CAD file"),
     ("garbage", {}, "garbage.step: "),
     ("curve", {}, "curve.step: the STEP file holds no faces"),
-    ("cone", {}, "cone.brep: face 1: the surface normal is undefined"),
+    ("cone", {}, "cone.brep: face 1: the surface normal is undefined at (0, 0, 10)"),
     ("closed", {"blank_side": (0, 1, 0)}, "closed.brep: face 2: points away from the blank"),
     ("wall", {}, "wall.step: face 1: is edge-on to the blank side"),
     ("die", {"faces": [1, 99]}, "die.step: face 99 is not in the model"),

@@ -216,3 +216,17 @@ def test_model_checks() -> None:
         ToolModel("a", "bezier", surface, [1, 2])
     with pytest.raises(ValueError, match="name must be one word"):
         ToolModel("a b", "bezier", surface, [1])
+
+
+def test_documented_examples_read(tmp_path: Path) -> None:
+    """The examples of docs/tool-files.md are valid tool files."""
+    text = (Path(__file__).resolve().parents[1] / "docs" / "tool-files.md").read_text()
+    blocks = [b.split("```")[0] for b in text.split("```\n# ddpy tool file")[1:]]
+    assert len(blocks) == 2
+    kinds = []
+    for i, block in enumerate(blocks):
+        model = read_tool(_write(tmp_path, "# ddpy tool file" + block, f"ex{i}.tool"))
+        kinds.append(model.description)
+        assert model.n_patches == 2
+        np.testing.assert_array_equal(model.face_tags, [1, 2])
+    assert kinds == ["nagata", "bezier"]

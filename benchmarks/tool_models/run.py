@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from ddpy.cad import build_tool_models, gmsh_session
-from ddpy.cad_examples import die_profile
+from ddpy.cad_examples import cylindrical_punch, die_profile
 from ddpy.shape_error import ShapeError, plot_shape_error, shape_error
 from ddpy.toolfile import read_tool
 
@@ -66,6 +66,28 @@ def _orders(step: Path, out: Path) -> dict[str, list[dict[str, float]]]:
     return rows
 
 
+def _punch(out: Path) -> dict[str, dict]:
+    """The revolved punch: per model and per CAD face, max |d| (um) and max angle."""
+    with gmsh_session():
+        import gmsh
+
+        gmsh.model.add("punch")
+        cylindrical_punch(out / "punch.step")
+        gmsh.model.remove()
+    paths = build_tool_models(out / "punch.step", out, "punch", size=10.0,
+                              blank_side=(0, 0, -1))
+    rows = {}
+    for kind, path in paths.items():
+        model = read_tool(path)
+        e = shape_error(model, samples=21 if kind == "bezier" else 9)
+        faces = model.face_tags[e.patch]
+        rows[kind] = {"patches": model.n_patches, **{
+            name: {"max_distance_um": 1e3 * float(np.abs(e.distance[faces == tag]).max()),
+                   "max_angle_deg": float(np.nanmax(e.angle[faces == tag]))}
+            for name, tag in zip(("disc", "fillet", "wall"), (1, 2, 3), strict=True)}}
+    return rows
+
+
 def _order(rows: list[dict[str, float]], key: str) -> float:
     h = np.log([1.0 / r["per_arc"] for r in rows])
     return float(np.polyfit(h, np.log([r[key] for r in rows]), 1)[0])
@@ -81,6 +103,7 @@ def compute(out: Path) -> dict:
     errors, seconds = _build(out / "die.step", out)
     degrees = seconds.pop("bezier_degrees")
     orders = _orders(out / "die.step", out)
+    punch = _punch(out)
     return {
         "geometry": {"land_mm": 20.0, "fillet_radius_mm": 4.0, "cylinder_radius_mm": 23.5,
                      "width_mm": 30.0, "straight_size_mm": SIZE},
@@ -90,6 +113,7 @@ def compute(out: Path) -> dict:
                           "angle": _order(rows, "max_angle_deg")}
                    for kind, rows in orders.items()},
         "bezier_degrees": degrees,
+        "punch": punch,
         "paper": PAPER,
         "_errors": errors,
     }
@@ -184,6 +208,40 @@ def report(result: dict, elapsed: float) -> str:
         f"{o['nagata']['angle']:.2f} (normal); facets {o['facets']['distance']:.2f} and "
         f"{o['facets']['angle']:.2f}. The paper's arc study (Fig. 4) gives 4 and 3 against 2 "
         "and 1: the surfaces behave like the arcs they are made of.",
+    ]
+    p = result["punch"]
+    lines += [
+        "",
+        "## A revolved tool: the nose of a cylindrical punch",
+        "",
+        "Deep drawing tools are surfaces of revolution: `ddpy.cad_examples.cylindrical_punch` "
+        "revolves a flat disc of radius 40 mm, a fillet of radius 8 mm and a wall of radius "
+        "48 mm about z (blank below). Fillet and wall are faces closed on a seam: gmsh refuses "
+        "them as transfinite, so ddpy grids them itself between gmsh's edge nodes (all "
+        "quadrilaterals, conforming); the disc is meshed unstructured and, for Bezier, covered "
+        "by an O-grid of five patches. Same densities as above (wall: 10 mm along z).",
+        "",
+        "| model | patches | disc max d [um] | fillet max d [um] | fillet max normal [deg] | "
+        "wall max d [um] | wall max normal [deg] |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for k in ("nagata", "facets", "bezier"):
+        r = p[k]
+        lines.append(f"| {label[k]} | {r['patches']} | {r['disc']['max_distance_um']:.3g} | "
+                     f"{r['fillet']['max_distance_um']:.3g} | {r['fillet']['max_angle_deg']:.3g}"
+                     f" | {r['wall']['max_distance_um']:.3g} | {r['wall']['max_angle_deg']:.3g} |")
+    lines += [
+        "",
+        "On the wall, Nagata behaves as on the die's cylinder. On the fillet it does not: its "
+        "edge along the disc joins two vertices whose normals are both the disc's (0, 0, -1), "
+        "so the Nagata curve of that edge is the straight chord (equal end normals carry no "
+        "curvature) while the CAD edge is a circle of radius 40 mm; the patches next to it "
+        "twist, and their error grows to the values above, largest near the chord's middle. "
+        "This is a property of the Nagata interpolation from vertex normals alone along an "
+        "edge where a plane meets a curved face tangentially (the paper's ref. [32] treats "
+        "such edges with the edge's tangent directions; the Nagata surfaces of ddpy do not "
+        "yet). The fine facets' error there is their own chord error, with 120 facets around "
+        "against 16 Nagata patches.",
         "",
         "## Maps (paper Fig. 8)",
         "",

@@ -3,14 +3,16 @@
 :func:`build_tool_models` reads a STEP, IGES or BREP file (or takes the faces of the current
 gmsh model) and writes three tool files (``docs/tool-files.md``):
 
-- ``<name>.nagata.tool``: every CAD face meshed in quadrilaterals (structured on 4-sided faces)
-  or triangles, ``patches_per_arc`` elements per 90 degrees along curved edges and edges of at
-  most ``size`` along straight ones; vertex normals from the exact CAD surface, one per CAD face
-  at crease vertices; all faces oriented towards the blank;
+- ``<name>.nagata.tool``: every CAD face meshed in quadrilaterals (structured on 4-sided
+  faces and on faces closed on a seam or a pole, :mod:`ddpy.cad_mesh`) or triangles,
+  ``patches_per_arc`` elements per 90 degrees along curved edges and edges of at most ``size``
+  along straight ones; vertex normals from the exact CAD surface, one per CAD face at crease
+  vertices; all faces oriented towards the blank;
 - ``<name>.facets.tool``: the same construction from its own mesh, ``facets_per_arc`` per 90
   degrees (the CAD is meshed twice when the two densities differ);
 - ``<name>.bezier.tool``: every CAD face fitted by non-rational Bezier patches of degree <= 6,
-  split until they deviate from the CAD surface by less than ``bezier_tol``.
+  split until they deviate from the CAD surface by less than ``bezier_tol`` and
+  ``bezier_angle_tol`` (:mod:`ddpy.bezier_fit`).
 
 Errors (:class:`CadError`) name the CAD file and the face.
 """

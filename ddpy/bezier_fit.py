@@ -171,32 +171,40 @@ def _fit_region(face: int, mapping: Mapping, region: tuple[float, float, float, 
     normal = np.asarray(gmsh.model.getNormal(face, uv.ravel())).reshape(len(s), len(t), 3)
     cos_tol = np.cos(np.radians(angle_tol))
     errors: dict[tuple[int, int], float] = {}
-    nets: dict[tuple[int, int], NDArray[np.float64]] = {}
+    halves = {n: np.einsum("ia,abk->ibk", _PINV[n], fit) for n in DEGREES}
+
+    def fitted(n: int, m: int) -> tuple[NDArray[np.float64], float]:
+        net = np.einsum("ibk,jb->ijk", halves[n], _PINV[m])
+        approx = np.einsum("ai,ijk,bj->abk", _CHECK_BASIS[n], net, _CHECK_BASIS[m])
+        distance = float(np.linalg.norm(approx - check, axis=2).max()) / tol
+        du = n * np.einsum("ai,ijk,bj->abk", _CHECK_BASIS[n - 1], np.diff(net, axis=0),
+                           _CHECK_BASIS[m])
+        dv = m * np.einsum("ai,ijk,bj->abk", _CHECK_BASIS[n], np.diff(net, axis=1),
+                           _CHECK_BASIS[m - 1])
+        cross = np.cross(du, dv)
+        length = np.linalg.norm(cross, axis=2)
+        tangent = np.maximum(np.linalg.norm(du, axis=2), np.linalg.norm(dv, axis=2))
+        defined = length > 1e-6 * tangent**2   # not at a point collapsed to a pole
+        cosine = np.einsum("abk,abk->ab", cross, normal)[defined] / length[defined]
+        cosine = cosine * (1.0 if cosine.sum() >= 0.0 else -1.0)
+        # Angle error relative to its tolerance, through 1 - cos ~ angle^2 / 2.
+        angle = float(np.sqrt(max(1.0 - cosine.min(), 0.0) / (1.0 - cos_tol)))
+        return net, max(distance, angle)
+
+    # Cheapest first (fewest control points, then lowest top degree); stop at the first group
+    # with a pair within the tolerances.
+    groups: dict[tuple[int, int], list[tuple[int, int]]] = {}
     for n in DEGREES:
-        half = np.einsum("ia,abk->ibk", _PINV[n], fit)
         for m in DEGREES:
-            net = np.einsum("ibk,jb->ijk", half, _PINV[m])
-            approx = np.einsum("ai,ijk,bj->abk", _CHECK_BASIS[n], net, _CHECK_BASIS[m])
-            distance = float(np.linalg.norm(approx - check, axis=2).max()) / tol
-            du = n * np.einsum("ai,ijk,bj->abk", _CHECK_BASIS[n - 1], np.diff(net, axis=0),
-                               _CHECK_BASIS[m])
-            dv = m * np.einsum("ai,ijk,bj->abk", _CHECK_BASIS[n], np.diff(net, axis=1),
-                               _CHECK_BASIS[m - 1])
-            cross = np.cross(du, dv)
-            length = np.linalg.norm(cross, axis=2)
-            tangent = np.maximum(np.linalg.norm(du, axis=2), np.linalg.norm(dv, axis=2))
-            defined = length > 1e-6 * tangent**2   # not at a point collapsed to a pole
-            cosine = np.einsum("abk,abk->ab", cross, normal)[defined] / length[defined]
-            cosine = cosine * (1.0 if cosine.sum() >= 0.0 else -1.0)
-            # Angle error relative to its tolerance, through 1 - cos ~ angle^2 / 2.
-            angle = float(np.sqrt(max(1.0 - cosine.min(), 0.0) / (1.0 - cos_tol)))
-            errors[n, m] = max(distance, angle)
-            nets[n, m] = net
-    good = [p for p in errors if errors[p] <= 1.0]
-    if not good:
-        return None, errors
-    best = min(good, key=lambda p: ((p[0] + 1) * (p[1] + 1), max(p), errors[p]))
-    return nets[best], errors
+            groups.setdefault(((n + 1) * (m + 1), max(n, m)), []).append((n, m))
+    for key in sorted(groups):
+        nets = {}
+        for pair in groups[key]:
+            nets[pair], errors[pair] = fitted(*pair)
+        good = [p for p in groups[key] if errors[p] <= 1.0]
+        if good:
+            return nets[min(good, key=errors.__getitem__)], errors
+    return None, errors
 
 
 def fit_face(builder: ToolBuilder, face: int, tol: float, angle_tol: float,

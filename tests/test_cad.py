@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -364,25 +362,36 @@ def test_bad_arguments(cad: dict[str, Path], tmp_path: Path) -> None:
         build_tool_models(cad["die"], tmp_path, "a", blank_side=(0, 1))
 
 
-def test_cli_build_and_error(cad: dict[str, Path], tmp_path: Path) -> None:
-    def ddpy(*args: str) -> subprocess.CompletedProcess[str]:
-        return subprocess.run([sys.executable, "-m", "ddpy", *args], capture_output=True,
-                              text=True)
-    done = ddpy("tools", "build", str(cad["cylinder"]), "--name", "cyl", "--out", str(tmp_path),
-                "--patches-per-arc", "2", "--facets-per-arc", "8", "--blank-point=0,0,10")
-    assert done.returncode == 0, done.stderr
-    files = done.stdout.split()
+def test_cli_build_and_error(cad: dict[str, Path], tmp_path: Path,
+                             capsys: pytest.CaptureFixture[str]) -> None:
+    from ddpy.cli import main
+
+    def ddpy(*args: str) -> tuple[int, str, str]:
+        try:
+            code = main(list(args))
+        except SystemExit as stop:   # argparse refusing an argument
+            code = int(stop.code)
+        out, err = capsys.readouterr()
+        return code, out, err
+
+    code, out, err = ddpy("tools", "build", str(cad["cylinder"]), "--name", "cyl", "--out",
+                          str(tmp_path), "--patches-per-arc", "2", "--facets-per-arc", "8",
+                          "--blank-point=0,0,10")
+    assert code == 0, err
+    files = out.split()
     assert [Path(f).name for f in files] == ["cyl.nagata.tool", "cyl.facets.tool",
                                               "cyl.bezier.tool"]
     assert read_tool(files[0]).n_patches == 2 and read_tool(files[1]).n_patches == 8
-    done = ddpy("tools", "error", *files, "--json", "--png", str(tmp_path))
-    assert done.returncode == 0, done.stderr
-    rows = json.loads(done.stdout)
+    code, out, err = ddpy("tools", "error", *files, "--json", "--png", str(tmp_path))
+    assert code == 0, err
+    rows = json.loads(out)
     assert [r["description"] for r in rows] == ["nagata", "facets", "bezier"]
     assert rows[0]["max_distance_um"] < rows[1]["max_distance_um"]
     assert (tmp_path / "cyl.nagata.tool.png").is_file()
-    done = ddpy("tools", "build", str(cad["cone"]), "--out", str(tmp_path))
-    assert done.returncode == 1
-    assert "ddpy tools build: error: " in done.stderr and "cone.brep: face 1" in done.stderr
-    done = ddpy("tools", "build", str(cad["die"]), "--blank-side", "1,2")
-    assert done.returncode == 2 and "expected X,Y,Z" in done.stderr
+    code, out, _ = ddpy("tools", "error", *files)
+    assert code == 0 and "max |d| um" in out
+    code, _, err = ddpy("tools", "build", str(cad["cone"]), "--out", str(tmp_path))
+    assert code == 1
+    assert "ddpy tools build: error: " in err and "cone.brep: face 1" in err
+    code, _, err = ddpy("tools", "build", str(cad["die"]), "--blank-side", "1,2")
+    assert code == 2 and "expected X,Y,Z" in err

@@ -1,0 +1,152 @@
+"""Checks of a case against the geometry of its tools, before any run (docs/input-format.md,
+"Checks"): each tool of the first phase starts outside the blank, on the side it touches, with
+its normals towards the blank; no forming phase brings two tools on opposite sides of the blank
+closer than half its thickness (a motion through the blank).
+
+They need the tool models (``ddpy.toolfile``); without that module they are skipped. The
+contact search (:class:`ddpy.search.ContactSearch`) measures the distances, so a check sees
+the surface the solver will see.
+"""
+
+from __future__ import annotations
+
+import itertools
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ddpy.case import Case, HoldGap, Move
+from ddpy.search import INSIDE, ContactSearch
+
+__all__ = ["geometry_errors"]
+
+#: A tool may start this fraction of the blank thickness inside it (Nagata bulge, rounding).
+START_TOLERANCE = 0.1
+#: Tools on opposite sides of the blank may not come closer than this fraction of its
+#: thickness during a phase.
+CLEARANCE = 0.5
+#: Positions along each phase where the clearance is checked.
+SAMPLES = 10
+#: Most surface points of one tool used for the clearance check.
+MAX_POINTS = 4000
+
+
+def _error(origin: str, message: str):  # -> DeckError
+    from ddpy.decks import DeckError
+
+    path, _, line = origin.rpartition(":")
+    if path and line.isdigit():
+        return DeckError(message, Path(path), int(line))
+    return DeckError(message, Path(origin) if origin else None)
+
+
+def geometry_errors(case: Case) -> list:
+    """Errors (DeckError) of the tool positions and motions; [] when the tool models cannot be
+    read here."""
+    try:
+        models = {t.name: t.model() for t in case.tools}
+    except ImportError:  # ddpy.toolfile is not part of this build
+        return []
+    from ddpy.decks import _blank_thickness
+
+    thickness = _blank_thickness(case.mesh) or 1.0
+    searches = {name: ContactSearch(m.surface) for name, m in models.items()}
+    return _start_errors(case, searches, thickness) + _clearance_errors(case, searches,
+                                                                        thickness)
+
+
+def _start_errors(case: Case, searches: dict[str, ContactSearch], thickness: float) -> list:
+    errors = []
+    mesh, first = case.mesh, case.phases[0]
+    for name in first.tools:
+        if isinstance(first.motion(name), HoldGap):
+            continue  # placed by its gap
+        tool = case.tool(name)
+        nodes = tool.contact_nodes(mesh)
+        found = searches[name].project(mesh.nodes[nodes])
+        inside = found.status == INSIDE
+        along = found.normal @ np.asarray(tool.facing)
+        clear = inside & (np.abs(along) > 0.5)
+        if clear.any() and (along[clear] > 0).all():
+            errors.append(_error(tool.origin, f"the normals of tool '{name}' point away from "
+                                 f"the blank (the {tool.contact} of the blank faces them): "
+                                 "expected a tool file whose normals point towards the blank"))
+            continue
+        depth = np.where(inside, -found.distance, -np.inf)
+        worst = int(np.argmax(depth))
+        if depth[worst] > START_TOLERANCE * thickness:
+            x = mesh.nodes[nodes[worst]]
+            errors.append(_error(tool.origin, f"tool '{name}' starts inside the blank: node "
+                                 f"{mesh.node_ids[nodes[worst]]} at ({_xyz(x)}) is "
+                                 f"{depth[worst]:.3g} mm behind its surface (expected the tool "
+                                 f"on the {tool.contact} of the blank, touching it at most)"))
+    return errors
+
+
+def _clearance_errors(case: Case, searches: dict[str, ContactSearch], thickness: float
+                      ) -> list:
+    errors = []
+    position = {t.name: np.zeros(3) for t in case.tools}
+    placed = set(position)  # tools whose position is known (not set by a gap)
+    points = {name: _subsample(s.grid_points) for name, s in searches.items()}
+    for phase in case.phases:
+        if phase.is_springback:
+            continue
+        for name in phase.tools:
+            if isinstance(phase.motion(name), HoldGap):
+                placed.discard(name)
+        known = [n for n in phase.tools if n in placed]
+        for a, b in itertools.combinations(known, 2):
+            fa, fb = case.tool(a).facing, case.tool(b).facing
+            if float(np.dot(fa, fb)) > -0.5:
+                continue  # same side of the blank
+            da, db = phase.displacement(a), phase.displacement(b)
+            if not (da.any() or db.any()):
+                continue
+            close = _first_approach(points, searches, a, b, position, da, db,
+                                    CLEARANCE * thickness)
+            if close is not None:
+                gap, fraction = close
+                mover = phase.motion(a) if da.any() else phase.motion(b)
+                assert isinstance(mover, Move)
+                how = (f"cross each other ({-gap:.3g} mm deep)" if gap < 0 else
+                       f"come {gap:.3g} mm apart, less than half the blank thickness "
+                       f"{thickness:.3g} mm")
+                errors.append(_error(mover.origin, f"phase '{phase.name}': tools '{a}' and "
+                                     f"'{b}' {how} at {fraction:.0%} of the phase: the motion "
+                                     "goes through the blank"))
+                return errors  # later positions follow from this one
+        for name in phase.tools:
+            if name in placed:
+                position[name] = position[name] + phase.displacement(name)
+    return errors
+
+
+def _first_approach(points: dict[str, NDArray[np.float64]],
+                    searches: dict[str, ContactSearch], a: str, b: str,
+                    position: dict[str, NDArray[np.float64]], da: NDArray[np.float64],
+                    db: NDArray[np.float64], limit: float) -> tuple[float, float] | None:
+    """The first position along the phase (fraction) where a surface point of either tool is
+    less than ``limit`` in front of the other's surface, and the smallest distance there."""
+    for fraction in np.linspace(1.0 / SAMPLES, 1.0, SAMPLES):
+        ua, ub = position[a] + fraction * da, position[b] + fraction * db
+        gaps = []
+        for p, q, up, uq in ((a, b, ua, ub), (b, a, ub, ua)):
+            found = searches[q].project(points[p] + up, tool_displacement=uq)
+            inside = found.status == INSIDE
+            if inside.any():
+                gaps.append(float(found.distance[inside].min()))
+        if gaps and min(gaps) < limit:
+            return min(gaps), float(fraction)
+    return None
+
+
+def _subsample(x: NDArray[np.float64]) -> NDArray[np.float64]:
+    if len(x) <= MAX_POINTS:
+        return x
+    return x[np.linspace(0, len(x) - 1, MAX_POINTS).astype(int)]
+
+
+def _xyz(x: NDArray[np.float64]) -> str:
+    return ", ".join(f"{c:.4g}" for c in x)

@@ -1,0 +1,69 @@
+"""Helpers of the deck tests: example cases copied to a folder, and a tool file reader for
+the geometry checks when ddpy.toolfile is not part of this build."""
+
+from __future__ import annotations
+
+import shutil
+import sys
+import types
+from pathlib import Path
+
+import numpy as np
+
+from ddpy.surfaces import NagataSurface
+
+EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
+
+
+def copy_example(name: str, folder: Path, **texts: str) -> Path:
+    """Copy examples/<name> to folder/<name>; replace decks given as keyword (mesh='...')."""
+    target = folder / name
+    shutil.copytree(EXAMPLES / name, target)
+    for deck, text in texts.items():
+        (target / f"{deck}.dat").write_text(text)
+    return target
+
+
+def edit(case: Path, deck: str, old: str, new: str) -> Path:
+    """Replace text in one deck of a case folder (the text must be there)."""
+    path = case / deck
+    text = path.read_text()
+    assert old in text, f"{old!r} not in {deck}"
+    path.write_text(text.replace(old, new, 1))
+    return case
+
+
+def _read_nagata(path: str | Path) -> types.SimpleNamespace:
+    """Enough of the tool file format (docs/tool-files.md) for Nagata and facet files."""
+    words = [line.split("#", 1)[0].split() for line in Path(path).read_text().splitlines()]
+    words = [w for w in words if w]
+    header = {w[0]: w[1] for w in words[:6] if w[0] in ("name", "description")}
+    i = next(k for k, w in enumerate(words) if w[0] == "vertices")
+    nv = int(words[i][1])
+    vertices = np.array(words[i + 1:i + 1 + nv], dtype=float)
+    i += 1 + nv
+    nn = int(words[i][1])
+    normals = np.array(words[i + 1:i + 1 + nn], dtype=float)
+    i += 1 + nn
+    nf = int(words[i][1])
+    faces = np.array(words[i + 1:i + 1 + nf], dtype=int)
+    corner = normals[faces[:, 4:8]]
+    corner /= np.linalg.norm(corner, axis=2, keepdims=True)
+
+    def model(smooth: bool) -> types.SimpleNamespace:
+        surface = NagataSurface(vertices, corner, faces[:, :4], smooth=smooth)
+        return types.SimpleNamespace(name=header["name"], surface=surface,
+                                     description="nagata" if smooth else "facets",
+                                     facets=lambda: model(False))
+
+    return model(header["description"] == "nagata")
+
+
+def install_toolfile(monkeypatch) -> None:
+    """Make ddpy.toolfile importable: the real one when present, else a minimal reader."""
+    try:
+        import ddpy.toolfile  # noqa: F401
+    except ImportError:
+        stub = types.ModuleType("ddpy.toolfile")
+        stub.read_tool = _read_nagata  # type: ignore[attr-defined]
+        monkeypatch.setitem(sys.modules, "ddpy.toolfile", stub)

@@ -1,0 +1,580 @@
+"""Input decks: every keyword, the validated model, and the error messages (file:line)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from deckutil import EXAMPLES, copy_example, edit, install_toolfile
+
+from ddpy.case import HoldGap, Move, Newton, RminLimits, rigid_body_modes_free
+from ddpy.decks import DeckError, parse_case, read_case
+from ddpy.material import Hill48, Swift, Voce
+
+
+def error_of(case: Path, geometry: bool = False) -> DeckError:
+    with pytest.raises(DeckError) as info:
+        read_case(case, geometry=geometry)
+    return info.value
+
+
+def line_of(case: Path, deck: str, text: str) -> int:
+    lines = (case / deck).read_text().splitlines()
+    return next(k for k, line in enumerate(lines, start=1) if text in line)
+
+
+# ----------------------------------------------------------------------------------- examples
+
+
+def test_bending_example_model() -> None:
+    case = read_case(EXAMPLES / "bending")
+    assert case.title.startswith("Unconstrained cylindrical bending")
+    forming, springback = case.phases
+    assert forming.kind == "forming" and forming.tools == ("punch", "die")
+    assert forming.motions == (Move("punch", (0.0, 0.0, -28.5), forming.motions[0].origin),)
+    assert forming.motions[0].origin.endswith("control.dat:21")
+    assert forming.lead == "punch" and forming.travel == pytest.approx(28.5)
+    assert forming.max_increment == 0.114 and forming.min_increment == pytest.approx(0.114e-3)
+    assert forming.output_at == (7.0, 14.0, 21.0, 28.5) and forming.output_every == 25
+    assert forming.rmin == RminLimits(0.01, 0.02, 1.0, True)
+    assert forming.newton == Newton(1e-4, 1e-4, 25, 0.5)
+    np.testing.assert_array_equal(forming.displacement("die"), [0, 0, 0])
+    assert springback.is_springback and springback.increments == 1 and springback.tools == ()
+    mesh = case.mesh
+    assert (mesh.n_nodes, mesh.n_elements) == (25 * 4 * 4, 24 * 3 * 3)
+    assert mesh.normal == (0.0, 0.0, 1.0) and mesh.elements.dtype == np.int32
+    assert not mesh.nodes.flags.writeable
+    np.testing.assert_allclose(mesh.thickness(), 1.0)
+    mat = case.material.material
+    assert mat.E == 210000 and mat.nu == 0.3 and mat.hardening == Swift(645.3, 0.0102, 0.252)
+    assert mat.yield_criterion == Hill48(F=0.254, G=0.397, H=0.603, L=1.5, M=1.5, N=1.689)
+    punch, die = case.tools
+    assert (punch.name, punch.description, punch.friction, punch.contact) == (
+        "punch", "nagata", 0.148, "top")
+    assert punch.file == EXAMPLES / "bending" / "tools" / "punch.tool"
+    assert die.facing == (0.0, 0.0, -1.0)
+    np.testing.assert_allclose(mesh.nodes[punch.contact_nodes(mesh), 2], 1.0)
+    np.testing.assert_allclose(mesh.nodes[die.contact_nodes(mesh), 2], 0.0)
+    # constraints: symmetry x, y always; the centre line in z only in springback
+    nodes, comps = case.boundary.constrained("forming")
+    assert set(comps.tolist()) == {0, 1}
+    np.testing.assert_allclose(mesh.nodes[nodes[comps == 0], 0], 0.0)
+    nodes, comps = case.boundary.constrained("springback")
+    centre = mesh.nodes[nodes[comps == 2]]
+    np.testing.assert_allclose(centre[:, :2], 0.0)
+    assert len(centre) == 4
+    assert rigid_body_modes_free(mesh.nodes, case.boundary.dofs("springback")) == []
+    assert rigid_body_modes_free(mesh.nodes, case.boundary.dofs("forming")) == [
+        "translation along z"]
+    assert "punch by (0, 0, -28.5)" in case.summary() and case.warnings == ()
+
+
+def test_strip_draw_example_model() -> None:
+    case = read_case(EXAMPLES / "strip_draw")
+    draw, free, back = case.phases
+    assert isinstance(draw.motion("holder"), HoldGap)
+    assert draw.motion("holder") == HoldGap("holder", "die", 1.1, draw.motion("holder").origin)
+    np.testing.assert_array_equal(draw.displacement("holder"), [0, 0, 0])  # follows the die
+    assert draw.max_increment == 0.2 and draw.min_increment == pytest.approx(2e-4)
+    assert free.tools == ("punch", "die") and free.max_increment == 0.1
+    assert free.rmin.strain == 0.01 and draw.rmin.strain == 0.02
+    assert back.increments == 4
+    assert case.tool("punch").description == "facets"
+    assert case.tool("die").contact.startswith("surface facing")
+    mat = case.material
+    assert isinstance(mat.material.hardening, Voce)
+    assert mat.material.yield_criterion.r0 == pytest.approx(1.73)
+    np.testing.assert_allclose(mat.axes((0, 0, 1)), [[0, 1, 0], [-1, 0, 0], [0, 0, 1]],
+                               atol=1e-15)
+    sets = case.boundary.nodesets
+    np.testing.assert_array_equal(sets["middle"].nodes, sets["corner"].nodes)
+    assert case.mesh.node_ids[sets["corner"].nodes].tolist() == [1, 4, 7, 10, 13, 16]
+    nodes, comps = case.boundary.constrained("draw")
+    assert np.count_nonzero(comps == 1) == 18  # plane strain on every node
+
+
+def test_geometry_checks_accept_examples(monkeypatch) -> None:
+    install_toolfile(monkeypatch)
+    for name in ("bending", "strip_draw"):
+        case = read_case(EXAMPLES / name)
+        assert case.tool("punch").model().surface.n_patches >= 4
+
+
+def test_parse_case_from_texts() -> None:
+    folder = EXAMPLES / "bending"
+    texts = {p.name: p.read_text() for p in folder.glob("*.dat")}
+    case = parse_case(texts, folder, geometry=False)
+    assert case.mesh.n_elements == 216
+    with pytest.raises(DeckError, match="missing"):
+        parse_case({"control.dat": texts["control.dat"]}, folder)
+
+
+# ----------------------------------------------------------------------------------- files
+
+
+def test_missing_folder_and_files(tmp_path: Path) -> None:
+    assert "not a case folder" in str(error_of(tmp_path / "nope"))
+    case = copy_example("bending", tmp_path)
+    (case / "bc.dat").unlink()
+    (case / "tools.dat").unlink()
+    error = error_of(case)
+    assert len(error.errors) == 2 and error.line is None
+    assert str(error).startswith(f"{case / 'bc.dat'}: missing")
+
+
+def test_binary_deck(tmp_path: Path) -> None:
+    case = copy_example("bending", tmp_path)
+    (case / "material.dat").write_bytes(b"elastic \xff\xfe E 1")
+    assert "not UTF-8" in str(error_of(case))
+
+
+def test_several_errors_collected(tmp_path: Path) -> None:
+    case = copy_example("bending", tmp_path)
+    edit(case, "tools.dat", "friction     0.148", "friction     -0.1")
+    edit(case, "material.dat", "nu 0.3", "nu 0.7")
+    edit(case, "control.dat", "cutback              0.5", "cutback 2")
+    error = error_of(case)
+    assert len(error.errors) == 3
+    text = str(error)
+    assert f"tools.dat:{line_of(case, 'tools.dat', '-0.1')}: friction must be >= 0, got -0.1" \
+        in text
+    assert "Poisson's ratio nu must be < 0.5, got 0.7" in text
+    assert "cutback must be < 1, got 2" in text
+    assert error.path == case / "control.dat"  # the first, in reading order
+
+
+# ----------------------------------------------------------------------------------- control
+
+CONTROL_ERRORS = [
+    ("tools     punch die", "tools     punch die press", "unknown tool 'press' in phase"),
+    ("tools     punch die", "tools     punch", "moves tool"),  # die not active: fine; see next
+    ("move      punch  0 0 -28.5", "move      punch  0 0 -28.5\n  move die 0 0 0", None),
+    ("move      punch  0 0 -28.5", "move punch 0 0 0", "moves no tool"),
+    ("move      punch  0 0 -28.5", "move punch 0 0", "expected 'move TOOL DX DY DZ'"),
+    ("move      punch  0 0 -28.5", "move punch 0 0 nan", "expected a finite number"),
+    ("move      punch  0 0 -28.5", "move punch 0 0 1e999", "expected a finite number"),
+    ("move      punch  0 0 -28.5", "move punch 0 0 -28.5\n  move punch 0 0 -1",
+     "already has a motion"),
+    ("lead      punch", "lead      die", "lead tool 'die' must be a tool that moves"),
+    ("output_at 7 14 21 28.5", "output_at 7 14 21 30", "beyond the travel 28.5 mm"),
+    ("output_at 7 14 21 28.5", "output_at 7 21 14", "must increase strictly"),
+    ("type      forming", "type      stamping", "expected the phase type among forming"),
+    ("type      forming", "type forming\n  increments 3", "'increments' applies to springback"),
+    ("max_increment        0.114", "max_increment -1", "max_increment must be > 0, got -1"),
+    ("max_increment        0.114", "max_increment 0.114\nmin_increment 1",
+     "min_increment 1 mm exceeds max_increment 0.114 mm"),
+    ("rmin_contact         on", "rmin_contact maybe", "expected rmin_contact among on, off"),
+    ("rmin_rotation        1.0", "rmin_rotation 120", "rmin_rotation must be <= 90"),
+    ("newton_force         1e-4", "newton_force 0", "newton_force must be > 0"),
+    ("max_iterations       25", "max_iterations 2.5", "expected an integer for max_iterations"),
+    ("max_iterations       25", "max_iterations 0", "max_iterations must be >= 1"),
+    ("output_every         25", "output_every 25\noutput_every 5", "given twice (first at line"),
+    ("title  Unconstrained", "titel  Unconstrained", "unknown keyword 'titel' at the top"),
+    ("  type        springback", "  type springback\n  tools punch",
+     "is a springback phase: the tools are removed, so 'tools' does not apply"),
+    ("  type        springback", "  type springback\n  move punch 0 0 1", "'move' does not"),
+    ("  increments  1", "  increments 0", "increments must be >= 1"),
+    ("phase springback", "phase forming", "phase 'forming' defined twice"),
+    ("phase forming", "phase 2nd", "expected a name for the phase"),
+    ("end\n\nphase springback", "\nphase springback", "is not closed: expected 'end' before the"),
+    ("  increments  1\nend", "  increments  1\nend\nend", "'end' without a 'phase NAME'"),
+    ("  move      punch", "  gap punch punch 1\n  move      punch", "cannot keep a gap to itself"),
+    ("  move      punch", "  gap die punch 0.9\n  move      punch", "gap 0.9 mm is smaller than"),
+    ("  move      punch", "  gap punch die 1.2\n  move      punch", "already has a motion"),
+    ("  output_at", "  move punch 0 0 1\n  output_at", "already has a motion at line"),
+]
+
+
+@pytest.mark.parametrize(("old", "new", "expected"), CONTROL_ERRORS)
+def test_control_errors(tmp_path: Path, old: str, new: str, expected: str | None) -> None:
+    case = edit(copy_example("bending", tmp_path), "control.dat", old, new)
+    if expected is None:
+        read_case(case, geometry=False)  # a fixed die moved, a punch moved up: legal
+        return
+    if expected == "moves tool":
+        expected = "moves tool 'punch'"
+        edit(case, "control.dat", "tools     punch", "tools     die")
+    error = error_of(case)
+    assert expected in str(error), str(error)
+    assert error.path == case / "control.dat" and error.line is not None
+
+
+def test_control_gap_rules(tmp_path: Path) -> None:
+    case = copy_example("strip_draw", tmp_path)
+    edit(case, "control.dat", "gap    holder die 1.1", "gap holder punch 1.1")
+    assert "touch the same side of the blank" in str(error_of(case))
+    case = copy_example("strip_draw", tmp_path / "b")
+    edit(case, "control.dat", "gap    holder die 1.1", "gap holder die 0.5")
+    assert "gap 0.5 mm is smaller than the blank thickness 1 mm" in str(error_of(case))
+    case = copy_example("strip_draw", tmp_path / "c")
+    edit(case, "control.dat", "gap    holder die 1.1", "gap holder press 1.1")
+    assert "gap partner 'press' is an unknown tool" in str(error_of(case))
+    case = copy_example("strip_draw", tmp_path / "d")
+    edit(case, "control.dat", "tools  punch die holder", "tools punch die holder\n  tools die")
+    assert "'tools' given twice" in str(error_of(case))
+
+
+def test_control_springback_first_and_rigid_modes(tmp_path: Path) -> None:
+    case = copy_example("bending", tmp_path)
+    edit(case, "bc.dat", "fix        centre  z  phase springback", "")
+    error = error_of(case)
+    assert f"control.dat:{line_of(case, 'control.dat', 'phase springback')}: springback phase " \
+        "'springback' removes the tools" in str(error)
+    assert "(translation along z)" in str(error)
+    (case / "control.dat").write_text("phase back\n type springback\nend\n")
+    assert "is a springback phase: there is nothing to release" in str(error_of(case))
+    (case / "control.dat").write_text("# nothing\n")
+    assert "no phase" in str(error_of(case))
+
+
+def test_control_defaults(tmp_path: Path) -> None:
+    case = copy_example("bending", tmp_path)
+    (case / "control.dat").write_text("phase only\n tools punch die\n move punch 0 0 -20\nend\n"
+                                      "phase springback\n type springback\nend\n")
+    c = read_case(case)
+    p = c.phases[0]
+    assert p.max_increment == pytest.approx(0.2) and p.min_increment == pytest.approx(2e-4)
+    assert p.rmin == RminLimits() and p.newton == Newton() and p.output_every == 10
+    assert p.lead == "punch" and c.title == "bending"
+
+
+def test_warnings(tmp_path: Path) -> None:
+    case = copy_example("bending", tmp_path)
+    edit(case, "control.dat", "max_increment        0.114", "max_increment 50")
+    edit(case, "tools.dat", "friction     0.148", "friction 1.5")
+    edit(case, "control.dat", "tools     punch die", "tools     punch")
+    warnings = read_case(case, geometry=False).warnings
+    assert any("max_increment 50 mm exceeds the travel 28.5 mm" in w for w in warnings)
+    assert any("friction coefficient 1.5 is above 1" in w for w in warnings)
+    assert any("tool 'die' is active in no phase" in w for w in warnings)
+
+
+# ----------------------------------------------------------------------------------- mesh
+
+OWN_MESH = """normal z
+nodes 8
+1 0 0 0
+2 1 0 0
+3 1 1 0
+4 0 1 0
+5 0 0 1
+6 1 0 1
+7 1 1 1
+8 0 1 1
+hexahedra 1
+10 1 2 3 4 5 6 7 8
+"""
+
+MESH_ERRORS = [
+    ("nodes 8", "nodes 9", "expected 9 lines 'ID X Y Z' after line 2, got 8 before 'hexahedra'",
+     11),
+    ("hexahedra 1", "hexahedra 2", "expected 2 lines 'ID N1 ... N8' after line 11, got 1 before "
+     "the end of the file", 12),
+    ("3 1 1 0", "3 1 1", "expected 'ID X Y Z' (4 numbers), got '3 1 1'", 5),
+    ("3 1 1 0", "3 1 one 0", "expected numbers X Y Z, got '1 one 0'", 5),
+    ("3 1 1 0", "3 1 1 inf", "expected finite coordinates", 5),
+    ("3 1 1 0", "2 1 1 0", "node 2 defined twice (first at line 4)", 5),
+    ("3 1 1 0", "0 1 1 0", "node ids must be >= 1, got 0", 5),
+    ("10 1 2 3 4 5 6 7 8", "10 1 2 3 4 5 6 7 9", "element 10 refers to node 9, which is not", 12),
+    ("10 1 2 3 4 5 6 7 8", "10 1 2 3 4 5 6 7 7", "element 10 repeats a node", 12),
+    ("10 1 2 3 4 5 6 7 8", "10 1 4 3 2 5 8 7 6", "element 10 is inverted at its corner 0", 12),
+    ("10 1 2 3 4 5 6 7 8", "10 1 2 3 4 5 6 7 8.0", "expected integers ID N1 ... N8", 12),
+    ("8 0 1 1\n", "8 0 1 1\n9 5 5 5\n", "expected 'hexahedra COUNT', got '9 5 5 5'", 11),
+    ("normal z", "normal w", "expected the sheet normal among x, y, z", 1),
+    ("normal z", "normal z\nbox 1 1 1 1 1 1", "'nodes' conflicts with 'box' at line 2", 3),
+    ("normal z", "normal z\norigin 1 2 3", "'origin' applies to a generated 'box' only", 2),
+    ("normal z", "normal z\nscale 1e308\nscale 2", "'scale' given twice", 3),
+    ("normal z", "normal z\nsize 3", "unknown keyword 'size': expected normal", 2),
+]
+
+
+@pytest.mark.parametrize(("old", "new", "expected", "line"), MESH_ERRORS)
+def test_mesh_errors(tmp_path: Path, old: str, new: str, expected: str, line: int | None
+                     ) -> None:
+    case = copy_example("bending", tmp_path, mesh=OWN_MESH.replace(old, new, 1))
+    error = error_of(case)
+    assert expected in str(error), str(error)
+    if line is not None:
+        assert (error.path.name, error.line) == ("mesh.dat", line)
+
+
+def test_mesh_unused_node(tmp_path: Path) -> None:
+    text = OWN_MESH.replace("nodes 8", "nodes 9").replace("hexahedra", "9 5 5 5\nhexahedra")
+    error = error_of(copy_example("bending", tmp_path, mesh=text))
+    assert "mesh.dat:11: node 9 belongs to no element" in str(error)
+
+
+def test_own_mesh_and_normal(tmp_path: Path) -> None:
+    text = OWN_MESH.replace("normal z", "normal -y\nscale 2")
+    case = copy_example("bending", tmp_path, mesh=text)
+    edit(case, "bc.dat", "nodeset    centre  box 0 0  0 0  -inf inf", "nodeset centre ids 1-8")
+    edit(case, "control.dat", "output_at 7 14 21 28.5", "")
+    c = read_case(case)
+    assert c.mesh.normal == (0.0, -1.0, 0.0) and c.mesh.node_ids.tolist() == list(range(1, 9))
+    assert c.mesh.element_ids.tolist() == [10] and c.mesh.nodes.max() == 2.0
+    np.testing.assert_allclose(c.mesh.nodes[c.tool("punch").contact_nodes(c.mesh), 1], 0.0)
+    np.testing.assert_allclose(c.mesh.thickness(), 2.0)
+
+
+def test_mesh_box_limits(tmp_path: Path) -> None:
+    case = copy_example("bending", tmp_path, mesh="box 1 1 1 1000 1000 1000\n")
+    assert "elements: at most" in str(error_of(case))
+    case = copy_example("bending", tmp_path / "b", mesh="box 1 1 1 1 1\n")
+    assert "expected 'box LX LY LZ NX NY NZ'" in str(error_of(case))
+    case = copy_example("bending", tmp_path / "d", mesh="box 10 10 10 1 1 1\nscale 1e308\n")
+    assert "mesh.dat:2: node coordinates overflow after scaling" in str(error_of(case))
+    case = copy_example("bending", tmp_path / "c", mesh="normal z\n")
+    assert "mesh.dat: no mesh" in str(error_of(case))
+
+
+def test_mesh_files(tmp_path: Path) -> None:
+    meshio = pytest.importorskip("meshio")
+    case = copy_example("bending", tmp_path)
+    box = read_case(EXAMPLES / "bending").mesh
+    extra = np.vstack([box.nodes, [[99.0, 99.0, 99.0]]])  # a node outside the hexahedra
+    data = meshio.Mesh(extra, [("hexahedron", box.elements)],
+                       point_sets={"centre nodes": np.flatnonzero(
+                           (box.nodes[:, 0] == 0) & (box.nodes[:, 1] == 0))})
+    meshio.write(case / "blank.inp", data)
+    (case / "mesh.dat").write_text("normal z\nfile blank.inp\n")
+    edit(case, "bc.dat", "nodeset    centre  box 0 0  0 0  -inf inf", "")
+    edit(case, "bc.dat", "fix        centre", "fix centre_nodes")
+    c = read_case(case)
+    assert c.mesh.n_nodes == box.n_nodes and c.mesh.source == "blank.inp"
+    np.testing.assert_allclose(c.mesh.nodes, box.nodes)
+    assert c.boundary.nodesets["centre_nodes"].nodes.size == 4
+    edit(case, "bc.dat", "symmetry   x 0", "nodeset centre_nodes plane x 0")
+    assert "node set 'centre_nodes' defined twice (first at blank.inp" in str(error_of(case))
+    meshio.write(case / "tet.msh", meshio.Mesh(box.nodes[:4], [("tetra", [[0, 1, 2, 3]])]),
+                 file_format="gmsh22", binary=False)
+    (case / "mesh.dat").write_text("file tet.msh\n")
+    assert "holds 1 tetra cells: only 8-node hexahedra" in str(error_of(case))
+    (case / "mesh.dat").write_text("file none.inp\n")
+    assert "mesh.dat:1: mesh file" in str(error_of(case)) and "not found" in str(error_of(case))
+    (case / "mesh.dat").write_text("file blank.vtu\n")
+    assert "ending in .inp or .msh" in str(error_of(case))
+    (case / "bad.inp").write_text("*NODE\n1, a, b\n")
+    (case / "mesh.dat").write_text("file bad.inp\n")
+    assert "cannot read mesh file" in str(error_of(case)) or "no hexahedra" in str(
+        error_of(case))
+
+
+# ----------------------------------------------------------------------------------- bc
+
+BC_ERRORS = [
+    ("fix        centre  z  phase springback", "fix centre", "expected 'fix NODESET COMPONENTS"),
+    ("fix        centre  z  phase springback", "fix centre w",
+     "expected components among x, y, z"),
+    ("fix        centre  z  phase springback", "fix centre zz", "expected components"),
+    ("fix        centre  z  phase springback", "fix centre z phase", "expected 'fix NODESET"),
+    ("fix        centre  z  phase springback", "fix centre z phase later",
+     "unknown phase 'later': control.dat defines forming, springback"),
+    ("fix        centre  z  phase springback", "fix center z", "unknown node set 'center'"),
+    ("symmetry   x 0 ", "symmetry x 1", "symmetry plane x = 1 holds no node of the mesh"),
+    ("symmetry   x 0 ", "symmetry w 0", "expected the symmetry axis among x, y, z"),
+    ("symmetry   x 0 ", "symmetry x edge", "unknown node set 'edge'"),
+    ("symmetry   x 0 ", "symmetry x", "expected 'symmetry AXIS VALUE|NODESET'"),
+    ("-inf inf ", "-inf 5 ", None),
+    ("box 0 0  0 0  -inf inf", "box 70 80 0 0 -inf inf", "selects no node"),
+    ("box 0 0  0 0  -inf inf", "box 1 0 0 0 -inf inf", "box bounds of x: min 1 > max 0"),
+    ("box 0 0  0 0  -inf inf", "box 0 0 0 0 nan inf", "expected a finite number"),
+    ("box 0 0  0 0  -inf inf", "box 0 0 0 0", "expected 'nodeset NAME box XMIN XMAX"),
+    ("box 0 0  0 0  -inf inf", "ids 1 26 501", "node 501 is not in the mesh"),
+    ("box 0 0  0 0  -inf inf", "ids 1-100000", "list more nodes than the mesh has (400)"),
+    ("box 0 0  0 0  -inf inf", "ids 5-2", "expected a range FIRST-LAST with 1 <= FIRST"),
+    ("box 0 0  0 0  -inf inf", "ids 1.5", "expected a node id or a range"),
+    ("box 0 0  0 0  -inf inf", "ids", "expected 'nodeset NAME ids ID...'"),
+    ("box 0 0  0 0  -inf inf", "sphere 1", "expected the node set kind among ids, box, plane"),
+    ("box 0 0  0 0  -inf inf", "plane x 3.3", "selects no node"),
+    ("box 0 0  0 0  -inf inf", "plane q 0", "expected the plane axis among x, y, z"),
+    ("tolerance  1e-4", "tolerance 0", "the tolerance must be > 0"),
+    ("tolerance  1e-4", "tolerance 1e-4\nfixed centre z", "unknown keyword 'fixed'"),
+    ("nodeset    centre", "nodeset centre plane x 0\nnodeset    centre",
+     "node set 'centre' defined twice (first at line"),
+]
+
+
+@pytest.mark.parametrize(("old", "new", "expected"), BC_ERRORS)
+def test_bc_errors(tmp_path: Path, old: str, new: str, expected: str | None) -> None:
+    case = edit(copy_example("bending", tmp_path), "bc.dat", old, new)
+    if expected is None:
+        read_case(case, geometry=False)
+        return
+    error = error_of(case)
+    assert expected in str(error), str(error)
+    assert error.path.name == "bc.dat" and error.line is not None
+
+
+def test_bc_message_format(tmp_path: Path) -> None:
+    case = edit(copy_example("bending", tmp_path), "bc.dat", "fix        centre  z  phase "
+                "springback", "fix centre")
+    number = line_of(case, "bc.dat", "fix centre")
+    assert str(error_of(case)) == (f"{case / 'bc.dat'}:{number}: expected 'fix NODESET "
+                                   "COMPONENTS [phase PHASE...]', got 'fix centre'")
+
+
+def test_bc_symmetry_on_node_set_and_all(tmp_path: Path) -> None:
+    case = edit(copy_example("bending", tmp_path), "bc.dat", "symmetry   x 0",
+                "nodeset xsym plane x 0\nsymmetry x xsym\nfix xsym all phase springback")
+    c = read_case(case, geometry=False)
+    labels = [k.label for k in c.boundary.constraints]
+    assert "symmetry x on xsym" in labels and "fix xsym xyz" in labels
+
+
+# ----------------------------------------------------------------------------------- material
+
+MATERIAL_ERRORS = [
+    ("nu 0.3", "nu 0.5", "Poisson's ratio nu must be < 0.5, got 0.5"),
+    ("E 210000", "E -1", "Young's modulus E must be > 0"),
+    ("E 210000", "", "missing E: expected 'elastic E VALUE nu VALUE'"),
+    ("E 210000", "E 1 E 2", "E given twice"),
+    ("E 210000", "E", "keys and values in pairs"),
+    ("E 210000", "G 3 E 1", "unknown key 'G' in 'elastic E VALUE nu VALUE'"),
+    ("N 1.689", "", "missing N: expected 'yield hill48 F VALUE"),
+    ("F 0.254  G 0.397  H 0.603", "F -1 G -1 H 0.603",
+     "do not define a convex yield surface"),
+    ("L 1.5", "L 0", "Hill48 L must be positive"),
+    ("hill48 ", "hill ", "expected the yield criterion among vonmises, hill48"),
+    ("n 0.252", "n 1.5", "Swift n must be <= 1, got 1.5"),
+    ("eps0 0.0102", "eps0 0", "Swift eps0 must be > 0"),
+    ("swift ", "voce ", "unknown key 'K' in 'hardening voce"),
+    ("swift ", "power ", "expected the hardening law among swift, voce"),
+    ("rolling_direction  0", "rolling_direction 400", "must be <= 360"),
+    ("rolling_direction  0", "rolling_direction", "expected 'rolling_direction ANGLE'"),
+    ("rolling_direction  0", "density 7.8e-9", "unknown keyword 'density'"),
+    ("elastic  ", "# elastic  ", "no 'elastic' line"),
+    ("yield              hill48", "# yield", "no 'yield' line"),
+    ("hardening          swift", "# hardening", "no 'hardening' line"),
+    ("hardening          swift", "hardening voce Y0 1 Q 1 b 1\nhardening swift",
+     "'hardening' given twice"),
+]
+
+
+@pytest.mark.parametrize(("old", "new", "expected"), MATERIAL_ERRORS)
+def test_material_errors(tmp_path: Path, old: str, new: str, expected: str) -> None:
+    case = edit(copy_example("bending", tmp_path), "material.dat", old, new)
+    error = error_of(case)
+    assert expected in str(error), str(error)
+    assert error.path.name == "material.dat"
+
+
+@pytest.mark.parametrize(("line", "check"), [
+    ("yield vonmises", lambda m: m.yield_criterion == Hill48.von_mises()),
+    ("yield hill48 r0 2 r45 1 r90 1.5",
+     lambda m: math.isclose(m.yield_criterion.r90, 1.5)
+     and m.yield_criterion.G + m.yield_criterion.H == pytest.approx(1)),
+    ("yield hill48 F 0.5 G 0.5 H 0.5 N 1.5", lambda m: m.yield_criterion.L == 1.5),
+])
+def test_material_yield_forms(tmp_path: Path, line: str, check) -> None:
+    case = edit(copy_example("bending", tmp_path), "material.dat",
+                "yield              hill48  F 0.254  G 0.397  H 0.603  L 1.5  M 1.5  N 1.689",
+                line)
+    assert check(read_case(case, geometry=False).material.material)
+
+
+def test_material_axes() -> None:
+    from ddpy.case import BlankMaterial
+
+    mat = read_case(EXAMPLES / "bending", geometry=False).material.material
+    axes = BlankMaterial(mat, 30.0).axes((0.0, 0.0, 1.0))
+    np.testing.assert_allclose(axes[0], [math.cos(math.pi / 6), 0.5, 0], atol=1e-15)
+    np.testing.assert_allclose(axes @ axes.T, np.eye(3), atol=1e-15)
+    np.testing.assert_allclose(BlankMaterial(mat, 0.0).axes((1.0, 0, 0))[0], [0, 1, 0])
+    assert np.linalg.det(BlankMaterial(mat, 10.0).axes((0, -1.0, 0))) == pytest.approx(1)
+
+
+# ----------------------------------------------------------------------------------- tools
+
+TOOL_ERRORS = [
+    ("friction     0.148", "friction     -0.1", "friction must be >= 0, got -0.1"),
+    ("friction     0.148", "friction     0.1 0.2", "expected 'friction MU'"),
+    ("contact      top", "", "tool 'punch' has no 'contact' (a tool with no contact partner)"),
+    ("contact      top", "contact side", "expected the contact side among top, bottom, facing"),
+    ("contact      top", "contact facing 0 0 0", "must be a non-zero finite vector"),
+    ("contact      top", "contact facing 1 1 1", "has no contact partner: no boundary face"),
+    ("contact      top", "contact facing 1 0", "expected 'contact facing NX NY NZ'"),
+    ("contact      top", "contact top 1", "expected 'contact top'"),
+    ("file         tools/punch.tool", "file tools/press.tool", "press.tool not found"),
+    ("file         tools/punch.tool", "", "tool 'punch' has no 'file'"),
+    ("description  nagata ", "description nurbs ", "expected the description among bezier"),
+    ("tool punch", "tool 1punch", "expected a name for the tool"),
+    ("tool die", "tool punch", "tool 'punch' defined twice (first at line 4)"),
+    ("end\n\ntool die", "\ntool die", "tool 'punch' is not closed"),
+    ("tool punch", "friction 0.1\ntool punch", "'friction' belongs inside a tool"),
+    ("tool punch", "toll punch", "unknown keyword 'toll' at the top of tools.dat"),
+    ("contact      top", "contact top\n  speed 3", "unknown keyword 'speed' in a tool"),
+    ("contact      top", "contact top\n  contact bottom", "'contact' given twice"),
+]
+
+
+@pytest.mark.parametrize(("old", "new", "expected"), TOOL_ERRORS)
+def test_tool_errors(tmp_path: Path, old: str, new: str, expected: str) -> None:
+    case = edit(copy_example("bending", tmp_path), "tools.dat", old, new)
+    error = error_of(case)
+    assert expected in str(error), str(error)
+    assert error.path.name == "tools.dat" and error.line is not None
+
+
+def test_tool_friction_message(tmp_path: Path) -> None:
+    case = edit(copy_example("bending", tmp_path), "tools.dat", "friction     0.148",
+                "friction -0.1")
+    number = line_of(case, "tools.dat", "friction -0.1")
+    assert str(error_of(case)) == f"{case / 'tools.dat'}:{number}: friction must be >= 0, got -0.1"
+
+
+def test_no_tools(tmp_path: Path) -> None:
+    case = copy_example("bending", tmp_path, tools="# none\n")
+    assert "tools.dat: no tool" in str(error_of(case))
+
+
+def test_tool_files_read(tmp_path: Path, monkeypatch) -> None:
+    install_toolfile(monkeypatch)
+    case = copy_example("bending", tmp_path)
+    (case / "tools" / "punch.tool").write_text("ddpy-tool 1\nname punch\n")
+    error = error_of(case, geometry=True)
+    assert "tools.dat:6: cannot read tool file" in str(error)
+    case = edit(copy_example("bending", tmp_path / "b"), "tools.dat", "description  nagata",
+                "description  facets")
+    c = read_case(case)
+    assert c.tool("punch").model().description == "facets"
+
+
+# ----------------------------------------------------------------------------------- geometry
+
+
+def test_geometry_tool_starts_inside(tmp_path: Path, monkeypatch) -> None:
+    install_toolfile(monkeypatch)
+    case = edit(copy_example("bending", tmp_path), "mesh.dat", "origin  0 0 0", "origin 0 0 0.5")
+    error = error_of(case, geometry=True)
+    assert str(error).startswith(f"{case / 'tools.dat'}:4: tool 'punch' starts inside the blank"
+                                 ": node 301 at (0, 0, 1.5) is 0.5 mm behind its surface")
+    read_case(case, geometry=False)  # without the geometry checks it passes
+
+
+def test_geometry_motion_through_blank(tmp_path: Path, monkeypatch) -> None:
+    install_toolfile(monkeypatch)
+    case = edit(copy_example("strip_draw", tmp_path), "control.dat", "move   punch  0 0 -10",
+                "move punch 10 0 -10")
+    error = error_of(case, geometry=True)
+    assert f"control.dat:{line_of(case, 'control.dat', 'move punch 10')}: phase 'draw': tools " \
+        "'punch' and 'die'" in str(error)
+    assert "the motion goes through the blank" in str(error) and len(error.errors) == 1
+
+
+def test_geometry_normals_away(tmp_path: Path, monkeypatch) -> None:
+    install_toolfile(monkeypatch)
+    case = copy_example("bending", tmp_path)
+    path = case / "tools" / "punch.tool"
+    lines = path.read_text().splitlines()
+    start = lines.index("normals 5")
+    for k in range(start + 1, start + 6):
+        lines[k] = " ".join(str(-float(w)) for w in lines[k].split())
+    faces = lines.index("faces 4")
+    for k in range(faces + 2, faces + 6):
+        w = lines[k].split()
+        lines[k] = " ".join(w[3::-1] + w[7:3:-1] + w[8:])
+    path.write_text("\n".join(lines) + "\n")
+    assert "the normals of tool 'punch' point away from the blank" in str(
+        error_of(case, geometry=True))

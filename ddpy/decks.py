@@ -52,9 +52,14 @@ MAX_ELEMENTS = 5_000_000
 MESH_SUFFIXES = (".inp", ".msh")
 #: A corner of a hexahedron with a scaled Jacobian below this is degenerate.
 MIN_SCALED_JACOBIAN = 1e-6
+#: Largest length a deck may give (mm): displacements, gaps, increments, box sizes.
+MAX_LENGTH = 1e6
+#: Largest node or element id.
+MAX_ID = 2**31 - 1
 #: Largest number of errors reported for one kind of defect in a block of data lines.
 _MAX_REPORTED = 5
 _NAME = re.compile(r"[A-Za-z][A-Za-z0-9_.\-]{0,63}")
+_INT = re.compile(r"[+-]?[0-9]+")
 
 
 class DeckError(ValueError):
@@ -170,7 +175,7 @@ def _float(word: str, what: str, *, gt: float | None = None, ge: float | None = 
 
 
 def _int(word: str, what: str, low: int | None = None, high: int | None = None) -> int:
-    if not re.fullmatch(r"[+-]?[0-9]+", word):
+    if not _INT.fullmatch(word):
         raise _Bad(f"expected an integer for {what}, got {_show(word)}")
     value = int(word)
     if low is not None and value < low:
@@ -193,13 +198,16 @@ def _choice(word: str, what: str, choices: tuple[str, ...]) -> str:
     return word
 
 
-def _vector(words: list[str], what: str) -> tuple[float, float, float]:
-    x, y, z = (_float(w, what) for w in words)
+def _vector(words: list[str], what: str, limit: float | None = None
+            ) -> tuple[float, float, float]:
+    x, y, z = (_float(w, what) if limit is None else _float(w, what, ge=-limit, le=limit)
+               for w in words)
     return (x, y, z)
 
 
 def _unit(words: list[str], what: str) -> tuple[float, float, float]:
     v = np.array(_vector(words, what))
+    v = v / max(float(np.abs(v).max()), 1e-300)
     length = float(np.linalg.norm(v))
     if not length > 0 or not math.isfinite(length):
         raise _Bad(f"{what} must be a non-zero finite vector, got {' '.join(words)}")
@@ -302,8 +310,8 @@ def parse_case(texts: Mapping[str, str], folder: str | Path = ".",
 
 #: Settings allowed at the top of control.dat (defaults of every phase) and inside a phase.
 _SETTINGS: dict[str, Callable[[str], Any]] = {
-    "max_increment": lambda w: _float(w, "max_increment", gt=0),
-    "min_increment": lambda w: _float(w, "min_increment", gt=0),
+    "max_increment": lambda w: _float(w, "max_increment", gt=0, le=MAX_LENGTH),
+    "min_increment": lambda w: _float(w, "min_increment", gt=0, le=MAX_LENGTH),
     "rmin_yield": lambda w: _float(w, "rmin_yield", ge=0),
     "rmin_strain": lambda w: _float(w, "rmin_strain", gt=0),
     "rmin_rotation": lambda w: _float(w, "rmin_rotation", gt=0, le=90),
@@ -415,14 +423,16 @@ def _phase_line(deck: _Deck, phase: _PhaseDraft, line: _Line) -> None:
     elif key == "move":
         _arity(line, "move TOOL DX DY DZ", 4)
         tool = _name(words[1], "the tool")
-        phase.moves.append((tool, _vector(words[2:], "the displacement"), line.number))
+        phase.moves.append((tool, _vector(words[2:], "the displacement", MAX_LENGTH),
+                            line.number))
     elif key == "gap":
         _arity(line, "gap TOOL OTHER VALUE", 3)
         tool, other = _name(words[1], "the tool"), _name(words[2], "the other tool")
         if tool == other:
             raise _Bad(f"a tool cannot keep a gap to itself: expected 'gap TOOL OTHER VALUE' "
                        f"with two tools, got '{tool}' twice")
-        phase.gaps.append((tool, other, _float(words[3], "the gap", gt=0), line.number))
+        gap = _float(words[3], "the gap", gt=0, le=MAX_LENGTH)
+        phase.gaps.append((tool, other, gap, line.number))
     elif key == "lead":
         _arity(line, "lead TOOL", 1)
         if _once(deck, phase.seen, line):
@@ -430,7 +440,7 @@ def _phase_line(deck: _Deck, phase: _PhaseDraft, line: _Line) -> None:
     elif key == "output_at":
         _arity(line, "output_at TRAVEL...", 1, -1)
         if _once(deck, phase.seen, line):
-            values = [_float(w, "an output travel", gt=0) for w in words[1:]]
+            values = [_float(w, "an output travel", gt=0, le=MAX_LENGTH) for w in words[1:]]
             if any(b <= a for a, b in zip(values, values[1:], strict=False)):
                 raise _Bad("output_at travels must increase strictly, got "
                            + " ".join(words[1:]))
@@ -485,7 +495,7 @@ def _parse_mesh(deck: _Deck) -> tuple[Mesh, dict[str, NDArray[np.int64]]] | None
             elif key == "origin":
                 _arity(line, "origin X Y Z", 3)
                 if _once(deck, seen, line):
-                    origin = np.array(_vector(line.words[1:], "the origin"))
+                    origin = np.array(_vector(line.words[1:], "the origin", MAX_LENGTH))
             elif key in ("nodes", "hexahedra", "box", "file"):
                 if key != "hexahedra":
                     if sources:
@@ -525,9 +535,11 @@ def _parse_mesh(deck: _Deck) -> tuple[Mesh, dict[str, NDArray[np.int64]]] | None
         return None
     with np.errstate(over="ignore", invalid="ignore"):
         nodes = raw.nodes * scale + (origin if sources[0][0] == "box" else 0.0)
-    if not np.all(np.isfinite(nodes)):
-        deck.error(seen.get("scale", sources[0][1]), "node coordinates overflow after scaling")
-        return None
+    with np.errstate(invalid="ignore"):
+        if not np.all(np.abs(nodes) <= MAX_LENGTH):
+            deck.error(seen.get("scale", sources[0][1]), f"node coordinates beyond +-"
+                       f"{MAX_LENGTH:g} mm (after scaling)")
+            return None
     if not _check_elements(deck, raw, nodes):
         return None
     mesh = Mesh(nodes, raw.elements, raw.node_ids, raw.element_ids, normal, raw.source)
@@ -536,7 +548,8 @@ def _parse_mesh(deck: _Deck) -> tuple[Mesh, dict[str, NDArray[np.int64]]] | None
 
 def _box(line: _Line) -> _RawMesh:
     w = line.words
-    size = [_float(v, f"the box length L{a}", gt=0) for v, a in zip(w[1:4], "XYZ", strict=True)]
+    size = [_float(v, f"the box length L{a}", gt=0, le=MAX_LENGTH)
+            for v, a in zip(w[1:4], "XYZ", strict=True)]
     counts = [_int(v, f"the element count N{a}", 1, MAX_ELEMENTS)
               for v, a in zip(w[4:7], "XYZ", strict=True)]
     nx, ny, nz = counts
@@ -604,16 +617,23 @@ def _own_arrays(deck: _Deck, blocks: dict) -> _RawMesh | None:
     ok = True
 
     def numbers(rows: list[list[str]], lines: NDArray, kind: type, what: str) -> NDArray | None:
-        try:
-            return np.array(rows, dtype=kind) if kind is float else _int_rows(rows)
-        except (ValueError, OverflowError):
-            for row, number in zip(rows, lines, strict=True):
+        """The rows as an array; on a bad word, an error at its line and None."""
+        if kind is float:
+            try:
+                return np.array(rows, dtype=float)
+            except ValueError:
+                pass
+        for row, number in zip(rows, lines, strict=True):
+            for word in row:
                 try:
-                    [float(w) if kind is float else _int(w, "x") for w in row]
-                except (ValueError, _Bad):
+                    value = float(word) if kind is float else int(_INT.fullmatch(word)[0])
+                except (ValueError, TypeError):
                     deck.error(int(number), f"expected {what}, got {_show(' '.join(row))}")
-                    break
-            return None
+                    return None
+                if kind is not float and abs(value) > MAX_ID:
+                    deck.error(int(number), f"{word} is out of range: ids are at most {MAX_ID}")
+                    return None
+        return np.array(rows, dtype=float if kind is float else np.int64)
 
     node_ids = numbers([r[:1] for r in node_rows], node_lines, int, "an integer node id")
     coords = numbers([r[1:] for r in node_rows], node_lines, float, "numbers X Y Z")
@@ -621,10 +641,11 @@ def _own_arrays(deck: _Deck, blocks: dict) -> _RawMesh | None:
     if node_ids is None or coords is None or elem is None:
         return None
     node_ids = node_ids[:, 0]
-    finite = np.isfinite(coords).all(axis=1)
+    with np.errstate(invalid="ignore"):
+        finite = (np.abs(coords) <= MAX_LENGTH).all(axis=1)
     for k in np.flatnonzero(~finite)[:_MAX_REPORTED]:
-        deck.error(int(node_lines[k]), "expected finite coordinates X Y Z, got "
-                   + _show(" ".join(node_rows[k][1:])))
+        deck.error(int(node_lines[k]), f"expected finite coordinates X Y Z within +-{MAX_LENGTH:g}"
+                   " mm, got " + _show(" ".join(node_rows[k][1:])))
     ok &= bool(finite.all())
     for ids, lines, what in ((node_ids, node_lines, "node"), (elem[:, 0], elem_lines,
                                                               "element")):
@@ -657,18 +678,6 @@ def _own_arrays(deck: _Deck, blocks: dict) -> _RawMesh | None:
         return None
     return _RawMesh(coords, order[pos], node_ids, elem[:, 0], elem_lines, {}, "mesh.dat",
                     node_lines)
-
-
-def _int_rows(rows: list[list[str]]) -> NDArray[np.int64]:
-    """Integer rows; ValueError on any non-integer word (no float silently truncated)."""
-    for row in rows:
-        for w in row:
-            if not re.fullmatch(r"[+-]?[0-9]+", w):
-                raise ValueError(w)
-    array = np.array([[int(w) for w in row] for row in rows], dtype=object)
-    if array.size and (np.abs(array).max() > 2**62):
-        raise OverflowError
-    return array.astype(np.int64).reshape(len(rows), -1)
 
 
 def _mesh_file(deck: _Deck, line: _Line) -> _RawMesh:

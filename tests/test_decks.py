@@ -324,7 +324,7 @@ def test_mesh_box_limits(tmp_path: Path) -> None:
     case = copy_example("bending", tmp_path / "b", mesh="box 1 1 1 1 1\n")
     assert "expected 'box LX LY LZ NX NY NZ'" in str(error_of(case))
     case = copy_example("bending", tmp_path / "d", mesh="box 10 10 10 1 1 1\nscale 1e308\n")
-    assert "mesh.dat:2: node coordinates overflow after scaling" in str(error_of(case))
+    assert "mesh.dat:2: node coordinates beyond +-1e+06 mm" in str(error_of(case))
     case = copy_example("bending", tmp_path / "c", mesh="normal z\n")
     assert "mesh.dat: no mesh" in str(error_of(case))
 

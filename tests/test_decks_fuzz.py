@@ -1,0 +1,174 @@
+"""Fuzzing the decks: valid example decks mutated at random (lines deleted, duplicated, swapped,
+tokens replaced by random text, numbers, NaN or huge values, files truncated or replaced by
+random bytes) are either accepted or refused with a DeckError: never another exception, never
+a hang."""
+
+from __future__ import annotations
+
+import os
+import signal
+import tempfile
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+from deckutil import EXAMPLES, install_toolfile
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from ddpy.decks import DECKS, DeckError, read_case
+
+#: Seconds one example may take before it counts as a hang.
+HANG = 20
+#: More examples, drawn afresh each run: DDPY_FUZZ_EXAMPLES=5000 pytest tests/test_decks_fuzz.py
+EXAMPLES_RUN = int(os.environ.get("DDPY_FUZZ_EXAMPLES", "0"))
+
+BASES = {name: {deck: (EXAMPLES / name / deck).read_text() for deck in DECKS}
+         for name in ("bending", "strip_draw")}
+
+SPECIAL = ["nan", "NaN", "inf", "-inf", "1e308", "-1e308", "1e999", "0", "-0", "-1", "1e-320",
+           "99999999999999999999", "-99999999999999999999", "0x10", "1_000", "end", "phase",
+           "tool", "nodes", "hexahedra", "box", "file", "x", "y", "z", "top", "bottom",
+           "facing", "springback", "forming", "punch", "die", "holder", "centre", "all",
+           "#", "1-", "-", "1-999999999", "ids", "plane", "\u00e9", "\u0663", "\x00", "''"]
+
+token = st.one_of(
+    st.sampled_from(SPECIAL),
+    st.text(max_size=12),
+    st.integers(min_value=-10**30, max_value=10**30).map(str),
+    st.floats(allow_nan=True, allow_infinity=True).map(repr),
+)
+
+
+@st.composite
+def mutation(draw: st.DrawFn, text: str) -> str:
+    """One random change of a deck's text."""
+    lines = text.splitlines()
+    kind = draw(st.sampled_from(["token"] * 4 + ["number"] * 4 + ["delete", "delete",
+                                 "duplicate", "duplicate", "swap", "insert", "truncate",
+                                 "replace"]))
+    if kind == "truncate":
+        return text[: draw(st.integers(0, len(text)))]
+    if kind == "replace":
+        return draw(st.text(max_size=200))
+    if not lines:
+        return text
+    i = draw(st.integers(0, len(lines) - 1))
+    if kind == "delete":
+        del lines[i]
+    elif kind == "duplicate":
+        lines.insert(i, lines[i])
+    elif kind == "swap":
+        j = draw(st.integers(0, len(lines) - 1))
+        lines[i], lines[j] = lines[j], lines[i]
+    elif kind == "insert":
+        lines.insert(i, " ".join(draw(st.lists(token, min_size=1, max_size=6))))
+    else:
+        words = lines[i].split()
+        if words:
+            k = draw(st.integers(0, len(words) - 1))
+            words[k] = draw(token) if kind == "token" else _nudge(words[k], draw(NUDGE))
+            lines[i] = " ".join(words)
+    return "\n".join(lines) + "\n"
+
+
+#: Changes of a number that keep it a number: sign, scale, zero, off by one.
+NUDGE = st.sampled_from([-1.0, 0.0, 0.5, 2.0, 10.0, 1e6, -1e-6, 1e300])
+
+
+def _nudge(word: str, factor: float) -> str:
+    try:
+        value = float(word)
+    except ValueError:
+        return word
+    if word.lstrip("-").isdigit():
+        return str(int(value * factor) if abs(value * factor) < 1e18 else int(value) + 1)
+    return repr(value * factor)
+
+
+@st.composite
+def mutated_case(draw: st.DrawFn) -> tuple[str, dict[str, str | bytes]]:
+    """An example case with one to three of its decks changed."""
+    name = draw(st.sampled_from(sorted(BASES)))
+    decks: dict[str, str | bytes] = dict(BASES[name])
+    for _ in range(draw(st.integers(1, 2))):
+        deck = draw(st.sampled_from(DECKS))
+        current = decks[deck]
+        if isinstance(current, bytes) or draw(st.integers(0, 39)) == 0:
+            decks[deck] = draw(st.binary(max_size=200))
+        else:
+            for _ in range(draw(st.integers(1, 2))):
+                current = draw(mutation(current))
+            decks[deck] = current
+    return name, decks
+
+
+class Hang(Exception):
+    pass
+
+
+def _alarm(signum: int, frame: object) -> None:
+    raise Hang(f"reading the decks took more than {HANG} s")
+
+
+@pytest.fixture(scope="module")
+def folder() -> Iterator[Path]:
+    """A scratch case folder whose tools/ links to the example's tool files."""
+    with pytest.MonkeyPatch.context() as patch, tempfile.TemporaryDirectory() as tmp:
+        install_toolfile(patch)
+        yield Path(tmp)
+
+
+def _write(folder: Path, name: str, decks: dict[str, str | bytes]) -> Path:
+    case = folder / name
+    case.mkdir(exist_ok=True)
+    tools = case / "tools"
+    if not tools.exists():
+        os.symlink(EXAMPLES / name / "tools", tools)
+    for deck, content in decks.items():
+        path = case / deck
+        if isinstance(content, bytes):
+            path.write_bytes(content)
+        else:
+            path.write_text(content, encoding="utf-8", errors="surrogatepass")
+    return case
+
+
+def _read_or_refuse(case: Path) -> None:
+    previous = signal.signal(signal.SIGALRM, _alarm)
+    signal.alarm(HANG)
+    try:
+        read_case(case)
+    except DeckError as error:
+        assert error.errors and all(isinstance(e, DeckError) for e in error.errors)
+        assert str(error)  # the message can be printed
+        for e in error.errors:
+            assert e.path is not None
+            assert e.line is None or e.line >= 1
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, previous)
+
+
+@settings(max_examples=EXAMPLES_RUN or 200, deadline=5000, derandomize=not EXAMPLES_RUN,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+@given(mutated_case())
+def test_mutated_decks_accepted_or_refused(folder: Path, mutated) -> None:
+    name, decks = mutated
+    _read_or_refuse(_write(folder, name, decks))
+
+
+@settings(max_examples=EXAMPLES_RUN // 4 or 50, deadline=5000, derandomize=not EXAMPLES_RUN,
+          suppress_health_check=[HealthCheck.too_slow])
+@given(st.sampled_from(DECKS), st.lists(st.lists(token, min_size=1, max_size=8), max_size=12))
+def test_random_lines_accepted_or_refused(folder: Path, deck: str, rows: list[list[str]]
+                                          ) -> None:
+    decks: dict[str, str | bytes] = dict(BASES["bending"])
+    decks[deck] = "\n".join(" ".join(r) for r in rows) + "\n"
+    _read_or_refuse(_write(folder, "bending", decks))
+
+
+def test_valid_examples_still_read(folder: Path) -> None:
+    for name, decks in BASES.items():
+        case = _write(folder, name, decks)
+        assert read_case(case).mesh.n_elements > 0

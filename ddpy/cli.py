@@ -24,6 +24,28 @@ def _accuracy(args: argparse.Namespace) -> int:
     return 0
 
 
+def _check(args: argparse.Namespace) -> int:
+    from ddpy.decks import DeckError, read_case
+
+    try:
+        case = read_case(args.case, geometry=not args.no_geometry)
+    except DeckError as error:
+        for e in error.errors:
+            print(e, file=sys.stderr)
+        count = len(error.errors)
+        print(f"{args.case}: {count} error{'s' if count > 1 else ''}", file=sys.stderr)
+        return 2
+    print(case.summary())
+    if not args.no_geometry:
+        try:
+            import ddpy.toolfile  # noqa: F401
+        except ImportError:
+            print("  note: ddpy.toolfile is not available: tool files not read, geometry "
+                  "checks skipped")
+    print(f"{args.case}: ok" + (f", {len(case.warnings)} warning(s)" if case.warnings else ""))
+    return 0
+
+
 def _info(args: argparse.Namespace) -> int:
     from ddpy.parallel import max_threads
 
@@ -162,6 +184,15 @@ def build_parser() -> argparse.ArgumentParser:
     accuracy.add_argument("--json", action="store_true", help="print the numbers as JSON")
     accuracy.add_argument("--figures", metavar="DIR", help="also write the figures (PNG) here")
     accuracy.set_defaults(handler=_accuracy)
+
+    check = commands.add_parser(
+        "check", help="validate a case folder: print its summary, or every error as file:line "
+        "(exit code 2)")
+    check.add_argument("case", metavar="CASE", help="the case folder (control.dat, mesh.dat, "
+                       "bc.dat, material.dat, tools.dat)")
+    check.add_argument("--no-geometry", action="store_true",
+                       help="skip the checks of the tool positions against the blank")
+    check.set_defaults(handler=_check)
 
     _add_tools(commands)
 

@@ -25,6 +25,9 @@ EXAMPLES_RUN = int(os.environ.get("DDPY_FUZZ_EXAMPLES", "0"))
 
 BASES = {name: {deck: (EXAMPLES / name / deck).read_text() for deck in DECKS}
          for name in ("bending", "strip_draw")}
+TOOL_FILES = {name: {f"tools/{p.name}": p.read_text()
+                     for p in sorted((EXAMPLES / name / "tools").glob("*.tool"))}
+              for name in BASES}
 
 SPECIAL = ["nan", "NaN", "inf", "-inf", "1e308", "-1e308", "1e999", "0", "-0", "-1", "1e-320",
            "99999999999999999999", "-99999999999999999999", "0x10", "1_000", "end", "phase",
@@ -88,9 +91,12 @@ def _nudge(word: str, factor: float) -> str:
 
 @st.composite
 def mutated_case(draw: st.DrawFn) -> tuple[str, dict[str, str | bytes]]:
-    """An example case with one to three of its decks changed."""
+    """An example case with one or two of its decks changed, sometimes a tool file too."""
     name = draw(st.sampled_from(sorted(BASES)))
     decks: dict[str, str | bytes] = dict(BASES[name])
+    if draw(st.integers(0, 5)) == 0:  # a tool file, now and then
+        tool = draw(st.sampled_from(sorted(TOOL_FILES[name])))
+        decks[tool] = draw(mutation(TOOL_FILES[name][tool]))
     for _ in range(draw(st.integers(1, 2))):
         deck = draw(st.sampled_from(DECKS))
         current = decks[deck]
@@ -120,10 +126,15 @@ def folder() -> Iterator[Path]:
 
 
 def _write(folder: Path, name: str, decks: dict[str, str | bytes]) -> Path:
-    case = folder / name
-    case.mkdir(exist_ok=True)
+    """Write the decks to a new case folder; tools/ links to the example's tool files unless
+    one of them is changed."""
+    case = Path(tempfile.mkdtemp(prefix=f"{name}-", dir=folder))
     tools = case / "tools"
-    if not tools.exists():
+    if any(deck.startswith("tools/") for deck in decks):
+        tools.mkdir()
+        for deck, content in TOOL_FILES[name].items():
+            (case / deck).write_text(content)
+    else:
         os.symlink(EXAMPLES / name / "tools", tools)
     for deck, content in decks.items():
         path = case / deck

@@ -325,8 +325,9 @@ class BlankMaterial:
 @dataclass(frozen=True)
 class Tool:
     """A rigid tool: its description (bezier, nagata or facets), its tool file, the Coulomb
-    friction coefficient and the side of the blank it touches (``facing``: the outward normal
-    of that blank surface; ``contact`` is top, bottom or facing)."""
+    friction coefficient, the side of the blank it touches (``facing``: the outward normal
+    of that blank surface; ``contact`` is top, bottom or facing) and the augmentation
+    parameter r of its contact law, N/mm (None: the solver chooses it)."""
 
     name: str
     description: Literal["bezier", "nagata", "facets"]
@@ -334,6 +335,7 @@ class Tool:
     friction: float
     contact: str
     facing: tuple[float, float, float]
+    augmentation: float | None = None
     origin: str = ""
 
     def model(self) -> ToolModel:

@@ -986,7 +986,8 @@ class _ToolDraft:
     model: Any = None
 
 
-_TOOL_KEYS = ("description", "file", "friction", "contact")
+_TOOL_KEYS = ("description", "file", "friction", "contact", "augmentation")
+_TOOL_REQUIRED = ("description", "file", "friction", "contact")
 _DESCRIPTIONS = ("bezier", "nagata", "facets")
 
 
@@ -1028,6 +1029,9 @@ def _parse_tools(deck: _Deck) -> list[_ToolDraft]:
                     _arity(line, "file PATH", 1)
                     path = Path(w[1])
                     tool.values[key] = path if path.is_absolute() else deck.path.parent / path
+                elif key == "augmentation":
+                    _arity(line, "augmentation R", 1)
+                    tool.values[key] = _float(w[1], "the augmentation parameter", gt=0)
                 elif key == "friction":
                     _arity(line, "friction MU", 1)
                     mu = _float(w[1], "friction", ge=0)
@@ -1046,7 +1050,8 @@ def _parse_tools(deck: _Deck) -> list[_ToolDraft]:
             else:
                 where = "in a tool" if tool is not None else "at the top of tools.dat"
                 raise _Bad(f"unknown keyword {_show(key)} {where}: expected "
-                           + ("description, file, friction, contact or end" if tool else "tool"))
+                           + ("description, file, friction, contact, augmentation or end" if tool
+                   else "tool"))
         except _Bad as bad:
             deck.error(line.number, str(bad))
     if tool is not None:
@@ -1062,7 +1067,7 @@ def _finish_tool(deck: _Deck, tool: _ToolDraft) -> None:
     forms = {"description": "description bezier|nagata|facets", "file": "file PATH",
              "friction": "friction MU",
              "contact": "contact top|bottom|facing NX NY NZ (the blank surface it touches)"}
-    for key in _TOOL_KEYS:
+    for key in _TOOL_REQUIRED:
         if key not in tool.seen:
             extra = " (a tool with no contact partner)" if key == "contact" else ""
             deck.error(tool.line, f"tool '{tool.name}' has no '{key}'{extra}: expected "
@@ -1139,7 +1144,7 @@ class _Cross:
             tool = Tool(d.name, d.values["description"], d.values["file"],
                         d.values["friction"], side if side != "facing" else
                         "surface facing (" + ", ".join(f"{c:.3g}" for c in facing) + ")",
-                        facing, self.tools_deck.where(d.line))
+                        facing, d.values.get("augmentation"), self.tools_deck.where(d.line))
             if d.model is not None:
                 object.__setattr__(tool, "_model", d.model)
             if tool.contact_nodes(mesh).size == 0:

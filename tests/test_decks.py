@@ -54,7 +54,7 @@ def test_bending_example_model() -> None:
     assert (punch.name, punch.description, punch.friction, punch.contact) == (
         "punch", "nagata", 0.148, "top")
     assert punch.file == EXAMPLES / "bending" / "tools" / "punch.tool"
-    assert die.facing == (0.0, 0.0, -1.0)
+    assert die.facing == (0.0, 0.0, -1.0) and die.augmentation is None
     np.testing.assert_allclose(mesh.nodes[punch.contact_nodes(mesh), 2], 1.0)
     np.testing.assert_allclose(mesh.nodes[die.contact_nodes(mesh), 2], 0.0)
     # constraints: symmetry x, y always; the centre line in z only in springback
@@ -82,6 +82,7 @@ def test_strip_draw_example_model() -> None:
     assert free.rmin.strain == 0.01 and draw.rmin.strain == 0.02
     assert back.increments == 4
     assert case.tool("punch").description == "facets"
+    assert case.tool("die").augmentation == 1e4 and case.tool("punch").augmentation is None
     assert case.tool("die").contact.startswith("surface facing")
     mat = case.material
     assert isinstance(mat.material.hardening, Voce)
@@ -506,6 +507,7 @@ TOOL_ERRORS = [
     ("tool punch", "toll punch", "unknown keyword 'toll' at the top of tools.dat"),
     ("contact      top", "contact top\n  speed 3", "unknown keyword 'speed' in a tool"),
     ("contact      top", "contact top\n  contact bottom", "'contact' given twice"),
+    ("contact      top", "contact top\n  augmentation 0", "augmentation parameter must be > 0"),
 ]
 
 

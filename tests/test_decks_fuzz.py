@@ -161,7 +161,7 @@ def _read_or_refuse(case: Path) -> None:
         signal.signal(signal.SIGALRM, previous)
 
 
-@settings(max_examples=EXAMPLES_RUN or 200, deadline=5000, derandomize=not EXAMPLES_RUN,
+@settings(max_examples=EXAMPLES_RUN or 150, deadline=5000, derandomize=not EXAMPLES_RUN,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(mutated_case())
 def test_mutated_decks_accepted_or_refused(folder: Path, mutated) -> None:

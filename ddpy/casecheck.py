@@ -17,6 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ddpy.case import Case, HoldGap, Move
+from ddpy.decks import DeckError, blank_thickness
 from ddpy.search import INSIDE, ContactSearch
 from ddpy.surfaces import NagataSurface
 
@@ -33,31 +34,27 @@ SAMPLES = 10
 MAX_POINTS = 2000
 
 
-def _error(origin: str, message: str):  # -> DeckError
-    from ddpy.decks import DeckError
-
+def _error(origin: str, message: str) -> DeckError:
     path, _, line = origin.rpartition(":")
     if path and line.isdigit():
         return DeckError(message, Path(path), int(line))
     return DeckError(message, Path(origin) if origin else None)
 
 
-def geometry_errors(case: Case) -> list:
-    """Errors (DeckError) of the tool positions and motions; [] when the tool models cannot be
-    read here."""
+def geometry_errors(case: Case) -> list[DeckError]:
+    """Errors of the tool positions and motions; [] when the tool models cannot be read here."""
     try:
         models = {t.name: t.model() for t in case.tools}
     except ImportError:  # ddpy.toolfile is not part of this build
         return []
-    from ddpy.decks import _blank_thickness
-
-    thickness = _blank_thickness(case.mesh) or 1.0
+    thickness = blank_thickness(case.mesh) or 1.0
     searches = {name: ContactSearch(m.surface) for name, m in models.items()}
     return _start_errors(case, searches, thickness) + _clearance_errors(case, searches,
                                                                         thickness)
 
 
-def _start_errors(case: Case, searches: dict[str, ContactSearch], thickness: float) -> list:
+def _start_errors(case: Case, searches: dict[str, ContactSearch], thickness: float
+                  ) -> list[DeckError]:
     errors = []
     mesh, first = case.mesh, case.phases[0]
     for name in first.tools:
@@ -86,7 +83,7 @@ def _start_errors(case: Case, searches: dict[str, ContactSearch], thickness: flo
 
 
 def _clearance_errors(case: Case, searches: dict[str, ContactSearch], thickness: float
-                      ) -> list:
+                      ) -> list[DeckError]:
     errors = []
     position = {t.name: np.zeros(3) for t in case.tools}
     placed = set(position)  # tools whose position is known (not set by a gap)

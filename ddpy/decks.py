@@ -1161,7 +1161,7 @@ class _Cross:
         deck = self.control
         names: dict[str, int] = {}
         phases = []
-        thickness = _blank_thickness(mesh)
+        thickness = blank_thickness(mesh)
         for p in control.phases:
             if p.name in names:
                 deck.error(p.line, f"phase '{p.name}' defined twice (first at line "
@@ -1435,8 +1435,8 @@ def _select(kind: str, args: list[str], mesh: Mesh, tol: float) -> NDArray[np.in
     return index.astype(np.int64)
 
 
-def _blank_thickness(mesh: Mesh) -> float | None:
-    """Smallest initial thickness of a layered blank; its extent along the normal else."""
+def blank_thickness(mesh: Mesh) -> float | None:
+    """Smallest initial thickness of a layered blank (mm); its extent along the normal else."""
     try:
         bottom, top = mesh.columns()
     except ValueError:

@@ -208,6 +208,13 @@ class ResultsWriter:
                           np.zeros_like(nodes), np.full(len(nodes), -1, np.int16), None, 0.0,
                           {})
 
+    @classmethod
+    def for_case(cls, path: str | os.PathLike[str], case: Any, overwrite: bool = False
+                 ) -> ResultsWriter:
+        """A writer for a :class:`ddpy.case.Case`: its mesh, tools, phases and title."""
+        return cls(path, case.mesh, case.tool_names, [p.name for p in case.phases],
+                   title=case.title, case=str(case.folder), overwrite=overwrite)
+
     @staticmethod
     def _column(group: Any, name: str, dtype: str, shape: tuple[int, ...], units: str,
                 meaning: str) -> None:

@@ -144,6 +144,11 @@ def test_writer_checks(tmp_path: Path, mesh) -> None:
             out.fields(**fields, time=5.0, extra={"bad": np.zeros(7)})
     with pytest.raises(FileExistsError):
         ResultsWriter(path, mesh, TOOLS)
+    case = read_case(EXAMPLES / "bending", geometry=False)
+    with ResultsWriter.for_case(tmp_path / "case.h5", case) as out:
+        assert out.tools == ("punch", "die") and out.phases == ("forming", "springback")
+    with ResultsReader(tmp_path / "case.h5") as r:
+        assert r.title == case.title and r.frames[0].increment == 0
     ResultsWriter(path, (mesh.nodes, mesh.elements), TOOLS, overwrite=True).close()
     with pytest.raises(ValueError, match="tools must name"):
         ResultsWriter(tmp_path / "x.h5", mesh, ())

@@ -1117,7 +1117,7 @@ class _Cross:
               ) -> Case | None:
         tools = self._tools(tool_drafts, mesh)
         phases = self._phases(control, {t.name: t for t in tools}, mesh)
-        boundary = self._boundary(bc, mesh, mesh_sets, [p.name for p in phases])
+        boundary = self._boundary(bc, mesh, mesh_sets, [p.name for p in control.phases])
         if any(d.errors for d in self.decks.values()) or boundary is None:
             return None
         self._springback_constraints(phases, control, boundary, mesh)

@@ -98,6 +98,8 @@ class BezierSurface(_Surface):
     """
 
     def __init__(self, control_nets: Sequence[ArrayLike] | ArrayLike) -> None:
+        if control_nets is None or isinstance(control_nets, (str, bytes)):
+            raise TypeError("control_nets must be a sequence of (n+1, m+1, 3) arrays")
         nets = list(control_nets)
         if not nets:
             raise ValueError("control_nets is empty: a Bezier surface needs at least one patch")
@@ -130,6 +132,8 @@ class BezierSurface(_Surface):
 
     def power_coefficients(self, patch: int) -> NDArray[np.float64]:
         """Power-basis coefficients A[k, l] (vectors) of one patch: S = sum A_kl u^k v^l."""
+        if not 0 <= patch < self.n_patches:
+            raise IndexError(f"patch {patch} is not a patch: expected 0 <= id < {self.n_patches}")
         n, m = self.degrees[patch]
         coef = self.coefficients.reshape(self.n_patches, _NB, _NB, 3)[patch]
         return coef.transpose(1, 0, 2)[: n + 1, : m + 1].copy()
@@ -137,6 +141,8 @@ class BezierSurface(_Surface):
     def evaluate_de_casteljau(self, patch_ids: ArrayLike, params: ArrayLike) -> NDArray[np.float64]:
         """Points (k, 3) by de Casteljau on the control nets: an independent cross-check."""
         ids, uv = self._check_queries(patch_ids, params)
+        if ids.size == 0:
+            return np.zeros((0, 3))
         points, info = _core.bezier_de_casteljau(self.degrees.ravel(), self.control.ravel(),
                                                  ids, uv.ravel())
         if info != 0:
@@ -196,11 +202,12 @@ class NagataSurface(_Surface):
                 f"face {f} = {faces[f].tolist()}: vertex indices must lie in 0..{n_vertices - 1}"
                 " (use -1 only in the last column, for a triangle)"
             )
-        ordered = np.sort(np.where(tri[:, None], faces[:, [0, 1, 2, 2]], faces), axis=1)
-        equal = ordered[:, 1:] == ordered[:, :-1]
-        equal[tri, 2] = False  # the padding repeat of a triangle
-        if equal.any():
-            f = int(np.flatnonzero(equal.any(axis=1))[0])
+        quad_repeats = (np.diff(np.sort(faces, axis=1), axis=1) == 0).any(axis=1)
+        a, b, c = faces[:, 0], faces[:, 1], faces[:, 2]
+        tri_repeats = (a == b) | (b == c) | (a == c)
+        repeated = np.where(tri, tri_repeats, quad_repeats)
+        if repeated.any():
+            f = int(np.flatnonzero(repeated)[0])
             raise ValueError(f"face {f} = {faces[f].tolist()} is degenerate: a vertex repeats")
         # A corner whose two edges are parallel makes a degenerate face.
         x = self.vertices[used]
@@ -269,6 +276,10 @@ def nagata_edge_coefficient(
     arrays = [float_array(a, name, (m, 3)) for a, name in zip(arrays, names, strict=True)]
     for a, name in zip(arrays[2:], names[2:], strict=True):
         _check_unit(a, name, "edge end")
+    if not 0.0 <= degenerate_tol < 1.0:
+        raise ValueError(f"degenerate_tol must be in [0, 1), got {degenerate_tol}")
+    if m == 0:
+        return np.zeros((0, 3))
     c = _core.nagata_edge_coefficient(*(a.ravel() for a in arrays), float(degenerate_tol))
     return c.reshape(m, 3) if np.ndim(x0) == 2 else c.reshape(3)
 

@@ -1,20 +1,50 @@
-!> TEMPORARY stand-in for the material module (branch `material` provides the real one):
-!> isotropic linear elasticity behind the agreed interface, so the solid can be built and
-!> tested. Replaced by the Hill'48 + Swift/Voce return mapping on merge.
+!> Elastoplastic material of the blank: isotropic linear elasticity, Hill'48 yield function in
+!> the material axes (1 = rolling, 2 = transverse, 3 = normal direction), Swift or Voce
+!> isotropic hardening, associative flow, backward-Euler return mapping with the consistent
+!> tangent (../docs/theory/material.md).
+!>
+!> Voigt order (11, 22, 33, 12, 23, 31); strains with engineering shears (gamma = 2 eps),
+!> stresses plain, so that stress . strain is the work. The hydrostatic stress is elastic (the
+!> Hill form does not see it), and on the five deviatoric modes that diagonalise the Hill form
+!> against the isotropic compliance, (C^-1 + dlambda P)^-1 is diagonal: the stress is a closed
+!> function of the one plastic multiplier, found by a bracketed Newton iteration.
 module ddpy_material
+  use, intrinsic :: ieee_arithmetic, only: ieee_is_finite
   use ddpy_kinds, only: wp
   implicit none
   private
-  public :: material_update
+  public :: material_update, material_hardening, material_yield_stress, material_check, &
+            hill48_from_r_values, hill48_is_convex, hill48_equivalent_stress
 
-  !> Length of the property vector: (1) E, (2) nu, (3:8) Hill F, G, H, L, M, N,
-  !> (9) hardening (1 Swift, 2 Voce), (10:12) Swift K, eps0, n / Voce Y0, Q, b.
+  !> Length of the property vector:
+  !> (1) E, (2) nu, (3) F, (4) G, (5) H, (6) L, (7) M, (8) N, (9) hardening law
+  !> (1 = Swift, 2 = Voce); Swift: (10) K, (11) eps0, (12) n; Voce: (10) Y0, (11) Q, (12) b;
+  !> (13:16) reserved, zero.
   integer, parameter, public :: material_prop_count = 16
+  !> Hardening laws, props(9).
+  integer, parameter, public :: hardening_swift = 1, hardening_voce = 2
+  !> Status of material_update: converged; return mapping failed (the caller cuts the
+  !> increment); properties invalid (see material_check); non-finite input.
+  integer, parameter, public :: material_ok = 0, material_not_converged = 1, &
+                                material_bad_props = 2, material_bad_input = 3
+
+  !> Relative overstress below which a trial state counts as elastic.
+  real(wp), parameter :: yield_tol = 1.0e-12_wp
+  !> Relative tolerance on |Y(ep)/sigma_eq - 1| of the return mapping.
+  real(wp), parameter :: return_tol = 1.0e-13_wp
+  integer, parameter :: max_iterations = 200
+
+  !> Voigt vector of ones on the normal components, (1, 1, 1, 0, 0, 0).
+  real(wp), parameter :: unit_normal(6) = [1.0_wp, 1.0_wp, 1.0_wp, 0.0_wp, 0.0_wp, 0.0_wp]
 
 contains
 
-  !> Stress update over a strain increment (Voigt 11, 22, 33, 12, 23, 31, engineering
-  !> shears, material axes): here linear elastic, stress = stress_old + D : increment.
+  !> Backward-Euler update of one material point over a strain increment.
+  !> stress_old, ep_old: converged state; strain_increment: (engineering shears) increment.
+  !> stress, ep: updated state; tangent(i, j) = d stress(i) / d strain_increment(j), the
+  !> consistent tangent (symmetric); plastic: the point yielded in this increment;
+  !> status: material_ok (0) or > 0 when no update is returned (stress = stress_old,
+  !> ep = ep_old, elastic tangent or zero for invalid properties).
   pure subroutine material_update(props, stress_old, ep_old, strain_increment, stress, ep, &
                                   tangent, plastic, status)
     real(wp), intent(in) :: props(material_prop_count), stress_old(6), ep_old, &
@@ -22,20 +52,310 @@ contains
     real(wp), intent(out) :: stress(6), ep, tangent(6, 6)
     logical, intent(out) :: plastic
     integer, intent(out) :: status
-    real(wp) :: lambda, mu
-    integer :: i
-    lambda = props(1)*props(2)/((1.0_wp + props(2))*(1.0_wp - 2.0_wp*props(2)))
-    mu = 0.5_wp*props(1)/(1.0_wp + props(2))
-    tangent = 0.0_wp
-    tangent(1:3, 1:3) = lambda
-    do i = 1, 3
-      tangent(i, i) = lambda + 2.0_wp*mu
-      tangent(i + 3, i + 3) = mu
-    end do
-    stress = stress_old + matmul(tangent, strain_increment)
-    ep = ep_old
+    real(wp) :: shear, bulk, modes(6, 5), q(5), c(5), mu(5), a(5), w(5), trial(6)
+    real(wp) :: pressure, sigma_trial, y_old, h, x, x_lo, x_hi, x_new, sigma, dsigma, y
+    real(wp) :: g, dg, dlambda, hdl, xi_n(6), beta
+    integer :: iter, k
+    logical :: converged
+
     plastic = .false.
-    status = 0
+    stress = stress_old
+    ep = ep_old
+    tangent = 0.0_wp
+    if (material_check(props) /= 0) then
+      status = material_bad_props
+      return
+    end if
+    call elastic_moduli(props, shear, bulk)
+    tangent = elastic_tangent(shear, bulk)
+    if (.not. (all(ieee_is_finite(stress_old)) .and. all(ieee_is_finite(strain_increment)) &
+               .and. ieee_is_finite(ep_old))) then
+      status = material_bad_input
+      return
+    end if
+    if (ep_old < 0.0_wp) then
+      status = material_bad_input
+      return
+    end if
+    status = material_ok
+
+    trial = stress_old + matmul(tangent, strain_increment)
+    sigma_trial = hill48_equivalent_stress(props(3:8), trial)
+    call material_hardening(props, ep_old, y_old, h)
+    if (sigma_trial <= y_old*(1.0_wp + yield_tol)) then
+      stress = trial
+      return
+    end if
+    plastic = .true.
+    call hill48_modes(props(3:8), shear, modes, q, c, mu)
+    a = matmul(trial, modes)
+    pressure = sum(trial(1:3))/3.0_wp
+
+    ! g(x) = Y(ep(x))/sigma(x) - 1 rises from g(0) < 0; x = 2 shear dlambda is dimensionless.
+    ! Since sigma(x) <= sigma_trial/(1 + x min(q)) and Y >= y_old, g(x_hi) >= 0.
+    x_lo = 0.0_wp
+    x_hi = (sigma_trial/y_old - 1.0_wp)/minval(q)
+    x = 0.0_wp
+    converged = .false.
+    do iter = 1, max_iterations
+      call state_at(x, sigma, dsigma, y, h, g, dg)
+      if (abs(g) <= return_tol) then
+        converged = .true.
+        exit
+      end if
+      if (g < 0.0_wp) then
+        x_lo = x
+      else
+        x_hi = x
+      end if
+      x_new = x - g/dg
+      ! Safeguard: bisect when Newton leaves the bracket (or dg is not usable).
+      if (.not. (x_new > x_lo .and. x_new < x_hi)) x_new = 0.5_wp*(x_lo + x_hi)
+      if (abs(x_new - x) <= 4.0_wp*epsilon(1.0_wp)*x .or. &
+          x_hi - x_lo <= 4.0_wp*epsilon(1.0_wp)*x_hi) then
+        ! Round-off level: the iterate cannot move any more.
+        x = x_new
+        call state_at(x, sigma, dsigma, y, h, g, dg)
+        converged = abs(g) <= 1.0e3_wp*return_tol
+        exit
+      end if
+      x = x_new
+    end do
+    if (.not. converged) then
+      plastic = .false.
+      stress = stress_old
+      status = material_not_converged
+      return
+    end if
+
+    ! Converged state: s = p m + sum_k w_k V_k, ep = ep_old + dlambda sigma_eq.
+    w = a/(1.0_wp + x*q)
+    stress = pressure*unit_normal + matmul(modes, w)
+    dlambda = x/(2.0_wp*shear)
+    ep = ep_old + dlambda*sigma
+
+    ! Consistent tangent: D = Xi - beta (Xi n)(Xi n)^T, Xi = (C^-1 + dlambda P)^-1,
+    ! n = P s, beta = (1 - H dlambda)/(H sigma^2 + (1 - H dlambda) n.Xi.n).
+    hdl = h*dlambda
+    xi_n = matmul(modes, mu*c*w/(1.0_wp + x*q))
+    beta = (1.0_wp - hdl)/(h*sigma*sigma + (1.0_wp - hdl)*sum(mu*(c*w)**2/(1.0_wp + x*q)))
+    tangent = 0.0_wp
+    tangent(1:3, 1:3) = bulk
+    do k = 1, 2
+      tangent(1:3, 1:3) = tangent(1:3, 1:3) &
+                          + mu(k)/(1.0_wp + x*q(k))*outer(modes(1:3, k), modes(1:3, k))
+    end do
+    do k = 3, 5
+      tangent(k + 1, k + 1) = mu(k)/(1.0_wp + x*q(k))
+    end do
+    tangent = tangent - beta*outer(xi_n, xi_n)
+    if (.not. all(ieee_is_finite(tangent))) then
+      plastic = .false.
+      stress = stress_old
+      ep = ep_old
+      tangent = elastic_tangent(shear, bulk)
+      status = material_not_converged
+    end if
+
+  contains
+
+    !> Equivalent stress and residual g = Y/sigma - 1 at x, with their x-derivatives.
+    pure subroutine state_at(xx, sig, dsig, yy, hh, gg, dgg)
+      real(wp), intent(in) :: xx
+      real(wp), intent(out) :: sig, dsig, yy, hh, gg, dgg
+      real(wp) :: ww(5), dep
+      ww = a/(1.0_wp + xx*q)
+      sig = sqrt(sum(c*ww*ww))
+      dsig = -sum(c*q*ww*ww/(1.0_wp + xx*q))/sig
+      call material_hardening(props, ep_old + xx*sig/(2.0_wp*shear), yy, hh)
+      dep = (sig + xx*dsig)/(2.0_wp*shear)
+      gg = yy/sig - 1.0_wp
+      dgg = (hh*dep*sig - yy*dsig)/(sig*sig)
+    end subroutine state_at
+
   end subroutine material_update
+
+  !> Yield stress Y(ep) and hardening slope dY/dep of the law in props(9:12).
+  pure subroutine material_hardening(props, ep, y, slope)
+    real(wp), intent(in) :: props(material_prop_count), ep
+    real(wp), intent(out) :: y, slope
+    real(wp) :: base, decay
+    select case (nint(props(9)))
+    case (hardening_swift)
+      base = props(11) + max(ep, 0.0_wp)
+      y = props(10)*base**props(12)
+      slope = props(12)*y/base
+    case (hardening_voce)
+      decay = exp(-props(12)*max(ep, 0.0_wp))
+      y = props(10) + props(11)*(1.0_wp - decay)
+      slope = props(11)*props(12)*decay
+    case default
+      y = 0.0_wp
+      slope = 0.0_wp
+    end select
+  end subroutine material_hardening
+
+  !> Yield stress Y(ep) (the RD uniaxial yield stress, since G + H = 1).
+  pure function material_yield_stress(props, ep) result(y)
+    real(wp), intent(in) :: props(material_prop_count), ep
+    real(wp) :: y, slope
+    call material_hardening(props, ep, y, slope)
+  end function material_yield_stress
+
+  !> 0 when the properties are valid, else the 1-based index of the first bad one:
+  !> 1 E <= 0, 2 nu outside (-1, 1/2), 3 Hill form (F, G, H) not positive definite on the
+  !> deviator, 6/7/8 L/M/N <= 0, 9 unknown law, 10-12 bad hardening parameters
+  !> (Swift: K > 0, eps0 > 0, 0 <= n <= 1; Voce: Y0 > 0, Q >= 0, b >= 0), or the index of a
+  !> non-finite entry.
+  pure function material_check(props) result(info)
+    real(wp), intent(in) :: props(material_prop_count)
+    integer :: info
+    integer :: i
+    info = 0
+    do i = 1, material_prop_count
+      if (.not. ieee_is_finite(props(i))) then
+        info = i
+        return
+      end if
+    end do
+    if (props(1) <= 0.0_wp) then
+      info = 1
+    else if (props(2) <= -1.0_wp .or. props(2) >= 0.5_wp) then
+      info = 2
+    else if (.not. hill48_is_convex(props(3:8))) then
+      info = 3
+      do i = 6, 8
+        if (props(i) <= 0.0_wp) info = i
+      end do
+    else
+      select case (nint(props(9)))
+      case (hardening_swift)
+        if (props(10) <= 0.0_wp) then
+          info = 10
+        else if (props(11) <= 0.0_wp) then
+          info = 11
+        else if (props(12) < 0.0_wp .or. props(12) > 1.0_wp) then
+          info = 12
+        end if
+      case (hardening_voce)
+        if (props(10) <= 0.0_wp) then
+          info = 10
+        else if (props(11) < 0.0_wp) then
+          info = 11
+        else if (props(12) < 0.0_wp) then
+          info = 12
+        end if
+      case default
+        info = 9
+      end select
+    end if
+  end function material_check
+
+  !> Hill'48 coefficients (F, G, H, L, M, N) from the r-values at 0, 45 and 90 degrees to the
+  !> rolling direction, normalised to G + H = 1, with L = M = 1.5 (isotropic through the
+  !> thickness). Non-positive r-values give all zeros (not a convex yield function).
+  pure subroutine hill48_from_r_values(r0, r45, r90, coefficients)
+    real(wp), intent(in) :: r0, r45, r90
+    real(wp), intent(out) :: coefficients(6)
+    coefficients = 0.0_wp
+    if (.not. (r0 > 0.0_wp .and. r45 > 0.0_wp .and. r90 > 0.0_wp)) return
+    coefficients(2) = 1.0_wp/(1.0_wp + r0)
+    coefficients(3) = r0/(1.0_wp + r0)
+    coefficients(1) = r0/(r90*(1.0_wp + r0))
+    coefficients(4:5) = 1.5_wp
+    coefficients(6) = (r0 + r90)*(1.0_wp + 2.0_wp*r45)/(2.0_wp*r90*(1.0_wp + r0))
+  end subroutine hill48_from_r_values
+
+  !> The Hill'48 quadratic form with coefficients (F, G, H, L, M, N) is positive definite on
+  !> the deviatoric stresses (a convex, bounded yield surface).
+  pure function hill48_is_convex(coefficients) result(ok)
+    real(wp), intent(in) :: coefficients(6)
+    logical :: ok
+    associate (f => coefficients(1), g => coefficients(2), h => coefficients(3))
+      ok = f + g > 0.0_wp .and. g + h > 0.0_wp .and. h + f > 0.0_wp &
+           .and. f*g + g*h + h*f > 0.0_wp .and. all(coefficients(4:6) > 0.0_wp)
+    end associate
+  end function hill48_is_convex
+
+  !> Hill'48 equivalent stress sqrt(2 f) of a Voigt stress (11, 22, 33, 12, 23, 31).
+  pure function hill48_equivalent_stress(coefficients, stress) result(sigma)
+    real(wp), intent(in) :: coefficients(6), stress(6)
+    real(wp) :: sigma
+    sigma = sqrt(max(0.0_wp, coefficients(1)*(stress(2) - stress(3))**2 &
+                 + coefficients(2)*(stress(3) - stress(1))**2 &
+                 + coefficients(3)*(stress(1) - stress(2))**2 &
+                 + 2.0_wp*(coefficients(4)*stress(5)**2 + coefficients(5)*stress(6)**2 &
+                           + coefficients(6)*stress(4)**2)))
+  end function hill48_equivalent_stress
+
+  !> Shear and bulk moduli from E and nu.
+  pure subroutine elastic_moduli(props, shear, bulk)
+    real(wp), intent(in) :: props(material_prop_count)
+    real(wp), intent(out) :: shear, bulk
+    shear = props(1)/(2.0_wp*(1.0_wp + props(2)))
+    bulk = props(1)/(3.0_wp*(1.0_wp - 2.0_wp*props(2)))
+  end subroutine elastic_moduli
+
+  !> Isotropic elasticity C (engineering shears): stress = C strain.
+  pure function elastic_tangent(shear, bulk) result(c)
+    real(wp), intent(in) :: shear, bulk
+    real(wp) :: c(6, 6)
+    integer :: i
+    c = (bulk - 2.0_wp*shear/3.0_wp)*outer(unit_normal, unit_normal)
+    do i = 1, 3
+      c(i, i) = c(i, i) + 2.0_wp*shear
+      c(i + 3, i + 3) = shear
+    end do
+  end function elastic_tangent
+
+  !> The five deviatoric modes V_k (columns of modes, orthonormal Voigt vectors) in which the
+  !> Hill matrix P and the isotropic compliance C^-1 are both diagonal: P V_k = c_k V_k and
+  !> C^-1 V_k = V_k / mu_k, with mu_k = 2G, c_k = q_k on the two normal modes and mu_k = G,
+  !> c_k = 2 q_k on the three shears (q = N, L, M). For s = p m + sum a_k V_k this gives
+  !> s.P.s = sum c_k a_k^2, and (C^-1 + dlambda P)^-1 scales mode k by
+  !> mu_k / (1 + x q_k) with x = 2 G dlambda.
+  pure subroutine hill48_modes(coefficients, shear, modes, q, c, mu)
+    real(wp), intent(in) :: coefficients(6), shear
+    real(wp), intent(out) :: modes(6, 5), q(5), c(5), mu(5)
+    real(wp) :: q11, q22, q12, mean, half_diff, radius, angle, ea(3), eb(3)
+    associate (f => coefficients(1), g => coefficients(2), h => coefficients(3))
+      ! The Hill normal block restricted to the deviatoric plane, in the orthonormal basis
+      ! ea = (1, -1, 0)/sqrt(2), eb = (1, 1, -2)/sqrt(6).
+      q11 = 0.5_wp*(f + g + 4.0_wp*h)
+      q22 = 1.5_wp*(f + g)
+      q12 = 0.5_wp*sqrt(3.0_wp)*(g - f)
+    end associate
+    ea = [1.0_wp, -1.0_wp, 0.0_wp]/sqrt(2.0_wp)
+    eb = [1.0_wp, 1.0_wp, -2.0_wp]/sqrt(6.0_wp)
+    mean = 0.5_wp*(q11 + q22)
+    half_diff = 0.5_wp*(q11 - q22)
+    radius = hypot(half_diff, q12)
+    angle = 0.5_wp*atan2(q12, half_diff)
+    modes = 0.0_wp
+    modes(1:3, 1) = cos(angle)*ea + sin(angle)*eb
+    modes(1:3, 2) = -sin(angle)*ea + cos(angle)*eb
+    modes(4, 3) = 1.0_wp
+    modes(5, 4) = 1.0_wp
+    modes(6, 5) = 1.0_wp
+    ! The smaller eigenvalue as det/larger: no cancellation when the form is nearly singular.
+    q(1) = mean + radius
+    q(2) = (q11*q22 - q12*q12)/q(1)
+    q(3) = coefficients(6)
+    q(4) = coefficients(4)
+    q(5) = coefficients(5)
+    c(1:2) = q(1:2)
+    c(3:5) = 2.0_wp*q(3:5)
+    mu(1:2) = 2.0_wp*shear
+    mu(3:5) = shear
+  end subroutine hill48_modes
+
+  pure function outer(u, v) result(m)
+    real(wp), intent(in) :: u(:), v(:)
+    real(wp) :: m(size(u), size(v))
+    integer :: j
+    do j = 1, size(v)
+      m(:, j) = u*v(j)
+    end do
+  end function outer
 
 end module ddpy_material

@@ -16,14 +16,15 @@ module ddpy_nagata
 contains
 
   !> Quadratic coefficient c of the Nagata curve C(s) = x0 + (d - c) s + c s^2 (paper Eq. 5).
-  !> When the end normals are (anti)parallel within tol (1 - |n0.n1| < tol) the curve is the
-  !> straight edge: the formula divides by 1 - a^2 and blows up for a wavy edge.
+  !> When the end normals are (anti)parallel within tol (1 - |n0.n1| <= tol) the curve is the
+  !> straight edge: the formula divides by 1 - a^2 and blows up for a wavy edge. Exactly
+  !> parallel normals give a straight edge even for tol = 0.
   pure function nagata_edge_coefficient(x0, x1, n0, n1, tol) result(c)
     real(wp), intent(in) :: x0(3), x1(3), n0(3), n1(3), tol
     real(wp) :: c(3)
     real(wp) :: d(3), a, d0, d1
     a = dot_product(n0, n1)
-    if (1.0_wp - abs(a) < tol) then
+    if (1.0_wp - abs(a) <= tol .or. 1.0_wp - a*a <= 0.0_wp) then
       c = 0.0_wp
       return
     end if

@@ -1,0 +1,298 @@
+"""Elastoplastic material of the blank: isotropic elasticity, Hill'48 anisotropy, Swift or Voce
+hardening, integrated by the core's backward-Euler return mapping (docs/theory/material.md).
+
+Material axes: 1 = rolling direction (RD), 2 = transverse direction (TD), 3 = normal direction
+(ND). Voigt order (11, 22, 33, 12, 23, 31); strains carry engineering shears (gamma = 2 eps),
+stresses are plain, so ``stress @ strain`` is the work.
+
+>>> steel = Material(210e3, 0.3, Hill48.from_r_values(1.73, 1.23, 2.02),
+...                  Swift(K=568.3, eps0=0.0059, n=0.233))
+>>> stress, ep, tangent, plastic = steel.update(np.zeros(6), 0.0, [0.01, 0, 0, 0, 0, 0])
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import astuple, dataclass
+from typing import ClassVar
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ddpy import _core
+from ddpy._validate import float_array
+
+__all__ = ["Hill48", "Material", "PROP_COUNT", "ReturnMappingError", "Swift", "Voce"]
+
+#: Length of the property vector the core takes (``Material.props()``).
+PROP_COUNT = 16
+
+_STATUS = {1: "the return mapping did not converge", 2: "invalid material properties",
+           3: "non-finite or negative input"}
+
+
+def _real(value: float, name: str) -> float:
+    """``value`` as a finite float, or ValueError naming it."""
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be a real number, got {value!r}") from None
+    if not math.isfinite(number):
+        raise ValueError(f"{name} must be finite, got {number}")
+    return number
+
+
+@dataclass(frozen=True)
+class Swift:
+    """Swift hardening Y = K (eps0 + ep)^n, ep the equivalent plastic strain.
+
+    K > 0 (stress), eps0 > 0 (initial yield stress K eps0^n), 0 <= n <= 1."""
+
+    K: float
+    eps0: float
+    n: float
+    law: ClassVar[int] = 1
+
+    def __post_init__(self) -> None:
+        for name in ("K", "eps0", "n"):
+            object.__setattr__(self, name, _real(getattr(self, name), f"Swift {name}"))
+        if self.K <= 0:
+            raise ValueError(f"Swift K must be positive, got {self.K}")
+        if self.eps0 <= 0:
+            raise ValueError(
+                f"Swift eps0 must be positive (the initial yield stress is K eps0^n), "
+                f"got {self.eps0}")
+        if not 0 <= self.n <= 1:
+            raise ValueError(f"Swift exponent n must lie in [0, 1], got {self.n}")
+
+    @property
+    def initial_yield_stress(self) -> float:
+        """Y at ep = 0."""
+        return self.K * self.eps0**self.n
+
+
+@dataclass(frozen=True)
+class Voce:
+    """Voce hardening Y = Y0 + Q (1 - exp(-b ep)); Y0 > 0, Q >= 0, b >= 0."""
+
+    Y0: float
+    Q: float
+    b: float
+    law: ClassVar[int] = 2
+
+    def __post_init__(self) -> None:
+        for name in ("Y0", "Q", "b"):
+            object.__setattr__(self, name, _real(getattr(self, name), f"Voce {name}"))
+        if self.Y0 <= 0:
+            raise ValueError(f"Voce Y0 must be positive, got {self.Y0}")
+        if self.Q < 0:
+            raise ValueError(f"Voce Q must be non-negative (no softening), got {self.Q}")
+        if self.b < 0:
+            raise ValueError(f"Voce b must be non-negative, got {self.b}")
+
+    @property
+    def initial_yield_stress(self) -> float:
+        """Y at ep = 0."""
+        return self.Y0
+
+
+@dataclass(frozen=True, kw_only=True)
+class Hill48:
+    """Hill'48 yield function in the material axes (1 = RD, 2 = TD, 3 = ND):
+
+    2 f = F (s22 - s33)^2 + G (s33 - s11)^2 + H (s11 - s22)^2
+          + 2 L s23^2 + 2 M s31^2 + 2 N s12^2,   equivalent stress sqrt(2 f).
+
+    With G + H = 1 the hardening curve is the RD uniaxial yield stress. Keywords only:
+    ``Hill48(F=..., G=..., H=..., N=...)``; L = M = 1.5 (isotropic through the thickness)
+    unless given. The quadratic form must be positive definite on the deviatoric stresses.
+    """
+
+    F: float
+    G: float
+    H: float
+    L: float = 1.5
+    M: float = 1.5
+    N: float
+
+    def __post_init__(self) -> None:
+        for name in ("F", "G", "H", "L", "M", "N"):
+            object.__setattr__(self, name, _real(getattr(self, name), f"Hill48 {name}"))
+        F, G, H = self.F, self.G, self.H
+        for name in ("L", "M", "N"):
+            if getattr(self, name) <= 0:
+                raise ValueError(
+                    f"Hill48 {name} must be positive for a convex yield surface, "
+                    f"got {getattr(self, name)}")
+        if min(F + G, G + H, H + F) <= 0 or F * G + G * H + H * F <= 0:
+            raise ValueError(
+                "Hill48 coefficients do not define a convex yield surface: need F+G, G+H, H+F "
+                f"> 0 and FG+GH+HF > 0, got F={F}, G={G}, H={H} (F+G={F + G:.4g}, "
+                f"G+H={G + H:.4g}, H+F={H + F:.4g}, FG+GH+HF={F * G + G * H + H * F:.4g})")
+
+    @classmethod
+    def from_r_values(cls, r0: float, r45: float, r90: float) -> Hill48:
+        """Coefficients with G + H = 1 and L = M = 1.5 from the r-values at 0, 45 and 90
+        degrees to RD (../shared/reference/math.md §7)."""
+        r = [_real(v, name) for v, name in ((r0, "r0"), (r45, "r45"), (r90, "r90"))]
+        if min(r) <= 0:
+            raise ValueError(f"r-values must be positive, got r0={r0}, r45={r45}, r90={r90}")
+        F, G, H, L, M, N = (float(c) for c in _core.hill48_from_r_values(*r))
+        return cls(F=F, G=G, H=H, L=L, M=M, N=N)
+
+    @classmethod
+    def von_mises(cls) -> Hill48:
+        """The isotropic case F = G = H = 1/2, L = M = N = 3/2."""
+        return cls(F=0.5, G=0.5, H=0.5, L=1.5, M=1.5, N=1.5)
+
+    @property
+    def coefficients(self) -> tuple[float, float, float, float, float, float]:
+        """(F, G, H, L, M, N), the order of the core's property vector."""
+        return astuple(self)
+
+    @property
+    def r0(self) -> float:
+        """Lankford coefficient along RD, H / G."""
+        return self.H / self.G
+
+    @property
+    def r45(self) -> float:
+        """Lankford coefficient at 45 degrees, N / (F + G) - 1/2."""
+        return self.N / (self.F + self.G) - 0.5
+
+    @property
+    def r90(self) -> float:
+        """Lankford coefficient along TD, H / F."""
+        return self.H / self.F
+
+    def r_value(self, angle: ArrayLike) -> NDArray[np.float64]:
+        """Lankford coefficient of in-plane uniaxial tension at ``angle`` (radians) to RD:
+        r = [H + (2N - F - G - 4H) sin^2 cos^2] / (F sin^2 + G cos^2)."""
+        s2, c2 = np.sin(angle) ** 2, np.cos(angle) ** 2
+        F, G, H, N = self.F, self.G, self.H, self.N
+        return (H + (2 * N - F - G - 4 * H) * s2 * c2) / (F * s2 + G * c2)
+
+    def yield_stress_ratio(self, angle: ArrayLike) -> NDArray[np.float64]:
+        """Uniaxial yield stress at ``angle`` (radians) to RD over the RD one:
+        sqrt((G + H) / (F sin^4 + G cos^4 + H cos^2(2 angle) + 2 N sin^2 cos^2))."""
+        s, c = np.sin(angle), np.cos(angle)
+        F, G, H, N = self.F, self.G, self.H, self.N
+        return np.sqrt((G + H) / (F * s**4 + G * c**4 + H * np.cos(2 * angle) ** 2
+                                  + 2 * N * s**2 * c**2))
+
+    def equivalent_stress(self, stress: ArrayLike) -> NDArray[np.float64]:
+        """sqrt(2 f) of Voigt stresses (..., 6) in the material axes."""
+        s = np.asarray(stress, dtype=float)
+        F, G, H, L, M, N = self.coefficients
+        return np.sqrt(F * (s[..., 1] - s[..., 2]) ** 2 + G * (s[..., 2] - s[..., 0]) ** 2
+                       + H * (s[..., 0] - s[..., 1]) ** 2
+                       + 2 * (L * s[..., 4] ** 2 + M * s[..., 5] ** 2 + N * s[..., 3] ** 2))
+
+
+class ReturnMappingError(RuntimeError):
+    """The return mapping failed at some points (``points``, 0-based; ``codes``, core status):
+    cut the increment."""
+
+    def __init__(self, points: NDArray[np.intp], codes: NDArray[np.int32]) -> None:
+        self.points = points
+        self.codes = codes
+        first = int(points[0])
+        reason = _STATUS.get(int(codes[0]), "unknown status")
+        super().__init__(
+            f"return mapping failed at {points.size} point(s), first at point {first} "
+            f"(status {int(codes[0])}: {reason})")
+
+
+@dataclass(frozen=True)
+class Material:
+    """Isotropic elasticity (E > 0, -1 < nu < 1/2), a Hill48 yield criterion in the material
+    axes and Swift or Voce hardening of the equivalent plastic strain."""
+
+    E: float
+    nu: float
+    yield_criterion: Hill48
+    hardening: Swift | Voce
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "E", _real(self.E, "Young's modulus E"))
+        object.__setattr__(self, "nu", _real(self.nu, "Poisson's ratio nu"))
+        if self.E <= 0:
+            raise ValueError(f"Young's modulus E must be positive, got {self.E}")
+        if not -1 < self.nu < 0.5:
+            raise ValueError(f"Poisson's ratio nu must lie in (-1, 0.5), got {self.nu}")
+        if not isinstance(self.yield_criterion, Hill48):
+            raise TypeError(
+                f"yield_criterion must be a Hill48, got {type(self.yield_criterion).__name__}")
+        if not isinstance(self.hardening, Swift | Voce):
+            raise TypeError(
+                f"hardening must be Swift or Voce, got {type(self.hardening).__name__}")
+        info = int(_core.material_check(self.props()))
+        if info != 0:  # the Python checks above should have caught it
+            raise ValueError(f"material property {info} (1-based) rejected by the core")
+
+    @property
+    def shear_modulus(self) -> float:
+        return self.E / (2 * (1 + self.nu))
+
+    @property
+    def bulk_modulus(self) -> float:
+        return self.E / (3 * (1 - 2 * self.nu))
+
+    def props(self) -> NDArray[np.float64]:
+        """The core's property vector: E, nu, F, G, H, L, M, N, law (1 Swift, 2 Voce), the three
+        hardening parameters (K, eps0, n or Y0, Q, b), then 4 reserved zeros."""
+        props = np.zeros(PROP_COUNT)
+        props[0:2] = self.E, self.nu
+        props[2:8] = self.yield_criterion.coefficients
+        props[8] = self.hardening.law
+        props[9:12] = astuple(self.hardening)
+        return props
+
+    def elastic_tangent(self) -> NDArray[np.float64]:
+        """The 6 x 6 isotropic elasticity matrix (engineering shear strains)."""
+        G, K = self.shear_modulus, self.bulk_modulus
+        c = np.zeros((6, 6))
+        c[:3, :3] = K - 2 * G / 3
+        c[range(3), range(3)] += 2 * G
+        c[range(3, 6), range(3, 6)] = G
+        return c
+
+    def yield_stress(self, ep: ArrayLike) -> NDArray[np.float64]:
+        """Y(ep), the current yield stress (the RD uniaxial one when G + H = 1)."""
+        return self.hardening_curve(ep)[0]
+
+    def hardening_curve(self, ep: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Y(ep) and dY/dep from the core."""
+        ep = np.asarray(ep)
+        flat = float_array(ep.reshape(-1), "ep", (None,))
+        y, slope = _core.material_hardening(self.props(), flat)
+        return y.reshape(ep.shape), slope.reshape(ep.shape)
+
+    def update(
+        self, stress_old: ArrayLike, ep_old: ArrayLike, strain_increment: ArrayLike,
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64],
+               NDArray[np.bool_]]:
+        """Backward-Euler update of k points: stress_old (k, 6), ep_old (k,), strain_increment
+        (k, 6) (or one point: (6,), scalar, (6,)). Returns the stress (k, 6), the equivalent
+        plastic strain (k,), the consistent tangent d stress / d strain_increment (k, 6, 6)
+        and whether each point yielded (k,). Raises ReturnMappingError when the return
+        mapping fails at a point (the caller cuts the increment)."""
+        single = np.ndim(stress_old) == 1
+        s = float_array(np.atleast_2d(stress_old), "stress_old", (None, 6))
+        k = s.shape[0]
+        ep = float_array(np.atleast_1d(ep_old), "ep_old", (k,))
+        de = float_array(np.atleast_2d(strain_increment), "strain_increment", (k, 6))
+        if np.any(ep < 0):
+            raise ValueError("ep_old must be non-negative")
+        stress, ep_new, tangent, plastic, status = _core.material_update(
+            self.props(), s.reshape(-1), ep, de.reshape(-1))
+        failed = np.flatnonzero(status)
+        if failed.size:
+            raise ReturnMappingError(failed, status[failed])
+        # Fortran tangent(i, j, p) is C-order [p, j, i]: transpose to [p, i, j].
+        tangent = tangent.reshape(k, 6, 6).transpose(0, 2, 1)
+        stress = stress.reshape(k, 6)
+        plastic = plastic.astype(bool)
+        if single:
+            return stress[0], ep_new[0], tangent[0], plastic[0]
+        return stress, ep_new, tangent, plastic

@@ -20,7 +20,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -31,7 +31,7 @@ from ddpy.linalg import LinearSolverError, MumpsSolver
 from ddpy.mesh import HexMesh
 from ddpy.parallel import threads as thread_count
 
-__all__ = ["Solid", "SolidState", "StaticProblem", "SolidResult", "ConvergenceError",
+__all__ = ["Assembly", "Solid", "SolidState", "StaticProblem", "SolidResult", "ConvergenceError",
            "ElementError", "material_props"]
 
 PROP_COUNT = 16
@@ -88,6 +88,10 @@ def material_props(material: Any) -> NDArray[np.float64]:
             raise ValueError(f"Voce Y0 must be positive and Q, b >= 0, got {y0}, {q}, {b}")
     else:
         raise ValueError(f"hardening must be 1 (Swift) or 2 (Voce), got {law}")
+    info = int(_core.material_check(props))
+    if info:
+        raise ValueError(f"material property {info - 1} (0-based) is out of range "
+                         "(see ddpy.material for the accepted ranges)")
     return props
 
 
@@ -108,6 +112,16 @@ class SolidState:
 
     def copy(self) -> SolidState:
         return SolidState(self.stress.copy(), self.ep.copy(), self.strain.copy())
+
+
+class Assembly(NamedTuple):
+    """What one assembly returns: internal forces (n, 3), tangent values in the slots of the
+    pattern, the trial state, and K dp when asked for (else None)."""
+
+    fint: NDArray[np.float64]
+    values: NDArray[np.float64]
+    state: SolidState
+    kdu: NDArray[np.float64] | None
 
 
 @dataclass
@@ -173,33 +187,38 @@ class Solid:
     def assemble(self, u: ArrayLike, state: SolidState | None = None,
                  pattern: _Pattern | None = None, tangent: bool = True,
                  values: NDArray[np.float64] | None = None,
-                 ) -> tuple[NDArray[np.float64], NDArray[np.float64], SolidState]:
+                 dp: ArrayLike | None = None) -> Assembly:
         """Internal forces (n, 3), tangent values in the slots of ``pattern`` (empty when
         ``tangent`` is False) and the trial state at total displacements ``u`` (n, 3),
-        starting from the converged ``state``. ``values`` may be given as the output buffer.
+        starting from the converged ``state``; with ``dp`` (n, 3) also the product K dp of
+        the tangent over all dofs with dp. ``values`` may be given as the output buffer.
         Raises ElementError when an element is inverted or its material update fails."""
-        u = float_array(u, "u", (self.mesh.n_nodes, 3))
+        n = self.mesh.n_nodes
+        u = float_array(u, "u", (n, 3))
         state = self.initial_state() if state is None else state
         pattern = self.pattern() if pattern is None else pattern
         if not tangent:
             values = np.zeros(0)
         elif values is None or values.shape != pattern.rows.shape:
             values = np.empty(pattern.rows.shape[0])
-        values, fint, stress, ep, strain, status, element = _core.solid_assemble(
+        product = dp is not None and tangent
+        dp = np.zeros(3 * n) if dp is None else float_array(dp, "dp", (n, 3)).ravel()
+        values, fint, kdu, stress, ep, strain, status, element = _core.solid_assemble(
             self._x, self._conn, u.ravel(), self.props, self.angle, state.stress.ravel(),
             state.ep.ravel(), state.strain.ravel(), pattern.eqn, int(pattern.symmetric),
-            int(tangent), pattern.offsets, values)
+            int(tangent), pattern.offsets, values, int(product), dp)
         if status:
             raise ElementError(int(status), int(element) - 1)
         m = self.mesh.n_elements
         trial = SolidState(stress.reshape(m, 8, 6), ep.reshape(m, 8), strain.reshape(m, 8, 6))
-        return fint.reshape(-1, 3), values, trial
+        return Assembly(fint.reshape(-1, 3), values, trial,
+                        kdu.reshape(-1, 3) if product else None)
 
     def internal_force(self, u: ArrayLike, state: SolidState | None = None,
                        ) -> tuple[NDArray[np.float64], SolidState]:
         """Internal forces (n, 3) and trial state at total displacements u (n, 3)."""
-        fint, _, trial = self.assemble(u, state, tangent=False)
-        return fint, trial
+        out = self.assemble(u, state, tangent=False)
+        return out.fint, out.state
 
     def tangent(self, u: ArrayLike, state: SolidState | None = None, symmetric: bool = False,
                 ) -> tuple[NDArray[np.int32], NDArray[np.int32], NDArray[np.float64]]:
@@ -207,8 +226,7 @@ class Solid:
         triple (rows, cols, values), duplicates to be summed; ``symmetric``: lower triangle
         only."""
         pattern = self.pattern(symmetric=symmetric)
-        _, values, _ = self.assemble(u, state, pattern)
-        return pattern.rows, pattern.cols, values
+        return pattern.rows, pattern.cols, self.assemble(u, state, pattern).values
 
     def stresses(self, u: ArrayLike, state: SolidState,
                  ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
@@ -229,7 +247,8 @@ class SolidResult:
     ``displacements[s]`` (n, 3), ``reactions[s]`` (n, 3; nonzero on constrained dofs),
     ``pk2[s]`` and ``cauchy[s]`` (m, 8, 6), ``ep[s]`` (m, 8), the norms of the free residual
     at every iteration ``residuals[s]`` and of the corrections ``corrections[s]``.
-    ``timings`` lists the seconds of every assembly, factorization and solve."""
+    ``timings`` lists the seconds of every assembly (with tangent), factorization, solve and
+    force-only assembly of the line search."""
 
     factors: list[float] = field(default_factory=list)
     displacements: list[NDArray[np.float64]] = field(default_factory=list)
@@ -242,7 +261,8 @@ class SolidResult:
     cuts: int = 0
     state: SolidState | None = None
     timings: dict[str, list[float]] = field(
-        default_factory=lambda: {"assembly": [], "factorization": [], "solve": []})
+        default_factory=lambda: {"assembly": [], "factorization": [], "solve": [],
+                                 "line_search": []})
 
     @property
     def iterations(self) -> list[int]:
@@ -406,14 +426,17 @@ class StaticProblem:
 
     def solve(self, increments: int = 1, tol_force: float = 1e-8, tol_disp: float = 1e-8,
               max_iterations: int = 25, max_cuts: int = 6, threads: int | None = None,
-              extrapolate: bool = True) -> SolidResult:
+              extrapolate: bool = False, line_search: bool = True) -> SolidResult:
         """Apply loads and prescribed displacements in ``increments`` equal steps.
 
-        An increment has converged when ||r_free|| <= tol_force max(||f_ext||,
-        ||reactions||, floor) and ||correction|| <= tol_disp ||increment of u||; on divergence,
-        an inverted element or a failed return mapping it is cut in half and retried from
-        the converged state, at most ``max_cuts`` times in a row. ``extrapolate`` starts each
-        increment from the previous one's displacement increment. ``threads``: OpenMP threads.
+        Each increment starts from the linearized predictor at the converged state (the
+        prescribed increment enters through the tangent, not as a jump of the boundary
+        nodes), or with ``extrapolate`` from the previous increment's displacement increment.
+        It has converged when ||r_free|| <= tol_force max(||f_ext||, ||reactions||, floor)
+        and ||correction|| <= tol_disp ||increment of u||. ``line_search``: energy line
+        search when a full Newton step overshoots. On divergence, an inverted element or a
+        failed return mapping the increment is cut in half and retried from the converged
+        state, at most ``max_cuts`` times in a row. ``threads``: OpenMP threads.
         """
         if int(increments) < 1:
             raise ValueError(f"increments must be at least 1, got {increments}")
@@ -425,41 +448,38 @@ class StaticProblem:
         if threads is not None:
             with thread_count(int(threads)):
                 return self._run(int(increments), tol_force, tol_disp, int(max_iterations),
-                                 int(max_cuts), extrapolate)
+                                 int(max_cuts), extrapolate, line_search)
         return self._run(int(increments), tol_force, tol_disp, int(max_iterations),
-                         int(max_cuts), extrapolate)
+                         int(max_cuts), extrapolate, line_search)
 
     def _run(self, increments: int, tol_force: float, tol_disp: float, max_iterations: int,
-             max_cuts: int, extrapolate: bool) -> SolidResult:
+             max_cuts: int, extrapolate: bool, line_search: bool) -> SolidResult:
         pattern, solver = self._prepare()
         solid = self.solid
-        free = ~self.fixed.ravel()
         fixed = self.fixed.ravel()
         # Floor of the force scale: a microstrain over one element's face.
         mesh = solid.mesh
         face = (mesh.volume() / mesh.n_elements) ** (2.0 / 3.0)
-        floor = 1e-6 * solid.props[0] * face
+        newton = _Newton(solid, pattern, solver, fixed, tol_force, tol_disp, max_iterations,
+                         1e-6 * solid.props[0] * face, line_search)
         result = SolidResult()
+        newton.timings = result.timings
         u = np.zeros(solid.n_dofs)
         state = solid.initial_state()
-        values = np.empty(pattern.rows.shape[0])
-        factor, step = 0.0, 1.0 / increments
+        nominal = 1.0 / increments
+        factor, step = 0.0, nominal
         previous: tuple[float, NDArray[np.float64]] | None = None
-        cuts_in_row, first_factorization = 0, True
+        cuts_in_row = 0
         while factor < 1.0 - 1e-12:
-            target = min(factor + step, 1.0)
-            if 1.0 - target < 1e-12:
-                target = 1.0
+            target = 1.0 if 1.0 - (factor + step) < 1e-12 else factor + step
             delta = target - factor
-            trial = u.copy()
-            trial[fixed] = self.prescribed(target).ravel()[fixed]
+            prescribed = self.prescribed(target).ravel()[fixed]
+            guess = None
             if extrapolate and previous is not None and cuts_in_row == 0:
-                trial[free] += delta / previous[0] * previous[1][free]
-            fext = target * self.forces.ravel()
-            outcome = self._increment(trial, u, state, fext, pattern, solver, values, free,
-                                      fixed, tol_force, tol_disp, max_iterations, floor, result,
-                                      first_factorization)
-            first_factorization = False
+                guess = u + delta / previous[0] * previous[1]
+                guess[fixed] = prescribed
+            outcome = newton.increment(u, state, prescribed, target * self.forces.ravel(),
+                                       guess)
             if isinstance(outcome, str):
                 cuts_in_row += 1
                 result.cuts += 1
@@ -482,71 +502,167 @@ class StaticProblem:
             result.ep.append(state.ep.copy())
             result.residuals.append(residuals)
             result.corrections.append(corrections)
-            if cuts_in_row == 0:
-                step = 1.0 / increments
-            else:  # back to the nominal size once the nominal increment is complete
-                nominal = 1.0 / increments
-                if abs(factor / nominal - round(factor / nominal)) < 1e-9:
-                    step, cuts_in_row = nominal, 0
+            # Back to the nominal size once a cut nominal increment is complete.
+            if cuts_in_row == 0 or abs(factor / nominal - round(factor / nominal)) < 1e-9:
+                step, cuts_in_row = nominal, 0
         result.state = state
         return result
-
-    def _increment(self, u: NDArray[np.float64], u_n: NDArray[np.float64], state: SolidState,
-                   fext: NDArray[np.float64], pattern: _Pattern, solver: MumpsSolver,
-                   values: NDArray[np.float64], free: NDArray[np.bool_],
-                   fixed: NDArray[np.bool_], tol_force: float, tol_disp: float,
-                   max_iterations: int, floor: float, result: SolidResult,
-                   first_factorization: bool) -> Any:
-        """One increment by Newton-Raphson from u; the converged (u, state, reactions,
-        residual norms, correction norms), or the reason of failure as a string."""
-        solid, times = self.solid, result.timings
-        residuals: list[float] = []
-        corrections: list[float] = []
-        norm_fext = float(np.linalg.norm(fext))
-        correction = np.inf
-        for iteration in range(max_iterations + 1):
-            start = time.perf_counter()
-            try:
-                fint, values, trial = solid.assemble(u.reshape(-1, 3), state, pattern,
-                                                     values=values)
-            except ElementError as error:
-                return str(error)
-            times["assembly"].append(time.perf_counter() - start)
-            r = fint.ravel() - fext
-            norm_r = float(np.linalg.norm(r[free]))
-            reactions = np.where(fixed, r, 0.0)
-            scale = max(norm_fext, float(np.linalg.norm(reactions)), floor)
-            residuals.append(norm_r)
-            if not np.isfinite(norm_r):
-                return "the residual is not finite"
-            step_norm = float(np.linalg.norm(u - u_n))
-            if norm_r <= tol_force * scale and (
-                    correction <= tol_disp * step_norm or (iteration == 0 and step_norm == 0.0)):
-                return u, trial, reactions, residuals, corrections
-            if iteration == max_iterations:
-                return f"no convergence in {max_iterations} iterations"
-            if iteration >= 3 and residuals[-1] > residuals[-2] > residuals[-3]:
-                return "the residual grows"
-            start = time.perf_counter()
-            try:
-                solver.factorize(values)
-            except LinearSolverError as error:
-                if first_factorization:
-                    raise ValueError(
-                        f"the stiffness matrix is singular ({error}): are rigid-body motions "
-                        "suppressed by the fixed dofs?") from error
-                return str(error)
-            times["factorization"].append(time.perf_counter() - start)
-            start = time.perf_counter()
-            du = solver.solve(-r[free])
-            times["solve"].append(time.perf_counter() - start)
-            u = u.copy()
-            u[free] += du
-            correction = float(np.linalg.norm(du))
-            corrections.append(correction)
-            first_factorization = False
-        return "no convergence"  # not reached
 
     def close(self) -> None:
         """Free the MUMPS instance."""
         self._reset_solver()
+
+
+class _Newton:
+    """Newton-Raphson iterations of one increment on the free dofs, with an energy line
+    search (secant on s(alpha) = du . r(u + alpha du)) when a full step overshoots."""
+
+    #: A full step is accepted when |s(1)| <= LINE_SEARCH |s(0)| or s(1) < 0.
+    LINE_SEARCH = 0.5
+    #: Secant steps of one line search at most.
+    LINE_SEARCH_STEPS = 5
+
+    def __init__(self, solid: Solid, pattern: _Pattern, solver: MumpsSolver,
+                 fixed: NDArray[np.bool_], tol_force: float, tol_disp: float,
+                 max_iterations: int, floor: float, line_search: bool) -> None:
+        self.solid, self.pattern, self.solver = solid, pattern, solver
+        self.fixed, self.free = fixed, ~fixed
+        self.tol_force, self.tol_disp = tol_force, tol_disp
+        self.max_iterations, self.floor = max_iterations, floor
+        self.line_search = line_search
+        self.values = np.empty(pattern.rows.shape[0])
+        self.timings: dict[str, list[float]] = {
+            "assembly": [], "factorization": [], "solve": [], "line_search": []}
+        self.factorized = False
+
+    def _assemble(self, u: NDArray[np.float64], state: SolidState,
+                  dp: NDArray[np.float64] | None = None, tangent: bool = True,
+                  ) -> Assembly | str:
+        start = time.perf_counter()
+        try:
+            out = self.solid.assemble(u.reshape(-1, 3), state, self.pattern, tangent=tangent,
+                                      values=self.values if tangent else None, dp=dp)
+        except ElementError as error:
+            return str(error)
+        self.timings["assembly" if tangent else "line_search"].append(
+            time.perf_counter() - start)
+        return out
+
+    def _solve(self, values: NDArray[np.float64], rhs: NDArray[np.float64],
+               ) -> NDArray[np.float64] | str:
+        start = time.perf_counter()
+        try:
+            self.solver.factorize(values)
+        except LinearSolverError as error:
+            if not self.factorized:
+                raise ValueError(
+                    f"the stiffness matrix is singular ({error}): is a part of the mesh free to "
+                    "move without straining?") from error
+            return str(error)
+        self.factorized = True
+        self.timings["factorization"].append(time.perf_counter() - start)
+        start = time.perf_counter()
+        du = self.solver.solve(rhs)
+        self.timings["solve"].append(time.perf_counter() - start)
+        return du
+
+    def _step(self, u: NDArray[np.float64], state: SolidState, du: NDArray[np.float64],
+              r: NDArray[np.float64], fext: NDArray[np.float64],
+              ) -> tuple[NDArray[np.float64], Assembly, float] | str:
+        """u + alpha du and its assembly: alpha = 1 unless the energy line search (or an
+        inverted element, by halving) asks for less."""
+        free = self.free
+        alpha = 1.0
+        for _ in range(4):
+            trial = u.copy()
+            trial[free] += alpha * du
+            out = self._assemble(trial, state)
+            if not isinstance(out, str):
+                break
+            alpha *= 0.5
+        else:
+            return out
+        s0 = float(du @ r[free])
+        s1 = float(du @ (out.fint.ravel() - fext)[free])
+        if not (self.line_search and s0 < 0.0 < s1 and s1 > self.LINE_SEARCH * -s0):
+            return trial, out, alpha
+        lo, s_lo, hi, s_hi = 0.0, s0, alpha, s1
+        for _ in range(self.LINE_SEARCH_STEPS):
+            alpha = hi - s_hi * (hi - lo) / (s_hi - s_lo)
+            alpha = min(max(alpha, lo + 0.1 * (hi - lo)), hi - 0.1 * (hi - lo))
+            trial = u.copy()
+            trial[free] += alpha * du
+            probe = self._assemble(trial, state, tangent=False)
+            if isinstance(probe, str):
+                hi, s_hi = alpha, abs(s_hi)
+                continue
+            s = float(du @ (probe.fint.ravel() - fext)[free])
+            if abs(s) <= self.LINE_SEARCH * -s0:
+                break
+            if s > 0.0:
+                hi, s_hi = alpha, s
+            else:
+                lo, s_lo = alpha, s
+        trial = u.copy()
+        trial[free] += alpha * du
+        out = self._assemble(trial, state)
+        if isinstance(out, str):
+            return out
+        return trial, out, alpha
+
+    def increment(self, u_n: NDArray[np.float64], state: SolidState,
+                  prescribed: NDArray[np.float64], fext: NDArray[np.float64],
+                  guess: NDArray[np.float64] | None) -> Any:
+        """Iterate from ``guess`` or, without one, from the linearized predictor at the
+        converged state: K_ff du_f = -(r_f + K_fp dp). Returns (u, state, reactions,
+        residual norms, correction norms) or the reason of failure."""
+        free, fixed = self.free, self.fixed
+        residuals: list[float] = []
+        corrections: list[float] = []
+        norm_fext = float(np.linalg.norm(fext))
+        if guess is None:
+            dp = np.zeros_like(u_n)
+            dp[fixed] = prescribed - u_n[fixed]
+            out = self._assemble(u_n, state, dp.reshape(-1, 3))
+            if isinstance(out, str):
+                return out
+            rhs = (out.fint.ravel() - fext + out.kdu.ravel())[free]
+            residuals.append(float(np.linalg.norm(rhs)))
+            du = self._solve(out.values, -rhs)
+            if isinstance(du, str):
+                return du
+            u = u_n + dp
+            u[free] += du
+            corrections.append(float(np.linalg.norm(du)))
+        else:
+            u = guess
+        out = self._assemble(u, state)
+        if isinstance(out, str):
+            return out
+        correction = corrections[-1] if corrections else np.inf
+        for iteration in range(len(corrections), self.max_iterations + 1):
+            r = out.fint.ravel() - fext
+            norm_r = float(np.linalg.norm(r[free]))
+            residuals.append(norm_r)
+            if not np.isfinite(norm_r):
+                return "the residual is not finite"
+            reactions = np.where(fixed, r, 0.0)
+            scale = max(norm_fext, float(np.linalg.norm(reactions)), self.floor)
+            step = float(np.linalg.norm(u - u_n))
+            if norm_r <= self.tol_force * scale and (
+                    correction <= self.tol_disp * step or (iteration == 0 and step == 0.0)):
+                return u, out.state, reactions, residuals, corrections
+            if iteration == self.max_iterations:
+                return f"no convergence in {self.max_iterations} iterations"
+            if iteration >= 4 and residuals[-1] > residuals[-2] > residuals[-3] > residuals[-4]:
+                return "the residual grows"
+            du = self._solve(out.values, -r[free])
+            if isinstance(du, str):
+                return du
+            stepped = self._step(u, state, du, r, fext)
+            if isinstance(stepped, str):
+                return stepped
+            u, out, alpha = stepped
+            correction = alpha * float(np.linalg.norm(du))
+            corrections.append(correction)
+        return "no convergence"  # not reached

@@ -95,19 +95,22 @@ contains
   end subroutine api_solid_coo_pattern
 
   !> Internal forces, tangent values in the slots of solid_coo_pattern (when tangent /= 0)
-  !> and the trial material state at total displacements u.
+  !> and the trial material state at total displacements u; with product /= 0 also
+  !> kdu = K dp (K over all dofs, dp the increment of prescribed displacements).
   subroutine api_solid_assemble(nn, x, ne, conn, u, props, angle, stress_old, ep_old, &
                                 strain_old, eqn, symmetric, tangent, offsets, nz, values, &
-                                fint, stress, ep, strain, status, element) &
+                                product, dp, fint, kdu, stress, ep, strain, status, element) &
     bind(C, name="ddpy_solid_assemble")
-    integer(c_int), value, intent(in) :: nn, ne, symmetric, tangent, nz
-    real(c_double), intent(in) :: x(3, nn), u(3, nn), props(np), angle(ne)
+    integer(c_int), value, intent(in) :: nn, ne, symmetric, tangent, nz, product
+    real(c_double), intent(in) :: x(3, nn), u(3, nn), props(np), angle(ne), dp(3, nn)
     integer(c_int), intent(in) :: conn(8, ne), eqn(3, nn), offsets(ne + 1)
     real(c_double), intent(in) :: stress_old(6, 8, ne), ep_old(8, ne), strain_old(6, 8, ne)
     real(c_double), intent(inout) :: values(nz)
-    real(c_double), intent(out) :: fint(3, nn), stress(6, 8, ne), ep(8, ne), strain(6, 8, ne)
+    real(c_double), intent(out) :: fint(3, nn), kdu(3, nn), stress(6, 8, ne), ep(8, ne), &
+                                   strain(6, 8, ne)
     integer(c_int), intent(out) :: status, element
     fint = 0.0_wp
+    kdu = 0.0_wp
     status = 0
     element = first_bad_element(nn, ne, conn)
     if (element > 0) then
@@ -119,8 +122,8 @@ contains
       return
     end if
     call solid_assemble(nn, x, ne, conn + 1, u, props, angle, stress_old, ep_old, strain_old, &
-                        eqn, symmetric /= 0, tangent /= 0, offsets, nz, values, fint, stress, &
-                        ep, strain, status, element)
+                        eqn, symmetric /= 0, tangent /= 0, offsets, nz, values, product /= 0, &
+                        dp, fint, kdu, stress, ep, strain, status, element)
   end subroutine api_solid_assemble
 
   !> Second Piola-Kirchhoff (global axes), Cauchy stresses and current Gauss point positions

@@ -91,28 +91,40 @@ contains
 
   !> Internal forces, tangent values (when want_tangent) and trial material state of the
   !> whole mesh at total displacements u. props: one material; angle(e): rolling direction
-  !> of element e (radians about z). status = hex8_ok, or the status of the first failing
-  !> element, whose index is returned in element (0 when none).
+  !> of element e (radians about z). With want_product (and want_tangent), kdu = K dp, the
+  !> tangent times the vector dp (the increment of the prescribed displacements: the
+  !> linearized predictor of an increment), otherwise kdu = 0. status = hex8_ok, or the
+  !> status of the first failing element, whose index is returned in element (0 when none).
   subroutine solid_assemble(nn, x, ne, conn, u, props, angle, stress_old, ep_old, strain_old, &
-                            eqn, symmetric, want_tangent, offsets, nz, values, fint, stress, &
-                            ep, strain, status, element)
+                            eqn, symmetric, want_tangent, offsets, nz, values, want_product, &
+                            dp, fint, kdu, stress, ep, strain, status, element)
     integer, intent(in) :: nn, ne, nz, conn(8, ne), eqn(3, nn), offsets(ne + 1)
     real(wp), intent(in) :: x(3, nn), u(3, nn), props(material_prop_count), angle(ne)
     real(wp), intent(in) :: stress_old(6, 8, ne), ep_old(8, ne), strain_old(6, 8, ne)
-    logical, intent(in) :: symmetric, want_tangent
+    real(wp), intent(in) :: dp(3, nn)
+    logical, intent(in) :: symmetric, want_tangent, want_product
     real(wp), intent(inout) :: values(nz)
-    real(wp), intent(out) :: fint(3, nn), stress(6, 8, ne), ep(8, ne), strain(6, 8, ne)
+    real(wp), intent(out) :: fint(3, nn), kdu(3, nn), stress(6, 8, ne), ep(8, ne), &
+                             strain(6, 8, ne)
     integer, intent(out) :: status, element
-    real(wp), allocatable :: fe(:, :)
+    real(wp), allocatable :: fe(:, :), ke_dp(:, :)
     integer, allocatable :: estatus(:)
     integer :: e, a
+    logical :: product
 
+    product = want_tangent .and. want_product
     allocate (fe(24, ne), estatus(ne))
+    if (product) then
+      allocate (ke_dp(24, ne))
+    else
+      allocate (ke_dp(24, 1))
+    end if
     !$omp parallel do schedule(dynamic, 16)
     do e = 1, ne
       call assemble_element(e, nn, x, ne, conn, u, props, angle, stress_old, ep_old, &
                             strain_old, eqn, symmetric, want_tangent, offsets, nz, values, &
-                            fe(:, e), stress(:, :, e), ep(:, e), strain(:, :, e), estatus(e))
+                            product, dp, fe(:, e), ke_dp(:, min(e, size(ke_dp, 2))), &
+                            stress(:, :, e), ep(:, e), strain(:, :, e), estatus(e))
     end do
     !$omp end parallel do
 
@@ -131,20 +143,28 @@ contains
         fint(:, conn(a, e)) = fint(:, conn(a, e)) + fe(3*a - 2:3*a, e)
       end do
     end do
+    kdu = 0.0_wp
+    if (.not. product) return
+    do e = 1, ne
+      do a = 1, 8
+        kdu(:, conn(a, e)) = kdu(:, conn(a, e)) + ke_dp(3*a - 2:3*a, e)
+      end do
+    end do
   end subroutine solid_assemble
 
   !> One element of solid_assemble: writes only its own slots and state columns.
   subroutine assemble_element(e, nn, x, ne, conn, u, props, angle, stress_old, ep_old, &
                               strain_old, eqn, symmetric, want_tangent, offsets, nz, values, &
-                              fe, stress, ep, strain, status)
+                              product, dp, fe, ke_dp, stress, ep, strain, status)
     integer, intent(in) :: e, nn, ne, nz, conn(8, ne), eqn(3, nn), offsets(ne + 1)
     real(wp), intent(in) :: x(3, nn), u(3, nn), props(material_prop_count), angle(ne)
     real(wp), intent(in) :: stress_old(6, 8, ne), ep_old(8, ne), strain_old(6, 8, ne)
-    logical, intent(in) :: symmetric, want_tangent
+    real(wp), intent(in) :: dp(3, nn)
+    logical, intent(in) :: symmetric, want_tangent, product
     real(wp), intent(inout) :: values(nz)
-    real(wp), intent(out) :: fe(24), stress(6, 8), ep(8), strain(6, 8)
+    real(wp), intent(out) :: fe(24), ke_dp(24), stress(6, 8), ep(8), strain(6, 8)
     integer, intent(out) :: status
-    real(wp) :: ke(24, 24), xe(3, 8), ue(3, 8)
+    real(wp) :: ke(24, 24), xe(3, 8), ue(3, 8), de(24)
     integer :: eq(24), i, j, pos, a
 
     do a = 1, 8
@@ -155,6 +175,12 @@ contains
                       ep_old(:, e), strain_old(:, :, e), want_tangent, fe, ke, stress, ep, &
                       strain, status)
     if (.not. want_tangent .or. status /= hex8_ok) return
+    if (product) then
+      do a = 1, 8
+        de(3*a - 2:3*a) = dp(:, conn(a, e))
+      end do
+      ke_dp = matmul(ke, de)
+    end if
     eq = element_equations(conn(:, e), nn, eqn)
     pos = offsets(e)
     do j = 1, 24

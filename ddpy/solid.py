@@ -426,12 +426,15 @@ class StaticProblem:
 
     def solve(self, increments: int = 1, tol_force: float = 1e-8, tol_disp: float = 1e-8,
               max_iterations: int = 25, max_cuts: int = 6, threads: int | None = None,
-              extrapolate: bool = False, line_search: bool = True) -> SolidResult:
+              predictor: str = "tangent", line_search: bool = True) -> SolidResult:
         """Apply loads and prescribed displacements in ``increments`` equal steps.
 
-        Each increment starts from the linearized predictor at the converged state (the
-        prescribed increment enters through the tangent, not as a jump of the boundary
-        nodes), or with ``extrapolate`` from the previous increment's displacement increment.
+        Each increment starts from a linearized predictor, the prescribed increment entering
+        through the tangent (K_ff du_f = -(r_f + K_fp dp)) rather than as a jump of the
+        boundary nodes. ``predictor``: "tangent" uses the consistent tangent of the last
+        iteration of the previous increment (plastic where the material was loading; the
+        first increment and retries after a cut use "elastic"); "elastic" the tangent at the
+        converged state; "extrapolate" starts from the previous displacement increment.
         It has converged when ||r_free|| <= tol_force max(||f_ext||, ||reactions||, floor)
         and ||correction|| <= tol_disp ||increment of u||. ``line_search``: energy line
         search when a full Newton step overshoots. On divergence, an inverted element or a
@@ -445,15 +448,18 @@ class StaticProblem:
                 raise ValueError(f"{name} must lie in (0, 1), got {value}")
         if int(max_iterations) < 1 or int(max_cuts) < 0:
             raise ValueError("max_iterations must be >= 1 and max_cuts >= 0")
+        if predictor not in ("tangent", "elastic", "extrapolate"):
+            raise ValueError(f"predictor must be 'tangent', 'elastic' or 'extrapolate', got "
+                             f"{predictor!r}")
         if threads is not None:
             with thread_count(int(threads)):
                 return self._run(int(increments), tol_force, tol_disp, int(max_iterations),
-                                 int(max_cuts), extrapolate, line_search)
+                                 int(max_cuts), predictor, line_search)
         return self._run(int(increments), tol_force, tol_disp, int(max_iterations),
-                         int(max_cuts), extrapolate, line_search)
+                         int(max_cuts), predictor, line_search)
 
     def _run(self, increments: int, tol_force: float, tol_disp: float, max_iterations: int,
-             max_cuts: int, extrapolate: bool, line_search: bool) -> SolidResult:
+             max_cuts: int, predictor: str, line_search: bool) -> SolidResult:
         pattern, solver = self._prepare()
         solid = self.solid
         fixed = self.fixed.ravel()
@@ -469,17 +475,28 @@ class StaticProblem:
         nominal = 1.0 / increments
         factor, step = 0.0, nominal
         previous: tuple[float, NDArray[np.float64]] | None = None
+        carry: _Carry | None = None
         cuts_in_row = 0
         while factor < 1.0 - 1e-12:
             target = 1.0 if 1.0 - (factor + step) < 1e-12 else factor + step
             delta = target - factor
-            prescribed = self.prescribed(target).ravel()[fixed]
-            guess = None
-            if extrapolate and previous is not None and cuts_in_row == 0:
+            prescribed = self.prescribed(target)
+            start: Any = None
+            if predictor == "extrapolate" and previous is not None and cuts_in_row == 0:
                 guess = u + delta / previous[0] * previous[1]
-                guess[fixed] = prescribed
-            outcome = newton.increment(u, state, prescribed, target * self.forces.ravel(),
-                                       guess)
+                guess[fixed] = prescribed.ravel()[fixed]
+                start = guess
+            elif predictor == "tangent" and carry is not None and carry.target == target:
+                start = carry
+            # The next increment if this one converges, for the tangent predictor.
+            on_grid = abs(target / nominal - round(target / nominal)) < 1e-9
+            after = nominal if cuts_in_row == 0 or on_grid else step
+            following = 1.0 if 1.0 - (target + after) < 1e-12 else target + after
+            dp_next = None
+            if predictor == "tangent" and target < 1.0:
+                dp_next = np.where(self.fixed, self.prescribed(following) - prescribed, 0.0)
+            outcome = newton.increment(u, state, prescribed.ravel()[fixed],
+                                       target * self.forces.ravel(), start, dp_next)
             if isinstance(outcome, str):
                 cuts_in_row += 1
                 result.cuts += 1
@@ -490,7 +507,9 @@ class StaticProblem:
                         f"{outcome}", result)
                 step = delta / 2.0
                 continue
-            new_u, new_state, reactions, residuals, corrections = outcome
+            new_u, new_state, reactions, residuals, corrections, carry = outcome
+            if carry is not None:
+                carry.target = following
             previous = (delta, new_u - u)
             u, state, factor = new_u, new_state, target
             pk2, cauchy, _ = solid.stresses(u.reshape(-1, 3), state)
@@ -502,15 +521,27 @@ class StaticProblem:
             result.ep.append(state.ep.copy())
             result.residuals.append(residuals)
             result.corrections.append(corrections)
-            # Back to the nominal size once a cut nominal increment is complete.
-            if cuts_in_row == 0 or abs(factor / nominal - round(factor / nominal)) < 1e-9:
-                step, cuts_in_row = nominal, 0
+            step = after
+            if after == nominal:
+                cuts_in_row = 0
         result.state = state
         return result
 
     def close(self) -> None:
         """Free the MUMPS instance."""
         self._reset_solver()
+
+
+@dataclass
+class _Carry:
+    """From the last iteration of a converged increment to the next increment: tangent
+    values, K dp of the next prescribed increment, internal forces; for load factor
+    ``target``."""
+
+    values: NDArray[np.float64]
+    kdu: NDArray[np.float64]
+    fint: NDArray[np.float64]
+    target: float = -1.0
 
 
 class _Newton:
@@ -568,6 +599,7 @@ class _Newton:
 
     def _step(self, u: NDArray[np.float64], state: SolidState, du: NDArray[np.float64],
               r: NDArray[np.float64], fext: NDArray[np.float64],
+              dp: NDArray[np.float64] | None,
               ) -> tuple[NDArray[np.float64], Assembly, float] | str:
         """u + alpha du and its assembly: alpha = 1 unless the energy line search (or an
         inverted element, by halving) asks for less."""
@@ -576,7 +608,7 @@ class _Newton:
         for _ in range(4):
             trial = u.copy()
             trial[free] += alpha * du
-            out = self._assemble(trial, state)
+            out = self._assemble(trial, state, dp)
             if not isinstance(out, str):
                 break
             alpha *= 0.5
@@ -605,38 +637,45 @@ class _Newton:
                 lo, s_lo = alpha, s
         trial = u.copy()
         trial[free] += alpha * du
-        out = self._assemble(trial, state)
+        out = self._assemble(trial, state, dp)
         if isinstance(out, str):
             return out
         return trial, out, alpha
 
     def increment(self, u_n: NDArray[np.float64], state: SolidState,
-                  prescribed: NDArray[np.float64], fext: NDArray[np.float64],
-                  guess: NDArray[np.float64] | None) -> Any:
-        """Iterate from ``guess`` or, without one, from the linearized predictor at the
-        converged state: K_ff du_f = -(r_f + K_fp dp). Returns (u, state, reactions,
-        residual norms, correction norms) or the reason of failure."""
+                  prescribed: NDArray[np.float64], fext: NDArray[np.float64], start: Any,
+                  dp_next: NDArray[np.float64] | None) -> Any:
+        """Iterate from ``start``: a displacement guess; a _Carry, the consistent tangent of
+        the last converged iteration with K_fp dp (the tangent predictor); or None, the
+        linearized predictor at the converged state, K_ff du_f = -(r_f + K_fp dp), whose
+        tangent is elastic. ``dp_next``: prescribed increment of the next increment, for
+        its tangent predictor. Returns (u, state, reactions, residual norms, correction
+        norms, _Carry or None) or the reason of failure."""
         free, fixed = self.free, self.fixed
         residuals: list[float] = []
         corrections: list[float] = []
         norm_fext = float(np.linalg.norm(fext))
-        if guess is None:
-            dp = np.zeros_like(u_n)
-            dp[fixed] = prescribed - u_n[fixed]
-            out = self._assemble(u_n, state, dp.reshape(-1, 3))
-            if isinstance(out, str):
-                return out
-            rhs = (out.fint.ravel() - fext + out.kdu.ravel())[free]
+        dp_now = np.zeros_like(u_n)
+        dp_now[fixed] = prescribed - u_n[fixed]
+        if start is None or isinstance(start, _Carry):
+            if isinstance(start, _Carry):
+                values, rhs = start.values, (start.fint - fext + start.kdu)[free]
+            else:
+                out = self._assemble(u_n, state, dp_now.reshape(-1, 3))
+                if isinstance(out, str):
+                    return out
+                values, rhs = out.values, (out.fint.ravel() - fext + out.kdu.ravel())[free]
             residuals.append(float(np.linalg.norm(rhs)))
-            du = self._solve(out.values, -rhs)
+            du = self._solve(values, -rhs)
             if isinstance(du, str):
                 return du
-            u = u_n + dp
+            u = u_n + dp_now
             u[free] += du
             corrections.append(float(np.linalg.norm(du)))
         else:
-            u = guess
-        out = self._assemble(u, state)
+            u = start
+        dp = None if dp_next is None else dp_next.reshape(-1, 3)
+        out = self._assemble(u, state, dp)
         if isinstance(out, str):
             return out
         correction = corrections[-1] if corrections else np.inf
@@ -651,7 +690,10 @@ class _Newton:
             step = float(np.linalg.norm(u - u_n))
             if norm_r <= self.tol_force * scale and (
                     correction <= self.tol_disp * step or (iteration == 0 and step == 0.0)):
-                return u, out.state, reactions, residuals, corrections
+                carry = None
+                if out.kdu is not None:
+                    carry = _Carry(out.values.copy(), out.kdu.ravel(), out.fint.ravel())
+                return u, out.state, reactions, residuals, corrections, carry
             if iteration == self.max_iterations:
                 return f"no convergence in {self.max_iterations} iterations"
             if iteration >= 4 and residuals[-1] > residuals[-2] > residuals[-3] > residuals[-4]:
@@ -659,7 +701,7 @@ class _Newton:
             du = self._solve(out.values, -r[free])
             if isinstance(du, str):
                 return du
-            stepped = self._step(u, state, du, r, fext)
+            stepped = self._step(u, state, du, r, fext, dp)
             if isinstance(stepped, str):
                 return stepped
             u, out, alpha = stepped

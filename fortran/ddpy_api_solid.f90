@@ -1,0 +1,151 @@
+!> The doorway of the hexahedral solid: flat arrays and C-bound procedures that f2py wraps
+!> (fortran/ddpy_core.pyf). Scalars in by value; node indices arrive 0-based and are checked
+!> and converted here. Status values: 0 ok, 1 inverted element (det J0 or det F <= 0),
+!> 2 material update failed, 3 node index out of range, 4 offsets inconsistent with nz;
+!> element is the 1-based index of the first offending element (0 when none).
+module ddpy_api_solid
+  use, intrinsic :: iso_c_binding, only: c_int, c_double
+  use ddpy_kinds, only: wp
+  use ddpy_material, only: material_prop_count
+  use ddpy_solid_assembly, only: solid_jacobians, solid_coo_count, solid_coo_pattern, &
+                                 solid_assemble, solid_stresses
+  implicit none
+  private
+  public :: api_material_prop_count, api_solid_jacobians, api_solid_coo_count, &
+            api_solid_coo_pattern, api_solid_assemble, api_solid_stresses
+
+  integer, parameter :: np = material_prop_count
+  integer, parameter :: status_bad_node = 3, status_bad_offsets = 4
+
+contains
+
+  !> Length of the material property vector.
+  subroutine api_material_prop_count(n) bind(C, name="ddpy_material_prop_count")
+    integer(c_int), intent(out) :: n
+    n = np
+  end subroutine api_material_prop_count
+
+  !> First element (1-based) with a node index outside 0..nn-1, or 0.
+  pure integer function first_bad_element(nn, ne, conn) result(bad)
+    integer, intent(in) :: nn, ne, conn(8, ne)
+    integer :: e
+    bad = 0
+    do e = 1, ne
+      if (any(conn(:, e) < 0) .or. any(conn(:, e) >= nn)) then
+        bad = e
+        return
+      end if
+    end do
+  end function first_bad_element
+
+  !> det J0 of every element at its 8 Gauss points then its 8 corners.
+  subroutine api_solid_jacobians(nn, x, ne, conn, detj, status, element) &
+    bind(C, name="ddpy_solid_jacobians")
+    integer(c_int), value, intent(in) :: nn, ne
+    real(c_double), intent(in) :: x(3, nn)
+    integer(c_int), intent(in) :: conn(8, ne)
+    real(c_double), intent(out) :: detj(16, ne)
+    integer(c_int), intent(out) :: status, element
+    detj = 0.0_wp
+    status = 0
+    element = first_bad_element(nn, ne, conn)
+    if (element > 0) then
+      status = status_bad_node
+      return
+    end if
+    call solid_jacobians(nn, x, ne, conn + 1, detj)
+  end subroutine api_solid_jacobians
+
+  !> Coordinate entries per element for the equation numbers eqn (0-based, -1 constrained).
+  subroutine api_solid_coo_count(nn, ne, conn, eqn, symmetric, counts, status, element) &
+    bind(C, name="ddpy_solid_coo_count")
+    integer(c_int), value, intent(in) :: nn, ne, symmetric
+    integer(c_int), intent(in) :: conn(8, ne), eqn(3, nn)
+    integer(c_int), intent(out) :: counts(ne), status, element
+    counts = 0
+    status = 0
+    element = first_bad_element(nn, ne, conn)
+    if (element > 0) then
+      status = status_bad_node
+      return
+    end if
+    call solid_coo_count(nn, ne, conn + 1, eqn, symmetric /= 0, counts)
+  end subroutine api_solid_coo_count
+
+  !> 0-based rows and columns of all slots; offsets(e) is the first slot of element e minus 1
+  !> (0-based start), offsets(ne + 1) = nz.
+  subroutine api_solid_coo_pattern(nn, ne, conn, eqn, symmetric, offsets, nz, rows, cols, &
+                                   status, element) bind(C, name="ddpy_solid_coo_pattern")
+    integer(c_int), value, intent(in) :: nn, ne, symmetric, nz
+    integer(c_int), intent(in) :: conn(8, ne), eqn(3, nn), offsets(ne + 1)
+    integer(c_int), intent(out) :: rows(nz), cols(nz), status, element
+    rows = 0
+    cols = 0
+    status = 0
+    element = first_bad_element(nn, ne, conn)
+    if (element > 0) then
+      status = status_bad_node
+      return
+    end if
+    if (offsets(ne + 1) /= nz) then
+      status = status_bad_offsets
+      return
+    end if
+    call solid_coo_pattern(nn, ne, conn + 1, eqn, symmetric /= 0, offsets, nz, rows, cols)
+  end subroutine api_solid_coo_pattern
+
+  !> Internal forces, tangent values in the slots of solid_coo_pattern (when tangent /= 0)
+  !> and the trial material state at total displacements u; with product /= 0 also
+  !> kdu = K dp (K over all dofs, dp the increment of prescribed displacements).
+  subroutine api_solid_assemble(nn, x, ne, conn, u, props, angle, stress_old, ep_old, &
+                                strain_old, eqn, symmetric, tangent, offsets, nz, values, &
+                                product, dp, fint, kdu, stress, ep, strain, status, element) &
+    bind(C, name="ddpy_solid_assemble")
+    integer(c_int), value, intent(in) :: nn, ne, symmetric, tangent, nz, product
+    real(c_double), intent(in) :: x(3, nn), u(3, nn), props(np), angle(ne), dp(3, nn)
+    integer(c_int), intent(in) :: conn(8, ne), eqn(3, nn), offsets(ne + 1)
+    real(c_double), intent(in) :: stress_old(6, 8, ne), ep_old(8, ne), strain_old(6, 8, ne)
+    real(c_double), intent(inout) :: values(nz)
+    real(c_double), intent(out) :: fint(3, nn), kdu(3, nn), stress(6, 8, ne), ep(8, ne), &
+                                   strain(6, 8, ne)
+    integer(c_int), intent(out) :: status, element
+    fint = 0.0_wp
+    kdu = 0.0_wp
+    status = 0
+    element = first_bad_element(nn, ne, conn)
+    if (element > 0) then
+      status = status_bad_node
+      return
+    end if
+    if (tangent /= 0 .and. offsets(ne + 1) /= nz) then
+      status = status_bad_offsets
+      return
+    end if
+    call solid_assemble(nn, x, ne, conn + 1, u, props, angle, stress_old, ep_old, strain_old, &
+                        eqn, symmetric /= 0, tangent /= 0, offsets, nz, values, product /= 0, &
+                        dp, fint, kdu, stress, ep, strain, status, element)
+  end subroutine api_solid_assemble
+
+  !> Second Piola-Kirchhoff (global axes), Cauchy stresses and current Gauss point positions
+  !> from the material-axes stresses of the state.
+  subroutine api_solid_stresses(nn, x, ne, conn, u, angle, stress_mat, pk2, cauchy, points, &
+                                status, element) bind(C, name="ddpy_solid_stresses")
+    integer(c_int), value, intent(in) :: nn, ne
+    real(c_double), intent(in) :: x(3, nn), u(3, nn), angle(ne), stress_mat(6, 8, ne)
+    integer(c_int), intent(in) :: conn(8, ne)
+    real(c_double), intent(out) :: pk2(6, 8, ne), cauchy(6, 8, ne), points(3, 8, ne)
+    integer(c_int), intent(out) :: status, element
+    pk2 = 0.0_wp
+    cauchy = 0.0_wp
+    points = 0.0_wp
+    status = 0
+    element = first_bad_element(nn, ne, conn)
+    if (element > 0) then
+      status = status_bad_node
+      return
+    end if
+    call solid_stresses(nn, x, ne, conn + 1, u, angle, stress_mat, pk2, cauchy, points, &
+                        status, element)
+  end subroutine api_solid_stresses
+
+end module ddpy_api_solid

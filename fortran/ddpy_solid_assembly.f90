@@ -1,0 +1,225 @@
+!> Assembly of the hexahedral solid straight into MUMPS coordinate storage, in parallel.
+!>
+!> Every element owns a fixed range of slots, offsets(e)+1 .. offsets(e+1), of the value
+!> array: the entries (i, j) of its 24 x 24 tangent, in the order j = 1..24, i = j..24
+!> (symmetric: lower triangle) or i = 1..24 (unsymmetric), skipping constrained dofs. The
+!> index arrays are built once per mesh and constraint set (solid_coo_pattern); the values
+!> are rewritten at every iteration by the elements in parallel, without races and in an
+!> order that does not depend on the number of threads. Internal forces are gathered into
+!> the nodal vector after the parallel loop, element by element, so they are deterministic
+!> too. Node indices here are 1-based; equation numbers 0-based (-1: constrained dof).
+module ddpy_solid_assembly
+  use ddpy_kinds, only: wp
+  use ddpy_material, only: material_prop_count
+  use ddpy_hex8, only: hex8_element, hex8_jacobians, hex8_stresses, strain_rotation, hex8_ok
+  implicit none
+  private
+  public :: solid_jacobians, solid_coo_count, solid_coo_pattern, solid_assemble, &
+            solid_stresses
+
+contains
+
+  !> Equation numbers of the 24 element dofs (node-major: 3 (a-1) + component).
+  pure function element_equations(nodes, nn, eqn) result(eq)
+    integer, intent(in) :: nodes(8), nn, eqn(3, nn)
+    integer :: eq(24)
+    integer :: a
+    do a = 1, 8
+      eq(3*a - 2:3*a) = eqn(:, nodes(a))
+    end do
+  end function element_equations
+
+  !> det J0 of every element at its Gauss points (1:8) and corners (9:16).
+  subroutine solid_jacobians(nn, x, ne, conn, detj)
+    integer, intent(in) :: nn, ne, conn(8, ne)
+    real(wp), intent(in) :: x(3, nn)
+    real(wp), intent(out) :: detj(16, ne)
+    integer :: e
+    !$omp parallel do schedule(static)
+    do e = 1, ne
+      call hex8_jacobians(x(:, conn(:, e)), detj(:, e))
+    end do
+    !$omp end parallel do
+  end subroutine solid_jacobians
+
+  !> Number of coordinate entries each element contributes.
+  subroutine solid_coo_count(nn, ne, conn, eqn, symmetric, counts)
+    integer, intent(in) :: nn, ne, conn(8, ne), eqn(3, nn)
+    logical, intent(in) :: symmetric
+    integer, intent(out) :: counts(ne)
+    integer :: e, nfree
+    !$omp parallel do schedule(static) private(nfree)
+    do e = 1, ne
+      nfree = count(element_equations(conn(:, e), nn, eqn) >= 0)
+      if (symmetric) then
+        counts(e) = nfree*(nfree + 1)/2
+      else
+        counts(e) = nfree*nfree
+      end if
+    end do
+    !$omp end parallel do
+  end subroutine solid_coo_count
+
+  !> Row and column (0-based equation numbers) of every slot; for the symmetric storage
+  !> row >= col.
+  subroutine solid_coo_pattern(nn, ne, conn, eqn, symmetric, offsets, nz, rows, cols)
+    integer, intent(in) :: nn, ne, conn(8, ne), eqn(3, nn), offsets(ne + 1), nz
+    logical, intent(in) :: symmetric
+    integer, intent(out) :: rows(nz), cols(nz)
+    integer :: e, i, j, pos, eq(24)
+    !$omp parallel do schedule(static) private(i, j, pos, eq)
+    do e = 1, ne
+      eq = element_equations(conn(:, e), nn, eqn)
+      pos = offsets(e)
+      do j = 1, 24
+        if (eq(j) < 0) cycle
+        do i = merge(j, 1, symmetric), 24
+          if (eq(i) < 0) cycle
+          pos = pos + 1
+          if (symmetric) then
+            rows(pos) = max(eq(i), eq(j))
+            cols(pos) = min(eq(i), eq(j))
+          else
+            rows(pos) = eq(i)
+            cols(pos) = eq(j)
+          end if
+        end do
+      end do
+    end do
+    !$omp end parallel do
+  end subroutine solid_coo_pattern
+
+  !> Internal forces, tangent values (when want_tangent) and trial material state of the
+  !> whole mesh at total displacements u. props: one material; angle(e): rolling direction
+  !> of element e (radians about z). With want_product (and want_tangent), kdu = K dp, the
+  !> tangent times the vector dp (the increment of the prescribed displacements: the
+  !> linearized predictor of an increment), otherwise kdu = 0. status = hex8_ok, or the
+  !> status of the first failing element, whose index is returned in element (0 when none).
+  subroutine solid_assemble(nn, x, ne, conn, u, props, angle, stress_old, ep_old, strain_old, &
+                            eqn, symmetric, want_tangent, offsets, nz, values, want_product, &
+                            dp, fint, kdu, stress, ep, strain, status, element)
+    integer, intent(in) :: nn, ne, nz, conn(8, ne), eqn(3, nn), offsets(ne + 1)
+    real(wp), intent(in) :: x(3, nn), u(3, nn), props(material_prop_count), angle(ne)
+    real(wp), intent(in) :: stress_old(6, 8, ne), ep_old(8, ne), strain_old(6, 8, ne)
+    real(wp), intent(in) :: dp(3, nn)
+    logical, intent(in) :: symmetric, want_tangent, want_product
+    real(wp), intent(inout) :: values(nz)
+    real(wp), intent(out) :: fint(3, nn), kdu(3, nn), stress(6, 8, ne), ep(8, ne), &
+                             strain(6, 8, ne)
+    integer, intent(out) :: status, element
+    real(wp), allocatable :: fe(:, :), ke_dp(:, :)
+    integer, allocatable :: estatus(:)
+    integer :: e, a
+    logical :: product
+
+    product = want_tangent .and. want_product
+    allocate (fe(24, ne), estatus(ne))
+    if (product) then
+      allocate (ke_dp(24, ne))
+    else
+      allocate (ke_dp(24, 1))
+    end if
+    !$omp parallel do schedule(dynamic, 16)
+    do e = 1, ne
+      call assemble_element(e, nn, x, ne, conn, u, props, angle, stress_old, ep_old, &
+                            strain_old, eqn, symmetric, want_tangent, offsets, nz, values, &
+                            product, dp, fe(:, e), ke_dp(:, min(e, size(ke_dp, 2))), &
+                            stress(:, :, e), ep(:, e), strain(:, :, e), estatus(e))
+    end do
+    !$omp end parallel do
+
+    status = hex8_ok
+    element = 0
+    do e = 1, ne
+      if (estatus(e) /= hex8_ok) then
+        status = estatus(e)
+        element = e
+        exit
+      end if
+    end do
+    fint = 0.0_wp
+    do e = 1, ne
+      do a = 1, 8
+        fint(:, conn(a, e)) = fint(:, conn(a, e)) + fe(3*a - 2:3*a, e)
+      end do
+    end do
+    kdu = 0.0_wp
+    if (.not. product) return
+    do e = 1, ne
+      do a = 1, 8
+        kdu(:, conn(a, e)) = kdu(:, conn(a, e)) + ke_dp(3*a - 2:3*a, e)
+      end do
+    end do
+  end subroutine solid_assemble
+
+  !> One element of solid_assemble: writes only its own slots and state columns.
+  subroutine assemble_element(e, nn, x, ne, conn, u, props, angle, stress_old, ep_old, &
+                              strain_old, eqn, symmetric, want_tangent, offsets, nz, values, &
+                              product, dp, fe, ke_dp, stress, ep, strain, status)
+    integer, intent(in) :: e, nn, ne, nz, conn(8, ne), eqn(3, nn), offsets(ne + 1)
+    real(wp), intent(in) :: x(3, nn), u(3, nn), props(material_prop_count), angle(ne)
+    real(wp), intent(in) :: stress_old(6, 8, ne), ep_old(8, ne), strain_old(6, 8, ne)
+    real(wp), intent(in) :: dp(3, nn)
+    logical, intent(in) :: symmetric, want_tangent, product
+    real(wp), intent(inout) :: values(nz)
+    real(wp), intent(out) :: fe(24), ke_dp(24), stress(6, 8), ep(8), strain(6, 8)
+    integer, intent(out) :: status
+    real(wp) :: ke(24, 24), xe(3, 8), ue(3, 8), de(24)
+    integer :: eq(24), i, j, pos, a
+
+    do a = 1, 8
+      xe(:, a) = x(:, conn(a, e))
+      ue(:, a) = u(:, conn(a, e))
+    end do
+    call hex8_element(xe, ue, props, strain_rotation(angle(e)), stress_old(:, :, e), &
+                      ep_old(:, e), strain_old(:, :, e), want_tangent, fe, ke, stress, ep, &
+                      strain, status)
+    if (.not. want_tangent .or. status /= hex8_ok) return
+    if (product) then
+      do a = 1, 8
+        de(3*a - 2:3*a) = dp(:, conn(a, e))
+      end do
+      ke_dp = matmul(ke, de)
+    end if
+    eq = element_equations(conn(:, e), nn, eqn)
+    pos = offsets(e)
+    do j = 1, 24
+      if (eq(j) < 0) cycle
+      do i = merge(j, 1, symmetric), 24
+        if (eq(i) < 0) cycle
+        pos = pos + 1
+        values(pos) = ke(i, j)
+      end do
+    end do
+  end subroutine assemble_element
+
+  !> Second Piola-Kirchhoff (global axes) and Cauchy stresses and current positions at the
+  !> Gauss points; status as in solid_assemble.
+  subroutine solid_stresses(nn, x, ne, conn, u, angle, stress_mat, pk2, cauchy, points, &
+                            status, element)
+    integer, intent(in) :: nn, ne, conn(8, ne)
+    real(wp), intent(in) :: x(3, nn), u(3, nn), angle(ne), stress_mat(6, 8, ne)
+    real(wp), intent(out) :: pk2(6, 8, ne), cauchy(6, 8, ne), points(3, 8, ne)
+    integer, intent(out) :: status, element
+    integer, allocatable :: estatus(:)
+    integer :: e
+    allocate (estatus(ne))
+    !$omp parallel do schedule(static)
+    do e = 1, ne
+      call hex8_stresses(x(:, conn(:, e)), u(:, conn(:, e)), strain_rotation(angle(e)), &
+                         stress_mat(:, :, e), pk2(:, :, e), cauchy(:, :, e), &
+                         points(:, :, e), estatus(e))
+    end do
+    !$omp end parallel do
+    status = hex8_ok
+    element = 0
+    do e = 1, ne
+      if (estatus(e) /= hex8_ok) then
+        status = estatus(e)
+        element = e
+        exit
+      end if
+    end do
+  end subroutine solid_stresses
+
+end module ddpy_solid_assembly

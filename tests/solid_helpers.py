@@ -1,0 +1,87 @@
+"""Shared helpers of the solid tests: material vectors, meshes, dense tangents."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ddpy import _core
+from ddpy.mesh import HexMesh
+from ddpy.solid import Solid, SolidState
+
+E, NU = 210e3, 0.3
+#: DDQ steel of the paper's Table 4 (reverse deep drawing), MPa.
+DDQ = dict(E=E, nu=NU, hill=(0.3137, 0.3663, 0.6337, 1.5, 1.5, 1.1764),
+           swift=(568.3, 0.0059, 0.233))
+
+
+def props_vector(e: float = E, nu: float = NU,
+                 hill: tuple[float, ...] = (0.5, 0.5, 0.5, 1.5, 1.5, 1.5),
+                 swift: tuple[float, float, float] = (1e9, 1.0, 0.0)) -> np.ndarray:
+    """16 material properties: Hill'48 (von Mises by default) with Swift hardening; the
+    default yield stress of 1e9 MPa keeps the material elastic."""
+    props = np.zeros(16)
+    props[:12] = [e, nu, *hill, 1.0, *swift]
+    return props
+
+
+def ddq_props() -> np.ndarray:
+    return props_vector(DDQ["E"], DDQ["nu"], DDQ["hill"], DDQ["swift"])
+
+
+def material_is_plastic() -> bool:
+    """False while the core carries the elastic stand-in of the material module."""
+    props = ddq_props()
+    mesh = HexMesh.box(1.0, 1.0, 1.0, 1, 1, 1)
+    u = np.zeros((8, 3))
+    u[:, 0] = 0.02 * mesh.nodes[:, 0]
+    _, trial = Solid(mesh, props).internal_force(u)
+    return bool(trial.ep.max() > 0.0)
+
+
+def linear_elastic_pk2(f: np.ndarray, e: float = E, nu: float = NU) -> np.ndarray:
+    """Saint Venant-Kirchhoff S(E) in Voigt order 11, 22, 33, 12, 23, 31."""
+    green = 0.5 * (f.T @ f - np.eye(3))
+    lam, mu = e * nu / ((1 + nu) * (1 - 2 * nu)), e / (2 * (1 + nu))
+    s = lam * np.trace(green) * np.eye(3) + 2 * mu * green
+    return np.array([s[0, 0], s[1, 1], s[2, 2], s[0, 1], s[1, 2], s[2, 0]])
+
+
+def distorted_box(nx: int, ny: int, nz: int, amount: float, seed: int,
+                  size: tuple[float, float, float] = (1.0, 1.0, 1.0)) -> HexMesh:
+    """A box mesh with every node moved at random by up to ``amount`` of an element size."""
+    mesh = HexMesh.box(*size, nx, ny, nz)
+    h = np.array(size) / [nx, ny, nz]
+    rng = np.random.default_rng(seed)
+    return HexMesh(mesh.nodes + amount * h * rng.uniform(-1, 1, mesh.nodes.shape),
+                   mesh.elements)
+
+
+def dense_tangent(solid: Solid, u: np.ndarray, state: SolidState | None = None) -> np.ndarray:
+    rows, cols, values = solid.tangent(u, state)
+    k = np.zeros((solid.n_dofs, solid.n_dofs))
+    np.add.at(k, (rows, cols), values)
+    return k
+
+
+def fd_tangent(solid: Solid, u: np.ndarray, state: SolidState | None = None,
+               h: float = 1e-7) -> np.ndarray:
+    """Central finite differences of the internal forces, column by column."""
+    k = np.zeros((solid.n_dofs, solid.n_dofs))
+    for j in range(solid.n_dofs):
+        du = np.zeros(solid.n_dofs)
+        du[j] = h
+        plus, _ = solid.internal_force(u + du.reshape(-1, 3), state)
+        minus, _ = solid.internal_force(u - du.reshape(-1, 3), state)
+        k[:, j] = (plus - minus).ravel() / (2 * h)
+    return k
+
+
+def rotation(axis: str, degrees: float) -> np.ndarray:
+    c, s = np.cos(np.radians(degrees)), np.sin(np.radians(degrees))
+    i, j = {"x": (1, 2), "y": (2, 0), "z": (0, 1)}[axis]
+    q = np.eye(3)
+    q[i, i], q[i, j], q[j, i], q[j, j] = c, -s, s, c
+    return q
+
+
+assert _core.material_prop_count() == 16

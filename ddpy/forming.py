@@ -1,0 +1,404 @@
+"""Forming: the blank in frictional contact with moving rigid tools, solved in one loop.
+
+DD3IMP's single Newton loop: the nodal displacements and the contact forces of every
+(tool, slave node) pair are the unknowns of one generalized Newton-Raphson, whose equations
+are the equilibrium of the blank and the Alart-Curnier contact law (ddpy.contact). The
+Jacobian is exact (material, geometric and tool curvature terms), so it converges
+quadratically, also through stick-slip changes. See docs/theory/contact.md.
+
+Example::
+
+    problem = FormingProblem(Solid(mesh, material), [RigidTool("punch", surface, slaves)])
+    problem.fix(mesh.select(x=0), "x")                    # symmetry plane
+    result = problem.run({"punch": (0, 0, -5.0)}, max_increment=0.1)
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ddpy._validate import float_array, int_array
+from ddpy.contact import INACTIVE, contact_law
+from ddpy.linalg import LinearSolverError, MumpsSolver
+from ddpy.search import NONE, ContactSearch
+from ddpy.solid import ElementError, Solid, SolidState, _components
+from ddpy.surfaces import BezierSurface, NagataSurface
+
+__all__ = ["RigidTool", "FormingProblem", "FormingResult", "FormingError"]
+
+
+class FormingError(RuntimeError):
+    """A run stopped: ``result`` keeps every increment that converged before."""
+
+    def __init__(self, message: str, result: FormingResult) -> None:
+        super().__init__(message)
+        self.result = result
+
+
+@dataclass
+class RigidTool:
+    """A rigid tool: its surface, the blank nodes that may touch it (``slaves``), Coulomb
+    friction, and optionally the outward normal of the blank face that meets it
+    (``facing``: only patches facing the opposite way are contact candidates) and the
+    augmentation parameter r of the contact law (default: E times the element size)."""
+
+    name: str
+    surface: BezierSurface | NagataSurface
+    slaves: ArrayLike
+    friction: float = 0.0
+    facing: ArrayLike | None = None
+    augmentation: float | None = None
+    search: ContactSearch = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        if not self.name or not isinstance(self.name, str):
+            raise ValueError("a tool needs a name")
+        self.slaves = int_array(np.atleast_1d(self.slaves), f"slaves of tool {self.name}",
+                                (None,))
+        if self.slaves.size == 0:
+            raise ValueError(f"tool {self.name} has no slave nodes: nothing can touch it")
+        if np.unique(self.slaves).size != self.slaves.size:
+            raise ValueError(f"tool {self.name}: slave nodes are repeated")
+        if not (np.isfinite(self.friction) and self.friction >= 0.0):
+            raise ValueError(f"tool {self.name}: friction must be >= 0, got {self.friction}")
+        if self.augmentation is not None and not self.augmentation > 0.0:
+            raise ValueError(f"tool {self.name}: augmentation must be > 0, got "
+                             f"{self.augmentation}")
+        if self.facing is not None:
+            facing = float_array(self.facing, f"facing of tool {self.name}", (3,))
+            if np.linalg.norm(facing) == 0.0:
+                raise ValueError(f"tool {self.name}: facing must not be zero")
+            self.facing = facing / np.linalg.norm(facing)
+        self.search = ContactSearch(self.surface)
+
+
+@dataclass
+class FormingResult:
+    """Converged increments of a run, per increment: the phase factor and the increment
+    size (as a fraction of the phase), each tool's displacement and the force the blank
+    exerts on it, the nodes in contact per tool, Newton iterations with the residual norms,
+    and the blank displacements. ``timings`` splits the wall time of every iteration."""
+
+    factors: list[float] = field(default_factory=list)
+    sizes: list[float] = field(default_factory=list)
+    tool_displacements: dict[str, list[NDArray[np.float64]]] = field(default_factory=dict)
+    tool_forces: dict[str, list[NDArray[np.float64]]] = field(default_factory=dict)
+    contacts: dict[str, list[int]] = field(default_factory=dict)
+    residuals: list[list[float]] = field(default_factory=list)
+    displacements: list[NDArray[np.float64]] = field(default_factory=list)
+    cuts: int = 0
+    timings: dict[str, float] = field(default_factory=lambda: {
+        "assembly": 0.0, "contact": 0.0, "factorization": 0.0, "solve": 0.0, "rest": 0.0})
+
+    @property
+    def iterations(self) -> list[int]:
+        """Newton iterations (factorizations) of every converged increment."""
+        return [len(r) - 1 for r in self.residuals]
+
+
+class _Layout:
+    """Unknowns and the fixed coordinate structure of the Jacobian for one constraint set:
+    free displacement dofs first, then 3 force components per (tool, slave) pair."""
+
+    def __init__(self, solid: Solid, tools: list[RigidTool], fixed: NDArray[np.bool_]) -> None:
+        n = solid.mesh.n_nodes
+        free = ~fixed.ravel()
+        self.nf = int(free.sum())
+        eqn = np.full(3 * n, -1, dtype=np.int32)
+        eqn[free] = np.arange(self.nf, dtype=np.int32)
+        self.eqn = eqn
+        self.pattern = solid.pattern(eqn, symmetric=False)
+        self.node = np.concatenate([t.slaves for t in tools]).astype(np.int64)
+        self.tool_of = np.concatenate([np.full(t.slaves.size, i) for i, t in enumerate(tools)])
+        self.first = np.concatenate([[0], np.cumsum([t.slaves.size for t in tools])])
+        npair = self.node.size
+        self.n = self.nf + 3 * npair
+        lam = self.nf + 3 * np.arange(npair)[:, None] + np.arange(3)  # (npair, 3)
+        self.lam = lam
+        equ = eqn.reshape(n, 3)[self.node]                              # (npair, 3)
+        self.equ = equ
+        # Components of a slave whose displacement is fixed: its force there is a support
+        # reaction, so that row of the law becomes lambda_k = 0.
+        self.held = equ < 0
+        coupling = equ >= 0
+        self.coupling = coupling
+        pi, ii, jj = np.nonzero(np.broadcast_to(coupling[:, None, :], (npair, 3, 3)))
+        self.dx_index = (pi, ii, jj)
+        rows = [self.pattern.rows, equ[coupling], lam[pi, ii], np.repeat(lam, 3, axis=1).ravel()]
+        cols = [self.pattern.cols, lam[coupling], equ[pi, jj], np.tile(lam, (1, 3)).ravel()]
+        self.rows = np.concatenate(rows).astype(np.int32)
+        self.cols = np.concatenate(cols).astype(np.int32)
+        self.k_slots = self.pattern.rows.size
+        self.n_coupling = int(coupling.sum())
+
+
+class FormingProblem:
+    """The blank (a Solid) and its rigid tools. ``fix`` holds displacement components of
+    nodes at zero (symmetry planes, clamps); ``run`` moves tools through a phase, and
+    successive calls continue from where the last one stopped (multi-stage processes)."""
+
+    def __init__(self, solid: Solid, tools: Iterable[RigidTool], ordering: str = "metis"
+                 ) -> None:
+        self.solid = solid
+        self.tools = list(tools)
+        names = [t.name for t in self.tools]
+        if len(set(names)) != len(names):
+            raise ValueError(f"tool names must be unique, got {names}")
+        n = solid.mesh.n_nodes
+        for tool in self.tools:
+            if tool.slaves.max() >= n or tool.slaves.min() < 0:
+                raise ValueError(f"tool {tool.name}: slave node out of range 0..{n - 1}")
+        self.ordering = ordering
+        self.fixed = np.zeros((n, 3), dtype=bool)
+        mesh = solid.mesh
+        self.size = (mesh.volume() / mesh.n_elements) ** (1.0 / 3.0)
+        young = solid.props[0]
+        self.r = np.concatenate([
+            np.full(t.slaves.size, t.augmentation or young * self.size) for t in self.tools])
+        self.mu = np.concatenate([np.full(t.slaves.size, t.friction) for t in self.tools])
+        # State carried between increments and phases.
+        self.u = np.zeros((n, 3))
+        self.state: SolidState = solid.initial_state()
+        self.position = {t.name: np.zeros(3) for t in self.tools}
+        npair = sum(t.slaves.size for t in self.tools)
+        self.force = np.zeros((npair, 3))
+        self._layout: _Layout | None = None
+        self._solver: MumpsSolver | None = None
+
+    # -- set-up ------------------------------------------------------------------------
+
+    def fix(self, nodes: ArrayLike, components: int | str | Iterable[int | str] = "xyz"
+            ) -> None:
+        """Hold ``components`` of ``nodes`` at their current displacement."""
+        nodes = int_array(np.atleast_1d(nodes), "nodes", (None,))
+        if nodes.size and (nodes.min() < 0 or nodes.max() >= self.solid.mesh.n_nodes):
+            raise ValueError("fixed node out of range")
+        self.fixed[np.ix_(nodes, _components(components))] = True
+        self._reset()
+
+    def release(self, nodes: ArrayLike, components: int | str | Iterable[int | str] = "xyz"
+                ) -> None:
+        """Free components held by ``fix`` (e.g. the clamps of a stage before springback)."""
+        nodes = int_array(np.atleast_1d(nodes), "nodes", (None,))
+        self.fixed[np.ix_(nodes, _components(components))] = False
+        self._reset()
+
+    def _reset(self) -> None:
+        if self._solver is not None:
+            self._solver.close()
+        self._solver, self._layout = None, None
+
+    def _prepare(self) -> tuple[_Layout, MumpsSolver]:
+        if self._layout is None or self._solver is None:
+            layout = _Layout(self.solid, self.tools, self.fixed)
+            solver = MumpsSolver("unsymmetric", self.ordering)
+            solver.analyse(layout.n, layout.rows, layout.cols)
+            self._layout, self._solver = layout, solver
+        return self._layout, self._solver
+
+    # -- the run -----------------------------------------------------------------------
+
+    def run(
+        self,
+        motion: Mapping[str, ArrayLike],
+        max_increment: float,
+        active: Iterable[str] | None = None,
+        tol_force: float = 1e-6,
+        tol_disp: float = 1e-6,
+        max_iterations: int = 25,
+        max_cuts: int = 10,
+        result: FormingResult | None = None,
+    ) -> FormingResult:
+        """Move each tool of ``motion`` by its displacement (3,) over the phase, linearly in
+        the phase factor; tools not in ``active`` (default: all) are lifted off (their
+        forces vanish). ``max_increment`` is the largest travel of the leading (longest
+        moving) tool per increment, in mm; an increment that fails is cut in half and
+        retried, at most ``max_cuts`` times in a row. Converged when the free residual and
+        the contact law are below ``tol_force`` times the force scale and the correction
+        below ``tol_disp`` times the increment."""
+        unknown = set(motion) - {t.name for t in self.tools}
+        if unknown:
+            raise ValueError(f"motion names unknown tools: {sorted(unknown)}")
+        active_set = {t.name for t in self.tools} if active is None else set(active)
+        if active_set - {t.name for t in self.tools}:
+            raise ValueError(f"active names unknown tools: {sorted(active_set)}")
+        moves = {t.name: float_array(motion.get(t.name, (0.0, 0.0, 0.0)),
+                                     f"motion of {t.name}", (3,)) for t in self.tools}
+        travel = max(float(np.linalg.norm(m)) for m in moves.values())
+        if not max_increment > 0.0:
+            raise ValueError(f"max_increment must be > 0, got {max_increment}")
+        result = FormingResult() if result is None else result
+        for t in self.tools:
+            result.tool_displacements.setdefault(t.name, [])
+            result.tool_forces.setdefault(t.name, [])
+            result.contacts.setdefault(t.name, [])
+        layout, solver = self._prepare()
+        on = np.concatenate([np.full(t.slaves.size, t.name in active_set) for t in self.tools])
+        start = {name: p.copy() for name, p in self.position.items()}
+        nominal = min(1.0, max_increment / travel) if travel > 0.0 else 1.0
+        factor, step, cuts_in_row = 0.0, nominal, 0
+        while factor < 1.0 - 1e-12:
+            target = min(1.0, factor + step)
+            positions = {n: start[n] + target * moves[n] for n in start}
+            outcome = self._increment(layout, solver, positions, on, tol_force, tol_disp,
+                                      max_iterations, result.timings)
+            if isinstance(outcome, str):
+                cuts_in_row += 1
+                result.cuts += 1
+                if cuts_in_row > max_cuts:
+                    raise FormingError(f"increment to phase factor {target:.6g} failed after "
+                                       f"{max_cuts} cuts: {outcome}", result)
+                step /= 2.0
+                continue
+            u, state, force, residuals, in_contact = outcome
+            self.u, self.state, self.force = u, state, force
+            self.position = positions
+            result.sizes.append(target - factor)
+            factor = target
+            result.factors.append(factor)
+            result.residuals.append(residuals)
+            result.displacements.append(u.copy())
+            for i, t in enumerate(self.tools):
+                pairs = slice(layout.first[i], layout.first[i + 1])
+                result.tool_displacements[t.name].append(positions[t.name].copy())
+                result.tool_forces[t.name].append(-force[pairs].sum(axis=0))
+                result.contacts[t.name].append(int(in_contact[pairs].sum()))
+            cuts_in_row = 0
+            step = min(nominal, 2.0 * step)  # grow back after cuts
+        return result
+
+    def _contact(self, layout: _Layout, x: NDArray[np.float64], x_n: NDArray[np.float64],
+                 positions: Mapping[str, NDArray[np.float64]], on: NDArray[np.bool_],
+                 force: NDArray[np.float64]):
+        """Contact law of every pair at positions x: residual, derivatives, states."""
+        npair = layout.node.size
+        c = force.copy()
+        d_lambda = np.broadcast_to(np.eye(3), (npair, 3, 3)).copy()
+        d_x = np.zeros((npair, 3, 3))
+        state = np.zeros(npair, dtype=np.int32)
+        for i, tool in enumerate(self.tools):
+            pairs = slice(layout.first[i], layout.first[i + 1])
+            if not on[pairs].any():
+                continue
+            nodes = tool.slaves
+            normals = None if tool.facing is None else np.tile(tool.facing, (nodes.size, 1))
+            found = tool.search.project(x[nodes], positions[tool.name], normals)
+            hit = found.status != NONE
+            patch = np.where(hit, found.patch, 0)
+            second = tool.surface.second_derivatives(patch, found.params)
+            v = (x[nodes] - x_n[nodes]) - (positions[tool.name] - self.position[tool.name])
+            law = contact_law(force[pairs], found, second, v, self.mu[pairs], self.r[pairs])
+            # Slices are views: write the pairs that found a patch; the others stay free.
+            c[pairs][hit] = law.residual[hit]
+            d_lambda[pairs][hit] = law.d_lambda[hit]
+            d_x[pairs][hit] = law.d_x[hit]
+            state[pairs][hit] = law.state[hit]
+        # Components held by a support: lambda_k = 0.
+        held = layout.held
+        c[held] = force[held]
+        hp, hk = np.nonzero(held)
+        d_lambda[hp, hk, :] = 0.0
+        d_lambda[hp, hk, hk] = 1.0
+        d_x[hp, hk, :] = 0.0
+        return c, d_lambda, d_x, state
+
+    def _evaluate(self, layout: _Layout, u: NDArray[np.float64], force: NDArray[np.float64],
+                  x_n: NDArray[np.float64], positions: Mapping[str, NDArray[np.float64]],
+                  on: NDArray[np.bool_], timings: dict[str, float]):
+        """Residual (free equilibrium rows, then the contact law) at (u, force), with the
+        Jacobian values in the layout's slots and the contact states; or a failure."""
+        tick = time.perf_counter()
+        c, d_lambda, d_x, state = self._contact(layout, self.solid.mesh.nodes + u, x_n,
+                                                positions, on, force)
+        tock = time.perf_counter()
+        timings["contact"] += tock - tick
+        try:
+            out = self.solid.assemble(u, self.state, layout.pattern)
+        except ElementError as error:
+            return str(error)
+        tick = time.perf_counter()
+        timings["assembly"] += tick - tock
+        # Equilibrium: internal forces minus the forces of the tools on the slaves.
+        r_node = out.fint.copy()
+        np.add.at(r_node, layout.node, -force)
+        residual = np.concatenate([r_node.ravel()[~self.fixed.ravel()], c.ravel()])
+        pi, ii, jj = layout.dx_index
+        k, m = layout.k_slots, layout.n_coupling
+        values = np.empty(layout.rows.size)
+        values[:k] = out.values
+        values[k:k + m] = -1.0
+        values[k + m:k + m + pi.size] = d_x[pi, ii, jj]
+        values[k + m + pi.size:] = d_lambda.reshape(-1)
+        timings["rest"] += time.perf_counter() - tick
+        return residual, values, state, out
+
+    def _increment(self, layout: _Layout, solver: MumpsSolver,
+                   positions: Mapping[str, NDArray[np.float64]], on: NDArray[np.bool_],
+                   tol_force: float, tol_disp: float, max_iterations: int,
+                   timings: dict[str, float]):
+        """Newton iterations of one increment; the new state, or the reason of failure.
+
+        The semi-smooth Newton step is globalized by backtracking on the residual norm: a
+        node switching between stick and slip (or contact and release) at every iteration
+        would otherwise make it cycle."""
+        solid = self.solid
+        u_n = self.u
+        x_n = solid.mesh.nodes + u_n
+        u = u_n.copy()
+        force = np.where(on[:, None], self.force, 0.0)
+        free = ~self.fixed.ravel()
+        floor = 1e-8 * solid.props[0] * self.size**2
+        residuals: list[float] = []
+        correction = np.inf
+        current = self._evaluate(layout, u, force, x_n, positions, on, timings)
+        if isinstance(current, str):
+            return current
+        for iteration in range(max_iterations + 1):
+            residual, values, state, out = current
+            norm = float(np.linalg.norm(residual))
+            residuals.append(norm)
+            if not np.isfinite(norm):
+                return "the residual is not finite"
+            scale = max(float(np.linalg.norm(force)), float(np.linalg.norm(
+                np.where(self.fixed.ravel(), out.fint.ravel(), 0.0))), floor)
+            step = float(np.linalg.norm(u - u_n))
+            if norm <= tol_force * scale and correction <= tol_disp * max(step, 1e-9 * self.size):
+                return u, out.state, force, residuals, (state != INACTIVE) & on
+            if iteration == max_iterations:
+                return f"no convergence in {max_iterations} iterations"
+            tick = time.perf_counter()
+            try:
+                solver.factorize(values)
+            except LinearSolverError as error:
+                return str(error)
+            tock = time.perf_counter()
+            timings["factorization"] += tock - tick
+            delta = solver.solve(-residual)
+            timings["solve"] += time.perf_counter() - tock
+            du = delta[:layout.nf]
+            dforce = delta[layout.nf:].reshape(-1, 3)
+            alpha = 1.0
+            for _ in range(5):
+                trial_u = u.copy()
+                trial_u.ravel()[free] += alpha * du
+                trial_force = force + alpha * dforce
+                trial = self._evaluate(layout, trial_u, trial_force, x_n, positions, on,
+                                       timings)
+                if not isinstance(trial, str) and (
+                        np.linalg.norm(trial[0]) <= (1.0 - 1e-4 * alpha) * norm):
+                    break
+                alpha *= 0.5
+            if isinstance(trial, str):
+                return trial
+            u, force, current = trial_u, trial_force, trial
+            correction = alpha * float(np.linalg.norm(du))
+        return "no convergence"
+
+    def close(self) -> None:
+        """Free the MUMPS instance."""
+        self._reset()

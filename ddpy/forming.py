@@ -29,7 +29,27 @@ from ddpy.search import NONE, ContactSearch
 from ddpy.solid import ElementError, Solid, SolidState, _components
 from ddpy.surfaces import BezierSurface, NagataSurface
 
-__all__ = ["RigidTool", "FormingProblem", "FormingResult", "FormingError"]
+__all__ = ["RigidTool", "FormingProblem", "FormingResult", "FormingError", "IncrementLimits"]
+
+
+@dataclass(frozen=True)
+class IncrementLimits:
+    """Limits of the r_min increment control (docs/theory/contact.md). An increment is
+    scaled by r_min = min(1, r_i) over: ``strain``, the largest equivalent strain increment
+    at a Gauss point; ``first_touch``, a free node that would pass through a tool (it lands
+    on it instead; gaps below ``touch_gap`` times the element size count as touching). No
+    increment is made smaller than ``min_fraction`` of the nominal one."""
+
+    strain: float = 0.02
+    first_touch: bool = True
+    touch_gap: float = 1e-3
+    min_fraction: float = 1e-3
+
+    def __post_init__(self) -> None:
+        if not 0.0 < self.strain < 1.0:
+            raise ValueError(f"strain limit must lie in (0, 1), got {self.strain}")
+        if not 0.0 < self.min_fraction <= 1.0 or not self.touch_gap >= 0.0:
+            raise ValueError("min_fraction must lie in (0, 1] and touch_gap be >= 0")
 
 
 class FormingError(RuntimeError):
@@ -86,6 +106,8 @@ class FormingResult:
 
     factors: list[float] = field(default_factory=list)
     sizes: list[float] = field(default_factory=list)
+    #: what set each increment: "max", "touch", "strain" or "cut"
+    limited_by: list[str] = field(default_factory=list)
     tool_displacements: dict[str, list[NDArray[np.float64]]] = field(default_factory=dict)
     tool_forces: dict[str, list[NDArray[np.float64]]] = field(default_factory=dict)
     contacts: dict[str, list[int]] = field(default_factory=dict)
@@ -167,6 +189,8 @@ class FormingProblem:
         self.position = {t.name: np.zeros(3) for t in self.tools}
         npair = sum(t.slaves.size for t in self.tools)
         self.force = np.zeros((npair, 3))
+        self._gap = (np.full(npair, np.inf), np.zeros((npair, 3)))
+        self.external = np.zeros((n, 3))
         self._layout: _Layout | None = None
         self._solver: MumpsSolver | None = None
 
@@ -212,6 +236,7 @@ class FormingProblem:
         tol_disp: float = 1e-6,
         max_iterations: int = 25,
         max_cuts: int = 10,
+        limits: IncrementLimits | None = None,
         result: FormingResult | None = None,
     ) -> FormingResult:
         """Move each tool of ``motion`` by its displacement (3,) over the phase, linearly in
@@ -220,7 +245,9 @@ class FormingProblem:
         moving) tool per increment, in mm; an increment that fails is cut in half and
         retried, at most ``max_cuts`` times in a row. Converged when the free residual and
         the contact law are below ``tol_force`` times the force scale and the correction
-        below ``tol_disp`` times the increment."""
+        below ``tol_disp`` times the increment. ``limits``: the r_min control (default
+        IncrementLimits())."""
+        limits = IncrementLimits() if limits is None else limits
         unknown = set(motion) - {t.name for t in self.tools}
         if unknown:
             raise ValueError(f"motion names unknown tools: {sorted(unknown)}")
@@ -241,8 +268,15 @@ class FormingProblem:
         on = np.concatenate([np.full(t.slaves.size, t.name in active_set) for t in self.tools])
         start = {name: p.copy() for name, p in self.position.items()}
         nominal = min(1.0, max_increment / travel) if travel > 0.0 else 1.0
-        factor, step, cuts_in_row = 0.0, nominal, 0
+        factor, step, cuts_in_row, reason = 0.0, nominal, 0, "max"
+        last_du: NDArray[np.float64] | None = None
+        x = self.solid.mesh.nodes + self.u  # gaps at the start of the phase, for first touch
+        self._gap = self._contact(layout, x, x, self.position, on, self.force)[4]
         while factor < 1.0 - 1e-12:
+            if limits.first_touch and reason != "cut":
+                touch = self._touch_factor(layout, on, moves, step, last_du, limits)
+                if touch < 1.0:
+                    step, reason = max(step * touch, limits.min_fraction * nominal), "touch"
             target = min(1.0, factor + step)
             positions = {n: start[n] + target * moves[n] for n in start}
             outcome = self._increment(layout, solver, positions, on, tol_force, tol_disp,
@@ -253,12 +287,19 @@ class FormingProblem:
                 if cuts_in_row > max_cuts:
                     raise FormingError(f"increment to phase factor {target:.6g} failed after "
                                        f"{max_cuts} cuts: {outcome}", result)
-                step /= 2.0
+                step, reason = step / 2.0, "cut"
                 continue
-            u, state, force, residuals, in_contact = outcome
-            self.u, self.state, self.force = u, state, force
+            u, state, force, residuals, in_contact, gap = outcome
+            strain = _equivalent_strain_increment(state.strain - self.state.strain)
+            if strain > 1.05 * limits.strain and step > limits.min_fraction * nominal:
+                step = max(step * limits.strain / strain, limits.min_fraction * nominal)
+                reason = "strain"
+                continue
+            last_du = (u - self.u) / (target - factor)
+            self.u, self.state, self.force, self._gap = u, state, force, gap
             self.position = positions
             result.sizes.append(target - factor)
+            result.limited_by.append(reason)
             factor = target
             result.factors.append(factor)
             result.residuals.append(residuals)
@@ -269,14 +310,69 @@ class FormingProblem:
                 result.tool_forces[t.name].append(-force[pairs].sum(axis=0))
                 result.contacts[t.name].append(int(in_contact[pairs].sum()))
             cuts_in_row = 0
-            step = min(nominal, 2.0 * step)  # grow back after cuts
+            step, reason = min(nominal, 2.0 * step), "max"  # grow back after limits
         return result
+
+    def springback(self, increments: int = 5, tol_force: float = 1e-6,
+                   tol_disp: float = 1e-6, max_iterations: int = 25,
+                   result: FormingResult | None = None) -> FormingResult:
+        """Remove the tools and let the blank unload. The contact forces at the end of
+        forming become nodal loads on the slaves, brought to zero in ``increments`` steps
+        (unloading is elastic unless it yields in reverse), with the tools lifted off. Keep
+        only the constraints that stop rigid-body motion: ``release`` clamps and ``fix``
+        support points before calling (docs/theory/contact.md)."""
+        if int(increments) < 1:
+            raise ValueError(f"increments must be at least 1, got {increments}")
+        result = FormingResult() if result is None else result
+        layout, solver = self._prepare()
+        loads = np.zeros_like(self.u)
+        np.add.at(loads, layout.node, self.force)
+        loads[self.fixed] = 0.0  # a support takes its share directly
+        self.force = np.zeros_like(self.force)
+        off = np.zeros(layout.node.size, dtype=bool)
+        try:
+            for k in range(1, int(increments) + 1):
+                self.external = loads * (1.0 - k / increments)
+                outcome = self._increment(layout, solver, self.position, off, tol_force,
+                                          tol_disp, max_iterations, result.timings)
+                if isinstance(outcome, str):
+                    raise FormingError(f"springback step {k} failed: {outcome}", result)
+                self.u, self.state = outcome[0], outcome[1]
+                result.factors.append(k / increments)
+                result.sizes.append(1.0 / increments)
+                result.limited_by.append("springback")
+                result.residuals.append(outcome[3])
+                result.displacements.append(self.u.copy())
+        finally:
+            self.external = np.zeros_like(self.u)
+        return result
+
+    def _touch_factor(self, layout: _Layout, on: NDArray[np.bool_],
+                      moves: Mapping[str, NDArray[np.float64]], step: float,
+                      last_du: NDArray[np.float64] | None, limits: IncrementLimits) -> float:
+        """Fraction of the next increment at which the first free node reaches a tool: its
+        gap over the approach, the tool's motion against the node's (extrapolated from the
+        last increment) along the normal at its closest point."""
+        gap, normal = self._gap
+        tool_step = np.concatenate([np.tile(step * moves[t.name], (t.slaves.size, 1))
+                                    for t in self.tools])
+        node_step = 0.0 if last_du is None else step * last_du[layout.node]
+        approach = np.einsum("ij,ij->i", tool_step - node_step, normal)
+        free = on & (self.force @ np.ones(3) == 0.0) & np.isfinite(gap)
+        free &= gap > limits.touch_gap * self.size
+        hits = free & (approach > gap)
+        if not hits.any():
+            return 1.0
+        # Land just past the surface, so that the node is caught in contact.
+        return float(np.min(gap[hits] / approach[hits])) * (1.0 + 1e-3)
 
     def _contact(self, layout: _Layout, x: NDArray[np.float64], x_n: NDArray[np.float64],
                  positions: Mapping[str, NDArray[np.float64]], on: NDArray[np.bool_],
                  force: NDArray[np.float64]):
         """Contact law of every pair at positions x: residual, derivatives, states."""
         npair = layout.node.size
+        gap = np.full(npair, np.inf)
+        normal = np.zeros((npair, 3))
         c = force.copy()
         d_lambda = np.broadcast_to(np.eye(3), (npair, 3, 3)).copy()
         d_x = np.zeros((npair, 3, 3))
@@ -298,6 +394,8 @@ class FormingProblem:
             d_lambda[pairs][hit] = law.d_lambda[hit]
             d_x[pairs][hit] = law.d_x[hit]
             state[pairs][hit] = law.state[hit]
+            gap[pairs][hit] = found.distance[hit]
+            normal[pairs][hit] = found.normal[hit]
         # Components held by a support: lambda_k = 0.
         held = layout.held
         c[held] = force[held]
@@ -305,7 +403,7 @@ class FormingProblem:
         d_lambda[hp, hk, :] = 0.0
         d_lambda[hp, hk, hk] = 1.0
         d_x[hp, hk, :] = 0.0
-        return c, d_lambda, d_x, state
+        return c, d_lambda, d_x, state, (gap, normal)
 
     def _evaluate(self, layout: _Layout, u: NDArray[np.float64], force: NDArray[np.float64],
                   x_n: NDArray[np.float64], positions: Mapping[str, NDArray[np.float64]],
@@ -313,8 +411,8 @@ class FormingProblem:
         """Residual (free equilibrium rows, then the contact law) at (u, force), with the
         Jacobian values in the layout's slots and the contact states; or a failure."""
         tick = time.perf_counter()
-        c, d_lambda, d_x, state = self._contact(layout, self.solid.mesh.nodes + u, x_n,
-                                                positions, on, force)
+        c, d_lambda, d_x, state, gap = self._contact(layout, self.solid.mesh.nodes + u, x_n,
+                                                     positions, on, force)
         tock = time.perf_counter()
         timings["contact"] += tock - tick
         try:
@@ -324,7 +422,7 @@ class FormingProblem:
         tick = time.perf_counter()
         timings["assembly"] += tick - tock
         # Equilibrium: internal forces minus the forces of the tools on the slaves.
-        r_node = out.fint.copy()
+        r_node = out.fint - self.external
         np.add.at(r_node, layout.node, -force)
         residual = np.concatenate([r_node.ravel()[~self.fixed.ravel()], c.ravel()])
         pi, ii, jj = layout.dx_index
@@ -335,7 +433,7 @@ class FormingProblem:
         values[k + m:k + m + pi.size] = d_x[pi, ii, jj]
         values[k + m + pi.size:] = d_lambda.reshape(-1)
         timings["rest"] += time.perf_counter() - tick
-        return residual, values, state, out
+        return residual, values, state, out, gap
 
     def _increment(self, layout: _Layout, solver: MumpsSolver,
                    positions: Mapping[str, NDArray[np.float64]], on: NDArray[np.bool_],
@@ -359,7 +457,7 @@ class FormingProblem:
         if isinstance(current, str):
             return current
         for iteration in range(max_iterations + 1):
-            residual, values, state, out = current
+            residual, values, state, out, gap = current
             norm = float(np.linalg.norm(residual))
             residuals.append(norm)
             if not np.isfinite(norm):
@@ -368,7 +466,7 @@ class FormingProblem:
                 np.where(self.fixed.ravel(), out.fint.ravel(), 0.0))), floor)
             step = float(np.linalg.norm(u - u_n))
             if norm <= tol_force * scale and correction <= tol_disp * max(step, 1e-9 * self.size):
-                return u, out.state, force, residuals, (state != INACTIVE) & on
+                return u, out.state, force, residuals, (state != INACTIVE) & on, gap
             if iteration == max_iterations:
                 return f"no convergence in {max_iterations} iterations"
             tick = time.perf_counter()
@@ -402,3 +500,13 @@ class FormingProblem:
     def close(self) -> None:
         """Free the MUMPS instance."""
         self._reset()
+
+
+def _equivalent_strain_increment(delta: NDArray[np.float64]) -> float:
+    """Largest sqrt(2/3 de:de) over Gauss points of Voigt strain increments (engineering
+    shears)."""
+    if delta.size == 0:
+        return 0.0
+    normal = (delta[..., :3] ** 2).sum(axis=-1)
+    shear = (delta[..., 3:] ** 2).sum(axis=-1) / 2.0
+    return float(np.sqrt(2.0 / 3.0 * (normal + shear)).max())

@@ -7,7 +7,7 @@ from math import comb
 import numpy as np
 import pytest
 
-from ddpy.forming import FormingProblem, RigidTool
+from ddpy.forming import FormingProblem, IncrementLimits, RigidTool
 from ddpy.material import Hill48, Material, Swift
 from ddpy.mesh import HexMesh
 from ddpy.solid import Solid
@@ -108,7 +108,7 @@ def cylinder_crest(kind: str, segments: int, radius: float = 10.0) -> BezierSurf
 
 def slide_over_cylinder(kind: str, segments: int) -> tuple[np.ndarray, list[int]]:
     """A 4 mm block clamped at its top, pressed 30 um into the crest, which then slides 2 mm
-    under it: the normal force along the slide, and the iterations."""
+    under it: the normal force every 0.02 mm of the slide, and the iterations."""
     mesh = HexMesh.box(4.0, 1.0, 0.5, 32, 2, 2, origin=(-2.0, -0.5, 0.0))
     tool = RigidTool("cylinder", cylinder_crest(kind, segments), mesh.select(z=0.0),
                      facing=(0, 0, -1))
@@ -119,7 +119,9 @@ def slide_over_cylinder(kind: str, segments: int) -> tuple[np.ndarray, list[int]
     start = len(result.factors)
     result = problem.run({"cylinder": (2.0, 0, 0)}, max_increment=0.02, result=result)
     force = -np.array(result.tool_forces["cylinder"][start:])[:, 2]
-    return force, result.iterations[start:]
+    slide = np.array(result.tool_displacements["cylinder"][start:])[:, 0] + 1.0
+    # Increments stopped at a first touch fall between: compare on one grid of positions.
+    return np.interp(np.linspace(0.02, 2.0, 100), slide, force), result.iterations[start:]
 
 
 @pytest.fixture(scope="module")
@@ -159,3 +161,34 @@ def test_newton_converges_quadratically_while_sliding() -> None:
     assert len(tail) >= 3
     assert max(tail[-1] / tail[-2] ** 2, 0) < 1e3 / history[0], history
     assert rates[-1] > 1.6, (rates, history)
+
+
+def test_first_touch_and_strain_limit_set_the_increments() -> None:
+    # The block hangs 0.1 mm above the plane; a 0.25 mm increment would push it 0.15 mm
+    # through: the increment stops where the first (every) node touches.
+    mesh = HexMesh.box(1.0, 1.0, 0.5, 2, 2, 2, origin=(-0.5, -0.5, 0.1))
+    tool = RigidTool("plane", plane_tool(), mesh.select(z=0.1), facing=(0, 0, -1))
+    problem = FormingProblem(Solid(mesh, ELASTIC), [tool])
+    problem.fix(mesh.select(z=0.6), "xyz")
+    limits = IncrementLimits(strain=0.01)
+    result = problem.run({"plane": (0, 0, 0.105)}, max_increment=0.25, limits=limits)
+    assert result.limited_by[0] == "touch"
+    assert result.tool_displacements["plane"][0][2] == pytest.approx(0.1, rel=2e-3)
+    # Every bottom node is caught in contact, pressed only by the 1e-3 landing margin.
+    assert result.contacts["plane"][0] == 9
+    assert abs(result.tool_forces["plane"][0][2]) < 1e-3 * 210e3 * 0.1 / 0.5 * 1.5
+    # Then 5 um into a 0.5 mm block: 1 % strain, at the limit; a 0.05 mm push would be 10 %.
+    result = problem.run({"plane": (0, 0, 0.05)}, max_increment=0.05, limits=limits,
+                         result=result)
+    assert "strain" in result.limited_by
+    steps = np.diff([0.1] + [d[2] for d in result.tool_displacements["plane"][1:]])
+    assert steps.max() <= 1.05 * 0.01 * 0.5 + 1e-4
+
+
+def test_springback_of_an_elastic_block_returns_it() -> None:
+    problem, mesh = block_on_plane(0.2)
+    problem.run({"plane": (3e-4, 0, 1e-3)}, max_increment=5e-4)
+    assert np.abs(problem.u).max() > 1e-4
+    problem.springback(increments=3)
+    # Elastic, still clamped at the top: every node comes back.
+    np.testing.assert_allclose(problem.u, 0.0, atol=1e-12)

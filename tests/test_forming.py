@@ -182,8 +182,10 @@ def test_first_touch_and_strain_limit_set_the_increments() -> None:
                          result=result)
     assert "strain" in result.limited_by
     steps = np.diff([0.1] + [d[2] for d in result.tool_displacements["plane"][1:]])
-    # Uniaxial strain e has the equivalent strain sqrt(2/3) e: 1 % is a 6.1 um step.
-    assert steps.max() <= 1.05 * 0.01 / np.sqrt(2.0 / 3.0) * 0.5
+    # Uniaxial strain e has the equivalent strain sqrt(2/3) e: 1 % is a 6.1 um step at the
+    # start; the Green-Lagrange increment of the block, already squeezed by up to 10 %,
+    # is up to 10 % smaller than the step over the height.
+    assert steps.max() <= 1.05 * 0.01 / np.sqrt(2.0 / 3.0) * 0.5 / 0.9
 
 
 def test_springback_of_an_elastic_block_returns_it() -> None:

@@ -352,6 +352,28 @@ def test_increment_cutting_recovers_and_reports() -> None:
     assert info.value.result.factors == []
 
 
+def test_predictors_reach_the_same_state_and_line_search_saves_cuts() -> None:
+    """Tangent, elastic and extrapolating predictors converge to the same plastic state
+    (backward Euler from the converged state: the iteration path does not matter; measured
+    4e-16). Without the line search the first increment cycles and has to be cut."""
+    mesh = HexMesh.box(4.0, 1.0, 0.5, 8, 2, 2)
+    out = []
+    for predictor, line_search in (("tangent", True), ("elastic", True),
+                                   ("extrapolate", True), ("tangent", False)):
+        problem = StaticProblem(Solid(mesh, ddq_props(), rolling_direction_deg=45.0))
+        problem.fix(mesh.select(x=0.0), "xyz")
+        problem.fix(mesh.select(x=4.0), "z", -0.4)
+        out.append(problem.solve(increments=4, tol_force=1e-10, tol_disp=1e-10,
+                                 predictor=predictor, line_search=line_search))
+    assert out[0].ep[-1].max() > 0.005
+    assert all(r.cuts == 0 for r in out[:3]) and out[3].cuts >= 1
+    for other in out[1:3]:
+        assert np.abs(other.displacements[-1] - out[0].displacements[-1]).max() <= 1e-12
+        assert np.abs(other.ep[-1] - out[0].ep[-1]).max() <= 1e-12
+    with pytest.raises(ValueError, match="predictor"):
+        StaticProblem(Solid(mesh, ELASTIC)).solve(predictor="none")
+
+
 def test_prescribed_displacements_give_reactions() -> None:
     """Uniaxial stretch by symmetry planes and a prescribed face: reactions balance and
     equal the area times the stress."""

@@ -134,12 +134,15 @@ class BezierSurface(_Surface):
         return _core.bezier_evaluate(self.degrees.ravel(), self.coefficients, ids, uv)
 
     def power_coefficients(self, patch: int) -> NDArray[np.float64]:
-        """Power-basis coefficients A[k, l] (vectors) of one patch: S = sum A_kl u^k v^l."""
+        """Power-basis coefficients A[k, l] (vectors) of one patch: S = sum A_kl u^k v^l.
+
+        (The core evaluates about the patch centre, in (u - 1/2)^k (v - 1/2)^l, where the
+        coefficients stay small and so does the rounding; these are the plain ones.)"""
         if not 0 <= patch < self.n_patches:
             raise IndexError(f"patch {patch} is not a patch: expected 0 <= id < {self.n_patches}")
         n, m = self.degrees[patch]
-        coef = self.coefficients.reshape(self.n_patches, _NB, _NB, 3)[patch]
-        return coef.transpose(1, 0, 2)[: n + 1, : m + 1].copy()
+        net = self.control[patch, : m + 1, : n + 1].transpose(1, 0, 2)
+        return np.einsum("ki,ijx,lj->klx", _power_matrix(int(n)), net, _power_matrix(int(m)))
 
     def evaluate_de_casteljau(self, patch_ids: ArrayLike, params: ArrayLike) -> NDArray[np.float64]:
         """Points (k, 3) by de Casteljau on the control nets: an independent cross-check."""
@@ -284,6 +287,14 @@ def nagata_edge_coefficient(
         return np.zeros((0, 3))
     c = _core.nagata_edge_coefficient(*(a.ravel() for a in arrays), ratio)
     return c.reshape(m, 3) if np.ndim(x0) == 2 else c.reshape(3)
+
+
+def _power_matrix(n: int) -> NDArray[np.float64]:
+    """M[k, i] = (-1)^(k-i) C(n, k) C(k, i): B_i^n(u) = sum_k M[k, i] u^k."""
+    from math import comb
+
+    return np.array([[(-1) ** (k - i) * comb(n, k) * comb(k, i) if k >= i else 0
+                      for i in range(n + 1)] for k in range(n + 1)], dtype=float)
 
 
 def _check_ratio(ratio: float) -> float:

@@ -237,6 +237,7 @@ class FormingProblem:
         max_iterations: int = 25,
         max_cuts: int = 10,
         limits: IncrementLimits | None = None,
+        gaps: Mapping[str, tuple[str, float, ArrayLike]] | None = None,
         result: FormingResult | None = None,
     ) -> FormingResult:
         """Move each tool of ``motion`` by its displacement (3,) over the phase, linearly in
@@ -246,7 +247,10 @@ class FormingProblem:
         retried, at most ``max_cuts`` times in a row. Converged when the free residual and
         the contact law are below ``tol_force`` times the force scale and the correction
         below ``tol_disp`` times the increment. ``limits``: the r_min control (default
-        IncrementLimits())."""
+        IncrementLimits()). ``gaps``: tools held at a fixed gap from another, e.g.
+        ``{"holder": ("die", 1.13, (0, 0, 1))}``: the holder is set, along the direction,
+        at 1.13 mm from the die (the smallest distance between their surfaces) in the
+        first increment and then follows the die (a position-controlled blank-holder)."""
         limits = IncrementLimits() if limits is None else limits
         unknown = set(motion) - {t.name for t in self.tools}
         if unknown:
@@ -256,6 +260,7 @@ class FormingProblem:
             raise ValueError(f"active names unknown tools: {sorted(active_set)}")
         moves = {t.name: float_array(motion.get(t.name, (0.0, 0.0, 0.0)),
                                      f"motion of {t.name}", (3,)) for t in self.tools}
+        offsets = self._gap_offsets(gaps or {}, moves)
         travel = max(float(np.linalg.norm(m)) for m in moves.values())
         if not max_increment > 0.0:
             raise ValueError(f"max_increment must be > 0, got {max_increment}")
@@ -279,6 +284,8 @@ class FormingProblem:
                     step, reason = max(step * touch, limits.min_fraction * nominal), "touch"
             target = min(1.0, factor + step)
             positions = {n: start[n] + target * moves[n] for n in start}
+            for name, (other, offset) in offsets.items():
+                positions[name] = positions[other] + offset
             outcome = self._increment(layout, solver, positions, on, tol_force, tol_disp,
                                       max_iterations, result.timings)
             if isinstance(outcome, str):
@@ -312,6 +319,35 @@ class FormingProblem:
             cuts_in_row = 0
             step, reason = min(nominal, 2.0 * step), "max"  # grow back after limits
         return result
+
+    def _gap_offsets(self, gaps: Mapping[str, tuple[str, float, ArrayLike]],
+                     moves: Mapping[str, NDArray[np.float64]],
+                     ) -> dict[str, tuple[str, NDArray[np.float64]]]:
+        """Offset of each gap-held tool from its partner that puts their surfaces at the
+        gap: the holder's grid points projected on the partner give the present gap."""
+        tools = {t.name: t for t in self.tools}
+        out: dict[str, tuple[str, NDArray[np.float64]]] = {}
+        for name, spec in gaps.items():
+            if len(spec) != 3:
+                raise ValueError(f"gap of {name} must be (other tool, gap, direction)")
+            other, gap, direction = spec
+            if name not in tools or other not in tools or name == other:
+                raise ValueError(f"gap {name} -> {other}: both must be tools, and different")
+            if np.any(moves[name] != 0.0):
+                raise ValueError(f"tool {name} is held at a gap: it cannot also be moved")
+            if not (np.isfinite(gap) and gap >= 0.0):
+                raise ValueError(f"gap of {name} must be >= 0, got {gap}")
+            axis = float_array(direction, f"gap direction of {name}", (3,))
+            if np.linalg.norm(axis) == 0.0:
+                raise ValueError(f"gap direction of {name} must not be zero")
+            axis = axis / np.linalg.norm(axis)
+            holder = tools[name].search
+            points = holder.grid_points + self.position[name]
+            found = tools[other].search.project(points, self.position[other])
+            present = float(np.min(np.abs(found.distance[found.status != NONE])))
+            offset = self.position[name] - self.position[other] + (gap - present) * axis
+            out[name] = (other, offset)
+        return out
 
     def springback(self, increments: int = 5, tol_force: float = 1e-6,
                    tol_disp: float = 1e-6, max_iterations: int = 25,

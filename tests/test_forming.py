@@ -195,3 +195,24 @@ def test_springback_of_an_elastic_block_returns_it() -> None:
     problem.springback(increments=3)
     # Elastic, still clamped at the top: every node comes back.
     np.testing.assert_allclose(problem.u, 0.0, atol=1e-12)
+
+
+def test_blank_holder_held_at_a_fixed_gap() -> None:
+    # A die plane at z = 0 under the block's bottom, a holder plane at z = 2 above its top
+    # (facing down); the holder is set 0.5 mm from the die, i.e. pressing the 0.5 mm block
+    # not at all, then follows the die as the die moves.
+    mesh = HexMesh.box(1.0, 1.0, 0.5, 2, 2, 1, origin=(-0.5, -0.5, 0.0))
+    holder_surface = NagataSurface([[-5, -5, 2], [-5, 5, 2], [5, 5, 2], [5, -5, 2]],
+                                   [[0, 0, -1]] * 4, [[0, 1, 2, 3]])
+    die = RigidTool("die", plane_tool(), mesh.select(z=0.0), facing=(0, 0, -1))
+    holder = RigidTool("holder", holder_surface, mesh.select(z=0.5), facing=(0, 0, 1))
+    problem = FormingProblem(Solid(mesh, ELASTIC), [die, holder])
+    problem.fix(mesh.select(x=-0.5), "xyz")
+    result = problem.run({"die": (0, 0, 0.01)}, max_increment=0.01,
+                         gaps={"holder": ("die", 0.499, (0, 0, 1))})
+    # Set at the gap (1.501 mm down), then carried up with the die by 0.01 mm.
+    np.testing.assert_allclose(result.tool_displacements["holder"][-1], [0, 0, -1.491],
+                               atol=1e-9)
+    with pytest.raises(ValueError, match="cannot also be moved"):
+        problem.run({"holder": (0, 0, 1.0)}, max_increment=0.1,
+                    gaps={"holder": ("die", 0.5, (0, 0, 1))})

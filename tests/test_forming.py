@@ -216,3 +216,44 @@ def test_blank_holder_held_at_a_fixed_gap() -> None:
     with pytest.raises(ValueError, match="cannot also be moved"):
         problem.run({"holder": (0, 0, 1.0)}, max_increment=0.1,
                     gaps={"holder": ("die", 0.5, (0, 0, 1))})
+
+
+def test_frictionless_cylinder_into_a_plate_gives_the_hertz_pressure() -> None:
+    # Plane strain: a rigid cylinder (R 10 mm, Nagata, 64 patches on 80 degrees) pressed
+    # 20 um into a 2 x 6 x 4 mm elastic plate (half model, x = 0 symmetry), 0.1 mm
+    # elements. Hertz (line contact): a = sqrt(4 P R / (pi E*)), p = p0 sqrt(1 - x^2/a^2),
+    # p0 = 2 P / (pi a), with P the force per unit length, which the run gives.
+    young, nu, radius, h = 210e3, 0.3, 10.0, 0.1
+    material = Material(young, nu, Hill48.von_mises(), Swift(1e7, 0.01, 0.0))
+    mesh = HexMesh.box(6.0, h, 4.0, 60, 1, 40, origin=(0.0, 0.0, -4.0))
+    phi = np.radians(np.linspace(-40.0, 40.0, 65))
+    m = phi.size
+    rim = np.column_stack([radius * np.sin(phi), radius * (1.0 - np.cos(phi))])
+    normal = np.column_stack([np.sin(phi), -np.cos(phi)])  # outward of the cylinder: down
+    vertices = np.vstack([np.column_stack([rim[:, 0], np.full(m, y), rim[:, 1]])
+                          for y in (-1.0, 1.0)])
+    normals = np.vstack([np.column_stack([normal[:, 0], np.zeros(m), normal[:, 1]])] * 2)
+    i = np.arange(m - 1)
+    cylinder = NagataSurface(vertices, normals, np.column_stack([i + m, i + 1 + m, i + 1, i]))
+    top = mesh.select(z=0.0)
+    problem = FormingProblem(Solid(mesh, material),
+                             [RigidTool("cylinder", cylinder, top, facing=(0, 0, 1))])
+    problem.fix(mesh.select(x=0.0), "x")
+    problem.fix(np.arange(mesh.n_nodes), "y")
+    problem.fix(mesh.select(z=-4.0), "z")
+    result = problem.run({"cylinder": (0, 0, -0.02)}, max_increment=0.01)
+    load = 2.0 * result.tool_forces["cylinder"][-1][2] / h  # both halves, per unit length
+    half_width = np.sqrt(4.0 * load * radius / (np.pi * young / (1.0 - nu**2)))
+    peak = 2.0 * load / (np.pi * half_width)
+    x = mesh.nodes[top, 0]
+    columns = np.unique(x)
+    force = np.array([-problem.force[x == c, 2].sum() for c in columns])
+    width = np.where((columns == 0.0) | (columns == 6.0), h / 2, h)
+    pressure = force / (width * h)
+    inside = columns < 0.8 * half_width
+    hertz = peak * np.sqrt(1.0 - (columns[inside] / half_width) ** 2)
+    assert inside.sum() >= 3
+    np.testing.assert_allclose(pressure[inside], hertz, rtol=0.05)
+    # The contact ends within one element of a.
+    last = columns[force > 1e-9 * force.max()].max()
+    assert abs(last - half_width) < h

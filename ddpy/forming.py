@@ -36,11 +36,15 @@ __all__ = ["RigidTool", "FormingProblem", "FormingResult", "FormingError", "Incr
 class IncrementLimits:
     """Limits of the r_min increment control (docs/theory/contact.md). An increment is
     scaled by r_min = min(1, r_i) over: ``strain``, the largest equivalent strain increment
-    at a Gauss point; ``first_touch``, a free node that would pass through a tool (it lands
-    on it instead; gaps below ``touch_gap`` times the element size count as touching). No
-    increment is made smaller than ``min_fraction`` of the nominal one."""
+    at a Gauss point; ``yield_tolerance``, the elasto-plastic transition: a Gauss point
+    elastic at the start of the increment whose elastic trial stress would overshoot the
+    yield stress by more than this fraction makes the increment land it on the yield
+    surface (None: off); ``first_touch``, a free node that would pass through a tool (it
+    lands on it instead; gaps below ``touch_gap`` times the element size count as
+    touching). No increment is made smaller than ``min_fraction`` of the nominal one."""
 
     strain: float = 0.02
+    yield_tolerance: float | None = 0.05
     first_touch: bool = True
     touch_gap: float = 1e-3
     min_fraction: float = 1e-3
@@ -106,7 +110,7 @@ class FormingResult:
 
     factors: list[float] = field(default_factory=list)
     sizes: list[float] = field(default_factory=list)
-    #: what set each increment: "max", "touch", "strain" or "cut"
+    #: what set each increment: "max", "touch", "strain", "yield" or "cut"
     limited_by: list[str] = field(default_factory=list)
     tool_displacements: dict[str, list[NDArray[np.float64]]] = field(default_factory=dict)
     tool_forces: dict[str, list[NDArray[np.float64]]] = field(default_factory=dict)
@@ -286,8 +290,14 @@ class FormingProblem:
             positions = {n: start[n] + target * moves[n] for n in start}
             for name, (other, offset) in offsets.items():
                 positions[name] = positions[other] + offset
+            landing = None if (limits.yield_tolerance is None or
+                               step <= limits.min_fraction * nominal) else limits.yield_tolerance
             outcome = self._increment(layout, solver, positions, on, tol_force, tol_disp,
-                                      max_iterations, result.timings)
+                                      max_iterations, result.timings, landing)
+            if isinstance(outcome, float):  # an elastic point would overshoot the yield stress
+                step = max(step * outcome, limits.min_fraction * nominal)
+                reason = "yield"
+                continue
             if isinstance(outcome, str):
                 cuts_in_row += 1
                 result.cuts += 1
@@ -302,6 +312,7 @@ class FormingProblem:
                 step = max(step * limits.strain / strain, limits.min_fraction * nominal)
                 reason = "strain"
                 continue
+
             last_du = (u - self.u) / (target - factor)
             self.u, self.state, self.force, self._gap = u, state, force, gap
             self.position = positions
@@ -474,8 +485,11 @@ class FormingProblem:
     def _increment(self, layout: _Layout, solver: MumpsSolver,
                    positions: Mapping[str, NDArray[np.float64]], on: NDArray[np.bool_],
                    tol_force: float, tol_disp: float, max_iterations: int,
-                   timings: dict[str, float]):
-        """Newton iterations of one increment; the new state, or the reason of failure.
+                   timings: dict[str, float], yield_tolerance: float | None = None):
+        """Newton iterations of one increment; the new state, or the reason of failure, or
+        (with ``yield_tolerance``) the fraction of the increment at which the first elastic
+        Gauss point reaches the yield surface, from the strains of the first (elastic
+        predictor) iteration, when that fraction is below 1.
 
         The semi-smooth Newton step is globalized by backtracking on the residual norm: a
         node switching between stick and slip (or contact and release) at every iteration
@@ -531,11 +545,55 @@ class FormingProblem:
                 return trial
             u, force, current = trial_u, trial_force, trial
             correction = alpha * float(np.linalg.norm(du))
+            if iteration == 0 and yield_tolerance is not None:
+                landing = _yield_factor(solid.props, self.state, trial[3].state,
+                                        yield_tolerance)
+                if landing < 1.0:
+                    return landing
         return "no convergence"
 
     def close(self) -> None:
         """Free the MUMPS instance."""
         self._reset()
+
+
+def _yield_factor(props: NDArray[np.float64], before: SolidState, after: SolidState,
+                  tolerance: float) -> float:
+    """Fraction of the increment at which the first Gauss point that was elastic reaches
+    the yield surface, if its elastic trial stress overshoots it by more than
+    ``tolerance``; 1 otherwise. ``after`` is the state of the elastic predictor. The
+    Hill'48 form is quadratic, so along the elastic trial path sigma_n + r C de the
+    landing r solves a quadratic."""
+    young, nu = props[0], props[1]
+    f, g, h, l_, m, n = props[2:8]
+    lam = young * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))
+    mu = young / (2.0 * (1.0 + nu))
+    de = after.strain - before.strain
+    ds = np.empty_like(de)
+    ds[..., :3] = lam * de[..., :3].sum(axis=-1, keepdims=True) + 2.0 * mu * de[..., :3]
+    ds[..., 3:] = mu * de[..., 3:]
+
+    def form(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The symmetric bilinear form of 2 f(sigma) (Voigt 11 22 33 12 23 31)."""
+        return (f * (a[..., 1] - a[..., 2]) * (b[..., 1] - b[..., 2])
+                + g * (a[..., 2] - a[..., 0]) * (b[..., 2] - b[..., 0])
+                + h * (a[..., 0] - a[..., 1]) * (b[..., 0] - b[..., 1])
+                + 2.0 * (n * a[..., 3] * b[..., 3] + l_ * a[..., 4] * b[..., 4]
+                         + m * a[..., 5] * b[..., 5]))
+
+    ep = before.ep
+    law, k1, k2, k3 = props[8], props[9], props[10], props[11]
+    y = k1 * (k2 + ep) ** k3 if law == 1.0 else k1 + k2 * (1.0 - np.exp(-k3 * ep))
+    a, b = before.stress, ds
+    qa, qab, qb = form(a, a), form(a, b), form(b, b)
+    elastic = qa < y**2 * (1.0 - 1e-9)
+    over = elastic & (qa + 2.0 * qab + qb > (y * (1.0 + tolerance)) ** 2) & (qb > 0.0)
+    if not over.any():
+        return 1.0
+    # q(a + r b) = y^2: r = (-qab + sqrt(qab^2 - qb (qa - y^2))) / qb, in (0, 1).
+    disc = np.maximum(qab[over] ** 2 - qb[over] * (qa[over] - y[over] ** 2), 0.0)
+    r = (-qab[over] + np.sqrt(disc)) / qb[over]
+    return float(np.clip(r.min() * (1.0 + tolerance / 2.0), 1e-6, 1.0))
 
 
 def _equivalent_strain_increment(delta: NDArray[np.float64]) -> float:

@@ -257,3 +257,20 @@ def test_frictionless_cylinder_into_a_plate_gives_the_hertz_pressure() -> None:
     # The contact ends within one element of a.
     last = columns[force > 1e-9 * force.max()].max()
     assert abs(last - half_width) < h
+
+
+def test_increment_lands_on_the_yield_surface() -> None:
+    # A steel block (Y0 = 645.3 * 0.0102^0.252 = 203 MPa, nu = 0: uniaxial stress) squeezed
+    # by 2 um steps: the first step that would yield stops where the block reaches Y0.
+    steel = Material(210e3, 0.0, Hill48.von_mises(), Swift(645.3, 0.0102, 0.252))
+    mesh = HexMesh.box(1.0, 1.0, 0.5, 2, 2, 2, origin=(-0.5, -0.5, 0.0))
+    tool = RigidTool("plane", plane_tool(), mesh.select(z=0.0), facing=(0, 0, -1))
+    problem = FormingProblem(Solid(mesh, steel), [tool])
+    problem.fix(mesh.select(z=0.5), "xyz")
+    result = problem.run({"plane": (0, 0, 6e-3)}, max_increment=2e-3,
+                         limits=IncrementLimits(yield_tolerance=0.02))
+    first_yield = result.limited_by.index("yield")
+    force = -result.tool_forces["plane"][first_yield][2]
+    y0 = 645.3 * 0.0102**0.252
+    assert y0 <= force <= 1.02 * y0
+    assert result.tool_displacements["plane"][-1][2] == pytest.approx(6e-3)

@@ -360,21 +360,73 @@ class FormingProblem:
             out[name] = (other, offset)
         return out
 
+    def free_rigid_modes(self) -> int:
+        """How many rigid-body motions of the blank the fixed dofs leave free."""
+        return 6 - int(np.linalg.matrix_rank(self._restrained_modes(self.fixed), tol=1e-9))
+
+    def _restrained_modes(self, fixed: NDArray[np.bool_]) -> NDArray[np.float64]:
+        """Rows: the six rigid modes (unit translations and rotations about the centroid,
+        scaled by the blank's size) at every fixed dof."""
+        x = self.solid.mesh.nodes + self.u
+        x = (x - x.mean(axis=0)) / max(float(np.ptp(x, axis=0).max()), 1e-300)
+        modes = np.zeros((x.shape[0], 3, 6))
+        for axis in range(3):
+            modes[:, axis, axis] = 1.0
+            modes[:, :, 3 + axis] = np.cross(np.eye(3)[axis], x)
+        rows = modes.reshape(-1, 6)[fixed.ravel()]
+        return rows if rows.size else np.zeros((1, 6))
+
+    def support_rigid_modes(self) -> list[tuple[int, int]]:
+        """Fix the fewest dofs (a 3-2-1 set on three far apart nodes of the deformed blank)
+        that stop the rigid-body motions the present constraints leave free. Returns the
+        (node, component) pairs fixed."""
+        x = self.solid.mesh.nodes + self.u
+        first = int(np.argmin(np.linalg.norm(x - x.mean(axis=0), axis=1)))
+        second = int(np.argmax(np.linalg.norm(x - x[first], axis=1)))
+        along = (x[second] - x[first]) / np.linalg.norm(x[second] - x[first])
+        off = (x - x[first]) - np.outer((x - x[first]) @ along, along)
+        third = int(np.argmax(np.linalg.norm(off, axis=1)))
+        added: list[tuple[int, int]] = []
+        fixed = self.fixed.copy()
+        rank = np.linalg.matrix_rank(self._restrained_modes(fixed), tol=1e-9)
+        for node in (first, second, third):
+            for comp in range(3):
+                if rank == 6 or fixed[node, comp]:
+                    continue
+                fixed[node, comp] = True
+                new_rank = np.linalg.matrix_rank(self._restrained_modes(fixed), tol=1e-9)
+                if new_rank > rank:
+                    rank = new_rank
+                    added.append((node, comp))
+                else:
+                    fixed[node, comp] = False
+        if rank < 6:
+            raise ValueError("could not find supports that stop every rigid-body motion")
+        for node, comp in added:
+            self.fix([node], comp)
+        return added
+
     def springback(self, increments: int = 5, tol_force: float = 1e-6,
                    tol_disp: float = 1e-6, max_iterations: int = 25,
                    result: FormingResult | None = None) -> FormingResult:
-        """Remove the tools and let the blank unload. The contact forces at the end of
-        forming become nodal loads on the slaves, brought to zero in ``increments`` steps
-        (unloading is elastic unless it yields in reverse), with the tools lifted off. Keep
-        only the constraints that stop rigid-body motion: ``release`` clamps and ``fix``
-        support points before calling (docs/theory/contact.md)."""
+        """Remove the tools and let the blank unload. The forces that held it at the end of
+        forming (contact forces, reactions of released clamps) become nodal loads, brought
+        to zero in ``increments`` steps (unloading is elastic unless it yields in reverse),
+        with the tools lifted off. Keep
+        only the constraints that stop rigid-body motion: ``release`` clamps first; if the
+        remaining constraints leave rigid motions free, ``support_rigid_modes`` adds a
+        3-2-1 set of supports (docs/theory/contact.md)."""
         if int(increments) < 1:
             raise ValueError(f"increments must be at least 1, got {increments}")
+        if self.free_rigid_modes():
+            self.support_rigid_modes()
         result = FormingResult() if result is None else result
         layout, solver = self._prepare()
-        loads = np.zeros_like(self.u)
-        np.add.at(loads, layout.node, self.force)
-        loads[self.fixed] = 0.0  # a support takes its share directly
+        # The blank is in equilibrium under the tools and the supports it had: its internal
+        # forces are those loads. Every one on a dof that is free now (contact forces, and
+        # reactions of released clamps) is brought to zero.
+        loads, _ = self.solid.internal_force(self.u, self.state)
+        loads[self.fixed] = 0.0
         self.force = np.zeros_like(self.force)
         off = np.zeros(layout.node.size, dtype=bool)
         try:

@@ -274,3 +274,27 @@ def test_increment_lands_on_the_yield_surface() -> None:
     y0 = 645.3 * 0.0102**0.252
     assert y0 <= force <= 1.02 * y0
     assert result.tool_displacements["plane"][-1][2] == pytest.approx(6e-3)
+
+
+def test_springback_supports_only_the_rigid_modes() -> None:
+    # Steel squeezed between the plane and the clamp, yielding; the clamp is released and
+    # the block springs back with a 3-2-1 set of supports found automatically.
+    steel = Material(210e3, 0.3, Hill48.von_mises(), Swift(645.3, 0.0102, 0.252))
+    mesh = HexMesh.box(1.0, 1.0, 0.5, 2, 2, 2, origin=(-0.5, -0.5, 0.0))
+    tool = RigidTool("plane", plane_tool(), mesh.select(z=0.0), facing=(0, 0, -1))
+    problem = FormingProblem(Solid(mesh, steel), [tool])
+    top = mesh.select(z=0.5)
+    problem.fix(top, "xyz")
+    problem.run({"plane": (0, 0, 5e-3)}, max_increment=1e-3)
+    assert problem.state.ep.max() > 1e-3
+    problem.release(top)
+    assert problem.free_rigid_modes() == 6
+    before = problem.u.copy()
+    problem.springback(increments=2)
+    assert problem.free_rigid_modes() == 0
+    assert int(problem.fixed.sum()) == 6  # 3 + 2 + 1 dofs, nothing more
+    # The tool forces are gone: the block is in equilibrium with no load, so the
+    # supports carry nothing; it springs back by the elastic part only.
+    fint, _ = problem.solid.internal_force(problem.u, problem.state)
+    assert np.abs(fint).max() < 1e-6 * 203.0
+    assert 0.0 < np.abs(problem.u - before).max() < 2e-3

@@ -36,7 +36,9 @@ __all__ = ["RigidTool", "FormingProblem", "FormingResult", "FormingError", "Incr
 class IncrementLimits:
     """Limits of the r_min increment control (docs/theory/contact.md). An increment is
     scaled by r_min = min(1, r_i) over: ``strain``, the largest equivalent strain increment
-    at a Gauss point; ``yield_tolerance``, the elasto-plastic transition: a Gauss point
+    at a Gauss point; ``rotation_deg``, the largest rigid rotation of an element (from the
+    least-squares linear fit of its nodes' displacement increments); ``yield_tolerance``,
+    the elasto-plastic transition: a Gauss point
     elastic at the start of the increment whose elastic trial stress would overshoot the
     yield stress by more than this fraction makes the increment land it on the yield
     surface (None: off); ``first_touch``, a free node that would pass through a tool (it
@@ -44,6 +46,7 @@ class IncrementLimits:
     touching). No increment is made smaller than ``min_fraction`` of the nominal one."""
 
     strain: float = 0.02
+    rotation_deg: float = 5.0
     yield_tolerance: float | None = 0.05
     first_touch: bool = True
     touch_gap: float = 1e-3
@@ -52,6 +55,9 @@ class IncrementLimits:
     def __post_init__(self) -> None:
         if not 0.0 < self.strain < 1.0:
             raise ValueError(f"strain limit must lie in (0, 1), got {self.strain}")
+        if not 0.0 < self.rotation_deg <= 90.0:
+            raise ValueError(f"rotation limit must lie in (0, 90] degrees, got "
+                             f"{self.rotation_deg}")
         if not 0.0 < self.min_fraction <= 1.0 or not self.touch_gap >= 0.0:
             raise ValueError("min_fraction must lie in (0, 1] and touch_gap be >= 0")
 
@@ -110,11 +116,13 @@ class FormingResult:
 
     factors: list[float] = field(default_factory=list)
     sizes: list[float] = field(default_factory=list)
-    #: what set each increment: "max", "touch", "strain", "yield" or "cut"
+    #: what set each increment: "max", "touch", "strain", "rotation", "yield" or "cut"
     limited_by: list[str] = field(default_factory=list)
     tool_displacements: dict[str, list[NDArray[np.float64]]] = field(default_factory=dict)
     tool_forces: dict[str, list[NDArray[np.float64]]] = field(default_factory=dict)
     contacts: dict[str, list[int]] = field(default_factory=dict)
+    #: per tool and increment, the state of every slave: 0 open, 1 stick, 2 slip
+    status: dict[str, list[NDArray[np.int32]]] = field(default_factory=dict)
     residuals: list[list[float]] = field(default_factory=list)
     displacements: list[NDArray[np.float64]] = field(default_factory=list)
     cuts: int = 0
@@ -273,6 +281,7 @@ class FormingProblem:
             result.tool_displacements.setdefault(t.name, [])
             result.tool_forces.setdefault(t.name, [])
             result.contacts.setdefault(t.name, [])
+            result.status.setdefault(t.name, [])
         layout, solver = self._prepare()
         on = np.concatenate([np.full(t.slaves.size, t.name in active_set) for t in self.tools])
         start = {name: p.copy() for name, p in self.position.items()}
@@ -281,6 +290,13 @@ class FormingProblem:
         last_du: NDArray[np.float64] | None = None
         x = self.solid.mesh.nodes + self.u  # gaps at the start of the phase, for first touch
         self._gap = self._contact(layout, x, x, self.position, on, self.force)[4]
+        deep = on & (self._gap[0] < -0.5 * self.size)
+        if deep.any():
+            name = self.tools[int(layout.tool_of[np.flatnonzero(deep)[0]])].name
+            raise ValueError(
+                f"tool {name} starts inside the blank: slave node "
+                f"{int(layout.node[np.flatnonzero(deep)[0]])} is "
+                f"{-float(self._gap[0][deep].min()):.3g} mm deep; move the tool out first")
         while factor < 1.0 - 1e-12:
             if limits.first_touch and reason != "cut":
                 touch = self._touch_factor(layout, on, moves, step, last_du, limits)
@@ -312,6 +328,12 @@ class FormingProblem:
                 step = max(step * limits.strain / strain, limits.min_fraction * nominal)
                 reason = "strain"
                 continue
+            rotation = self._rotation_increment(u - self.u)
+            limit = np.radians(limits.rotation_deg)
+            if rotation > 1.05 * limit and step > limits.min_fraction * nominal:
+                step = max(step * limit / rotation, limits.min_fraction * nominal)
+                reason = "rotation"
+                continue
 
             last_du = (u - self.u) / (target - factor)
             self.u, self.state, self.force, self._gap = u, state, force, gap
@@ -326,7 +348,8 @@ class FormingProblem:
                 pairs = slice(layout.first[i], layout.first[i + 1])
                 result.tool_displacements[t.name].append(positions[t.name].copy())
                 result.tool_forces[t.name].append(-force[pairs].sum(axis=0))
-                result.contacts[t.name].append(int(in_contact[pairs].sum()))
+                result.contacts[t.name].append(int((in_contact[pairs] != INACTIVE).sum()))
+                result.status[t.name].append(in_contact[pairs].copy())
             cuts_in_row = 0
             step, reason = min(nominal, 2.0 * step), "max"  # grow back after limits
         return result
@@ -445,6 +468,20 @@ class FormingProblem:
         finally:
             self.external = np.zeros_like(self.u)
         return result
+
+    def _rotation_increment(self, du: NDArray[np.float64]) -> float:
+        """Largest element rotation (radians) of a displacement increment: the axial vector
+        of the skew part of the gradient of the linear field that fits each element's nodal
+        increments in least squares."""
+        x = self.solid.mesh.nodes + self.u
+        elements = self.solid.mesh.elements
+        coords = x[elements] - x[elements].mean(axis=1, keepdims=True)   # (m, 8, 3)
+        moves = du[elements] - du[elements].mean(axis=1, keepdims=True)  # (m, 8, 3)
+        gram = np.einsum("mai,maj->mij", coords, coords)
+        gradient = np.linalg.solve(gram, np.einsum("mai,maj->mij", coords, moves))
+        skew = 0.5 * (gradient - gradient.transpose(0, 2, 1))
+        axial = np.stack([skew[:, 1, 2], skew[:, 2, 0], skew[:, 0, 1]], axis=1)
+        return float(np.linalg.norm(axial, axis=1).max()) if len(axial) else 0.0
 
     def _touch_factor(self, layout: _Layout, on: NDArray[np.bool_],
                       moves: Mapping[str, NDArray[np.float64]], step: float,
@@ -568,7 +605,7 @@ class FormingProblem:
                 np.where(self.fixed.ravel(), out.fint.ravel(), 0.0))), floor)
             step = float(np.linalg.norm(u - u_n))
             if norm <= tol_force * scale and correction <= tol_disp * max(step, 1e-9 * self.size):
-                return u, out.state, force, residuals, (state != INACTIVE) & on, gap
+                return u, out.state, force, residuals, np.where(on, state, INACTIVE), gap
             if iteration == max_iterations:
                 return f"no convergence in {max_iterations} iterations"
             tick = time.perf_counter()

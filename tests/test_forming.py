@@ -7,6 +7,7 @@ from math import comb
 import numpy as np
 import pytest
 
+from ddpy.contact import SLIP, STICK
 from ddpy.forming import FormingProblem, IncrementLimits, RigidTool
 from ddpy.material import Hill48, Material, Swift
 from ddpy.mesh import HexMesh
@@ -47,10 +48,12 @@ def test_block_sticks_below_and_slips_above_coulomb() -> None:
     tangential = abs(result.tool_forces["plane"][-1][0])
     assert 0.0 < tangential < mu * normal
     np.testing.assert_allclose(problem.u[bottom, 0], 2e-5, rtol=1e-9)
+    assert (result.status["plane"][-1] == STICK).all()
     # A large one: every node slips and the friction force is mu N exactly.
     result = problem.run({"plane": (2e-3, 0, 0)}, max_increment=5e-4, result=result,
                          tol_force=1e-11)
     force = result.tool_forces["plane"][-1]
+    assert (result.status["plane"][-1] == SLIP).all()
     # Every node slips: its tangential force is mu times its normal force...
     node = problem.force
     np.testing.assert_allclose(np.hypot(node[:, 0], node[:, 1]), mu * node[:, 2], rtol=1e-9)
@@ -298,3 +301,17 @@ def test_springback_supports_only_the_rigid_modes() -> None:
     fint, _ = problem.solid.internal_force(problem.u, problem.state)
     assert np.abs(fint).max() < 1e-6 * 203.0
     assert 0.0 < np.abs(problem.u - before).max() < 2e-3
+
+
+def test_rotation_increment_and_a_tool_inside_the_blank() -> None:
+    problem, mesh = block_on_plane(0.0)
+    angle = np.radians(2.0)
+    x = mesh.nodes
+    rotated = x @ np.array([[np.cos(angle), np.sin(angle), 0], [-np.sin(angle), np.cos(angle), 0],
+                            [0, 0, 1.0]])
+    # A rigid rotation by a small angle: the increment's rotation is its tangent-ish angle.
+    assert problem._rotation_increment(rotated - x) == pytest.approx(np.sin(angle), rel=1e-9)
+    # A phase that starts with the tool 0.3 mm inside the 0.5 mm block is refused.
+    problem.position["plane"] = np.array([0.0, 0.0, 0.3])
+    with pytest.raises(ValueError, match="starts inside the blank"):
+        problem.run({"plane": (0, 0, 0.1)}, max_increment=0.05)

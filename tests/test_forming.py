@@ -315,3 +315,23 @@ def test_rotation_increment_and_a_tool_inside_the_blank() -> None:
     problem.position["plane"] = np.array([0.0, 0.0, 0.3])
     with pytest.raises(ValueError, match="starts inside the blank"):
         problem.run({"plane": (0, 0, 0.1)}, max_increment=0.05)
+
+
+@pytest.mark.parametrize("kind", ["nagata", "bezier"])
+def test_quadratic_convergence_sliding_with_friction_over_a_curved_tool(kind: str) -> None:
+    # The curvature term of the tangent at work: nodes slip over a cylinder crest.
+    mesh = HexMesh.box(2.0, 1.0, 0.5, 8, 2, 2, origin=(-1.0, -0.5, 0.0))
+    tool = RigidTool("cylinder", cylinder_crest(kind, 8 if kind == "nagata" else 4),
+                     mesh.select(z=0.0), friction=0.15, facing=(0, 0, -1))
+    problem = FormingProblem(Solid(mesh, ELASTIC), [tool])
+    problem.fix(mesh.select(z=0.5), "xyz")
+    result = problem.run({"cylinder": (0, 0, 0.02)}, max_increment=0.02)
+    result = problem.run({"cylinder": (0.2, 0, 0)}, max_increment=0.05, result=result,
+                         tol_force=1e-12)
+    assert (result.status["cylinder"][-1] == SLIP).sum() >= 3
+    rates = []
+    for history in result.residuals[-3:]:
+        tail = [r for r in history if r > 1e-13 * history[0]]
+        if len(tail) >= 3:
+            rates.append(np.log(tail[-1] / tail[-2]) / np.log(tail[-2] / tail[-3]))
+    assert rates and max(rates) > 1.7, (rates, result.residuals[-3:])

@@ -56,7 +56,7 @@ contains
         return
       end if
     end do
-    !$omp parallel do schedule(static)
+    !$omp parallel do schedule(static) if(npatch > 256)
     do p = 1, npatch
       call bezier_power_coefficients(degrees(1, p), degrees(2, p), control(:, :, :, p), &
                                      coef(:, :, :, p))
@@ -123,7 +123,7 @@ contains
         return
       end if
     end do
-    !$omp parallel do schedule(static) private(nv, x, c)
+    !$omp parallel do schedule(static) private(nv, x, c) if(nface > 256)
     do f = 1, nface
       nv = merge(3, 4, faces(4, f) < 0)
       x = 0.0_wp

@@ -27,7 +27,7 @@ contains
     integer(c_int), intent(out) :: plastic(k), status(k)
     integer :: i, point_status
     logical :: yielded
-    !$omp parallel do schedule(static) private(yielded, point_status)
+    !$omp parallel do schedule(static) private(yielded, point_status) if(k > 256)
     do i = 1, k
       call material_update(props, stress_old(:, i), ep_old(i), strain_increment(:, i), &
                            stress(:, i), ep(i), tangent(:, :, i), yielded, point_status)

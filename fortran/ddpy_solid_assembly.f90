@@ -35,7 +35,7 @@ contains
     real(wp), intent(in) :: x(3, nn)
     real(wp), intent(out) :: detj(16, ne)
     integer :: e
-    !$omp parallel do schedule(static)
+    !$omp parallel do schedule(static) if(ne > 256)
     do e = 1, ne
       call hex8_jacobians(x(:, conn(:, e)), detj(:, e))
     end do
@@ -48,7 +48,7 @@ contains
     logical, intent(in) :: symmetric
     integer, intent(out) :: counts(ne)
     integer :: e, nfree
-    !$omp parallel do schedule(static) private(nfree)
+    !$omp parallel do schedule(static) private(nfree) if(ne > 256)
     do e = 1, ne
       nfree = count(element_equations(conn(:, e), nn, eqn) >= 0)
       if (symmetric) then
@@ -67,7 +67,7 @@ contains
     logical, intent(in) :: symmetric
     integer, intent(out) :: rows(nz), cols(nz)
     integer :: e, i, j, pos, eq(24)
-    !$omp parallel do schedule(static) private(i, j, pos, eq)
+    !$omp parallel do schedule(static) private(i, j, pos, eq) if(ne > 256)
     do e = 1, ne
       eq = element_equations(conn(:, e), nn, eqn)
       pos = offsets(e)
@@ -119,7 +119,7 @@ contains
     else
       allocate (ke_dp(24, 1))
     end if
-    !$omp parallel do schedule(dynamic, 16)
+    !$omp parallel do schedule(dynamic, 16) if(ne > 256)
     do e = 1, ne
       call assemble_element(e, nn, x, ne, conn, u, props, angle, stress_old, ep_old, &
                             strain_old, eqn, symmetric, want_tangent, offsets, nz, values, &
@@ -204,7 +204,7 @@ contains
     integer, allocatable :: estatus(:)
     integer :: e
     allocate (estatus(ne))
-    !$omp parallel do schedule(static)
+    !$omp parallel do schedule(static) if(ne > 256)
     do e = 1, ne
       call hex8_stresses(x(:, conn(:, e)), u(:, conn(:, e)), strain_rotation(angle(e)), &
                          stress_mat(:, :, e), pk2(:, :, e), cauchy(:, :, e), &

@@ -112,7 +112,7 @@ def cylinder_crest(kind: str, segments: int, radius: float = 10.0) -> BezierSurf
 def slide_over_cylinder(kind: str, segments: int) -> tuple[np.ndarray, list[int]]:
     """A 4 mm block clamped at its top, pressed 30 um into the crest, which then slides 2 mm
     under it: the normal force every 0.02 mm of the slide, and the iterations."""
-    mesh = HexMesh.box(4.0, 1.0, 0.5, 32, 2, 2, origin=(-2.0, -0.5, 0.0))
+    mesh = HexMesh.box(4.0, 1.0, 0.5, 32, 1, 2, origin=(-2.0, -0.5, 0.0))
     tool = RigidTool("cylinder", cylinder_crest(kind, segments), mesh.select(z=0.0),
                      facing=(0, 0, -1))
     problem = FormingProblem(Solid(mesh, ELASTIC), [tool])

@@ -6,7 +6,8 @@ nodes spread like a blank a few mm above it (some penetrating). Measures, on 1 a
 threads, projections and nodes per second for a ~5,000-patch tool and 30,000 nodes, the
 set-up / query split, the Newton iterations, and the query cost for tools of 1e2 to 1e5
 patches. Without flags, writes ``contact_search.md`` and two PNGs to ``docs/benchmarks``
-(or ``--out DIR``); with ``--json``, prints only the numbers as JSON and writes nothing.
+(or ``--out DIR``); with ``--json``, prints only the numbers as JSON and writes nothing;
+``--render FILE`` writes the report from numbers saved with ``--json``.
 """
 
 from __future__ import annotations
@@ -186,7 +187,7 @@ def min_radius_of_curvature(samples: int = 400) -> float:
 # --------------------------------------------------------------------------- timing
 
 
-Times = dict[Any, dict[str, float]]
+Times = dict[Any, dict[str, Any]]
 
 
 def timings(calls: dict[Any, Callable[[], object]], repeats: int, warm_up: bool = True) -> Times:
@@ -204,7 +205,15 @@ def timings(calls: dict[Any, Callable[[], object]], repeats: int, warm_up: bool 
             call()
             wall[key].append(time.perf_counter() - start)
             cpu[key].append(time.process_time() - start_cpu)
-    return {key: {"wall": min(wall[key]), "cpu": min(cpu[key])} for key in calls}
+    return {key: {"wall": min(wall[key]), "cpu": min(cpu[key]), "walls": wall[key],
+                  "cpus": cpu[key]} for key in calls}
+
+
+def paired(times: Times, a: Any, b: Any, kind: str, combine: Callable[..., Any]) -> float:
+    """Median over the rounds of ``combine(time of a, time of b)`` in the same round: calls
+    timed next to each other see the same speed of the machine, which drifts."""
+    return float(np.median([combine(x, y) for x, y in zip(times[a][kind], times[b][kind],
+                                                          strict=True)]))
 
 
 def with_threads(n: int, call: Callable[[], object]) -> Callable[[], object]:
@@ -305,8 +314,15 @@ def measure_main(description: str, nodes: int, repeats: int, check: int,
         its = {m: int(c.project(points).iterations.sum()) for m, c in capped.items()}
     projections = int(found.candidates.sum())
     # From CPU times (1 thread): a difference of two runs must not carry the load of others.
-    per_iteration = (t["newton_12", 1]["cpu"] - t["newton_1", 1]["cpu"]) / max(its[12] - its[1], 1)
-    local = per_iteration * (int(found.iterations.sum()) + projections)  # + final evaluation
+    # Per round (the machine's speed drifts between rounds), then the median: the cost of an
+    # iteration, and the local search (iterations + one final evaluation per projection) as
+    # a share of the query of the same round.
+    steps = int(found.iterations.sum()) + projections
+    per_round = [(c12 - c1) / max(its[12] - its[1], 1) for c12, c1 in
+                 zip(t["newton_12", 1]["cpus"], t["newton_1", 1]["cpus"], strict=True)]
+    per_iteration = float(np.median(per_round))
+    share = float(np.median([c * steps / q for c, q in
+                             zip(per_round, t["query", 1]["cpus"], strict=True)]))
 
     sample = rng.choice(nodes, size=min(check, nodes), replace=False)
     brute = search.project(points[sample], brute_force=True)
@@ -316,6 +332,7 @@ def measure_main(description: str, nodes: int, repeats: int, check: int,
 
     error = np.abs(found.distance - gap)
     query_cpu = t["query", 1]["cpu"]
+    local = share * query_cpu
     result: dict[str, Any] = {
         "patches": int(surface.n_patches), "nodes": nodes, "model_build_s": build_s,
         "setup_s": t["setup", 1]["wall"], "setup_cpu_s": t["setup", 1]["cpu"],
@@ -337,7 +354,9 @@ def measure_main(description: str, nodes: int, repeats: int, check: int,
         result[str(n)] = {"query_s": q, "query_cpu_s": t["query", n]["cpu"],
                           "projections_per_s": projections / q, "nodes_per_s": nodes / q,
                           "us_per_node": q / nodes * 1e6}
-    result["speedup"] = t["query", 1]["wall"] / t["query", 2]["wall"]
+    # 1 and 2 threads run next to each other in every round: the median of their ratios.
+    result["speedup"] = paired(t, ("query", 1), ("query", 2), "walls", lambda a, b: a / b)
+    result["speedup_best_of"] = t["query", 1]["wall"] / t["query", 2]["wall"]
     result["cpus_obtained_2_threads"] = t["query", 2]["cpu"] / t["query", 2]["wall"]
     result["one_node_call_us"] = single["wall"] * 1e6
     result["search_s"] = {str(n): t["setup", 1]["wall"] + t["query", n]["wall"] for n in THREADS}
@@ -345,55 +364,75 @@ def measure_main(description: str, nodes: int, repeats: int, check: int,
     return result
 
 
-def measure_tool(variant: str, description: str, patches: int, nodes: int, repeats: int,
-                 rng: np.random.Generator) -> dict[str, dict[str, Any]]:
-    """Set-up time and query time per node (1 thread) for a tool of about ``patches``.
+def measure_series(variant: str, description: str, nodes: int, repeats: int,
+                   rng: np.random.Generator) -> dict[str, list[dict[str, Any]]]:
+    """Set-up time and query time per node (1 thread) for tools of SCALING_PATCHES patches.
 
     ``grow``: patches of the main case's size on a die that grows with their number; the
-    nodes lie either over a fixed window (the whole 100-patch tool, the same in every tool:
-    the algorithmic cost) or spread over the whole tool (fewer nodes per patch as the tool
-    grows: adds the memory traffic). ``refine``: the 200 mm die in ever smaller patches,
-    nodes over all of it, the gaps scaled with the patch size. Returns one row per node set.
+    nodes lie either over a fixed window (the whole 100-patch tool, the same nodes for every
+    tool: the algorithmic cost) or spread over the whole tool (fewer nodes per patch as the
+    tool grows: adds the memory traffic). ``refine``: the 200 mm die in ever smaller
+    patches, nodes over all of it, the gaps scaled with the patch size. All tools are built
+    first and timed in interleaved rounds, so that a drift of the machine's speed during
+    the series does not tilt the slope. Returns the rows of each node set.
     """
     meter = LoadMeter()
-    cells = cells_for(description, patches)
-    edge = cell_edge(description) if variant == "grow" else SIDE / cells
-    side = cells * edge
-    start = time.perf_counter()
-    surface = build_surface(description, cells, side)
-    build_s = time.perf_counter() - start
-    scale = edge / cell_edge(description)
-    low = margin(scale)
-    if variant == "grow":
-        window = cells_for(description, SCALING_PATCHES[0]) * edge
-        node_sets = {"window": blank_nodes(nodes, low, window - low, scale, rng)[0],
-                     "spread": blank_nodes(nodes, low, side - low, scale, rng)[0]}
-    else:
-        node_sets = {"refine": blank_nodes(nodes, low, side - low, scale, rng)[0]}
-    search = ContactSearch(surface)  # the warm-up of the set-up
-    calls: dict[Any, Callable[[], object]] = {"setup": lambda: ContactSearch(surface)}
-    found = {}
-    with threads(1):
-        for name, points in node_sets.items():
-            found[name] = search.project(points)  # the warm-up of the query
-            calls[name] = with_threads(1, lambda p=points: search.project(p))
+    tools: dict[int, dict[str, Any]] = {}
+    for patches in SCALING_PATCHES:
+        cells = cells_for(description, patches)
+        edge = cell_edge(description) if variant == "grow" else SIDE / cells
+        side = cells * edge
+        start = time.perf_counter()
+        surface = build_surface(description, cells, side)
+        build_s = time.perf_counter() - start
+        scale = edge / cell_edge(description)
+        low = margin(scale)
+        if variant == "grow":
+            if not tools:
+                window = blank_nodes(nodes, low, side - low, scale, rng)[0]
+            node_sets = {"window": window,
+                         "spread": blank_nodes(nodes, low, side - low, scale, rng)[0]}
+        else:
+            node_sets = {"refine": blank_nodes(nodes, low, side - low, scale, rng)[0]}
+        tools[patches] = {"surface": surface, "side": side, "build_s": build_s,
+                          "search": ContactSearch(surface),  # the warm-up of the set-up
+                          "nodes": node_sets}
+    calls: dict[Any, Callable[[], object]] = {}
+    found: dict[Any, Any] = {}
+    for patches, tool in tools.items():
+        search = tool["search"]
+        calls[patches, "setup"] = lambda s=tool["surface"]: ContactSearch(s)
+        with threads(1):
+            for name, points in tool["nodes"].items():
+                found[patches, name] = search.project(points)  # the warm-up of the query
+                calls[patches, name] = with_threads(1, lambda c=search, p=points: c.project(p))
+        one = next(iter(tool["nodes"].values()))[:1]
+        calls[patches, "one"] = with_threads(1, lambda c=search, p=one: c.project(p))
     t = timings(calls, repeats, warm_up=False)
-    one = next(iter(node_sets.values()))[:1]
-    single = timings({"one": with_threads(1, lambda: search.project(one))}, 30)["one"]
+    # One call of a single node is too short for one timing: best of 30 more, interleaved.
+    ones = timings({key: call for key, call in calls.items() if key[1] == "one"}, 30)
     load = meter.value()
-    occupied = np.diff(search._cell_start)  # the spatial index (private: for the analysis)
-    per_cell = float(occupied[occupied > 0].mean())
-    return {name: {"patches": int(surface.n_patches), "side_mm": side, "nodes": nodes,
-                   "model_build_s": build_s, "setup_s": t["setup"]["wall"],
-                   "setup_cpu_s": t["setup"]["cpu"], "query_s": t[name]["wall"],
-                   "query_us_per_node": t[name]["wall"] / nodes * 1e6,
-                   "query_cpu_us_per_node": t[name]["cpu"] / nodes * 1e6,
-                   "mean_iterations": found[name].mean_iterations,
-                   "candidates_per_node": float(found[name].candidates.mean()),
-                   "none": int((found[name].status == NONE).sum()),
-                   "one_node_call_us": single["wall"] * 1e6,
-                   "index_points_per_cell": per_cell, "index_cell_mm": float(search._h),
-                   "other_processes_cpus": load} for name in node_sets}
+    rows: dict[str, list[dict[str, Any]]] = {}
+    for patches, tool in tools.items():
+        search = tool["search"]
+        occupied = np.diff(search._cell_start)  # the spatial index (private: for the analysis)
+        for name in tool["nodes"]:
+            result = found[patches, name]
+            rows.setdefault(name, []).append({
+                "patches": int(tool["surface"].n_patches), "side_mm": tool["side"],
+                "nodes": nodes, "model_build_s": tool["build_s"],
+                "setup_s": t[patches, "setup"]["wall"], "setup_cpu_s": t[patches, "setup"]["cpu"],
+                "query_s": t[patches, name]["wall"],
+                "query_us_per_node": t[patches, name]["wall"] / nodes * 1e6,
+                "query_cpu_us_per_node": t[patches, name]["cpu"] / nodes * 1e6,
+                "mean_iterations": result.mean_iterations,
+                "candidates_per_node": float(result.candidates.mean()),
+                "none": int((result.status == NONE).sum()),
+                "one_node_call_us": min(ones[patches, "one"]["wall"], t[patches, "one"]["wall"])
+                * 1e6,
+                "index_points_per_cell": float(occupied[occupied > 0].mean()),
+                "index_cell_mm": float(search._h), "other_processes_cpus": load})
+    return rows
 
 
 def fit_slope(patches: list[int], values: list[float]) -> float:
@@ -441,10 +480,10 @@ class Quiet:
 
 
 def load_of(result: dict[str, Any]) -> float:
-    """CPUs used by other processes during a measurement (the worst of its node sets)."""
+    """CPUs used by other processes during a measurement (or a series of them)."""
     if "other_processes_cpus" in result:
         return float(result["other_processes_cpus"])
-    return max(float(r["other_processes_cpus"]) for r in result.values())
+    return max(float(r["other_processes_cpus"]) for rows in result.values() for r in rows)
 
 
 def run(nodes: int, scaling_nodes: int, repeats: int, check: int, seed: int, refine: bool,
@@ -459,11 +498,10 @@ def run(nodes: int, scaling_nodes: int, repeats: int, check: int, seed: int, ref
     rows: dict[str, dict[str, list[dict[str, Any]]]] = {}
     for variant in ("grow", "refine") if refine else ("grow",):
         for description in DESCRIPTIONS:
-            for patches in SCALING_PATCHES:
-                measured = quiet.measure(lambda v=variant, d=description, p=patches: measure_tool(
-                    v, d, p, scaling_nodes, repeats, rng), 2)
-                for name, row in measured.items():
-                    rows.setdefault(name, {}).setdefault(description, []).append(row)
+            measured = quiet.measure(lambda v=variant, d=description: measure_series(
+                v, d, scaling_nodes, repeats, rng), 1)
+            for name, series in measured.items():
+                rows.setdefault(name, {})[description] = series
     info["loadavg_end"] = os.getloadavg()[0]
     info["other_processes_cpus"] = meter.value()
     return {"machine": info, "nodes": nodes, "scaling_nodes": scaling_nodes,
@@ -487,14 +525,15 @@ def throughput_table(numbers: dict[str, Any]) -> str:
     """Markdown: projections and nodes per second on 1 and 2 threads."""
     lines = ["| description | patches | projections per node | projections/s, 1 thread "
              "| projections/s, 2 threads | nodes/s, 1 thread | nodes/s, 2 threads "
-             "| speed-up | CPU time / wall time, 2 threads | other load [CPUs] |",
-             "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+             "| speed-up, paired / best | CPU time / wall time, 2 threads "
+             "| other load [CPUs] |", "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for name, r in numbers["main"].items():
         lines.append(
             f"| {name} | {r['patches']} | {r['candidates_per_node']:.2f} "
             f"| {fmt(r['1']['projections_per_s'])} | {fmt(r['2']['projections_per_s'])} "
             f"| {fmt(r['1']['nodes_per_s'])} | {fmt(r['2']['nodes_per_s'])} "
-            f"| {r['speedup']:.2f}x | {r['cpus_obtained_2_threads']:.2f} "
+            f"| {r['speedup']:.2f}x / {r['speedup_best_of']:.2f}x "
+            f"| {r['cpus_obtained_2_threads']:.2f} "
             f"| {r['other_processes_cpus']:.2f} |")
     return "\n".join(lines)
 
@@ -577,7 +616,12 @@ def findings(numbers: dict[str, Any]) -> list[str]:
                      "CPUs of CPU time per second, so a thread shared its CPU; the work "
                      "itself parallelizes (independent nodes, dynamic schedule; the fixed "
                      f"cost of a call, {r['one_node_call_us']:.0f} us, is {serial:.2f} % of "
-                     "the 1-thread query)" if load > 0.1 else "no other load was measured")
+                     "the 1-thread query)" if load > 0.1 else
+                     "no other load was measured and the query kept "
+                     f"{r['cpus_obtained_2_threads']:.2f} CPUs busy, so no thread waited on a "
+                     f"serial part (the fixed cost of a call, {r['one_node_call_us']:.0f} us, "
+                     f"is {serial:.2f} % of the 1-thread query): the two threads slow each "
+                     "other down in what the CPUs share (cache, memory bandwidth)")
             text.append(f"2-thread speed-up of {name}: {r['speedup']:.2f}x (below 1.6x); "
                         f"{cause}.")
     shares = {n: r["split_1_thread_cpu"] for n, r in main.items()}
@@ -641,9 +685,9 @@ def report(numbers: dict[str, Any], figures: tuple[Path, Path]) -> str:
     args = (f" --wait-quiet {numbers['wait_quiet_s']:g} --wait-budget "
             f"{numbers['wait_budget_s']:g}" if numbers["wait_quiet_s"] else "")
     refine_text = (
-        "* **refine**: the 200 mm die itself in ever smaller patches (20 mm down to 0.63 mm), "
-        "the nodes over all of it, the gaps scaled with the patch size: the node distribution "
-        "relative to the patches is the same, as when a CAD surface is meshed finer.\n"
+        "* **refine**: the 200 mm die itself in ever smaller patches (20 mm down to 0.63 mm),\n"
+        "  the nodes over all of it, the gaps scaled with the patch size: the node distribution\n"
+        "  relative to the patches is the same, as when a CAD surface is meshed finer.\n"
         if refine else "")
     refine_section = f"\n### refine\n\n{scaling_table(numbers, 'refine')}\n" if refine else ""
     return f"""# Contact search: throughput, search time and scaling
@@ -655,7 +699,9 @@ Machine: `nproc` = {m['nproc']}, CPU {m['cpu_model']}, numpy {m['numpy']}, Pytho
 during each measurement are in the "other load" columns (on average
 {m['other_processes_cpus']:.2f} CPUs over the run; load average {m['loadavg_start']:.2f} at
 the start, {m['loadavg_end']:.2f} at the end). Wall times on a loaded machine are too long;
-the CPU time of a 1-thread run is not, so it is given next to them.
+the CPU time of a 1-thread run is not, so it is given next to them (it counts every thread
+of the process, so the idle OpenMP thread still spinning after a 2-thread run can put it a
+few % above the wall time).
 
 ## What is measured
 
@@ -686,6 +732,11 @@ the CPU time of a 1-thread run is not, so it is given next to them.
 
 ## Projections and nodes per second
 
+Rates from the best time of each. Speed-up, paired: the median over the rounds of the
+1-thread over the 2-thread time of the same round (they run next to each other, so they see
+the same speed of the machine, which drifts); best: the ratio of the best times. CPU time /
+wall time: the CPUs the 2-thread query kept busy (2 = both, all the time).
+
 {throughput_table(numbers)}
 
 ![throughput]({figures[0].name})
@@ -703,9 +754,10 @@ check. Inside / edge / none: the closest point is inside a patch, held on a patc
 The global search (spatial index, ranking of the candidates) does not depend on the Newton
 iterations, so the query is also run with Newton capped at one iteration and forced to up
 to twelve (`max_iterations=1`; `max_iterations=12, tol=0`: many stop earlier, on a zero
-step) on the same candidates. Their difference gives the cost of one iteration (an
-evaluation with second derivatives and a 2 x 2 solve); the local search is that cost
-times (iterations + one final evaluation) per projection, the global search the rest of the
+step) on the same candidates. Their difference in each round gives the cost of one
+iteration (an evaluation with second derivatives and a 2 x 2 solve); the local search is
+that cost times (iterations + one final evaluation) per projection, as a share of the
+query of the same round (median over the rounds); the global search is the rest of the
 query (with the Python and f2py call overhead). CPU times, because a difference of two wall
 times on a loaded machine is mostly noise; still expect +-20 % on the split. Model build is
 the construction of the surface object (`BezierSurface(nets)` / `NagataSurface(...)`), not
@@ -716,7 +768,11 @@ part of the set-up.
 ## Scaling with the number of patches
 
 The cost of one query (time of `project` per node, 1 thread, {numbers['scaling_nodes']:,}
-nodes) for tools of about 10^2, 10^3, 10^4 and 10^5 patches, every description:
+nodes) for tools of about 10^2, 10^3, 10^4 and 10^5 patches, every description. The four
+tools of a series are built first and timed in interleaved rounds (best of
+{numbers['repeats']}): the speed of this virtual machine drifts by up to +-40 % over tens of
+seconds even when no other process runs, and interleaving keeps that drift out of the
+slopes.
 
 * **window** (grow): patches of the size of the main case on a die that grows with their
   number (28 mm to 894 mm a side), the nodes always over the same 28 x 28 mm corner (the
@@ -724,11 +780,11 @@ nodes) for tools of about 10^2, 10^3, 10^4 and 10^5 patches, every description:
   the tool grows. This is the algorithmic cost the issue asks about.
 * **spread** (grow): the same tools, the nodes over the whole tool, from 100 nodes per
   patch down to 0.1: adds the memory traffic of a large tool (cache misses).
-* One-node call: the wall time of `project` with a single node (best of 30), i.e. the
+{refine_text}* One-node call: the wall time of `project` with a single node (best of 30), i.e. the
   fixed cost of a call whatever the batch size. Index points per occupied cell: the mean
   number of points (Bezier: grid points, Nagata/facets: vertices) in a non-empty cell of
   the spatial index, read from the `ContactSearch` object.
-{refine_text}
+
 ![scaling]({figures[1].name})
 
 Fitted slopes of log(time) over log(patches) (0: independent of the tool size, 1: linear):
@@ -768,7 +824,7 @@ def plot_main(numbers: dict[str, Any], path: Path) -> None:
                     ha="center", va="bottom", fontsize=9)
     ax.set_xticks(x, names, rotation=20, ha="right")
     ax.set_ylabel("projections per second [millions]")
-    ax.set_title("(a) ~5,000-patch tool; label: 2-thread speed-up")
+    ax.set_title("(a) ~5,000-patch tool; label: 2-thread speed-up (paired)")
     ax.legend(loc="lower right")
 
     parts = (("setup", "set-up (1 thread)", "tab:gray"),
@@ -876,10 +932,16 @@ def main(argv: list[str] | None = None) -> int:
                              "to go idle, and measure again (once) if they disturbed it")
     parser.add_argument("--wait-budget", type=float, default=120.0, metavar="SECONDS",
                         help="total time spent waiting with --wait-quiet (default 120)")
+    parser.add_argument("--render", type=Path, default=None, metavar="JSON",
+                        help="write the report and figures from numbers saved with --json "
+                             "instead of measuring")
     args = parser.parse_args(argv)
 
-    numbers = run(args.nodes, args.scaling_nodes, args.repeats, args.check, args.seed,
-                  not args.no_refine, Quiet(args.wait_quiet, args.wait_budget))
+    if args.render is not None:
+        numbers = json.loads(args.render.read_text(encoding="utf-8"))
+    else:
+        numbers = run(args.nodes, args.scaling_nodes, args.repeats, args.check, args.seed,
+                      not args.no_refine, Quiet(args.wait_quiet, args.wait_budget))
     if args.json:
         print(json.dumps(numbers))
         return 0

@@ -31,6 +31,10 @@ from ddpy.surfaces import BezierSurface, NagataSurface
 
 __all__ = ["RigidTool", "FormingProblem", "FormingResult", "FormingError", "IncrementLimits"]
 
+#: Gap (times the element size) within which an unloaded node counts as lying on a tool for
+#: the closed predictor of the first iteration: zero up to the rounding of the positions.
+TOUCHING = 1e-6
+
 
 @dataclass(frozen=True)
 class IncrementLimits:
@@ -43,13 +47,18 @@ class IncrementLimits:
     yield stress by more than this fraction makes the increment land it on the yield
     surface (None: off); ``first_touch``, a free node that would pass through a tool (it
     lands on it instead; gaps below ``touch_gap`` times the element size count as
-    touching). No increment is made smaller than ``min_fraction`` of the nominal one."""
+    touching); ``release``, a node in contact at the start of the increment and released at
+    its end, whose release (interpolated where its augmented pressure p - r g reaches zero)
+    falls before the last ``release`` fraction of the increment, makes the increment be
+    redone to end just past the release (None: off). No increment is made smaller than
+    ``min_fraction`` of the nominal one."""
 
     strain: float = 0.02
     rotation_deg: float = 5.0
     yield_tolerance: float | None = 0.05
     first_touch: bool = True
     touch_gap: float = 1e-3
+    release: float | None = 0.05
     min_fraction: float = 1e-3
 
     def __post_init__(self) -> None:
@@ -60,6 +69,10 @@ class IncrementLimits:
                              f"{self.rotation_deg}")
         if not 0.0 < self.min_fraction <= 1.0 or not self.touch_gap >= 0.0:
             raise ValueError("min_fraction must lie in (0, 1] and touch_gap be >= 0")
+        for name in ("yield_tolerance", "release"):
+            value = getattr(self, name)
+            if value is not None and not 0.0 < value < 1.0:
+                raise ValueError(f"{name} must lie in (0, 1) or be None, got {value}")
 
 
 class FormingError(RuntimeError):
@@ -105,6 +118,10 @@ class RigidTool:
                 raise ValueError(f"tool {self.name}: facing must not be zero")
             self.facing = facing / np.linalg.norm(facing)
         self.search = ContactSearch(self.surface)
+        if self.facing is not None and not (self.search.grid_normals @ self.facing < 0.0).any():
+            raise ValueError(f"tool {self.name}: no patch faces its slave nodes (every normal "
+                             f"points along facing {self.facing.tolist()}, away from the "
+                             "blank): nothing can touch it; check the normals or facing")
 
 
 @dataclass
@@ -116,7 +133,8 @@ class FormingResult:
 
     factors: list[float] = field(default_factory=list)
     sizes: list[float] = field(default_factory=list)
-    #: what set each increment: "max", "touch", "strain", "rotation", "yield" or "cut"
+    #: what set each increment: "max", "touch", "release", "strain", "rotation", "yield"
+    #: or "cut"
     limited_by: list[str] = field(default_factory=list)
     tool_displacements: dict[str, list[NDArray[np.float64]]] = field(default_factory=dict)
     tool_forces: dict[str, list[NDArray[np.float64]]] = field(default_factory=dict)
@@ -202,6 +220,7 @@ class FormingProblem:
         npair = sum(t.slaves.size for t in self.tools)
         self.force = np.zeros((npair, 3))
         self._gap = (np.full(npair, np.inf), np.zeros((npair, 3)))
+        self._status = np.zeros(npair, dtype=np.int32)  # of the law, last increment
         self.external = np.zeros((n, 3))
         self._layout: _Layout | None = None
         self._solver: MumpsSolver | None = None
@@ -288,20 +307,32 @@ class FormingProblem:
         nominal = min(1.0, max_increment / travel) if travel > 0.0 else 1.0
         factor, step, cuts_in_row, reason = 0.0, nominal, 0, "max"
         last_du: NDArray[np.float64] | None = None
-        x = self.solid.mesh.nodes + self.u  # gaps at the start of the phase, for first touch
-        self._gap = self._contact(layout, x, x, self.position, on, self.force)[4]
-        deep = on & (self._gap[0] < -0.5 * self.size)
-        if deep.any():
-            name = self.tools[int(layout.tool_of[np.flatnonzero(deep)[0]])].name
+        last_dp: NDArray[np.float64] | None = None  # pressure rate of the last increment
+        # Gaps at the start of the phase (tools held at a gap placed there), for first touch;
+        # a tool deeper in the blank than one increment may push it out is refused.
+        x = self.solid.mesh.nodes + self.u
+        initial = dict(self.position)
+        for name, (other, offset) in offsets.items():
+            initial[name] = self.position[other] + offset
+        self._gap = self._contact(layout, x, x, initial, on, self.force)[4]
+        depth = np.where(on & np.isfinite(self._gap[0]), -self._gap[0], -np.inf)
+        worst = int(np.argmax(depth)) if depth.size else 0
+        if depth.size and depth[worst] > limits.strain * self.size:
             raise ValueError(
-                f"tool {name} starts inside the blank: slave node "
-                f"{int(layout.node[np.flatnonzero(deep)[0]])} is "
-                f"{-float(self._gap[0][deep].min()):.3g} mm deep; move the tool out first")
+                f"tool {self.tools[int(layout.tool_of[worst])].name} starts inside the blank: "
+                f"slave node {int(layout.node[worst])} is {depth[worst]:.3g} mm deep, more "
+                f"than the strain limit times the element size ({limits.strain:g} x "
+                f"{self.size:.3g} mm); move the tool out first")
         while factor < 1.0 - 1e-12:
             if limits.first_touch and reason != "cut":
                 touch = self._touch_factor(layout, on, moves, step, last_du, limits)
                 if touch < 1.0:
                     step, reason = max(step * touch, limits.min_fraction * nominal), "touch"
+            if limits.release is not None and reason != "cut" and last_dp is not None:
+                ahead = self._release_ahead(step, last_dp, limits.release)
+                if ahead < 1.0:
+                    step = max(step * ahead, limits.min_fraction * nominal)
+                    reason = "release"
             target = min(1.0, factor + step)
             positions = {n: start[n] + target * moves[n] for n in start}
             for name, (other, offset) in offsets.items():
@@ -309,7 +340,8 @@ class FormingProblem:
             landing = None if (limits.yield_tolerance is None or
                                step <= limits.min_fraction * nominal) else limits.yield_tolerance
             outcome = self._increment(layout, solver, positions, on, tol_force, tol_disp,
-                                      max_iterations, result.timings, landing)
+                                      max_iterations, result.timings, landing,
+                                      TOUCHING * self.size)
             if isinstance(outcome, float):  # an elastic point would overshoot the yield stress
                 step = max(step * outcome, limits.min_fraction * nominal)
                 reason = "yield"
@@ -334,9 +366,22 @@ class FormingProblem:
                 step = max(step * limit / rotation, limits.min_fraction * nominal)
                 reason = "rotation"
                 continue
+            if limits.release is not None and step > limits.min_fraction * nominal:
+                change = None if last_dp is None else last_dp * (target - factor)
+                release = self._release_factor(force, in_contact, gap, change)
+                if release < 1.0 - limits.release:
+                    # Redo it ending just past the release, so that the node is free at
+                    # the end (a release within the last fraction is accepted).
+                    step = max(step * release * (1.0 + limits.release / 2.0),
+                               limits.min_fraction * nominal)
+                    reason = "release"
+                    continue
 
             last_du = (u - self.u) / (target - factor)
+            normal = gap[1]
+            last_dp = np.einsum("ij,ij->i", force - self.force, normal) / (target - factor)
             self.u, self.state, self.force, self._gap = u, state, force, gap
+            self._status = in_contact
             self.position = positions
             result.sizes.append(target - factor)
             result.limited_by.append(reason)
@@ -502,10 +547,52 @@ class FormingProblem:
         # Land just past the surface, so that the node is caught in contact.
         return float(np.min(gap[hits] / approach[hits])) * (1.0 + 1e-3)
 
+    def _release_ahead(self, step: float, rate: NDArray[np.float64], margin: float
+                       ) -> float:
+        """Fraction of the next increment at which the first node in contact is released,
+        its pressure extrapolated at the rate of the last increment (``rate``, per unit
+        phase factor), plus ``margin / 2`` so that it is free at the end."""
+        pressure = np.einsum("ij,ij->i", self.force, self._gap[1])
+        falling = (self._status != INACTIVE) & (pressure > 0.0) & (rate < 0.0)
+        ahead = np.full(pressure.size, np.inf)
+        ahead[falling] = pressure[falling] / (-rate[falling] * step)
+        first = float(ahead.min()) if ahead.size else np.inf
+        return first * (1.0 + margin / 2.0) if first * (1.0 + margin / 2.0) < 1.0 else 1.0
+
+    def _release_factor(self, force: NDArray[np.float64], state: NDArray[np.int32],
+                        gap: tuple[NDArray[np.float64], NDArray[np.float64]],
+                        change: NDArray[np.float64] | None) -> float:
+        """Fraction of a converged increment at which the first node in contact at its start
+        and open at its end was released; 1 when none was. The semi-smooth Newton opens a
+        pulled node in its first iteration, so a release is seen only after the increment.
+        A node whose pressure fell in the last increment (``change``: that rate times this
+        increment) is released where the extrapolated pressure reaches zero; otherwise (the
+        start of a phase, or when the extrapolation would not release it) where its
+        augmented pressure p_aug = p - r g, whose sign opens and closes the law, reaches
+        zero, interpolated between p at the start (g = 0) and -r g at the end (p = 0)."""
+        distance, normal = gap
+        pressure = np.einsum("ij,ij->i", self.force, normal)
+        after = np.einsum("ij,ij->i", force, normal) - self.r * distance
+        released = (self._status != INACTIVE) & (state == INACTIVE) & (pressure > 0.0)
+        released &= np.isfinite(distance) & (after < 0.0)
+        if not released.any():
+            return 1.0
+        p = pressure[released]
+        fraction = p / (p - after[released])
+        if change is not None:
+            drop = -change[released]
+            trend = np.divide(p, drop, out=np.full(p.size, np.inf), where=drop > 0.0)
+            fraction = np.where(trend < 1.0, trend, fraction)
+        return float(fraction.min())
+
     def _contact(self, layout: _Layout, x: NDArray[np.float64], x_n: NDArray[np.float64],
                  positions: Mapping[str, NDArray[np.float64]], on: NDArray[np.bool_],
-                 force: NDArray[np.float64]):
-        """Contact law of every pair at positions x: residual, derivatives, states."""
+                 force: NDArray[np.float64], touching: float | None = None):
+        """Contact law of every pair at positions x: residual, derivatives, states. With
+        ``touching`` (a distance), a pair the law leaves open (p_aug <= 0) whose gap is
+        within it takes the closed branch at p_aug = 0+ instead (the predictor of the first
+        iteration, docs/theory/contact.md): an unloaded node lying on a tool then holds the
+        blank against it, as the generalized Jacobian allows at the kink."""
         npair = layout.node.size
         gap = np.full(npair, np.inf)
         normal = np.zeros((npair, 3))
@@ -524,7 +611,19 @@ class FormingProblem:
             patch = np.where(hit, found.patch, 0)
             second = tool.surface.second_derivatives(patch, found.params)
             v = (x[nodes] - x_n[nodes]) - (positions[tool.name] - self.position[tool.name])
-            law = contact_law(force[pairs], found, second, v, self.mu[pairs], self.r[pairs])
+            lam = force[pairs]
+            if touching is not None:
+                # A normal force that lifts p_aug just above zero: the law then gives its
+                # closed branch there (stick, C = r g n + r s, when nothing slides yet),
+                # which does not depend on the shift.
+                r = self.r[pairs]
+                p_aug = np.einsum("ij,ij->i", lam, found.normal) - r * found.distance
+                close = hit & (p_aug <= 0.0) & (np.abs(found.distance) <= touching)
+                if close.any():
+                    lift = -p_aug[close] + 1e-9 * r[close] * self.size
+                    lam = lam.copy()
+                    lam[close] += lift[:, None] * found.normal[close]
+            law = contact_law(lam, found, second, v, self.mu[pairs], self.r[pairs])
             # Slices are views: write the pairs that found a patch; the others stay free.
             c[pairs][hit] = law.residual[hit]
             d_lambda[pairs][hit] = law.d_lambda[hit]
@@ -543,12 +642,13 @@ class FormingProblem:
 
     def _evaluate(self, layout: _Layout, u: NDArray[np.float64], force: NDArray[np.float64],
                   x_n: NDArray[np.float64], positions: Mapping[str, NDArray[np.float64]],
-                  on: NDArray[np.bool_], timings: dict[str, float]):
+                  on: NDArray[np.bool_], timings: dict[str, float],
+                  touching: float | None = None):
         """Residual (free equilibrium rows, then the contact law) at (u, force), with the
         Jacobian values in the layout's slots and the contact states; or a failure."""
         tick = time.perf_counter()
         c, d_lambda, d_x, state, gap = self._contact(layout, self.solid.mesh.nodes + u, x_n,
-                                                     positions, on, force)
+                                                     positions, on, force, touching)
         tock = time.perf_counter()
         timings["contact"] += tock - tick
         try:
@@ -574,11 +674,13 @@ class FormingProblem:
     def _increment(self, layout: _Layout, solver: MumpsSolver,
                    positions: Mapping[str, NDArray[np.float64]], on: NDArray[np.bool_],
                    tol_force: float, tol_disp: float, max_iterations: int,
-                   timings: dict[str, float], yield_tolerance: float | None = None):
+                   timings: dict[str, float], yield_tolerance: float | None = None,
+                   touching: float | None = None):
         """Newton iterations of one increment; the new state, or the reason of failure, or
         (with ``yield_tolerance``) the fraction of the increment at which the first elastic
         Gauss point reaches the yield surface, from the strains of the first (elastic
-        predictor) iteration, when that fraction is below 1.
+        predictor) iteration, when that fraction is below 1. With ``touching`` (a distance),
+        the first iteration takes pairs within that gap as closed (see ``_contact``).
 
         The semi-smooth Newton step is globalized by backtracking on the residual norm: a
         node switching between stick and slip (or contact and release) at every iteration
@@ -592,7 +694,7 @@ class FormingProblem:
         floor = 1e-8 * solid.props[0] * self.size**2
         residuals: list[float] = []
         correction = np.inf
-        current = self._evaluate(layout, u, force, x_n, positions, on, timings)
+        current = self._evaluate(layout, u, force, x_n, positions, on, timings, touching)
         if isinstance(current, str):
             return current
         for iteration in range(max_iterations + 1):

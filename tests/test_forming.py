@@ -335,3 +335,96 @@ def test_quadratic_convergence_sliding_with_friction_over_a_curved_tool(kind: st
         if len(tail) >= 3:
             rates.append(np.log(tail[-1] / tail[-2]) / np.log(tail[-2] / tail[-3]))
     assert rates and max(rates) > 1.7, (rates, result.residuals[-3:])
+
+
+def lift_off(max_increment: float, limits: IncrementLimits | None = None
+             ) -> tuple[list[float], list[str], list[int], float]:
+    """The clamped block pressed 1 mm / 1000 onto the plane, then the plane lowered by 2 um:
+    the plane's height after each increment of the lift, what limited it, the nodes in
+    contact, and the element size."""
+    problem, _ = block_on_plane(0.3)
+    result = problem.run({"plane": (0, 0, 1e-3)}, max_increment=1e-3)
+    start = len(result.factors)
+    result = problem.run({"plane": (0, 0, -2e-3)}, max_increment=max_increment,
+                         limits=limits, result=result)
+    heights = [float(d[2]) for d in result.tool_displacements["plane"][start - 1:]]
+    return heights, result.limited_by[start:], result.contacts["plane"][start:], problem.size
+
+
+@pytest.mark.parametrize("max_increment", [7e-4, 1.5e-3])
+def test_release_of_the_nodes_ends_an_increment(max_increment: float) -> None:
+    # Elastic (nu = 0) and clamped at its top, the block lets go of the plane exactly when
+    # the plane passes z = 0, its undeformed bottom. The increment in which every node is
+    # released ends within the last 5 % of itself past that point (release tolerance 0.05):
+    # mid-phase from the pressure trend of the last increment (7e-4), in the first
+    # increment of the phase by interpolating the augmented pressure (1.5e-3).
+    heights, limited_by, contacts, _ = lift_off(max_increment)
+    k = contacts.index(0)
+    assert k >= 1 and contacts[k - 1] == 16
+    assert limited_by[k] == "release", limited_by
+    before, after = heights[k], heights[k + 1]
+    assert before > 0.0 >= after > -0.05 * (before - after), (before, after)
+    # The plane then goes on at the nominal increment.
+    assert heights[-1] == pytest.approx(-1e-3)
+    # Without the release limit the increment runs far past the release.
+    heights, limited_by, contacts, _ = lift_off(max_increment, IncrementLimits(release=None))
+    k = contacts.index(0)
+    assert "release" not in limited_by
+    assert heights[k + 1] < -0.1 * (heights[k] - heights[k + 1])
+
+
+def test_a_block_held_only_by_contact_solves_from_the_start() -> None:
+    # A block lying on a die plane (zero gap, no force) with nothing else holding it: every
+    # rigid mode is free. A punch plane 0.05 mm above comes down and squeezes it by 1 um.
+    # The open nodes on the die would leave the tangent singular in the first iterations;
+    # the closed predictor takes nodes lying on a tool as in contact, so the first Newton
+    # step is a full one and the answer is the uniaxial one (nu = 0, stick on both faces).
+    mesh = HexMesh.box(1.0, 1.0, 0.5, 2, 2, 2, origin=(-0.5, -0.5, 0.0))
+    above = NagataSurface([[-5, -5, 0.55], [-5, 5, 0.55], [5, 5, 0.55], [5, -5, 0.55]],
+                          [[0, 0, -1]] * 4, [[0, 1, 2, 3]])
+    die = RigidTool("die", plane_tool(), mesh.select(z=0.0), friction=0.2, facing=(0, 0, -1))
+    punch = RigidTool("punch", above, mesh.select(z=0.5), friction=0.2, facing=(0, 0, 1))
+    problem = FormingProblem(Solid(mesh, ELASTIC), [die, punch])
+    assert problem.free_rigid_modes() == 6
+    result = problem.run({"punch": (0, 0, -0.051)}, max_increment=0.1)
+    assert result.cuts == 0 and result.limited_by == ["touch", "max"]
+    for history in result.residuals:
+        assert history[1] < 1e-2 * history[0], history   # a full first step
+    stretch = 1.0 - 1e-3 / 0.5
+    squeeze = 210e3 * (stretch - stretch**3) / 2.0
+    assert -result.tool_forces["die"][-1][2] == pytest.approx(squeeze, rel=1e-9)
+    assert result.tool_forces["punch"][-1][2] == pytest.approx(squeeze, rel=1e-9)
+    assert np.abs(problem.u[:, :2]).max() < 1e-12   # no rigid drift in the plane
+
+
+def test_bad_contact_input_is_refused_before_the_run() -> None:
+    mesh = HexMesh.box(1.0, 1.0, 0.5, 3, 3, 2, origin=(-0.5, -0.5, 0.0))
+    with pytest.raises(ValueError, match="tool plane has no slave nodes"):
+        RigidTool("plane", plane_tool(), [], facing=(0, 0, -1))
+    with pytest.raises(ValueError, match="tool plane: friction must be >= 0, got -0.1"):
+        RigidTool("plane", plane_tool(), mesh.select(z=0.0), friction=-0.1)
+    with pytest.raises(ValueError, match="no patch faces its slave nodes"):
+        RigidTool("plane", plane_tool(), mesh.select(z=0.0), facing=(0, 0, 1))
+    with pytest.raises(ValueError, match="release must lie in"):
+        IncrementLimits(release=1.0)
+    # A tool deeper in the blank than the strain limit times the element size (0.02 x
+    # 0.303 mm here) is refused before any numerics; a slight overlap is not.
+    problem, mesh = block_on_plane(0.0)
+    problem.position["plane"] = np.array([0.0, 0.0, 0.01])
+    with pytest.raises(ValueError, match="plane starts inside the blank: slave node .* is "
+                                         "0.01 mm deep"):
+        problem.run({"plane": (0, 0, 1e-3)}, max_increment=1e-3)
+    assert not problem.u.any()
+    problem.position["plane"] = np.array([0.0, 0.0, 0.005])
+    problem.run({"plane": (0, 0, 1e-3)}, max_increment=1e-3)
+    # So is a blank-holder placed by its gap inside the blank.
+    holder = NagataSurface([[-5, -5, 2], [-5, 5, 2], [5, 5, 2], [5, -5, 2]],
+                           [[0, 0, -1]] * 4, [[0, 1, 2, 3]])
+    block = HexMesh.box(1.0, 1.0, 0.5, 2, 2, 1, origin=(-0.5, -0.5, 0.0))
+    problem = FormingProblem(Solid(block, ELASTIC), [
+        RigidTool("die", plane_tool(), block.select(z=0.0), facing=(0, 0, -1)),
+        RigidTool("holder", holder, block.select(z=0.5), facing=(0, 0, 1))])
+    problem.fix(block.select(x=-0.5), "xyz")
+    with pytest.raises(ValueError, match="holder starts inside the blank"):
+        problem.run({"die": (0, 0, 0.01)}, max_increment=0.01,
+                    gaps={"holder": ("die", 0.3, (0, 0, 1))})

@@ -16,7 +16,7 @@ Example::
 from __future__ import annotations
 
 import time
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -29,7 +29,8 @@ from ddpy.search import NONE, ContactSearch
 from ddpy.solid import ElementError, Solid, SolidState, _components
 from ddpy.surfaces import BezierSurface, NagataSurface
 
-__all__ = ["RigidTool", "FormingProblem", "FormingResult", "FormingError", "IncrementLimits"]
+__all__ = ["RigidTool", "FormingProblem", "FormingResult", "FormingError", "IncrementLimits",
+           "PhaseProgress"]
 
 #: Gap (times the element size) within which an unloaded node counts as lying on a tool for
 #: the closed predictor of the first iteration: zero up to the rounding of the positions.
@@ -73,6 +74,23 @@ class IncrementLimits:
             value = getattr(self, name)
             if value is not None and not 0.0 < value < 1.0:
                 raise ValueError(f"{name} must lie in (0, 1) or be None, got {value}")
+
+
+@dataclass
+class PhaseProgress:
+    """Where a ``FormingProblem.run`` stands after a converged increment: the tool positions
+    at the start of the phase, the offsets of gap-held tools, the phase factor reached, the
+    next trial increment with what set it, and the last displacement increment and pressure
+    change per unit factor. Given back as ``resume`` (with the problem's state restored) the
+    run continues exactly as it would have."""
+
+    start: dict[str, NDArray[np.float64]]
+    offsets: dict[str, tuple[str, NDArray[np.float64]]]
+    factor: float
+    step: float
+    reason: str
+    last_du: NDArray[np.float64] | None
+    last_dp: NDArray[np.float64] | None = None
 
 
 class FormingError(RuntimeError):
@@ -270,6 +288,8 @@ class FormingProblem:
         limits: IncrementLimits | None = None,
         gaps: Mapping[str, tuple[str, float, ArrayLike]] | None = None,
         result: FormingResult | None = None,
+        on_increment: Callable[[PhaseProgress], bool | None] | None = None,
+        resume: PhaseProgress | None = None,
     ) -> FormingResult:
         """Move each tool of ``motion`` by its displacement (3,) over the phase, linearly in
         the phase factor; tools not in ``active`` (default: all) are lifted off (their
@@ -281,7 +301,10 @@ class FormingProblem:
         IncrementLimits()). ``gaps``: tools held at a fixed gap from another, e.g.
         ``{"holder": ("die", 1.13, (0, 0, 1))}``: the holder is set, along the direction,
         at 1.13 mm from the die (the smallest distance between their surfaces) in the
-        first increment and then follows the die (a position-controlled blank-holder)."""
+        first increment and then follows the die (a position-controlled blank-holder).
+        ``on_increment`` is called after every converged increment (the result holds its
+        data); a true return stops the run there. ``resume`` continues a run from the
+        progress such a call received."""
         limits = IncrementLimits() if limits is None else limits
         unknown = set(motion) - {t.name for t in self.tools}
         if unknown:
@@ -291,7 +314,7 @@ class FormingProblem:
             raise ValueError(f"active names unknown tools: {sorted(active_set)}")
         moves = {t.name: float_array(motion.get(t.name, (0.0, 0.0, 0.0)),
                                      f"motion of {t.name}", (3,)) for t in self.tools}
-        offsets = self._gap_offsets(gaps or {}, moves)
+        offsets = self._gap_offsets(gaps or {}, moves) if resume is None else resume.offsets
         travel = max(float(np.linalg.norm(m)) for m in moves.values())
         if not max_increment > 0.0:
             raise ValueError(f"max_increment must be > 0, got {max_increment}")
@@ -308,6 +331,9 @@ class FormingProblem:
         factor, step, cuts_in_row, reason = 0.0, nominal, 0, "max"
         last_du: NDArray[np.float64] | None = None
         last_dp: NDArray[np.float64] | None = None  # pressure rate of the last increment
+        if resume is not None:
+            start, factor, step = resume.start, resume.factor, resume.step
+            reason, last_du, last_dp = resume.reason, resume.last_du, resume.last_dp
         # Gaps at the start of the phase (tools held at a gap placed there), for first touch;
         # a tool deeper in the blank than one increment may push it out is refused.
         x = self.solid.mesh.nodes + self.u
@@ -397,6 +423,9 @@ class FormingProblem:
                 result.status[t.name].append(in_contact[pairs].copy())
             cuts_in_row = 0
             step, reason = min(nominal, 2.0 * step), "max"  # grow back after limits
+            if on_increment is not None and on_increment(
+                    PhaseProgress(start, offsets, factor, step, reason, last_du, last_dp)):
+                break
         return result
 
     def _gap_offsets(self, gaps: Mapping[str, tuple[str, float, ArrayLike]],

@@ -215,6 +215,62 @@ class ResultsWriter:
         return cls(path, case.mesh, case.tool_names, [p.name for p in case.phases],
                    title=case.title, case=str(case.folder), overwrite=overwrite)
 
+    @classmethod
+    def reopen(cls, path: str | os.PathLike[str], increments: int, iterations: int,
+               frames: int) -> ResultsWriter:
+        """Open an existing results file to continue a run from a checkpoint: rows and
+        frames past the counts given (written after the checkpoint) are dropped."""
+        import h5py
+
+        self = cls.__new__(cls)
+        self.path = Path(path)
+        self.xdmf_path = self.path.with_suffix(".xdmf")
+        f = h5py.File(self.path, "r+")
+        if f.attrs.get("format") != FORMAT:
+            f.close()
+            raise ValueError(f"{self.path} is not a ddpy results file")
+        inc, it, fields = f["increments"], f["iterations"], f["fields"]
+        have = (int(inc.attrs["count"]), int(it.attrs["count"]), int(fields.attrs["count"]))
+        if increments > have[0] or iterations > have[1] or not 1 <= frames <= have[2]:
+            f.close()
+            raise ValueError(f"{self.path} holds {have[0]} increments, {have[1]} iterations "
+                             f"and {have[2]} frames, fewer than the checkpoint's "
+                             f"{increments}, {iterations} and {frames}")
+        for group, count in ((inc, increments), (it, iterations)):
+            group.attrs["count"] = count
+            for d in group.values():
+                d.resize(count, axis=0)
+        fields.attrs["count"] = frames
+        for index in range(frames, have[2]):
+            del fields[f"{index:06d}"]
+        self._file = f
+        self.nodes, self.elements = f["mesh/nodes"][()], f["mesh/elements"][()]
+        self.tools = tuple(str(t) for t in f.attrs["tools"])
+        self.phases = tuple(str(p) for p in f.attrs["phases"])
+        try:
+            self._columns = through_thickness_columns(self.nodes, self.elements,
+                                                      f["mesh"].attrs["normal"])
+        except ValueError:
+            self._columns = None
+        self._count, self._iterations = increments, iterations
+        self._frames = []
+        for index in range(frames):
+            a = fields[f"{index:06d}"].attrs
+            self._frames.append(Frame(index, int(a["increment"]), int(a["phase"]),
+                                      float(a["travel"]), float(a["time"])))
+        self._phase = int(inc["phase"][increments - 1]) if increments else 0
+        self._travel = float(inc["travel"][increments - 1]) if increments else 0.0
+        if "closed" in f.attrs:
+            del f.attrs["closed"]
+        f.flush()
+        self._write_xdmf()
+        return self
+
+    def annotate(self, **attrs: Any) -> None:
+        """Set root attributes (e.g. the run's status) and flush."""
+        self._file.attrs.update(attrs)
+        self._file.flush()
+
     @staticmethod
     def _column(group: Any, name: str, dtype: str, shape: tuple[int, ...], units: str,
                 meaning: str) -> None:
@@ -229,6 +285,16 @@ class ResultsWriter:
     def increments(self) -> int:
         """Increments written so far."""
         return self._count
+
+    @property
+    def iteration_rows(self) -> int:
+        """Newton iteration rows written so far."""
+        return self._iterations
+
+    @property
+    def frame_count(self) -> int:
+        """Frames written so far, the initial state included."""
+        return len(self._frames)
 
     def increment(self, *, phase: int, step: float, travel: float,
                   tool_displacement: ArrayLike, tool_force: ArrayLike, iterations: int,

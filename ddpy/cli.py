@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from ddpy import __version__
+from ddpy.cli_run import add_run
 
 
 def _accuracy(args: argparse.Namespace) -> int:
@@ -195,6 +196,7 @@ def build_parser() -> argparse.ArgumentParser:
     check.set_defaults(handler=_check)
 
     _add_tools(commands)
+    add_run(commands)
 
     info = commands.add_parser("info", help="version, threads and linked libraries")
     info.set_defaults(handler=_info)

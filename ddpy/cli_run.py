@@ -1,0 +1,153 @@
+"""``ddpy run``: run a case with a progress display; Ctrl-C stops cleanly (docs/running.md)."""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+import time
+from pathlib import Path
+from types import FrameType
+from typing import TYPE_CHECKING, TextIO
+
+if TYPE_CHECKING:
+    from ddpy.runner import Progress
+
+__all__ = ["ProgressDisplay", "add_run", "default_output"]
+
+#: Exit codes of ``ddpy run``.
+EXIT = {"completed": 0, "stopped": 0, "failed": 1, "interrupted": 130}
+
+
+def default_output(case_folder: Path) -> Path:
+    """Where a run writes when no --output is given: results/<case folder name>."""
+    return Path("results") / case_folder.resolve().name
+
+
+class ProgressDisplay:
+    """A progress bar rewritten in place on a terminal, one plain line per increment
+    otherwise (a log file, a pipe)."""
+
+    def __init__(self, stream: TextIO, width: int = 24) -> None:
+        self.stream, self.width = stream, width
+        self.tty = stream.isatty()
+        self.start = time.perf_counter()
+        self._open = False
+
+    def __call__(self, p: Progress) -> None:
+        elapsed = time.perf_counter() - self.start
+        lead = f"{p.lead} {p.travel:.4f}/{p.phase_travel:g} mm" if p.lead else "tools off"
+        if not self.tty:
+            print(f"increment {p.increment} phase {p.phase} ({p.phase_index + 1}/{p.phases}) "
+                  f"{lead} step {p.step:.4g} iterations {p.iterations} limit {p.limit} "
+                  f"{elapsed:.1f} s", file=self.stream, flush=True)
+            return
+        done = p.travel / p.phase_travel if p.phase_travel > 0 else 1.0
+        filled = int(round(self.width * min(max(done, 0.0), 1.0)))
+        bar = "#" * filled + "-" * (self.width - filled)
+        line = (f"\r{p.phase} ({p.phase_index + 1}/{p.phases}) [{bar}] {100 * done:5.1f}% "
+                f"inc {p.increment}  {lead}  it {p.iterations}  {elapsed:.0f} s")
+        self.stream.write(line + "\033[K")
+        self.stream.flush()
+        self._open = True
+
+    def close(self) -> None:
+        if self._open:
+            self.stream.write("\n")
+            self.stream.flush()
+            self._open = False
+
+
+class _Interrupt:
+    """SIGINT sets a flag the run polls after each increment; a second one aborts."""
+
+    def __init__(self) -> None:
+        self.requested = False
+        self._previous = signal.getsignal(signal.SIGINT)
+
+    def __enter__(self) -> _Interrupt:
+        signal.signal(signal.SIGINT, self._handle)
+        return self
+
+    def _handle(self, signum: int, frame: FrameType | None) -> None:
+        if self.requested:
+            raise KeyboardInterrupt
+        self.requested = True
+        print("\nddpy run: stopping after this increment (Ctrl-C again to abort)",
+              file=sys.stderr, flush=True)
+
+    def __call__(self) -> bool:
+        return self.requested
+
+    def __exit__(self, *exc: object) -> None:
+        signal.signal(signal.SIGINT, self._previous)
+
+
+def _run(args: argparse.Namespace) -> int:
+    from ddpy.checkpoint import CheckpointError
+    from ddpy.decks import DeckError, read_case
+    from ddpy.runner import DEFAULT_CASE, RunError, run_case
+
+    folder = Path(args.case) if args.case else DEFAULT_CASE
+    try:
+        case = read_case(folder)
+    except DeckError as error:
+        for e in error.errors:
+            print(e, file=sys.stderr)
+        print(f"{folder}: {len(error.errors)} error(s); see 'ddpy check'", file=sys.stderr)
+        return 2
+    output = Path(args.output) if args.output else default_output(folder)
+    display = ProgressDisplay(sys.stdout)
+    verb = "continuing" if args.restart else "running"
+    print(f"ddpy run: {verb} {case.title} ({folder}) -> {output}", flush=True)
+    try:
+        with _Interrupt() as interrupt:
+            outcome = run_case(case, output, restart=args.restart, progress=display,
+                               stop=interrupt, overwrite=args.overwrite,
+                               checkpoint_every=args.checkpoint_every,
+                               max_increments=args.stop_after, threads=args.threads)
+    except (RunError, CheckpointError, ValueError) as error:
+        display.close()
+        print(f"ddpy run: error: {error}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        display.close()
+        print("ddpy run: aborted; the results and the last checkpoint are kept",
+              file=sys.stderr)
+        return 130
+    display.close()
+    print(f"ddpy run: {outcome.status} after {outcome.increments} increments, "
+          f"{outcome.frames} frames, {outcome.wall_time:.1f} s"
+          + (f": {outcome.message}" if outcome.message else ""))
+    print(f"  results: {outcome.results} (open {outcome.results.with_suffix('.xdmf')} in "
+          "ParaView)")
+    if outcome.status in ("interrupted", "stopped"):
+        again = ["ddpy run", *([str(args.case)] if args.case else []), "--restart",
+                 "--output", str(output)]
+        print(f"  continue with: {' '.join(again)}")
+    return EXIT[outcome.status]
+
+
+def add_run(commands: argparse._SubParsersAction) -> None:
+    """The ``run`` subcommand."""
+    run = commands.add_parser(
+        "run", help="run a case (default: the built-in coarse cylindrical bending)",
+        description="Run the phases of a case folder, writing results.h5/.xdmf, checkpoints "
+        "and status.json to the output folder. Ctrl-C stops after the current increment and "
+        "keeps the results; --restart continues from the last checkpoint.")
+    run.add_argument("case", nargs="?", metavar="CASE",
+                     help="case folder (default: the built-in cylindrical bending case)")
+    run.add_argument("--output", metavar="DIR",
+                     help="output folder (default: results/<case folder name>)")
+    run.add_argument("--restart", action="store_true",
+                     help="continue from the output folder's last checkpoint")
+    run.add_argument("--overwrite", action="store_true",
+                     help="replace results already in the output folder")
+    run.add_argument("--threads", type=int, metavar="N",
+                     help="OpenMP threads of the core (default: OMP_NUM_THREADS)")
+    run.add_argument("--checkpoint-every", type=int, default=10, metavar="N",
+                     help="write a checkpoint every N increments (default 10; also at the "
+                     "end of every phase)")
+    run.add_argument("--stop-after", type=int, metavar="N",
+                     help="stop after N increments of the whole run (restartable)")
+    run.set_defaults(handler=_run)

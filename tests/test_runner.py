@@ -1,0 +1,214 @@
+"""The case runner: phases to the results file, checkpoints and restart, ``ddpy run``."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from ddpy.checkpoint import CheckpointError, read_checkpoint
+from ddpy.decks import read_case
+from ddpy.results import ResultsReader
+from ddpy.runner import CHECKPOINT, DEFAULT_CASE, RESULTS, RunError, read_status, run_case
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def tiny_case(folder: Path, draw: float = 2.0, max_increment: float = 0.2) -> Path:
+    """examples/strip_draw with short strokes: three phases, a gap-held holder switched off
+    in the second, output_at, springback in 4 steps."""
+    shutil.copytree(ROOT / "examples" / "strip_draw", folder)
+    control = folder / "control.dat"
+    text = control.read_text()
+    text = text.replace("move   punch  0 0 -10", f"move   punch  0 0 -{draw}\n  output_at 0.5 1")
+    text = text.replace("move           punch  0 0 -5", "move           punch  0 0 -0.5")
+    text = text.replace("max_increment  0.2", f"max_increment  {max_increment}")
+    control.write_text(text)
+    return folder
+
+
+def compare(a: Path, b: Path) -> None:
+    """Two results files hold the same run: every column but the timings, every frame."""
+    with ResultsReader(a / RESULTS) as ra, ResultsReader(b / RESULTS) as rb:
+        ha, hb = ra.history(), rb.history()
+        assert ha.keys() == hb.keys()
+        for name in ha:
+            if not name.startswith("time_"):
+                np.testing.assert_allclose(hb[name], ha[name], rtol=1e-10, atol=1e-12,
+                                           err_msg=name)
+        assert ra.frames == rb.frames
+        for name in ("displacement", "stress", "plastic_strain", "contact_force"):
+            np.testing.assert_allclose(rb.field(name), ra.field(name), rtol=1e-10,
+                                       atol=1e-12, err_msg=name)
+        np.testing.assert_array_equal(ra.iterations()["iteration"],
+                                      rb.iterations()["iteration"])
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
+    """The tiny case run without interruption."""
+    base = tmp_path_factory.mktemp("reference")
+    case = tiny_case(base / "case")
+    outcome = run_case(read_case(case), base / "out")
+    assert outcome.status == "completed", outcome.message
+    return case, base / "out"
+
+
+def test_run_writes_every_phase_and_the_outputs(reference: tuple[Path, Path]) -> None:
+    case, out = reference
+    status = read_status(out)
+    assert status["status"] == "completed"
+    with ResultsReader(out / RESULTS) as r:
+        phase = r.curve("phase")
+        assert set(phase) == {0, 1, 2} and np.all(np.diff(phase) >= 0)
+        assert r.curve("increment").tolist() == list(range(1, r.n_increments + 1))
+        travel, step = r.curve("travel"), r.curve("step")
+        draw = phase == 0
+        # Each phase ends at its travel; steps add up to it; max_increment holds.
+        assert travel[draw][-1] == pytest.approx(2.0)
+        assert step[draw].sum() == pytest.approx(2.0)
+        assert step[phase == 1].sum() == pytest.approx(0.5)
+        assert step.max() <= 0.2 + 1e-12
+        # The punch moved down with its travel, pushed back by the blank.
+        punch = r.tool_displacement("punch")
+        np.testing.assert_allclose(-punch[draw][:, 2], travel[draw], atol=1e-12)
+        assert r.tool_force("punch")[draw][-1, 2] > 0.0
+        # The holder is off in free_draw and springback: no force, no contact.
+        assert np.all(r.tool_force("holder")[phase > 0] == 0.0)
+        assert r.curve("nodes_in_contact")[phase == 0, 1].max() > 0
+        # Frames at output_at 0.5 and 1, every 10 increments, and every phase end.
+        frames = r.frames
+        at = {(f.phase, round(f.travel, 9)) for f in frames}
+        assert {(0, 0.5), (0, 1.0), (0, 2.0), (1, 0.5)} <= at
+        assert frames[-1].increment == r.n_increments and frames[-1].phase == 2
+        limits = r.curve("limit")
+        assert 6 in limits  # a phase end landed
+        assert r.field("plastic_strain").max() > 0.0
+        assert np.abs(r.field("contact_force", frame=-1)).max() == 0.0  # tools off
+        assert r.iterations()["iteration"].size == r.curve("iterations").sum() + len(phase)
+
+
+def test_restart_after_a_stop_ends_as_the_uninterrupted_run(
+        reference: tuple[Path, Path], tmp_path: Path) -> None:
+    case, ref = reference
+    loaded = read_case(case)
+    first = run_case(loaded, tmp_path, max_increments=7, checkpoint_every=3)
+    assert first.status == "stopped" and first.increments == 7
+    meta, _ = read_checkpoint(tmp_path / CHECKPOINT)
+    assert meta["increments"] == 7 and meta["progress"] is not None
+    second = run_case(loaded, tmp_path, restart=True, max_increments=31, checkpoint_every=4)
+    assert second.status == "stopped"
+    last = run_case(loaded, tmp_path, restart=True)
+    assert last.status == "completed"
+    compare(ref, tmp_path)
+
+
+def test_restart_refuses_a_changed_case_and_a_missing_checkpoint(
+        reference: tuple[Path, Path], tmp_path: Path) -> None:
+    case, ref = reference
+    with pytest.raises(RunError, match="no checkpoint"):
+        run_case(read_case(case), tmp_path / "empty", restart=True)
+    with pytest.raises(RunError, match="exists"):
+        run_case(read_case(case), ref)
+    changed = shutil.copytree(case, tmp_path / "changed")
+    (changed / "material.dat").write_text((changed / "material.dat").read_text() + "\n# x\n")
+    shutil.copytree(ref, tmp_path / "out")
+    with pytest.raises(CheckpointError, match="changed since the checkpoint"):
+        run_case(read_case(changed), tmp_path / "out", restart=True)
+
+
+def _start(case: Path, out: Path, *extra: str) -> subprocess.Popen[str]:
+    env = {**os.environ, "OMP_NUM_THREADS": "1"}
+    return subprocess.Popen([sys.executable, "-m", "ddpy", "run", str(case), "--output",
+                             str(out), *extra], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, env=env)
+
+
+def _wait_for_checkpoint(out: Path, process: subprocess.Popen[str], increments: int) -> None:
+    deadline = time.monotonic() + 60.0
+    while time.monotonic() < deadline:
+        assert process.poll() is None, "the run ended before it could be stopped"
+        try:
+            if read_checkpoint(out / CHECKPOINT)[0]["increments"] >= increments:
+                return
+        except CheckpointError:
+            pass
+        time.sleep(0.02)
+    raise AssertionError("no checkpoint within 60 s")
+
+
+@pytest.fixture(scope="module")
+def slow_case(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
+    """The tiny case with small increments (long enough to be stopped), run once."""
+    base = tmp_path_factory.mktemp("slow")
+    case = tiny_case(base / "case", draw=1.5, max_increment=0.02)
+    outcome = run_case(read_case(case), base / "out")
+    assert outcome.status == "completed", outcome.message
+    return case, base / "out"
+
+
+def test_killed_run_restarts_to_the_same_results(slow_case: tuple[Path, Path],
+                                                 tmp_path: Path) -> None:
+    case, ref = slow_case
+    process = _start(case, tmp_path, "--checkpoint-every", "5")
+    _wait_for_checkpoint(tmp_path, process, 5)
+    process.send_signal(signal.SIGKILL)
+    process.wait(timeout=30)
+    assert read_status(tmp_path)["status"] == "running"
+    done = subprocess.run([sys.executable, "-m", "ddpy", "run", str(case), "--output",
+                           str(tmp_path), "--restart"], capture_output=True, text=True,
+                          env={**os.environ, "OMP_NUM_THREADS": "1"})
+    assert done.returncode == 0, done.stderr
+    assert "completed" in done.stdout
+    compare(ref, tmp_path)
+
+
+def test_ctrl_c_stops_cleanly_and_keeps_the_results(slow_case: tuple[Path, Path],
+                                                    tmp_path: Path) -> None:
+    case, _ = slow_case
+    process = _start(case, tmp_path)
+    _wait_for_checkpoint(tmp_path, process, 10)
+    process.send_signal(signal.SIGINT)
+    stdout, stderr = process.communicate(timeout=60)
+    assert process.returncode == 130, stderr
+    assert "stopping after this increment" in stderr
+    assert "interrupted" in stdout and "--restart" in stdout
+    status = json.loads((tmp_path / "status.json").read_text())
+    assert status["status"] == "interrupted" and status["increments"] >= 10
+    with ResultsReader(tmp_path / RESULTS) as r:
+        assert r.n_increments == status["increments"]
+        assert r.frames[-1].increment == r.n_increments  # the fields where it stopped
+        assert r._file.attrs["status"] == "interrupted"
+    # Not a terminal: one plain line per increment.
+    assert stdout.count("\nincrement ") >= 10
+
+
+def test_default_case_is_packaged_and_equals_the_example(tmp_path: Path) -> None:
+    example = ROOT / "examples" / "bending"
+    files = sorted(p.relative_to(example) for p in example.rglob("*") if p.is_file())
+    assert files == sorted(p.relative_to(DEFAULT_CASE) for p in DEFAULT_CASE.rglob("*")
+                           if p.is_file())
+    for name in files:
+        assert (DEFAULT_CASE / name).read_bytes() == (example / name).read_bytes(), name
+    meson = (ROOT / "meson.build").read_text()
+    for name in files:
+        assert f"'ddpy/cases/cylindrical_bending/{name}'" in meson, name
+    # `ddpy run` without a case reads it and starts; here it stops at once, finding
+    # results already in its default output folder.
+    taken = tmp_path / "results" / "cylindrical_bending"
+    taken.mkdir(parents=True)
+    (taken / RESULTS).write_bytes(b"")
+    done = subprocess.run([sys.executable, "-m", "ddpy", "run"], capture_output=True,
+                          text=True, cwd=tmp_path)
+    assert done.returncode == 1
+    assert "running Unconstrained cylindrical bending" in done.stdout
+    assert str(DEFAULT_CASE) in done.stdout
+    assert "results/cylindrical_bending/results.h5 exists" in done.stderr

@@ -63,7 +63,13 @@ CHECKPOINT_EVERY = 10
 #: What limited an increment in ddpy.forming -> the ``limit`` names of ddpy.results.
 _LIMITS = {"max": "max_increment", "touch": "contact_touch", "strain": "strain",
            "rotation": "rotation", "yield": "yield", "cut": "cutback",
+           "release": "contact_release",
            "springback": "max_increment"}
+
+
+#: Arrays of FormingProblem carried from one increment to the next (besides the solid state
+#: and the tool positions): a checkpoint stores them. Add here any new state of the loop.
+_CARRIED = ("u", "force", "_status")
 
 
 class RunError(RuntimeError):
@@ -187,7 +193,7 @@ class _Run:
         """Write a checkpoint of the present state (``progress``: inside a forming phase)."""
         assert self.writer is not None
         p = self.problem
-        arrays: dict[str, NDArray] = {"u": p.u, "force": p.force}
+        arrays: dict[str, NDArray] = {k: getattr(p, k) for k in _CARRIED}
         arrays.update(state_arrays(p.state))
         arrays.update({f"position/{k}": v for k, v in p.position.items()})
         meta: dict[str, Any] = {
@@ -202,8 +208,9 @@ class _Run:
                                 "offsets": {k: o for k, (o, _) in progress.offsets.items()}}
             arrays.update({f"start/{k}": v for k, v in progress.start.items()})
             arrays.update({f"offset/{k}": v for k, (_, v) in progress.offsets.items()})
-            if progress.last_du is not None:
-                arrays["last_du"] = progress.last_du
+            for name in ("last_du", "last_dp"):
+                if getattr(progress, name) is not None:
+                    arrays[name] = getattr(progress, name)
         write_checkpoint(self.output / CHECKPOINT, meta, arrays)
         self._since_checkpoint = 0
 
@@ -216,14 +223,16 @@ class _Run:
                                   "checkpoint was written; run again without --restart")
         p = self.problem
         try:
-            u, force = arrays["u"], arrays["force"]
+            carried = {k: arrays[k] for k in _CARRIED}
             positions = {k: arrays[f"position/{k}"] for k in self.names}
         except KeyError as error:
             raise CheckpointError(f"{path}: {error.args[0]} missing") from None
-        if u.shape != p.u.shape or force.shape != p.force.shape:
-            raise CheckpointError(f"{path}: written for another mesh or tools (u {u.shape}, "
-                                  f"expected {p.u.shape})")
-        p.u, p.force, p.position = u.copy(), force.copy(), positions
+        for name, value in carried.items():
+            if value.shape != getattr(p, name).shape:
+                raise CheckpointError(f"{path}: written for another mesh or tools ({name} "
+                                      f"{value.shape}, expected {getattr(p, name).shape})")
+            setattr(p, name, value.copy())
+        p.position = positions
         p.state = state_from_arrays(SolidState, arrays, where=str(path))
         self.phase_index, self.segment = int(meta["phase_index"]), int(meta["segment"])
         self.phase_increments, self.last_frame = (int(meta["phase_increments"]),
@@ -235,7 +244,8 @@ class _Run:
                 start={k: arrays[f"start/{k}"] for k in self.names},
                 offsets={k: (o, arrays[f"offset/{k}"]) for k, o in prog["offsets"].items()},
                 factor=float(prog["factor"]), step=float(prog["step"]),
-                reason=str(prog["reason"]), last_du=arrays.get("last_du"))
+                reason=str(prog["reason"]), last_du=arrays.get("last_du"),
+                last_dp=arrays.get("last_dp"))
         self.writer = ResultsWriter.reopen(self.output / RESULTS, int(meta["increments"]),
                                            int(meta["iterations"]), int(meta["frames"]))
 
@@ -315,7 +325,8 @@ class _Run:
         ratio = longest / phase.travel if phase.travel > 0 else 1.0
         limits = IncrementLimits(
             strain=phase.rmin.strain, rotation_deg=phase.rmin.rotation,
-            yield_tolerance=phase.rmin.yield_tolerance, first_touch=phase.rmin.contact,
+            yield_tolerance=max(phase.rmin.yield_tolerance, 1e-6),
+            first_touch=phase.rmin.contact, release=0.05 if phase.rmin.contact else None,
             min_fraction=min(1.0, phase.min_increment / phase.max_increment))
         max_cuts = max(1, math.ceil(math.log(phase.max_increment / phase.min_increment)
                                     / math.log(2.0)))

@@ -97,21 +97,33 @@ def material_props(material: Any) -> NDArray[np.float64]:
 
 @dataclass
 class SolidState:
-    """Material state per Gauss point at a converged increment: second Piola-Kirchhoff stress
-    in material axes (m, 8, 6), equivalent plastic strain (m, 8) and the mean-dilatation
-    Green-Lagrange strain in global axes (m, 8, 6)."""
+    """State of the blank at a converged increment, the reference configuration of the next
+    (updated Lagrangian): per Gauss point the rotated Kirchhoff stress in material axes
+    (m, 8, 6), the equivalent plastic strain (m, 8), the accumulated logarithmic strain in
+    material axes (m, 8, 6) and the material axes as columns (m, 8, 3, 3); per node the
+    displacements (n, 3)."""
 
     stress: NDArray[np.float64]
     ep: NDArray[np.float64]
     strain: NDArray[np.float64]
+    axes: NDArray[np.float64]
+    displacement: NDArray[np.float64]
 
     @classmethod
-    def zeros(cls, n_elements: int) -> SolidState:
+    def zeros(cls, n_elements: int, n_nodes: int) -> SolidState:
+        """Stress-free, undeformed state with the material axes along the global axes."""
+        axes = np.broadcast_to(np.eye(3), (n_elements, 8, 3, 3)).copy()
         return cls(np.zeros((n_elements, 8, 6)), np.zeros((n_elements, 8)),
-                   np.zeros((n_elements, 8, 6)))
+                   np.zeros((n_elements, 8, 6)), axes, np.zeros((n_nodes, 3)))
 
     def copy(self) -> SolidState:
-        return SolidState(self.stress.copy(), self.ep.copy(), self.strain.copy())
+        return SolidState(self.stress.copy(), self.ep.copy(), self.strain.copy(),
+                          self.axes.copy(), self.displacement.copy())
+
+
+def _flat(a: NDArray[np.float64]) -> NDArray[np.float64]:
+    """C-ordered flat float64 view (or copy) for the core."""
+    return np.ascontiguousarray(a, dtype=np.float64).ravel()
 
 
 class Assembly(NamedTuple):
@@ -161,8 +173,16 @@ class Solid:
         return 3 * self.mesh.n_nodes
 
     def initial_state(self) -> SolidState:
-        """Stress-free state with no plastic strain."""
-        return SolidState.zeros(self.mesh.n_elements)
+        """Stress-free, undeformed state with no plastic strain; the material axes are the
+        rolling direction, its normal in the x-y plane and z."""
+        state = SolidState.zeros(self.mesh.n_elements, self.mesh.n_nodes)
+        c, s = np.cos(self.angle), np.sin(self.angle)
+        axes = np.zeros((self.mesh.n_elements, 3, 3))
+        axes[:, 0, 0], axes[:, 1, 0] = c, s
+        axes[:, 0, 1], axes[:, 1, 1] = -s, c
+        axes[:, 2, 2] = 1.0
+        state.axes[:] = axes[:, None, :, :]
+        return state
 
     def pattern(self, eqn: ArrayLike | None = None, symmetric: bool = True) -> _Pattern:
         """Coordinate structure of the tangent for equation numbers ``eqn`` (n, 3) (0-based,
@@ -190,7 +210,8 @@ class Solid:
                  dp: ArrayLike | None = None) -> Assembly:
         """Internal forces (n, 3), tangent values in the slots of ``pattern`` (empty when
         ``tangent`` is False) and the trial state at total displacements ``u`` (n, 3),
-        starting from the converged ``state``; with ``dp`` (n, 3) also the product K dp of
+        over the increment from the converged ``state`` (its displacements are the
+        reference configuration); with ``dp`` (n, 3) also the product K dp of
         the tangent over all dofs with dp. ``values`` may be given as the output buffer.
         Raises ElementError when an element is inverted or its material update fails."""
         n = self.mesh.n_nodes
@@ -203,14 +224,16 @@ class Solid:
             values = np.empty(pattern.rows.shape[0])
         product = dp is not None and tangent
         dp = np.zeros(3 * n) if dp is None else float_array(dp, "dp", (n, 3)).ravel()
-        values, fint, kdu, stress, ep, strain, status, element = _core.solid_assemble(
-            self._x, self._conn, u.ravel(), self.props, self.angle, state.stress.ravel(),
-            state.ep.ravel(), state.strain.ravel(), pattern.eqn, int(pattern.symmetric),
-            int(tangent), pattern.offsets, values, int(product), dp)
+        values, fint, kdu, stress, ep, strain, axes, status, element = _core.solid_assemble(
+            self._x, self._conn, _flat(state.displacement), u.ravel(), self.props,
+            _flat(state.axes.transpose(0, 1, 3, 2)), _flat(state.stress), _flat(state.ep),
+            _flat(state.strain), pattern.eqn, int(pattern.symmetric), int(tangent),
+            pattern.offsets, values, int(product), dp)
         if status:
             raise ElementError(int(status), int(element) - 1)
         m = self.mesh.n_elements
-        trial = SolidState(stress.reshape(m, 8, 6), ep.reshape(m, 8), strain.reshape(m, 8, 6))
+        trial = SolidState(stress.reshape(m, 8, 6), ep.reshape(m, 8), strain.reshape(m, 8, 6),
+                           axes.reshape(m, 8, 3, 3).transpose(0, 1, 3, 2), u.copy())
         return Assembly(fint.reshape(-1, 3), values, trial,
                         kdu.reshape(-1, 3) if product else None)
 
@@ -230,11 +253,12 @@ class Solid:
 
     def stresses(self, u: ArrayLike, state: SolidState,
                  ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-        """Second Piola-Kirchhoff stress in global axes and Cauchy stress (m, 8, 6), and the
-        current Gauss point positions (m, 8, 3)."""
+        """Second Piola-Kirchhoff and Cauchy stress in global axes (m, 8, 6) and the current
+        Gauss point positions (m, 8, 3) of ``state`` at total displacements ``u``."""
         u = float_array(u, "u", (self.mesh.n_nodes, 3))
         pk2, cauchy, points, status, element = _core.solid_stresses(
-            self._x, self._conn, u.ravel(), self.angle, state.stress.ravel())
+            self._x, self._conn, u.ravel(), _flat(state.axes.transpose(0, 1, 3, 2)),
+            _flat(state.stress))
         if status:
             raise ElementError(int(status), int(element) - 1)
         m = self.mesh.n_elements

@@ -95,19 +95,21 @@ contains
   end subroutine api_solid_coo_pattern
 
   !> Internal forces, tangent values in the slots of solid_coo_pattern (when tangent /= 0)
-  !> and the trial material state at total displacements u; with product /= 0 also
-  !> kdu = K dp (K over all dofs, dp the increment of prescribed displacements).
-  subroutine api_solid_assemble(nn, x, ne, conn, u, props, angle, stress_old, ep_old, &
-                                strain_old, eqn, symmetric, tangent, offsets, nz, values, &
-                                product, dp, fint, kdu, stress, ep, strain, status, element) &
-    bind(C, name="ddpy_solid_assemble")
+  !> and the trial material state at total displacements u, over the increment from the
+  !> converged state at displacements u_ref; with product /= 0 also kdu = K dp (K over all
+  !> dofs, dp the increment of prescribed displacements).
+  subroutine api_solid_assemble(nn, x, ne, conn, u_ref, u, props, axes_old, stress_old, &
+                                ep_old, strain_old, eqn, symmetric, tangent, offsets, nz, &
+                                values, product, dp, fint, kdu, stress, ep, strain, axes, &
+                                status, element) bind(C, name="ddpy_solid_assemble")
     integer(c_int), value, intent(in) :: nn, ne, symmetric, tangent, nz, product
-    real(c_double), intent(in) :: x(3, nn), u(3, nn), props(np), angle(ne), dp(3, nn)
+    real(c_double), intent(in) :: x(3, nn), u_ref(3, nn), u(3, nn), props(np), dp(3, nn)
     integer(c_int), intent(in) :: conn(8, ne), eqn(3, nn), offsets(ne + 1)
-    real(c_double), intent(in) :: stress_old(6, 8, ne), ep_old(8, ne), strain_old(6, 8, ne)
+    real(c_double), intent(in) :: axes_old(3, 3, 8, ne), stress_old(6, 8, ne), &
+                                  ep_old(8, ne), strain_old(6, 8, ne)
     real(c_double), intent(inout) :: values(nz)
     real(c_double), intent(out) :: fint(3, nn), kdu(3, nn), stress(6, 8, ne), ep(8, ne), &
-                                   strain(6, 8, ne)
+                                   strain(6, 8, ne), axes(3, 3, 8, ne)
     integer(c_int), intent(out) :: status, element
     fint = 0.0_wp
     kdu = 0.0_wp
@@ -121,17 +123,17 @@ contains
       status = status_bad_offsets
       return
     end if
-    call solid_assemble(nn, x, ne, conn + 1, u, props, angle, stress_old, ep_old, strain_old, &
-                        eqn, symmetric /= 0, tangent /= 0, offsets, nz, values, product /= 0, &
-                        dp, fint, kdu, stress, ep, strain, status, element)
+    call solid_assemble(nn, x, ne, conn + 1, u_ref, u, props, axes_old, stress_old, ep_old, &
+                        strain_old, eqn, symmetric /= 0, tangent /= 0, offsets, nz, values, &
+                        product /= 0, dp, fint, kdu, stress, ep, strain, axes, status, element)
   end subroutine api_solid_assemble
 
   !> Second Piola-Kirchhoff (global axes), Cauchy stresses and current Gauss point positions
-  !> from the material-axes stresses of the state.
-  subroutine api_solid_stresses(nn, x, ne, conn, u, angle, stress_mat, pk2, cauchy, points, &
+  !> from the state's material axes and rotated Kirchhoff stresses.
+  subroutine api_solid_stresses(nn, x, ne, conn, u, axes, stress_mat, pk2, cauchy, points, &
                                 status, element) bind(C, name="ddpy_solid_stresses")
     integer(c_int), value, intent(in) :: nn, ne
-    real(c_double), intent(in) :: x(3, nn), u(3, nn), angle(ne), stress_mat(6, 8, ne)
+    real(c_double), intent(in) :: x(3, nn), u(3, nn), axes(3, 3, 8, ne), stress_mat(6, 8, ne)
     integer(c_int), intent(in) :: conn(8, ne)
     real(c_double), intent(out) :: pk2(6, 8, ne), cauchy(6, 8, ne), points(3, 8, ne)
     integer(c_int), intent(out) :: status, element
@@ -144,7 +146,7 @@ contains
       status = status_bad_node
       return
     end if
-    call solid_stresses(nn, x, ne, conn + 1, u, angle, stress_mat, pk2, cauchy, points, &
+    call solid_stresses(nn, x, ne, conn + 1, u, axes, stress_mat, pk2, cauchy, points, &
                         status, element)
   end subroutine api_solid_stresses
 

@@ -1,17 +1,29 @@
-!> The 8-node hexahedron at large strains and rotations (../docs/theory/solid.md).
+!> The 8-node hexahedron at large strains and rotations, updated Lagrangian
+!> (../docs/theory/solid.md).
 !>
-!> Kinematics in the reference configuration: F = I + grad_X u, Green-Lagrange strain
-!> E = (F^T F - I)/2 with a mean-dilatation modification against volumetric locking,
-!> Ebar = E + (tr E_mean - tr E) I/3, where tr E_mean is the volume average of tr E over the
-!> element (2 x 2 x 2 Gauss points). Ebar = E for a homogeneous deformation (patch test) and
-!> is quadratic in u, so its first and second derivatives, and with them the tangent, are
-!> exact. The material works on increments of Ebar and on the second Piola-Kirchhoff stress
-!> S in material axes (rolling direction rotated by an angle about z), both invariant under
-!> rigid rotations: the update is objective and the orthotropy axes are convected.
+!> Each increment is referred to the last converged configuration x_n: the relative
+!> deformation gradient dF = I + grad_xn du has the Green-Lagrange strain E_GL and the
+!> logarithmic strain dE = ln(dU) (ddpy_log_strain), whose derivatives are exact, so the
+!> tangent is consistent. Against volumetric locking, the mean dilatation: the volumetric
+!> part of dE (ln det dF) is replaced by its volume average over the element,
+!> dEbar = dE + (mean(ln det dF) - ln det dF) I/3. The material integrates dEbar in the
+!> material axes of x_n from the stress of the last increment, in a frame that rotates
+!> with the body. The material returns T, conjugate to dE per unit initial volume; the
+!> second Piola-Kirchhoff stress relative to x_n is S = P^T T (P = d dE / d E_GL) and the
+!> stress kept is the Kirchhoff stress dF S dF^T rotated back by dR of the polar
+!> decomposition dF = dR dU, tau_hat = dU S dU, with the material axes turned by dR. The
+!> update is objective (a rigid rotation leaves tau_hat unchanged) and keeps equilibrium
+!> from one increment to the next (tau_hat gives back the converged forces). For coaxial
+!> stretching tau_hat = T and logarithmic strains add, so uniaxial tension follows the
+!> hardening law in Kirchhoff stress and logarithmic strain exactly; where dU and T are not
+!> coaxial, tau_hat may stand off the yield surface by the order of |dE| |T|, and the next
+!> increment returns it.
 !> Voigt order 11, 22, 33, 12, 23, 31 with engineering shear strains throughout.
 module ddpy_hex8
   use ddpy_kinds, only: wp
   use ddpy_material, only: material_update, material_prop_count
+  use ddpy_log_strain, only: hencky_type, hencky_evaluate, hencky_first, hencky_second, &
+                             hencky_stretch, tensor_from_stress, stress_from_tensor
   implicit none
   private
   public :: hex8_element, hex8_jacobians, hex8_stresses, strain_rotation
@@ -28,6 +40,7 @@ module ddpy_hex8
 
   !> Index pairs (i, j) of the Voigt components.
   integer, parameter :: voigt(2, 6) = reshape([1, 1, 2, 2, 3, 3, 1, 2, 2, 3, 3, 1], [2, 6])
+  real(wp), parameter :: identity_voigt(6) = [1.0_wp, 1.0_wp, 1.0_wp, 0.0_wp, 0.0_wp, 0.0_wp]
 
 contains
 
@@ -93,20 +106,13 @@ contains
     end do
   end subroutine hex8_jacobians
 
-  !> Voigt strain transformation t (engineering shears) from global axes to material axes
-  !> rotated by angle (radians) about z: strain_material = t strain_global. The stress goes
-  !> back as stress_global = t^T stress_material and the tangent as t^T D t.
-  pure function strain_rotation(angle) result(t)
-    real(wp), intent(in) :: angle
+  !> Voigt strain transformation t (engineering shears) from global axes to the material
+  !> axes whose directions are the columns of axes: strain_material = t strain_global. The
+  !> stress goes back as stress_global = t^T stress_material and the tangent as t^T D t.
+  pure function strain_rotation(axes) result(t)
+    real(wp), intent(in) :: axes(3, 3)
     real(wp) :: t(6, 6)
-    real(wp) :: q(3, 3)
     integer :: r, c, i, j, k, l
-    q = 0.0_wp
-    q(1, 1) = cos(angle)
-    q(1, 2) = sin(angle)
-    q(2, 1) = -sin(angle)
-    q(2, 2) = cos(angle)
-    q(3, 3) = 1.0_wp
     do c = 1, 6
       k = voigt(1, c)
       l = voigt(2, c)
@@ -114,9 +120,9 @@ contains
         i = voigt(1, r)
         j = voigt(2, r)
         if (c <= 3) then
-          t(r, c) = q(i, k)*q(j, k)
+          t(r, c) = axes(k, i)*axes(k, j)
         else
-          t(r, c) = 0.5_wp*(q(i, k)*q(j, l) + q(i, l)*q(j, k))
+          t(r, c) = 0.5_wp*(axes(k, i)*axes(l, j) + axes(l, i)*axes(k, j))
         end if
         if (r > 3) t(r, c) = 2.0_wp*t(r, c)
       end do
@@ -133,51 +139,48 @@ contains
          c(1, 2), c(2, 3), c(3, 1)]
   end function green_lagrange
 
-  !> Internal force, tangent (lower triangle and its mirror) and updated material state of
-  !> one element.
+  !> Internal force, tangent and trial material state of one element over an increment.
   !>
-  !> x: reference coordinates, u: total displacements of the 8 nodes; rot: strain_rotation
-  !> of the element's material axes. State per Gauss point at the last converged increment:
-  !> stress_old (S in material axes), ep_old, strain_old (Ebar, global axes). Out: the trial
-  !> state at u (stress, ep, strain), f = sum W Bbar^T S, k = d f / d u (full 24 x 24,
-  !> symmetric; only when want_tangent), status hex8_ok, hex8_inverted (det J0 or det F <= 0
-  !> at a Gauss point) or hex8_material_failed.
-  pure subroutine hex8_element(x, u, props, rot, stress_old, ep_old, strain_old, &
-                               want_tangent, f, k, stress, ep, strain, status)
-    real(wp), intent(in) :: x(3, 8), u(3, 8), props(material_prop_count), rot(6, 6)
-    real(wp), intent(in) :: stress_old(6, 8), ep_old(8), strain_old(6, 8)
+  !> x0: initial coordinates; xn: coordinates at the last converged increment (the
+  !> reference of the increment); du: displacement increment from xn. State per Gauss point
+  !> at xn: axes_old (material axes as columns), stress_old (tau_hat in material axes),
+  !> ep_old, strain_old (accumulated logarithmic strain in material axes).
+  !> Out: f = sum W0 dEbar/du^T T, k = d f / d du (24 x 24, symmetric; only when
+  !> want_tangent), the trial state (stress, ep, strain, axes) and status hex8_ok,
+  !> hex8_inverted (det J or det dF <= 0 at a Gauss point) or hex8_material_failed.
+  pure subroutine hex8_element(x0, xn, du, props, axes_old, stress_old, ep_old, strain_old, &
+                               want_tangent, f, k, stress, ep, strain, axes, status)
+    real(wp), intent(in) :: x0(3, 8), xn(3, 8), du(3, 8), props(material_prop_count)
+    real(wp), intent(in) :: axes_old(3, 3, 8), stress_old(6, 8), ep_old(8), strain_old(6, 8)
     logical, intent(in) :: want_tangent
-    real(wp), intent(out) :: f(24), k(24, 24), stress(6, 8), ep(8), strain(6, 8)
+    real(wp), intent(out) :: f(24), k(24, 24), stress(6, 8), ep(8), strain(6, 8), axes(3, 3, 8)
     integer, intent(out) :: status
-    real(wp) :: g(8, 3, 8), w(8), e(6, 8), b(6, 24, 8), btr(24, 8), tr(8)
-    real(wp) :: fg(3, 3), vol, trbar, bbar_tr(24), g2(8, 8), kg(8, 8), bb(6, 24), db(6, 24), &
-                bt(24, 6)
-    real(wp) :: de(6), s_mat(6), d_mat(6, 6), s(6), d(6, 6), s3(3, 3), sg(3, 8), ptr, ptr_sum
+    type(hencky_type) :: hk(8)
+    real(wp) :: g(8, 3, 8), v(8), w0(8), b(6, 24, 8), bl(6, 24, 8), btr(24, 8), lnj(8), &
+                pm(6, 6, 8), tg(6, 8), trt(8)
+    real(wp) :: fg(3, 3), vol, mean_lnj, bbar_tr(24), kg(8, 8), bb(6, 24), db(6, 24), &
+                bt(24, 6), g0(8, 3), rot(6, 6), de(6), s_mat(6), d_mat(6, 6), d(6, 6), &
+                a_hat(6), s_eff(6), lmat(6, 6), lb(6, 24), u(3, 3), u_inv(3, 3), ct
     integer :: p, a, c, i, j, col, mstatus
-    logical :: plastic, rotated
+    logical :: plastic
 
-    ! Material axes = global axes (the common case): skip the rotations.
-    rotated = .false.
-    do j = 1, 6
-      do i = 1, 6
-        if (rot(i, j) /= merge(1.0_wp, 0.0_wp, i == j)) rotated = .true.
-      end do
-    end do
     f = 0.0_wp
     k = 0.0_wp
     stress = stress_old
     ep = ep_old
     strain = strain_old
+    axes = axes_old
     status = hex8_ok
 
-    ! Pass 1: gradients, strains and their first derivatives at the Gauss points.
+    ! Pass 1: gradients on xn, relative deformation, both strains and their derivatives.
     do p = 1, 8
-      call reference_gradients(x, gauss*corner(:, p), g(:, :, p), w(p))
-      if (w(p) <= 0.0_wp) then
+      call reference_gradients(x0, gauss*corner(:, p), g0, w0(p))
+      call reference_gradients(xn, gauss*corner(:, p), g(:, :, p), v(p))
+      if (w0(p) <= 0.0_wp .or. v(p) <= 0.0_wp) then
         status = hex8_inverted
         return
       end if
-      fg = matmul(u, g(:, :, p))
+      fg = matmul(du, g(:, :, p))
       do i = 1, 3
         fg(i, i) = fg(i, i) + 1.0_wp
       end do
@@ -185,8 +188,8 @@ contains
         status = hex8_inverted
         return
       end if
-      e(:, p) = green_lagrange(fg)
-      tr(p) = e(1, p) + e(2, p) + e(3, p)
+      call hencky_evaluate(green_lagrange(fg), hk(p))
+      lnj(p) = hk(p)%strain(1) + hk(p)%strain(2) + hk(p)%strain(3)
       do a = 1, 8
         do c = 1, 3
           col = 3*(a - 1) + c
@@ -198,55 +201,55 @@ contains
           b(6, col, p) = fg(c, 3)*g(a, 1, p) + fg(c, 1)*g(a, 3, p)
         end do
       end do
-      btr(:, p) = b(1, :, p) + b(2, :, p) + b(3, :, p)
+      pm(:, :, p) = hencky_first(hk(p))
+      bl(:, :, p) = matmul(pm(:, :, p), b(:, :, p))
+      btr(:, p) = bl(1, :, p) + bl(2, :, p) + bl(3, :, p)
     end do
 
-    ! Volume averages of tr E, of its gradient and of its second derivative (g2).
-    vol = sum(w)
-    trbar = dot_product(w, tr)/vol
-    bbar_tr = matmul(btr, w)/vol
-    if (want_tangent) then
-      g2 = 0.0_wp
-      do p = 1, 8
-        g2 = g2 + w(p)*matmul(g(:, :, p), transpose(g(:, :, p)))
-      end do
-      g2 = g2/vol
-      kg = 0.0_wp
-      ptr_sum = 0.0_wp
-    end if
+    ! Averages over the element of ln det dF and of its gradient, weighted by the initial
+    ! volumes: the same weights in every increment, so that the stress kept gives back the
+    ! converged forces exactly (weights of xn would shift the mean pressure between
+    ! increments).
+    vol = sum(w0)
+    mean_lnj = dot_product(w0, lnj)/vol
+    bbar_tr = matmul(btr, w0)/vol
 
-    ! Pass 2: mean-dilatation strain, material update, force and tangent.
+    ! Pass 2: mean-dilatation strain, material update in the axes of xn, force, material
+    ! tangent, and the state rotated to the end of the increment.
     do p = 1, 8
-      strain(:, p) = e(:, p)
-      strain(1:3, p) = strain(1:3, p) + (trbar - tr(p))/3.0_wp
-      bb = b(:, :, p)
+      de = hk(p)%strain + (mean_lnj - lnj(p))/3.0_wp*identity_voigt
+      bb = bl(:, :, p)
       do i = 1, 3
         bb(i, :) = bb(i, :) + (bbar_tr - btr(:, p))/3.0_wp
       end do
-      de = strain(:, p) - strain_old(:, p)
-      if (rotated) de = matmul(rot, de)
+      rot = strain_rotation(axes_old(:, :, p))
+      de = matmul(rot, de)
       call material_update(props, stress_old(:, p), ep_old(p), de, s_mat, ep(p), d_mat, &
                            plastic, mstatus)
       if (mstatus > 0) then
         status = hex8_material_failed
         return
       end if
-      stress(:, p) = s_mat
-      if (rotated) then
-        s = matmul(transpose(rot), s_mat)
-      else
-        s = s_mat
-      end if
-      f = f + w(p)*matmul(s, bb)
+      strain(:, p) = strain_old(:, p) + de
+      tg(:, p) = matmul(transpose(rot), s_mat)
+      trt(p) = tg(1, p) + tg(2, p) + tg(3, p)
+      f = f + w0(p)*matmul(tg(:, p), bb)
+      ! The stress at the end of the increment in the axes turned by dR = dF dU^-1: the
+      ! rotated Kirchhoff stress dU S dU, S = P^T T relative to xn per unit initial volume.
+      call hencky_stretch(hk(p), u, u_inv)
+      fg = matmul(du, g(:, :, p))
+      do i = 1, 3
+        fg(i, i) = fg(i, i) + 1.0_wp
+      end do
+      axes(:, :, p) = matmul(matmul(fg, u_inv), axes_old(:, :, p))
+      u = matmul(u, matmul(tensor_from_stress(matmul(tg(:, p), pm(:, :, p))), u))
+      stress(:, p) = stress_from_tensor(matmul(transpose(axes_old(:, :, p)), &
+                                               matmul(u, axes_old(:, :, p))))
       if (.not. want_tangent) cycle
 
-      ! Material part W Bbar^T D Bbar, lower triangle, vectorized along the columns.
-      if (rotated) then
-        d = matmul(transpose(rot), matmul(d_mat, rot))
-        db = w(p)*matmul(d, bb)
-      else
-        db = w(p)*matmul(d_mat, bb)
-      end if
+      ! Material part W0 Bbar^T D Bbar, lower triangle, vectorized along the columns.
+      d = matmul(transpose(rot), matmul(d_mat, rot))
+      db = w0(p)*matmul(d, bb)
       bt = transpose(bb)
       do j = 1, 24
         do i = j, 24
@@ -254,16 +257,28 @@ contains
                     + bt(i, 4)*db(4, j) + bt(i, 5)*db(5, j) + bt(i, 6)*db(6, j)
         end do
       end do
-      ! Geometric part S : d2Ebar/du2 = S : d2E + tr S/3 (d2 trE_mean - d2 trE).
-      s3 = reshape([s(1), s(4), s(6), s(4), s(2), s(5), s(6), s(5), s(3)], [3, 3])
-      ptr = w(p)*(s(1) + s(2) + s(3))/3.0_wp
-      sg = matmul(s3, transpose(g(:, :, p)))
-      kg = kg + w(p)*matmul(g(:, :, p), sg) - ptr*matmul(g(:, :, p), transpose(g(:, :, p)))
-      ptr_sum = ptr_sum + ptr
     end do
     if (.not. want_tangent) return
 
-    kg = kg + ptr_sum*g2
+    ! Pass 3, geometric part: sum_p A_p : d2 dE_p / du2 with A_p = W0 T_p + a_p I, where a_p
+    ! moves the pressure to the element average (mean dilatation). By the chain rule
+    ! A : d2 dE = B^T L(A) B + (P^T A) : d2 E_GL, the second part the familiar g S g^T.
+    ct = dot_product(w0, trt)/3.0_wp
+    kg = 0.0_wp
+    do p = 1, 8
+      a_hat = w0(p)*tg(:, p) + (w0(p)/vol*ct - w0(p)*trt(p)/3.0_wp)*identity_voigt
+      lmat = hencky_second(hk(p), a_hat)
+      lb = matmul(lmat, b(:, :, p))
+      bt = transpose(b(:, :, p))
+      do j = 1, 24
+        do i = j, 24
+          k(i, j) = k(i, j) + bt(i, 1)*lb(1, j) + bt(i, 2)*lb(2, j) + bt(i, 3)*lb(3, j) &
+                    + bt(i, 4)*lb(4, j) + bt(i, 5)*lb(5, j) + bt(i, 6)*lb(6, j)
+        end do
+      end do
+      s_eff = matmul(a_hat, pm(:, :, p))
+      kg = kg + matmul(g(:, :, p), matmul(tensor_from_stress(s_eff), transpose(g(:, :, p))))
+    end do
     do j = 1, 8
       do i = j, 8
         do c = 1, 3
@@ -271,31 +286,37 @@ contains
         end do
       end do
     end do
-    ! Entries (3(i-1)+c, 3(i-1)+c') with c < c' of the same node lie above the diagonal and
-    ! receive nothing from kg; mirror the lower triangle to the upper.
+    call mirror(k)
+  end subroutine hex8_element
+
+  !> Copies the lower triangle of k to the upper.
+  pure subroutine mirror(k)
+    real(wp), intent(inout) :: k(24, 24)
+    integer :: i, j
     do j = 2, 24
       do i = 1, j - 1
         k(i, j) = k(j, i)
       end do
     end do
-  end subroutine hex8_element
+  end subroutine mirror
 
-  !> Stresses and positions at the 8 Gauss points: second Piola-Kirchhoff stress in global
-  !> axes (pk2 = rot^T stress_mat), Cauchy stress sigma = F S F^T / det F, and the current
-  !> positions of the points. Status hex8_inverted when det J0 or det F <= 0.
-  pure subroutine hex8_stresses(x, u, rot, stress_mat, pk2, cauchy, points, status)
-    real(wp), intent(in) :: x(3, 8), u(3, 8), rot(6, 6), stress_mat(6, 8)
+  !> Stresses and positions at the 8 Gauss points from the state at total displacement u:
+  !> Cauchy sigma = tau / det F and second Piola-Kirchhoff S = F^-1 tau F^-T (global axes),
+  !> tau = Q tau_hat Q^T with Q the material axes. Status hex8_inverted when det J0 or
+  !> det F <= 0.
+  pure subroutine hex8_stresses(x0, u, axes, stress_mat, pk2, cauchy, points, status)
+    real(wp), intent(in) :: x0(3, 8), u(3, 8), axes(3, 3, 8), stress_mat(6, 8)
     real(wp), intent(out) :: pk2(6, 8), cauchy(6, 8), points(3, 8)
     integer, intent(out) :: status
-    real(wp) :: g(8, 3), detj, fg(3, 3), s3(3, 3), sig(3, 3), n(8), dn(8, 3), jf
+    real(wp) :: g(8, 3), detj, fg(3, 3), tau(3, 3), finv(3, 3), n(8), dn(8, 3), jf
     integer :: p, i
     status = hex8_ok
     pk2 = 0.0_wp
     cauchy = 0.0_wp
     do p = 1, 8
       call shape_functions(gauss*corner(:, p), n, dn)
-      points(:, p) = matmul(x + u, n)
-      call reference_gradients(x, gauss*corner(:, p), g, detj)
+      points(:, p) = matmul(x0 + u, n)
+      call reference_gradients(x0, gauss*corner(:, p), g, detj)
       fg = matmul(u, g)
       do i = 1, 3
         fg(i, i) = fg(i, i) + 1.0_wp
@@ -305,12 +326,28 @@ contains
         status = hex8_inverted
         cycle
       end if
-      pk2(:, p) = matmul(transpose(rot), stress_mat(:, p))
-      s3 = reshape([pk2(1, p), pk2(4, p), pk2(6, p), pk2(4, p), pk2(2, p), pk2(5, p), &
-                    pk2(6, p), pk2(5, p), pk2(3, p)], [3, 3])
-      sig = matmul(fg, matmul(s3, transpose(fg)))/jf
-      cauchy(:, p) = [sig(1, 1), sig(2, 2), sig(3, 3), sig(1, 2), sig(2, 3), sig(3, 1)]
+      tau = matmul(axes(:, :, p), matmul(tensor_from_stress(stress_mat(:, p)), &
+                                         transpose(axes(:, :, p))))
+      cauchy(:, p) = stress_from_tensor(tau)/jf
+      finv = inverse3(fg, jf)
+      pk2(:, p) = stress_from_tensor(matmul(finv, matmul(tau, transpose(finv))))
     end do
   end subroutine hex8_stresses
+
+  !> Inverse of a 3 x 3 matrix with determinant det.
+  pure function inverse3(a, det) result(inv)
+    real(wp), intent(in) :: a(3, 3), det
+    real(wp) :: inv(3, 3)
+    inv(1, 1) = a(2, 2)*a(3, 3) - a(2, 3)*a(3, 2)
+    inv(1, 2) = a(1, 3)*a(3, 2) - a(1, 2)*a(3, 3)
+    inv(1, 3) = a(1, 2)*a(2, 3) - a(1, 3)*a(2, 2)
+    inv(2, 1) = a(2, 3)*a(3, 1) - a(2, 1)*a(3, 3)
+    inv(2, 2) = a(1, 1)*a(3, 3) - a(1, 3)*a(3, 1)
+    inv(2, 3) = a(1, 3)*a(2, 1) - a(1, 1)*a(2, 3)
+    inv(3, 1) = a(2, 1)*a(3, 2) - a(2, 2)*a(3, 1)
+    inv(3, 2) = a(1, 2)*a(3, 1) - a(1, 1)*a(3, 2)
+    inv(3, 3) = a(1, 1)*a(2, 2) - a(1, 2)*a(2, 1)
+    inv = inv/det
+  end function inverse3
 
 end module ddpy_hex8

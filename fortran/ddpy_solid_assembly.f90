@@ -11,7 +11,7 @@
 module ddpy_solid_assembly
   use ddpy_kinds, only: wp
   use ddpy_material, only: material_prop_count
-  use ddpy_hex8, only: hex8_element, hex8_jacobians, hex8_stresses, strain_rotation, hex8_ok
+  use ddpy_hex8, only: hex8_element, hex8_jacobians, hex8_stresses, hex8_ok
   implicit none
   private
   public :: solid_jacobians, solid_coo_count, solid_coo_pattern, solid_assemble, &
@@ -90,22 +90,26 @@ contains
   end subroutine solid_coo_pattern
 
   !> Internal forces, tangent values (when want_tangent) and trial material state of the
-  !> whole mesh at total displacements u. props: one material; angle(e): rolling direction
-  !> of element e (radians about z). With want_product (and want_tangent), kdu = K dp, the
-  !> tangent times the vector dp (the increment of the prescribed displacements: the
-  !> linearized predictor of an increment), otherwise kdu = 0. status = hex8_ok, or the
-  !> status of the first failing element, whose index is returned in element (0 when none).
-  subroutine solid_assemble(nn, x, ne, conn, u, props, angle, stress_old, ep_old, strain_old, &
-                            eqn, symmetric, want_tangent, offsets, nz, values, want_product, &
-                            dp, fint, kdu, stress, ep, strain, status, element)
+  !> whole mesh at total displacements u, over the increment from the converged state at
+  !> displacements u_ref (the reference configuration x + u_ref of the updated Lagrangian
+  !> element). props: one material; state per Gauss point as in hex8_element. With
+  !> want_product (and want_tangent), kdu = K dp, the tangent times the vector dp (the
+  !> increment of the prescribed displacements: the linearized predictor of an increment),
+  !> otherwise kdu = 0. status = hex8_ok, or the status of the first failing element, whose
+  !> index is returned in element (0 when none).
+  subroutine solid_assemble(nn, x, ne, conn, u_ref, u, props, axes_old, stress_old, ep_old, &
+                            strain_old, eqn, symmetric, want_tangent, offsets, nz, values, &
+                            want_product, dp, fint, kdu, stress, ep, strain, axes, status, &
+                            element)
     integer, intent(in) :: nn, ne, nz, conn(8, ne), eqn(3, nn), offsets(ne + 1)
-    real(wp), intent(in) :: x(3, nn), u(3, nn), props(material_prop_count), angle(ne)
-    real(wp), intent(in) :: stress_old(6, 8, ne), ep_old(8, ne), strain_old(6, 8, ne)
+    real(wp), intent(in) :: x(3, nn), u_ref(3, nn), u(3, nn), props(material_prop_count)
+    real(wp), intent(in) :: axes_old(3, 3, 8, ne), stress_old(6, 8, ne), ep_old(8, ne), &
+                            strain_old(6, 8, ne)
     real(wp), intent(in) :: dp(3, nn)
     logical, intent(in) :: symmetric, want_tangent, want_product
     real(wp), intent(inout) :: values(nz)
     real(wp), intent(out) :: fint(3, nn), kdu(3, nn), stress(6, 8, ne), ep(8, ne), &
-                             strain(6, 8, ne)
+                             strain(6, 8, ne), axes(3, 3, 8, ne)
     integer, intent(out) :: status, element
     real(wp), allocatable :: fe(:, :), ke_dp(:, :)
     integer, allocatable :: estatus(:)
@@ -121,10 +125,11 @@ contains
     end if
     !$omp parallel do schedule(dynamic, 16) if(ne > 256)
     do e = 1, ne
-      call assemble_element(e, nn, x, ne, conn, u, props, angle, stress_old, ep_old, &
-                            strain_old, eqn, symmetric, want_tangent, offsets, nz, values, &
-                            product, dp, fe(:, e), ke_dp(:, min(e, size(ke_dp, 2))), &
-                            stress(:, :, e), ep(:, e), strain(:, :, e), estatus(e))
+      call assemble_element(e, nn, x, ne, conn, u_ref, u, props, axes_old, stress_old, &
+                            ep_old, strain_old, eqn, symmetric, want_tangent, offsets, nz, &
+                            values, product, dp, fe(:, e), ke_dp(:, min(e, size(ke_dp, 2))), &
+                            stress(:, :, e), ep(:, e), strain(:, :, e), axes(:, :, :, e), &
+                            estatus(e))
     end do
     !$omp end parallel do
 
@@ -153,27 +158,30 @@ contains
   end subroutine solid_assemble
 
   !> One element of solid_assemble: writes only its own slots and state columns.
-  subroutine assemble_element(e, nn, x, ne, conn, u, props, angle, stress_old, ep_old, &
-                              strain_old, eqn, symmetric, want_tangent, offsets, nz, values, &
-                              product, dp, fe, ke_dp, stress, ep, strain, status)
+  subroutine assemble_element(e, nn, x, ne, conn, u_ref, u, props, axes_old, stress_old, &
+                              ep_old, strain_old, eqn, symmetric, want_tangent, offsets, nz, &
+                              values, product, dp, fe, ke_dp, stress, ep, strain, axes, status)
     integer, intent(in) :: e, nn, ne, nz, conn(8, ne), eqn(3, nn), offsets(ne + 1)
-    real(wp), intent(in) :: x(3, nn), u(3, nn), props(material_prop_count), angle(ne)
-    real(wp), intent(in) :: stress_old(6, 8, ne), ep_old(8, ne), strain_old(6, 8, ne)
+    real(wp), intent(in) :: x(3, nn), u_ref(3, nn), u(3, nn), props(material_prop_count)
+    real(wp), intent(in) :: axes_old(3, 3, 8, ne), stress_old(6, 8, ne), ep_old(8, ne), &
+                            strain_old(6, 8, ne)
     real(wp), intent(in) :: dp(3, nn)
     logical, intent(in) :: symmetric, want_tangent, product
     real(wp), intent(inout) :: values(nz)
-    real(wp), intent(out) :: fe(24), ke_dp(24), stress(6, 8), ep(8), strain(6, 8)
+    real(wp), intent(out) :: fe(24), ke_dp(24), stress(6, 8), ep(8), strain(6, 8), &
+                             axes(3, 3, 8)
     integer, intent(out) :: status
-    real(wp) :: ke(24, 24), xe(3, 8), ue(3, 8), de(24)
+    real(wp) :: ke(24, 24), x0(3, 8), xn(3, 8), du(3, 8), de(24)
     integer :: eq(24), i, j, pos, a
 
     do a = 1, 8
-      xe(:, a) = x(:, conn(a, e))
-      ue(:, a) = u(:, conn(a, e))
+      x0(:, a) = x(:, conn(a, e))
+      xn(:, a) = x0(:, a) + u_ref(:, conn(a, e))
+      du(:, a) = u(:, conn(a, e)) - u_ref(:, conn(a, e))
     end do
-    call hex8_element(xe, ue, props, strain_rotation(angle(e)), stress_old(:, :, e), &
+    call hex8_element(x0, xn, du, props, axes_old(:, :, :, e), stress_old(:, :, e), &
                       ep_old(:, e), strain_old(:, :, e), want_tangent, fe, ke, stress, ep, &
-                      strain, status)
+                      strain, axes, status)
     if (.not. want_tangent .or. status /= hex8_ok) return
     if (product) then
       do a = 1, 8
@@ -193,12 +201,13 @@ contains
     end do
   end subroutine assemble_element
 
-  !> Second Piola-Kirchhoff (global axes) and Cauchy stresses and current positions at the
-  !> Gauss points; status as in solid_assemble.
-  subroutine solid_stresses(nn, x, ne, conn, u, angle, stress_mat, pk2, cauchy, points, &
+  !> Second Piola-Kirchhoff and Cauchy stresses (global axes) and current positions at the
+  !> Gauss points from the state (material axes, rotated Kirchhoff stress) at total
+  !> displacements u; status as in solid_assemble.
+  subroutine solid_stresses(nn, x, ne, conn, u, axes, stress_mat, pk2, cauchy, points, &
                             status, element)
     integer, intent(in) :: nn, ne, conn(8, ne)
-    real(wp), intent(in) :: x(3, nn), u(3, nn), angle(ne), stress_mat(6, 8, ne)
+    real(wp), intent(in) :: x(3, nn), u(3, nn), axes(3, 3, 8, ne), stress_mat(6, 8, ne)
     real(wp), intent(out) :: pk2(6, 8, ne), cauchy(6, 8, ne), points(3, 8, ne)
     integer, intent(out) :: status, element
     integer, allocatable :: estatus(:)
@@ -206,7 +215,7 @@ contains
     allocate (estatus(ne))
     !$omp parallel do schedule(static) if(ne > 256)
     do e = 1, ne
-      call hex8_stresses(x(:, conn(:, e)), u(:, conn(:, e)), strain_rotation(angle(e)), &
+      call hex8_stresses(x(:, conn(:, e)), u(:, conn(:, e)), axes(:, :, :, e), &
                          stress_mat(:, :, e), pk2(:, :, e), cauchy(:, :, e), &
                          points(:, :, e), estatus(e))
     end do

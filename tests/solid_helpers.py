@@ -46,6 +46,20 @@ def linear_elastic_pk2(f: np.ndarray, e: float = E, nu: float = NU) -> np.ndarra
     return np.array([s[0, 0], s[1, 1], s[2, 2], s[0, 1], s[1, 2], s[2, 0]])
 
 
+def hencky_elastic_cauchy(f: np.ndarray, e: float = E, nu: float = NU) -> np.ndarray:
+    """Cauchy stress (3, 3) of isotropic elasticity on the logarithmic strain:
+    sigma = (lambda tr(ln V) I + 2 mu ln V) / det F, V the left stretch of f."""
+    w, v = np.linalg.eigh(f @ f.T)
+    log_v = v @ np.diag(0.5 * np.log(w)) @ v.T
+    lam, mu = e * nu / ((1 + nu) * (1 - 2 * nu)), e / (2 * (1 + nu))
+    return (lam * np.trace(log_v) * np.eye(3) + 2 * mu * log_v) / np.linalg.det(f)
+
+
+def voigt(t: np.ndarray) -> np.ndarray:
+    """Voigt vector (11, 22, 33, 12, 23, 31) of a symmetric tensor."""
+    return t[[0, 1, 2, 0, 1, 2], [0, 1, 2, 1, 2, 0]]
+
+
 def distorted_box(nx: int, ny: int, nz: int, amount: float, seed: int,
                   size: tuple[float, float, float] = (1.0, 1.0, 1.0)) -> HexMesh:
     """A box mesh with every node moved at random by up to ``amount`` of an element size."""

@@ -1,0 +1,265 @@
+!> The logarithmic (Hencky) strain E = ln(U) = (1/2) ln(C) of a deformation and its first and
+!> second derivatives with respect to the Green-Lagrange strain, for the updated Lagrangian
+!> hexahedron (../docs/theory/solid.md).
+!>
+!> Everything is computed in the eigenbasis of C = I + 2 E_GL by the Daleckii-Krein formulas:
+!> with f(lambda) = ln(lambda)/2, the first derivative of f(C) in direction H has the
+!> eigenbasis components f[l_i, l_j] H'_ij and the second, in directions H and K,
+!> sum_k f[l_i, l_k, l_j] (H'_ik K'_kj + K'_ik H'_kj), where f[.,.] and f[.,.,.] are divided
+!> differences. They are evaluated in forms that stay accurate for equal and nearly equal
+!> eigenvalues (the undeformed state has three), so no perturbation is needed.
+!> Voigt order 11, 22, 33, 12, 23, 31; strains with engineering shears, stresses without.
+module ddpy_log_strain
+  use ddpy_kinds, only: wp
+  implicit none
+  private
+  public :: hencky_type, hencky_evaluate, hencky_first, hencky_second, hencky_stretch, &
+            symmetric_eigen, tensor_from_strain, strain_from_tensor, tensor_from_stress, &
+            stress_from_tensor
+
+  !> One evaluation: eigenvalues mu of 2 E_GL (C = I + 2 E_GL has 1 + mu), eigenvectors
+  !> (columns), the divided differences of f, the Hencky strain (Voigt) and the six unit
+  !> Green-Lagrange directions, as dC = 2 dE_GL, in the eigenbasis.
+  type :: hencky_type
+    real(wp) :: mu(3) = 0.0_wp
+    real(wp) :: vectors(3, 3) = 0.0_wp
+    real(wp) :: first(3, 3) = 0.0_wp
+    real(wp) :: second(3, 3, 3) = 0.0_wp
+    real(wp) :: strain(6) = 0.0_wp
+    real(wp) :: direction(3, 3, 6) = 0.0_wp
+  end type hencky_type
+
+  integer, parameter :: voigt(2, 6) = reshape([1, 1, 2, 2, 3, 3, 1, 2, 2, 3, 3, 1], [2, 6])
+  !> Relative spread of three eigenvalues below which the second divided difference is taken
+  !> from its Taylor series (error ~ spread^4) instead of the difference quotient (rounding
+  !> ~ epsilon / spread): both near 1e-13 at 1e-3.
+  real(wp), parameter :: taylor_spread = 1.0e-3_wp
+
+contains
+
+  !> ln(1 + x), accurate for small x (Kahan's correction of the rounded 1 + x).
+  pure elemental function log_one_plus(x) result(y)
+    real(wp), intent(in) :: x
+    real(wp) :: y, w
+    w = 1.0_wp + x
+    if (w == 1.0_wp) then
+      y = x
+    else
+      y = log(w)*x/(w - 1.0_wp)
+    end if
+  end function log_one_plus
+
+  !> Symmetric 3 x 3 tensor from Voigt strain components (engineering shears halved).
+  pure function tensor_from_strain(e) result(t)
+    real(wp), intent(in) :: e(6)
+    real(wp) :: t(3, 3)
+    t = reshape([e(1), 0.5_wp*e(4), 0.5_wp*e(6), 0.5_wp*e(4), e(2), 0.5_wp*e(5), &
+                 0.5_wp*e(6), 0.5_wp*e(5), e(3)], [3, 3])
+  end function tensor_from_strain
+
+  pure function strain_from_tensor(t) result(e)
+    real(wp), intent(in) :: t(3, 3)
+    real(wp) :: e(6)
+    e = [t(1, 1), t(2, 2), t(3, 3), t(1, 2) + t(2, 1), t(2, 3) + t(3, 2), t(3, 1) + t(1, 3)]
+  end function strain_from_tensor
+
+  pure function tensor_from_stress(s) result(t)
+    real(wp), intent(in) :: s(6)
+    real(wp) :: t(3, 3)
+    t = reshape([s(1), s(4), s(6), s(4), s(2), s(5), s(6), s(5), s(3)], [3, 3])
+  end function tensor_from_stress
+
+  pure function stress_from_tensor(t) result(s)
+    real(wp), intent(in) :: t(3, 3)
+    real(wp) :: s(6)
+    s = [t(1, 1), t(2, 2), t(3, 3), 0.5_wp*(t(1, 2) + t(2, 1)), 0.5_wp*(t(2, 3) + t(3, 2)), &
+         0.5_wp*(t(3, 1) + t(1, 3))]
+  end function stress_from_tensor
+
+  !> Eigenvalues and orthonormal eigenvectors (columns) of a symmetric 3 x 3 matrix by cyclic
+  !> Jacobi rotations: accurate relative to the largest entry, also for repeated eigenvalues.
+  pure subroutine symmetric_eigen(a, values, vectors)
+    real(wp), intent(in) :: a(3, 3)
+    real(wp), intent(out) :: values(3), vectors(3, 3)
+    real(wp) :: m(3, 3), scale, theta, t, c, s, x, y
+    integer :: sweep, p, q, r
+    m = 0.5_wp*(a + transpose(a))
+    vectors = 0.0_wp
+    do p = 1, 3
+      vectors(p, p) = 1.0_wp
+    end do
+    scale = maxval(abs(m))
+    do sweep = 1, 30
+      if (abs(m(1, 2)) + abs(m(1, 3)) + abs(m(2, 3)) <= 0.0_wp) exit
+      do p = 1, 2
+        do q = p + 1, 3
+          if (abs(m(p, q)) <= 1.0e-3_wp*epsilon(1.0_wp)*scale) then
+            m(p, q) = 0.0_wp
+            m(q, p) = 0.0_wp
+            cycle
+          end if
+          theta = (m(q, q) - m(p, p))/(2.0_wp*m(p, q))
+          if (abs(theta) > 1.0e100_wp) then
+            t = 0.5_wp/theta
+          else
+            t = sign(1.0_wp, theta)/(abs(theta) + sqrt(theta*theta + 1.0_wp))
+          end if
+          c = 1.0_wp/sqrt(t*t + 1.0_wp)
+          s = t*c
+          do r = 1, 3
+            x = m(r, p)
+            y = m(r, q)
+            m(r, p) = c*x - s*y
+            m(r, q) = s*x + c*y
+          end do
+          do r = 1, 3
+            x = m(p, r)
+            y = m(q, r)
+            m(p, r) = c*x - s*y
+            m(q, r) = s*x + c*y
+          end do
+          m(p, q) = 0.0_wp
+          m(q, p) = 0.0_wp
+          do r = 1, 3
+            x = vectors(r, p)
+            y = vectors(r, q)
+            vectors(r, p) = c*x - s*y
+            vectors(r, q) = s*x + c*y
+          end do
+        end do
+      end do
+    end do
+    values = [m(1, 1), m(2, 2), m(3, 3)]
+  end subroutine symmetric_eigen
+
+  !> First divided difference f[1 + a, 1 + b] of f = ln/2: atanh(x)/(x (2 + a + b)) with
+  !> x = (a - b)/(2 + a + b), exact in form for all a, b (series for small x).
+  pure function divided_first(a, b) result(d)
+    real(wp), intent(in) :: a, b
+    real(wp) :: d, x, sum_ab
+    sum_ab = 2.0_wp + a + b
+    x = (a - b)/sum_ab
+    if (abs(x) < 1.0e-4_wp) then
+      d = (1.0_wp + x*x*(1.0_wp/3.0_wp + 0.2_wp*x*x))/sum_ab
+    else
+      d = atanh(x)/(x*sum_ab)
+    end if
+  end function divided_first
+
+  !> Second divided difference f[1 + a, 1 + b, 1 + c] of f = ln/2 (symmetric in its
+  !> arguments): the quotient over the two most distant arguments, or the Taylor series
+  !> f''/2 + f''''/24 h2 + f'''''/120 h3 about the mean (h_k: complete homogeneous symmetric
+  !> polynomials of the deviations; h1 = 0).
+  pure function divided_second(a, b, c) result(d)
+    real(wp), intent(in) :: a, b, c
+    real(wp) :: d, s(3), lm, dev(3), h2, h3
+    integer :: i, j, k
+    s = [min(a, b, c), 0.0_wp, max(a, b, c)]
+    s(2) = a + b + c - s(1) - s(3)
+    lm = 1.0_wp + (a + b + c)/3.0_wp
+    if (s(3) - s(1) > taylor_spread*lm) then
+      d = (divided_first(s(1), s(2)) - divided_first(s(2), s(3)))/(s(1) - s(3))
+      return
+    end if
+    dev = s + 1.0_wp - lm
+    h2 = 0.0_wp
+    h3 = 0.0_wp
+    do i = 1, 3
+      do j = i, 3
+        h2 = h2 + dev(i)*dev(j)
+        do k = j, 3
+          h3 = h3 + dev(i)*dev(j)*dev(k)
+        end do
+      end do
+    end do
+    d = -0.25_wp/lm**2 - 0.125_wp*h2/lm**4 + 0.1_wp*h3/lm**5
+  end function divided_second
+
+  !> Hencky strain of the Green-Lagrange strain e_gl (Voigt) and the data of its derivatives.
+  pure subroutine hencky_evaluate(e_gl, h)
+    real(wp), intent(in) :: e_gl(6)
+    type(hencky_type), intent(out) :: h
+    real(wp) :: values(3), unit(6), t(3, 3)
+    integer :: i, j, k, c
+    call symmetric_eigen(tensor_from_strain(e_gl), values, h%vectors)
+    h%mu = 2.0_wp*values
+    do j = 1, 3
+      do i = 1, 3
+        h%first(i, j) = divided_first(h%mu(i), h%mu(j))
+        do k = 1, 3
+          h%second(i, k, j) = divided_second(h%mu(i), h%mu(k), h%mu(j))
+        end do
+      end do
+    end do
+    t = 0.0_wp
+    do i = 1, 3
+      t(i, i) = 0.5_wp*log_one_plus(h%mu(i))
+    end do
+    h%strain = strain_from_tensor(matmul(h%vectors, matmul(t, transpose(h%vectors))))
+    do c = 1, 6
+      unit = 0.0_wp
+      unit(c) = 1.0_wp
+      h%direction(:, :, c) = matmul(transpose(h%vectors), &
+                                    matmul(2.0_wp*tensor_from_strain(unit), h%vectors))
+    end do
+  end subroutine hencky_evaluate
+
+  !> p(:, c) = d E_Hencky / d E_GL(c) (Voigt, engineering shears on both sides).
+  pure function hencky_first(h) result(p)
+    type(hencky_type), intent(in) :: h
+    real(wp) :: p(6, 6)
+    integer :: c
+    do c = 1, 6
+      p(:, c) = strain_from_tensor(matmul(h%vectors, &
+                                          matmul(h%first*h%direction(:, :, c), &
+                                                 transpose(h%vectors))))
+    end do
+  end function hencky_first
+
+  !> l(c, d) = a : d2 E_Hencky / (d E_GL(c) d E_GL(d)) for a stress-like a (Voigt).
+  pure function hencky_second(h, a) result(l)
+    type(hencky_type), intent(in) :: h
+    real(wp), intent(in) :: a(6)
+    real(wp) :: l(6, 6)
+    real(wp) :: ae(3, 3), w(3, 3, 3), g(3, 3)
+    integer :: i, j, k, c, d
+    ae = matmul(transpose(h%vectors), matmul(tensor_from_stress(a), h%vectors))
+    do j = 1, 3
+      do k = 1, 3
+        do i = 1, 3
+          w(i, k, j) = ae(i, j)*h%second(i, k, j)
+        end do
+      end do
+    end do
+    ! l(c, d) = 2 sum_ikj w(i, k, j) H_c(i, k) H_d(k, j): the two orderings of the
+    ! Daleckii-Krein sum are equal by the symmetries of a, H and f[., ., .].
+    do d = 1, 6
+      do k = 1, 3
+        do i = 1, 3
+          g(i, k) = w(i, k, 1)*h%direction(k, 1, d) + w(i, k, 2)*h%direction(k, 2, d) &
+                    + w(i, k, 3)*h%direction(k, 3, d)
+        end do
+      end do
+      do c = 1, 6
+        l(c, d) = 2.0_wp*sum(h%direction(:, :, c)*g)
+      end do
+    end do
+  end function hencky_second
+
+  !> Right stretch U = C^(1/2) and its inverse.
+  pure subroutine hencky_stretch(h, u, u_inverse)
+    type(hencky_type), intent(in) :: h
+    real(wp), intent(out) :: u(3, 3), u_inverse(3, 3)
+    real(wp) :: root(3)
+    integer :: i
+    root = sqrt(1.0_wp + h%mu)
+    u = 0.0_wp
+    u_inverse = 0.0_wp
+    do i = 1, 3
+      u = u + root(i)*spread(h%vectors(:, i), 2, 3)*spread(h%vectors(:, i), 1, 3)
+      u_inverse = u_inverse + spread(h%vectors(:, i), 2, 3)*spread(h%vectors(:, i), 1, 3) &
+                  /root(i)
+    end do
+  end subroutine hencky_stretch
+
+end module ddpy_log_strain

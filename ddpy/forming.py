@@ -25,6 +25,7 @@ from numpy.typing import ArrayLike, NDArray
 from ddpy._validate import float_array, int_array
 from ddpy.contact import INACTIVE, contact_law
 from ddpy.linalg import LinearSolverError, MumpsSolver
+from ddpy.ordering import mesh_solver
 from ddpy.search import NONE, ContactSearch
 from ddpy.solid import ElementError, Solid, SolidState, _components
 from ddpy.surfaces import BezierSurface, NagataSurface
@@ -212,7 +213,7 @@ class FormingProblem:
     nodes at zero (symmetry planes, clamps); ``run`` moves tools through a phase, and
     successive calls continue from where the last one stopped (multi-stage processes)."""
 
-    def __init__(self, solid: Solid, tools: Iterable[RigidTool], ordering: str = "metis"
+    def __init__(self, solid: Solid, tools: Iterable[RigidTool], ordering: str = "nested"
                  ) -> None:
         self.solid = solid
         self.tools = list(tools)
@@ -269,7 +270,9 @@ class FormingProblem:
     def _prepare(self) -> tuple[_Layout, MumpsSolver]:
         if self._layout is None or self._solver is None:
             layout = _Layout(self.solid, self.tools, self.fixed)
-            solver = MumpsSolver("unsymmetric", self.ordering)
+            solver = mesh_solver("unsymmetric", self.ordering, self.solid.node_order,
+                                 np.concatenate([np.flatnonzero(~self.fixed.ravel()) // 3,
+                                                 np.repeat(layout.node, 3)]))
             solver.analyse(layout.n, layout.rows, layout.cols)
             self._layout, self._solver = layout, solver
         return self._layout, self._solver

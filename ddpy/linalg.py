@@ -44,7 +44,7 @@ class MumpsSolver:
     """One MUMPS instance: analyse a structure once, then factorize and solve repeatedly.
 
     ``symmetry`` is "unsymmetric", "symmetric" or "spd" (for the last two give one triangle);
-    ``ordering`` a MUMPS ordering name ("metis" by default, measured best for sheets; MUMPS
+    ``ordering`` a MUMPS ordering name ("metis" by default; MUMPS
     falls back to its own choice when the library lacks it); ``controls`` sets further MUMPS
     ICNTL entries by their 1-based index, e.g. ``{10: -2}`` for two refinement steps.
     """
@@ -67,6 +67,16 @@ class MumpsSolver:
                 raise ValueError(f"MUMPS has no control ICNTL({position})")
         self.n = 0
         self.nnz = 0
+
+    def set_ordering(self, position: ArrayLike) -> None:
+        """Use a given pivot order in the next analyses instead of MUMPS's own:
+        ``position[i]`` is the 0-based place of variable i in the elimination (a
+        permutation of 0..n-1; see ddpy.ordering)."""
+        position = int_array(position, "position", (None,))
+        if not np.array_equal(np.sort(position), np.arange(position.size)):
+            raise ValueError("position must be a permutation of 0..n-1")
+        if _core.solver_set_ordering(self._live(), position) < 0:
+            raise LinearSolverError(-1001, "ordering")
 
     def analyse(self, n: int, rows: ArrayLike, cols: ArrayLike) -> None:
         """Symbolic analysis of an n x n matrix with entries at 0-based (rows, cols)."""

@@ -29,6 +29,7 @@ from ddpy import _core
 from ddpy._validate import float_array, int_array
 from ddpy.linalg import LinearSolverError, MumpsSolver
 from ddpy.mesh import HexMesh
+from ddpy.ordering import mesh_solver, nested_dissection, node_adjacency
 from ddpy.parallel import threads as thread_count
 
 __all__ = ["Assembly", "Solid", "SolidState", "StaticProblem", "SolidResult", "ConvergenceError",
@@ -171,6 +172,13 @@ class Solid:
     @property
     def n_dofs(self) -> int:
         return 3 * self.mesh.n_nodes
+
+    def node_order(self) -> NDArray[np.int64]:
+        """Nested-dissection elimination order of the mesh nodes (computed once)."""
+        if getattr(self, "_node_order", None) is None:
+            graph = node_adjacency(self.mesh.elements, self.mesh.n_nodes)
+            self._node_order = nested_dissection(graph, self.mesh.nodes)
+        return self._node_order
 
     def initial_state(self) -> SolidState:
         """Stress-free, undeformed state with no plastic strain; the material axes are the
@@ -317,13 +325,14 @@ class StaticProblem:
     solved by Newton-Raphson with MUMPS.
 
     ``symmetry``: "symmetric" (lower triangle, LDL^T; the tangent is symmetric) or
-    "unsymmetric"; ``ordering``: MUMPS ordering name. The MUMPS instance and its analysis
+    "unsymmetric"; ``ordering``: "nested" (nested dissection of the mesh, ddpy.ordering) or
+    a MUMPS ordering name ("scotch", "pord", "amd", ...). The MUMPS instance and its analysis
     are kept for every iteration, increment and call of ``solve`` until the set of
     constrained dofs changes.
     """
 
     def __init__(self, solid: Solid, symmetry: str = "symmetric",
-                 ordering: str = "metis") -> None:
+                 ordering: str = "nested") -> None:
         if symmetry not in ("symmetric", "unsymmetric"):
             raise ValueError(f"symmetry must be 'symmetric' or 'unsymmetric', got {symmetry!r}")
         self.solid = solid
@@ -443,7 +452,8 @@ class StaticProblem:
             eqn = np.full(free.size, -1, dtype=np.int32)
             eqn[free] = np.arange(int(free.sum()), dtype=np.int32)
             pattern = self.solid.pattern(eqn, symmetric=self.symmetry == "symmetric")
-            solver = MumpsSolver(self.symmetry, self.ordering)
+            solver = mesh_solver(self.symmetry, self.ordering, self.solid.node_order,
+                                 np.flatnonzero(free) // 3)
             solver.analyse(int(free.sum()), pattern.rows, pattern.cols)
             self._pattern, self._solver = pattern, solver
         return self._pattern, self._solver

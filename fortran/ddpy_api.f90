@@ -10,7 +10,7 @@ module ddpy_api
   use ddpy_surface, only: bezier_evaluate_batch, nagata_evaluate_batch
   use ddpy_linear_solver, only: solver_create, solver_analyse, solver_factorize, &
                                 solver_solve, solver_destroy, solver_info, &
-                                solver_set_control
+                                solver_set_control, solver_set_ordering
   !$ use omp_lib, only: omp_get_max_threads, omp_set_num_threads
   implicit none
   private
@@ -18,7 +18,7 @@ module ddpy_api
             api_bezier_evaluate, api_bezier_de_casteljau, api_nagata_coefficients, &
             api_nagata_evaluate, api_nagata_edge_coefficient, api_solver_create, &
             api_solver_analyse, api_solver_factorize, api_solver_solve, api_solver_info, &
-            api_solver_destroy, api_solver_set_control
+            api_solver_destroy, api_solver_set_control, api_solver_set_ordering
 
   integer, parameter :: nb = max_bezier_degree
   integer, parameter :: nc = nagata_coefficient_count
@@ -207,6 +207,15 @@ contains
     integer(c_int), intent(out) :: status
     call solver_set_control(handle, index, value, status)
   end subroutine api_solver_set_control
+
+  !> Pivot order for the next analyses: perm(i) the 0-based position of variable i.
+  subroutine api_solver_set_ordering(handle, n, perm, status) &
+    bind(C, name="ddpy_solver_set_ordering")
+    integer(c_int), value, intent(in) :: handle, n
+    integer(c_int), intent(in) :: perm(n)
+    integer(c_int), intent(out) :: status
+    call solver_set_ordering(handle, n, perm + 1, status)
+  end subroutine api_solver_set_ordering
 
   subroutine api_solver_destroy(handle, status) bind(C, name="ddpy_solver_destroy")
     integer(c_int), value, intent(in) :: handle

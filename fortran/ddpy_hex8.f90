@@ -156,11 +156,11 @@ contains
     real(wp), intent(out) :: f(24), k(24, 24), stress(6, 8), ep(8), strain(6, 8), axes(3, 3, 8)
     integer, intent(out) :: status
     type(hencky_type) :: hk(8)
-    real(wp) :: g(8, 3, 8), v(8), w0(8), b(6, 24, 8), bl(6, 24, 8), btr(24, 8), lnj(8), &
-                pm(6, 6, 8), tg(6, 8), trt(8)
-    real(wp) :: fg(3, 3), vol, mean_lnj, bbar_tr(24), kg(8, 8), bb(6, 24), db(6, 24), &
-                bt(24, 6), g0(8, 3), rot(6, 6), de(6), s_mat(6), d_mat(6, 6), d(6, 6), &
-                a_hat(6), s_eff(6), lmat(6, 6), lb(6, 24), u(3, 3), u_inv(3, 3), ct
+    real(wp) :: g(8, 3, 8), w0(8), b(6, 24, 8), btr(24, 8), lnj(8), pm(6, 6, 8), tg(6, 8), &
+                trt(8), dg(6, 6, 8)
+    real(wp) :: fg(3, 3), vj, vol, mean_lnj, bbar_tr(24), dtr(24), kg(8, 8), n8(8), dn8(8, 3), &
+                rot(6, 6), de(6), s_mat(6), d_mat(6, 6), a_hat(6), mmat(6, 6), mb(6, 24), &
+                dm(6), vb(24), bt(24, 6), u(3, 3), u_inv(3, 3), ct, dmm, dv
     integer :: p, a, c, i, j, col, mstatus
     logical :: plastic
 
@@ -172,11 +172,13 @@ contains
     axes = axes_old
     status = hex8_ok
 
-    ! Pass 1: gradients on xn, relative deformation, both strains and their derivatives.
+    ! Pass 1: gradients on xn, relative deformation, both strains and the derivatives:
+    ! dE_GL = b du, d dE = P b du, d ln det dF = m^T P b du = btr du (m = (1,1,1,0,0,0)).
     do p = 1, 8
-      call reference_gradients(x0, gauss*corner(:, p), g0, w0(p))
-      call reference_gradients(xn, gauss*corner(:, p), g(:, :, p), v(p))
-      if (w0(p) <= 0.0_wp .or. v(p) <= 0.0_wp) then
+      call shape_functions(gauss*corner(:, p), n8, dn8)
+      w0(p) = det3(matmul(x0, dn8))
+      call reference_gradients(xn, gauss*corner(:, p), g(:, :, p), vj)
+      if (w0(p) <= 0.0_wp .or. vj <= 0.0_wp) then
         status = hex8_inverted
         return
       end if
@@ -202,8 +204,7 @@ contains
         end do
       end do
       pm(:, :, p) = hencky_first(hk(p))
-      bl(:, :, p) = matmul(pm(:, :, p), b(:, :, p))
-      btr(:, p) = bl(1, :, p) + bl(2, :, p) + bl(3, :, p)
+      btr(:, p) = matmul(pm(1, :, p) + pm(2, :, p) + pm(3, :, p), b(:, :, p))
     end do
 
     ! Averages over the element of ln det dF and of its gradient, weighted by the initial
@@ -214,14 +215,11 @@ contains
     mean_lnj = dot_product(w0, lnj)/vol
     bbar_tr = matmul(btr, w0)/vol
 
-    ! Pass 2: mean-dilatation strain, material update in the axes of xn, force, material
-    ! tangent, and the state rotated to the end of the increment.
+    ! Pass 2: mean-dilatation strain, material update in the axes of xn, force
+    ! f = sum W0 Bbar^T T with Bbar = P b + m (bbar_tr - btr)^T/3, and the state rotated to
+    ! the end of the increment.
     do p = 1, 8
       de = hk(p)%strain + (mean_lnj - lnj(p))/3.0_wp*identity_voigt
-      bb = bl(:, :, p)
-      do i = 1, 3
-        bb(i, :) = bb(i, :) + (bbar_tr - btr(:, p))/3.0_wp
-      end do
       rot = strain_rotation(axes_old(:, :, p))
       de = matmul(rot, de)
       call material_update(props, stress_old(:, p), ep_old(p), de, s_mat, ep(p), d_mat, &
@@ -233,7 +231,9 @@ contains
       strain(:, p) = strain_old(:, p) + de
       tg(:, p) = matmul(transpose(rot), s_mat)
       trt(p) = tg(1, p) + tg(2, p) + tg(3, p)
-      f = f + w0(p)*matmul(tg(:, p), bb)
+      if (want_tangent) dg(:, :, p) = matmul(transpose(rot), matmul(d_mat, rot))
+      f = f + w0(p)*(matmul(matmul(tg(:, p), pm(:, :, p)), b(:, :, p)) &
+                     + (bbar_tr - btr(:, p))*trt(p)/3.0_wp)
       ! The stress at the end of the increment in the axes turned by dR = dF dU^-1: the
       ! rotated Kirchhoff stress dU S dU, S = P^T T relative to xn per unit initial volume.
       call hencky_stretch(hk(p), u, u_inv)
@@ -245,39 +245,38 @@ contains
       u = matmul(u, matmul(tensor_from_stress(matmul(tg(:, p), pm(:, :, p))), u))
       stress(:, p) = stress_from_tensor(matmul(transpose(axes_old(:, :, p)), &
                                                matmul(u, axes_old(:, :, p))))
-      if (.not. want_tangent) cycle
-
-      ! Material part W0 Bbar^T D Bbar, lower triangle, vectorized along the columns.
-      d = matmul(transpose(rot), matmul(d_mat, rot))
-      db = w0(p)*matmul(d, bb)
-      bt = transpose(bb)
-      do j = 1, 24
-        do i = j, 24
-          k(i, j) = k(i, j) + bt(i, 1)*db(1, j) + bt(i, 2)*db(2, j) + bt(i, 3)*db(3, j) &
-                    + bt(i, 4)*db(4, j) + bt(i, 5)*db(5, j) + bt(i, 6)*db(6, j)
-        end do
-      end do
     end do
     if (.not. want_tangent) return
 
-    ! Pass 3, geometric part: sum_p A_p : d2 dE_p / du2 with A_p = W0 T_p + a_p I, where a_p
-    ! moves the pressure to the element average (mean dilatation). By the chain rule
-    ! A : d2 dE = B^T L(A) B + (P^T A) : d2 E_GL, the second part the familiar g S g^T.
+    ! Pass 3, the tangent. Material part W0 Bbar^T D Bbar expanded in b and the rank-one
+    ! mean-dilatation terms; geometric part sum_p A_p : d2 dE_p with A_p = W0 T_p + a_p I,
+    ! a_p moving the pressure to the element average, by the chain rule
+    ! A : d2 dE = b^T L(A) b + (P^T A) : d2 E_GL (the last the familiar g S g^T). So
+    ! K_p = b^T (W0 P^T D P + L(A)) b + W0/3 (v dtr^T + dtr v^T) + W0 m^T D m/9 dtr dtr^T,
+    ! v = b^T P^T D m, dtr = bbar_tr - btr: one 24 x 24 product per Gauss point.
     ct = dot_product(w0, trt)/3.0_wp
     kg = 0.0_wp
     do p = 1, 8
       a_hat = w0(p)*tg(:, p) + (w0(p)/vol*ct - w0(p)*trt(p)/3.0_wp)*identity_voigt
-      lmat = hencky_second(hk(p), a_hat)
-      lb = matmul(lmat, b(:, :, p))
+      mmat = w0(p)*matmul(transpose(pm(:, :, p)), matmul(dg(:, :, p), pm(:, :, p))) &
+             + hencky_second(hk(p), a_hat)
+      mb = matmul(mmat, b(:, :, p))
+      dm = w0(p)*matmul(transpose(pm(:, :, p)), dg(:, 1, p) + dg(:, 2, p) + dg(:, 3, p))
+      dmm = w0(p)*sum(dg(1:3, 1:3, p))/9.0_wp
+      vb = matmul(dm, b(:, :, p))/3.0_wp
+      dtr = bbar_tr - btr(:, p)
       bt = transpose(b(:, :, p))
+      ! Lower triangle, contiguous in i so that it vectorizes.
       do j = 1, 24
+        dv = vb(j) + dmm*dtr(j)
         do i = j, 24
-          k(i, j) = k(i, j) + bt(i, 1)*lb(1, j) + bt(i, 2)*lb(2, j) + bt(i, 3)*lb(3, j) &
-                    + bt(i, 4)*lb(4, j) + bt(i, 5)*lb(5, j) + bt(i, 6)*lb(6, j)
+          k(i, j) = k(i, j) + bt(i, 1)*mb(1, j) + bt(i, 2)*mb(2, j) + bt(i, 3)*mb(3, j) &
+                    + bt(i, 4)*mb(4, j) + bt(i, 5)*mb(5, j) + bt(i, 6)*mb(6, j) &
+                    + vb(i)*dtr(j) + dtr(i)*dv
         end do
       end do
-      s_eff = matmul(a_hat, pm(:, :, p))
-      kg = kg + matmul(g(:, :, p), matmul(tensor_from_stress(s_eff), transpose(g(:, :, p))))
+      kg = kg + matmul(g(:, :, p), matmul(tensor_from_stress(matmul(a_hat, pm(:, :, p))), &
+                                          transpose(g(:, :, p))))
     end do
     do j = 1, 8
       do i = j, 8

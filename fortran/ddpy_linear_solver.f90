@@ -9,7 +9,7 @@ module ddpy_linear_solver
   implicit none
   private
   public :: max_solvers, solver_create, solver_analyse, solver_factorize, solver_solve, &
-            solver_destroy, solver_info, solver_set_control
+            solver_destroy, solver_info, solver_set_control, solver_set_ordering
 
   include 'dmumps_struc.h'
 
@@ -74,7 +74,7 @@ contains
       id%icntl(7) = ordering
       ! Extra workspace: FE matrices with many equal pivots can outgrow the estimate.
       id%icntl(14) = 40
-      nullify (id%irn, id%jcn, id%a, id%rhs)
+      nullify (id%irn, id%jcn, id%a, id%rhs, id%perm_in)
     end associate
     in_use(handle) = .true.
     analysed(handle) = .false.
@@ -92,6 +92,15 @@ contains
       return
     end if
     associate (id => instance(handle))
+      if (id%icntl(7) == 1) then
+        if (.not. associated(id%perm_in)) then
+          status = status_size_mismatch
+          return
+        else if (size(id%perm_in) /= n) then
+          status = status_size_mismatch
+          return
+        end if
+      end if
       call release_arrays(handle)
       allocate (id%irn(nz), id%jcn(nz), id%a(nz), id%rhs(n))
       id%irn = irn
@@ -204,6 +213,24 @@ contains
     status = 0
   end subroutine solver_set_control
 
+  !> Use the pivot order perm for the next analyses (MUMPS ICNTL(7) = 1): perm(i) is the
+  !> position (1-based) of variable i in the pivot order.
+  subroutine solver_set_ordering(handle, n, perm, status)
+    integer, intent(in) :: handle, n, perm(n)
+    integer, intent(out) :: status
+    if (.not. valid_handle(handle)) then
+      status = status_bad_handle
+      return
+    end if
+    associate (id => instance(handle))
+      if (associated(id%perm_in)) deallocate (id%perm_in)
+      allocate (id%perm_in(n))
+      id%perm_in = perm
+      id%icntl(7) = 1
+    end associate
+    status = 0
+  end subroutine solver_set_ordering
+
   !> Free a MUMPS instance and its arrays.
   subroutine solver_destroy(handle, status)
     integer, intent(in) :: handle
@@ -214,6 +241,7 @@ contains
     end if
     call release_arrays(handle)
     associate (id => instance(handle))
+      if (associated(id%perm_in)) deallocate (id%perm_in)
       id%job = -2
       call dmumps(id)
       status = id%infog(1)

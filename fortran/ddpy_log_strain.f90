@@ -53,8 +53,15 @@ contains
   pure function tensor_from_strain(e) result(t)
     real(wp), intent(in) :: e(6)
     real(wp) :: t(3, 3)
-    t = reshape([e(1), 0.5_wp*e(4), 0.5_wp*e(6), 0.5_wp*e(4), e(2), 0.5_wp*e(5), &
-                 0.5_wp*e(6), 0.5_wp*e(5), e(3)], [3, 3])
+    t(1, 1) = e(1)
+    t(2, 2) = e(2)
+    t(3, 3) = e(3)
+    t(1, 2) = 0.5_wp*e(4)
+    t(2, 1) = t(1, 2)
+    t(2, 3) = 0.5_wp*e(5)
+    t(3, 2) = t(2, 3)
+    t(3, 1) = 0.5_wp*e(6)
+    t(1, 3) = t(3, 1)
   end function tensor_from_strain
 
   pure function strain_from_tensor(t) result(e)
@@ -66,7 +73,15 @@ contains
   pure function tensor_from_stress(s) result(t)
     real(wp), intent(in) :: s(6)
     real(wp) :: t(3, 3)
-    t = reshape([s(1), s(4), s(6), s(4), s(2), s(5), s(6), s(5), s(3)], [3, 3])
+    t(1, 1) = s(1)
+    t(2, 2) = s(2)
+    t(3, 3) = s(3)
+    t(1, 2) = s(4)
+    t(2, 1) = s(4)
+    t(2, 3) = s(5)
+    t(3, 2) = s(5)
+    t(3, 1) = s(6)
+    t(1, 3) = s(6)
   end function tensor_from_stress
 
   pure function stress_from_tensor(t) result(s)
@@ -93,7 +108,7 @@ contains
       if (abs(m(1, 2)) + abs(m(1, 3)) + abs(m(2, 3)) <= 0.0_wp) exit
       do p = 1, 2
         do q = p + 1, 3
-          if (abs(m(p, q)) <= 1.0e-3_wp*epsilon(1.0_wp)*scale) then
+          if (abs(m(p, q)) <= 0.01_wp*epsilon(1.0_wp)*scale) then
             m(p, q) = 0.0_wp
             m(q, p) = 0.0_wp
             cycle
@@ -176,31 +191,76 @@ contains
   end function divided_second
 
   !> Hencky strain of the Green-Lagrange strain e_gl (Voigt) and the data of its derivatives.
+  !> The eigenvalues are sorted, so that a second divided difference over indices
+  !> a <= b <= c has its most distant arguments at a and c; of the 9 first and 27 second
+  !> divided differences only 6 and 10 are distinct.
   pure subroutine hencky_evaluate(e_gl, h)
     real(wp), intent(in) :: e_gl(6)
     type(hencky_type), intent(out) :: h
-    real(wp) :: values(3), unit(6), t(3, 3)
-    integer :: i, j, k, c
-    call symmetric_eigen(tensor_from_strain(e_gl), values, h%vectors)
-    h%mu = 2.0_wp*values
-    do j = 1, 3
-      do i = 1, 3
+    real(wp) :: values(3), vectors(3, 3), lam(3), t, table(3, 3, 3)
+    integer :: i, j, k, a, b, c, order(3)
+    integer, parameter :: pairs(2, 6) = reshape([1, 1, 2, 2, 3, 3, 1, 2, 2, 3, 3, 1], [2, 6])
+    call symmetric_eigen(tensor_from_strain(e_gl), values, vectors)
+    order = [minloc(values, 1), 0, maxloc(values, 1)]
+    if (order(1) == order(3)) order(3) = merge(2, 1, order(1) == 1)
+    order(2) = 6 - order(1) - order(3)
+    h%mu = 2.0_wp*values(order)
+    h%vectors = vectors(:, order)
+    lam = 1.0_wp + h%mu
+    do i = 1, 3
+      h%first(i, i) = 0.5_wp/lam(i)
+      do j = i + 1, 3
         h%first(i, j) = divided_first(h%mu(i), h%mu(j))
-        do k = 1, 3
-          h%second(i, k, j) = divided_second(h%mu(i), h%mu(k), h%mu(j))
+        h%first(j, i) = h%first(i, j)
+      end do
+    end do
+    do a = 1, 3
+      do b = a, 3
+        do c = b, 3
+          if (a == c) then
+            table(a, b, c) = -0.25_wp/lam(a)**2
+          else if (h%mu(c) - h%mu(a) > taylor_spread*(1.0_wp + (h%mu(a) + h%mu(b) &
+                                                                 + h%mu(c))/3.0_wp)) then
+            table(a, b, c) = (h%first(a, b) - h%first(b, c))/(h%mu(a) - h%mu(c))
+          else
+            table(a, b, c) = divided_second(h%mu(a), h%mu(b), h%mu(c))
+          end if
         end do
       end do
     end do
-    t = 0.0_wp
-    do i = 1, 3
-      t(i, i) = 0.5_wp*log_one_plus(h%mu(i))
+    do j = 1, 3
+      do k = 1, 3
+        do i = 1, 3
+          a = min(i, j, k)
+          c = max(i, j, k)
+          h%second(i, k, j) = table(a, i + j + k - a - c, c)
+        end do
+      end do
     end do
-    h%strain = strain_from_tensor(matmul(h%vectors, matmul(t, transpose(h%vectors))))
+    h%strain = 0.0_wp
+    do k = 1, 3
+      t = 0.5_wp*log_one_plus(h%mu(k))
+      do c = 1, 6
+        i = pairs(1, c)
+        j = pairs(2, c)
+        h%strain(c) = h%strain(c) + merge(1.0_wp, 2.0_wp, c <= 3)*t*h%vectors(i, k) &
+                      *h%vectors(j, k)
+      end do
+    end do
+    ! Directions V^T (2 e_c) V of the unit Green-Lagrange strains (engineering shears).
     do c = 1, 6
-      unit = 0.0_wp
-      unit(c) = 1.0_wp
-      h%direction(:, :, c) = matmul(transpose(h%vectors), &
-                                    matmul(2.0_wp*tensor_from_strain(unit), h%vectors))
+      k = pairs(1, c)
+      a = pairs(2, c)
+      do j = 1, 3
+        do i = 1, 3
+          if (c <= 3) then
+            h%direction(i, j, c) = 2.0_wp*h%vectors(k, i)*h%vectors(k, j)
+          else
+            h%direction(i, j, c) = h%vectors(k, i)*h%vectors(a, j) &
+                                   + h%vectors(a, i)*h%vectors(k, j)
+          end if
+        end do
+      end do
     end do
   end subroutine hencky_evaluate
 
@@ -251,14 +311,17 @@ contains
     type(hencky_type), intent(in) :: h
     real(wp), intent(out) :: u(3, 3), u_inverse(3, 3)
     real(wp) :: root(3)
-    integer :: i
+    integer :: i, j, k
     root = sqrt(1.0_wp + h%mu)
-    u = 0.0_wp
-    u_inverse = 0.0_wp
-    do i = 1, 3
-      u = u + root(i)*spread(h%vectors(:, i), 2, 3)*spread(h%vectors(:, i), 1, 3)
-      u_inverse = u_inverse + spread(h%vectors(:, i), 2, 3)*spread(h%vectors(:, i), 1, 3) &
-                  /root(i)
+    do j = 1, 3
+      do i = 1, 3
+        u(i, j) = 0.0_wp
+        u_inverse(i, j) = 0.0_wp
+        do k = 1, 3
+          u(i, j) = u(i, j) + root(k)*h%vectors(i, k)*h%vectors(j, k)
+          u_inverse(i, j) = u_inverse(i, j) + h%vectors(i, k)*h%vectors(j, k)/root(k)
+        end do
+      end do
     end do
   end subroutine hencky_stretch
 

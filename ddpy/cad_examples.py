@@ -13,7 +13,8 @@ import numpy as np
 
 from ddpy.cad import quiet
 
-__all__ = ["cylinder_segment", "cylindrical_punch", "die_profile", "sphere_patch", "write_cad"]
+__all__ = ["bending_tools", "cylinder_segment", "cylindrical_punch", "die_profile", "sphere_patch",
+           "write_cad"]
 
 
 def write_cad(path: str | os.PathLike[str] | None) -> Path | None:
@@ -108,3 +109,42 @@ def cylindrical_punch(path: str | os.PathLike[str] | None = None, radius: float 
     occ.synchronize()
     write_cad(path)
     return [t for d, t in out if d == 2]
+
+
+def bending_tools(path: str | os.PathLike[str] | None = None, punch_radius: float = 23.5,
+                  shoulder_radius: float = 4.0, shoulder_x: float = 29.5,
+                  thickness: float = 1.0, die_end: float = 70.0, wall_depth: float = 20.0,
+                  width: tuple[float, float] = (-5.0, 20.0)) -> dict[str, list[int]]:
+    """The tools of the unconstrained cylindrical bending benchmark (Numisheet 2002 B),
+    quarter model, as reconstructed in design.md (the paper's Fig. 6 is not in its text).
+
+    Symmetry planes x = 0 and y = 0; the flat blank lies on 0 <= z <= ``thickness``. The punch
+    is a quarter cylinder of radius ``punch_radius``, axis along y through x = 0,
+    z = thickness + punch_radius, from its lowest line (x = 0, z = thickness) up to x =
+    punch_radius. The open die (no bottom) is an inner wall x = shoulder_x - shoulder_radius
+    from z = -shoulder_radius - wall_depth up to the shoulder, a quarter cylinder of radius
+    ``shoulder_radius`` centred at (shoulder_x, -shoulder_radius), and a flat top z = 0 out to
+    x = ``die_end``. Every face spans ``width`` along y. Returns the face tags by tool
+    ({"punch": [...], "die": [wall, shoulder, flat]}).
+    """
+    import gmsh
+
+    occ = gmsh.model.occ
+    y0, y1 = width
+    zc = thickness + punch_radius
+    bottom, centre = occ.addPoint(0, y0, thickness), occ.addPoint(0, y0, zc)
+    side = occ.addPoint(punch_radius, y0, zc)
+    punch = [occ.addCircleArc(bottom, centre, side)]
+    inner = shoulder_x - shoulder_radius
+    w0, w1 = occ.addPoint(inner, y0, -shoulder_radius - wall_depth), \
+        occ.addPoint(inner, y0, -shoulder_radius)
+    c, top = occ.addPoint(shoulder_x, y0, -shoulder_radius), occ.addPoint(shoulder_x, y0, 0)
+    end = occ.addPoint(die_end, y0, 0)
+    die = [occ.addLine(w0, w1), occ.addCircleArc(w1, c, top), occ.addLine(top, end)]
+    faces: dict[str, list[int]] = {}
+    for name, curves in (("punch", punch), ("die", die)):
+        out = occ.extrude([(1, k) for k in curves], 0, y1 - y0, 0)
+        faces[name] = [t for d, t in out if d == 2]
+    occ.synchronize()
+    write_cad(path)
+    return faces

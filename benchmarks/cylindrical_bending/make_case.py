@@ -1,0 +1,260 @@
+"""Write the cases of the unconstrained cylindrical bending benchmark (paper Fig. 6-12).
+
+    python benchmarks/cylindrical_bending/make_case.py            # both meshes
+    python benchmarks/cylindrical_bending/make_case.py --mesh coarse
+
+Writes, next to this script (all generated, git-ignored):
+
+- ``tools/tools.step``: one CAD model of the punch and the open die (ddpy.cad_examples.
+  bending_tools, a reconstruction of the paper's Fig. 6, design.md);
+- ``tools/{punch,die}.{bezier,nagata,facets}.tool``: the tool models built from it by
+  ``ddpy.cad.build_tool_models`` (what ``ddpy tools build`` runs): Bezier patches, Nagata
+  4 patches per 90 degrees of arc, facets 30 per arc. The paper's coarse facets are the Nagata
+  mesh with flat patches (its section "Bilinear facets": c = 0, "keeping the same
+  discretization"), so that model reads the Nagata file with ``description facets``;
+- ``meshes/<mesh>.msh``: the blank, a quarter 60 x 15 x 1 mm (rolling direction along x):
+  ``paper``, unstructured quadrilaterals extruded in 3 layers, as close to the paper's 19,950
+  hexahedra as gmsh's recombination gets; ``coarse``, structured, graded along x;
+- ``cases/<mesh>/<model>/``: the five decks of each case, for the models ``bezier``,
+  ``nagata``, ``facets_coarse`` and ``facets_fine``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+MODELS = ("bezier", "nagata", "facets_coarse", "facets_fine")
+MESHES = ("coarse", "paper")
+#: The quarter blank, mm (the paper: 120 x 30 x 1 mm, rolling direction along the length).
+LENGTH, WIDTH, THICKNESS = 60.0, 15.0, 1.0
+PAPER_HEXAHEDRA, LAYERS = 19950, 3
+#: Coarse blank: elements along x in [0, COARSE_SPLIT] and beyond, across y, through z.
+COARSE_SPLIT, COARSE_X, COARSE_Y = 36.0, (24, 6), 2
+#: Tool file of each model and tool, and the description the deck gives it.
+TOOL_FILES = {"bezier": ("bezier", "bezier"), "nagata": ("nagata", "nagata"),
+              "facets_coarse": ("facets", "nagata"), "facets_fine": ("facets", "facets")}
+STROKE, MAX_INCREMENT, FRICTION = 28.5, 0.114, 0.148
+OUTPUT_AT = (7.0, 14.0, 21.0, 28.5)
+
+
+def build_tools(folder: Path = HERE / "tools", size: float = 5.0) -> dict[str, dict[str, Path]]:
+    """Write the CAD model and the punch and die tool files; return the paths by tool and
+    model ('bezier', 'nagata', 'facets')."""
+    from ddpy.cad import build_tool_models, gmsh_session, load_cad
+    from ddpy.cad_examples import bending_tools
+
+    folder.mkdir(parents=True, exist_ok=True)
+    step = folder / "tools.step"
+    with gmsh_session():
+        import gmsh
+
+        gmsh.clear()
+        bending_tools(step)
+        gmsh.clear()
+        faces = load_cad(step)
+        # The punch lies above the blank (z > thickness), the die below (z <= 0).
+        punch = [f for f in faces if gmsh.model.getBoundingBox(2, f)[2] > 0.5 * THICKNESS]
+        die = [f for f in faces if f not in punch]
+        gmsh.clear()
+    return {
+        "punch": build_tool_models(step, folder, "punch", patches_per_arc=4, facets_per_arc=30,
+                                   size=size, blank_side=(0, 0, -1), faces=punch),
+        "die": build_tool_models(step, folder, "die", patches_per_arc=4, facets_per_arc=30,
+                                 size=size, blank_side=(0, 0, 1), faces=die),
+    }
+
+
+def paper_mesh(path: Path, quads: int = PAPER_HEXAHEDRA // LAYERS, tries: int = 8) -> int:
+    """The paper's blank: an unstructured quadrilateral mesh of the 60 x 15 mm quarter (gmsh
+    Frontal-Delaunay for quads, Blossom recombination), its size tuned to ``quads``
+    quadrilaterals, extruded in 3 layers. Writes a Gmsh file; returns the hexahedra."""
+    import gmsh
+
+    from ddpy.cad import gmsh_session
+
+    size = math.sqrt(LENGTH * WIDTH / quads)
+    best: tuple[int, float] | None = None
+    with gmsh_session():
+        for attempt in range(tries + 1):
+            if best is not None and attempt == tries:
+                size = best[1]  # the closest of the tries, meshed once more to write it
+            gmsh.clear()
+            occ = gmsh.model.occ
+            surface = occ.addRectangle(0, 0, 0, LENGTH, WIDTH)
+            occ.synchronize()
+            gmsh.option.setNumber("Mesh.Algorithm", 8)
+            gmsh.option.setNumber("Mesh.RecombinationAlgorithm", 1)
+            gmsh.option.setNumber("Mesh.MeshSizeMin", size)
+            gmsh.option.setNumber("Mesh.MeshSizeMax", size)
+            gmsh.model.mesh.setRecombine(2, surface)
+            gmsh.model.mesh.generate(2)
+            count = sum(len(t) for t in gmsh.model.mesh.getElements(2, surface)[1])
+            if best is None or abs(count - quads) < abs(best[0] - quads):
+                best = (count, size)
+            if attempt == tries or count == quads:
+                break
+            size *= math.sqrt(count / quads) ** 0.9
+        gmsh.clear()
+        occ = gmsh.model.occ
+        surface = occ.addRectangle(0, 0, 0, LENGTH, WIDTH)
+        occ.extrude([(2, surface)], 0, 0, THICKNESS, numElements=[LAYERS], recombine=True)
+        occ.synchronize()
+        gmsh.model.mesh.setRecombine(2, surface)
+        gmsh.option.setNumber("Mesh.MeshSizeMin", best[1] if best else size)
+        gmsh.option.setNumber("Mesh.MeshSizeMax", best[1] if best else size)
+        gmsh.model.mesh.generate(3)
+        hexahedra = sum(len(t) for t in gmsh.model.mesh.getElements(3)[1])
+        gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        gmsh.write(str(path))
+        gmsh.clear()
+    return hexahedra
+
+
+def coarse_mesh(path: Path) -> int:
+    """The coarse blank: structured, ``COARSE_X[0]`` elements over the bending zone
+    0 <= x <= COARSE_SPLIT (punch and die shoulder), ``COARSE_X[1]`` over the straight
+    flange beyond, ``COARSE_Y`` across and 3 through the thickness. Returns the hexahedra."""
+    import meshio
+    import numpy as np
+
+    x = np.concatenate([np.linspace(0.0, COARSE_SPLIT, COARSE_X[0] + 1),
+                        np.linspace(COARSE_SPLIT, LENGTH, COARSE_X[1] + 1)[1:]])
+    y = np.linspace(0.0, WIDTH, COARSE_Y + 1)
+    z = np.linspace(0.0, THICKNESS, LAYERS + 1)
+    nodes = np.stack(np.meshgrid(x, y, z, indexing="ij"), axis=-1).reshape(-1, 3)
+    ids = np.arange(nodes.shape[0]).reshape(x.size, y.size, z.size)
+    i, j, k = (a.ravel() for a in np.meshgrid(np.arange(x.size - 1), np.arange(y.size - 1),
+                                              np.arange(z.size - 1), indexing="ij"))
+    bottom = [ids[i, j, k], ids[i + 1, j, k], ids[i + 1, j + 1, k], ids[i, j + 1, k]]
+    top = [ids[i, j, k + 1], ids[i + 1, j, k + 1], ids[i + 1, j + 1, k + 1],
+           ids[i, j + 1, k + 1]]
+    hexahedra = np.column_stack(bottom + top)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    meshio.write(str(path), meshio.Mesh(nodes, [("hexahedron", hexahedra)]),
+                 file_format="gmsh22", binary=False)
+    return int(hexahedra.shape[0])
+
+
+CONTROL = """\
+# ddpy control deck.  Units mm, N, MPa, s.  Written by benchmarks/cylindrical_bending/make_case.py
+# Unconstrained cylindrical bending (Numisheet 2002 benchmark B), quarter model.
+
+title  Unconstrained cylindrical bending, {model} tools, {mesh} blank
+
+max_increment        {max_increment}    # mm of punch travel (paper: 0.114)
+rmin_yield           0.01
+rmin_strain          0.02
+rmin_rotation        1.0
+rmin_contact         on
+newton_force         1e-4
+newton_displacement  1e-4
+max_iterations       25
+cutback              0.5
+output_every         0         # fields only at output_at and at the end of each phase
+
+phase forming
+  type      forming
+  tools     punch die
+  move      punch  0 0 -{stroke}
+  lead      punch
+  output_at {output_at}          # paper Table 2
+end
+
+phase springback
+  type        springback
+  increments  {springback}
+end
+"""
+
+MESH = """\
+# ddpy mesh deck: the blank.  Units mm.  Written by make_case.py
+# Quarter of the 120 x 30 x 1 mm strip: 60 x 15 x 1 mm, {what}.
+normal  z
+file    ../../../meshes/{mesh}.msh
+"""
+
+BC = """\
+# ddpy boundary deck.  Units mm.  Written by make_case.py
+tolerance  1e-4
+symmetry   x 0                     # plane x = 0 (the punch's axis plane)
+symmetry   y 0                     # plane y = 0 (middle of the width)
+nodeset    centre  box 0 0  0 0  -inf inf
+fix        centre  z  phase springback     # the blank's free rigid motion along z
+"""
+
+MATERIAL = """\
+# ddpy material deck.  Units MPa.  Written by make_case.py
+# High strength steel of the Numisheet 2002 benchmark B (paper Table 1; E, nu assumed).
+elastic            E 210000  nu 0.3
+yield              hill48  F 0.254  G 0.397  H 0.603  L 1.5  M 1.5  N 1.689
+hardening          swift   K 645.3  eps0 0.0102  n 0.252
+rolling_direction  0          # along x, the blank's length
+"""
+
+TOOLS = """\
+# ddpy tools deck.  Units mm.  Written by make_case.py: the {model} model.
+tool punch
+  description  {description}
+  file         ../../../tools/punch.{file}.tool
+  friction     {friction}
+  contact      top
+end
+
+tool die
+  description  {description}
+  file         ../../../tools/die.{file}.tool
+  friction     {friction}
+  contact      bottom
+end
+"""
+
+
+def write_case(folder: Path, model: str, mesh: str, stroke: float = STROKE,
+               max_increment: float = MAX_INCREMENT, springback: int = 1) -> Path:
+    """Write the five decks of one case (the tool and mesh files are referred to relatively:
+    the folder must be ``<root>/cases/<mesh>/<model>`` next to ``tools/`` and ``meshes/``)."""
+    description, file = TOOL_FILES[model]
+    folder.mkdir(parents=True, exist_ok=True)
+    what = {"paper": "unstructured, 3 layers (paper: 19,950 hexahedra)",
+            "coarse": "structured, graded, 3 layers"}.get(mesh, "3 layers")
+    at = " ".join(f"{s:g}" for s in OUTPUT_AT if s <= stroke + 1e-9)
+    decks = {
+        "control.dat": CONTROL.format(model=model, mesh=mesh, max_increment=max_increment,
+                                      stroke=f"{stroke:g}", output_at=at, springback=springback),
+        "mesh.dat": MESH.format(mesh=mesh, what=what),
+        "bc.dat": BC,
+        "material.dat": MATERIAL,
+        "tools.dat": TOOLS.format(model=model, description=description, file=file,
+                                  friction=FRICTION),
+    }
+    for name, text in decks.items():
+        (folder / name).write_text(text)
+    return folder
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--mesh", choices=(*MESHES, "all"), default="all")
+    parser.add_argument("--root", type=Path, default=HERE,
+                        help="where tools/, meshes/ and cases/ go (default: next to this script)")
+    args = parser.parse_args(argv)
+    root: Path = args.root
+    for tool, paths in build_tools(root / "tools").items():
+        print(f"{tool}: " + ", ".join(str(p) for p in paths.values()), file=sys.stderr)
+    meshes = MESHES if args.mesh == "all" else (args.mesh,)
+    for mesh in meshes:
+        maker = paper_mesh if mesh == "paper" else coarse_mesh
+        count = maker(root / "meshes" / f"{mesh}.msh")
+        print(f"mesh {mesh}: {count} hexahedra", file=sys.stderr)
+        for model in MODELS:
+            print(write_case(root / "cases" / mesh / model, model, mesh))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -32,6 +32,9 @@ MESHES = ("coarse", "paper")
 #: The quarter blank, mm (the paper: 120 x 30 x 1 mm, rolling direction along the length).
 LENGTH, WIDTH, THICKNESS = 60.0, 15.0, 1.0
 PAPER_HEXAHEDRA, LAYERS = 19950, 3
+#: Tools (design.md's reconstruction of Fig. 6): punch radius, die shoulder radius and the
+#: distance of the shoulder's centre from the symmetry plane.
+PUNCH_RADIUS, SHOULDER_RADIUS, SHOULDER_X = 23.5, 4.0, 29.5
 #: Coarse blank: elements along x in [0, COARSE_SPLIT] and beyond, across y, through z.
 COARSE_SPLIT, COARSE_X, COARSE_Y = 36.0, (24, 6), 2
 #: Tool file of each model and tool, and the description the deck gives it.
@@ -53,7 +56,8 @@ def build_tools(folder: Path = HERE / "tools", size: float = 5.0) -> dict[str, d
         import gmsh
 
         gmsh.clear()
-        bending_tools(step)
+        bending_tools(step, punch_radius=PUNCH_RADIUS, shoulder_radius=SHOULDER_RADIUS,
+                      shoulder_x=SHOULDER_X, thickness=THICKNESS)
         gmsh.clear()
         faces = load_cad(step)
         # The punch lies above the blank (z > thickness), the die below (z <= 0).
@@ -115,17 +119,18 @@ def paper_mesh(path: Path, quads: int = PAPER_HEXAHEDRA // LAYERS, tries: int = 
     return hexahedra
 
 
-def coarse_mesh(path: Path) -> int:
-    """The coarse blank: structured, ``COARSE_X[0]`` elements over the bending zone
-    0 <= x <= COARSE_SPLIT (punch and die shoulder), ``COARSE_X[1]`` over the straight
-    flange beyond, ``COARSE_Y`` across and 3 through the thickness. Returns the hexahedra."""
+def coarse_mesh(path: Path, nx: tuple[int, int] = COARSE_X, ny: int = COARSE_Y,
+                layers: int = LAYERS) -> int:
+    """The coarse blank: structured, ``nx[0]`` elements over the bending zone
+    0 <= x <= COARSE_SPLIT (punch and die shoulder), ``nx[1]`` over the straight flange
+    beyond, ``ny`` across and ``layers`` through the thickness. Returns the hexahedra."""
     import meshio
     import numpy as np
 
-    x = np.concatenate([np.linspace(0.0, COARSE_SPLIT, COARSE_X[0] + 1),
-                        np.linspace(COARSE_SPLIT, LENGTH, COARSE_X[1] + 1)[1:]])
-    y = np.linspace(0.0, WIDTH, COARSE_Y + 1)
-    z = np.linspace(0.0, THICKNESS, LAYERS + 1)
+    x = np.concatenate([np.linspace(0.0, COARSE_SPLIT, nx[0] + 1),
+                        np.linspace(COARSE_SPLIT, LENGTH, nx[1] + 1)[1:]])
+    y = np.linspace(0.0, WIDTH, ny + 1)
+    z = np.linspace(0.0, THICKNESS, layers + 1)
     nodes = np.stack(np.meshgrid(x, y, z, indexing="ij"), axis=-1).reshape(-1, 3)
     ids = np.arange(nodes.shape[0]).reshape(x.size, y.size, z.size)
     i, j, k = (a.ravel() for a in np.meshgrid(np.arange(x.size - 1), np.arange(y.size - 1),

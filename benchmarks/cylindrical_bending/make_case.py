@@ -140,8 +140,10 @@ def coarse_mesh(path: Path, nx: tuple[int, int] = COARSE_X, ny: int = COARSE_Y,
            ids[i, j + 1, k + 1]]
     hexahedra = np.column_stack(bottom + top)
     path.parent.mkdir(parents=True, exist_ok=True)
-    meshio.write(str(path), meshio.Mesh(nodes, [("hexahedron", hexahedra)]),
-                 file_format="gmsh22", binary=False)
+    tags = [np.ones(hexahedra.shape[0], dtype=int)]
+    mesh = meshio.Mesh(nodes, [("hexahedron", hexahedra)],
+                       cell_data={"gmsh:physical": tags, "gmsh:geometrical": tags})
+    meshio.write(str(path), mesh, file_format="gmsh22", binary=False)
     return int(hexahedra.shape[0])
 
 

@@ -1,0 +1,102 @@
+"""The cylindrical bending benchmark end to end on a small blank: a regression test.
+
+Builds the benchmark's tools from their CAD model (benchmarks/cylindrical_bending/make_case.py),
+a test-only blank coarser than the benchmark's coarse one, and the Nagata case; runs it through
+forming (28.5 mm) and springback; and compares the contact angles, beta_1, beta_2 and the punch
+force curve with the values stored in tests/data/cylindrical_bending_reference.json.
+
+The reference values are not the paper's: they come from a run of this same test set-up
+(``python tests/test_cylindrical_bending.py`` rewrites the file, stating the commit it ran
+on). The test protects against regressions: a change that moves the results beyond the
+tolerances below must explain why and renew the reference. Tolerances: contact angles
+1 degree (one node of this mesh spans about 7 degrees of theta, so a change of the contact
+status of one node shows); beta 0.5 degree; punch force 2 % of its largest value at every
+stroke of the reference curve; increments and iterations 15 %.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+BENCH = Path(__file__).resolve().parents[1] / "benchmarks" / "cylindrical_bending"
+REFERENCE = Path(__file__).resolve().parent / "data" / "cylindrical_bending_reference.json"
+#: The test blank: elements over the bending zone and beyond, across, through the thickness.
+TEST_MESH = {"nx": (12, 2), "ny": 1, "layers": 2}
+MODEL = "nagata"
+STROKES = np.linspace(1.0, 28.5, 56)  # where the force curve is compared
+
+
+def _module(name: str) -> Any:
+    spec = importlib.util.spec_from_file_location(f"bending_{name}", BENCH / f"{name}.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # dataclasses look their module up
+    spec.loader.exec_module(module)
+    return module
+
+
+def run_test_case(root: Path) -> dict[str, Any]:
+    """Write the test case under ``root``, run it, return its numbers and force curve."""
+    make_case, bench = _module("make_case"), _module("run")
+    make_case.build_tools(root / "tools")
+    make_case.coarse_mesh(root / "meshes" / "test.msh", **TEST_MESH)
+    folder = make_case.write_case(root / "cases" / "test" / MODEL, MODEL, "test")
+    run = bench.run_case_folder(folder)
+    numbers = bench.summary(MODEL, run)
+    numbers["force_N"] = np.interp(STROKES, run.stroke, run.force).round(4).tolist()
+    return numbers
+
+
+@pytest.fixture(scope="module")
+def result(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
+    return run_test_case(tmp_path_factory.mktemp("bending"))
+
+
+@pytest.fixture(scope="module")
+def reference() -> dict[str, Any]:
+    return json.loads(REFERENCE.read_text())
+
+
+def test_contact_angles_and_springback(result: dict[str, Any], reference: dict[str, Any]
+                                       ) -> None:
+    assert np.allclose(result["theta_deg"], reference["theta_deg"], atol=1.0), \
+        (result["theta_deg"], reference["theta_deg"])
+    # The wrap grows with the stroke, and the flange opens in springback.
+    assert np.all(np.diff(result["theta_deg"]) > 0)
+    assert result["beta1_deg"] == pytest.approx(reference["beta1_deg"], abs=0.5)
+    assert result["beta2_deg"] == pytest.approx(reference["beta2_deg"], abs=0.5)
+
+
+def test_punch_force_curve(result: dict[str, Any], reference: dict[str, Any]) -> None:
+    force, expected = np.array(result["force_N"]), np.array(reference["force_N"])
+    scale = np.abs(expected).max()
+    assert np.abs(force - expected).max() <= 0.02 * scale, np.abs(force - expected).max()
+    assert result["max_force_N"] == pytest.approx(reference["max_force_N"], rel=0.02)
+
+
+def test_effort(result: dict[str, Any], reference: dict[str, Any]) -> None:
+    assert result["increments"] == pytest.approx(reference["increments"], rel=0.15)
+    assert result["iterations"] == pytest.approx(reference["iterations"], rel=0.15)
+
+
+if __name__ == "__main__":  # renew the reference
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as tmp:
+        numbers = run_test_case(Path(tmp))
+    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
+                            text=True, cwd=BENCH).stdout.strip()
+    numbers["produced_by"] = (f"python tests/test_cylindrical_bending.py at commit {commit} "
+                              f"(test mesh {TEST_MESH}, model {MODEL}, strokes of force_N: "
+                              f"numpy.linspace(1, 28.5, 56))")
+    REFERENCE.parent.mkdir(parents=True, exist_ok=True)
+    REFERENCE.write_text(json.dumps(numbers, indent=1) + "\n")
+    print(f"wrote {REFERENCE}", file=sys.stderr)

@@ -782,11 +782,11 @@ class FormingProblem:
 
 def _yield_factor(props: NDArray[np.float64], before: SolidState, after: SolidState,
                   tolerance: float) -> float:
-    """Fraction of the increment at which the first Gauss point that was elastic reaches
-    the yield surface, if its elastic trial stress overshoots it by more than
-    ``tolerance``; 1 otherwise. ``after`` is the state of the elastic predictor. The
-    Hill'48 form is quadratic, so along the elastic trial path sigma_n + r C de the
-    landing r solves a quadratic."""
+    """Fraction of the increment at which the first Gauss point that was elastic (below the
+    yield surface by more than ``tolerance``) reaches the yield surface, if its elastic trial
+    stress overshoots it by more than ``tolerance``; 1 otherwise. ``after`` is the state of
+    the elastic predictor. The Hill'48 form is quadratic, so along the elastic trial path
+    sigma_n + r C de the landing r solves a quadratic."""
     young, nu = props[0], props[1]
     f, g, h, l_, m, n = props[2:8]
     lam = young * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))
@@ -809,7 +809,10 @@ def _yield_factor(props: NDArray[np.float64], before: SolidState, after: SolidSt
     y = k1 * (k2 + ep) ** k3 if law == 1.0 else k1 + k2 * (1.0 - np.exp(-k3 * ep))
     a, b = before.stress, ds
     qa, qab, qb = form(a, a), form(a, b), form(b, b)
-    elastic = qa < y**2 * (1.0 - 1e-9)
+    # A point within the tolerance below the surface is yielding already (it got there by
+    # unloading a little, or by a step that landed it): landing it again would cut the
+    # increment to almost nothing, over and over, while it crosses the last fraction.
+    elastic = qa < (y * (1.0 - tolerance)) ** 2
     over = elastic & (qa + 2.0 * qab + qb > (y * (1.0 + tolerance)) ** 2) & (qb > 0.0)
     if not over.any():
         return 1.0

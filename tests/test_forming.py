@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 from ddpy.contact import SLIP, STICK
-from ddpy.forming import FormingProblem, IncrementLimits, RigidTool
+from ddpy.forming import FormingProblem, IncrementLimits, RigidTool, _yield_factor
 from ddpy.material import Hill48, Material, Swift
 from ddpy.mesh import HexMesh
-from ddpy.solid import Solid
+from ddpy.solid import Solid, SolidState, material_props
 from ddpy.surfaces import BezierSurface, NagataSurface
 
 #: Elastic in practice (yield stress 1e7 MPa), no Poisson effect: the analytic answers hold.
@@ -277,6 +277,26 @@ def test_increment_lands_on_the_yield_surface() -> None:
     y0 = 645.3 * 0.0102**0.252
     assert y0 <= force <= 1.02 * y0
     assert result.tool_displacements["plane"][-1][2] == pytest.approx(6e-3)
+
+
+def test_yield_landing_skips_points_already_at_the_surface() -> None:
+    # Uniaxial stress in one Gauss point under a step that would overshoot the yield stress
+    # by 50 %: from 0.5 Y the step is cut to reach Y (r = 0.5 / 1.0 of the way, plus half the
+    # tolerance); from 0.9996 Y (a point a tiny unloading left just inside the surface) it is
+    # not cut at all, instead of being cut to ~1e-3 again and again.
+    steel = Material(210e3, 0.0, Hill48.von_mises(), Swift(645.3, 0.0102, 0.252))
+    props = material_props(steel)
+    y0 = 645.3 * 0.0102**0.252
+
+    def state(sigma: float, strain: float) -> SolidState:
+        s = SolidState.zeros(1)
+        s.stress[..., 0], s.strain[..., 0] = sigma, strain
+        return s
+
+    de = 1.0 * y0 / 210e3
+    half = _yield_factor(props, state(0.5 * y0, 0.0), state(0.0, de), 0.01)
+    assert half == pytest.approx(0.5 * 1.005, rel=1e-6)
+    assert _yield_factor(props, state(0.9996 * y0, 0.0), state(0.0, de), 0.01) == 1.0
 
 
 def test_springback_supports_only_the_rigid_modes() -> None:

@@ -49,7 +49,7 @@ def run_test_case(root: Path) -> dict[str, Any]:
     make_case.build_tools(root / "tools")
     make_case.coarse_mesh(root / "meshes" / "test.msh", **TEST_MESH)
     folder = make_case.write_case(root / "cases" / "test" / MODEL, MODEL, "test")
-    run = bench.run_case_folder(folder)
+    run = bench.run_case_folder(folder, root / "results")
     numbers = bench.summary(MODEL, run)
     numbers["force_N"] = np.interp(STROKES, run.stroke, run.force).round(4).tolist()
     return numbers

@@ -8,8 +8,9 @@ writes docs/benchmarks/cylindrical_bending.md with its figures, next to the pape
     python benchmarks/cylindrical_bending/run.py --json           # print the numbers only
     python benchmarks/cylindrical_bending/run.py --reuse          # report from saved runs
 
-The cases are written first by make_case.py (tools, meshes, decks); each run is saved to
-results/<mesh>/<model>.npz (git-ignored) for ``--reuse``.
+The cases are written first by make_case.py (tools, meshes, decks) when missing; each case
+runs through the case runner (``ddpy run``) into results/<mesh>/<model>/ (git-ignored), which
+``--reuse`` reads back.
 """
 
 from __future__ import annotations
@@ -18,8 +19,7 @@ import argparse
 import importlib.util
 import json
 import sys
-import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -83,63 +83,6 @@ class Run:
     extra: dict[str, float] = field(default_factory=dict)
 
 
-def run_direct(folder: Path) -> Run:
-    """Run one case by driving ddpy.forming directly from its decks: the forming phase in
-    segments ending at the strokes of Table 2 (the contact angles are measured there), then
-    springback. Temporary, until the case runner (ddpy run) is on main."""
-    from ddpy.decks import read_case
-    from ddpy.forming import FormingProblem, FormingResult, IncrementLimits, RigidTool
-    from ddpy.mesh import HexMesh
-    from ddpy.solid import Solid
-
-    case = read_case(folder)
-    mesh = HexMesh(case.mesh.nodes, case.mesh.elements)
-    solid = Solid(mesh, case.material.material,
-                  rolling_direction_deg=case.material.rolling_angle)
-    tools = [RigidTool(t.name, t.model().surface, t.contact_nodes(case.mesh), t.friction,
-                       facing=t.facing, augmentation=t.augmentation) for t in case.tools]
-    problem = FormingProblem(solid, tools)
-    forming, springback = case.phases
-    nodes, comps = case.boundary.constrained(forming.name)
-    for c in range(3):
-        problem.fix(nodes[comps == c], c)
-    limits = IncrementLimits(strain=forming.rmin.strain, rotation_deg=forming.rmin.rotation,
-                             yield_tolerance=forming.rmin.yield_tolerance,
-                             first_touch=forming.rmin.contact)
-    direction = forming.displacement("punch") / forming.travel
-    punch = [t.name for t in case.tools].index("punch")
-    result = FormingResult()
-    theta, done = [], 0.0
-    start = time.perf_counter()
-    for at in forming.output_at:
-        result = problem.run({"punch": direction * (at - done)}, forming.max_increment,
-                             tol_force=forming.newton.force_tolerance,
-                             tol_disp=forming.newton.displacement_tolerance,
-                             max_iterations=forming.newton.max_iterations, limits=limits,
-                             result=result)
-        done = at
-        x = case.mesh.nodes + problem.u
-        slaves = tools[punch].slaves
-        theta.append(contact_angle(x[slaves], result.status["punch"][-1] != 0,
-                                   AXIS0 + problem.position["punch"]))
-    formed = case.mesh.nodes + problem.u
-    for c in range(3):
-        problem.release(nodes[comps == c], c)
-    kept, kept_comps = case.boundary.constrained(springback.name)
-    for c in range(3):
-        problem.fix(kept[kept_comps == c], c)
-    back = problem.springback(springback.increments)
-    wall = time.perf_counter() - start
-    stroke = np.array(result.tool_displacements["punch"]) @ direction
-    force = -np.array(result.tool_forces["punch"]) @ direction
-    sizes = np.diff(np.concatenate([[0.0], stroke]))
-    return Run(stroke=stroke, force=force, sizes=sizes,
-               iterations=np.array(result.iterations), cuts=result.cuts, theta=theta,
-               shape_formed=formed, shape_sprung=case.mesh.nodes + problem.u,
-               initial=np.array(case.mesh.nodes), wall_s=wall,
-               springback_iterations=int(sum(back.iterations)))
-
-
 def from_results(path: Path, output_at: tuple[float, ...] = make_case.OUTPUT_AT) -> Run:
     """Read one run back from its results file (docs/results-format.md): the curves, the
     contact angles from the frames at the strokes of Table 2 (``output_at`` in the decks),
@@ -170,9 +113,26 @@ def from_results(path: Path, output_at: tuple[float, ...] = make_case.OUTPUT_AT)
                    springback_iterations=int(history["iterations"][~forming].sum()))
 
 
-def run_case_folder(folder: Path) -> Run:
-    """Run one case folder and return what the report needs."""
-    return run_direct(folder)
+def run_case_folder(folder: Path, output: Path | None = None, verbose: bool = False) -> Run:
+    """Run one case folder with the case runner (``ddpy run``) into ``output`` (default:
+    results/<mesh>/<model> next to this script) and read back what the report needs."""
+    from ddpy.decks import read_case
+    from ddpy.runner import Progress, run_case
+
+    output = output or HERE / "results" / folder.parent.name / folder.name
+
+    def progress(p: Progress) -> None:
+        if p.increment % 50 == 0:
+            print(f"  {folder.name}: {p.phase} increment {p.increment}, travel "
+                  f"{p.travel:.3f} of {p.phase_travel:g} mm", file=sys.stderr, flush=True)
+
+    outcome = run_case(read_case(folder), output, overwrite=True,
+                       progress=progress if verbose else None)
+    if outcome.status != "completed":
+        raise RuntimeError(f"{folder}: run {outcome.status}: {outcome.message}")
+    run = from_results(outcome.results)
+    run.wall_s = outcome.wall_time
+    return run
 
 
 def betas(run: Run) -> tuple[float, float]:
@@ -204,23 +164,6 @@ def summary(model: str, run: Run) -> dict[str, Any]:
         "oscillation_rel": round(osc / float(np.mean(np.abs(run.force))), 6),
         "full_size_increments": int(np.sum(run.sizes >= 0.999 * make_case.MAX_INCREMENT)),
     }
-
-
-def save(run: Run, path: Path) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    data = asdict(run)
-    data.pop("extra")
-    np.savez(path, **{k: np.asarray(v) for k, v in data.items()})
-
-
-def load(path: Path) -> Run:
-    data = np.load(path)
-    return Run(stroke=data["stroke"], force=data["force"], sizes=data["sizes"],
-               iterations=data["iterations"], cuts=int(data["cuts"]),
-               theta=[float(t) for t in data["theta"]], shape_formed=data["shape_formed"],
-               shape_sprung=data["shape_sprung"], initial=data["initial"],
-               wall_s=float(data["wall_s"]),
-               springback_iterations=int(data["springback_iterations"]))
 
 
 def shape_errors(tools: Path) -> dict[str, dict[str, dict[str, Any]]]:
@@ -465,13 +408,12 @@ def main(argv: list[str] | None = None) -> int:
         make_case.main(["--mesh", args.mesh])
     runs: dict[str, Run] = {}
     for model in models:
-        saved = HERE / "results" / args.mesh / f"{model}.npz"
+        saved = HERE / "results" / args.mesh / model / "results.h5"
         if args.reuse and saved.exists():
-            runs[model] = load(saved)
+            runs[model] = from_results(saved)
             continue
         print(f"running {args.mesh}/{model} ...", file=sys.stderr, flush=True)
-        runs[model] = run_case_folder(case_root / model)
-        save(runs[model], saved)
+        runs[model] = run_case_folder(case_root / model, verbose=True)
         print(f"  {runs[model].stroke.size} increments, {runs[model].wall_s:.0f} s",
               file=sys.stderr, flush=True)
     numbers = {m: summary(m, r) for m, r in runs.items()}

@@ -1,9 +1,11 @@
 """The cylindrical bending benchmark end to end on a small blank: a regression test.
 
 Builds the benchmark's tools from their CAD model (benchmarks/cylindrical_bending/make_case.py),
-a test-only blank coarser than the benchmark's coarse one, and the Nagata case; runs it through
-forming (28.5 mm) and springback; and compares the contact angles, beta_1, beta_2 and the punch
-force curve with the values stored in tests/data/cylindrical_bending_reference.json.
+a test-only blank (the benchmark's coarse one with one element across) and the Nagata case with
+a 7 mm stroke (the first of the paper's four) and test-only increment settings; runs it to the
+end (forming, springback) through the case runner; and compares the contact angle theta_1,
+beta_1, beta_2 and the punch force curve with the values stored in
+tests/data/cylindrical_bending_reference.json.
 
 The reference values are not the paper's: they come from a run of this same test set-up
 (``python tests/test_cylindrical_bending.py`` rewrites the file, stating the commit it ran
@@ -29,9 +31,12 @@ import pytest
 BENCH = Path(__file__).resolve().parents[1] / "benchmarks" / "cylindrical_bending"
 REFERENCE = Path(__file__).resolve().parent / "data" / "cylindrical_bending_reference.json"
 #: The test blank: elements over the bending zone and beyond, across, through the thickness.
-TEST_MESH = {"nx": (12, 2), "ny": 1, "layers": 2}
+TEST_MESH = {"nx": (24, 6), "ny": 1, "layers": 3}
+#: Test-only settings (the benchmark's: 28.5 mm, 0.114 mm and 0.1): the first of the paper's
+#: four strokes, fewer and longer increments. The full stroke takes about 5 minutes here.
+TEST_SETTINGS = {"stroke": 7.0, "max_increment": 0.5, "rmin_yield": 0.5}
 MODEL = "nagata"
-STROKES = np.linspace(1.0, 28.5, 56)  # where the force curve is compared
+STROKES = np.linspace(0.5, 7.0, 27)  # where the force curve is compared
 
 
 def _module(name: str) -> Any:
@@ -48,7 +53,8 @@ def run_test_case(root: Path) -> dict[str, Any]:
     make_case, bench = _module("make_case"), _module("run")
     make_case.build_tools(root / "tools")
     make_case.coarse_mesh(root / "meshes" / "test.msh", **TEST_MESH)
-    folder = make_case.write_case(root / "cases" / "test" / MODEL, MODEL, "test")
+    folder = make_case.write_case(root / "cases" / "test" / MODEL, MODEL, "test",
+                                  **TEST_SETTINGS)
     run = bench.run_case_folder(folder, root / "results")
     numbers = bench.summary(MODEL, run)
     numbers["force_N"] = np.interp(STROKES, run.stroke, run.force).round(4).tolist()
@@ -69,8 +75,7 @@ def test_contact_angles_and_springback(result: dict[str, Any], reference: dict[s
                                        ) -> None:
     assert np.allclose(result["theta_deg"], reference["theta_deg"], atol=1.0), \
         (result["theta_deg"], reference["theta_deg"])
-    # The wrap grows with the stroke, and the flange opens in springback.
-    assert np.all(np.diff(result["theta_deg"]) > 0)
+    assert len(result["theta_deg"]) == 1 and result["theta_deg"][0] > 0.0
     assert result["beta1_deg"] == pytest.approx(reference["beta1_deg"], abs=0.5)
     assert result["beta2_deg"] == pytest.approx(reference["beta2_deg"], abs=0.5)
 
@@ -94,9 +99,9 @@ if __name__ == "__main__":  # renew the reference
         numbers = run_test_case(Path(tmp))
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
                             text=True, cwd=BENCH).stdout.strip()
-    numbers["produced_by"] = (f"python tests/test_cylindrical_bending.py at commit {commit} "
-                              f"(test mesh {TEST_MESH}, model {MODEL}, strokes of force_N: "
-                              f"numpy.linspace(1, 28.5, 56))")
+    numbers["produced_by"] = (
+        f"python tests/test_cylindrical_bending.py at commit {commit} (test mesh {TEST_MESH}, "
+        f"{TEST_SETTINGS}, model {MODEL}, strokes of force_N: numpy.linspace(0.5, 7, 27))")
     REFERENCE.parent.mkdir(parents=True, exist_ok=True)
     REFERENCE.write_text(json.dumps(numbers, indent=1) + "\n")
     print(f"wrote {REFERENCE}", file=sys.stderr)

@@ -178,8 +178,9 @@ phase forming
 end
 
 phase springback
-  type        springback
-  increments  {springback}
+  type            springback
+  increments      {springback}      # one step does not converge (the blank swings far)
+  max_iterations  60
 end
 """
 
@@ -227,7 +228,7 @@ end
 
 
 def write_case(folder: Path, model: str, mesh: str, stroke: float = STROKE,
-               max_increment: float = MAX_INCREMENT, springback: int = 1,
+               max_increment: float = MAX_INCREMENT, springback: int = 20,
                rmin_yield: float = RMIN_YIELD) -> Path:
     """Write the five decks of one case (the tool and mesh files are referred to relatively:
     the folder must be ``<root>/cases/<mesh>/<model>`` next to ``tools/`` and ``meshes/``)."""

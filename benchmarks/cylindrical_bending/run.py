@@ -19,7 +19,7 @@ import argparse
 import importlib.util
 import json
 import sys
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -80,7 +80,7 @@ class Run:
     initial: np.ndarray           # (n, 3) initial node positions
     wall_s: float
     springback_iterations: int = 0
-    extra: dict[str, float] = field(default_factory=dict)
+    status: str = "completed"
 
 
 def from_results(path: Path, output_at: tuple[float, ...] = make_case.OUTPUT_AT) -> Run:
@@ -98,24 +98,34 @@ def from_results(path: Path, output_at: tuple[float, ...] = make_case.OUTPUT_AT)
         frames = r.frames
         theta = []
         for at in output_at:
-            frame = next(f for f in frames if f.phase == 0 and abs(f.travel - at) < 1e-6)
+            frame = next((f for f in frames if f.phase == 0 and abs(f.travel - at) < 1e-6),
+                         None)
+            if frame is None:  # a run that stopped before this stroke
+                theta.append(float("nan"))
+                continue
             fields = r.frame(frame.index)
             tool_disp = r.tool_displacement("punch")[frame.increment - 1]
             theta.append(contact_angle(fields["coordinates"], fields["contact_tool"] == punch,
                                        AXIS0 + tool_disp))
         formed = max((f for f in frames if f.phase == 0), key=lambda f: f.increment)
+        sprung = frames[-1] if frames[-1].phase == 1 else None
+        status = "completed" if sprung is not None else "partial"
         return Run(stroke=stroke, force=force, sizes=history["step"][forming],
                    iterations=history["iterations"][forming],
                    cuts=int(history["cutbacks"][forming].sum()), theta=theta,
                    shape_formed=r.field("coordinates", formed.index),
-                   shape_sprung=r.field("coordinates", -1), initial=r.nodes,
+                   shape_sprung=r.field("coordinates", sprung.index) if sprung else
+                   np.full_like(r.nodes, np.nan), initial=r.nodes,
                    wall_s=float(history["time_total"].sum()),
-                   springback_iterations=int(history["iterations"][~forming].sum()))
+                   springback_iterations=int(history["iterations"][~forming].sum()),
+                   status=status)
 
 
-def run_case_folder(folder: Path, output: Path | None = None, verbose: bool = False) -> Run:
+def run_case_folder(folder: Path, output: Path | None = None, verbose: bool = False,
+                    max_increments: int | None = None) -> Run:
     """Run one case folder with the case runner (``ddpy run``) into ``output`` (default:
-    results/<mesh>/<model> next to this script) and read back what the report needs."""
+    results/<mesh>/<model> next to this script) and read back what the report needs. A run
+    stopped after ``max_increments`` or failed is read as far as it got (``Run.status``)."""
     from ddpy.decks import read_case
     from ddpy.runner import Progress, run_case
 
@@ -127,11 +137,10 @@ def run_case_folder(folder: Path, output: Path | None = None, verbose: bool = Fa
                   f"{p.travel:.3f} of {p.phase_travel:g} mm", file=sys.stderr, flush=True)
 
     outcome = run_case(read_case(folder), output, overwrite=True,
-                       progress=progress if verbose else None)
-    if outcome.status != "completed":
-        raise RuntimeError(f"{folder}: run {outcome.status}: {outcome.message}")
+                       progress=progress if verbose else None, max_increments=max_increments)
     run = from_results(outcome.results)
     run.wall_s = outcome.wall_time
+    run.status = outcome.status + (f": {outcome.message}" if outcome.message else "")
     return run
 
 
@@ -140,7 +149,9 @@ def betas(run: Run) -> tuple[float, float]:
     initially at x >= FLANGE_X, beyond the die shoulder) after forming and after springback,
     fitted through all its nodes (every layer)."""
     flange = run.initial[:, 0] >= FLANGE_X - 1e-9
-    return line_angle(run.shape_formed[flange]), line_angle(run.shape_sprung[flange])
+    sprung = run.shape_sprung[flange]
+    return (line_angle(run.shape_formed[flange]),
+            line_angle(sprung) if np.isfinite(sprung).all() else float("nan"))
 
 
 def summary(model: str, run: Run) -> dict[str, Any]:
@@ -150,6 +161,8 @@ def summary(model: str, run: Run) -> dict[str, Any]:
     late = force_oscillation(run.stroke, run.force, WINDOW, start=20.0)
     return {
         "model": model,
+        "status": run.status,
+        "stroke_mm": round(float(run.stroke[-1]), 3) if run.stroke.size else 0.0,
         "theta_deg": [round(t, 2) for t in run.theta],
         "beta1_deg": round(beta1, 2),
         "beta2_deg": round(beta2, 2),
@@ -331,6 +344,9 @@ def report(mesh: str, hexahedra: int, numbers: dict[str, dict[str, Any]],
         "",
         head,
         _row(["---"] * (1 + 2 * len(models))),
+        _row(["run", *[numbers[m]["status"] for m in models], *["completed" for _ in models]]),
+        _row(["stroke reached [mm]", *[numbers[m]["stroke_mm"] for m in models],
+              *[make_case.STROKE for _ in models]]),
         _row(["increments", *[numbers[m]["increments"] for m in models],
               *[PAPER[m]["increments"] for m in models]]),
         _row(["iterations", *[numbers[m]["iterations"] for m in models],
@@ -394,6 +410,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--models", default=",".join(MODELS),
                         help="comma-separated among " + ", ".join(MODELS))
     parser.add_argument("--json", action="store_true", help="print the numbers only")
+    parser.add_argument("--max-increments", type=int, default=1500, metavar="N",
+                        help="stop a run after N increments, report it as far as it got "
+                        "(default 1500; 0: no limit)")
     parser.add_argument("--reuse", action="store_true",
                         help="report from the runs saved in results/ (no new run)")
     args = parser.parse_args(argv)
@@ -413,7 +432,8 @@ def main(argv: list[str] | None = None) -> int:
             runs[model] = from_results(saved)
             continue
         print(f"running {args.mesh}/{model} ...", file=sys.stderr, flush=True)
-        runs[model] = run_case_folder(case_root / model, verbose=True)
+        runs[model] = run_case_folder(case_root / model, verbose=True,
+                                      max_increments=args.max_increments or None)
         print(f"  {runs[model].stroke.size} increments, {runs[model].wall_s:.0f} s",
               file=sys.stderr, flush=True)
     numbers = {m: summary(m, r) for m, r in runs.items()}

@@ -56,6 +56,7 @@ def run_test_case(root: Path) -> dict[str, Any]:
     folder = make_case.write_case(root / "cases" / "test" / MODEL, MODEL, "test",
                                   **TEST_SETTINGS)
     run = bench.run_case_folder(folder, root / "results")
+    assert run.status == "completed", run.status
     numbers = bench.summary(MODEL, run)
     numbers["force_N"] = np.interp(STROKES, run.stroke, run.force).round(4).tolist()
     return numbers

@@ -158,7 +158,8 @@ def summary(model: str, run: Run) -> dict[str, Any]:
     """The numbers of one run."""
     beta1, beta2 = betas(run)
     osc = force_oscillation(run.stroke, run.force, WINDOW, start=START)
-    late = force_oscillation(run.stroke, run.force, WINDOW, start=20.0)
+    late = (force_oscillation(run.stroke, run.force, WINDOW, start=20.0)
+            if run.stroke.size and run.stroke[-1] >= 21.0 else float("nan"))
     return {
         "model": model,
         "status": run.status,

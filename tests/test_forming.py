@@ -289,7 +289,7 @@ def test_yield_landing_skips_points_already_at_the_surface() -> None:
     y0 = 645.3 * 0.0102**0.252
 
     def state(sigma: float, strain: float) -> SolidState:
-        s = SolidState.zeros(1)
+        s = SolidState.zeros(1, 8)
         s.stress[..., 0], s.strain[..., 0] = sigma, strain
         return s
 

@@ -136,9 +136,10 @@ def run_case_folder(folder: Path, output: Path | None = None, verbose: bool = Fa
             print(f"  {folder.name}: {p.phase} increment {p.increment}, travel "
                   f"{p.travel:.3f} of {p.phase_travel:g} mm", file=sys.stderr, flush=True)
 
-    outcome = run_case(read_case(folder), output, overwrite=True,
+    case = read_case(folder)
+    outcome = run_case(case, output, overwrite=True,
                        progress=progress if verbose else None, max_increments=max_increments)
-    run = from_results(outcome.results)
+    run = from_results(outcome.results, case.phases[0].output_at)
     run.wall_s = outcome.wall_time
     run.status = outcome.status + (f": {outcome.message}" if outcome.message else "")
     return run

@@ -239,7 +239,7 @@ def report(runs: list[dict], meta: dict, out: Path) -> None:
             f"{100 * osc['max']:.2f} |")
     by = {r["kind"]: oscillation(r)["rms"] for r in runs}
     smooth = max(by.get("bezier", np.nan), by.get("nagata", np.nan))
-    verdict = ", ".join(f"{KINDS[k]} {by[k] / smooth:.1f} times" for k in
+    verdict = ", ".join(f"{KINDS[k]} {by[k] / smooth:.2f}" for k in
                         ("facets_coarse", "facets_fine") if k in by)
     lines = [
         "# Strip bending: a cylindrical punch and an open die with each tool description",
@@ -287,8 +287,10 @@ def report(runs: list[dict], meta: dict, out: Path) -> None:
         "",
         *table,
         "",
-        f"Facets oscillate more than the smooth descriptions: the RMS deviation is {verdict} "
-        "the larger of Bezier's and Nagata's."
+        f"RMS oscillation of the facets over the larger of Bezier's and Nagata's: {verdict} "
+        "(above 1: the facets oscillate more). The kinks of the curves between 1.3 and 1.8 mm "
+        "fall on increments limited by a first touch and then a release: the die contact "
+        "passing from one column of nodes to the next."
         if verdict and np.isfinite(smooth) else "",
         "",
         "![punch force](strip_bending_force.png)",

@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 
 from ddpy import __version__
-from ddpy.cli_run import add_run
+from ddpy.cli_run import add_post, add_run
 
 
 def _accuracy(args: argparse.Namespace) -> int:
@@ -197,6 +197,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     _add_tools(commands)
     add_run(commands)
+    add_post(commands)
 
     info = commands.add_parser("info", help="version, threads and linked libraries")
     info.set_defaults(handler=_info)

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, TextIO
 if TYPE_CHECKING:
     from ddpy.runner import Progress
 
-__all__ = ["ProgressDisplay", "add_run", "default_output"]
+__all__ = ["ProgressDisplay", "add_post", "add_run", "default_output"]
 
 #: Exit codes of ``ddpy run``.
 EXIT = {"completed": 0, "stopped": 0, "failed": 1, "interrupted": 130}
@@ -151,3 +151,57 @@ def add_run(commands: argparse._SubParsersAction) -> None:
     run.add_argument("--stop-after", type=int, metavar="N",
                      help="stop after N increments of the whole run (restartable)")
     run.set_defaults(handler=_run)
+
+
+def _post(args: argparse.Namespace) -> int:
+    from ddpy.post import post_run
+
+    try:
+        paths = post_run(args.target, args.output)
+    except (FileNotFoundError, ValueError, KeyError) as error:
+        print(f"ddpy post: error: {error}", file=sys.stderr)
+        return 1
+    for path in paths:
+        print(path)
+    return 0
+
+
+def _compare(args: argparse.Namespace) -> int:
+    from ddpy.post import compare_runs
+
+    labels = args.labels.split(",") if args.labels else None
+    try:
+        paths, table = compare_runs(args.runs, args.output, labels)
+    except (FileNotFoundError, ValueError, KeyError) as error:
+        print(f"ddpy compare: error: {error}", file=sys.stderr)
+        return 1
+    print(table, end="")
+    for path in paths:
+        print(path, file=sys.stderr)
+    return 0
+
+
+def add_post(commands: argparse._SubParsersAction) -> None:
+    """The ``post`` and ``compare`` subcommands."""
+    post = commands.add_parser(
+        "post", help="figures (PNG) and tables (CSV, markdown) of a run",
+        description="Write force_stroke.png, increments.png, contact.png, plastic_strain.png, "
+        "increments.csv, phases.csv and summary.md for a run.")
+    post.add_argument("target", metavar="CASE_OR_RESULTS",
+                      help="a results file, an output folder, or a case folder (its default "
+                      "output results/<name>)")
+    post.add_argument("--output", metavar="DIR", help="where to write (default: beside the "
+                      "results file)")
+    post.set_defaults(handler=_post)
+    compare = commands.add_parser(
+        "compare", help="overlay the force-stroke curves of several runs",
+        description="Overlay the lead tool's force against stroke of several runs "
+        "(compare_force.png) and tabulate increments, iterations, cutbacks, force and time "
+        "(compare.csv, compare.md; the table is also printed).")
+    compare.add_argument("runs", nargs="+", metavar="RUN",
+                         help="results files, output folders or case folders")
+    compare.add_argument("--output", default="compare", metavar="DIR",
+                         help="where to write (default: compare)")
+    compare.add_argument("--labels", metavar="A,B,...", help="names of the runs in the legend "
+                         "(default: their folder names)")
+    compare.set_defaults(handler=_compare)

@@ -1,0 +1,100 @@
+"""``ddpy post`` and ``ddpy compare``: figures and tables from results files."""
+
+from __future__ import annotations
+
+import csv
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from test_runner import tiny_case
+
+from ddpy.decks import read_case
+from ddpy.post import load_run
+from ddpy.results import ResultsReader
+from ddpy.runner import RESULTS, run_case
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, Path]:
+    """The tiny case run to the end, and a second run stopped early."""
+    base = tmp_path_factory.mktemp("post")
+    case = read_case(tiny_case(base / "case"))
+    assert run_case(case, base / "full").status == "completed"
+    assert run_case(case, base / "part", max_increments=12).status == "stopped"
+    return base / "case", base / "full", base / "part"
+
+
+def cli(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "ddpy", *args], capture_output=True,
+                          text=True, cwd=cwd)
+
+
+def test_force_against_stroke_follows_the_lead_tool(runs: tuple[Path, Path, Path]) -> None:
+    _, full, _ = runs
+    run = load_run(full)
+    with ResultsReader(full / RESULTS) as r:
+        punch_z = r.tool_displacement("punch")[:, 2]
+        punch_f = r.tool_force("punch")[:, 2]
+    forming = run.forming
+    assert forming.sum() == len(run.phase) - 4  # the 4 springback steps have no lead
+    # The punch moves down (-z): stroke = -u_z over both forming phases, force = +F_z.
+    np.testing.assert_allclose(run.stroke[forming], -punch_z[forming], atol=1e-12)
+    np.testing.assert_allclose(run.force[forming], punch_f[forming], atol=1e-9)
+    assert run.stroke[forming][-1] == pytest.approx(2.5)
+    assert run.force[forming].max() > 0.0
+
+
+def test_post_writes_figures_and_tables(runs: tuple[Path, Path, Path], tmp_path: Path) -> None:
+    _, full, _ = runs
+    done = cli("post", str(full), "--output", str(tmp_path))
+    assert done.returncode == 0, done.stderr
+    for name in ("force_stroke.png", "increments.png", "contact.png", "plastic_strain.png"):
+        data = (tmp_path / name).read_bytes()
+        assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 5000, name
+    with open(tmp_path / "increments.csv") as f:
+        rows = list(csv.DictReader(f))
+    run = load_run(full)
+    assert len(rows) == len(run.phase)
+    assert float(rows[-5]["stroke_mm"]) == pytest.approx(2.5)
+    assert {"contact_punch", "contact_die", "contact_holder", "limit"} <= set(rows[0])
+    with open(tmp_path / "phases.csv") as f:
+        phases = list(csv.DictReader(f))
+    assert [p["phase"] for p in phases] == ["draw", "free_draw", "springback"]
+    assert sum(int(p["increments"]) for p in phases) == len(rows)
+    summary = (tmp_path / "summary.md").read_text()
+    assert "| draw | punch |" in summary and "status completed" in summary
+
+
+def test_post_finds_the_results_of_a_case_folder_and_says_when_there_are_none(
+        runs: tuple[Path, Path, Path], tmp_path: Path) -> None:
+    case, full, _ = runs
+    missing = cli("post", str(case))
+    assert missing.returncode == 1 and "no results found" in missing.stderr
+    # A case folder: its default output results/<name> under the working directory.
+    (tmp_path / "results").mkdir()
+    (tmp_path / "results" / case.name).symlink_to(full)
+    done = cli("post", str(case), "--output", "figures", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert (tmp_path / "figures" / "force_stroke.png").is_file()
+
+
+def test_compare_overlays_runs_and_tabulates_them(runs: tuple[Path, Path, Path],
+                                                  tmp_path: Path) -> None:
+    _, full, part = runs
+    done = cli("compare", str(full), str(part / RESULTS), "--output", str(tmp_path),
+               "--labels", "full,part")
+    assert done.returncode == 0, done.stderr
+    lines = [line for line in done.stdout.splitlines() if line.startswith("| full")
+             or line.startswith("| part")]
+    assert len(lines) == 2
+    assert "| part | stopped | 12 |" in lines[1]
+    assert (tmp_path / "compare_force.png").read_bytes()[:4] == b"\x89PNG"
+    with open(tmp_path / "compare.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert [r["run"] for r in rows] == ["full", "part"]
+    assert int(rows[0]["increments"]) > int(rows[1]["increments"]) == 12
+    bad = cli("compare", str(full), "--labels", "a,b", "--output", str(tmp_path))
+    assert bad.returncode == 1 and "2 labels for 1 runs" in bad.stderr

@@ -472,7 +472,11 @@ def run_case(case: Case, output: str | os.PathLike[str], restart: bool = False,
         run.writer.annotate(status=status, message=message, wall_time=wall)
         run.writer.close()
         run.problem.close()
-        _write_atomic(output / STATUS, json.dumps({
-            "status": status, "message": message, "case": str(case.folder),
-            "increments": increments, "frames": frames, "wall_time": wall}, indent=1))
+        try:
+            _write_atomic(output / STATUS, json.dumps({
+                "status": status, "message": message, "case": str(case.folder),
+                "increments": increments, "frames": frames, "wall_time": wall}, indent=1))
+        except OSError:  # the output folder went away: keep the run's own error
+            if status != "failed":
+                raise
     return RunOutcome(status, message, increments, frames, wall, output)

@@ -157,7 +157,7 @@ contains
     integer, intent(out) :: status
     type(hencky_type) :: hk(8)
     real(wp) :: g(8, 3, 8), w0(8), b(6, 24, 8), btr(24, 8), lnj(8), pm(6, 6, 8), tg(6, 8), &
-                trt(8), dg(6, 6, 8)
+                trt(8), dg(6, 6, 8), rp(6, 6, 8)
     real(wp) :: fg(3, 3), vj, vol, mean_lnj, bbar_tr(24), dtr(24), kg(8, 8), n8(8), dn8(8, 3), &
                 rot(6, 6), de(6), s_mat(6), d_mat(6, 6), a_hat(6), mmat(6, 6), mb(6, 24), &
                 dm(6), vb(24), bt(24, 6), u(3, 3), u_inv(3, 3), ct, dmm, dv
@@ -231,7 +231,10 @@ contains
       strain(:, p) = strain_old(:, p) + de
       tg(:, p) = matmul(transpose(rot), s_mat)
       trt(p) = tg(1, p) + tg(2, p) + tg(3, p)
-      if (want_tangent) dg(:, :, p) = matmul(transpose(rot), matmul(d_mat, rot))
+      if (want_tangent) then
+        dg(:, :, p) = d_mat
+        rp(:, :, p) = matmul(rot, pm(:, :, p))
+      end if
       f = f + w0(p)*(matmul(matmul(tg(:, p), pm(:, :, p)), b(:, :, p)) &
                      + (bbar_tr - btr(:, p))*trt(p)/3.0_wp)
       ! The stress at the end of the increment in the axes turned by dR = dF dU^-1: the
@@ -258,10 +261,12 @@ contains
     kg = 0.0_wp
     do p = 1, 8
       a_hat = w0(p)*tg(:, p) + (w0(p)/vol*ct - w0(p)*trt(p)/3.0_wp)*identity_voigt
-      mmat = w0(p)*matmul(transpose(pm(:, :, p)), matmul(dg(:, :, p), pm(:, :, p))) &
+      ! With R = rot P (material axes): P^T D_global P = R^T D R, and D_global m = rot^T D m
+      ! since the identity strain m is the same in every axes.
+      mmat = w0(p)*matmul(transpose(rp(:, :, p)), matmul(dg(:, :, p), rp(:, :, p))) &
              + hencky_second(hk(p), a_hat)
       mb = matmul(mmat, b(:, :, p))
-      dm = w0(p)*matmul(transpose(pm(:, :, p)), dg(:, 1, p) + dg(:, 2, p) + dg(:, 3, p))
+      dm = w0(p)*matmul(transpose(rp(:, :, p)), dg(:, 1, p) + dg(:, 2, p) + dg(:, 3, p))
       dmm = w0(p)*sum(dg(1:3, 1:3, p))/9.0_wp
       vb = matmul(dm, b(:, :, p))/3.0_wp
       dtr = bbar_tr - btr(:, p)

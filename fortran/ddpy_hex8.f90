@@ -160,7 +160,8 @@ contains
                 trt(8), dg(6, 6, 8), rp(6, 6, 8)
     real(wp) :: fg(3, 3), vj, vol, mean_lnj, bbar_tr(24), dtr(24), kg(8, 8), n8(8), dn8(8, 3), &
                 rot(6, 6), de(6), s_mat(6), d_mat(6, 6), a_hat(6), mmat(6, 6), mb(6, 24), &
-                dm(6), vb(24), bt(24, 6), u(3, 3), u_inv(3, 3), ct, dmm, dv
+                dm(6), vb(24), bt(24, 6), u(3, 3), u_inv(3, 3), ct, dmm, dv, s6(6), &
+                s3(3, 3), gs(3), dr(6, 6)
     integer :: p, a, c, i, j, col, mstatus
     logical :: plastic
 
@@ -182,10 +183,7 @@ contains
         status = hex8_inverted
         return
       end if
-      fg = matmul(du, g(:, :, p))
-      do i = 1, 3
-        fg(i, i) = fg(i, i) + 1.0_wp
-      end do
+      fg = relative_gradient(du, g(:, :, p))
       if (det3(fg) <= 0.0_wp) then
         status = hex8_inverted
         return
@@ -204,7 +202,10 @@ contains
         end do
       end do
       pm(:, :, p) = hencky_first(hk(p))
-      btr(:, p) = matmul(pm(1, :, p) + pm(2, :, p) + pm(3, :, p), b(:, :, p))
+      s6 = pm(1, :, p) + pm(2, :, p) + pm(3, :, p)
+      do col = 1, 24
+        btr(col, p) = dot_product(s6, b(:, col, p))
+      end do
     end do
 
     ! Averages over the element of ln det dF and of its gradient, weighted by the initial
@@ -213,7 +214,11 @@ contains
     ! increments).
     vol = sum(w0)
     mean_lnj = dot_product(w0, lnj)/vol
-    bbar_tr = matmul(btr, w0)/vol
+    bbar_tr = 0.0_wp
+    do p = 1, 8
+      bbar_tr = bbar_tr + w0(p)*btr(:, p)
+    end do
+    bbar_tr = bbar_tr/vol
 
     ! Pass 2: mean-dilatation strain, material update in the axes of xn, force
     ! f = sum W0 Bbar^T T with Bbar = P b + m (bbar_tr - btr)^T/3, and the state rotated to
@@ -229,25 +234,34 @@ contains
         return
       end if
       strain(:, p) = strain_old(:, p) + de
-      tg(:, p) = matmul(transpose(rot), s_mat)
+      do c = 1, 6
+        tg(c, p) = dot_product(rot(:, c), s_mat)
+      end do
       trt(p) = tg(1, p) + tg(2, p) + tg(3, p)
       if (want_tangent) then
         dg(:, :, p) = d_mat
         rp(:, :, p) = matmul(rot, pm(:, :, p))
       end if
-      f = f + w0(p)*(matmul(matmul(tg(:, p), pm(:, :, p)), b(:, :, p)) &
-                     + (bbar_tr - btr(:, p))*trt(p)/3.0_wp)
+      do c = 1, 6
+        s6(c) = dot_product(tg(:, p), pm(:, c, p))
+      end do
+      do col = 1, 24
+        f(col) = f(col) + w0(p)*(dot_product(s6, b(:, col, p)) &
+                                 + (bbar_tr(col) - btr(col, p))*trt(p)/3.0_wp)
+      end do
       ! The stress at the end of the increment in the axes turned by dR = dF dU^-1: the
       ! rotated Kirchhoff stress dU S dU, S = P^T T relative to xn per unit initial volume.
       call hencky_stretch(hk(p), u, u_inv)
-      fg = matmul(du, g(:, :, p))
-      do i = 1, 3
-        fg(i, i) = fg(i, i) + 1.0_wp
+      fg = relative_gradient(du, g(:, :, p))
+      axes(:, :, p) = product3(product3(fg, u_inv), axes_old(:, :, p))
+      u = product3(u, product3(tensor_from_stress(s6), u))
+      s3 = product3(u, axes_old(:, :, p))
+      do j = 1, 3
+        do i = 1, 3
+          u(i, j) = dot_product(axes_old(:, i, p), s3(:, j))
+        end do
       end do
-      axes(:, :, p) = matmul(matmul(fg, u_inv), axes_old(:, :, p))
-      u = matmul(u, matmul(tensor_from_stress(matmul(tg(:, p), pm(:, :, p))), u))
-      stress(:, p) = stress_from_tensor(matmul(transpose(axes_old(:, :, p)), &
-                                               matmul(u, axes_old(:, :, p))))
+      stress(:, p) = stress_from_tensor(u)
     end do
     if (.not. want_tangent) return
 
@@ -263,12 +277,28 @@ contains
       a_hat = w0(p)*tg(:, p) + (w0(p)/vol*ct - w0(p)*trt(p)/3.0_wp)*identity_voigt
       ! With R = rot P (material axes): P^T D_global P = R^T D R, and D_global m = rot^T D m
       ! since the identity strain m is the same in every axes.
-      mmat = w0(p)*matmul(transpose(rp(:, :, p)), matmul(dg(:, :, p), rp(:, :, p))) &
-             + hencky_second(hk(p), a_hat)
-      mb = matmul(mmat, b(:, :, p))
-      dm = w0(p)*matmul(transpose(rp(:, :, p)), dg(:, 1, p) + dg(:, 2, p) + dg(:, 3, p))
+      dr = matmul(dg(:, :, p), rp(:, :, p))
+      mmat = hencky_second(hk(p), a_hat)
+      do j = 1, 6
+        do i = 1, 6
+          mmat(i, j) = mmat(i, j) + w0(p)*dot_product(rp(:, i, p), dr(:, j))
+        end do
+      end do
+      do col = 1, 24
+        do i = 1, 6
+          mb(i, col) = mmat(i, 1)*b(1, col, p) + mmat(i, 2)*b(2, col, p) &
+                       + mmat(i, 3)*b(3, col, p) + mmat(i, 4)*b(4, col, p) &
+                       + mmat(i, 5)*b(5, col, p) + mmat(i, 6)*b(6, col, p)
+        end do
+      end do
+      s6 = dg(:, 1, p) + dg(:, 2, p) + dg(:, 3, p)
+      do c = 1, 6
+        dm(c) = w0(p)*dot_product(rp(:, c, p), s6)
+      end do
       dmm = w0(p)*sum(dg(1:3, 1:3, p))/9.0_wp
-      vb = matmul(dm, b(:, :, p))/3.0_wp
+      do col = 1, 24
+        vb(col) = dot_product(dm, b(:, col, p))/3.0_wp
+      end do
       dtr = bbar_tr - btr(:, p)
       bt = transpose(b(:, :, p))
       ! Lower triangle, contiguous in i so that it vectorizes.
@@ -280,8 +310,16 @@ contains
                     + vb(i)*dtr(j) + dtr(i)*dv
         end do
       end do
-      kg = kg + matmul(g(:, :, p), matmul(tensor_from_stress(matmul(a_hat, pm(:, :, p))), &
-                                          transpose(g(:, :, p))))
+      do c = 1, 6
+        s6(c) = dot_product(a_hat, pm(:, c, p))
+      end do
+      s3 = tensor_from_stress(s6)
+      do j = 1, 8
+        gs = matmul(s3, g(j, :, p))
+        do i = j, 8
+          kg(i, j) = kg(i, j) + g(i, 1, p)*gs(1) + g(i, 2, p)*gs(2) + g(i, 3, p)*gs(3)
+        end do
+      end do
     end do
     do j = 1, 8
       do i = j, 8
@@ -292,6 +330,32 @@ contains
     end do
     call mirror(k)
   end subroutine hex8_element
+
+  !> The product of two 3 x 3 matrices, written out (gfortran calls its library for some
+  !> matmul forms, which costs more than the product).
+  pure function product3(a, b) result(c)
+    real(wp), intent(in) :: a(3, 3), b(3, 3)
+    real(wp) :: c(3, 3)
+    integer :: j
+    do j = 1, 3
+      c(:, j) = a(:, 1)*b(1, j) + a(:, 2)*b(2, j) + a(:, 3)*b(3, j)
+    end do
+  end function product3
+
+  !> dF = I + du g^T over the 8 nodes (g(a, :) the gradient of N_a).
+  pure function relative_gradient(du, g) result(fg)
+    real(wp), intent(in) :: du(3, 8), g(8, 3)
+    real(wp) :: fg(3, 3)
+    integer :: a, i, j
+    do j = 1, 3
+      do i = 1, 3
+        fg(i, j) = merge(1.0_wp, 0.0_wp, i == j)
+        do a = 1, 8
+          fg(i, j) = fg(i, j) + du(i, a)*g(a, j)
+        end do
+      end do
+    end do
+  end function relative_gradient
 
   !> Copies the lower triangle of k to the upper.
   pure subroutine mirror(k)

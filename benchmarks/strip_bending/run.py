@@ -271,7 +271,8 @@ def report(runs: list[dict], meta: dict, out: Path) -> None:
         f"{MAX_INCREMENT:g} mm of punch travel (the paper's); the r_min limits first touch, "
         "release, strain 0.02 and rotation 5 degrees, not the elasto-plastic transition (a "
         "Gauss point starts to yield in almost every increment of a bend, and landing each on "
-        "the yield surface took 511 increments for the first mm).",
+        "the yield surface took 511 increments for the first mm at commit 2aad867, before "
+        "the limit left out points within its tolerance of the surface).",
         f"* Tool models from CAD by `build_tool_models` (size {LINE_PIECE:g} mm along straight "
         "edges and across): Bezier patches fitted to each CAD face within 1 um; Nagata "
         f"patches {PER_ARC['nagata']} per 90 degrees with exact CAD normals; facets "

@@ -53,15 +53,7 @@ contains
   pure function tensor_from_strain(e) result(t)
     real(wp), intent(in) :: e(6)
     real(wp) :: t(3, 3)
-    t(1, 1) = e(1)
-    t(2, 2) = e(2)
-    t(3, 3) = e(3)
-    t(1, 2) = 0.5_wp*e(4)
-    t(2, 1) = t(1, 2)
-    t(2, 3) = 0.5_wp*e(5)
-    t(3, 2) = t(2, 3)
-    t(3, 1) = 0.5_wp*e(6)
-    t(1, 3) = t(3, 1)
+    t = tensor_from_stress([e(1), e(2), e(3), 0.5_wp*e(4), 0.5_wp*e(5), 0.5_wp*e(6)])
   end function tensor_from_strain
 
   pure function strain_from_tensor(t) result(e)

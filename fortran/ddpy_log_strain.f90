@@ -83,9 +83,82 @@ contains
          0.5_wp*(t(3, 1) + t(1, 3))]
   end function stress_from_tensor
 
+  !> Eigenvalues and orthonormal eigenvectors (columns) of a symmetric 3 x 3 matrix, accurate
+  !> relative to the largest entry. Closed form (the trigonometric solution of the
+  !> characteristic cubic, eigenvectors from cross products of the rows of A - lambda I) when
+  !> the eigenvalues are apart by more than 1e-4 of the largest entry, where its eigenvectors
+  !> are good to about epsilon / 1e-4; cyclic Jacobi rotations otherwise (also for repeated
+  !> eigenvalues). The closed form is several times faster: no chain of square roots and
+  !> divisions.
+  pure subroutine symmetric_eigen(a, values, vectors)
+    real(wp), intent(in) :: a(3, 3)
+    real(wp), intent(out) :: values(3), vectors(3, 3)
+    real(wp), parameter :: third_turn = 2.09439510239319549230842892218633_wp
+    real(wp) :: b(3, 3), scale, q, p1, p2, p, r, phi, l(3), v(3), w(3), best(3), size, size2
+    integer :: i, j
+    b = 0.5_wp*(a + transpose(a))
+    scale = maxval(abs(b))
+    if (scale == 0.0_wp) then
+      values = 0.0_wp
+      vectors = 0.0_wp
+      do i = 1, 3
+        vectors(i, i) = 1.0_wp
+      end do
+      return
+    end if
+    b = b/scale
+    q = (b(1, 1) + b(2, 2) + b(3, 3))/3.0_wp
+    p1 = b(1, 2)**2 + b(1, 3)**2 + b(2, 3)**2
+    p2 = (b(1, 1) - q)**2 + (b(2, 2) - q)**2 + (b(3, 3) - q)**2 + 2.0_wp*p1
+    p = sqrt(p2/6.0_wp)
+    if (p > 0.0_wp) then
+      do i = 1, 3
+        b(i, i) = b(i, i) - q
+      end do
+      r = 0.5_wp*(b(1, 1)*(b(2, 2)*b(3, 3) - b(2, 3)*b(3, 2)) &
+                  - b(1, 2)*(b(2, 1)*b(3, 3) - b(2, 3)*b(3, 1)) &
+                  + b(1, 3)*(b(2, 1)*b(3, 2) - b(2, 2)*b(3, 1)))/p**3
+      phi = acos(max(-1.0_wp, min(1.0_wp, r)))/3.0_wp
+      l = [2.0_wp*p*cos(phi), 0.0_wp, 2.0_wp*p*cos(phi + third_turn)]
+      l(2) = -l(1) - l(3)
+      if (min(l(1) - l(2), l(2) - l(3)) > 1.0e-4_wp) then
+        ! Eigenvectors of the outer eigenvalues: the largest cross product of two rows of
+        ! B - l I; the middle one completes the basis.
+        do j = 1, 3, 2
+          size = -1.0_wp
+          do i = 1, 3
+            v = b(:, mod(i, 3) + 1) - l(j)*unit_vector(mod(i, 3) + 1)
+            w = b(:, mod(i + 1, 3) + 1) - l(j)*unit_vector(mod(i + 1, 3) + 1)
+            v = [v(2)*w(3) - v(3)*w(2), v(3)*w(1) - v(1)*w(3), v(1)*w(2) - v(2)*w(1)]
+            size2 = dot_product(v, v)
+            if (size2 > size) then
+              size = size2
+              best = v
+            end if
+          end do
+          vectors(:, j) = best/sqrt(size)
+        end do
+        vectors(:, 2) = [vectors(2, 3)*vectors(3, 1) - vectors(3, 3)*vectors(2, 1), &
+                         vectors(3, 3)*vectors(1, 1) - vectors(1, 3)*vectors(3, 1), &
+                         vectors(1, 3)*vectors(2, 1) - vectors(2, 3)*vectors(1, 1)]
+        values = (l + q)*scale
+        return
+      end if
+    end if
+    call jacobi_eigen(a, values, vectors)
+  end subroutine symmetric_eigen
+
+  !> e_i, the i-th unit vector.
+  pure function unit_vector(i) result(e)
+    integer, intent(in) :: i
+    real(wp) :: e(3)
+    e = 0.0_wp
+    e(i) = 1.0_wp
+  end function unit_vector
+
   !> Eigenvalues and orthonormal eigenvectors (columns) of a symmetric 3 x 3 matrix by cyclic
   !> Jacobi rotations: accurate relative to the largest entry, also for repeated eigenvalues.
-  pure subroutine symmetric_eigen(a, values, vectors)
+  pure subroutine jacobi_eigen(a, values, vectors)
     real(wp), intent(in) :: a(3, 3)
     real(wp), intent(out) :: values(3), vectors(3, 3)
     real(wp) :: m(3, 3), scale, theta, t, c, s, x, y
@@ -137,7 +210,7 @@ contains
       end do
     end do
     values = [m(1, 1), m(2, 2), m(3, 3)]
-  end subroutine symmetric_eigen
+  end subroutine jacobi_eigen
 
   !> First divided difference f[1 + a, 1 + b] of f = ln/2: atanh(x)/(x (2 + a + b)) with
   !> x = (a - b)/(2 + a + b), exact in form for all a, b (series for small x).

@@ -714,9 +714,13 @@ class FormingProblem:
         predictor) iteration, when that fraction is below 1. With ``touching`` (a distance),
         the first iteration takes pairs within that gap as closed (see ``_contact``).
 
-        The semi-smooth Newton step is globalized by backtracking on the residual norm: a
+        The semi-smooth Newton step is globalized by backtracking until Deuflhard's natural
+        monotonicity test holds (the simplified correction at the trial point, solved with
+        this iteration's factors, shorter than the step), else on the residual norm: a
         node switching between stick and slip (or contact and release) at every iteration
-        would otherwise make it cycle."""
+        would otherwise make it cycle. The norm alone is the wrong measure for a thin sheet
+        that bends: a step that bends it right leaves a large membrane residual of second
+        order (docs/theory/contact.md)."""
         solid = self.solid
         u_n = self.u
         x_n = solid.mesh.nodes + u_n
@@ -724,6 +728,8 @@ class FormingProblem:
         force = np.where(on[:, None], self.force, 0.0)
         free = ~self.fixed.ravel()
         floor = 1e-8 * solid.props[0] * self.size**2
+        # Unknowns in mm: displacements, and contact forces over the augmentation.
+        weight = np.concatenate([np.ones(layout.nf), np.repeat(1.0 / self.r, 3)])
         residuals: list[float] = []
         correction = np.inf
         current = self._evaluate(layout, u, force, x_n, positions, on, timings, touching)
@@ -753,17 +759,35 @@ class FormingProblem:
             timings["solve"] += time.perf_counter() - tock
             du = delta[:layout.nf]
             dforce = delta[layout.nf:].reshape(-1, 3)
-            alpha = 1.0
+            size = float(np.linalg.norm(delta * weight))
+            alpha, fallback = 1.0, None
             for _ in range(5):
                 trial_u = u.copy()
                 trial_u.ravel()[free] += alpha * du
                 trial_force = force + alpha * dforce
                 trial = self._evaluate(layout, trial_u, trial_force, x_n, positions, on,
                                        timings)
-                if not isinstance(trial, str) and (
-                        np.linalg.norm(trial[0]) <= (1.0 - 1e-4 * alpha) * norm):
-                    break
+                if not isinstance(trial, str):
+                    # Natural monotonicity test (Deuflhard): the simplified Newton
+                    # correction at the trial, with this iteration's factors, must be
+                    # shorter than the step's.
+                    tock = time.perf_counter()
+                    simplified = solver.solve(-trial[0])
+                    timings["solve"] += time.perf_counter() - tock
+                    if np.linalg.norm(simplified * weight) <= (1.0 - alpha / 4.0) * size:
+                        break
+                    if fallback is None and (
+                            np.linalg.norm(trial[0]) <= (1.0 - 1e-4 * alpha) * norm):
+                        fallback = alpha, trial_u, trial_force, trial
                 alpha *= 0.5
+            else:
+                # The simplified correction sees the contact set of this iteration: where
+                # that set changes, the test can fail at every step length. Then the
+                # longest step that lowered the residual norm, if one did, else the last.
+                if fallback is not None:
+                    alpha, trial_u, trial_force, trial = fallback
+                else:
+                    alpha *= 2.0
             if isinstance(trial, str):
                 return trial
             u, force, current = trial_u, trial_force, trial

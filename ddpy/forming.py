@@ -206,6 +206,12 @@ class _Layout:
         self.cols = np.concatenate(cols).astype(np.int32)
         self.k_slots = self.pattern.rows.size
         self.n_coupling = int(coupling.sum())
+        # Two buffers of Jacobian values, reused by the evaluations (the assembly writes its
+        # slots in place): a fresh array of this size per evaluation cost more than the
+        # contact law. Two, so that a line search can keep one trial while it tries others.
+        self.values = (np.empty(self.rows.size), np.empty(self.rows.size))
+        for values in self.values:
+            values[self.k_slots:self.k_slots + self.n_coupling] = -1.0
 
 
 class FormingProblem:
@@ -675,16 +681,19 @@ class FormingProblem:
     def _evaluate(self, layout: _Layout, u: NDArray[np.float64], force: NDArray[np.float64],
                   x_n: NDArray[np.float64], positions: Mapping[str, NDArray[np.float64]],
                   on: NDArray[np.bool_], timings: dict[str, float],
-                  touching: float | None = None):
+                  touching: float | None = None, buffer: int = 0):
         """Residual (free equilibrium rows, then the contact law) at (u, force), with the
-        Jacobian values in the layout's slots and the contact states; or a failure."""
+        Jacobian values in the layout's slots and the contact states; or a failure. The
+        values are the layout's buffer ``buffer`` (0 or 1): the next evaluation into the
+        same buffer overwrites them."""
         tick = time.perf_counter()
         c, d_lambda, d_x, state, gap = self._contact(layout, self.solid.mesh.nodes + u, x_n,
                                                      positions, on, force, touching)
         tock = time.perf_counter()
         timings["contact"] += tock - tick
         try:
-            out = self.solid.assemble(u, self.state, layout.pattern)
+            out = self.solid.assemble(u, self.state, layout.pattern,
+                                      values=layout.values[buffer][:layout.k_slots])
         except ElementError as error:
             return str(error)
         tick = time.perf_counter()
@@ -695,9 +704,7 @@ class FormingProblem:
         residual = np.concatenate([r_node.ravel()[~self.fixed.ravel()], c.ravel()])
         pi, ii, jj = layout.dx_index
         k, m = layout.k_slots, layout.n_coupling
-        values = np.empty(layout.rows.size)
-        values[:k] = out.values
-        values[k:k + m] = -1.0
+        values = layout.values[buffer]  # [:k] assembled in place, [k:k + m] = -1 set once
         values[k + m:k + m + pi.size] = d_x[pi, ii, jj]
         values[k + m + pi.size:] = d_lambda.reshape(-1)
         timings["rest"] += time.perf_counter() - tick
@@ -760,13 +767,13 @@ class FormingProblem:
             du = delta[:layout.nf]
             dforce = delta[layout.nf:].reshape(-1, 3)
             size = float(np.linalg.norm(delta * weight))
-            alpha, fallback = 1.0, None
+            alpha, fallback, buffer = 1.0, None, 0  # the factors hold `values` from here
             for _ in range(5):
                 trial_u = u.copy()
                 trial_u.ravel()[free] += alpha * du
                 trial_force = force + alpha * dforce
                 trial = self._evaluate(layout, trial_u, trial_force, x_n, positions, on,
-                                       timings)
+                                       timings, buffer=buffer)
                 if not isinstance(trial, str):
                     # Natural monotonicity test (Deuflhard): the simplified Newton
                     # correction at the trial, with this iteration's factors, must be
@@ -779,6 +786,7 @@ class FormingProblem:
                     if fallback is None and (
                             np.linalg.norm(trial[0]) <= (1.0 - 1e-4 * alpha) * norm):
                         fallback = alpha, trial_u, trial_force, trial
+                        buffer = 1  # the fallback keeps its Jacobian values in buffer 0
                 alpha *= 0.5
             else:
                 # The simplified correction sees the contact set of this iteration: where

@@ -114,6 +114,11 @@ class ContactSearch:
             self._vertex_start, self._vertex_patches = _vertex_patches(surface)
         self._index_points = np.ascontiguousarray(index_points, dtype=np.float64)
         self._group = np.ascontiguousarray(group, dtype=np.int32)
+        # The core takes these index arrays 1-based: made once here, not on every call.
+        self._group1 = self._group + 1
+        self._grid_start1 = self.grid_start + 1
+        self._vertex_start1 = self._vertex_start + 1
+        self._vertex_patches1 = self._vertex_patches + 1
         self._origin, self._h, self._dims = _core.index_layout(self._index_points.ravel())
         ncell = int(np.prod(self._dims))
         self._cell_start, self._cell_items = _core.index_build(
@@ -145,10 +150,10 @@ class ContactSearch:
         mode = _MODE["brute"] if brute_force else self.mode
         out = _core.contact_search(
             self.kind, self._stride, self.surface.coefficients, self._degrees, self._triangle,
-            mode, self._index_points.ravel(), self._group, self._origin, self._h, self._dims,
-            self._cell_start, self._cell_items, self.grid_start, self.grid_params.ravel(),
-            self.grid_normals.ravel(), self.grid_points.ravel(), self._vertex_start,
-            self._vertex_patches, x.ravel(), nn.ravel(), u, self.candidates,
+            mode, self._index_points.ravel(), self._group1, self._origin, self._h, self._dims,
+            self._cell_start, self._cell_items, self._grid_start1, self.grid_params.ravel(),
+            self.grid_normals.ravel(), self.grid_points.ravel(), self._vertex_start1,
+            self._vertex_patches1, x.ravel(), nn.ravel(), u, self.candidates,
             self.vertices_per_query, self.max_iterations, self.tol,
         )
         patch, params, point, normal, tangents, distance, status, iterations, ncand_out = out

@@ -1,5 +1,8 @@
 !> f2py doorway of the contact search (see ddpy_api.f90 for the conventions).
-!> Patch, point and vertex indices arriving from Python are 0-based.
+!> Patch, point and vertex indices arriving from Python are 0-based, except the index
+!> structures that Python builds once per tool for the core alone (cell_items, and group,
+!> grid_start, vertex_patch_start and vertex_patches of the search): those are 1-based, so
+!> that no call makes 1-based copies of them.
 module ddpy_api_search
   use, intrinsic :: iso_c_binding, only: c_int, c_double
   use ddpy_kinds, only: wp
@@ -32,6 +35,7 @@ contains
   end subroutine api_index_build
 
   !> Global and local search of nnode nodes against one tool (see ddpy_global_search).
+  !> group, grid_start, vertex_patch_start and vertex_patches arrive 1-based (see above).
   !> Outputs: patch (0-based, -1 for none), parameters, closest point (moved with the tool),
   !> unit normal, tangents, signed normal distance, status, Newton iterations, candidates.
   subroutine api_contact_search(kind, npatch, stride, coef, degrees, triangle, mode, npoint, &
@@ -59,9 +63,9 @@ contains
     real(c_double), intent(out) :: params(2, nnode), points(3, nnode), normals(3, nnode), &
                                    tangents(3, 2, nnode), distance(nnode)
     call contact_search(kind, npatch, stride, coef, degrees, triangle, mode, npoint, &
-                        index_points, group + 1, origin, h, dims, ncell, cell_start, &
-                        cell_items, ngrid, grid_start + 1, grid_params, grid_normals, &
-                        grid_points, nvertex, vertex_patch_start + 1, nvp, vertex_patches + 1, &
+                        index_points, group, origin, h, dims, ncell, cell_start, &
+                        cell_items, ngrid, grid_start, grid_params, grid_normals, &
+                        grid_points, nvertex, vertex_patch_start, nvp, vertex_patches, &
                         nnode, nodes, node_normals, tool_displacement, ncand, nvertex_query, &
                         max_iterations, tol, patch, params, points, normals, tangents, &
                         distance, status, iterations, ncandidates)

@@ -180,6 +180,9 @@ contains
   end subroutine contact_search
 
   !> Offer patch pp, at the distance of its nearest grid point, to the candidate list.
+  !> One offer per patch: the same list as offering every grid point (a listed patch keeps
+  !> its nearest point, the first of equals), without scanning the list per point. The
+  !> nearest point by squared distance; norm2 (scaled, slow) only for it.
   pure subroutine offer_grid(pp, x, node_normal, filter, npatch, ngrid, grid_start, &
                              grid_points, grid_normals, k, cand, item, dist, nc)
     integer, intent(in) :: pp, npatch, ngrid, grid_start(npatch + 1), k
@@ -187,13 +190,23 @@ contains
     logical, intent(in) :: filter
     integer, intent(inout) :: cand(k), item(k), nc
     real(wp), intent(inout) :: dist(k)
-    integer :: gp
+    integer :: gp, nearest
+    real(wp) :: d2, d2min, y(3)
+    nearest = 0
+    d2min = huge(1.0_wp)
     do gp = grid_start(pp), grid_start(pp + 1) - 1
       if (filter) then
         if (dot_product(grid_normals(:, gp), node_normal) >= 0.0_wp) cycle
       end if
-      call offer(pp, gp, norm2(grid_points(:, gp) - x), k, cand, item, dist, nc)
+      y = grid_points(:, gp) - x
+      d2 = y(1)*y(1) + y(2)*y(2) + y(3)*y(3)
+      if (nearest == 0 .or. d2 < d2min) then
+        nearest = gp
+        d2min = d2
+      end if
     end do
+    if (nearest /= 0) call offer(pp, nearest, norm2(grid_points(:, nearest) - x), k, cand, &
+                                 item, dist, nc)
   end subroutine offer_grid
 
 end module ddpy_global_search

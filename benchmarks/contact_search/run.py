@@ -663,12 +663,10 @@ def findings(numbers: dict[str, Any]) -> list[str]:
                     f"The fixed cost of one `project` call grows with the tool: "
                     f"{description}, one node, {rows[0]['one_node_call_us']:.0f} us at "
                     f"{rows[0]['patches']} patches, {rows[-1]['one_node_call_us']:.0f} us at "
-                    f"{rows[-1]['patches']} (slope {entry['one_node_slope']:.2f}). Likely "
-                    "cause: `api_contact_search` (fortran/ddpy_api_search.f90) passes "
-                    "`group + 1`, `grid_start + 1`, `vertex_patch_start + 1` and "
-                    "`vertex_patches + 1`, array temporaries as large as the spatial index "
-                    "(Bezier: every grid point) made on every call. Small in a batch of "
-                    "thousands of nodes, linear in the patches for small batches.")
+                    f"{rows[-1]['patches']} (slope {entry['one_node_slope']:.2f}). Not the "
+                    "1-based index arrays: `ContactSearch` makes them once (they were "
+                    "temporaries as large as the spatial index, made on every call, before "
+                    "docs/benchmarks/forming_iteration.md).")
             if any(r["none"] for r in rows):
                 text.append(f"Scaling, {node_set}: {description} left nodes without a patch.")
     return text

@@ -1,0 +1,292 @@
+"""Benchmark: time per Newton iteration of a forming run, split by where it goes.
+
+Runs the first increments of the cylindrical bending case through ``ddpy.runner.run_case``
+(what ``ddpy run CASE --stop-after N`` does) on two meshes: the built-in coarse case (216
+hexahedra, Nagata tools) and the paper's blank (about 20,000 hexahedra, Nagata tools; its
+case is written by benchmarks/cylindrical_bending/make_case.py when missing). Each mesh and
+thread count runs in its own process with OMP_NUM_THREADS and OPENBLAS_NUM_THREADS set.
+The parts are timed by wrapping, in the worker only, the functions that do them:
+
+- assembly: ``Solid.assemble`` (Fortran solid_assemble and its Python wrapper);
+- contact: ``FormingProblem._contact`` (search, Alart-Curnier law, Jacobian blocks), of
+  which search: ``ContactSearch.project``;
+- factorization and solve: ``MumpsSolver.factorize`` and ``MumpsSolver.solve``;
+- writing: ``ResultsWriter.increment``, ``ResultsWriter.fields`` and the checkpoints;
+- set-up: case reading, problem, pattern and MUMPS analysis (once per run, not per
+  iteration);
+- rest: the remainder of the run's wall time (the Newton loop's Python, residual and
+  Jacobian blocks, increment control).
+
+Per iteration = over the factorizations (every Newton iteration factorizes once, rejected
+increments included). The numbers of every ``--label`` are kept in forming_iteration.json;
+the page shows them all (e.g. ``before`` from a checkout of the code before a change).
+
+    python benchmarks/forming_iteration/run.py --label after [--threads 1 2]
+        [--coarse-increments 20] [--paper-increments 2] [--meshes coarse paper]
+
+writes docs/benchmarks/forming_iteration.md and forming_iteration.json.
+"""
+
+from __future__ import annotations
+
+import argparse
+import functools
+import json
+import os
+import platform
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parents[2]
+DOCS = ROOT / "docs" / "benchmarks"
+BENDING = ROOT / "benchmarks" / "cylindrical_bending"
+PARTS = ("assembly", "contact", "search", "factorization", "solve", "writing")
+
+
+def cpu_busy() -> float:
+    """CPU seconds all processes have used since boot (/proc/stat)."""
+    with open("/proc/stat") as stat:
+        fields = [int(v) for v in stat.readline().split()[1:]]
+    idle = fields[3] + (fields[4] if len(fields) > 4 else 0)
+    return (sum(fields) - idle) / os.sysconf("SC_CLK_TCK")
+
+
+def case_folder(mesh: str) -> Path:
+    if mesh == "coarse":
+        from ddpy.runner import DEFAULT_CASE
+        return Path(DEFAULT_CASE)
+    folder = BENDING / "cases" / "paper" / "nagata"
+    if not (folder / "control.dat").is_file():
+        subprocess.run([sys.executable, str(BENDING / "make_case.py"), "--mesh", "paper"],
+                       check=True)
+    return folder
+
+
+def worker(mesh: str, increments: int) -> dict[str, Any]:
+    """One run in this process (threads from the environment); seconds per part."""
+    from ddpy import checkpoint, runner
+    from ddpy.decks import read_case
+    from ddpy.forming import FormingProblem
+    from ddpy.linalg import MumpsSolver
+    from ddpy.results import ResultsWriter
+    from ddpy.search import ContactSearch
+    from ddpy.solid import Solid
+
+    spent = dict.fromkeys((*PARTS, "prepare"), 0.0)
+    first: list[float] = []
+    count = {"factorizations": 0}
+
+    def timed(owner: Any, name: str, part: str) -> None:
+        original = getattr(owner, name)
+
+        @functools.wraps(original)
+        def wrapper(*args: Any, **kwargs: Any) -> Any:
+            tick = time.perf_counter()
+            try:
+                return original(*args, **kwargs)
+            finally:
+                spent[part] += time.perf_counter() - tick
+                if name == "factorize":
+                    count["factorizations"] += 1
+
+        setattr(owner, name, wrapper)
+
+    timed(Solid, "assemble", "assembly")
+    timed(FormingProblem, "_contact", "contact")
+    timed(ContactSearch, "project", "search")
+    timed(MumpsSolver, "solve", "solve")
+    timed(ResultsWriter, "increment", "writing")
+    timed(ResultsWriter, "fields", "writing")
+    timed(runner, "write_checkpoint", "writing")
+    timed(FormingProblem, "_prepare", "prepare")
+    factorize = MumpsSolver.factorize
+    mumps: dict[str, float] = {}
+
+    def factorize_once(self: MumpsSolver, values: Any) -> None:
+        factorize(self, values)
+        if not mumps:  # flops and fill of the first factorization
+            stats = self.statistics()
+            mumps.update(n=self.n, nnz=self.nnz, flops=stats["flops"],
+                         factor_entries=stats["factor_entries"])
+
+    MumpsSolver.factorize = factorize_once  # type: ignore[method-assign]
+    timed(MumpsSolver, "factorize", "factorization")
+    original_run = FormingProblem.run
+
+    def run(*args: Any, **kwargs: Any) -> Any:
+        first.append(time.perf_counter())
+        return original_run(*args, **kwargs)
+
+    FormingProblem.run = run  # type: ignore[method-assign]
+    assert runner.write_checkpoint is not checkpoint.write_checkpoint
+
+    busy, cpu0, start = cpu_busy(), time.process_time(), time.perf_counter()
+    case = read_case(case_folder(mesh))
+    with tempfile.TemporaryDirectory() as output:
+        outcome = runner.run_case(case, output, max_increments=increments, overwrite=True)
+        wall = time.perf_counter() - start
+        cpu = time.process_time() - cpu0
+        other = max(cpu_busy() - busy - cpu, 0.0) / wall
+        from ddpy.results import ResultsReader
+        with ResultsReader(Path(output) / runner.RESULTS) as results:
+            iterations = int(results.history()["iterations"].sum())
+    from ddpy.parallel import max_threads
+    setup = first[0] - start + spent.pop("prepare")
+    return {"mesh": mesh, "threads": max_threads(), "increments": outcome.increments,
+            "iterations": iterations, "wall": wall, "cpu": cpu, "setup": setup,
+            "other_cpus": other, "mumps": mumps, **count, **spent}
+
+
+def measure(mesh: str, threads: int, increments: int) -> dict[str, Any]:
+    env = dict(os.environ, OMP_NUM_THREADS=str(threads), OPENBLAS_NUM_THREADS=str(threads))
+    out = subprocess.run([sys.executable, __file__, "--worker", mesh, str(increments)],
+                         env=env, check=True, capture_output=True, text=True)
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def split(r: dict[str, Any]) -> dict[str, float]:
+    """Seconds per iteration: assembly, contact (search within), factorization + solve,
+    writing, rest."""
+    n = max(r["factorizations"], 1)
+    loop = r["wall"] - r["setup"]
+    known = r["assembly"] + r["contact"] + r["factorization"] + r["solve"] + r["writing"]
+    return {"assembly": r["assembly"] / n, "contact": r["contact"] / n,
+            "search": r["search"] / n, "factorization": r["factorization"] / n,
+            "solve": r["solve"] / n, "writing": r["writing"] / n,
+            "rest": max(loop - known, 0.0) / n, "total": loop / n}
+
+
+HEADER = ("| code | mesh | threads | assembly | contact (search) | factorization | solve | "
+          "writing | rest | **per iteration** | non-MUMPS | iterations | increments | "
+          "set-up (s) | other CPUs |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+          "---|---|")
+
+
+def report(numbers: dict[str, Any]) -> str:
+    rows = []
+    for label, runs in numbers["labels"].items():
+        for r in runs:
+            s = split(r)
+            mumps = s["factorization"] + s["solve"]
+            rows.append(
+                f"| {label} | {r['mesh']} | {r['threads']} | {s['assembly']:.4f} | "
+                f"{s['contact']:.4f} ({s['search']:.4f}) | {s['factorization']:.4f} | "
+                f"{s['solve']:.4f} | {s['writing']:.4f} | {s['rest']:.4f} | "
+                f"**{s['total']:.4f}** | {s['total'] - mumps:.4f} | {r['factorizations']} | "
+                f"{r['increments']} | {r['setup']:.1f} | {r['other_cpus']:.2f} |")
+    note_text = "\n".join(f"- {line}" for line in findings(numbers))
+    return f"""# Benchmark: time per Newton iteration of a forming run
+
+`benchmarks/forming_iteration/run.py` (written by it; {numbers['machine']}, 2 cores shared
+with other work: single timings scatter by tens of percent, "other CPUs" says how many of
+the 2 cores other processes used on average during the run, from /proc/stat).
+
+The cylindrical bending case (Nagata tools) through `ddpy.runner.run_case`, its first
+increments: **coarse** = the built-in case (`ddpy run`, 216 hexahedra), **paper** = the
+paper's blank from `benchmarks/cylindrical_bending/make_case.py` (about 20,000 hexahedra,
+123,750 unknowns with the contact forces, 11.8 million Jacobian entries, LU). Seconds per
+Newton iteration (= per factorization, rejected increments included):
+
+- assembly: `Solid.assemble` (Fortran solid_assemble: internal forces, consistent tangent,
+  return mapping, written into the MUMPS values; and its Python wrapper);
+- contact: `FormingProblem._contact`, the search of both tools (in brackets) with the
+  Alart-Curnier law and its Jacobian blocks;
+- factorization, solve: MUMPS (`MumpsSolver.factorize`, `.solve`);
+- writing: results (HDF5 increments and fields) and checkpoints;
+- rest: everything else in the loop (residual, Jacobian assembly of the blocks, line search
+  bookkeeping, increment control, Python);
+- non-MUMPS: per iteration minus factorization and solve. Set-up (case, pattern, MUMPS
+  analysis) is once per run, not in the iteration.
+
+{HEADER}
+{chr(10).join(rows)}
+
+Findings (computed from the table):
+
+{note_text}
+"""
+
+
+def findings(numbers: dict[str, Any]) -> list[str]:
+    """Lines of the findings: MUMPS share, before/after, the 0.45 s target."""
+    lines = []
+    labels = list(numbers["labels"])
+    for label, runs in numbers["labels"].items():
+        for r in runs:
+            s = split(r)
+            mumps = s["factorization"] + s["solve"]
+            biggest = max(("assembly", "contact", "writing", "rest"), key=lambda k: s[k])
+            text = (f"{label}, {r['mesh']}, {r['threads']} thread(s): MUMPS (factorization "
+                    f"and solve) {100 * mumps / s['total']:.0f} % of the iteration; of the "
+                    f"rest, {biggest} leads ({s[biggest]:.4f} s)")
+            m = r.get("mumps")
+            if m:
+                text += (f"; the LU of {m['n']:,} unknowns and {m['nnz']:,} entries takes "
+                         f"{m['flops']:.3g} flops and {m['factor_entries']:,} factor entries")
+            lines.append(text + ".")
+    if len(labels) >= 2:
+        first, last = numbers["labels"][labels[0]], numbers["labels"][labels[-1]]
+        for a in first:
+            b = next((r for r in last if (r["mesh"], r["threads"]) == (a["mesh"], a["threads"])),
+                     None)
+            if b is None:
+                continue
+            sa, sb = split(a), split(b)
+            na = sa["total"] - sa["factorization"] - sa["solve"]
+            nb = sb["total"] - sb["factorization"] - sb["solve"]
+            lines.append(
+                f"{a['mesh']}, {a['threads']} thread(s), {labels[0]} -> {labels[-1]}: outside "
+                f"MUMPS {na:.4f} -> {nb:.4f} s per iteration ({na / max(nb, 1e-12):.2f} times "
+                f"faster); contact {sa['contact']:.4f} -> {sb['contact']:.4f}, rest "
+                f"{sa['rest']:.4f} -> {sb['rest']:.4f}, assembly {sa['assembly']:.4f} -> "
+                f"{sb['assembly']:.4f}.")
+    for r in numbers["labels"][labels[-1]]:
+        if r["mesh"] == "paper":
+            s = split(r)
+            lines.append(
+                f"Target (about 3,900 iterations in 30 minutes: 0.45 s per iteration), "
+                f"{labels[-1]}, paper, {r['threads']} thread(s): {s['total']:.2f} s per "
+                f"iteration, {s['total'] * 3900 / 3600:.1f} h for 3,900; without MUMPS "
+                f"{s['total'] - s['factorization'] - s['solve']:.2f} s.")
+    return lines
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--worker", nargs=2, metavar=("MESH", "INCREMENTS"),
+                        help=argparse.SUPPRESS)
+    parser.add_argument("--label", default="after")
+    parser.add_argument("--threads", type=int, nargs="+", default=[1, 2])
+    parser.add_argument("--meshes", nargs="+", default=["coarse", "paper"],
+                        choices=["coarse", "paper"])
+    parser.add_argument("--coarse-increments", type=int, default=20)
+    parser.add_argument("--paper-increments", type=int, default=2)
+    parser.add_argument("--json", type=Path, default=DOCS / "forming_iteration.json")
+    parser.add_argument("--markdown", type=Path, default=DOCS / "forming_iteration.md")
+    args = parser.parse_args(argv)
+    if args.worker:
+        print(json.dumps(worker(args.worker[0], int(args.worker[1]))))
+        return 0
+    numbers = json.loads(args.json.read_text()) if args.json.is_file() else {"labels": {}}
+    numbers["machine"] = f"{platform.machine()}, {os.cpu_count()} cores"
+    runs = []
+    for mesh in args.meshes:
+        n = args.coarse_increments if mesh == "coarse" else args.paper_increments
+        for threads in args.threads:
+            r = measure(mesh, threads, n)
+            runs.append(r)
+            s = split(r)
+            print(f"{args.label} {mesh} {threads} thread(s): "
+                  + ", ".join(f"{k} {v:.4f}" for k, v in s.items()), flush=True)
+    numbers["labels"][args.label] = runs
+    args.json.write_text(json.dumps(numbers, indent=1) + "\n")
+    args.markdown.write_text(report(numbers))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -75,7 +75,7 @@ def test_nested_order_in_mumps_gives_the_same_answer_with_less_fill() -> None:
             answers[name] = solver.solve(rhs)
             flops[name] = solver.statistics()["flops"]
     scale = np.abs(answers["scotch"]).max()
-    assert np.abs(answers["nested"] - answers["scotch"]).max() <= 1e-9 * scale
+    assert np.abs(answers["nested"] - answers["scotch"]).max() <= 1e-8 * scale
     assert flops["nested"] < 0.8 * flops["scotch"]
     with MumpsSolver("symmetric") as solver, pytest.raises(ValueError, match="permutation"):
         solver.set_ordering([0, 0, 1])

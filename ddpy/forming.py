@@ -31,7 +31,7 @@ from ddpy.solid import ElementError, Solid, SolidState, _components
 from ddpy.surfaces import BezierSurface, NagataSurface
 
 __all__ = ["RigidTool", "FormingProblem", "FormingResult", "FormingError", "IncrementLimits",
-           "PhaseProgress"]
+           "PhaseProgress", "default_augmentation"]
 
 #: Gap (times the element size) within which an unloaded node counts as lying on a tool for
 #: the closed predictor of the first iteration: zero up to the rounding of the positions.
@@ -107,7 +107,7 @@ class RigidTool:
     """A rigid tool: its surface, the blank nodes that may touch it (``slaves``), Coulomb
     friction, and optionally the outward normal of the blank face that meets it
     (``facing``: only patches facing the opposite way are contact candidates) and the
-    augmentation parameter r of the contact law (default: E times the element size)."""
+    augmentation parameter r of the contact law (default: ``default_augmentation``)."""
 
     name: str
     surface: BezierSurface | NagataSurface
@@ -152,8 +152,8 @@ class FormingResult:
 
     factors: list[float] = field(default_factory=list)
     sizes: list[float] = field(default_factory=list)
-    #: what set each increment: "max", "touch", "release", "strain", "rotation", "yield"
-    #: or "cut"
+    #: what set each increment: "max", "touch", "release", "strain", "rotation", "yield",
+    #: "cut" or "regrow" (growing back after a cut, at most doubling per increment)
     limited_by: list[str] = field(default_factory=list)
     tool_displacements: dict[str, list[NDArray[np.float64]]] = field(default_factory=dict)
     tool_forces: dict[str, list[NDArray[np.float64]]] = field(default_factory=dict)
@@ -234,9 +234,9 @@ class FormingProblem:
         self.fixed = np.zeros((n, 3), dtype=bool)
         mesh = solid.mesh
         self.size = (mesh.volume() / mesh.n_elements) ** (1.0 / 3.0)
-        young = solid.props[0]
         self.r = np.concatenate([
-            np.full(t.slaves.size, t.augmentation or young * self.size) for t in self.tools])
+            np.full(t.slaves.size, t.augmentation or default_augmentation(solid))
+            for t in self.tools])
         self.mu = np.concatenate([np.full(t.slaves.size, t.friction) for t in self.tools])
         # State carried between increments and phases.
         self.u = np.zeros((n, 3))
@@ -295,6 +295,7 @@ class FormingProblem:
         max_iterations: int = 25,
         max_cuts: int = 10,
         limits: IncrementLimits | None = None,
+        cutback: float = 0.5,
         gaps: Mapping[str, tuple[str, float, ArrayLike]] | None = None,
         result: FormingResult | None = None,
         on_increment: Callable[[PhaseProgress], bool | None] | None = None,
@@ -303,8 +304,8 @@ class FormingProblem:
         """Move each tool of ``motion`` by its displacement (3,) over the phase, linearly in
         the phase factor; tools not in ``active`` (default: all) are lifted off (their
         forces vanish). ``max_increment`` is the largest travel of the leading (longest
-        moving) tool per increment, in mm; an increment that fails is cut in half and
-        retried, at most ``max_cuts`` times in a row. Converged when the free residual and
+        moving) tool per increment, in mm; an increment that fails is cut by ``cutback``
+        and retried, at most ``max_cuts`` times in a row. Converged when the free residual and
         the contact law are below ``tol_force`` times the force scale and the correction
         below ``tol_disp`` times the increment. ``limits``: the r_min control (default
         IncrementLimits()). ``gaps``: tools held at a fixed gap from another, e.g.
@@ -327,6 +328,8 @@ class FormingProblem:
         travel = max(float(np.linalg.norm(m)) for m in moves.values())
         if not max_increment > 0.0:
             raise ValueError(f"max_increment must be > 0, got {max_increment}")
+        if not 0.0 < cutback < 1.0:
+            raise ValueError(f"cutback must lie in (0, 1), got {cutback}")
         result = FormingResult() if result is None else result
         for t in self.tools:
             result.tool_displacements.setdefault(t.name, [])
@@ -387,7 +390,7 @@ class FormingProblem:
                 if cuts_in_row > max_cuts:
                     raise FormingError(f"increment to phase factor {target:.6g} failed after "
                                        f"{max_cuts} cuts: {outcome}", result)
-                step, reason = step / 2.0, "cut"
+                step, reason = step * cutback, "cut"
                 continue
             u, state, force, residuals, in_contact, gap = outcome
             strain = _equivalent_strain_increment(state.strain - self.state.strain)
@@ -431,7 +434,8 @@ class FormingProblem:
                 result.contacts[t.name].append(int((in_contact[pairs] != INACTIVE).sum()))
                 result.status[t.name].append(in_contact[pairs].copy())
             cuts_in_row = 0
-            step, reason = min(nominal, 2.0 * step), "max"  # grow back after limits
+            step, reason = _next_step(step, nominal, reason, strain / limits.strain,
+                                      rotation / limit)
             if on_increment is not None and on_increment(
                     PhaseProgress(start, offsets, factor, step, reason, last_du, last_dp)):
                 break
@@ -810,6 +814,44 @@ class FormingProblem:
     def close(self) -> None:
         """Free the MUMPS instance."""
         self._reset()
+
+
+def default_augmentation(solid: Solid) -> float:
+    """The augmentation parameter r (N/mm) of the contact law when a tool sets none:
+    E t^2 / h, the median over the elements of t, their thinnest mean edge length along
+    the three natural directions, and h, the geometric mean of the other two. For a cube it is E h, the stiffness
+    of a node pressed into a solid; for the flat elements of a sheet it is lower by
+    (t / h)^2, as a sheet is pressed by a tool mostly in bending. r changes only how the
+    Newton loop decides between open, stick and slip (p - r g, lambda_T - r s): a value far
+    above the blank's stiffness decides on gaps of 1e-3 mm and flips contact states from
+    iteration to iteration (docs/theory/contact.md)."""
+    x = solid.mesh.nodes[solid.mesh.elements]  # (m, 8, 3)
+    edges = {0: ((0, 1), (3, 2), (4, 5), (7, 6)), 1: ((0, 3), (1, 2), (4, 7), (5, 6)),
+             2: ((0, 4), (1, 5), (2, 6), (3, 7))}
+    lengths = np.stack([np.mean([np.linalg.norm(x[:, b] - x[:, a], axis=1) for a, b in pairs],
+                                axis=0) for pairs in edges.values()], axis=1)
+    lengths.sort(axis=1)
+    ratio = lengths[:, 0] ** 2 / np.sqrt(lengths[:, 1] * lengths[:, 2])
+    return float(solid.props[0] * np.median(ratio))
+
+
+def _next_step(step: float, nominal: float, reason: str, strain_ratio: float,
+               rotation_ratio: float) -> tuple[float, str]:
+    """The trial size of the next increment and what set it, after one of ``step`` that
+    ``reason`` limited, whose largest strain and rotation increments were these fractions
+    of their limits. As in DD3IMP's r_min, each increment tries the nominal size again:
+    the touch, release and yield limits are found before or in the first iteration and
+    cost little to apply once more. Two things are remembered: a strain or rotation limit
+    is found only after convergence, so the next size is predicted from this increment's
+    rates (strain and rotation grow about linearly with the size), to 90 % of the limit;
+    and after a cut (divergence) the size at most doubles per increment."""
+    grow = 0.9 / max(strain_ratio, rotation_ratio, 1e-12)
+    cap = 2.0 if reason in ("cut", "regrow") else np.inf
+    if min(grow, cap) * step >= nominal:
+        return nominal, "max"
+    if cap < grow:
+        return cap * step, "regrow"
+    return grow * step, "strain" if strain_ratio >= rotation_ratio else "rotation"
 
 
 def _yield_factor(props: NDArray[np.float64], before: SolidState, after: SolidState,

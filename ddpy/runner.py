@@ -62,7 +62,7 @@ STATUS = "status.json"
 CHECKPOINT_EVERY = 10
 #: What limited an increment in ddpy.forming -> the ``limit`` names of ddpy.results.
 _LIMITS = {"max": "max_increment", "touch": "contact_touch", "strain": "strain",
-           "rotation": "rotation", "yield": "yield", "cut": "cutback",
+           "rotation": "rotation", "yield": "yield", "cut": "cutback", "regrow": "cutback",
            "release": "contact_release",
            "springback": "max_increment"}
 
@@ -329,7 +329,7 @@ class _Run:
             first_touch=phase.rmin.contact, release=0.05 if phase.rmin.contact else None,
             min_fraction=min(1.0, phase.min_increment / phase.max_increment))
         max_cuts = max(1, math.ceil(math.log(phase.max_increment / phase.min_increment)
-                                    / math.log(2.0)))
+                                    / -math.log(newton.cutback)))
         ends = _segments(phase)
         while self.segment < len(ends):
             a = ends[self.segment - 1] if self.segment else 0.0
@@ -371,6 +371,7 @@ class _Run:
             p.run(motion, phase.max_increment * ratio, active=phase.tools,
                   tol_force=newton.force_tolerance, tol_disp=newton.displacement_tolerance,
                   max_iterations=newton.max_iterations, max_cuts=max_cuts, limits=limits,
+                  cutback=newton.cutback,
                   gaps=gaps, result=result, on_increment=hook, resume=resume)
             if self.halt:
                 self.fields(result)

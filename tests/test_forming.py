@@ -493,3 +493,23 @@ def test_springback_of_a_bent_strip_converges_quadratically() -> None:
     np.testing.assert_allclose(shapes[1], shapes[5], atol=1e-6)
     springback = bent.displacements[-1][tip, 2] - shapes[5][tip, 2]
     assert springback.min() > 0.1
+
+
+def test_next_increment_tries_the_nominal_size_again_after_a_limit() -> None:
+    from ddpy.forming import _next_step
+
+    # Touch, release and yield are found before or in the first iteration: back to nominal
+    # unless the rates predict a strain or rotation limit.
+    for reason in ("touch", "release", "yield", "max"):
+        assert _next_step(0.01, 0.1, reason, 0.05, 0.01) == (0.1, "max")
+        assert _next_step(0.01, 0.1, reason, 0.2, 0.1) == (pytest.approx(0.045), "strain")
+    # A strain or rotation limit is seen only after convergence: the next size is
+    # predicted from this increment's rate, to 90 % of the limit.
+    step, reason = _next_step(0.05, 0.1, "strain", 1.0, 0.5)
+    assert step == pytest.approx(0.045) and reason == "strain"
+    step, reason = _next_step(0.05, 0.1, "max", 0.2, 1.5)
+    assert step == pytest.approx(0.03) and reason == "rotation"
+    # After a cut (divergence) the size at most doubles per increment.
+    assert _next_step(0.01, 0.1, "cut", 0.1, 0.1) == (0.02, "regrow")
+    assert _next_step(0.04, 0.1, "regrow", 0.1, 0.1) == (0.08, "regrow")
+    assert _next_step(0.08, 0.1, "regrow", 0.1, 0.1) == (0.1, "max")

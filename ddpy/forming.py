@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ddpy._validate import float_array, int_array
+from ddpy.case import HEX_FACES
 from ddpy.contact import INACTIVE, contact_law
 from ddpy.linalg import LinearSolverError, MumpsSolver
 from ddpy.ordering import mesh_solver
@@ -647,7 +648,7 @@ class FormingProblem:
             if not on[pairs].any():
                 continue
             nodes = tool.slaves
-            normals = None if tool.facing is None else np.tile(tool.facing, (nodes.size, 1))
+            normals = None if tool.facing is None else self._facing_normals(i, x)
             found = tool.search.project(x[nodes], positions[tool.name], normals)
             hit = found.status != NONE
             patch = np.where(hit, found.patch, 0)
@@ -681,6 +682,37 @@ class FormingProblem:
         d_lambda[hp, hk, hk] = 1.0
         d_x[hp, hk, :] = 0.0
         return c, d_lambda, d_x, state, (gap, normal)
+
+    def _facing_normals(self, i: int, x: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Outward normals (k, 3) of the blank surface at the slaves of tool ``i``, in the
+        configuration x: the sum of the area vectors of the boundary faces around each
+        slave that faced the tool at the start (normal within 60 degrees of ``facing``).
+        The search keeps only patches opposing them. ``facing`` itself would turn the
+        filter wrong where the sheet has turned by 90 degrees or more, as over a die
+        shoulder onto its wall (a slave without such a face keeps ``facing``)."""
+        tool = self.tools[i]
+        if not hasattr(self, "_faces"):
+            self._faces: dict[int, tuple[NDArray[np.int64], NDArray[np.int64]]] = {}
+        if i not in self._faces:
+            mesh = self.solid.mesh
+            faces = mesh.elements[:, HEX_FACES].reshape(-1, 4)
+            _, inverse, counts = np.unique(np.sort(faces, axis=1), axis=0,
+                                           return_inverse=True, return_counts=True)
+            faces = faces[counts[inverse.reshape(-1)] == 1]
+            keep = (_unit(_area_vectors(mesh.nodes, faces)) @ tool.facing) > 0.5
+            faces = faces[keep]
+            # slave index of every face corner (-1: not a slave of this tool)
+            where = np.full(mesh.n_nodes, -1, dtype=np.int64)
+            where[tool.slaves] = np.arange(tool.slaves.size)
+            self._faces[i] = (faces, where[faces])
+        faces, corner = self._faces[i]
+        area = _area_vectors(x, faces)
+        total = np.zeros((tool.slaves.size, 3))
+        ok = corner >= 0
+        np.add.at(total, corner[ok], np.repeat(area[:, None, :], 4, axis=1)[ok])
+        length = np.linalg.norm(total, axis=1, keepdims=True)
+        return np.where(length > 0.0, total / np.where(length > 0.0, length, 1.0),
+                        tool.facing[None, :])
 
     def _evaluate(self, layout: _Layout, u: NDArray[np.float64], force: NDArray[np.float64],
                   x_n: NDArray[np.float64], positions: Mapping[str, NDArray[np.float64]],
@@ -816,15 +848,25 @@ class FormingProblem:
         self._reset()
 
 
+def _area_vectors(x: NDArray[np.float64], faces: NDArray[np.int64]) -> NDArray[np.float64]:
+    """Outward area vectors (f, 3) of quadrilaterals: half the cross product of diagonals."""
+    return 0.5 * np.cross(x[faces[:, 2]] - x[faces[:, 0]], x[faces[:, 3]] - x[faces[:, 1]])
+
+
+def _unit(v: NDArray[np.float64]) -> NDArray[np.float64]:
+    length = np.linalg.norm(v, axis=-1, keepdims=True)
+    return v / np.where(length > 0.0, length, 1.0)
+
+
 def default_augmentation(solid: Solid) -> float:
     """The augmentation parameter r (N/mm) of the contact law when a tool sets none:
     E t^2 / h, the median over the elements of t, their thinnest mean edge length along
-    the three natural directions, and h, the geometric mean of the other two. For a cube it is E h, the stiffness
-    of a node pressed into a solid; for the flat elements of a sheet it is lower by
-    (t / h)^2, as a sheet is pressed by a tool mostly in bending. r changes only how the
-    Newton loop decides between open, stick and slip (p - r g, lambda_T - r s): a value far
-    above the blank's stiffness decides on gaps of 1e-3 mm and flips contact states from
-    iteration to iteration (docs/theory/contact.md)."""
+    the three natural directions, and h, the geometric mean of the other two. For a cube
+    it is E h, the stiffness of a node pressed into a solid; for the flat elements of a
+    sheet it is lower by (t / h)^2, as a sheet is pressed by a tool mostly in bending.
+    r changes only how the Newton loop decides between open, stick and slip (p - r g,
+    lambda_T - r s): a value far above the blank's stiffness decides on gaps of 1e-3 mm
+    and flips contact states from iteration to iteration (docs/theory/contact.md)."""
     x = solid.mesh.nodes[solid.mesh.elements]  # (m, 8, 3)
     edges = {0: ((0, 1), (3, 2), (4, 5), (7, 6)), 1: ((0, 3), (1, 2), (4, 7), (5, 6)),
              2: ((0, 4), (1, 5), (2, 6), (3, 7))}

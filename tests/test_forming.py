@@ -513,3 +513,18 @@ def test_next_increment_tries_the_nominal_size_again_after_a_limit() -> None:
     assert _next_step(0.01, 0.1, "cut", 0.1, 0.1) == (0.02, "regrow")
     assert _next_step(0.04, 0.1, "regrow", 0.1, 0.1) == (0.08, "regrow")
     assert _next_step(0.08, 0.1, "regrow", 0.1, 0.1) == (0.1, "max")
+
+
+def test_contact_filter_follows_the_blank_surface_as_it_turns() -> None:
+    # The slaves' outward normals come from the blank's faces in the current configuration:
+    # turned 90 degrees about y, the bottom of a block faces +x (a sheet wrapped over a die
+    # shoulder onto its wall), where the fixed facing (0, 0, -1) would hide the wall.
+    mesh = HexMesh.box(1.0, 1.0, 0.5, 2, 2, 2)
+    bottom = mesh.select(z=0.0)
+    tool = RigidTool("plane", plane_tool(), bottom, facing=(0, 0, -1))
+    problem = FormingProblem(Solid(mesh, ELASTIC), [tool])
+    assert np.allclose(problem._facing_normals(0, mesh.nodes), (0.0, 0.0, -1.0))
+    turn = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])  # about y
+    normals = problem._facing_normals(0, mesh.nodes @ turn.T)
+    assert np.allclose(normals, turn @ np.array([0.0, 0.0, -1.0]))
+    assert np.allclose(normals, (-1.0, 0.0, 0.0))

@@ -148,13 +148,15 @@ contains
     real(wp), intent(out) :: f(24), k(24, 24), stress(6, 8), ep(8), strain(6, 8), axes(3, 3, 8)
     integer, intent(out) :: status
     type(hencky_type) :: hk(8)
-    real(wp) :: g(8, 3, 8), w0(8), b(6, 24, 8), btr(24, 8), lnj(8), pm(6, 6, 8), tg(6, 8), &
-                trt(8), dg(6, 6, 8), rp(6, 6, 8)
-    real(wp) :: fg(3, 3), vj, vol, mean_lnj, bbar_tr(24), dtr(24), kg(8, 8), n8(8), dn8(8, 3), &
-                rot(6, 6), de(6), s_mat(6), d_mat(6, 6), a_hat(6), mmat(6, 6), mb(6, 24), &
-                dm(6), vb(24), bt(24, 6), u(3, 3), u_inv(3, 3), ct, dmm, dv, s6(6), &
-                s3(3, 3), gs(3), dr(6, 6)
-    integer :: p, a, c, i, j, col, mstatus
+    ! bt(:, :, p) = b^T, the derivative of E_GL (Voigt) by the 24 dofs, stored by dof so that
+    ! the products over the dofs are contiguous and vectorize; lk and rk hold the 8 x 8
+    ! columns of the rank-64 tangent k = lk rk^T (lower triangle).
+    real(wp) :: g(8, 3, 8), w0(8), bt(24, 6, 8), btr(24, 8), lnj(8), pm(6, 6, 8), tg(6, 8), &
+                trt(8), dg(6, 6, 8), rp(6, 6, 8), fgs(3, 3, 8), lk(24, 64), rk(24, 64)
+    real(wp) :: fg(3, 3), vj, vol, mean_lnj, bbar_tr(24), kg(8, 8), n8(8), dn8(8, 3), &
+                rot(6, 6), de(6), s_mat(6), d_mat(6, 6), a_hat(6), mmat(6, 6), dm(6), &
+                u(3, 3), u_inv(3, 3), ct, dmm, s6(6), s3(3, 3), gs(3), dr(6, 6)
+    integer :: p, a, c, i, j, col, mstatus, r0
     logical :: plastic
 
     f = 0.0_wp
@@ -180,24 +182,23 @@ contains
         status = hex8_inverted
         return
       end if
+      fgs(:, :, p) = fg
       call hencky_evaluate(green_lagrange(fg), hk(p))
       lnj(p) = hk(p)%strain(1) + hk(p)%strain(2) + hk(p)%strain(3)
       do a = 1, 8
         do c = 1, 3
           col = 3*(a - 1) + c
-          b(1, col, p) = fg(c, 1)*g(a, 1, p)
-          b(2, col, p) = fg(c, 2)*g(a, 2, p)
-          b(3, col, p) = fg(c, 3)*g(a, 3, p)
-          b(4, col, p) = fg(c, 1)*g(a, 2, p) + fg(c, 2)*g(a, 1, p)
-          b(5, col, p) = fg(c, 2)*g(a, 3, p) + fg(c, 3)*g(a, 2, p)
-          b(6, col, p) = fg(c, 3)*g(a, 1, p) + fg(c, 1)*g(a, 3, p)
+          bt(col, 1, p) = fg(c, 1)*g(a, 1, p)
+          bt(col, 2, p) = fg(c, 2)*g(a, 2, p)
+          bt(col, 3, p) = fg(c, 3)*g(a, 3, p)
+          bt(col, 4, p) = fg(c, 1)*g(a, 2, p) + fg(c, 2)*g(a, 1, p)
+          bt(col, 5, p) = fg(c, 2)*g(a, 3, p) + fg(c, 3)*g(a, 2, p)
+          bt(col, 6, p) = fg(c, 3)*g(a, 1, p) + fg(c, 1)*g(a, 3, p)
         end do
       end do
       pm(:, :, p) = hencky_first(hk(p))
       s6 = pm(1, :, p) + pm(2, :, p) + pm(3, :, p)
-      do col = 1, 24
-        btr(col, p) = dot_product(s6, b(:, col, p))
-      end do
+      btr(:, p) = by_dofs(bt(:, :, p), s6)
     end do
 
     ! Averages over the element of ln det dF and of its gradient, weighted by the initial
@@ -237,15 +238,11 @@ contains
       do c = 1, 6
         s6(c) = dot_product(tg(:, p), pm(:, c, p))
       end do
-      do col = 1, 24
-        f(col) = f(col) + w0(p)*(dot_product(s6, b(:, col, p)) &
-                                 + (bbar_tr(col) - btr(col, p))*trt(p)/3.0_wp)
-      end do
+      f = f + w0(p)*(by_dofs(bt(:, :, p), s6) + (bbar_tr - btr(:, p))*trt(p)/3.0_wp)
       ! The stress at the end of the increment in the axes turned by dR = dF dU^-1: the
       ! rotated Kirchhoff stress dU S dU, S = P^T T relative to xn per unit initial volume.
       call hencky_stretch(hk(p), u, u_inv)
-      fg = relative_gradient(du, g(:, :, p))
-      axes(:, :, p) = product3(product3(fg, u_inv), axes_old(:, :, p))
+      axes(:, :, p) = product3(product3(fgs(:, :, p), u_inv), axes_old(:, :, p))
       u = product3(u, product3(tensor_from_stress(s6), u))
       s3 = product3(u, axes_old(:, :, p))
       do j = 1, 3
@@ -262,10 +259,12 @@ contains
     ! a_p moving the pressure to the element average, by the chain rule
     ! A : d2 dE = b^T L(A) b + (P^T A) : d2 E_GL (the last the familiar g S g^T). So
     ! K_p = b^T (W0 P^T D P + L(A)) b + W0/3 (v dtr^T + dtr v^T) + W0 m^T D m/9 dtr dtr^T,
-    ! v = b^T P^T D m, dtr = bbar_tr - btr: one 24 x 24 product per Gauss point.
+    ! v = b^T P^T D m, dtr = bbar_tr - btr: eight columns of lk and rk per Gauss point,
+    ! (b^T, v, dtr) and (b^T M, dtr, v + W0 m^T D m/9 dtr), and one product at the end.
     ct = dot_product(w0, trt)/3.0_wp
     kg = 0.0_wp
     do p = 1, 8
+      r0 = 8*(p - 1)
       a_hat = w0(p)*tg(:, p) + (w0(p)/vol*ct - w0(p)*trt(p)/3.0_wp)*identity_voigt
       ! With R = rot P (material axes): P^T D_global P = R^T D R, and D_global m = rot^T D m
       ! since the identity strain m is the same in every axes.
@@ -276,32 +275,19 @@ contains
           mmat(i, j) = mmat(i, j) + w0(p)*dot_product(rp(:, i, p), dr(:, j))
         end do
       end do
-      do col = 1, 24
-        do i = 1, 6
-          mb(i, col) = mmat(i, 1)*b(1, col, p) + mmat(i, 2)*b(2, col, p) &
-                       + mmat(i, 3)*b(3, col, p) + mmat(i, 4)*b(4, col, p) &
-                       + mmat(i, 5)*b(5, col, p) + mmat(i, 6)*b(6, col, p)
-        end do
+      lk(:, r0 + 1:r0 + 6) = bt(:, :, p)
+      do i = 1, 6
+        rk(:, r0 + i) = by_dofs(bt(:, :, p), mmat(i, :))
       end do
       s6 = dg(:, 1, p) + dg(:, 2, p) + dg(:, 3, p)
       do c = 1, 6
         dm(c) = w0(p)*dot_product(rp(:, c, p), s6)
       end do
       dmm = w0(p)*sum(dg(1:3, 1:3, p))/9.0_wp
-      do col = 1, 24
-        vb(col) = dot_product(dm, b(:, col, p))/3.0_wp
-      end do
-      dtr = bbar_tr - btr(:, p)
-      bt = transpose(b(:, :, p))
-      ! Lower triangle, contiguous in i so that it vectorizes.
-      do j = 1, 24
-        dv = vb(j) + dmm*dtr(j)
-        do i = j, 24
-          k(i, j) = k(i, j) + bt(i, 1)*mb(1, j) + bt(i, 2)*mb(2, j) + bt(i, 3)*mb(3, j) &
-                    + bt(i, 4)*mb(4, j) + bt(i, 5)*mb(5, j) + bt(i, 6)*mb(6, j) &
-                    + vb(i)*dtr(j) + dtr(i)*dv
-        end do
-      end do
+      lk(:, r0 + 7) = by_dofs(bt(:, :, p), dm)/3.0_wp
+      lk(:, r0 + 8) = bbar_tr - btr(:, p)
+      rk(:, r0 + 7) = lk(:, r0 + 8)
+      rk(:, r0 + 8) = lk(:, r0 + 7) + dmm*lk(:, r0 + 8)
       do c = 1, 6
         s6(c) = dot_product(a_hat, pm(:, c, p))
       end do
@@ -313,6 +299,7 @@ contains
         end do
       end do
     end do
+    call lower_product(lk, rk, k)
     do j = 1, 8
       do i = j, 8
         do c = 1, 3
@@ -322,6 +309,35 @@ contains
     end do
     call mirror(k)
   end subroutine hex8_element
+
+  !> sum_r bt(:, r) v(r): a Voigt row vector v times b, over the 24 dofs.
+  pure function by_dofs(bt, v) result(w)
+    real(wp), intent(in) :: bt(24, 6), v(6)
+    real(wp) :: w(24)
+    w = bt(:, 1)*v(1) + bt(:, 2)*v(2) + bt(:, 3)*v(3) + bt(:, 4)*v(4) + bt(:, 5)*v(5) &
+        + bt(:, 6)*v(6)
+  end function by_dofs
+
+  !> The lower triangle of k + l r^T (k, l, r: 24 x 24, 24 x 64, 24 x 64; the strict upper
+  !> triangle gets its entries too and is overwritten by mirror). Two whole columns at a
+  !> time: fixed lengths that the compiler unrolls into twelve vector sums kept in
+  !> registers over the 64 terms (a triangular loop of varying length would not be).
+  pure subroutine lower_product(l, r, k)
+    real(wp), intent(in) :: l(24, 64), r(24, 64)
+    real(wp), intent(inout) :: k(24, 24)
+    real(wp) :: k1(24), k2(24)
+    integer :: j, q
+    do j = 1, 23, 2
+      k1 = 0.0_wp
+      k2 = 0.0_wp
+      do q = 1, 64
+        k1 = k1 + l(:, q)*r(j, q)
+        k2 = k2 + l(:, q)*r(j + 1, q)
+      end do
+      k(:, j) = k(:, j) + k1
+      k(:, j + 1) = k(:, j + 1) + k2
+    end do
+  end subroutine lower_product
 
   !> The product of two 3 x 3 matrices, written out (gfortran calls its library for some
   !> matmul forms, which costs more than the product).

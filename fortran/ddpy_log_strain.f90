@@ -18,15 +18,23 @@ module ddpy_log_strain
             stress_from_tensor
 
   !> One evaluation: eigenvalues mu of 2 E_GL (C = I + 2 E_GL has 1 + mu), eigenvectors
-  !> (columns), the divided differences of f, the Hencky strain (Voigt) and the six unit
-  !> Green-Lagrange directions, as dC = 2 dE_GL, in the eigenbasis.
+  !> (columns), the divided differences of f, the Hencky strain (Voigt), the six unit
+  !> Green-Lagrange directions, as dC = 2 dE_GL, in the eigenbasis, and the Voigt vectors
+  !> (engineering shears) dyads(:, q) of the symmetric dyads of eigenvectors
+  !> (v_i v_j^T + v_j v_i^T)/2 over the pairs q = (1, 1), (2, 2), (3, 3),
+  !> (1, 2), (2, 3), (3, 1): direction(c, i, j) = d_c dyads(c, q(i, j)) with d = (2, 2, 2,
+  !> 1, 1, 1), so that the first derivative is a sum of six symmetric rank-one terms.
+  !> No default initialization: hencky_evaluate sets every component, and a default would
+  !> make every intent(out) dummy and local of this type be cleared at each call (the element
+  !> evaluates it at every Gauss point).
   type :: hencky_type
-    real(wp) :: mu(3) = 0.0_wp
-    real(wp) :: vectors(3, 3) = 0.0_wp
-    real(wp) :: first(3, 3) = 0.0_wp
-    real(wp) :: second(3, 3, 3) = 0.0_wp
-    real(wp) :: strain(6) = 0.0_wp
-    real(wp) :: direction(3, 3, 6) = 0.0_wp
+    real(wp) :: mu(3)
+    real(wp) :: vectors(3, 3)
+    real(wp) :: first(3, 3)
+    real(wp) :: second(3, 3, 3)
+    real(wp) :: strain(6)
+    real(wp) :: direction(6, 3, 3)
+    real(wp) :: dyads(6, 6)
   end type hencky_type
 
   integer, parameter :: voigt(2, 6) = reshape([1, 1, 2, 2, 3, 3, 1, 2, 2, 3, 3, 1], [2, 6])
@@ -263,7 +271,7 @@ contains
     real(wp), intent(in) :: e_gl(6)
     type(hencky_type), intent(out) :: h
     real(wp) :: values(3), vectors(3, 3), lam(3), t, table(3, 3, 3)
-    integer :: i, j, k, a, b, c, order(3)
+    integer :: i, j, k, a, b, c, q, order(3)
     integer, parameter :: pairs(2, 6) = reshape([1, 1, 2, 2, 3, 3, 1, 2, 2, 3, 3, 1], [2, 6])
     call symmetric_eigen(tensor_from_strain(e_gl), values, vectors)
     order = [minloc(values, 1), 0, maxloc(values, 1)]
@@ -271,6 +279,7 @@ contains
     order(2) = 6 - order(1) - order(3)
     h%mu = 2.0_wp*values(order)
     h%vectors = vectors(:, order)
+    h%strain = 0.0_wp
     lam = 1.0_wp + h%mu
     do i = 1, 3
       h%first(i, i) = 0.5_wp/lam(i)
@@ -302,43 +311,62 @@ contains
         end do
       end do
     end do
-    h%strain = 0.0_wp
-    do k = 1, 3
-      t = 0.5_wp*log_one_plus(h%mu(k))
+    ! Dyads of the eigenvector pairs; the Hencky strain sum_k f(l_k) v_k v_k^T is a sum of
+    ! the first three, and the directions V^T (2 e_c) V of the unit Green-Lagrange strains
+    ! (engineering shears) are the dyads read by rows.
+    do q = 1, 6
+      i = pairs(1, q)
+      j = pairs(2, q)
       do c = 1, 6
-        i = pairs(1, c)
-        j = pairs(2, c)
-        h%strain(c) = h%strain(c) + merge(1.0_wp, 2.0_wp, c <= 3)*t*h%vectors(i, k) &
-                      *h%vectors(j, k)
+        a = pairs(1, c)
+        b = pairs(2, c)
+        if (c <= 3) then
+          h%dyads(c, q) = h%vectors(a, i)*h%vectors(a, j)
+        else
+          h%dyads(c, q) = h%vectors(a, i)*h%vectors(b, j) + h%vectors(b, i)*h%vectors(a, j)
+        end if
       end do
     end do
-    ! Directions V^T (2 e_c) V of the unit Green-Lagrange strains (engineering shears).
+    do k = 1, 3
+      t = 0.5_wp*log_one_plus(h%mu(k))
+      h%strain = h%strain + t*h%dyads(:, k)
+    end do
     do c = 1, 6
-      k = pairs(1, c)
-      a = pairs(2, c)
-      do j = 1, 3
-        do i = 1, 3
-          if (c <= 3) then
-            h%direction(i, j, c) = 2.0_wp*h%vectors(k, i)*h%vectors(k, j)
-          else
-            h%direction(i, j, c) = h%vectors(k, i)*h%vectors(a, j) &
-                                   + h%vectors(a, i)*h%vectors(k, j)
-          end if
-        end do
+      do q = 1, 6
+        i = pairs(1, q)
+        j = pairs(2, q)
+        h%direction(c, i, j) = merge(2.0_wp, 1.0_wp, c <= 3)*h%dyads(c, q)
+        h%direction(c, j, i) = h%direction(c, i, j)
       end do
     end do
   end subroutine hencky_evaluate
 
   !> p(:, c) = d E_Hencky / d E_GL(c) (Voigt, engineering shears on both sides).
+  !> By Daleckii-Krein, p(r, c) = sum_ij first(i, j) y_ij(r) d_c y_ij(c) with y_ij the dyads:
+  !> six symmetric rank-one terms (the pairs i /= j twice), then column c scaled by d_c.
   pure function hencky_first(h) result(p)
     type(hencky_type), intent(in) :: h
     real(wp) :: p(6, 6)
-    integer :: c
-    do c = 1, 6
-      p(:, c) = strain_from_tensor(matmul(h%vectors, &
-                                          matmul(h%first*h%direction(:, :, c), &
-                                                 transpose(h%vectors))))
+    real(wp) :: phi(6), yp(6, 6), acc(6, 6)
+    integer :: q, r, c
+    integer, parameter :: pairs(2, 6) = reshape([1, 1, 2, 2, 3, 3, 1, 2, 2, 3, 3, 1], [2, 6])
+    do q = 1, 6
+      phi(q) = merge(1.0_wp, 2.0_wp, q <= 3)*h%first(pairs(1, q), pairs(2, q))
+      yp(:, q) = phi(q)*h%dyads(:, q)
     end do
+    do c = 1, 6
+      do r = c, 6
+        acc(r, c) = yp(r, 1)*h%dyads(c, 1) + yp(r, 2)*h%dyads(c, 2) + yp(r, 3)*h%dyads(c, 3) &
+                  + yp(r, 4)*h%dyads(c, 4) + yp(r, 5)*h%dyads(c, 5) + yp(r, 6)*h%dyads(c, 6)
+      end do
+    end do
+    do c = 1, 6
+      do r = 1, c - 1
+        acc(r, c) = acc(c, r)
+      end do
+    end do
+    p(:, 1:3) = 2.0_wp*acc(:, 1:3)
+    p(:, 4:6) = acc(:, 4:6)
   end function hencky_first
 
   !> l(c, d) = a : d2 E_Hencky / (d E_GL(c) d E_GL(d)) for a stress-like a (Voigt).
@@ -346,29 +374,45 @@ contains
     type(hencky_type), intent(in) :: h
     real(wp), intent(in) :: a(6)
     real(wp) :: l(6, 6)
-    real(wp) :: ae(3, 3), w(3, 3, 3), g(3, 3)
-    integer :: i, j, k, c, d
-    ae = matmul(transpose(h%vectors), matmul(tensor_from_stress(a), h%vectors))
+    ! Summed in a local array: into the result, which the compiler must assume may alias
+    ! h, the loops do not vectorize.
+    real(wp) :: ae(3, 3), s3(3, 3), wk(3, 3), y(3, 6), acc(6, 6)
+    integer :: i, j, k, d
+    ! a in the eigenbasis, V^T a V.
+    s3 = tensor_from_stress(a)
     do j = 1, 3
-      do k = 1, 3
-        do i = 1, 3
-          w(i, k, j) = ae(i, j)*h%second(i, k, j)
-        end do
+      do i = 1, 3
+        wk(i, j) = s3(i, 1)*h%vectors(1, j) + s3(i, 2)*h%vectors(2, j) &
+                   + s3(i, 3)*h%vectors(3, j)
       end do
     end do
-    ! l(c, d) = 2 sum_ikj w(i, k, j) H_c(i, k) H_d(k, j): the two orderings of the
-    ! Daleckii-Krein sum are equal by the symmetries of a, H and f[., ., .].
-    do d = 1, 6
-      do k = 1, 3
-        do i = 1, 3
-          g(i, k) = w(i, k, 1)*h%direction(k, 1, d) + w(i, k, 2)*h%direction(k, 2, d) &
-                    + w(i, k, 3)*h%direction(k, 3, d)
-        end do
-      end do
-      do c = 1, 6
-        l(c, d) = 2.0_wp*sum(h%direction(:, :, c)*g)
+    do j = 1, 3
+      do i = 1, 3
+        ae(i, j) = h%vectors(1, i)*wk(1, j) + h%vectors(2, i)*wk(2, j) &
+                   + h%vectors(3, i)*wk(3, j)
       end do
     end do
+    ! l(c, d) = 2 sum_ikj ae(i, j) f[i, k, j] H_c(i, k) H_d(k, j) (the two orderings of the
+    ! Daleckii-Krein sum are equal by the symmetries of a, H and f[., ., .]); for each k a
+    ! form x_c^T W_k x_d with x_c = H_c(:, k) = direction(c, :, k) and
+    ! W_k(i, j) = ae(i, j) f[i, k, j], summed by whole columns of l (vectorizes).
+    acc = 0.0_wp
+    do k = 1, 3
+      do j = 1, 3
+        do i = 1, 3
+          wk(i, j) = ae(i, j)*h%second(i, k, j)
+        end do
+      end do
+      do d = 1, 6
+        y(:, d) = wk(:, 1)*h%direction(d, 1, k) + wk(:, 2)*h%direction(d, 2, k) &
+                  + wk(:, 3)*h%direction(d, 3, k)
+      end do
+      do d = 1, 6
+        acc(:, d) = acc(:, d) + h%direction(:, 1, k)*y(1, d) + h%direction(:, 2, k)*y(2, d) &
+                  + h%direction(:, 3, k)*y(3, d)
+      end do
+    end do
+    l = 2.0_wp*acc
   end function hencky_second
 
   !> Right stretch U = C^(1/2) and its inverse.

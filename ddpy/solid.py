@@ -118,8 +118,10 @@ class SolidState:
                    np.zeros((n_elements, 8, 6)), axes, np.zeros((n_nodes, 3)))
 
     def copy(self) -> SolidState:
+        # order="K" keeps the layout of axes (a transposed view when written by assemble),
+        # so that the copy goes back to the core without another copy.
         return SolidState(self.stress.copy(), self.ep.copy(), self.strain.copy(),
-                          self.axes.copy(), self.displacement.copy())
+                          self.axes.copy(order="K"), self.displacement.copy())
 
 
 def _flat(a: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -192,6 +194,12 @@ class Solid:
         state.axes[:] = axes[:, None, :, :]
         return state
 
+    def state_buffer(self) -> SolidState:
+        """Uninitialized arrays of a state, in the layout ``assemble`` writes (``out``)."""
+        m, n = self.mesh.n_elements, self.mesh.n_nodes
+        return SolidState(np.empty((m, 8, 6)), np.empty((m, 8)), np.empty((m, 8, 6)),
+                          np.empty((m, 8, 3, 3)).transpose(0, 1, 3, 2), np.empty((n, 3)))
+
     def pattern(self, eqn: ArrayLike | None = None, symmetric: bool = True) -> _Pattern:
         """Coordinate structure of the tangent for equation numbers ``eqn`` (n, 3) (0-based,
         -1 for a constrained dof; default: every dof free, numbered 3 node + component)."""
@@ -215,12 +223,14 @@ class Solid:
     def assemble(self, u: ArrayLike, state: SolidState | None = None,
                  pattern: _Pattern | None = None, tangent: bool = True,
                  values: NDArray[np.float64] | None = None,
-                 dp: ArrayLike | None = None) -> Assembly:
+                 dp: ArrayLike | None = None, out: SolidState | None = None) -> Assembly:
         """Internal forces (n, 3), tangent values in the slots of ``pattern`` (empty when
         ``tangent`` is False) and the trial state at total displacements ``u`` (n, 3),
         over the increment from the converged ``state`` (its displacements are the
         reference configuration); with ``dp`` (n, 3) also the product K dp of
-        the tangent over all dofs with dp. ``values`` may be given as the output buffer.
+        the tangent over all dofs with dp. ``values`` may be given as the output buffer,
+        and ``out`` (from ``state_buffer`` or an earlier assembly) as the arrays of the
+        trial state: it must not share memory with ``state``, and is overwritten.
         Raises ElementError when an element is inverted or its material update fails."""
         n = self.mesh.n_nodes
         u = float_array(u, "u", (n, 3))
@@ -232,14 +242,33 @@ class Solid:
             values = np.empty(pattern.rows.shape[0])
         product = dp is not None and tangent
         dp = np.zeros(3 * n) if dp is None else float_array(dp, "dp", (n, 3)).ravel()
+        # The trial state is written into given arrays (fresh ones when out is None) rather
+        # than into arrays f2py allocates and zeroes: 28 MB per call on 20,000 elements.
+        m = self.mesh.n_elements
+        if out is None:
+            out_axes = np.empty((m, 8, 3, 3))
+            out_stress, out_ep, out_strain = (np.empty((m, 8, 6)), np.empty((m, 8)),
+                                              np.empty((m, 8, 6)))
+        else:
+            out_axes = out.axes.transpose(0, 1, 3, 2)
+            out_stress, out_ep, out_strain = out.stress, out.ep, out.strain
+            for name, array, shape in (("stress", out_stress, (m, 8, 6)), ("ep", out_ep, (m, 8)),
+                                       ("strain", out_strain, (m, 8, 6)),
+                                       ("axes", out_axes, (m, 8, 3, 3))):
+                if (array.shape != shape or array.dtype != np.float64
+                        or not array.flags.c_contiguous):
+                    raise ValueError(f"out.{name} is not a buffer of this solid's state")
+                if any(np.may_share_memory(array, held) for held in (
+                        state.stress, state.ep, state.strain, state.axes)):
+                    raise ValueError("out shares memory with state")
         values, fint, kdu, stress, ep, strain, axes, status, element = _core.solid_assemble(
             self._x, self._conn, _flat(state.displacement), u.ravel(), self.props,
             _flat(state.axes.transpose(0, 1, 3, 2)), _flat(state.stress), _flat(state.ep),
             _flat(state.strain), pattern.eqn, int(pattern.symmetric), int(tangent),
-            pattern.offsets, values, int(product), dp)
+            pattern.offsets, values, int(product), dp, out_stress.ravel(), out_ep.ravel(),
+            out_strain.ravel(), out_axes.ravel())
         if status:
             raise ElementError(int(status), int(element) - 1)
-        m = self.mesh.n_elements
         trial = SolidState(stress.reshape(m, 8, 6), ep.reshape(m, 8), strain.reshape(m, 8, 6),
                            axes.reshape(m, 8, 3, 3).transpose(0, 1, 3, 2), u.copy())
         return Assembly(fint.reshape(-1, 3), values, trial,
@@ -535,7 +564,7 @@ class StaticProblem:
                 cuts_in_row += 1
                 result.cuts += 1
                 if cuts_in_row > max_cuts:
-                    result.state = state
+                    result.state = state.copy()
                     raise ConvergenceError(
                         f"increment to load factor {target:.6g} failed after {max_cuts} cuts: "
                         f"{outcome}", result)
@@ -558,7 +587,7 @@ class StaticProblem:
             step = after
             if after == nominal:
                 cuts_in_row = 0
-        result.state = state
+        result.state = state.copy()
         return result
 
     def close(self) -> None:
@@ -596,6 +625,11 @@ class _Newton:
         self.max_iterations, self.floor = max_iterations, floor
         self.line_search = line_search
         self.values = np.empty(pattern.rows.shape[0])
+        # Two sets of trial-state arrays, used in turn: an assembly writes into the set that
+        # is not its converged input (a trial state lives until the next assembly, or
+        # becomes the converged state of the next increment). Saves the allocation and
+        # zeroing of the state arrays at every assembly; _run copies the state it returns.
+        self.buffers = (solid.state_buffer(), solid.state_buffer())
         self.timings: dict[str, list[float]] = {
             "assembly": [], "factorization": [], "solve": [], "line_search": []}
         self.factorized = False
@@ -604,9 +638,13 @@ class _Newton:
                   dp: NDArray[np.float64] | None = None, tangent: bool = True,
                   ) -> Assembly | str:
         start = time.perf_counter()
+        buffer = self.buffers[0]
+        if np.may_share_memory(buffer.stress, state.stress):
+            buffer = self.buffers[1]
         try:
             out = self.solid.assemble(u.reshape(-1, 3), state, self.pattern, tangent=tangent,
-                                      values=self.values if tangent else None, dp=dp)
+                                      values=self.values if tangent else None, dp=dp,
+                                      out=buffer)
         except ElementError as error:
             return str(error)
         self.timings["assembly" if tangent else "line_search"].append(

@@ -22,6 +22,7 @@
 module ddpy_hex8
   use ddpy_kinds, only: wp
   use ddpy_material, only: material_update, material_prop_count
+  use ddpy_element_products, only: lower_product
   use ddpy_log_strain, only: hencky_type, hencky_evaluate, hencky_first, hencky_second, &
                              hencky_stretch, tensor_from_stress, stress_from_tensor
   implicit none
@@ -149,14 +150,15 @@ contains
     integer, intent(out) :: status
     type(hencky_type) :: hk(8)
     ! bt(:, :, p) = b^T, the derivative of E_GL (Voigt) by the 24 dofs, stored by dof so that
-    ! the products over the dofs are contiguous and vectorize; lk and rk hold the 8 x 8
-    ! columns of the rank-64 tangent k = lk rk^T (lower triangle).
+    ! the products over the dofs are contiguous and vectorize; with rk, the 6 x 8 columns
+    ! of the tangent k = bt rk^T + bbar_tr dv_sum^T (lower triangle).
     real(wp) :: g(8, 3, 8), w0(8), bt(24, 6, 8), btr(24, 8), lnj(8), pm(6, 6, 8), tg(6, 8), &
-                trt(8), dg(6, 6, 8), rp(6, 6, 8), fgs(3, 3, 8), lk(24, 64), rk(24, 64)
+                trt(8), dg(6, 6, 8), rp(6, 6, 8), fgs(3, 3, 8), rk(24, 6, 8), dv_sum(24)
     real(wp) :: fg(3, 3), vj, vol, mean_lnj, bbar_tr(24), kg(8, 8), n8(8), dn8(8, 3), &
                 rot(6, 6), de(6), s_mat(6), d_mat(6, 6), a_hat(6), mmat(6, 6), dm(6), &
-                u(3, 3), u_inv(3, 3), ct, dmm, s6(6), s3(3, 3), gs(3), dr(6, 6)
-    integer :: p, a, c, i, j, col, mstatus, r0
+                u(3, 3), u_inv(3, 3), ct, dmm, s6(6), s3(3, 3), gs8(8, 3), dr(6, 6), &
+                dtr(24), dv(24)
+    integer :: p, a, c, i, j, col, mstatus
     logical :: plastic
 
     f = 0.0_wp
@@ -259,12 +261,13 @@ contains
     ! a_p moving the pressure to the element average, by the chain rule
     ! A : d2 dE = b^T L(A) b + (P^T A) : d2 E_GL (the last the familiar g S g^T). So
     ! K_p = b^T (W0 P^T D P + L(A)) b + W0/3 (v dtr^T + dtr v^T) + W0 m^T D m/9 dtr dtr^T,
-    ! v = b^T P^T D m, dtr = bbar_tr - btr: eight columns of lk and rk per Gauss point,
-    ! (b^T, v, dtr) and (b^T M, dtr, v + W0 m^T D m/9 dtr), and one product at the end.
+    ! v = b^T P^T D m, dtr = bbar_tr - btr. With dv = v/3 + W0 m^T D m/9 dtr and
+    ! btr = b^T P^T m, K_p = b^T R_p^T + bbar_tr dv^T, R_p^T = M b + (D m/3) dtr^T - P^T m dv^T:
+    ! six columns of rk per Gauss point, and one product of rank 49 at the end.
     ct = dot_product(w0, trt)/3.0_wp
     kg = 0.0_wp
+    dv_sum = 0.0_wp
     do p = 1, 8
-      r0 = 8*(p - 1)
       a_hat = w0(p)*tg(:, p) + (w0(p)/vol*ct - w0(p)*trt(p)/3.0_wp)*identity_voigt
       ! With R = rot P (material axes): P^T D_global P = R^T D R, and D_global m = rot^T D m
       ! since the identity strain m is the same in every axes.
@@ -275,31 +278,32 @@ contains
           mmat(i, j) = mmat(i, j) + w0(p)*dot_product(rp(:, i, p), dr(:, j))
         end do
       end do
-      lk(:, r0 + 1:r0 + 6) = bt(:, :, p)
-      do i = 1, 6
-        rk(:, r0 + i) = by_dofs(bt(:, :, p), mmat(i, :))
-      end do
       s6 = dg(:, 1, p) + dg(:, 2, p) + dg(:, 3, p)
       do c = 1, 6
-        dm(c) = w0(p)*dot_product(rp(:, c, p), s6)
+        dm(c) = w0(p)*dot_product(rp(:, c, p), s6)/3.0_wp
       end do
       dmm = w0(p)*sum(dg(1:3, 1:3, p))/9.0_wp
-      lk(:, r0 + 7) = by_dofs(bt(:, :, p), dm)/3.0_wp
-      lk(:, r0 + 8) = bbar_tr - btr(:, p)
-      rk(:, r0 + 7) = lk(:, r0 + 8)
-      rk(:, r0 + 8) = lk(:, r0 + 7) + dmm*lk(:, r0 + 8)
+      dtr = bbar_tr - btr(:, p)
+      dv = by_dofs(bt(:, :, p), dm) + dmm*dtr
+      dv_sum = dv_sum + dv
+      s6 = pm(1, :, p) + pm(2, :, p) + pm(3, :, p)
+      do i = 1, 6
+        rk(:, i, p) = by_dofs(bt(:, :, p), mmat(i, :)) + dm(i)*dtr - s6(i)*dv
+      end do
       do c = 1, 6
         s6(c) = dot_product(a_hat, pm(:, c, p))
       end do
+      ! kg += g S g^T, by whole columns of 8.
       s3 = tensor_from_stress(s6)
+      do j = 1, 3
+        gs8(:, j) = g(:, 1, p)*s3(1, j) + g(:, 2, p)*s3(2, j) + g(:, 3, p)*s3(3, j)
+      end do
       do j = 1, 8
-        gs = matmul(s3, g(j, :, p))
-        do i = j, 8
-          kg(i, j) = kg(i, j) + g(i, 1, p)*gs(1) + g(i, 2, p)*gs(2) + g(i, 3, p)*gs(3)
-        end do
+        kg(:, j) = kg(:, j) + gs8(:, 1)*g(j, 1, p) + gs8(:, 2)*g(j, 2, p) &
+                   + gs8(:, 3)*g(j, 3, p)
       end do
     end do
-    call lower_product(lk, rk, k)
+    call lower_product(bt, rk, bbar_tr, dv_sum, k)
     do j = 1, 8
       do i = j, 8
         do c = 1, 3
@@ -317,27 +321,6 @@ contains
     w = bt(:, 1)*v(1) + bt(:, 2)*v(2) + bt(:, 3)*v(3) + bt(:, 4)*v(4) + bt(:, 5)*v(5) &
         + bt(:, 6)*v(6)
   end function by_dofs
-
-  !> The lower triangle of k + l r^T (k, l, r: 24 x 24, 24 x 64, 24 x 64; the strict upper
-  !> triangle gets its entries too and is overwritten by mirror). Two whole columns at a
-  !> time: fixed lengths that the compiler unrolls into twelve vector sums kept in
-  !> registers over the 64 terms (a triangular loop of varying length would not be).
-  pure subroutine lower_product(l, r, k)
-    real(wp), intent(in) :: l(24, 64), r(24, 64)
-    real(wp), intent(inout) :: k(24, 24)
-    real(wp) :: k1(24), k2(24)
-    integer :: j, q
-    do j = 1, 23, 2
-      k1 = 0.0_wp
-      k2 = 0.0_wp
-      do q = 1, 64
-        k1 = k1 + l(:, q)*r(j, q)
-        k2 = k2 + l(:, q)*r(j + 1, q)
-      end do
-      k(:, j) = k(:, j) + k1
-      k(:, j + 1) = k(:, j + 1) + k2
-    end do
-  end subroutine lower_product
 
   !> The product of two 3 x 3 matrices, written out (gfortran calls its library for some
   !> matmul forms, which costs more than the product).

@@ -191,6 +191,15 @@ contains
     end if
     eq = element_equations(conn(:, e), nn, eqn)
     pos = offsets(e)
+    if (all(eq >= 0)) then
+      ! No constrained dof (most elements): whole column pieces, copied as blocks.
+      do j = 1, 24
+        i = merge(j, 1, symmetric)
+        values(pos + 1:pos + 25 - i) = ke(i:24, j)
+        pos = pos + 25 - i
+      end do
+      return
+    end if
     do j = 1, 24
       if (eq(j) < 0) cycle
       do i = merge(j, 1, symmetric), 24

@@ -512,3 +512,35 @@ def test_bad_constraints_and_loads_are_refused() -> None:
         Solid(mesh, ELASTIC, rolling_direction_deg=[0.0, 1.0])
     with pytest.raises(ElementError, match="element 0 is inverted"):
         Solid(mesh, ELASTIC).internal_force(-2.0 * mesh.nodes)
+
+
+def test_assemble_into_state_buffers() -> None:
+    """A trial state written into given arrays (``out``) equals the one in fresh arrays,
+    also when the out arrays held another state before and when the input state is itself
+    such a buffer; out may not share memory with the input state."""
+    mesh = distorted_box(4, 3, 2, 0.2, seed=3, size=(4.0, 3.0, 1.0))
+    solid = Solid(mesh, ddq_props(), rolling_direction_deg=20.0)
+    pattern = solid.pattern(symmetric=True)
+    rng = np.random.default_rng(4)
+    u1 = 0.03 * rng.standard_normal((mesh.n_nodes, 3))
+    u2 = u1 + 0.01 * rng.standard_normal((mesh.n_nodes, 3))
+    fresh1 = solid.assemble(u1, None, pattern)
+    fresh2 = solid.assemble(u2, fresh1.state, pattern, dp=u1)
+    buffers = (solid.state_buffer(), solid.state_buffer())
+    for b in buffers:
+        for array in (b.stress, b.ep, b.strain, b.axes):
+            array[...] = np.nan
+    first = solid.assemble(u1, None, pattern, out=buffers[0])
+    assert np.shares_memory(first.state.stress, buffers[0].stress)
+    assert np.shares_memory(first.state.axes, buffers[0].axes)
+    second = solid.assemble(u2, first.state, pattern, dp=u1, out=buffers[1])
+    for a, b in ((fresh1, first), (fresh2, second)):
+        assert np.array_equal(a.fint, b.fint)
+        assert np.array_equal(a.values, b.values)
+        for name in ("stress", "ep", "strain", "axes"):
+            assert np.array_equal(getattr(a.state, name), getattr(b.state, name))
+    assert np.array_equal(fresh2.kdu, second.kdu)
+    with pytest.raises(ValueError, match="shares memory"):
+        solid.assemble(u2, first.state, pattern, out=buffers[0])
+    with pytest.raises(ValueError, match="not a buffer"):
+        solid.assemble(u2, first.state, pattern, out=solid.initial_state())

@@ -21,7 +21,8 @@
 !> Voigt order 11, 22, 33, 12, 23, 31 with engineering shear strains throughout.
 module ddpy_hex8
   use ddpy_kinds, only: wp
-  use ddpy_material, only: material_update, material_prop_count
+  use ddpy_material, only: material_update_checked, material_check, material_yield_stress, &
+                           material_prop_count
   use ddpy_element_products, only: lower_product
   use ddpy_log_strain, only: hencky_type, hencky_evaluate, hencky_first, hencky_second, &
                              hencky_stretch, tensor_from_stress, stress_from_tensor
@@ -105,22 +106,49 @@ contains
   pure function strain_rotation(axes) result(t)
     real(wp), intent(in) :: axes(3, 3)
     real(wp) :: t(6, 6)
+    call rotation_of_strains(axes, t)
+  end function strain_rotation
+
+  !> strain_rotation as a subroutine for the element loop (no result descriptor), by
+  !> blocks of rows and columns (normal, shear) without branches.
+  pure subroutine rotation_of_strains(axes, t)
+    real(wp), intent(in) :: axes(3, 3)
+    real(wp), intent(out) :: t(6, 6)
     integer :: r, c, i, j, k, l
-    do c = 1, 6
-      k = voigt(1, c)
-      l = voigt(2, c)
-      do r = 1, 6
+    do c = 1, 3
+      do r = 1, 3
+        t(r, c) = axes(c, r)*axes(c, r)
+      end do
+      do r = 4, 6
         i = voigt(1, r)
         j = voigt(2, r)
-        if (c <= 3) then
-          t(r, c) = axes(k, i)*axes(k, j)
-        else
-          t(r, c) = 0.5_wp*(axes(k, i)*axes(l, j) + axes(l, i)*axes(k, j))
-        end if
-        if (r > 3) t(r, c) = 2.0_wp*t(r, c)
+        t(r, c) = 2.0_wp*axes(c, i)*axes(c, j)
       end do
     end do
-  end function strain_rotation
+    do c = 4, 6
+      k = voigt(1, c)
+      l = voigt(2, c)
+      do r = 1, 3
+        t(r, c) = axes(k, r)*axes(l, r)
+      end do
+      do r = 4, 6
+        i = voigt(1, r)
+        j = voigt(2, r)
+        t(r, c) = axes(k, i)*axes(l, j) + axes(l, i)*axes(k, j)
+      end do
+    end do
+  end subroutine rotation_of_strains
+
+  !> The symmetric 3 x 3 tensor of a Voigt stress: tensor_from_stress of ddpy_log_strain,
+  !> here again so that the element loop can inline it (an array result across modules is
+  !> a call with a descriptor).
+  pure function stress_tensor(s) result(t)
+    real(wp), intent(in) :: s(6)
+    real(wp) :: t(3, 3)
+    t(:, 1) = [s(1), s(4), s(6)]
+    t(:, 2) = [s(4), s(2), s(5)]
+    t(:, 3) = [s(6), s(5), s(3)]
+  end function stress_tensor
 
   !> Green-Lagrange strain (Voigt, engineering shears) of a deformation gradient.
   pure function green_lagrange(f) result(e)
@@ -157,7 +185,7 @@ contains
     real(wp) :: fg(3, 3), vj, vol, mean_lnj, bbar_tr(24), kg(8, 8), n8(8), dn8(8, 3), &
                 rot(6, 6), de(6), s_mat(6), d_mat(6, 6), a_hat(6), mmat(6, 6), dm(6), &
                 u(3, 3), u_inv(3, 3), ct, dmm, s6(6), s3(3, 3), gs8(8, 3), dr(6, 6), &
-                dtr(24), dv(24)
+                dtr(24), dv(24), yield_floor
     integer :: p, a, c, i, j, col, mstatus
     logical :: plastic
 
@@ -198,7 +226,7 @@ contains
           bt(col, 6, p) = fg(c, 3)*g(a, 1, p) + fg(c, 1)*g(a, 3, p)
         end do
       end do
-      pm(:, :, p) = hencky_first(hk(p))
+      call hencky_first(hk(p), pm(:, :, p))
       s6 = pm(1, :, p) + pm(2, :, p) + pm(3, :, p)
       btr(:, p) = by_dofs(bt(:, :, p), s6)
     end do
@@ -217,13 +245,18 @@ contains
 
     ! Pass 2: mean-dilatation strain, material update in the axes of xn, force
     ! f = sum W0 Bbar^T T with Bbar = P b + m (bbar_tr - btr)^T/3, and the state rotated to
-    ! the end of the increment.
+    ! the end of the increment. The properties are checked once for the 8 points.
+    if (material_check(props) /= 0) then
+      status = hex8_material_failed
+      return
+    end if
+    yield_floor = material_yield_stress(props, 0.0_wp)
     do p = 1, 8
       de = hk(p)%strain + (mean_lnj - lnj(p))/3.0_wp*identity_voigt
-      rot = strain_rotation(axes_old(:, :, p))
+      call rotation_of_strains(axes_old(:, :, p), rot)
       de = matmul(rot, de)
-      call material_update(props, stress_old(:, p), ep_old(p), de, s_mat, ep(p), d_mat, &
-                           plastic, mstatus)
+      call material_update_checked(props, yield_floor, stress_old(:, p), ep_old(p), de, &
+                                   s_mat, ep(p), d_mat, plastic, mstatus)
       if (mstatus > 0) then
         status = hex8_material_failed
         return
@@ -245,14 +278,15 @@ contains
       ! rotated Kirchhoff stress dU S dU, S = P^T T relative to xn per unit initial volume.
       call hencky_stretch(hk(p), u, u_inv)
       axes(:, :, p) = product3(product3(fgs(:, :, p), u_inv), axes_old(:, :, p))
-      u = product3(u, product3(tensor_from_stress(s6), u))
+      u = product3(u, product3(stress_tensor(s6), u))
       s3 = product3(u, axes_old(:, :, p))
       do j = 1, 3
         do i = 1, 3
           u(i, j) = dot_product(axes_old(:, i, p), s3(:, j))
         end do
       end do
-      stress(:, p) = stress_from_tensor(u)
+      stress(:, p) = [u(1, 1), u(2, 2), u(3, 3), 0.5_wp*(u(1, 2) + u(2, 1)), &
+                      0.5_wp*(u(2, 3) + u(3, 2)), 0.5_wp*(u(3, 1) + u(1, 3))]
     end do
     if (.not. want_tangent) return
 
@@ -272,7 +306,7 @@ contains
       ! With R = rot P (material axes): P^T D_global P = R^T D R, and D_global m = rot^T D m
       ! since the identity strain m is the same in every axes.
       dr = matmul(dg(:, :, p), rp(:, :, p))
-      mmat = hencky_second(hk(p), a_hat)
+      call hencky_second(hk(p), a_hat, mmat)
       do j = 1, 6
         do i = 1, 6
           mmat(i, j) = mmat(i, j) + w0(p)*dot_product(rp(:, i, p), dr(:, j))
@@ -294,7 +328,7 @@ contains
         s6(c) = dot_product(a_hat, pm(:, c, p))
       end do
       ! kg += g S g^T, by whole columns of 8.
-      s3 = tensor_from_stress(s6)
+      s3 = stress_tensor(s6)
       do j = 1, 3
         gs8(:, j) = g(:, 1, p)*s3(1, j) + g(:, 2, p)*s3(2, j) + g(:, 3, p)*s3(3, j)
       end do

@@ -344,9 +344,11 @@ contains
   !> p(:, c) = d E_Hencky / d E_GL(c) (Voigt, engineering shears on both sides).
   !> By Daleckii-Krein, p(r, c) = sum_ij first(i, j) y_ij(r) d_c y_ij(c) with y_ij the dyads:
   !> six symmetric rank-one terms (the pairs i /= j twice), then column c scaled by d_c.
-  pure function hencky_first(h) result(p)
+  !> A subroutine rather than a function: an array function result is passed with a
+  !> descriptor, and the copies through it do not vectorize.
+  pure subroutine hencky_first(h, p)
     type(hencky_type), intent(in) :: h
-    real(wp) :: p(6, 6)
+    real(wp), intent(out) :: p(6, 6)
     real(wp) :: phi(6), yp(6, 6), acc(6, 6)
     integer :: q, r, c
     integer, parameter :: pairs(2, 6) = reshape([1, 1, 2, 2, 3, 3, 1, 2, 2, 3, 3, 1], [2, 6])
@@ -367,19 +369,22 @@ contains
     end do
     p(:, 1:3) = 2.0_wp*acc(:, 1:3)
     p(:, 4:6) = acc(:, 4:6)
-  end function hencky_first
+  end subroutine hencky_first
 
   !> l(c, d) = a : d2 E_Hencky / (d E_GL(c) d E_GL(d)) for a stress-like a (Voigt).
-  pure function hencky_second(h, a) result(l)
+  !> A subroutine, as hencky_first.
+  pure subroutine hencky_second(h, a, l)
     type(hencky_type), intent(in) :: h
     real(wp), intent(in) :: a(6)
-    real(wp) :: l(6, 6)
+    real(wp), intent(out) :: l(6, 6)
     ! Summed in a local array: into the result, which the compiler must assume may alias
     ! h, the loops do not vectorize.
     real(wp) :: ae(3, 3), s3(3, 3), wk(3, 3), y(3, 6), acc(6, 6)
     integer :: i, j, k, d
     ! a in the eigenbasis, V^T a V.
-    s3 = tensor_from_stress(a)
+    s3(:, 1) = [a(1), a(4), a(6)]
+    s3(:, 2) = [a(4), a(2), a(5)]
+    s3(:, 3) = [a(6), a(5), a(3)]
     do j = 1, 3
       do i = 1, 3
         wk(i, j) = s3(i, 1)*h%vectors(1, j) + s3(i, 2)*h%vectors(2, j) &
@@ -413,7 +418,7 @@ contains
       end do
     end do
     l = 2.0_wp*acc
-  end function hencky_second
+  end subroutine hencky_second
 
   !> Right stretch U = C^(1/2) and its inverse.
   pure subroutine hencky_stretch(h, u, u_inverse)

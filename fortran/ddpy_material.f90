@@ -13,8 +13,9 @@ module ddpy_material
   use ddpy_kinds, only: wp
   implicit none
   private
-  public :: material_update, material_hardening, material_yield_stress, material_check, &
-            hill48_from_r_values, hill48_is_convex, hill48_equivalent_stress
+  public :: material_update, material_update_checked, material_hardening, &
+            material_yield_stress, material_check, hill48_from_r_values, hill48_is_convex, &
+            hill48_equivalent_stress
 
   !> Length of the property vector:
   !> (1) E, (2) nu, (3) F, (4) G, (5) H, (6) L, (7) M, (8) N, (9) hardening law
@@ -52,6 +53,31 @@ contains
     real(wp), intent(out) :: stress(6), ep, tangent(6, 6)
     logical, intent(out) :: plastic
     integer, intent(out) :: status
+    if (material_check(props) /= 0) then
+      plastic = .false.
+      stress = stress_old
+      ep = ep_old
+      tangent = 0.0_wp
+      status = material_bad_props
+      return
+    end if
+    call material_update_checked(props, material_yield_stress(props, 0.0_wp), stress_old, &
+                                 ep_old, strain_increment, stress, ep, tangent, plastic, status)
+  end subroutine material_update
+
+  !> material_update for properties that passed material_check, with yield_floor =
+  !> material_yield_stress(props, 0), the smallest yield stress (both laws are
+  !> non-decreasing for valid properties): for the many points of an element assembly,
+  !> which check the properties once, and whose trial stress below the floor is elastic
+  !> without evaluating the hardening law (a pow for Swift).
+  pure subroutine material_update_checked(props, yield_floor, stress_old, ep_old, &
+                                          strain_increment, stress, ep, tangent, plastic, &
+                                          status)
+    real(wp), intent(in) :: props(material_prop_count), yield_floor, stress_old(6), ep_old, &
+                            strain_increment(6)
+    real(wp), intent(out) :: stress(6), ep, tangent(6, 6)
+    logical, intent(out) :: plastic
+    integer, intent(out) :: status
     real(wp) :: shear, bulk, modes(6, 5), q(5), c(5), mu(5), a(5), w(5), trial(6)
     real(wp) :: pressure, sigma_trial, y_old, h, x, x_lo, x_hi, x_new, sigma, dsigma, y
     real(wp) :: g, dg, dlambda, hdl, xi_n(6), beta
@@ -61,11 +87,6 @@ contains
     plastic = .false.
     stress = stress_old
     ep = ep_old
-    tangent = 0.0_wp
-    if (material_check(props) /= 0) then
-      status = material_bad_props
-      return
-    end if
     call elastic_moduli(props, shear, bulk)
     tangent = elastic_tangent(shear, bulk)
     if (.not. (all(ieee_is_finite(stress_old)) .and. all(ieee_is_finite(strain_increment)) &
@@ -81,6 +102,11 @@ contains
 
     trial = stress_old + matmul(tangent, strain_increment)
     sigma_trial = hill48_equivalent_stress(props(3:8), trial)
+    ! Y(ep_old) >= yield_floor: below the floor the test below is passed whatever Y is.
+    if (sigma_trial <= yield_floor*(1.0_wp + yield_tol)) then
+      stress = trial
+      return
+    end if
     call material_hardening(props, ep_old, y_old, h)
     if (sigma_trial <= y_old*(1.0_wp + yield_tol)) then
       stress = trial
@@ -173,7 +199,7 @@ contains
       dgg = (hh*dep*sig - yy*dsig)/(sig*sig)
     end subroutine state_at
 
-  end subroutine material_update
+  end subroutine material_update_checked
 
   !> Yield stress Y(ep) and hardening slope dY/dep of the law in props(9:12).
   pure subroutine material_hardening(props, ep, y, slope)

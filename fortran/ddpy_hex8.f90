@@ -23,7 +23,7 @@ module ddpy_hex8
   use ddpy_kinds, only: wp
   use ddpy_material, only: material_update_checked, material_check, material_yield_stress, &
                            material_prop_count
-  use ddpy_element_products, only: lower_product
+  use ddpy_element_products, only: lower_product, add_congruence, add_congruence_t
   use ddpy_log_strain, only: hencky_type, hencky_evaluate, hencky_first, hencky_second, &
                              hencky_stretch, tensor_from_stress, stress_from_tensor
   implicit none
@@ -184,13 +184,12 @@ contains
                 trt(8), dg(6, 6, 8), rp(6, 6, 8), fgs(3, 3, 8), rk(24, 6, 8), dv_sum(24)
     real(wp) :: fg(3, 3), vj, vol, mean_lnj, bbar_tr(24), kg(8, 8), n8(8), dn8(8, 3), &
                 rot(6, 6), de(6), s_mat(6), d_mat(6, 6), a_hat(6), mmat(6, 6), dm(6), &
-                u(3, 3), u_inv(3, 3), ct, dmm, s6(6), s3(3, 3), gs8(8, 3), dr(6, 6), &
+                u(3, 3), u_inv(3, 3), ct, dmm, s6(6), s3(3, 3), &
                 dtr(24), dv(24), yield_floor
     integer :: p, a, c, i, j, col, mstatus
     logical :: plastic
 
     f = 0.0_wp
-    k = 0.0_wp
     stress = stress_old
     ep = ep_old
     strain = strain_old
@@ -205,11 +204,13 @@ contains
       call reference_gradients(xn, gauss*corner(:, p), g(:, :, p), vj)
       if (w0(p) <= 0.0_wp .or. vj <= 0.0_wp) then
         status = hex8_inverted
+        k = 0.0_wp
         return
       end if
       fg = relative_gradient(du, g(:, :, p))
       if (det3(fg) <= 0.0_wp) then
         status = hex8_inverted
+        k = 0.0_wp
         return
       end if
       fgs(:, :, p) = fg
@@ -248,6 +249,7 @@ contains
     ! the end of the increment. The properties are checked once for the 8 points.
     if (material_check(props) /= 0) then
       status = hex8_material_failed
+      k = 0.0_wp
       return
     end if
     yield_floor = material_yield_stress(props, 0.0_wp)
@@ -259,6 +261,7 @@ contains
                                    s_mat, ep(p), d_mat, plastic, mstatus)
       if (mstatus > 0) then
         status = hex8_material_failed
+        k = 0.0_wp
         return
       end if
       strain(:, p) = strain_old(:, p) + de
@@ -288,7 +291,10 @@ contains
       stress(:, p) = [u(1, 1), u(2, 2), u(3, 3), 0.5_wp*(u(1, 2) + u(2, 1)), &
                       0.5_wp*(u(2, 3) + u(3, 2)), 0.5_wp*(u(3, 1) + u(1, 3))]
     end do
-    if (.not. want_tangent) return
+    if (.not. want_tangent) then
+      k = 0.0_wp
+      return
+    end if
 
     ! Pass 3, the tangent. Material part W0 Bbar^T D Bbar expanded in b and the rank-one
     ! mean-dilatation terms; geometric part sum_p A_p : d2 dE_p with A_p = W0 T_p + a_p I,
@@ -305,13 +311,8 @@ contains
       a_hat = w0(p)*tg(:, p) + (w0(p)/vol*ct - w0(p)*trt(p)/3.0_wp)*identity_voigt
       ! With R = rot P (material axes): P^T D_global P = R^T D R, and D_global m = rot^T D m
       ! since the identity strain m is the same in every axes.
-      dr = matmul(dg(:, :, p), rp(:, :, p))
       call hencky_second(hk(p), a_hat, mmat)
-      do j = 1, 6
-        do i = 1, 6
-          mmat(i, j) = mmat(i, j) + w0(p)*dot_product(rp(:, i, p), dr(:, j))
-        end do
-      end do
+      call add_congruence(w0(p), rp(:, :, p), dg(:, :, p), mmat)
       s6 = dg(:, 1, p) + dg(:, 2, p) + dg(:, 3, p)
       do c = 1, 6
         dm(c) = w0(p)*dot_product(rp(:, c, p), s6)/3.0_wp
@@ -327,15 +328,7 @@ contains
       do c = 1, 6
         s6(c) = dot_product(a_hat, pm(:, c, p))
       end do
-      ! kg += g S g^T, by whole columns of 8.
-      s3 = stress_tensor(s6)
-      do j = 1, 3
-        gs8(:, j) = g(:, 1, p)*s3(1, j) + g(:, 2, p)*s3(2, j) + g(:, 3, p)*s3(3, j)
-      end do
-      do j = 1, 8
-        kg(:, j) = kg(:, j) + gs8(:, 1)*g(j, 1, p) + gs8(:, 2)*g(j, 2, p) &
-                   + gs8(:, 3)*g(j, 3, p)
-      end do
+      call add_congruence_t(g(:, :, p), stress_tensor(s6), kg)
     end do
     call lower_product(bt, rk, bbar_tr, dv_sum, k)
     do j = 1, 8

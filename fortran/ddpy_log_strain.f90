@@ -101,7 +101,6 @@ contains
   pure subroutine symmetric_eigen(a, values, vectors)
     real(wp), intent(in) :: a(3, 3)
     real(wp), intent(out) :: values(3), vectors(3, 3)
-    real(wp), parameter :: third_turn = 2.09439510239319549230842892218633_wp
     real(wp) :: b(3, 3), scale, q, p1, p2, p, r, phi, l(3), v(3), w(3), best(3), size, size2
     integer :: i, j
     b = 0.5_wp*(a + transpose(a))
@@ -127,7 +126,8 @@ contains
                   - b(1, 2)*(b(2, 1)*b(3, 3) - b(2, 3)*b(3, 1)) &
                   + b(1, 3)*(b(2, 1)*b(3, 2) - b(2, 2)*b(3, 1)))/p**3
       phi = acos(max(-1.0_wp, min(1.0_wp, r)))/3.0_wp
-      l = [2.0_wp*p*cos(phi), 0.0_wp, 2.0_wp*p*cos(phi + third_turn)]
+      ! cos(phi + 2 pi/3) from cos and sin of phi: one sincos instead of two cos.
+      l = [2.0_wp*p*cos(phi), 0.0_wp, -p*(cos(phi) + sqrt(3.0_wp)*sin(phi))]
       l(2) = -l(1) - l(3)
       if (min(l(1) - l(2), l(2) - l(3)) > 1.0e-4_wp) then
         ! Eigenvectors of the outer eigenvalues: the largest cross product of two rows of
@@ -270,10 +270,13 @@ contains
   pure subroutine hencky_evaluate(e_gl, h)
     real(wp), intent(in) :: e_gl(6)
     type(hencky_type), intent(out) :: h
-    real(wp) :: values(3), vectors(3, 3), lam(3), t, table(3, 3, 3)
+    real(wp) :: values(3), vectors(3, 3), lam(3), t, table(3, 3, 3), s3(3, 3)
     integer :: i, j, k, a, b, c, q, order(3)
     integer, parameter :: pairs(2, 6) = reshape([1, 1, 2, 2, 3, 3, 1, 2, 2, 3, 3, 1], [2, 6])
-    call symmetric_eigen(tensor_from_strain(e_gl), values, vectors)
+    s3(:, 1) = [e_gl(1), 0.5_wp*e_gl(4), 0.5_wp*e_gl(6)]
+    s3(:, 2) = [0.5_wp*e_gl(4), e_gl(2), 0.5_wp*e_gl(5)]
+    s3(:, 3) = [0.5_wp*e_gl(6), 0.5_wp*e_gl(5), e_gl(3)]
+    call symmetric_eigen(s3, values, vectors)
     order = [minloc(values, 1), 0, maxloc(values, 1)]
     if (order(1) == order(3)) order(3) = merge(2, 1, order(1) == 1)
     order(2) = 6 - order(1) - order(3)

@@ -368,7 +368,7 @@ class RminLimits:
     rotation increment at a Gauss point, degrees; ``contact``: limit the increment at the first
     touch of a free node and the release of a node in contact."""
 
-    yield_tolerance: float = 0.01
+    yield_tolerance: float = 0.1
     strain: float = 0.02
     rotation: float = 1.0
     contact: bool = True

@@ -51,7 +51,8 @@ def _module(name: str) -> Any:
 def run_test_case(root: Path) -> dict[str, Any]:
     """Write the test case under ``root``, run it, return its numbers and force curve."""
     make_case, bench = _module("make_case"), _module("run")
-    make_case.build_tools(root / "tools")
+    if not (root / "tools" / "die.nagata.tool").exists():
+        make_case.build_tools(root / "tools")
     make_case.coarse_mesh(root / "meshes" / "test.msh", **TEST_MESH)
     folder = make_case.write_case(root / "cases" / "test" / MODEL, MODEL, "test",
                                   **TEST_SETTINGS)
@@ -63,8 +64,45 @@ def run_test_case(root: Path) -> dict[str, Any]:
 
 
 @pytest.fixture(scope="module")
-def result(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
-    return run_test_case(tmp_path_factory.mktemp("bending"))
+def root(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A folder with the benchmark's tool files built from its CAD model."""
+    folder = tmp_path_factory.mktemp("bending")
+    _module("make_case").build_tools(folder / "tools")
+    return folder
+
+
+@pytest.fixture(scope="module")
+def result(root: Path) -> dict[str, Any]:
+    return run_test_case(root)
+
+
+def _numbers(text: str) -> list[float]:
+    """The numbers of a tool file, comments left out."""
+    out = []
+    for word in (w for line in text.splitlines() if not line.startswith("#")
+                 for w in line.split()):
+        try:
+            out.append(float(word))
+        except ValueError:
+            pass
+    return out
+
+
+def test_built_in_case_is_the_benchmark_coarse_nagata_case(root: Path) -> None:
+    # `ddpy run` with no case runs ddpy/cases/cylindrical_bending: it must be what
+    # make_case.py --default-case writes from the CAD model (decks and mesh to the byte,
+    # tool files to 1e-9 mm, as gmsh's last digits may differ between machines).
+    built = _module("make_case").write_default_case(root / "default", tools=root / "tools")
+    shipped = Path(__file__).resolve().parents[1] / "ddpy" / "cases" / "cylindrical_bending"
+    names = sorted(p.relative_to(built).as_posix() for p in built.rglob("*") if p.is_file())
+    assert names == sorted(p.relative_to(shipped).as_posix() for p in shipped.rglob("*")
+                           if p.is_file())
+    for name in names:
+        a, b = (built / name).read_text(), (shipped / name).read_text()
+        if name.endswith(".tool"):
+            assert np.allclose(_numbers(a), _numbers(b), rtol=0.0, atol=1e-9), name
+        else:
+            assert a == b, name
 
 
 @pytest.fixture(scope="module")

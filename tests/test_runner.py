@@ -191,13 +191,11 @@ def test_ctrl_c_stops_cleanly_and_keeps_the_results(slow_case: tuple[Path, Path]
     assert stdout.count("\nincrement ") >= 10
 
 
-def test_default_case_is_packaged_and_equals_the_example(tmp_path: Path) -> None:
-    example = ROOT / "examples" / "bending"
-    files = sorted(p.relative_to(example) for p in example.rglob("*") if p.is_file())
-    assert files == sorted(p.relative_to(DEFAULT_CASE) for p in DEFAULT_CASE.rglob("*")
-                           if p.is_file())
-    for name in files:
-        assert (DEFAULT_CASE / name).read_bytes() == (example / name).read_bytes(), name
+def test_default_case_is_packaged(tmp_path: Path) -> None:
+    # Its content is the benchmark's coarse Nagata case: tests/test_cylindrical_bending.py.
+    files = sorted(p.relative_to(DEFAULT_CASE).as_posix() for p in DEFAULT_CASE.rglob("*")
+                   if p.is_file())
+    assert "mesh.msh" in files and "tools/punch.tool" in files
     meson = (ROOT / "meson.build").read_text()
     for name in files:
         assert f"'ddpy/cases/cylindrical_bending/{name}'" in meson, name

@@ -2,6 +2,7 @@
 
     python benchmarks/cylindrical_bending/make_case.py            # both meshes
     python benchmarks/cylindrical_bending/make_case.py --mesh coarse
+    python benchmarks/cylindrical_bending/make_case.py --default-case   # ddpy's built-in case
 
 Writes, next to this script (all generated, git-ignored):
 
@@ -252,12 +253,55 @@ def write_case(folder: Path, model: str, mesh: str, stroke: float = STROKE,
     return folder
 
 
+#: The built-in default case of ``ddpy run``: this benchmark's coarse Nagata case.
+DEFAULT_CASE = HERE.parents[1] / "ddpy" / "cases" / "cylindrical_bending"
+DEFAULT_HEADER = """\
+# The built-in default case of `ddpy run`: the coarse blank and Nagata tools of
+# benchmarks/cylindrical_bending, written by its make_case.py --default-case (do not edit
+# here: tests/test_cylindrical_bending.py checks that the two agree).
+"""
+
+
+def write_default_case(folder: Path = DEFAULT_CASE, tools: Path | None = None) -> Path:
+    """Write the built-in default case into ``folder``: the decks of the coarse Nagata case
+    with the mesh (``mesh.msh``) and the tool files (``tools/punch.tool``, ``tools/die.tool``)
+    beside them, so that the folder stands alone. ``tools``: a folder of tool files already
+    built by ``build_tools`` (default: built here in a temporary folder)."""
+    import shutil
+    import tempfile
+
+    folder.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory() as scratch:
+        if tools is None:
+            tools = Path(scratch) / "tools"
+            build_tools(tools)
+        (folder / "tools").mkdir(exist_ok=True)
+        for tool in ("punch", "die"):
+            shutil.copyfile(tools / f"{tool}.nagata.tool", folder / "tools" / f"{tool}.tool")
+    coarse_mesh(folder / "mesh.msh")
+    write_case(folder, "nagata", "coarse")
+    for name in ("control.dat", "mesh.dat", "tools.dat", "bc.dat", "material.dat"):
+        path = folder / name
+        text = path.read_text()
+        text = text.replace("../../../meshes/coarse.msh", "mesh.msh")
+        for tool in ("punch", "die"):
+            text = text.replace(f"../../../tools/{tool}.nagata.tool", f"tools/{tool}.tool")
+        path.write_text(DEFAULT_HEADER + text)
+    return folder
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--mesh", choices=(*MESHES, "all"), default="all")
     parser.add_argument("--root", type=Path, default=HERE,
                         help="where tools/, meshes/ and cases/ go (default: next to this script)")
+    parser.add_argument("--default-case", type=Path, nargs="?", const=DEFAULT_CASE,
+                        metavar="FOLDER", help="write only the built-in default case of "
+                        "`ddpy run` (default folder: ddpy/cases/cylindrical_bending)")
     args = parser.parse_args(argv)
+    if args.default_case is not None:
+        print(write_default_case(args.default_case))
+        return 0
     root: Path = args.root
     for tool, paths in build_tools(root / "tools").items():
         print(f"{tool}: " + ", ".join(str(p) for p in paths.values()), file=sys.stderr)

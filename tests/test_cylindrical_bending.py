@@ -2,18 +2,20 @@
 
 Builds the benchmark's tools from their CAD model (benchmarks/cylindrical_bending/make_case.py),
 a test-only blank (the benchmark's coarse one with one element across) and the Nagata case with
-a 7 mm stroke (the first of the paper's four) and test-only increment settings; runs it to the
-end (forming, springback) through the case runner; and compares the contact angle theta_1,
-beta_1, beta_2 and the punch force curve with the values stored in
-tests/data/cylindrical_bending_reference.json.
+the full 28.5 mm stroke and test-only increment settings; runs it to the end (forming,
+springback) through the case runner; and compares the contact angles theta_1..4 at 7, 14,
+21 and 28.5 mm, beta_1, beta_2 and the punch force curve with the values stored in
+tests/data/cylindrical_bending_reference.json. It also checks that the built-in case of
+`ddpy run` is the benchmark's coarse Nagata case.
 
 The reference values are not the paper's: they come from a run of this same test set-up
 (``python tests/test_cylindrical_bending.py`` rewrites the file, stating the commit it ran
 on). The test protects against regressions: a change that moves the results beyond the
 tolerances below must explain why and renew the reference. Tolerances: contact angles
-1 degree (one node of this mesh spans about 7 degrees of theta, so a change of the contact
-status of one node shows); beta 0.5 degree; punch force 2 % of its largest value at every
-stroke of the reference curve; increments and iterations 15 %.
+1 degree (one node of this mesh spans 3.7 degrees of theta on the punch, so a change of the
+contact status of one node shows); beta 0.5 degree; punch force 2 % of its largest value,
+within 0.3 mm of stroke of every point of the reference curve (the curve jumps where a
+node column reaches the punch); increments and iterations 30 %.
 """
 
 from __future__ import annotations
@@ -32,11 +34,15 @@ BENCH = Path(__file__).resolve().parents[1] / "benchmarks" / "cylindrical_bendin
 REFERENCE = Path(__file__).resolve().parent / "data" / "cylindrical_bending_reference.json"
 #: The test blank: elements over the bending zone and beyond, across, through the thickness.
 TEST_MESH = {"nx": (24, 6), "ny": 1, "layers": 3}
-#: Test-only settings (the benchmark's: 28.5 mm, 0.114 mm and 0.1): the first of the paper's
-#: four strokes, fewer and longer increments. The full stroke takes about 5 minutes here.
-TEST_SETTINGS = {"stroke": 7.0, "max_increment": 0.5, "rmin_yield": 0.5}
+#: Test-only settings (the benchmark's: 0.114 mm and 0.1): fewer and longer increments; the
+#: run takes about 1.5 minutes here.
+TEST_SETTINGS = {"stroke": 28.5, "max_increment": 0.5, "rmin_yield": 0.5}
 MODEL = "nagata"
-STROKES = np.linspace(0.5, 7.0, 27)  # where the force curve is compared
+STROKES = np.linspace(0.5, 28.5, 113)  # where the force curve is compared
+#: The force curve is compared within this stroke window (mm) around each reference point:
+#: it jumps where a node column reaches the punch or the sheet's end leaves the shoulder,
+#: and a jump that moves by a fraction of an increment must not fail the test.
+WINDOW = 0.3
 
 
 def _module(name: str) -> Any:
@@ -60,6 +66,8 @@ def run_test_case(root: Path) -> dict[str, Any]:
     assert run.status == "completed", run.status
     numbers = bench.summary(MODEL, run)
     numbers["force_N"] = np.interp(STROKES, run.stroke, run.force).round(4).tolist()
+    fine = np.arange(0.0, TEST_SETTINGS["stroke"] + 1e-9, 0.01)
+    numbers["curve"] = (fine, np.interp(fine, run.stroke, run.force))
     return numbers
 
 
@@ -114,15 +122,20 @@ def test_contact_angles_and_springback(result: dict[str, Any], reference: dict[s
                                        ) -> None:
     assert np.allclose(result["theta_deg"], reference["theta_deg"], atol=1.0), \
         (result["theta_deg"], reference["theta_deg"])
-    assert len(result["theta_deg"]) == 1 and result["theta_deg"][0] > 0.0
+    assert len(result["theta_deg"]) == 4 and result["theta_deg"][0] > 0.0
     assert result["beta1_deg"] == pytest.approx(reference["beta1_deg"], abs=0.5)
     assert result["beta2_deg"] == pytest.approx(reference["beta2_deg"], abs=0.5)
 
 
 def test_punch_force_curve(result: dict[str, Any], reference: dict[str, Any]) -> None:
-    force, expected = np.array(result["force_N"]), np.array(reference["force_N"])
-    scale = np.abs(expected).max()
-    assert np.abs(force - expected).max() <= 0.02 * scale, np.abs(force - expected).max()
+    # Every reference point (s, F) has a point of the curve within WINDOW of s and 2 % of
+    # the largest force of F.
+    stroke, force = result["curve"]
+    expected = np.array(reference["force_N"])
+    tolerance = 0.02 * np.abs(expected).max()
+    worst = max(np.abs(force[np.abs(stroke - s) <= WINDOW] - f).min()
+                for s, f in zip(STROKES, expected, strict=True))
+    assert worst <= tolerance, (worst, tolerance)
     assert result["max_force_N"] == pytest.approx(reference["max_force_N"], rel=0.02)
 
 
@@ -139,11 +152,12 @@ if __name__ == "__main__":  # renew the reference
 
     with tempfile.TemporaryDirectory() as tmp:
         numbers = run_test_case(Path(tmp))
+    numbers.pop("curve")
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
                             text=True, cwd=BENCH).stdout.strip()
     numbers["produced_by"] = (
         f"python tests/test_cylindrical_bending.py at commit {commit} (test mesh {TEST_MESH}, "
-        f"{TEST_SETTINGS}, model {MODEL}, strokes of force_N: numpy.linspace(0.5, 7, 27))")
+        f"{TEST_SETTINGS}, model {MODEL}, strokes of force_N: numpy.linspace(0.5, 28.5, 113))")
     REFERENCE.parent.mkdir(parents=True, exist_ok=True)
     REFERENCE.write_text(json.dumps(numbers, indent=1) + "\n")
     print(f"wrote {REFERENCE}", file=sys.stderr)

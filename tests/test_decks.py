@@ -38,7 +38,7 @@ def test_bending_example_model() -> None:
     assert forming.lead == "punch" and forming.travel == pytest.approx(28.5)
     assert forming.max_increment == 0.114 and forming.min_increment == pytest.approx(0.114e-3)
     assert forming.output_at == (7.0, 14.0, 21.0, 28.5) and forming.output_every == 25
-    assert forming.rmin == RminLimits(0.01, 0.02, 1.0, True)
+    assert forming.rmin == RminLimits(0.1, 0.02, 1.0, True)
     assert forming.newton == Newton(1e-4, 1e-4, 25, 0.5)
     np.testing.assert_array_equal(forming.displacement("die"), [0, 0, 0])
     assert springback.is_springback and springback.increments == 1 and springback.tools == ()

@@ -46,23 +46,26 @@ DOCS = ROOT / "docs" / "benchmarks"
 BENDING = ROOT / "benchmarks" / "cylindrical_bending"
 PARTS = ("assembly", "contact", "search", "factorization", "solve", "writing")
 #: What the labels of the present page compare (edit with the labels).
-CHANGES = """The two labels: main at 13394ca, and the branch that (1) assembles the Jacobian
-values in place into two buffers kept by the forming layout (before: a new array of all the
-entries per evaluation, 94 MB on the paper mesh, and a copy of the tangent into it; page
-faults and the copy were the "rest"), (2) offers each candidate patch of the contact search
-once, at its nearest grid point found by squared distances (before: every grid point was
-offered to the sorted candidate list, with gfortran's scaled norm2 each), same candidates,
-and (3) keeps the search's 1-based index arrays (group, grid_start, vertex_patch_start,
-vertex_patches) in ContactSearch instead of making them on every call. Results are bitwise
-the same (the built-in case's displacements, forces and residuals compared over 20
-increments).
+CHANGES = """The labels: main at 13394ca; "after (prof)", the branch that (1) assembles the
+Jacobian values in place into two buffers kept by the forming layout (before: a new array of
+all the entries per evaluation, 94 MB on the paper mesh, and a copy of the tangent into it;
+page faults and the copy were the "rest"), (2) offers each candidate patch of the contact
+search once, at its nearest grid point found by squared distances (before: every grid point
+was offered to the sorted candidate list, with gfortran's scaled norm2 each), same
+candidates, and (3) keeps the search's 1-based index arrays in ContactSearch instead of
+making them on every call (results bitwise the same); "multipliers first", main at 4dcfc4f:
+the element kernel reworked (docs/building.md) and the contact multipliers eliminated
+before the displacements in the nested-dissection pivot order (in a separator they widened
+every front: one factorization of the paper mesh 5.8e10 -> 4.4e10 flops). Its runs also
+carry the session's changes of the contact law's default augmentation and of the increment
+control, so their iteration counts differ; the time per iteration is the comparison.
 
-What dominates now, on the paper mesh, is MUMPS's LU (one per iteration, see the findings):
+What dominates on the paper mesh is still MUMPS's LU (one per iteration, see the findings):
 the 0.45 s per iteration of the target is out of reach while every iteration factorizes
-afresh. Of its unknowns, 3 per slave node and tool are contact forces (about 41,000 of
-123,000 here), most of them of open pairs whose rows only say lambda = 0, yet in the LU;
-leaving open pairs out of the system, or fewer factorizations per increment, are where the
-time is. Outside MUMPS the assembly (Fortran element kernel) leads."""
+afresh, and the iterations per increment (about 15 with Nagata tools on the coarse mesh,
+the paper's DD3IMP 11.5) weigh as much: contact states of a band of nodes grazing the punch
+flip between iterations (docs/benchmarks/cylindrical_bending.md). Outside MUMPS the assembly
+(Fortran element kernel) leads."""
 
 
 def cpu_busy() -> float:

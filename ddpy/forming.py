@@ -162,6 +162,10 @@ class FormingResult:
     #: per tool and increment, the state of every slave: 0 open, 1 stick, 2 slip
     status: dict[str, list[NDArray[np.int32]]] = field(default_factory=dict)
     residuals: list[list[float]] = field(default_factory=list)
+    #: per increment and Newton iteration, what convergence is judged on: the residual norm
+    #: over the force scale and the correction over the increment's displacement (inf
+    #: before the first correction)
+    relative: list[list[tuple[float, float]]] = field(default_factory=list)
     displacements: list[NDArray[np.float64]] = field(default_factory=list)
     cuts: int = 0
     timings: dict[str, float] = field(default_factory=lambda: {
@@ -399,7 +403,7 @@ class FormingProblem:
                                        f"{max_cuts} cuts: {outcome}", result)
                 step, reason = step * cutback, "cut"
                 continue
-            u, state, force, residuals, in_contact, gap = outcome
+            u, state, force, residuals, in_contact, gap, relative = outcome
             strain = _equivalent_strain_increment(state.strain - self.state.strain)
             if strain > 1.05 * limits.strain and step > limits.min_fraction * nominal:
                 step = max(step * limits.strain / strain, limits.min_fraction * nominal)
@@ -433,6 +437,7 @@ class FormingProblem:
             factor = target
             result.factors.append(factor)
             result.residuals.append(residuals)
+            result.relative.append(relative)
             result.displacements.append(u.copy())
             for i, t in enumerate(self.tools):
                 pairs = slice(layout.first[i], layout.first[i + 1])
@@ -558,6 +563,7 @@ class FormingProblem:
                 result.sizes.append(1.0 / increments)
                 result.limited_by.append("springback")
                 result.residuals.append(outcome[3])
+                result.relative.append(outcome[6])
                 result.displacements.append(self.u.copy())
         finally:
             self.external = np.zeros_like(self.u)
@@ -780,6 +786,7 @@ class FormingProblem:
         # Unknowns in mm: displacements, and contact forces over the augmentation.
         weight = np.concatenate([np.ones(layout.nf), np.repeat(1.0 / self.r, 3)])
         residuals: list[float] = []
+        relative: list[tuple[float, float]] = []
         correction = np.inf
         current = self._evaluate(layout, u, force, x_n, positions, on, timings, touching)
         if isinstance(current, str):
@@ -793,8 +800,10 @@ class FormingProblem:
             scale = max(float(np.linalg.norm(force)), float(np.linalg.norm(
                 np.where(self.fixed.ravel(), out.fint.ravel(), 0.0))), floor)
             step = float(np.linalg.norm(u - u_n))
+            relative.append((norm / scale, correction / max(step, 1e-9 * self.size)))
             if norm <= tol_force * scale and correction <= tol_disp * max(step, 1e-9 * self.size):
-                return u, out.state, force, residuals, np.where(on, state, INACTIVE), gap
+                return (u, out.state, force, residuals, np.where(on, state, INACTIVE), gap,
+                        relative)
             if iteration == max_iterations:
                 return f"no convergence in {max_iterations} iterations"
             tick = time.perf_counter()

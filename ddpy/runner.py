@@ -276,20 +276,21 @@ class _Run:
                limit: str, timings: Timings, cuts: int) -> None:
         """Write the last increment of ``result`` as a row of the results."""
         assert self.writer is not None
-        history = np.asarray(result.residuals[-1], dtype=float)
-        relative = history / max(float(history[0]), 1e-300)
+        # The measures convergence is judged on (FormingResult.relative): the residual over
+        # the force scale and the correction over the increment's displacement.
+        history = np.asarray(result.relative[-1], dtype=float).reshape(-1, 2)
         self.writer.increment(
             phase=self.phase_index, step=step, travel=travel,
             tool_displacement=np.array([self.problem.position[k] for k in self.names]),
             tool_force=np.array([result.tool_forces[k][-1] if result.tool_forces.get(k)
                                  else np.zeros(3) for k in self.names]),
-            iterations=len(history) - 1, residual_force=float(relative[-1]),
-            residual_displacement=float("nan"), timings=timings,
+            iterations=len(history) - 1, residual_force=float(history[-1, 0]),
+            residual_displacement=float(history[-1, 1]), timings=timings,
             nodes_in_contact=[result.contacts[k][-1] if result.contacts.get(k) else 0
                               for k in self.names],
             cutbacks=cuts, rmin=min(1.0, step / phase.max_increment) if phase.max_increment
             else 1.0, limit=limit,
-            residual_history=np.column_stack([relative, np.full(len(relative), np.nan)]))
+            residual_history=history)
         self.phase_increments += 1
         self._since_checkpoint += 1
         if self.progress is not None:
@@ -388,7 +389,8 @@ class _Run:
         share = (time.perf_counter() - start) / phase.increments
         t = result.timings
         for k in range(len(result.residuals)):
-            part = FormingResult(residuals=[result.residuals[k]])
+            part = FormingResult(residuals=[result.residuals[k]],
+                                 relative=[result.relative[k]])
             self.record(phase, part, 0.0, 0.0, "max_increment",
                         Timings(t["assembly"] / phase.increments, t["contact"] / phase.increments,
                                 (t["factorization"] + t["solve"]) / phase.increments,

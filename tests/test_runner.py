@@ -94,6 +94,12 @@ def test_run_writes_every_phase_and_the_outputs(reference: tuple[Path, Path]) ->
         assert r.field("plastic_strain").max() > 0.0
         assert np.abs(r.field("contact_force", frame=-1)).max() == 0.0  # tools off
         assert r.iterations()["iteration"].size == r.curve("iterations").sum() + len(phase)
+        # The residuals convergence was judged on, below the deck's tolerances (1e-4 by
+        # default): the force residual over the force scale, the correction over the step.
+        assert np.all(r.curve("residual_force") <= 1e-4)
+        assert np.all(r.curve("residual_displacement") <= 1e-4)
+        first = r.iterations()["iteration"] == 0
+        assert np.all(np.isinf(r.iterations()["residual_displacement"][first]))
 
 
 def test_restart_after_a_stop_ends_as_the_uninterrupted_run(

@@ -98,7 +98,8 @@ def test_run_writes_every_phase_and_the_outputs(reference: tuple[Path, Path]) ->
         # default): the force residual over the force scale, the correction over the step.
         assert np.all(r.curve("residual_force") <= 1e-4)
         assert np.all(r.curve("residual_displacement") <= 1e-4)
-        first = r.iterations()["iteration"] == 0
+        first = r.iterations()["iteration"] == 1  # before the first correction
+        assert first.sum() == len(phase)
         assert np.all(np.isinf(r.iterations()["residual_displacement"][first]))
 
 

@@ -388,9 +388,11 @@ class FormingProblem:
                 positions[name] = positions[other] + offset
             landing = None if (limits.yield_tolerance is None or
                                step <= limits.min_fraction * nominal) else limits.yield_tolerance
+            # Start from the last increment's displacement rate (docs/theory/contact.md).
+            guess = None if last_du is None else self.u + (target - factor) * last_du
             outcome = self._increment(layout, solver, positions, on, tol_force, tol_disp,
                                       max_iterations, result.timings, landing,
-                                      TOUCHING * self.size)
+                                      TOUCHING * self.size, guess)
             if isinstance(outcome, float):  # an elastic point would overshoot the yield stress
                 step = max(step * outcome, limits.min_fraction * nominal)
                 reason = "yield"
@@ -762,12 +764,15 @@ class FormingProblem:
                    positions: Mapping[str, NDArray[np.float64]], on: NDArray[np.bool_],
                    tol_force: float, tol_disp: float, max_iterations: int,
                    timings: dict[str, float], yield_tolerance: float | None = None,
-                   touching: float | None = None):
+                   touching: float | None = None, guess: NDArray[np.float64] | None = None):
         """Newton iterations of one increment; the new state, or the reason of failure, or
         (with ``yield_tolerance``) the fraction of the increment at which the first elastic
         Gauss point reaches the yield surface, from the strains of the first (elastic
         predictor) iteration, when that fraction is below 1. With ``touching`` (a distance),
-        the first iteration takes pairs within that gap as closed (see ``_contact``).
+        the first iteration takes pairs within that gap as closed (see ``_contact``). With
+        ``guess`` (displacements, the last increment's rate times this one's size) the
+        iterations start there instead of at the converged u_n, unless an element fails
+        there; the converged state does not depend on the start.
 
         The semi-smooth Newton step is globalized by backtracking until Deuflhard's natural
         monotonicity test holds (the simplified correction at the trial point, solved with
@@ -788,7 +793,16 @@ class FormingProblem:
         residuals: list[float] = []
         relative: list[tuple[float, float]] = []
         correction = np.inf
-        current = self._evaluate(layout, u, force, x_n, positions, on, timings, touching)
+        current = None
+        if guess is not None:  # the extrapolated start, unless an element fails there
+            current = self._evaluate(layout, guess, force, x_n, positions, on, timings,
+                                     touching)
+            if isinstance(current, str):
+                current = None
+            else:
+                u = guess.copy()
+        if current is None:
+            current = self._evaluate(layout, u, force, x_n, positions, on, timings, touching)
         if isinstance(current, str):
             return current
         for iteration in range(max_iterations + 1):

@@ -111,7 +111,7 @@ def test_restart_after_a_stop_ends_as_the_uninterrupted_run(
     assert first.status == "stopped" and first.increments == 7
     meta, _ = read_checkpoint(tmp_path / CHECKPOINT)
     assert meta["increments"] == 7 and meta["progress"] is not None
-    second = run_case(loaded, tmp_path, restart=True, max_increments=31, checkpoint_every=4)
+    second = run_case(loaded, tmp_path, restart=True, max_increments=20, checkpoint_every=4)
     assert second.status == "stopped"
     last = run_case(loaded, tmp_path, restart=True)
     assert last.status == "completed"

@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ddpy.material import Material
+from ddpy.mesh import HEX_EDGES, HEX_FACES, boundary_faces, face_area_vectors
 
 if TYPE_CHECKING:
     from ddpy.toolfile import ToolModel
@@ -34,14 +35,6 @@ __all__ = ["AXES", "BlankMaterial", "BoundaryConditions", "Case", "Constraint", 
 #: Axis names and their index.
 AXES = {"x": 0, "y": 1, "z": 2}
 
-#: The six faces of an 8-node hexahedron (bottom 0-1-2-3 counter-clockwise seen from the top
-#: 4-5-6-7), each ordered counter-clockwise seen from outside the element.
-HEX_FACES = np.array([[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6],
-                      [3, 0, 4, 7]])
-#: The edges of each local direction (xi, eta, zeta) of a hexahedron.
-_HEX_EDGES = np.array([[[0, 1], [3, 2], [4, 5], [7, 6]],
-                       [[0, 3], [1, 2], [4, 7], [5, 6]],
-                       [[0, 4], [1, 5], [2, 6], [3, 7]]])
 #: A boundary face belongs to a contact side when its outward normal makes less than
 #: about 45 degrees with the side's direction.
 SIDE_COSINE = 0.7
@@ -106,16 +99,12 @@ class Mesh:
 
     def boundary_faces(self) -> NDArray[np.int32]:
         """Faces (f, 4) that belong to one element only, counter-clockwise seen from outside."""
-        faces = self.elements[:, HEX_FACES].reshape(-1, 4)
-        key = np.sort(faces, axis=1)
-        _, inverse, counts = np.unique(key, axis=0, return_inverse=True, return_counts=True)
-        return faces[counts[inverse.reshape(-1)] == 1].astype(np.int32)
+        return boundary_faces(self.elements)
 
     def face_normals(self, faces: NDArray[np.int32],
                      nodes: NDArray[np.float64] | None = None) -> NDArray[np.float64]:
         """Unit outward normals (f, 3) of quadrilateral faces (cross product of diagonals)."""
-        x = self.nodes if nodes is None else nodes
-        n = np.cross(x[faces[:, 2]] - x[faces[:, 0]], x[faces[:, 3]] - x[faces[:, 1]])
+        n = face_area_vectors(self.nodes if nodes is None else nodes, faces)
         length = np.linalg.norm(n, axis=1, keepdims=True)
         return n / np.where(length > 0, length, 1.0)
 
@@ -160,7 +149,7 @@ def through_thickness_columns(nodes: ArrayLike, elements: ArrayLike, normal: Arr
     if len(e) == 0:
         idx = np.arange(n, dtype=np.int32)
         return idx, idx.copy()
-    edges = e[:, _HEX_EDGES]  # (m, 3, 4, 2)
+    edges = e[:, HEX_EDGES]  # (m, 3, 4, 2)
     vectors = x[edges[..., 1]] - x[edges[..., 0]]  # (m, 3, 4, 3)
     lengths = np.linalg.norm(vectors, axis=-1)
     alignment = np.abs((vectors @ d) / np.where(lengths > 0, lengths, 1.0)).mean(axis=2)

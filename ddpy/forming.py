@@ -23,9 +23,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ddpy._validate import float_array, int_array
-from ddpy.case import HEX_FACES
 from ddpy.contact import INACTIVE, contact_law
 from ddpy.linalg import LinearSolverError, MumpsSolver
+from ddpy.mesh import HEX_EDGES, boundary_faces, face_area_vectors
 from ddpy.ordering import mesh_solver
 from ddpy.search import NONE, ContactSearch
 from ddpy.solid import ElementError, Solid, SolidState, _components
@@ -242,9 +242,12 @@ class FormingProblem:
         self.fixed = np.zeros((n, 3), dtype=bool)
         mesh = solid.mesh
         self.size = (mesh.volume() / mesh.n_elements) ** (1.0 / 3.0)
-        self.r = np.concatenate([
-            np.full(t.slaves.size, t.augmentation or default_augmentation(solid))
-            for t in self.tools])
+        default_r = default_augmentation(solid)
+        self.r = np.concatenate([np.full(t.slaves.size, t.augmentation or default_r)
+                                 for t in self.tools])
+        # Per tool, the blank's boundary faces that face it and the slave index of their
+        # corners (see _facing_normals), made on first use.
+        self._faces: dict[int, tuple[NDArray[np.int32], NDArray[np.int64]]] = {}
         self.mu = np.concatenate([np.full(t.slaves.size, t.friction) for t in self.tools])
         # State carried between increments and phases.
         self.u = np.zeros((n, 3))
@@ -713,22 +716,17 @@ class FormingProblem:
         filter wrong where the sheet has turned by 90 degrees or more, as over a die
         shoulder onto its wall (a slave without such a face keeps ``facing``)."""
         tool = self.tools[i]
-        if not hasattr(self, "_faces"):
-            self._faces: dict[int, tuple[NDArray[np.int64], NDArray[np.int64]]] = {}
         if i not in self._faces:
             mesh = self.solid.mesh
-            faces = mesh.elements[:, HEX_FACES].reshape(-1, 4)
-            _, inverse, counts = np.unique(np.sort(faces, axis=1), axis=0,
-                                           return_inverse=True, return_counts=True)
-            faces = faces[counts[inverse.reshape(-1)] == 1]
-            keep = (_unit(_area_vectors(mesh.nodes, faces)) @ tool.facing) > 0.5
-            faces = faces[keep]
+            faces = boundary_faces(mesh.elements)
+            area = face_area_vectors(mesh.nodes, faces)
+            faces = faces[area @ tool.facing > 0.5 * np.linalg.norm(area, axis=1)]
             # slave index of every face corner (-1: not a slave of this tool)
             where = np.full(mesh.n_nodes, -1, dtype=np.int64)
             where[tool.slaves] = np.arange(tool.slaves.size)
             self._faces[i] = (faces, where[faces])
         faces, corner = self._faces[i]
-        area = _area_vectors(x, faces)
+        area = face_area_vectors(x, faces)
         total = np.zeros((tool.slaves.size, 3))
         ok = corner >= 0
         np.add.at(total, corner[ok], np.repeat(area[:, None, :], 4, axis=1)[ok])
@@ -885,16 +883,6 @@ class FormingProblem:
         self._reset()
 
 
-def _area_vectors(x: NDArray[np.float64], faces: NDArray[np.int64]) -> NDArray[np.float64]:
-    """Outward area vectors (f, 3) of quadrilaterals: half the cross product of diagonals."""
-    return 0.5 * np.cross(x[faces[:, 2]] - x[faces[:, 0]], x[faces[:, 3]] - x[faces[:, 1]])
-
-
-def _unit(v: NDArray[np.float64]) -> NDArray[np.float64]:
-    length = np.linalg.norm(v, axis=-1, keepdims=True)
-    return v / np.where(length > 0.0, length, 1.0)
-
-
 def default_augmentation(solid: Solid) -> float:
     """The augmentation parameter r (N/mm) of the contact law when a tool sets none:
     E t^2 / h, the median over the elements of t, their thinnest mean edge length along
@@ -904,11 +892,9 @@ def default_augmentation(solid: Solid) -> float:
     r changes only how the Newton loop decides between open, stick and slip (p - r g,
     lambda_T - r s): a value far above the blank's stiffness decides on gaps of 1e-3 mm
     and flips contact states from iteration to iteration (docs/theory/contact.md)."""
-    x = solid.mesh.nodes[solid.mesh.elements]  # (m, 8, 3)
-    edges = {0: ((0, 1), (3, 2), (4, 5), (7, 6)), 1: ((0, 3), (1, 2), (4, 7), (5, 6)),
-             2: ((0, 4), (1, 5), (2, 6), (3, 7))}
-    lengths = np.stack([np.mean([np.linalg.norm(x[:, b] - x[:, a], axis=1) for a, b in pairs],
-                                axis=0) for pairs in edges.values()], axis=1)
+    edges = solid.mesh.elements[:, HEX_EDGES]  # (m, 3, 4, 2)
+    x = solid.mesh.nodes
+    lengths = np.linalg.norm(x[edges[..., 1]] - x[edges[..., 0]], axis=-1).mean(axis=2)
     lengths.sort(axis=1)
     ratio = lengths[:, 0] ** 2 / np.sqrt(lengths[:, 1] * lengths[:, 2])
     return float(solid.props[0] * np.median(ratio))

@@ -12,10 +12,35 @@ from numpy.typing import ArrayLike, NDArray
 from ddpy import _core
 from ddpy._validate import float_array, int_array
 
-__all__ = ["HexMesh"]
+__all__ = ["HEX_EDGES", "HEX_FACES", "HexMesh", "boundary_faces", "face_area_vectors"]
 
 #: Relative size below which a Jacobian determinant counts as degenerate.
 DEGENERATE = 1e-10
+#: The six faces of an 8-node hexahedron (bottom 0-1-2-3 counter-clockwise seen from the top
+#: 4-5-6-7), each ordered counter-clockwise seen from outside the element.
+HEX_FACES = np.array([[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6],
+                      [3, 0, 4, 7]])
+#: The four edges of each local direction (xi, eta, zeta) of a hexahedron.
+HEX_EDGES = np.array([[[0, 1], [3, 2], [4, 5], [7, 6]],
+                      [[0, 3], [1, 2], [4, 7], [5, 6]],
+                      [[0, 4], [1, 5], [2, 6], [3, 7]]])
+
+
+def boundary_faces(elements: ArrayLike) -> NDArray[np.int32]:
+    """Faces (f, 4) of hexahedra (m, 8) that belong to one element only, counter-clockwise
+    seen from outside."""
+    faces = np.asarray(elements).reshape(-1, 8)[:, HEX_FACES].reshape(-1, 4)
+    _, inverse, counts = np.unique(np.sort(faces, axis=1), axis=0, return_inverse=True,
+                                   return_counts=True)
+    return faces[counts[inverse.reshape(-1)] == 1].astype(np.int32)
+
+
+def face_area_vectors(nodes: NDArray[np.float64], faces: NDArray[np.integer]
+                      ) -> NDArray[np.float64]:
+    """Outward area vectors (f, 3) of quadrilateral faces: half the cross product of their
+    diagonals."""
+    return 0.5 * np.cross(nodes[faces[:, 2]] - nodes[faces[:, 0]],
+                          nodes[faces[:, 3]] - nodes[faces[:, 1]])
 
 
 class HexMesh:

@@ -194,7 +194,7 @@ def _plastic_strain_map(results: Path, path: Path) -> Path:
     facing the viewer coloured by the equivalent plastic strain of their element."""
     from matplotlib.collections import PolyCollection
 
-    from ddpy.case import HEX_FACES
+    from ddpy.mesh import HEX_FACES
 
     plt = _pyplot()
     with ResultsReader(results) as r:

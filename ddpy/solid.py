@@ -246,15 +246,11 @@ class Solid:
         # than into arrays f2py allocates and zeroes: 28 MB per call on 20,000 elements.
         m = self.mesh.n_elements
         if out is None:
-            out_axes = np.empty((m, 8, 3, 3))
-            out_stress, out_ep, out_strain = (np.empty((m, 8, 6)), np.empty((m, 8)),
-                                              np.empty((m, 8, 6)))
+            out = self.state_buffer()
         else:
-            out_axes = out.axes.transpose(0, 1, 3, 2)
-            out_stress, out_ep, out_strain = out.stress, out.ep, out.strain
-            for name, array, shape in (("stress", out_stress, (m, 8, 6)), ("ep", out_ep, (m, 8)),
-                                       ("strain", out_strain, (m, 8, 6)),
-                                       ("axes", out_axes, (m, 8, 3, 3))):
+            for name, array, shape in (("stress", out.stress, (m, 8, 6)), ("ep", out.ep, (m, 8)),
+                                       ("strain", out.strain, (m, 8, 6)),
+                                       ("axes", out.axes.transpose(0, 1, 3, 2), (m, 8, 3, 3))):
                 if (array.shape != shape or array.dtype != np.float64
                         or not array.flags.c_contiguous):
                     raise ValueError(f"out.{name} is not a buffer of this solid's state")
@@ -265,8 +261,8 @@ class Solid:
             self._x, self._conn, _flat(state.displacement), u.ravel(), self.props,
             _flat(state.axes.transpose(0, 1, 3, 2)), _flat(state.stress), _flat(state.ep),
             _flat(state.strain), pattern.eqn, int(pattern.symmetric), int(tangent),
-            pattern.offsets, values, int(product), dp, out_stress.ravel(), out_ep.ravel(),
-            out_strain.ravel(), out_axes.ravel())
+            pattern.offsets, values, int(product), dp, out.stress.ravel(), out.ep.ravel(),
+            out.strain.ravel(), out.axes.transpose(0, 1, 3, 2).ravel())
         if status:
             raise ElementError(int(status), int(element) - 1)
         trial = SolidState(stress.reshape(m, 8, 6), ep.reshape(m, 8), strain.reshape(m, 8, 6),

@@ -24,7 +24,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ddpy._validate import float_array, int_array
 from ddpy.contact import INACTIVE, contact_law
-from ddpy.linalg import LinearSolverError, MumpsSolver
+from ddpy.linalg import CoordinateMatrix, LinearSolverError, MumpsSolver, gmres
 from ddpy.mesh import HEX_EDGES, boundary_faces, face_area_vectors
 from ddpy.ordering import mesh_solver
 from ddpy.search import NONE, ContactSearch
@@ -40,6 +40,15 @@ BISECT_BELOW = 0.1
 #: Gap (times the element size) within which an unloaded node counts as lying on a tool for
 #: the closed predictor of the first iteration: zero up to the rounding of the positions.
 TOUCHING = 1e-6
+#: Unknowns from which linear_solver "auto" solves with older factors (GMRES) between
+#: factorizations: below, a factorization costs little more than a few solves.
+REUSE_FROM = 20_000
+#: GMRES on the older factors: relative tolerance (of the preconditioned, weighted
+#: residual: the correction's relative error), the iterations before it gives up, and the
+#: most after which the same factors are tried again.
+KRYLOV_TOLERANCE = 1e-8
+KRYLOV_MAX = 15
+KRYLOV_KEEP = 8
 
 
 @dataclass(frozen=True)
@@ -171,12 +180,16 @@ class FormingResult:
     relative: list[list[tuple[float, float]]] = field(default_factory=list)
     displacements: list[NDArray[np.float64]] = field(default_factory=list)
     cuts: int = 0
+    #: LU factorizations, and the GMRES iterations of the Newton corrections solved with an
+    #: older factorization instead (``FormingProblem.linear_solver``)
+    factorizations: int = 0
+    krylov_iterations: int = 0
     timings: dict[str, float] = field(default_factory=lambda: {
         "assembly": 0.0, "contact": 0.0, "factorization": 0.0, "solve": 0.0, "rest": 0.0})
 
     @property
     def iterations(self) -> list[int]:
-        """Newton iterations (factorizations) of every converged increment."""
+        """Newton iterations of every converged increment."""
         return [len(r) - 1 for r in self.residuals]
 
 
@@ -218,6 +231,7 @@ class _Layout:
         # slots in place): a fresh array of this size per evaluation cost more than the
         # contact law. Two, so that a line search can keep one trial while it tries others.
         self.values = (np.empty(self.rows.size), np.empty(self.rows.size))
+        self.matrix: CoordinateMatrix | None = None  # for products, made when first needed
         for values in self.values:
             values[self.k_slots:self.k_slots + self.n_coupling] = -1.0
 
@@ -227,8 +241,15 @@ class FormingProblem:
     nodes at zero (symmetry planes, clamps); ``run`` moves tools through a phase, and
     successive calls continue from where the last one stopped (multi-stage processes)."""
 
-    def __init__(self, solid: Solid, tools: Iterable[RigidTool], ordering: str = "nested"
-                 ) -> None:
+    def __init__(self, solid: Solid, tools: Iterable[RigidTool], ordering: str = "nested",
+                 linear_solver: str = "auto") -> None:
+        if linear_solver not in ("auto", "direct", "reuse"):
+            raise ValueError(f"linear_solver must be 'auto', 'direct' or 'reuse', got "
+                             f"{linear_solver!r}")
+        #: "direct": factorize the Jacobian at every Newton iteration; "reuse": solve with
+        #: the last factorization as the preconditioner of GMRES while it converges fast,
+        #: factorizing again when it does not; "auto": reuse from REUSE_FROM unknowns
+        self.linear_solver = linear_solver
         self.solid = solid
         self.tools = list(tools)
         names = [t.name for t in self.tools]
@@ -260,6 +281,8 @@ class FormingProblem:
         self.external = np.zeros((n, 3))
         self._layout: _Layout | None = None
         self._solver: MumpsSolver | None = None
+        self._factored = False  # the solver holds factors of a Jacobian of this layout
+        self._reuse_next = True  # the last GMRES converged fast: try the factors again
 
     # -- set-up ------------------------------------------------------------------------
 
@@ -282,7 +305,7 @@ class FormingProblem:
     def _reset(self) -> None:
         if self._solver is not None:
             self._solver.close()
-        self._solver, self._layout = None, None
+        self._solver, self._layout, self._factored = None, None, False
 
     def _prepare(self) -> tuple[_Layout, MumpsSolver]:
         if self._layout is None or self._solver is None:
@@ -397,7 +420,7 @@ class FormingProblem:
             # Start from the last increment's displacement rate (docs/theory/contact.md).
             guess = None if last_du is None else self.u + (target - factor) * last_du
             outcome = self._increment(layout, solver, positions, on, tol_force, tol_disp,
-                                      max_iterations, result.timings, landing,
+                                      max_iterations, result, landing,
                                       TOUCHING * self.size, guess)
             if isinstance(outcome, float):  # an elastic point would overshoot the yield stress
                 step = max(step * outcome, limits.min_fraction * nominal)
@@ -563,7 +586,7 @@ class FormingProblem:
             for k in range(1, int(increments) + 1):
                 self.external = loads * (1.0 - k / increments)
                 outcome = self._increment(layout, solver, self.position, off, tol_force,
-                                          tol_disp, max_iterations, result.timings)
+                                          tol_disp, max_iterations, result)
                 if isinstance(outcome, str):
                     raise FormingError(f"springback step {k} failed: {outcome}", result)
                 self.u, self.state = outcome[0], outcome[1]
@@ -769,7 +792,7 @@ class FormingProblem:
     def _increment(self, layout: _Layout, solver: MumpsSolver,
                    positions: Mapping[str, NDArray[np.float64]], on: NDArray[np.bool_],
                    tol_force: float, tol_disp: float, max_iterations: int,
-                   timings: dict[str, float], yield_tolerance: float | None = None,
+                   result: FormingResult, yield_tolerance: float | None = None,
                    touching: float | None = None, guess: NDArray[np.float64] | None = None):
         """Newton iterations of one increment; the new state, or the reason of failure, or
         (with ``yield_tolerance``) the fraction of the increment at which the first elastic
@@ -787,6 +810,7 @@ class FormingProblem:
         would otherwise make it cycle. The norm alone is the wrong measure for a thin sheet
         that bends: a step that bends it right leaves a large membrane residual of second
         order (docs/theory/contact.md)."""
+        timings = result.timings
         solid = self.solid
         u_n = self.u
         x_n = solid.mesh.nodes + u_n
@@ -826,18 +850,12 @@ class FormingProblem:
                         relative)
             if iteration == max_iterations:
                 return f"no convergence in {max_iterations} iterations"
-            tick = time.perf_counter()
-            try:
-                solver.factorize(values)
-            except LinearSolverError as error:
-                return str(error)
-            tock = time.perf_counter()
-            timings["factorization"] += tock - tick
-            delta = solver.solve(-residual)
-            timings["solve"] += time.perf_counter() - tock
+            direction = self._direction(layout, solver, values, residual, weight, result)
+            if isinstance(direction, str):
+                return direction
+            delta, size = direction
             du = delta[:layout.nf]
             dforce = delta[layout.nf:].reshape(-1, 3)
-            size = float(np.linalg.norm(delta * weight))
             alpha, fallback, buffer = 1.0, None, 0  # the factors hold `values` from here
             for _ in range(5):
                 trial_u = u.copy()
@@ -877,6 +895,50 @@ class FormingProblem:
                 if landing < 1.0:
                     return landing
         return "no convergence"
+
+    def _direction(self, layout: _Layout, solver: MumpsSolver, values: NDArray[np.float64],
+                   residual: NDArray[np.float64], weight: NDArray[np.float64],
+                   result: FormingResult) -> tuple[NDArray[np.float64], float] | str:
+        """Newton correction for the Jacobian ``values`` at ``residual``, and its size as the
+        line search measures it: ||W M^-1 r||, W the unknowns' weights and M the factored
+        matrix (= ||W delta|| when the factors are this Jacobian's).
+
+        With factors of an earlier Jacobian at hand, GMRES on W M^-1 J W^-1 (left
+        preconditioned: the norm it minimizes is that of the correction's error, in the
+        weighted unknowns) to KRYLOV_TOLERANCE; each iteration costs a solve and a product,
+        a factorization about 20 solves on the paper's bending blank. It gives up after
+        KRYLOV_MAX iterations, and when it needed more than KRYLOV_KEEP the next iteration
+        factorizes at once (the Jacobian has moved too far)."""
+        timings = result.timings
+        reuse = self.linear_solver == "reuse" or (
+            self.linear_solver == "auto" and layout.n >= REUSE_FROM)
+        if reuse and self._factored and self._reuse_next:
+            tick = time.perf_counter()
+            if layout.matrix is None:
+                layout.matrix = CoordinateMatrix(layout.n, layout.rows, layout.cols)
+            jacobian = layout.matrix.matrix(values)
+            preconditioned = weight * solver.solve(-residual)
+            z, count, converged = gmres(
+                lambda v: weight * solver.solve(jacobian @ (v / weight)), preconditioned,
+                KRYLOV_TOLERANCE, KRYLOV_MAX)
+            timings["solve"] += time.perf_counter() - tick
+            result.krylov_iterations += count
+            self._reuse_next = count <= KRYLOV_KEEP
+            if converged:
+                return z / weight, float(np.linalg.norm(preconditioned))
+        tick = time.perf_counter()
+        try:
+            solver.factorize(values)
+        except LinearSolverError as error:
+            self._factored = False
+            return str(error)
+        tock = time.perf_counter()
+        timings["factorization"] += tock - tick
+        result.factorizations += 1
+        self._factored, self._reuse_next = True, True
+        delta = solver.solve(-residual)
+        timings["solve"] += time.perf_counter() - tock
+        return delta, float(np.linalg.norm(delta * weight))
 
     def close(self) -> None:
         """Free the MUMPS instance."""

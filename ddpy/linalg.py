@@ -2,6 +2,8 @@
 
 The structure is analysed once (``analyse``), then factorized (``factorize``) and solved
 (``solve``) as often as the values change, as the Newton loop of a forming run does.
+``gmres`` and ``CoordinateMatrix`` let a Newton loop solve with an older factorization as
+the preconditioner instead of factorizing again (docs/theory/linear-solver.md).
 """
 
 from __future__ import annotations
@@ -9,12 +11,13 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+import scipy.sparse
 from numpy.typing import ArrayLike, NDArray
 
 from ddpy import _core
 from ddpy._validate import float_array, int_array
 
-__all__ = ["MumpsSolver", "LinearSolverError", "spsolve"]
+__all__ = ["MumpsSolver", "LinearSolverError", "spsolve", "gmres", "CoordinateMatrix"]
 
 _SYMMETRY = {"unsymmetric": 0, "spd": 1, "symmetric": 2}
 _ORDERING = {"amd": 0, "amf": 2, "scotch": 3, "pord": 4, "metis": 5, "qamd": 6, "auto": 7}
@@ -46,12 +49,14 @@ class MumpsSolver:
     ``symmetry`` is "unsymmetric", "symmetric" or "spd" (for the last two give one triangle);
     ``ordering`` a MUMPS ordering name ("metis" by default; MUMPS
     falls back to its own choice when the library lacks it); ``controls`` sets further MUMPS
-    ICNTL entries by their 1-based index, e.g. ``{10: -2}`` for two refinement steps.
+    ICNTL entries by their 1-based index, e.g. ``{10: -2}`` for two refinement steps, and
+    ``real_controls`` CNTL entries, e.g. ``{7: 1e-9}`` for the block low-rank tolerance.
     """
 
     def __init__(
         self, symmetry: str = "unsymmetric", ordering: str = "metis",
         controls: dict[int, int] | None = None,
+        real_controls: dict[int, float] | None = None,
     ) -> None:
         if symmetry not in _SYMMETRY:
             raise ValueError(f"symmetry must be one of {sorted(_SYMMETRY)}, got {symmetry!r}")
@@ -65,6 +70,10 @@ class MumpsSolver:
             if _core.solver_set_control(self._handle, int(position), int(value)) < 0:
                 self.close()
                 raise ValueError(f"MUMPS has no control ICNTL({position})")
+        for position, value in (real_controls or {}).items():
+            if _core.solver_set_real_control(self._handle, int(position), float(value)) < 0:
+                self.close()
+                raise ValueError(f"MUMPS has no control CNTL({position})")
         self.n = 0
         self.nnz = 0
 
@@ -155,3 +164,76 @@ def spsolve(matrix: Any, rhs: ArrayLike) -> NDArray[np.float64]:
         solver.analyse(n, rows, cols)
         solver.factorize(values)
         return solver.solve(rhs)
+
+
+class CoordinateMatrix:
+    """A fixed n x n coordinate structure (duplicates are summed, as MUMPS does) whose
+    values change: ``matrix(values)`` gives the compressed-row matrix of one set of values
+    for products, the structure's sort done once."""
+
+    def __init__(self, n: int, rows: ArrayLike, cols: ArrayLike) -> None:
+        rows = int_array(rows, "rows", (None,)).astype(np.int64)
+        cols = int_array(cols, "cols", (rows.size,)).astype(np.int64)
+        self.n = int(n)
+        key, self._slot = np.unique(rows * self.n + cols, return_inverse=True)
+        self._indices = (key % self.n).astype(np.int32)
+        self._indptr = np.searchsorted(key // self.n, np.arange(self.n + 1)).astype(np.int32)
+        self.size = rows.size
+
+    def matrix(self, values: ArrayLike) -> scipy.sparse.csr_matrix:
+        """The matrix with these entries (in the order of the structure's rows, cols)."""
+        values = float_array(values, "values", (self.size,))
+        data = np.bincount(self._slot, weights=values, minlength=self._indices.size)
+        return scipy.sparse.csr_matrix((data, self._indices, self._indptr),
+                                       shape=(self.n, self.n))
+
+
+def gmres(operator: Any, rhs: ArrayLike, tol: float, max_iterations: int
+          ) -> tuple[NDArray[np.float64], int, bool]:
+    """Solve ``operator(x) = rhs`` by GMRES from x = 0, without restart: the iterate, the
+    number of iterations and whether ||operator(x) - rhs|| <= tol ||rhs|| was reached.
+    ``operator`` is already preconditioned by the caller (e.g. M^-1 A with M^-1 an older
+    factorization), so that the norm minimized is the one that matters to it. Arnoldi with
+    modified Gram-Schmidt run twice (the basis stays orthogonal to rounding when the
+    operator is far from normal) and Givens rotations for the residual norm."""
+    b = float_array(rhs, "rhs", (None,))
+    beta = float(np.linalg.norm(b))
+    if beta == 0.0:
+        return np.zeros_like(b), 0, True
+    m = int(max_iterations)
+    basis = np.zeros((m + 1, b.size))
+    basis[0] = b / beta
+    hessenberg = np.zeros((m + 1, m))
+    cosines, sines = np.zeros(m), np.zeros(m)
+    residual = np.zeros(m + 1)
+    residual[0] = beta
+    k = 0
+    for k in range(1, m + 1):
+        j = k - 1
+        w = np.asarray(operator(basis[j]), dtype=np.float64)
+        for _ in range(2):
+            h = basis[:k] @ w
+            w -= h @ basis[:k]
+            hessenberg[:k, j] += h
+        hessenberg[k, j] = np.linalg.norm(w)
+        breakdown = not hessenberg[k, j] > 1e-14 * np.abs(hessenberg[:k, j]).max(initial=0.0)
+        if not breakdown:  # else the Krylov space is invariant: the solution is in it
+            basis[k] = w / hessenberg[k, j]
+        for i in range(j):  # the earlier rotations on the new column
+            a, c = hessenberg[i, j], hessenberg[i + 1, j]
+            hessenberg[i, j] = cosines[i] * a + sines[i] * c
+            hessenberg[i + 1, j] = -sines[i] * a + cosines[i] * c
+        a, c = hessenberg[j, j], hessenberg[k, j]
+        radius = float(np.hypot(a, c))
+        cosines[j], sines[j] = (a / radius, c / radius) if radius > 0.0 else (1.0, 0.0)
+        hessenberg[j, j], hessenberg[k, j] = radius, 0.0
+        residual[k] = -sines[j] * residual[j]
+        residual[j] = cosines[j] * residual[j]
+        if abs(residual[k]) <= tol * beta or breakdown or radius == 0.0:
+            break
+    r = np.triu(hessenberg[:k, :k])
+    if np.diag(r).min() == 0.0:  # a singular operator on the Krylov space
+        return np.zeros_like(b), k, False
+    y = np.linalg.solve(r, residual[:k])  # triangular and small
+    x = y @ basis[:k]
+    return x, k, bool(abs(residual[k]) <= tol * beta)

@@ -58,6 +58,8 @@ _SCALARS: dict[str, tuple[str, str, str]] = {
     "travel": ("f8", "mm", "travel of the lead tool since the start of the phase"),
     "iterations": ("i4", "1", "Newton iterations of the converged increment"),
     "cutbacks": ("i4", "1", "cuts of the increment before it converged"),
+    "factorizations": ("i4", "1", "LU factorizations in the increment, its rejected trials "
+                       "included (the other corrections are solved with older factors)"),
     "residual_force": ("f8", "1", "relative residual force at convergence"),
     "residual_displacement": ("f8", "1", "relative displacement correction at convergence"),
     "rmin": ("f8", "1", "r_min factor applied to the trial increment"),
@@ -301,7 +303,7 @@ class ResultsWriter:
                   residual_force: float, residual_displacement: float,
                   timings: Timings = Timings(), nodes_in_contact: ArrayLike | None = None,
                   cutbacks: int = 0, rmin: float = 1.0, limit: int | str = 0,
-                  residual_history: ArrayLike | None = None) -> int:
+                  residual_history: ArrayLike | None = None, factorizations: int = 0) -> int:
         """Append one converged increment; return its number (from 1). ``tool_displacement``
         and ``tool_force`` are (tools, 3); ``residual_history`` (iterations, 2) holds the
         force and displacement residuals of each Newton iteration."""
@@ -316,7 +318,8 @@ class ResultsWriter:
         k = self._count
         row = {"increment": k + 1, "phase": int(phase), "step": float(step),
                "travel": float(travel), "iterations": int(iterations),
-               "cutbacks": int(cutbacks), "residual_force": float(residual_force),
+               "cutbacks": int(cutbacks), "factorizations": int(factorizations),
+               "residual_force": float(residual_force),
                "residual_displacement": float(residual_displacement), "rmin": float(rmin),
                "limit": code, "time_assembly": timings.assembly,
                "time_contact": timings.contact, "time_factorization": timings.factorization,

@@ -273,7 +273,7 @@ class _Run:
         self.last_frame = self.writer.increments
 
     def record(self, phase: Phase, result: FormingResult, step: float, travel: float,
-               limit: str, timings: Timings, cuts: int) -> None:
+               limit: str, timings: Timings, cuts: int, factorizations: int) -> None:
         """Write the last increment of ``result`` as a row of the results."""
         assert self.writer is not None
         # The measures convergence is judged on (FormingResult.relative): the residual over
@@ -290,7 +290,7 @@ class _Run:
                               for k in self.names],
             cutbacks=cuts, rmin=min(1.0, step / phase.max_increment) if phase.max_increment
             else 1.0, limit=limit,
-            residual_history=history)
+            residual_history=history, factorizations=factorizations)
         self.phase_increments += 1
         self._since_checkpoint += 1
         if self.progress is not None:
@@ -341,7 +341,7 @@ class _Run:
             gaps = {m.tool: (m.other, m.gap, self.case.tool(m.tool).facing)
                     for m in phase.motions if isinstance(m, HoldGap)} if self.segment == 0 else {}
             result = FormingResult()
-            clock = [time.perf_counter(), dict(result.timings), 0]
+            clock = [time.perf_counter(), dict(result.timings), 0, 0]
 
             def hook(progress: PhaseProgress, a: float = a, b: float = b,
                      result: FormingResult = result, clock: list = clock) -> bool:
@@ -357,9 +357,9 @@ class _Run:
                         and size < phase.max_increment * (1 - 1e-9)):
                     limit = "phase_end" if b >= phase.travel * (1 - 1e-12) else "output"
                 self.record(phase, result, size, a + progress.factor * (b - a), limit, timing,
-                            result.cuts - clock[2])
-                clock[0], clock[1], clock[2] = time.perf_counter(), dict(result.timings), \
-                    result.cuts
+                            result.cuts - clock[2], result.factorizations - clock[3])
+                clock[:] = [time.perf_counter(), dict(result.timings), result.cuts,
+                            result.factorizations]
                 if progress.factor >= 1.0 - 1e-12 or (
                         phase.output_every and self.phase_increments % phase.output_every == 0):
                     self.fields(result)  # output_every, output_at, the phase end
@@ -394,7 +394,10 @@ class _Run:
             self.record(phase, part, 0.0, 0.0, "max_increment",
                         Timings(t["assembly"] / phase.increments, t["contact"] / phase.increments,
                                 (t["factorization"] + t["solve"]) / phase.increments,
-                                max(0.0, share - sum(t.values()) / phase.increments)), 0)
+                                max(0.0, share - sum(t.values()) / phase.increments)), 0,
+                        # spread evenly (timed per phase, as the timings), summing right
+                        (k + 1) * result.factorizations // phase.increments
+                        - k * result.factorizations // phase.increments)
         self.fields(None)
 
     def run(self) -> None:

@@ -10,7 +10,8 @@ module ddpy_api
   use ddpy_surface, only: bezier_evaluate_batch, nagata_evaluate_batch
   use ddpy_linear_solver, only: solver_create, solver_analyse, solver_factorize, &
                                 solver_solve, solver_destroy, solver_info, &
-                                solver_set_control, solver_set_ordering
+                                solver_set_control, solver_set_real_control, &
+                                solver_set_ordering
   !$ use omp_lib, only: omp_get_max_threads, omp_set_num_threads
   implicit none
   private
@@ -18,7 +19,8 @@ module ddpy_api
             api_bezier_evaluate, api_bezier_de_casteljau, api_nagata_coefficients, &
             api_nagata_evaluate, api_nagata_edge_coefficient, api_solver_create, &
             api_solver_analyse, api_solver_factorize, api_solver_solve, api_solver_info, &
-            api_solver_destroy, api_solver_set_control, api_solver_set_ordering
+            api_solver_destroy, api_solver_set_control, api_solver_set_real_control, &
+            api_solver_set_ordering
 
   integer, parameter :: nb = max_bezier_degree
   integer, parameter :: nc = nagata_coefficient_count
@@ -207,6 +209,14 @@ contains
     integer(c_int), intent(out) :: status
     call solver_set_control(handle, index, value, status)
   end subroutine api_solver_set_control
+
+  subroutine api_solver_set_real_control(handle, index, value, status) &
+    bind(C, name="ddpy_solver_set_real_control")
+    integer(c_int), value, intent(in) :: handle, index
+    real(c_double), value, intent(in) :: value
+    integer(c_int), intent(out) :: status
+    call solver_set_real_control(handle, index, value, status)
+  end subroutine api_solver_set_real_control
 
   !> Pivot order for the next analyses: perm(i) the 0-based position of variable i.
   subroutine api_solver_set_ordering(handle, n, perm, status) &

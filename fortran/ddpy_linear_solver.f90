@@ -9,7 +9,8 @@ module ddpy_linear_solver
   implicit none
   private
   public :: max_solvers, solver_create, solver_analyse, solver_factorize, solver_solve, &
-            solver_destroy, solver_info, solver_set_control, solver_set_ordering
+            solver_destroy, solver_info, solver_set_control, solver_set_real_control, &
+            solver_set_ordering
 
   include 'dmumps_struc.h'
 
@@ -212,6 +213,24 @@ contains
     instance(handle)%icntl(index) = value
     status = 0
   end subroutine solver_set_control
+
+  !> Set MUMPS real control CNTL(index) = value (e.g. CNTL(7), the block low-rank
+  !> compression tolerance).
+  subroutine solver_set_real_control(handle, index, value, status)
+    integer, intent(in) :: handle, index
+    real(wp), intent(in) :: value
+    integer, intent(out) :: status
+    if (.not. valid_handle(handle)) then
+      status = status_bad_handle
+      return
+    end if
+    if (index < 1 .or. index > size(instance(handle)%cntl)) then
+      status = status_size_mismatch
+      return
+    end if
+    instance(handle)%cntl(index) = value
+    status = 0
+  end subroutine solver_set_real_control
 
   !> Use the pivot order perm for the next analyses (MUMPS ICNTL(7) = 1): perm(i) is the
   !> position (1-based) of variable i in the pivot order.

@@ -37,7 +37,13 @@ PAPER_HEXAHEDRA, LAYERS = 19950, 3
 #: distance of the shoulder's centre from the symmetry plane.
 PUNCH_RADIUS, SHOULDER_RADIUS, SHOULDER_X = 23.5, 4.0, 29.5
 #: Coarse blank: elements along x in [0, COARSE_SPLIT] and beyond, across y, through z.
-COARSE_SPLIT, COARSE_X, COARSE_Y = 36.0, (24, 6), 2
+#: The fine zone (1.5 mm) must hold all the material drawn over the die shoulder (radius
+#: 4 mm): up to x = 39 mm at full stroke. With the split at 36 mm, the 4 mm elements beyond
+#: reached the shoulder at 25.6 mm of stroke; the shoulder cut 0.5 mm into their bottom face
+#: between two nodes (the contact keeps nodes out of the tools, not faces) and the blank,
+#: with its one node on the shoulder gone onto the vertical inner wall, slid down with the
+#: punch on the wall's friction alone (punch force 18 N) until the next node landed.
+COARSE_SPLIT, COARSE_X, COARSE_Y = 42.0, (28, 5), 2
 #: Tool file of each model and tool, and the description the deck gives it.
 TOOL_FILES = {"bezier": ("bezier", "bezier"), "nagata": ("nagata", "nagata"),
               "facets_coarse": ("facets", "nagata"), "facets_fine": ("facets", "facets")}

@@ -440,7 +440,7 @@ def findings(numbers: dict[str, dict[str, Any]]) -> list[str]:
             "theta_4 stays below the paper's 155 degrees. The springback, "
             f"{b2 - b1:.1f} degrees against the paper's 14, is smaller: the reconstructed "
             "tools, the assumed elastic constants (E, nu are lost from the paper's text) and "
-            "this mesh of 24 elements over the bend all bear on it.")
+            f"this mesh of {make_case.COARSE_X[0]} elements over the bend all bear on it.")
     if {"nagata", "facets_coarse"} <= set(numbers):
         n, f = numbers["nagata"], numbers["facets_coarse"]
         if not (f["increments"] > n["increments"] and f["iterations"] > n["iterations"]):

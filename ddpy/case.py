@@ -355,12 +355,15 @@ class RminLimits:
     fraction of the yield stress before the increment is scaled back to the transition;
     ``strain``: largest equivalent strain increment at a Gauss point; ``rotation``: largest
     rotation increment at a Gauss point, degrees; ``contact``: limit the increment at the first
-    touch of a free node and the release of a node in contact."""
+    touch of a free node and the release of a node in contact; ``release_share``: a node
+    that carries at most this share of its tool's normal force is released inside an
+    increment instead (docs/theory/contact.md)."""
 
     yield_tolerance: float = 0.1
     strain: float = 0.02
     rotation: float = 1.0
     contact: bool = True
+    release_share: float = 0.1
 
 
 @dataclass(frozen=True)

@@ -316,6 +316,7 @@ _SETTINGS: dict[str, Callable[[str], Any]] = {
     "rmin_strain": lambda w: _float(w, "rmin_strain", gt=0),
     "rmin_rotation": lambda w: _float(w, "rmin_rotation", gt=0, le=90),
     "rmin_contact": lambda w: _choice(w, "rmin_contact", ("on", "off")) == "on",
+    "rmin_release": lambda w: _float(w, "rmin_release", ge=0, le=1),
     "newton_force": lambda w: _float(w, "newton_force", gt=0, lt=1),
     "newton_displacement": lambda w: _float(w, "newton_displacement", gt=0, lt=1),
     "max_iterations": lambda w: _int(w, "max_iterations", 1, 1000),
@@ -1190,7 +1191,8 @@ class _Cross:
         r, n = RminLimits(), Newton()
         return dict(
             rmin=RminLimits(s("rmin_yield", r.yield_tolerance), s("rmin_strain", r.strain),
-                            s("rmin_rotation", r.rotation), s("rmin_contact", r.contact)),
+                            s("rmin_rotation", r.rotation), s("rmin_contact", r.contact),
+                            s("rmin_release", r.release_share)),
             newton=Newton(s("newton_force", n.force_tolerance),
                           s("newton_displacement", n.displacement_tolerance),
                           s("max_iterations", n.max_iterations), s("cutback", n.cutback)),

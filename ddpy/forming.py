@@ -43,11 +43,12 @@ TOUCHING = 1e-6
 #: Unknowns from which linear_solver "auto" solves with older factors (GMRES) between
 #: factorizations: below, a factorization costs little more than a few solves.
 REUSE_FROM = 20_000
-#: GMRES on the older factors: relative tolerance (of the preconditioned, weighted
-#: residual: the correction's relative error), the iterations before it gives up, and the
-#: most after which the same factors are tried again.
-KRYLOV_TOLERANCE = 1e-8
-KRYLOV_MAX = 15
+#: GMRES on the older factors: bounds of its relative tolerance (of the preconditioned,
+#: weighted residual: the correction's relative error; see _increment), the iterations
+#: before it gives up (a factorization costs about 14 on the paper's bending blank), and
+#: the most after which the same factors are tried again.
+KRYLOV_LOOSE, KRYLOV_TIGHT = 1e-2, 1e-10
+KRYLOV_MAX = 12
 KRYLOV_KEEP = 8
 
 
@@ -65,8 +66,10 @@ class IncrementLimits:
     touching); ``release``, a node in contact at the start of the increment and released at
     its end, whose release (interpolated where its augmented pressure p - r g reaches zero)
     falls before the last ``release`` fraction of the increment, makes the increment be
-    redone to end just past the release (None: off). No increment is made smaller than
-    ``min_fraction`` of the nominal one."""
+    redone to end just past the release (None: off); a node that carries at most
+    ``release_share`` of its tool's normal force at the start of the increment is released
+    inside it instead (0: every release limits the increment). No increment is made
+    smaller than ``min_fraction`` of the nominal one."""
 
     strain: float = 0.02
     rotation_deg: float = 5.0
@@ -74,6 +77,7 @@ class IncrementLimits:
     first_touch: bool = True
     touch_gap: float = 1e-3
     release: float | None = 0.05
+    release_share: float = 0.0
     min_fraction: float = 1e-3
 
     def __post_init__(self) -> None:
@@ -84,6 +88,8 @@ class IncrementLimits:
                              f"{self.rotation_deg}")
         if not 0.0 < self.min_fraction <= 1.0 or not self.touch_gap >= 0.0:
             raise ValueError("min_fraction must lie in (0, 1] and touch_gap be >= 0")
+        if not 0.0 <= self.release_share <= 1.0:
+            raise ValueError(f"release_share must lie in [0, 1], got {self.release_share}")
         for name in ("yield_tolerance", "release"):
             value = getattr(self, name)
             if value is not None and not 0.0 < value < 1.0:
@@ -407,7 +413,8 @@ class FormingProblem:
                 if touch < 1.0:
                     step, reason = max(step * touch, limits.min_fraction * nominal), "touch"
             if limits.release is not None and reason != "cut" and last_dp is not None:
-                ahead = self._release_ahead(step, last_dp, limits.release)
+                ahead = self._release_ahead(step, last_dp, limits.release,
+                                            self._minor(layout, limits.release_share))
                 if ahead < 1.0:
                     step = max(step * ahead, limits.min_fraction * nominal)
                     reason = "release"
@@ -448,7 +455,8 @@ class FormingProblem:
                 continue
             if limits.release is not None and step > limits.min_fraction * nominal:
                 change = None if last_dp is None else last_dp * (target - factor)
-                release = self._release_factor(force, in_contact, gap, change)
+                release = self._release_factor(force, in_contact, gap, change,
+                                               self._minor(layout, limits.release_share))
                 if release < 1.0 - limits.release:
                     # Redo it ending just past the release, so that the node is free at
                     # the end (a release within the last fraction is accepted).
@@ -633,13 +641,22 @@ class FormingProblem:
         # Land just past the surface, so that the node is caught in contact.
         return float(np.min(gap[hits] / approach[hits])) * (1.0 + 1e-3)
 
-    def _release_ahead(self, step: float, rate: NDArray[np.float64], margin: float
-                       ) -> float:
+    def _minor(self, layout: _Layout, share: float) -> NDArray[np.bool_]:
+        """Pairs whose normal force at the start of the increment is at most ``share`` of
+        their tool's: released inside an increment, they change the tool's force by less
+        than that (IncrementLimits.release_share)."""
+        pressure = np.einsum("ij,ij->i", self.force, self._gap[1])
+        pressure = np.where(self._status != INACTIVE, np.maximum(pressure, 0.0), 0.0)
+        total = np.add.reduceat(pressure, layout.first[:-1]) if pressure.size else pressure
+        return pressure <= share * total[layout.tool_of]
+
+    def _release_ahead(self, step: float, rate: NDArray[np.float64], margin: float,
+                       minor: NDArray[np.bool_]) -> float:
         """Fraction of the next increment at which the first node in contact is released,
         its pressure extrapolated at the rate of the last increment (``rate``, per unit
         phase factor), plus ``margin / 2`` so that it is free at the end."""
         pressure = np.einsum("ij,ij->i", self.force, self._gap[1])
-        falling = (self._status != INACTIVE) & (pressure > 0.0) & (rate < 0.0)
+        falling = (self._status != INACTIVE) & (pressure > 0.0) & (rate < 0.0) & ~minor
         ahead = np.full(pressure.size, np.inf)
         ahead[falling] = pressure[falling] / (-rate[falling] * step)
         first = float(ahead.min()) if ahead.size else np.inf
@@ -647,7 +664,8 @@ class FormingProblem:
 
     def _release_factor(self, force: NDArray[np.float64], state: NDArray[np.int32],
                         gap: tuple[NDArray[np.float64], NDArray[np.float64]],
-                        change: NDArray[np.float64] | None) -> float:
+                        change: NDArray[np.float64] | None, minor: NDArray[np.bool_]
+                        ) -> float:
         """Fraction of a converged increment at which the first node in contact at its start
         and open at its end was released; 1 when none was. The semi-smooth Newton opens a
         pulled node in its first iteration, so a release is seen only after the increment.
@@ -660,7 +678,7 @@ class FormingProblem:
         pressure = np.einsum("ij,ij->i", self.force, normal)
         after = np.einsum("ij,ij->i", force, normal) - self.r * distance
         released = (self._status != INACTIVE) & (state == INACTIVE) & (pressure > 0.0)
-        released &= np.isfinite(distance) & (after < 0.0)
+        released &= np.isfinite(distance) & (after < 0.0) & ~minor
         if not released.any():
             return 1.0
         p = pressure[released]
@@ -823,6 +841,7 @@ class FormingProblem:
         residuals: list[float] = []
         relative: list[tuple[float, float]] = []
         correction = np.inf
+        hint = None
         current = None
         if guess is not None:  # the extrapolated start, unless an element fails there
             current = self._evaluate(layout, guess, force, x_n, positions, on, timings,
@@ -850,7 +869,13 @@ class FormingProblem:
                         relative)
             if iteration == max_iterations:
                 return f"no convergence in {max_iterations} iterations"
-            direction = self._direction(layout, solver, values, residual, weight, result)
+            # Inexact Newton (Eisenstat and Walker): the correction's relative error may be
+            # a tenth of the relative residual (the rate stays quadratic), or as large as
+            # leaves the next residual a tenth of the tolerance (the last iteration).
+            rel = norm / scale
+            forcing = min(KRYLOV_LOOSE, max(KRYLOV_TIGHT, 0.1 * rel, 0.1 * tol_force / rel))
+            direction = self._direction(layout, solver, values, residual, weight, result,
+                                        forcing, hint)
             if isinstance(direction, str):
                 return direction
             delta, size = direction
@@ -874,7 +899,7 @@ class FormingProblem:
                         break
                     if fallback is None and (
                             np.linalg.norm(trial[0]) <= (1.0 - 1e-4 * alpha) * norm):
-                        fallback = alpha, trial_u, trial_force, trial
+                        fallback = alpha, trial_u, trial_force, trial, simplified
                         buffer = 1  # the fallback keeps its Jacobian values in buffer 0
                 alpha *= 0.5
             else:
@@ -882,12 +907,13 @@ class FormingProblem:
                 # that set changes, the test can fail at every step length. Then the
                 # longest step that lowered the residual norm, if one did, else the last.
                 if fallback is not None:
-                    alpha, trial_u, trial_force, trial = fallback
+                    alpha, trial_u, trial_force, trial, simplified = fallback
                 else:
                     alpha *= 2.0
             if isinstance(trial, str):
                 return trial
             u, force, current = trial_u, trial_force, trial
+            hint = simplified  # M^-1 of the new residual, while the factors stay
             correction = alpha * float(np.linalg.norm(du))
             if iteration == 0 and yield_tolerance is not None:
                 landing = _yield_factor(solid.props, self.state, trial[3].state,
@@ -898,17 +924,20 @@ class FormingProblem:
 
     def _direction(self, layout: _Layout, solver: MumpsSolver, values: NDArray[np.float64],
                    residual: NDArray[np.float64], weight: NDArray[np.float64],
-                   result: FormingResult) -> tuple[NDArray[np.float64], float] | str:
+                   result: FormingResult, tolerance: float,
+                   hint: NDArray[np.float64] | None = None
+                   ) -> tuple[NDArray[np.float64], float] | str:
         """Newton correction for the Jacobian ``values`` at ``residual``, and its size as the
         line search measures it: ||W M^-1 r||, W the unknowns' weights and M the factored
         matrix (= ||W delta|| when the factors are this Jacobian's).
 
         With factors of an earlier Jacobian at hand, GMRES on W M^-1 J W^-1 (left
         preconditioned: the norm it minimizes is that of the correction's error, in the
-        weighted unknowns) to KRYLOV_TOLERANCE; each iteration costs a solve and a product,
-        a factorization about 20 solves on the paper's bending blank. It gives up after
+        weighted unknowns) to ``tolerance``; each iteration costs a solve and a product, a
+        factorization about 14 of them on the paper's bending blank. It gives up after
         KRYLOV_MAX iterations, and when it needed more than KRYLOV_KEEP the next iteration
-        factorizes at once (the Jacobian has moved too far)."""
+        factorizes at once (the Jacobian has moved too far). ``hint``: M^-1 (-residual)
+        when the line search has solved it already with the same factors."""
         timings = result.timings
         reuse = self.linear_solver == "reuse" or (
             self.linear_solver == "auto" and layout.n >= REUSE_FROM)
@@ -917,10 +946,10 @@ class FormingProblem:
             if layout.matrix is None:
                 layout.matrix = CoordinateMatrix(layout.n, layout.rows, layout.cols)
             jacobian = layout.matrix.matrix(values)
-            preconditioned = weight * solver.solve(-residual)
+            preconditioned = weight * (solver.solve(-residual) if hint is None else hint)
             z, count, converged = gmres(
                 lambda v: weight * solver.solve(jacobian @ (v / weight)), preconditioned,
-                KRYLOV_TOLERANCE, KRYLOV_MAX)
+                tolerance, KRYLOV_MAX)
             timings["solve"] += time.perf_counter() - tick
             result.krylov_iterations += count
             self._reuse_next = count <= KRYLOV_KEEP

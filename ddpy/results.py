@@ -60,6 +60,8 @@ _SCALARS: dict[str, tuple[str, str, str]] = {
     "cutbacks": ("i4", "1", "cuts of the increment before it converged"),
     "factorizations": ("i4", "1", "LU factorizations in the increment, its rejected trials "
                        "included (the other corrections are solved with older factors)"),
+    "krylov_iterations": ("i4", "1", "GMRES iterations of the corrections solved with older "
+                          "factors in the increment, rejected trials included"),
     "residual_force": ("f8", "1", "relative residual force at convergence"),
     "residual_displacement": ("f8", "1", "relative displacement correction at convergence"),
     "rmin": ("f8", "1", "r_min factor applied to the trial increment"),
@@ -303,7 +305,8 @@ class ResultsWriter:
                   residual_force: float, residual_displacement: float,
                   timings: Timings = Timings(), nodes_in_contact: ArrayLike | None = None,
                   cutbacks: int = 0, rmin: float = 1.0, limit: int | str = 0,
-                  residual_history: ArrayLike | None = None, factorizations: int = 0) -> int:
+                  residual_history: ArrayLike | None = None, factorizations: int = 0,
+                  krylov_iterations: int = 0) -> int:
         """Append one converged increment; return its number (from 1). ``tool_displacement``
         and ``tool_force`` are (tools, 3); ``residual_history`` (iterations, 2) holds the
         force and displacement residuals of each Newton iteration."""
@@ -319,6 +322,7 @@ class ResultsWriter:
         row = {"increment": k + 1, "phase": int(phase), "step": float(step),
                "travel": float(travel), "iterations": int(iterations),
                "cutbacks": int(cutbacks), "factorizations": int(factorizations),
+               "krylov_iterations": int(krylov_iterations),
                "residual_force": float(residual_force),
                "residual_displacement": float(residual_displacement), "rmin": float(rmin),
                "limit": code, "time_assembly": timings.assembly,

@@ -273,7 +273,8 @@ class _Run:
         self.last_frame = self.writer.increments
 
     def record(self, phase: Phase, result: FormingResult, step: float, travel: float,
-               limit: str, timings: Timings, cuts: int, factorizations: int) -> None:
+               limit: str, timings: Timings, cuts: int, factorizations: int,
+               krylov_iterations: int) -> None:
         """Write the last increment of ``result`` as a row of the results."""
         assert self.writer is not None
         # The measures convergence is judged on (FormingResult.relative): the residual over
@@ -290,7 +291,8 @@ class _Run:
                               for k in self.names],
             cutbacks=cuts, rmin=min(1.0, step / phase.max_increment) if phase.max_increment
             else 1.0, limit=limit,
-            residual_history=history, factorizations=factorizations)
+            residual_history=history, factorizations=factorizations,
+            krylov_iterations=krylov_iterations)
         self.phase_increments += 1
         self._since_checkpoint += 1
         if self.progress is not None:
@@ -328,6 +330,7 @@ class _Run:
             strain=phase.rmin.strain, rotation_deg=phase.rmin.rotation,
             yield_tolerance=max(phase.rmin.yield_tolerance, 1e-6),
             first_touch=phase.rmin.contact, release=0.05 if phase.rmin.contact else None,
+            release_share=phase.rmin.release_share,
             min_fraction=min(1.0, phase.min_increment / phase.max_increment))
         max_cuts = max(1, math.ceil(math.log(phase.max_increment / phase.min_increment)
                                     / -math.log(newton.cutback)))
@@ -341,7 +344,7 @@ class _Run:
             gaps = {m.tool: (m.other, m.gap, self.case.tool(m.tool).facing)
                     for m in phase.motions if isinstance(m, HoldGap)} if self.segment == 0 else {}
             result = FormingResult()
-            clock = [time.perf_counter(), dict(result.timings), 0, 0]
+            clock = [time.perf_counter(), dict(result.timings), 0, 0, 0]
 
             def hook(progress: PhaseProgress, a: float = a, b: float = b,
                      result: FormingResult = result, clock: list = clock) -> bool:
@@ -357,9 +360,10 @@ class _Run:
                         and size < phase.max_increment * (1 - 1e-9)):
                     limit = "phase_end" if b >= phase.travel * (1 - 1e-12) else "output"
                 self.record(phase, result, size, a + progress.factor * (b - a), limit, timing,
-                            result.cuts - clock[2], result.factorizations - clock[3])
+                            result.cuts - clock[2], result.factorizations - clock[3],
+                            result.krylov_iterations - clock[4])
                 clock[:] = [time.perf_counter(), dict(result.timings), result.cuts,
-                            result.factorizations]
+                            result.factorizations, result.krylov_iterations]
                 if progress.factor >= 1.0 - 1e-12 or (
                         phase.output_every and self.phase_increments % phase.output_every == 0):
                     self.fields(result)  # output_every, output_at, the phase end
@@ -395,9 +399,8 @@ class _Run:
                         Timings(t["assembly"] / phase.increments, t["contact"] / phase.increments,
                                 (t["factorization"] + t["solve"]) / phase.increments,
                                 max(0.0, share - sum(t.values()) / phase.increments)), 0,
-                        # spread evenly (timed per phase, as the timings), summing right
-                        (k + 1) * result.factorizations // phase.increments
-                        - k * result.factorizations // phase.increments)
+                        *[_share(total, k, phase.increments) for total in
+                          (result.factorizations, result.krylov_iterations)])
         self.fields(None)
 
     def run(self) -> None:
@@ -416,6 +419,12 @@ class _Run:
             self.save(None)
             if self.phase_index < len(phases) and self._should_halt():
                 return
+
+
+def _share(total: int, k: int, parts: int) -> int:
+    """Part k of a count spread evenly over ``parts`` (the springback's counts are known per
+    phase only, like its timings), the parts summing to ``total``."""
+    return (k + 1) * total // parts - k * total // parts
 
 
 def run_case(case: Case, output: str | os.PathLike[str], restart: bool = False,

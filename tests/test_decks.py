@@ -167,6 +167,7 @@ CONTROL_ERRORS = [
     ("max_increment        0.114", "max_increment 0.114\nmin_increment 1",
      "min_increment 1 mm exceeds max_increment 0.114 mm"),
     ("rmin_contact         on", "rmin_contact maybe", "expected rmin_contact among on, off"),
+    ("rmin_contact         on", "rmin_contact on\nrmin_release 2", "rmin_release must be <= 1"),
     ("rmin_rotation        1.0", "rmin_rotation 120", "rmin_rotation must be <= 90"),
     ("newton_force         1e-4", "newton_force 0", "newton_force must be > 0"),
     ("max_iterations       25", "max_iterations 2.5", "expected an integer for max_iterations"),

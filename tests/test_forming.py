@@ -393,6 +393,22 @@ def test_release_of_the_nodes_ends_an_increment(max_increment: float) -> None:
     assert heights[k + 1] < -0.1 * (heights[k] - heights[k + 1])
 
 
+def test_release_of_nodes_with_a_small_share_of_the_force_does_not_limit() -> None:
+    # The 16 nodes under the clamped block carry 1/16 of the force on average, the corner
+    # ones less. A share of 1 exempts every node (as no release limit); a share below the
+    # smallest node's exempts none (as the strict limit).
+    problem, _ = block_on_plane(0.3)
+    problem.run({"plane": (0, 0, 1e-3)}, max_increment=1e-3)
+    pressure = problem.force[:, 2]
+    shares = pressure / pressure.sum()
+    assert shares.min() > 0.0 and shares.max() < 0.2, shares
+    for share, limited in ((1.0, False), (0.5 * shares.min(), True)):
+        heights, limited_by, contacts, _ = lift_off(
+            7e-4, IncrementLimits(release_share=share))
+        assert ("release" in limited_by) is limited, (share, limited_by)
+        assert contacts[-1] == 0 and heights[-1] == pytest.approx(-1e-3)
+
+
 def test_a_block_held_only_by_contact_solves_from_the_start() -> None:
     # A block lying on a die plane (zero gap, no force) with nothing else holding it: every
     # rigid mode is free. A punch plane 0.05 mm above comes down and squeezes it by 1 um.

@@ -83,3 +83,10 @@ def test_reused_factors_give_the_direct_solution_with_fewer_factorizations() -> 
     # iteration), so the last step is not quadratic by design; the quadratic rate of the
     # tangent itself is tested with the direct solver (tests/test_forming.py).
     assert sum(result_reuse.iterations) <= sum(result_direct.iterations) + 2
+
+
+def test_linear_solver_choice_is_checked() -> None:
+    mesh = HexMesh.box(1.0, 1.0, 0.5, 1, 1, 1)
+    tool = RigidTool("cylinder", cylinder_crest("nagata", 4), mesh.select(z=0.0))
+    with pytest.raises(ValueError, match="linear_solver"):
+        FormingProblem(Solid(mesh, ELASTIC), [tool], linear_solver="iterative")

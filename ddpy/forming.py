@@ -854,17 +854,24 @@ class FormingProblem:
             current = self._evaluate(layout, u, force, x_n, positions, on, timings, touching)
         if isinstance(current, str):
             return current
+        def measures(u: NDArray[np.float64], force: NDArray[np.float64], evaluation: tuple,
+                     correction: float) -> tuple[float, float, float, bool]:
+            """Residual norm, force scale, relative correction, and whether converged."""
+            norm = float(np.linalg.norm(evaluation[0]))
+            scale = max(float(np.linalg.norm(force)), float(np.linalg.norm(
+                np.where(self.fixed.ravel(), evaluation[3].fint.ravel(), 0.0))), floor)
+            moved = max(float(np.linalg.norm(u - u_n)), 1e-9 * self.size)
+            return (norm, scale, correction / moved,
+                    norm <= tol_force * scale and correction <= tol_disp * moved)
+
         for iteration in range(max_iterations + 1):
             residual, values, state, out, gap = current
-            norm = float(np.linalg.norm(residual))
+            norm, scale, moved, converged = measures(u, force, current, correction)
             residuals.append(norm)
             if not np.isfinite(norm):
                 return "the residual is not finite"
-            scale = max(float(np.linalg.norm(force)), float(np.linalg.norm(
-                np.where(self.fixed.ravel(), out.fint.ravel(), 0.0))), floor)
-            step = float(np.linalg.norm(u - u_n))
-            relative.append((norm / scale, correction / max(step, 1e-9 * self.size)))
-            if norm <= tol_force * scale and correction <= tol_disp * max(step, 1e-9 * self.size):
+            relative.append((norm / scale, moved))
+            if converged:
                 return (u, out.state, force, residuals, np.where(on, state, INACTIVE), gap,
                         relative)
             if iteration == max_iterations:
@@ -873,7 +880,8 @@ class FormingProblem:
             # a tenth of the relative residual (the rate stays quadratic), or as large as
             # leaves the next residual a tenth of the tolerance (the last iteration).
             rel = norm / scale
-            forcing = min(KRYLOV_LOOSE, max(KRYLOV_TIGHT, 0.1 * rel, 0.1 * tol_force / rel))
+            forcing = min(KRYLOV_LOOSE, max(KRYLOV_TIGHT, 0.1 * rel,
+                                            0.1 * tol_force / max(rel, 1e-300)))
             direction = self._direction(layout, solver, values, residual, weight, result,
                                         forcing, hint)
             if isinstance(direction, str):
@@ -889,6 +897,10 @@ class FormingProblem:
                 trial = self._evaluate(layout, trial_u, trial_force, x_n, positions, on,
                                        timings, buffer=buffer)
                 if not isinstance(trial, str):
+                    if alpha == 1.0 and measures(trial_u, trial_force, trial,
+                                                 float(np.linalg.norm(du)))[3]:
+                        simplified = None  # converged: the next iteration returns it
+                        break
                     # Natural monotonicity test (Deuflhard): the simplified Newton
                     # correction at the trial, with this iteration's factors, must be
                     # shorter than the step's.

@@ -465,7 +465,9 @@ def run_case(case: Case, output: str | os.PathLike[str], restart: bool = False,
         run.save(None)
     assert run.writer is not None
     leads = [p.lead or "" for p in case.phases]
-    run.writer.annotate(status="running", message="", leads=leads)
+    from ddpy.parallel import max_threads
+
+    run.writer.annotate(status="running", message="", leads=leads, threads=max_threads())
     _write_atomic(output / STATUS, json.dumps({"status": "running", "case": str(case.folder)}))
     status, message = "failed", "stopped by an error"
     try:

@@ -89,6 +89,7 @@ class Run:
     factorizations: int = 0
     krylov_iterations: int = 0
     all_iterations: int = 0       # Newton iterations of the whole run, springback included
+    threads: int = 0              # OpenMP threads of the run (0: not recorded)
 
 
 def from_results(path: Path, output_at: tuple[float, ...] = make_case.OUTPUT_AT) -> Run:
@@ -133,7 +134,16 @@ def from_results(path: Path, output_at: tuple[float, ...] = make_case.OUTPUT_AT)
                    factorizations=int(history.get("factorizations", np.zeros(1)).sum()),
                    krylov_iterations=int(history.get("krylov_iterations",
                                                      np.zeros(1)).sum()),
-                   all_iterations=int(history["iterations"].sum()))
+                   all_iterations=int(history["iterations"].sum()),
+                   threads=_threads(path))
+
+
+def _threads(path: Path) -> int:
+    """OpenMP threads the run was made with (root attribute of its results)."""
+    import h5py
+
+    with h5py.File(path, "r") as f:
+        return int(f.attrs.get("threads", 0))
 
 
 def _count_limits(codes: np.ndarray) -> dict[str, int]:
@@ -195,6 +205,7 @@ def summary(model: str, run: Run) -> dict[str, Any]:
         "cuts": int(run.cuts),
         "springback_iterations": run.springback_iterations,
         "wall_s": round(run.wall_s, 1),
+        "threads": run.threads,
         "max_force_N": round(float(run.force.max()), 2),
         "oscillation_N": round(osc, 4),
         "oscillation_after_20mm_N": round(late, 4),
@@ -348,7 +359,9 @@ def report(mesh: str, hexahedra: int, numbers: dict[str, dict[str, Any]],
            f"{make_case.COARSE_Y} across; the paper: 19,950 unstructured). Contact angles "
            "come from nodes: on this mesh they move in steps of the node spacing over the "
            "punch, about 3.6 degrees of arc (7 degrees of theta)."),
-        f"Runs on {threads} thread(s); wall times are this machine's, shared with other jobs.",
+        f"Report written on {threads} thread(s); each run's threads are in Table 3 (a run "
+        "alone on the 2 cores with 2 threads, or several at once with 1 thread each); wall "
+        "times are this machine's (x86_64, 2 cores).",
         "",
         "## Contact angles and springback (Table 2)",
         "",
@@ -393,6 +406,8 @@ def report(mesh: str, hexahedra: int, numbers: dict[str, dict[str, Any]],
         _row(["cut increments", *[numbers[m]["cuts"] for m in models], *["" for _ in models]]),
         _row(["wall time", *[f"{numbers[m]['wall_s']:.0f} s" for m in models],
               *[f"{PAPER[m]['cpu_min']} min" for m in models]]),
+        _row(["threads", *[numbers[m]["threads"] or "?" for m in models],
+              *["4 cores" for _ in models]]),
         "",
         _row(["LU factorizations", *[numbers[m]["factorizations"] for m in models],
               *["" for _ in models]]),

@@ -8,6 +8,7 @@ with its figures, next to the paper's values.
     python benchmarks/cylindrical_bending/run.py --mesh paper     # 20,010 hexahedra (hours)
     python benchmarks/cylindrical_bending/run.py --json           # print the numbers only
     python benchmarks/cylindrical_bending/run.py --reuse          # report from saved runs
+    python benchmarks/cylindrical_bending/run.py --mesh paper --restart   # continue them
 
 The cases are written first by make_case.py (tools, meshes, decks) when missing; each case
 runs through the case runner (``ddpy run``) into results/<mesh>/<model>/ (git-ignored), which
@@ -154,10 +155,11 @@ def _count_limits(codes: np.ndarray) -> dict[str, int]:
 
 
 def run_case_folder(folder: Path, output: Path | None = None, verbose: bool = False,
-                    max_increments: int | None = None) -> Run:
+                    max_increments: int | None = None, restart: bool = False) -> Run:
     """Run one case folder with the case runner (``ddpy run``) into ``output`` (default:
     results/<mesh>/<model> next to this script) and read back what the report needs. A run
-    stopped after ``max_increments`` or failed is read as far as it got (``Run.status``)."""
+    stopped after ``max_increments`` or failed is read as far as it got (``Run.status``);
+    ``restart`` continues the run saved there from its last checkpoint."""
     from ddpy.decks import read_case
     from ddpy.runner import Progress, run_case
 
@@ -169,10 +171,11 @@ def run_case_folder(folder: Path, output: Path | None = None, verbose: bool = Fa
                   f"{p.travel:.3f} of {p.phase_travel:g} mm", file=sys.stderr, flush=True)
 
     case = read_case(folder)
-    outcome = run_case(case, output, overwrite=True,
+    outcome = run_case(case, output, overwrite=not restart, restart=restart,
                        progress=progress if verbose else None, max_increments=max_increments)
     run = from_results(outcome.results, case.phases[0].output_at)
-    run.wall_s = outcome.wall_time
+    if not restart:  # a continued run: the increments' times of all its parts
+        run.wall_s = outcome.wall_time
     run.status = outcome.status + (f": {outcome.message}" if outcome.message else "")
     return run
 
@@ -566,6 +569,9 @@ def main(argv: list[str] | None = None) -> int:
                         "(default 1500; 0: no limit)")
     parser.add_argument("--reuse", action="store_true",
                         help="report from the runs saved in results/ (no new run)")
+    parser.add_argument("--restart", action="store_true",
+                        help="continue the runs saved in results/ from their checkpoints "
+                        "(a run stopped or cut off; a completed one is read back)")
     args = parser.parse_args(argv)
     from ddpy.parallel import max_threads
 
@@ -581,6 +587,15 @@ def main(argv: list[str] | None = None) -> int:
         saved = HERE / "results" / args.mesh / model / "results.h5"
         if args.reuse and saved.exists():
             runs[model] = from_results(saved)
+            continue
+        if args.restart and saved.exists():
+            state = json.loads((saved.parent / "status.json").read_text())["status"]
+            if state == "completed":
+                runs[model] = from_results(saved)
+                continue
+            print(f"continuing {args.mesh}/{model} ...", file=sys.stderr, flush=True)
+            runs[model] = run_case_folder(case_root / model, verbose=True, restart=True,
+                                          max_increments=args.max_increments or None)
             continue
         print(f"running {args.mesh}/{model} ...", file=sys.stderr, flush=True)
         runs[model] = run_case_folder(case_root / model, verbose=True,

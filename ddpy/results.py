@@ -539,6 +539,8 @@ class ResultsReader:
         self.tools = tuple(str(t) for t in f.attrs["tools"])
         self.phases = tuple(str(p) for p in f.attrs["phases"])
         self.units = str(f.attrs["units"])
+        #: OpenMP threads of the run (``ddpy run``; 0 when not recorded)
+        self.threads = int(f.attrs.get("threads", 0))
 
     @property
     def nodes(self) -> NDArray[np.float64]:

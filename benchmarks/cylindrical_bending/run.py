@@ -136,15 +136,7 @@ def from_results(path: Path, output_at: tuple[float, ...] = make_case.OUTPUT_AT)
                    krylov_iterations=int(history.get("krylov_iterations",
                                                      np.zeros(1)).sum()),
                    all_iterations=int(history["iterations"].sum()),
-                   threads=_threads(path))
-
-
-def _threads(path: Path) -> int:
-    """OpenMP threads the run was made with (root attribute of its results)."""
-    import h5py
-
-    with h5py.File(path, "r") as f:
-        return int(f.attrs.get("threads", 0))
+                   threads=r.threads)
 
 
 def _count_limits(codes: np.ndarray) -> dict[str, int]:
@@ -411,11 +403,11 @@ def report(mesh: str, hexahedra: int, numbers: dict[str, dict[str, Any]],
               *[f"{PAPER[m]['cpu_min']} min" for m in models]]),
         _row(["threads", *[numbers[m]["threads"] or "?" for m in models],
               *["4 cores" for _ in models]]),
-        "",
         _row(["LU factorizations", *[numbers[m]["factorizations"] for m in models],
               *["" for _ in models]]),
         _row(["GMRES iterations (older factors)", *[numbers[m]["krylov_iterations"]
                                                    for m in models], *["" for _ in models]]),
+        "",
         "",
         "Time per Newton iteration (whole run, springback included; wall time of each part "
         "over the run's iterations, s; linear = LU factorizations, solves and GMRES with "
@@ -473,7 +465,7 @@ def report(mesh: str, hexahedra: int, numbers: dict[str, dict[str, Any]],
     lines += ["## The claims of the paper", ""]
     for text, holds, detail in claims(numbers):
         lines.append(f"- {text}: **{'holds' if holds else 'does not hold'}** ({detail}).")
-    lines += ["", *findings(numbers), ""]
+    lines += ["", *findings(numbers, mesh), ""]
     return "\n".join(lines)
 
 
@@ -506,10 +498,27 @@ def target(mesh: str, numbers: dict[str, dict[str, Any]]) -> list[str]:
         ""]
 
 
-def findings(numbers: dict[str, dict[str, Any]]) -> list[str]:
+def findings(numbers: dict[str, dict[str, Any]], mesh: str = "coarse") -> list[str]:
     """What the numbers say beyond the claims: where the sheet's end went, and the cause of
     a claim that does not hold."""
     out = ["## Findings", ""]
+    if {"nagata", "bezier"} <= set(numbers) and mesh == "coarse":
+        n, b = numbers["nagata"], numbers["bezier"]
+        diffs = [x - y for x, y in zip(n["theta_deg"], b["theta_deg"], strict=True)]
+        # theta steps by twice the arc between node columns over the punch
+        step = np.degrees(2 * (make_case.COARSE_SPLIT / make_case.COARSE_X[0])
+                          / (make_case.PUNCH_RADIUS + make_case.THICKNESS))
+        if max(abs(d) for d in diffs) > 1.0:
+            out.append(
+                "- Nagata against Bezier, theta differences " + ", ".join(
+                    f"{d:+.1f}" for d in diffs) + f" degrees: theta comes from nodes, and on "
+                f"this blank it moves in steps of {step:.1f} degrees (node columns "
+                f"{make_case.COARSE_SPLIT / make_case.COARSE_X[0]:g} mm apart over the "
+                "punch); a difference of one step is one node column that touches the punch "
+                "in one run and not yet in the other at that stroke. beta_1 and beta_2, "
+                "fitted through the flange's nodes, differ by "
+                f"{abs(n['beta1_deg'] - b['beta1_deg']):.2f} and "
+                f"{abs(n['beta2_deg'] - b['beta2_deg']):.2f} degrees.")
     if "nagata" in numbers and numbers["nagata"].get("end_xz_mm"):
         n = numbers["nagata"]
         x, z = n["end_xz_mm"]

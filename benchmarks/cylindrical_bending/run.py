@@ -463,7 +463,12 @@ def report(mesh: str, hexahedra: int, numbers: dict[str, dict[str, Any]],
         if "png" in shape.get("die", {}).get(m, {}):
             lines += [f"![{LABELS[m]} die]({shape['die'][m]['png']})", ""]
     lines += ["## The claims of the paper", ""]
+    partial = [LABELS[m] for m in models if not numbers[m]["status"].startswith("completed")]
     for text, holds, detail in claims(numbers):
+        if partial:  # a claim on runs that stopped short says nothing
+            lines.append(f"- {text}: **not checked** (runs not completed: "
+                         f"{', '.join(partial)}).")
+            continue
         lines.append(f"- {text}: **{'holds' if holds else 'does not hold'}** ({detail}).")
     lines += ["", *findings(numbers, mesh), ""]
     return "\n".join(lines)
@@ -502,6 +507,14 @@ def findings(numbers: dict[str, dict[str, Any]], mesh: str = "coarse") -> list[s
     """What the numbers say beyond the claims: where the sheet's end went, and the cause of
     a claim that does not hold."""
     out = ["## Findings", ""]
+    short = {m: n["stroke_mm"] for m, n in numbers.items()
+             if not n["status"].startswith("completed")}
+    if short:  # what a partial run says about the end of the process would mislead
+        return out + [
+            "- Not all runs are complete (stroke reached: " + ", ".join(
+                f"{LABELS[m]} {s:g} mm" for m, s in short.items()) + "); the findings wait "
+            "for them. Continue them from their checkpoints with `run.py --mesh " + mesh
+            + " --restart`, then write this report with `--reuse`."]
     if {"nagata", "bezier"} <= set(numbers) and mesh == "coarse":
         n, b = numbers["nagata"], numbers["bezier"]
         diffs = [x - y for x, y in zip(n["theta_deg"], b["theta_deg"], strict=True)]

@@ -175,15 +175,20 @@ class CoordinateMatrix:
         rows = int_array(rows, "rows", (None,)).astype(np.int64)
         cols = int_array(cols, "cols", (rows.size,)).astype(np.int64)
         self.n = int(n)
-        key, self._slot = np.unique(rows * self.n + cols, return_inverse=True)
+        key, slot = np.unique(rows * self.n + cols, return_inverse=True)
         self._indices = (key % self.n).astype(np.int32)
         self._indptr = np.searchsorted(key // self.n, np.arange(self.n + 1)).astype(np.int32)
         self.size = rows.size
+        # Each entry's contributions, entry after entry: the core sums them in parallel.
+        self._sources = np.argsort(slot, kind="stable").astype(np.int32)
+        self._starts = np.zeros(key.size + 1, dtype=np.int32)
+        np.cumsum(np.bincount(slot, minlength=key.size), out=self._starts[1:])
 
     def matrix(self, values: ArrayLike) -> scipy.sparse.csr_matrix:
         """The matrix with these entries (in the order of the structure's rows, cols)."""
         values = float_array(values, "values", (self.size,))
-        data = np.bincount(self._slot, weights=values, minlength=self._indices.size)
+        data = _core.sum_duplicates(values, self._sources, self._starts,
+                                    np.empty(self._indices.size))
         return scipy.sparse.csr_matrix((data, self._indices, self._indptr),
                                        shape=(self.n, self.n))
 

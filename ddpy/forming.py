@@ -49,6 +49,9 @@ REUSE_FROM = 20_000
 #: the most after which the same factors are tried again.
 KRYLOV_LOOSE, KRYLOV_TIGHT = 1e-2, 1e-10
 KRYLOV_MAX = 12
+#: Deepest a free node may be pushed into a tool by one Newton step, in element sizes, and
+#: the shortest step that limit may leave (FormingProblem._penetration_step).
+PENETRATION, MIN_STEP = 0.02, 1.0 / 64.0
 KRYLOV_KEEP = 8
 
 
@@ -889,7 +892,10 @@ class FormingProblem:
             delta, size = direction
             du = delta[:layout.nf]
             dforce = delta[layout.nf:].reshape(-1, 3)
-            alpha, fallback, buffer = 1.0, None, 0  # the factors hold `values` from here
+            # The factors hold `values` from here. The first trial stops short where the
+            # step would push a free node into a tool (see _penetration_step).
+            alpha = self._penetration_step(layout, du, state, gap, on)
+            fallback, buffer = None, 0
             for _ in range(5):
                 trial_u = u.copy()
                 trial_u.ravel()[free] += alpha * du
@@ -933,6 +939,27 @@ class FormingProblem:
                 if landing < 1.0:
                     return landing
         return "no convergence"
+
+    def _penetration_step(self, layout: _Layout, du: NDArray[np.float64],
+                          state: NDArray[np.int32], gap: tuple[NDArray[np.float64], ...],
+                          on: NDArray[np.bool_]) -> float:
+        """Longest fraction (at most 1) of the Newton step ``du`` (free dofs) that leaves no
+        free node more than PENETRATION times the element size inside a tool, the gaps
+        linearized at the current iterate. The tangent does not see a tool where a node is
+        free: on a sheet held by a line of contact nodes (the paper's unconstrained bending,
+        from 11 mm of stroke) the full step bends the span between the contact lines on
+        along its soft, plastic mode and pushed 1,133 free nodes up to 1 mm into the punch;
+        the line search then halved down to 1/32 and the contact states cycled for 15 to 25
+        iterations. Stopped at the surface, those nodes close in the next iteration."""
+        distance, normal = gap
+        move = np.zeros(self.u.size)
+        move[~self.fixed.ravel()] = du
+        closing = -np.einsum("ij,ij->i", move.reshape(-1, 3)[layout.node], normal)
+        room = np.maximum(distance, 0.0) + PENETRATION * self.size
+        free = on & (state == INACTIVE) & np.isfinite(distance) & (closing > room)
+        if not free.any():
+            return 1.0
+        return max(float(np.min(room[free] / closing[free])), MIN_STEP)
 
     def _direction(self, layout: _Layout, solver: MumpsSolver, values: NDArray[np.float64],
                    residual: NDArray[np.float64], weight: NDArray[np.float64],

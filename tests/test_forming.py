@@ -544,3 +544,33 @@ def test_contact_filter_follows_the_blank_surface_as_it_turns() -> None:
     normals = problem._facing_normals(0, mesh.nodes @ turn.T)
     assert np.allclose(normals, turn @ np.array([0.0, 0.0, -1.0]))
     assert np.allclose(normals, (-1.0, 0.0, 0.0))
+
+
+def test_a_newton_step_stops_where_free_nodes_would_enter_a_tool() -> None:
+    # The block hangs 0.1 mm above the plane, its bottom nodes free (no contact). A step
+    # moving every free node 1 mm down may go only until they are PENETRATION element
+    # sizes deep; a step moving them up, or a node already in contact, is not limited.
+    from ddpy.contact import INACTIVE
+    from ddpy.forming import MIN_STEP, PENETRATION
+
+    mesh = HexMesh.box(1.0, 1.0, 0.5, 2, 2, 2, origin=(-0.5, -0.5, 0.1))
+    tool = RigidTool("plane", plane_tool(), mesh.select(z=0.1), facing=(0, 0, -1))
+    problem = FormingProblem(Solid(mesh, ELASTIC), [tool])
+    problem.fix(mesh.select(z=0.6), "xyz")
+    layout, _ = problem._prepare()
+    x = mesh.nodes.copy()
+    on = np.ones(layout.node.size, dtype=bool)
+    state, gap = problem._contact(layout, x, x, problem.position, on, problem.force)[3:]
+    assert (state == INACTIVE).all() and np.allclose(gap[0], 0.1)
+    free = ~problem.fixed.ravel()
+    down = np.zeros((mesh.n_nodes, 3))
+    down[:, 2] = -1.0
+    du = down.ravel()[free]
+    alpha = problem._penetration_step(layout, du, state, gap, on)
+    assert alpha == pytest.approx(0.1 + PENETRATION * problem.size)
+    assert problem._penetration_step(layout, -du, state, gap, on) == 1.0
+    closed = state.copy()
+    closed[:] = 2  # every pair in contact (slip): the tangent sees the tool
+    assert problem._penetration_step(layout, du, closed, gap, on) == 1.0
+    # A step of 1 km still moves: the shortest fraction is MIN_STEP.
+    assert problem._penetration_step(layout, 1e6 * du, state, gap, on) == MIN_STEP

@@ -335,7 +335,11 @@ def report(mesh: str, hexahedra: int, numbers: dict[str, dict[str, Any]],
         + (" --mesh paper" if mesh == "paper" else "") + "`; the cases by `make_case.py` "
         "next to it. Numisheet 2002 benchmark B, quarter model: HSS (Swift, Hill'48), "
         f"friction {make_case.FRICTION}, stroke {make_case.STROKE} mm, max increment "
-        f"{make_case.MAX_INCREMENT} mm, then springback.",
+        f"{make_case.MAX_INCREMENT} mm, then springback. Deck settings of this blank "
+        f"(make_case.py says why): rmin_yield {make_case.RMIN_YIELD.get(mesh, 0.1):g}, "
+        + (f"contact augmentation {make_case.AUGMENTATION[mesh]:g} N/mm."
+           if mesh in make_case.AUGMENTATION else "contact augmentation the solver's default "
+           "(E t^2 / h of the elements)."),
         "",
         "**The tools are a reconstruction** (the paper's Fig. 6 is not in its text, design.md): "
         f"punch radius {make_case.PUNCH_RADIUS} mm; open die, shoulders of radius "

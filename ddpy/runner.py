@@ -9,7 +9,8 @@ results file, with checkpoints to continue an interrupted run (docs/running.md).
 The output folder holds ``results.h5`` and ``results.xdmf`` (docs/results-format.md),
 ``checkpoint.npz`` (the last checkpoint) and ``status.json`` (running, completed,
 interrupted, stopped or failed). ``run_case(..., restart=True)`` continues from the
-checkpoint; the results then end as those of an uninterrupted run.
+checkpoint; the results then end as those of an uninterrupted run (to the bit while the
+Newton loop factorizes every iteration; docs/running.md).
 """
 
 from __future__ import annotations

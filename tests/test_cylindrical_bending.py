@@ -159,6 +159,35 @@ def test_effort(result: dict[str, Any], reference: dict[str, Any]) -> None:
     assert result["iterations"] == pytest.approx(reference["iterations"], rel=0.3)
 
 
+def test_a_kept_run_reports_the_numbers_it_was_kept_with(tmp_path: Path) -> None:
+    """The runs file (docs/benchmarks/<report>_runs.json) gives back the numbers and curves
+    of a run, with its code version, and merges: a model written later keeps the others."""
+    bench = _module("run")
+    stroke = np.linspace(0.0, 28.5, 400)
+    initial = np.array([[50.0, 0.0, 0.0], [60.0, 0.0, 0.0], [50.0, 0.0, 1.0],
+                        [60.0, 0.0, 1.0]])
+    formed = initial + np.array([0.0, 0.0, 1.0]) * (initial[:, :1] - 50.0) / 10.0
+    run = bench.Run(stroke=stroke, force=60.0 * np.tanh(stroke) + 0.1 * np.sin(40 * stroke),
+                    sizes=np.full(stroke.size, 0.0715), iterations=np.full(stroke.size, 4),
+                    cuts=2, theta=[17.0, 58.0, float("nan"), 145.0], shape_formed=formed,
+                    shape_sprung=formed, initial=initial, wall_s=1234.5, code="abc1234",
+                    date="2026-11-24", threads=2)
+    numbers = bench.summary("nagata", run)
+    path = tmp_path / "report_runs.json"
+    bench.keep_runs(path, {"nagata": numbers}, {"nagata": run})
+    other = bench.Run(**{**run.__dict__, "code": "def5678", "wall_s": 99.0})
+    bench.keep_runs(path, {"bezier": bench.summary("bezier", other)}, {"bezier": other})
+    kept = bench.kept_run(path, "nagata")
+    assert kept is not None and bench.kept_run(path, "facets_fine") is None
+    again = bench.summary("nagata", kept)
+    assert again["code"] == "abc1234" and again["wall_s"] == 1234.5
+    assert again["beta1_deg"] == numbers["beta1_deg"]
+    assert np.isnan(again["theta_deg"][2]) and again["theta_deg"][3] == 145.0
+    assert again["oscillation_N"] == numbers["oscillation_N"]
+    np.testing.assert_allclose(kept.force, run.force, atol=1e-5)
+    assert bench.summary("bezier", bench.kept_run(path, "bezier"))["code"] == "def5678"
+
+
 if __name__ == "__main__":  # renew the reference
     import tempfile
 

@@ -12,16 +12,22 @@ with its figures, next to the paper's values.
 
 The cases are written first by make_case.py (tools, meshes, decks) when missing; each case
 runs through the case runner (``ddpy run``) into results/<mesh>/<model>/ (git-ignored), which
-``--reuse`` reads back.
+``--reuse`` reads back. Every report also keeps the numbers and curves of its runs, with the
+code version and date of each, in docs/benchmarks/<report>_runs.json (merged: a model not
+run keeps its entry); ``--reuse`` takes a model without results/ from there, so the paper
+mesh's runs, hours each, may come from different sessions (the report says which code
+made each).
 """
 
 from __future__ import annotations
 
 import argparse
+import datetime
 import importlib.util
 import json
+import subprocess
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -91,6 +97,11 @@ class Run:
     krylov_iterations: int = 0
     all_iterations: int = 0       # Newton iterations of the whole run, springback included
     threads: int = 0              # OpenMP threads of the run (0: not recorded)
+    #: code version (git describe) and date of the run; numbers of a run kept in the runs
+    #: file (no shapes): summary() returns them as they are
+    code: str = ""
+    date: str = ""
+    kept: dict[str, Any] = field(default_factory=dict)
 
 
 def from_results(path: Path, output_at: tuple[float, ...] = make_case.OUTPUT_AT) -> Run:
@@ -136,7 +147,15 @@ def from_results(path: Path, output_at: tuple[float, ...] = make_case.OUTPUT_AT)
                    krylov_iterations=int(history.get("krylov_iterations",
                                                      np.zeros(1)).sum()),
                    all_iterations=int(history["iterations"].sum()),
-                   threads=r.threads)
+                   threads=r.threads, **_code_of(path.parent))
+
+
+def _code_of(folder: Path) -> dict[str, str]:
+    """Code version and date recorded by run_case_folder next to a run's results."""
+    try:
+        return json.loads((folder / "code.json").read_text())
+    except (OSError, ValueError):
+        return {}
 
 
 def _count_limits(codes: np.ndarray) -> dict[str, int]:
@@ -144,6 +163,49 @@ def _count_limits(codes: np.ndarray) -> dict[str, int]:
 
     values, counts = np.unique(np.asarray(codes, dtype=int), return_counts=True)
     return {LIMITS[int(v)]: int(c) for v, c in zip(values, counts, strict=True)}
+
+
+def code_version() -> str:
+    """The checkout's ``git describe --always --dirty`` (empty outside a git checkout)."""
+    try:
+        return subprocess.run(["git", "describe", "--always", "--dirty"], cwd=ROOT,
+                              capture_output=True, text=True, check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return ""
+
+
+def runs_file(stem: str) -> Path:
+    """The kept runs of a report: docs/benchmarks/<stem>_runs.json."""
+    return DOCS / f"{stem}_runs.json"
+
+
+def keep_runs(path: Path, numbers: dict[str, dict[str, Any]], runs: dict[str, Run]) -> None:
+    """Merge the numbers and curves of ``runs`` into the runs file ``path``."""
+    kept = json.loads(path.read_text()) if path.exists() else {}
+    for model, run in runs.items():
+        kept[model] = {"numbers": numbers[model],
+                       "curves": {"stroke": np.round(run.stroke, 6).tolist(),
+                                  "force": np.round(run.force, 5).tolist(),
+                                  "sizes": np.round(run.sizes, 8).tolist(),
+                                  "iterations": np.asarray(run.iterations).tolist()}}
+    path.write_text(json.dumps(kept, indent=1) + "\n")
+
+
+def kept_run(path: Path, model: str) -> Run | None:
+    """One model's run from the runs file, or None."""
+    if not path.exists():
+        return None
+    entry = json.loads(path.read_text()).get(model)
+    if entry is None:
+        return None
+    curves, numbers = entry["curves"], entry["numbers"]
+    empty = np.zeros((0, 3))
+    return Run(stroke=np.array(curves["stroke"]), force=np.array(curves["force"]),
+               sizes=np.array(curves["sizes"]), iterations=np.array(curves["iterations"]),
+               cuts=numbers["cuts"], theta=numbers["theta_deg"], shape_formed=empty,
+               shape_sprung=empty, initial=empty, wall_s=numbers["wall_s"],
+               status=numbers["status"], code=numbers.get("code", ""),
+               date=numbers.get("date", ""), kept=numbers)
 
 
 def run_case_folder(folder: Path, output: Path | None = None, verbose: bool = False,
@@ -163,6 +225,9 @@ def run_case_folder(folder: Path, output: Path | None = None, verbose: bool = Fa
                   f"{p.travel:.3f} of {p.phase_travel:g} mm", file=sys.stderr, flush=True)
 
     case = read_case(folder)
+    output.mkdir(parents=True, exist_ok=True)
+    (output / "code.json").write_text(json.dumps({
+        "code": code_version(), "date": datetime.date.today().isoformat()}))
     outcome = run_case(case, output, overwrite=not restart, restart=restart,
                        progress=progress if verbose else None, max_increments=max_increments)
     run = from_results(outcome.results, case.phases[0].output_at)
@@ -184,6 +249,8 @@ def betas(run: Run) -> tuple[float, float]:
 
 def summary(model: str, run: Run) -> dict[str, Any]:
     """The numbers of one run."""
+    if run.kept:
+        return run.kept
     beta1, beta2 = betas(run)
     osc = force_oscillation(run.stroke, run.force, WINDOW, start=START)
     late = (force_oscillation(run.stroke, run.force, WINDOW, start=20.0)
@@ -191,6 +258,8 @@ def summary(model: str, run: Run) -> dict[str, Any]:
     return {
         "model": model,
         "status": run.status,
+        "code": run.code,
+        "date": run.date,
         "stroke_mm": round(float(run.stroke[-1]), 3) if run.stroke.size else 0.0,
         "theta_deg": [round(t, 2) for t in run.theta],
         "beta1_deg": round(beta1, 2),
@@ -407,6 +476,8 @@ def report(mesh: str, hexahedra: int, numbers: dict[str, dict[str, Any]],
               *[f"{PAPER[m]['cpu_min']} min" for m in models]]),
         _row(["threads", *[numbers[m]["threads"] or "?" for m in models],
               *["4 cores" for _ in models]]),
+        _row(["code, date", *[f"{numbers[m].get('code') or '?'}, {numbers[m].get('date') or '?'}"
+                              for m in models], *["" for _ in models]]),
         _row(["LU factorizations", *[numbers[m]["factorizations"] for m in models],
               *["" for _ in models]]),
         _row(["GMRES iterations (older factors)", *[numbers[m]["krylov_iterations"]
@@ -609,7 +680,8 @@ def main(argv: list[str] | None = None) -> int:
                         help="stop a run after N increments, report it as far as it got "
                         "(default 1500; 0: no limit)")
     parser.add_argument("--reuse", action="store_true",
-                        help="report from the runs saved in results/ (no new run)")
+                        help="report from the runs saved in results/, else kept in the "
+                        "report's runs file (no new run)")
     parser.add_argument("--restart", action="store_true",
                         help="continue the runs saved in results/ from their checkpoints "
                         "(a run stopped or cut off; a completed one is read back)")
@@ -623,11 +695,16 @@ def main(argv: list[str] | None = None) -> int:
     if not all((case_root / m / "control.dat").exists() for m in models) or \
             not (HERE / "tools" / "tools.step").exists():
         make_case.main(["--mesh", args.mesh])
+    stem = "cylindrical_bending" + ("_paper" if args.mesh == "paper" else "")
     runs: dict[str, Run] = {}
     for model in models:
         saved = HERE / "results" / args.mesh / model / "results.h5"
         if args.reuse and saved.exists():
             runs[model] = from_results(saved)
+            continue
+        kept = kept_run(runs_file(stem), model) if args.reuse else None
+        if kept is not None:
+            runs[model] = kept
             continue
         if args.restart and saved.exists():
             state = json.loads((saved.parent / "status.json").read_text())["status"]
@@ -650,7 +727,7 @@ def main(argv: list[str] | None = None) -> int:
                                      for c, h, d in claims(numbers)]}, indent=2))
         return 0
     DOCS.mkdir(parents=True, exist_ok=True)
-    stem = "cylindrical_bending" + ("_paper" if args.mesh == "paper" else "")
+    keep_runs(runs_file(stem), numbers, {m: r for m, r in runs.items() if not r.kept})
     figures = {"force": plot_force(runs, DOCS / f"{stem}_force.png", (20.0, 24.0)),
                "increments": plot_increments(runs, DOCS / f"{stem}_increments.png")}
     shape = shape_errors(HERE / "tools")

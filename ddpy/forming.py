@@ -43,12 +43,11 @@ TOUCHING = 1e-6
 #: Unknowns from which linear_solver "auto" solves with older factors (GMRES) between
 #: factorizations: below, a factorization costs little more than a few solves.
 REUSE_FROM = 20_000
-#: GMRES on the older factors: its relative tolerance (of the preconditioned, weighted
-#: residual: the correction's relative error; see _increment) as a share of the Newton
-#: loop's displacement tolerance, and its floor; the iterations before it gives up (a
-#: factorization costs about 14 on the paper's bending blank), and the most after which
-#: the same factors are tried again.
-KRYLOV_ACCURACY, KRYLOV_TIGHT = 0.1, 1e-10
+#: GMRES on the older factors: bounds of its relative tolerance (of the preconditioned,
+#: weighted residual: the correction's relative error; see _increment), the iterations
+#: before it gives up (a factorization costs about 14 on the paper's bending blank), and
+#: the most after which the same factors are tried again.
+KRYLOV_LOOSE, KRYLOV_TIGHT = 1e-2, 1e-10
 KRYLOV_MAX = 12
 #: Deepest a free node may be pushed into a tool by one Newton step, in element sizes, and
 #: the shortest step that limit may leave (FormingProblem._penetration_step).
@@ -880,13 +879,12 @@ class FormingProblem:
                         relative)
             if iteration == max_iterations:
                 return f"no convergence in {max_iterations} iterations"
-            # The correction's relative error: a tenth of the displacement tolerance. The
-            # first correction is about the whole increment, and an error of eta times it
-            # is what the convergence test on the correction sees next. Inexact Newton
-            # (Eisenstat and Walker, eta from 1e-2 down to 1e-3 as the residual fell) took
-            # 212 iterations for the first 3.26 mm of the paper's bending blank, against 131
-            # for 3.60 mm with this (docs/theory/linear-solver.md).
-            forcing = max(KRYLOV_TIGHT, KRYLOV_ACCURACY * tol_disp)
+            # Inexact Newton (Eisenstat and Walker): the correction's relative error may be
+            # a tenth of the relative residual (the rate stays quadratic), or as large as
+            # leaves the next residual a tenth of the tolerance (the last iteration).
+            rel = norm / scale
+            forcing = min(KRYLOV_LOOSE, max(KRYLOV_TIGHT, 0.1 * rel,
+                                            0.1 * tol_force / max(rel, 1e-300)))
             direction = self._direction(layout, solver, values, residual, weight, result,
                                         forcing, hint)
             if isinstance(direction, str):

@@ -177,15 +177,16 @@ def test_a_kept_run_reports_the_numbers_it_was_kept_with(tmp_path: Path) -> None
     bench.keep_runs(path, {"nagata": numbers}, {"nagata": run})
     other = bench.Run(**{**run.__dict__, "code": "def5678", "wall_s": 99.0})
     bench.keep_runs(path, {"bezier": bench.summary("bezier", other)}, {"bezier": other})
-    kept = bench.kept_run(path, "nagata")
-    assert kept is not None and bench.kept_run(path, "facets_fine") is None
+    runs = bench.kept_runs(path)
+    assert sorted(runs) == ["bezier", "nagata"] and bench.kept_runs(tmp_path / "none") == {}
+    kept = runs["nagata"]
     again = bench.summary("nagata", kept)
     assert again["code"] == "abc1234" and again["wall_s"] == 1234.5
     assert again["beta1_deg"] == numbers["beta1_deg"]
     assert np.isnan(again["theta_deg"][2]) and again["theta_deg"][3] == 145.0
     assert again["oscillation_N"] == numbers["oscillation_N"]
     np.testing.assert_allclose(kept.force, run.force, atol=1e-5)
-    assert bench.summary("bezier", bench.kept_run(path, "bezier"))["code"] == "def5678"
+    assert bench.summary("bezier", runs["bezier"])["code"] == "def5678"
 
 
 if __name__ == "__main__":  # renew the reference

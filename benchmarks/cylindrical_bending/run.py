@@ -69,6 +69,8 @@ AXIS0 = np.array([0.0, 0.0, make_case.THICKNESS + make_case.PUNCH_RADIUS])
 #: Force oscillation: moving quadratic over 1 mm of stroke, from 1 mm on (the first
 #: millimetre is the elastic-plastic transition, a real bend in the curve).
 WINDOW, START = 1.0, 1.0
+#: Written by run_case_folder next to a run's results: its code version and date.
+CODE_FILE = "code.json"
 #: The free flange for beta: material initially beyond this x, past the die shoulder.
 FLANGE_X = 45.0
 
@@ -153,7 +155,7 @@ def from_results(path: Path, output_at: tuple[float, ...] = make_case.OUTPUT_AT)
 def _code_of(folder: Path) -> dict[str, str]:
     """Code version and date recorded by run_case_folder next to a run's results."""
     try:
-        return json.loads((folder / "code.json").read_text())
+        return json.loads((folder / CODE_FILE).read_text())
     except (OSError, ValueError):
         return {}
 
@@ -191,21 +193,22 @@ def keep_runs(path: Path, numbers: dict[str, dict[str, Any]], runs: dict[str, Ru
     path.write_text(json.dumps(kept, indent=1) + "\n")
 
 
-def kept_run(path: Path, model: str) -> Run | None:
-    """One model's run from the runs file, or None."""
+def kept_runs(path: Path) -> dict[str, Run]:
+    """The runs of the runs file ``path`` by model (none when it does not exist)."""
     if not path.exists():
-        return None
-    entry = json.loads(path.read_text()).get(model)
-    if entry is None:
-        return None
-    curves, numbers = entry["curves"], entry["numbers"]
+        return {}
     empty = np.zeros((0, 3))
-    return Run(stroke=np.array(curves["stroke"]), force=np.array(curves["force"]),
-               sizes=np.array(curves["sizes"]), iterations=np.array(curves["iterations"]),
-               cuts=numbers["cuts"], theta=numbers["theta_deg"], shape_formed=empty,
-               shape_sprung=empty, initial=empty, wall_s=numbers["wall_s"],
-               status=numbers["status"], code=numbers.get("code", ""),
-               date=numbers.get("date", ""), kept=numbers)
+    runs = {}
+    for model, entry in json.loads(path.read_text()).items():
+        curves, numbers = entry["curves"], entry["numbers"]
+        runs[model] = Run(
+            stroke=np.array(curves["stroke"]), force=np.array(curves["force"]),
+            sizes=np.array(curves["sizes"]), iterations=np.array(curves["iterations"]),
+            cuts=numbers["cuts"], theta=numbers["theta_deg"], shape_formed=empty,
+            shape_sprung=empty, initial=empty, wall_s=numbers["wall_s"],
+            status=numbers["status"], code=numbers.get("code", ""),
+            date=numbers.get("date", ""), kept=numbers)
+    return runs
 
 
 def run_case_folder(folder: Path, output: Path | None = None, verbose: bool = False,
@@ -226,7 +229,7 @@ def run_case_folder(folder: Path, output: Path | None = None, verbose: bool = Fa
 
     case = read_case(folder)
     output.mkdir(parents=True, exist_ok=True)
-    (output / "code.json").write_text(json.dumps({
+    (output / CODE_FILE).write_text(json.dumps({
         "code": code_version(), "date": datetime.date.today().isoformat()}))
     outcome = run_case(case, output, overwrite=not restart, restart=restart,
                        progress=progress if verbose else None, max_increments=max_increments)
@@ -696,15 +699,15 @@ def main(argv: list[str] | None = None) -> int:
             not (HERE / "tools" / "tools.step").exists():
         make_case.main(["--mesh", args.mesh])
     stem = "cylindrical_bending" + ("_paper" if args.mesh == "paper" else "")
+    kept = kept_runs(runs_file(stem)) if args.reuse else {}
     runs: dict[str, Run] = {}
     for model in models:
         saved = HERE / "results" / args.mesh / model / "results.h5"
         if args.reuse and saved.exists():
             runs[model] = from_results(saved)
             continue
-        kept = kept_run(runs_file(stem), model) if args.reuse else None
-        if kept is not None:
-            runs[model] = kept
+        if model in kept:
+            runs[model] = kept[model]
             continue
         if args.restart and saved.exists():
             state = json.loads((saved.parent / "status.json").read_text())["status"]

@@ -189,6 +189,37 @@ def test_a_kept_run_reports_the_numbers_it_was_kept_with(tmp_path: Path) -> None
     assert bench.summary("bezier", runs["bezier"])["code"] == "def5678"
 
 
+def test_the_target_is_timed_by_a_run_alone_on_the_machine() -> None:
+    """A run that shared the cores (1 thread) does not time the target: the wall time comes
+    from a run alone with a thread per core that took the same path, or the target is not
+    judged."""
+    bench = _module("run")
+    alone = {"status": "completed", "threads": 2, "wall_s": 4106.0, "code": "abc1234",
+             "date": "2026-11-25", "increments": 485, "iterations": 3151,
+             "springback_iterations": 323, "factorizations": 460, "krylov_iterations": 18944,
+             "per_iteration_s": {"assembly": 0.236, "contact": 0.127, "linear": 0.795,
+                                 "rest": 0.024}}
+    timed = bench.timed_alone(alone, None, 2)
+    assert timed is not None and timed["wall_s"] == 4106.0
+    shared = {**alone, "threads": 1, "wall_s": 7300.0}
+    assert bench.timed_alone(shared, timed, 2) == timed
+    assert bench.timed_alone({**shared, "iterations": 3150}, timed, 2) is None
+    assert bench.timed_alone(shared, None, 2) is None
+    assert bench.timed_alone({**alone, "status": "partial"}, None, 2) is None
+
+    text = " ".join(bench.target("paper", {"nagata": {**shared, "timed_alone": timed}}))
+    assert "not met** (completed; 68.4 min alone with 2 threads at abc1234" in text
+    assert "linear, 67 %" in text and "What would remove it" in text
+    fast = {**timed, "wall_s": 1500.0}
+    assert "met** (completed; 25.0 min" in " ".join(
+        bench.target("paper", {"nagata": {**alone, "timed_alone": fast}}))
+    untimed = " ".join(bench.target("paper", {"nagata": {**shared, "timed_alone": None}}))
+    assert "not judged" in untimed and "What would remove it" not in untimed
+    assert bench.target("coarse", {"nagata": alone}) == []
+    assert bench._alone({"timed_alone": timed}) == "68.4 min (2, abc1234)"
+    assert bench._alone({"timed_alone": None}) == "not measured"
+
+
 if __name__ == "__main__":  # renew the reference
     import tempfile
 

@@ -68,7 +68,10 @@ _SCALARS: dict[str, tuple[str, str, str]] = {
     "limit": ("i1", "1", "what limited the increment (attribute 'codes')"),
     "time_assembly": ("f8", "s", "wall time in assembly (internal forces, tangent)"),
     "time_contact": ("f8", "s", "wall time in the contact search"),
-    "time_factorization": ("f8", "s", "wall time in factorization and solution"),
+    "time_factorization": ("f8", "s", "wall time in LU factorizations (files written "
+                           "before time_solve existed: factorizations and solutions)"),
+    "time_solve": ("f8", "s", "wall time in solutions with the LU factors, GMRES with "
+                   "older factors included"),
     "time_rest": ("f8", "s", "wall time in everything else"),
     "time_total": ("f8", "s", "wall time of the increment"),
 }
@@ -89,10 +92,11 @@ class Timings:
     contact: float = 0.0
     factorization: float = 0.0
     rest: float = 0.0
+    solve: float = 0.0
 
     @property
     def total(self) -> float:
-        return self.assembly + self.contact + self.factorization + self.rest
+        return self.assembly + self.contact + self.factorization + self.solve + self.rest
 
 
 @dataclass(frozen=True)
@@ -244,6 +248,10 @@ class ResultsWriter:
             group.attrs["count"] = count
             for d in group.values():
                 d.resize(count, axis=0)
+        for name, (dtype, units, meaning) in _SCALARS.items():
+            if name not in inc:  # a file of an older version: the column starts at zero
+                cls._column(inc, name, dtype, (), units, meaning)
+                inc[name].resize(increments, axis=0)
         fields.attrs["count"] = frames
         for index in range(frames, have[2]):
             del fields[f"{index:06d}"]
@@ -327,7 +335,7 @@ class ResultsWriter:
                "residual_displacement": float(residual_displacement), "rmin": float(rmin),
                "limit": code, "time_assembly": timings.assembly,
                "time_contact": timings.contact, "time_factorization": timings.factorization,
-               "time_rest": timings.rest, "time_total": timings.total,
+               "time_solve": timings.solve, "time_rest": timings.rest, "time_total": timings.total,
                "tool_displacement": u, "tool_force": force, "nodes_in_contact": contact}
         inc = self._file["increments"]
         for name, value in row.items():

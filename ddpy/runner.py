@@ -351,9 +351,9 @@ class _Run:
                      result: FormingResult = result, clock: list = clock) -> bool:
                 now = time.perf_counter()
                 spent = {k: v - clock[1][k] for k, v in result.timings.items()}
-                timing = Timings(spent["assembly"], spent["contact"],
-                                 spent["factorization"] + spent["solve"],
-                                 max(0.0, now - clock[0] - sum(spent.values())))
+                timing = Timings(spent["assembly"], spent["contact"], spent["factorization"],
+                                 max(0.0, now - clock[0] - sum(spent.values())),
+                                 spent["solve"])
                 reason = result.limited_by[-1]
                 limit = _LIMITS.get(reason, "max_increment")
                 size = result.sizes[-1] * (b - a)
@@ -398,8 +398,9 @@ class _Run:
                                  relative=[result.relative[k]])
             self.record(phase, part, 0.0, 0.0, "max_increment",
                         Timings(t["assembly"] / phase.increments, t["contact"] / phase.increments,
-                                (t["factorization"] + t["solve"]) / phase.increments,
-                                max(0.0, share - sum(t.values()) / phase.increments)), 0,
+                                t["factorization"] / phase.increments,
+                                max(0.0, share - sum(t.values()) / phase.increments),
+                                t["solve"] / phase.increments), 0,
                         *[_share(total, k, phase.increments) for total in
                           (result.factorizations, result.krylov_iterations)])
         self.fields(None)

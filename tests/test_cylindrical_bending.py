@@ -198,7 +198,7 @@ def test_the_target_is_timed_by_a_run_alone_on_the_machine() -> None:
              "date": "2026-11-25", "increments": 485, "iterations": 3151,
              "springback_iterations": 323, "factorizations": 460, "krylov_iterations": 18944,
              "per_iteration_s": {"assembly": 0.236, "contact": 0.127, "linear": 0.795,
-                                 "rest": 0.024}}
+                                 "rest": 0.024, "factorization": 0.2, "solve": 0.595}}
     timed = bench.timed_alone(alone, None, 2)
     assert timed is not None and timed["wall_s"] == 4106.0
     shared = {**alone, "threads": 1, "wall_s": 7300.0}
@@ -209,7 +209,8 @@ def test_the_target_is_timed_by_a_run_alone_on_the_machine() -> None:
 
     text = " ".join(bench.target("paper", {"nagata": {**shared, "timed_alone": timed}}))
     assert "not met** (completed; 68.4 min alone with 2 threads at abc1234" in text
-    assert "linear, 67 %" in text and "What would remove it" in text
+    assert "linear, 67 %: LU factorizations 17 %, solutions 50 %" in text
+    assert "What would remove it" in text and "1523 iterations" in text
     fast = {**timed, "wall_s": 1500.0}
     assert "met** (completed; 25.0 min" in " ".join(
         bench.target("paper", {"nagata": {**alone, "timed_alone": fast}}))

@@ -97,6 +97,34 @@ def test_write_and_read_back(tmp_path: Path, mesh) -> None:
             r.frame(5)
 
 
+def test_factorization_and_solve_times_apart(tmp_path: Path, mesh) -> None:
+    """LU factorizations and solutions are timed apart; a file written before time_solve
+    existed gets the column, zero for its rows, when a run continues in it."""
+    path = tmp_path / "run.h5"
+    with ResultsWriter(path, mesh, TOOLS) as out:
+        for k in range(2):
+            out.increment(phase=0, step=0.1, travel=0.1 * (k + 1),
+                          tool_displacement=np.zeros((2, 3)), tool_force=np.zeros((2, 3)),
+                          iterations=3, residual_force=1e-5, residual_displacement=1e-5,
+                          timings=Timings(assembly=0.1, contact=0.02, factorization=0.3,
+                                          rest=0.01, solve=0.5))
+    with ResultsReader(path) as r:
+        h = r.history()
+        np.testing.assert_allclose(h["time_solve"], 0.5)
+        np.testing.assert_allclose(h["time_factorization"], 0.3)
+        np.testing.assert_allclose(h["time_total"], 0.93)
+    import h5py
+
+    with h5py.File(path, "r+") as f:  # as an older version wrote it
+        del f["increments/time_solve"]
+    with ResultsWriter.reopen(path, increments=1, iterations=0, frames=1) as out:
+        out.increment(phase=0, step=0.1, travel=0.2, tool_displacement=np.zeros((2, 3)),
+                      tool_force=np.zeros((2, 3)), iterations=3, residual_force=1e-5,
+                      residual_displacement=1e-5, timings=Timings(solve=0.25))
+    with ResultsReader(path) as r:
+        np.testing.assert_allclose(r.history()["time_solve"], [0.0, 0.25])
+
+
 def test_xdmf_read_by_meshio(tmp_path: Path, mesh) -> None:
     meshio = pytest.importorskip("meshio")
     path = tmp_path / "run.h5"

@@ -143,14 +143,37 @@ def from_results(path: Path, output_at: tuple[float, ...] = make_case.OUTPUT_AT)
                    wall_s=float(history["time_total"].sum()),
                    springback_iterations=int(history["iterations"][~forming].sum()),
                    status=status, limits=_count_limits(history["limit"][forming]),
-                   times={part: float(history[f"time_{key}"].sum()) for part, key in
-                          (("assembly", "assembly"), ("contact", "contact"),
-                           ("linear", "factorization"), ("rest", "rest"))},
+                   times=_times(history),
                    factorizations=int(history.get("factorizations", np.zeros(1)).sum()),
                    krylov_iterations=int(history.get("krylov_iterations",
                                                      np.zeros(1)).sum()),
                    all_iterations=int(history["iterations"].sum()),
                    threads=r.threads, **_code_of(path.parent))
+
+
+#: The parts of an iteration's time that add up to it (Table 3).
+PARTS = ("assembly", "contact", "linear", "rest")
+
+
+def _times(history: dict[str, np.ndarray]) -> dict[str, float]:
+    """Wall time of a run by part, s: PARTS, linear being the LU factorizations and the
+    solutions with the factors (GMRES included); with these two apart as factorization and
+    solve when the results file has them (time_solve, since 2026-11-25)."""
+    part = {key: float(history[f"time_{key}"].sum())
+            for key in ("assembly", "contact", "factorization", "rest")}
+    out = {"assembly": part["assembly"], "contact": part["contact"],
+           "linear": part["factorization"], "rest": part["rest"]}
+    if "time_solve" in history:
+        solve = float(history["time_solve"].sum())
+        out.update(linear=part["factorization"] + solve, factorization=part["factorization"],
+                   solve=solve)
+    return out
+
+
+def _per_iteration(numbers: dict[str, Any]) -> tuple[dict[str, float], float]:
+    """A run's seconds per iteration by part (PARTS) and their sum."""
+    per = {k: v for k, v in numbers["per_iteration_s"].items() if k in PARTS}
+    return per, sum(per.values())
 
 
 def _code_of(folder: Path) -> dict[str, str]:
@@ -417,6 +440,10 @@ def plot_increments(runs: dict[str, Run], path: Path) -> Path:
     return path
 
 
+def _seconds(value: float | None) -> str:
+    return "-" if value is None else f"{value:.3f}"
+
+
 def _alone(numbers: dict[str, Any]) -> str:
     """Table 3's cell for the wall time of a run alone on the machine."""
     timed = numbers.get("timed_alone")
@@ -528,16 +555,18 @@ def report(mesh: str, hexahedra: int, numbers: dict[str, dict[str, Any]],
         "",
         "",
         "Time per Newton iteration (whole run, springback included; wall time of each part "
-        "over the run's iterations, s; linear = LU factorizations, solves and GMRES with "
-        "older factors, docs/theory/linear-solver.md):",
+        "over the run's iterations, s; linear = LU factorizations, and solutions with the "
+        "factors, GMRES with older factors included, docs/theory/linear-solver.md; the two "
+        "apart where the results file has them):",
         "",
         _row(["", *[LABELS[m] for m in models]]),
         _row(["---"] * (1 + len(models))),
-        *[_row([part, *[f"{numbers[m]['per_iteration_s'].get(part, float('nan')):.3f}"
-                        for m in models]])
-          for part in ("assembly", "contact", "linear", "rest")],
-        _row(["**per iteration**", *[
-            f"**{sum(numbers[m]['per_iteration_s'].values()):.3f}**" for m in models]]),
+        *[_row([label, *[_seconds(numbers[m]["per_iteration_s"].get(part)) for m in models]])
+          for part, label in (("assembly", "assembly"), ("contact", "contact search"),
+                              ("linear", "linear"), ("factorization", "- LU factorizations"),
+                              ("solve", "- solutions"), ("rest", "rest"))],
+        _row(["**per iteration**", *[f"**{_per_iteration(numbers[m])[1]:.3f}**"
+                                     for m in models]]),
         "",
         *target(mesh, numbers),
         f"![increment size]({figures['increments'].name})",
@@ -612,15 +641,18 @@ def target(mesh: str, numbers: dict[str, dict[str, Any]]) -> list[str]:
             f"more than {PAPER['nagata']['iterations']} Newton iterations: ")
     done = n["status"].startswith("completed")
     source = timed or n
-    per = source["per_iteration_s"]
-    total = sum(per.values())
+    per, total = _per_iteration(source)
     lead = max(per, key=per.get) if per else "linear"
+    split = source["per_iteration_s"]
+    apart = (f": LU factorizations {100 * split['factorization'] / max(total, 1e-12):.0f} %, "
+             f"solutions {100 * split['solve'] / max(total, 1e-12):.0f} %"
+             if lead == "linear" and "solve" in split else "")
     dominates = (
         f"What dominates an iteration: {lead}, "
-        f"{100 * per.get(lead, 0.0) / max(total, 1e-12):.0f} % ({n['factorizations']} LU "
-        f"factorizations and {n['krylov_iterations']} GMRES iterations with older factors; "
-        "one LU of this blank is 3.2e10 flops, 1.2-1.5 s, one solve 0.07-0.1 s, "
-        "memory-bound).")
+        f"{100 * per.get(lead, 0.0) / max(total, 1e-12):.0f} %{apart} "
+        f"({n['factorizations']} LU factorizations and {n['krylov_iterations']} GMRES "
+        "iterations with older factors; one LU of this blank is 3.2e10 flops, 1.2-1.5 s, one "
+        "solve 0.07-0.1 s, memory-bound).")
     if timed is None:
         return [head + "not judged** (" + n["status"] + f"; this run took {n['threads']} "
                 "thread(s) and shared the cores with other runs, and no run alone with a "

@@ -193,6 +193,11 @@ class FormingResult:
     #: older factorization instead (``FormingProblem.linear_solver``)
     factorizations: int = 0
     krylov_iterations: int = 0
+    #: Newton corrections and residual evaluations (line-search trials and extrapolated
+    #: starts included) of every trial increment, the rejected ones (cut, or redone shorter
+    #: by an increment limit) included: the work behind ``iterations``
+    newton_iterations: int = 0
+    evaluations: int = 0
     timings: dict[str, float] = field(default_factory=lambda: {
         "assembly": 0.0, "contact": 0.0, "factorization": 0.0, "solve": 0.0, "rest": 0.0})
 
@@ -847,6 +852,7 @@ class FormingProblem:
         hint = None
         current = None
         if guess is not None:  # the extrapolated start, unless an element fails there
+            result.evaluations += 1
             current = self._evaluate(layout, guess, force, x_n, positions, on, timings,
                                      touching)
             if isinstance(current, str):
@@ -854,6 +860,7 @@ class FormingProblem:
             else:
                 u = guess.copy()
         if current is None:
+            result.evaluations += 1
             current = self._evaluate(layout, u, force, x_n, positions, on, timings, touching)
         if isinstance(current, str):
             return current
@@ -885,6 +892,7 @@ class FormingProblem:
             rel = norm / scale
             forcing = min(KRYLOV_LOOSE, max(KRYLOV_TIGHT, 0.1 * rel,
                                             0.1 * tol_force / max(rel, 1e-300)))
+            result.newton_iterations += 1
             direction = self._direction(layout, solver, values, residual, weight, result,
                                         forcing, hint)
             if isinstance(direction, str):
@@ -900,6 +908,7 @@ class FormingProblem:
                 trial_u = u.copy()
                 trial_u.ravel()[free] += alpha * du
                 trial_force = force + alpha * dforce
+                result.evaluations += 1
                 trial = self._evaluate(layout, trial_u, trial_force, x_n, positions, on,
                                        timings, buffer=buffer)
                 if not isinstance(trial, str):

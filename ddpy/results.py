@@ -62,6 +62,10 @@ _SCALARS: dict[str, tuple[str, str, str]] = {
                        "included (the other corrections are solved with older factors)"),
     "krylov_iterations": ("i4", "1", "GMRES iterations of the corrections solved with older "
                           "factors in the increment, rejected trials included"),
+    "newton_iterations": ("i4", "1", "Newton corrections spent on the increment, its "
+                          "rejected trials (cut, or redone shorter by a limit) included"),
+    "evaluations": ("i4", "1", "residual and tangent evaluations of the increment (line-search "
+                    "trials and rejected trials included)"),
     "residual_force": ("f8", "1", "relative residual force at convergence"),
     "residual_displacement": ("f8", "1", "relative displacement correction at convergence"),
     "rmin": ("f8", "1", "r_min factor applied to the trial increment"),
@@ -314,7 +318,8 @@ class ResultsWriter:
                   timings: Timings = Timings(), nodes_in_contact: ArrayLike | None = None,
                   cutbacks: int = 0, rmin: float = 1.0, limit: int | str = 0,
                   residual_history: ArrayLike | None = None, factorizations: int = 0,
-                  krylov_iterations: int = 0) -> int:
+                  krylov_iterations: int = 0, newton_iterations: int = 0,
+                  evaluations: int = 0) -> int:
         """Append one converged increment; return its number (from 1). ``tool_displacement``
         and ``tool_force`` are (tools, 3); ``residual_history`` (iterations, 2) holds the
         force and displacement residuals of each Newton iteration."""
@@ -331,6 +336,7 @@ class ResultsWriter:
                "travel": float(travel), "iterations": int(iterations),
                "cutbacks": int(cutbacks), "factorizations": int(factorizations),
                "krylov_iterations": int(krylov_iterations),
+               "newton_iterations": int(newton_iterations), "evaluations": int(evaluations),
                "residual_force": float(residual_force),
                "residual_displacement": float(residual_displacement), "rmin": float(rmin),
                "limit": code, "time_assembly": timings.assembly,

@@ -274,9 +274,9 @@ class _Run:
         self.last_frame = self.writer.increments
 
     def record(self, phase: Phase, result: FormingResult, step: float, travel: float,
-               limit: str, timings: Timings, cuts: int, factorizations: int,
-               krylov_iterations: int) -> None:
-        """Write the last increment of ``result`` as a row of the results."""
+               limit: str, timings: Timings, counts: dict[str, int]) -> None:
+        """Write the last increment of ``result`` as a row of the results; ``counts``, the
+        increment's share of the COUNTERS of a FormingResult."""
         assert self.writer is not None
         # The measures convergence is judged on (FormingResult.relative): the residual over
         # the force scale and the correction over the increment's displacement.
@@ -290,10 +290,11 @@ class _Run:
             residual_displacement=float(history[-1, 1]), timings=timings,
             nodes_in_contact=[result.contacts[k][-1] if result.contacts.get(k) else 0
                               for k in self.names],
-            cutbacks=cuts, rmin=min(1.0, step / phase.max_increment) if phase.max_increment
-            else 1.0, limit=limit,
-            residual_history=history, factorizations=factorizations,
-            krylov_iterations=krylov_iterations)
+            cutbacks=counts["cuts"], rmin=min(1.0, step / phase.max_increment)
+            if phase.max_increment else 1.0, limit=limit, residual_history=history,
+            factorizations=counts["factorizations"],
+            krylov_iterations=counts["krylov_iterations"],
+            newton_iterations=counts["newton_iterations"], evaluations=counts["evaluations"])
         self.phase_increments += 1
         self._since_checkpoint += 1
         if self.progress is not None:
@@ -345,12 +346,13 @@ class _Run:
             gaps = {m.tool: (m.other, m.gap, self.case.tool(m.tool).facing)
                     for m in phase.motions if isinstance(m, HoldGap)} if self.segment == 0 else {}
             result = FormingResult()
-            clock = [time.perf_counter(), dict(result.timings), 0, 0, 0]
+            clock = [time.perf_counter(), dict(result.timings), _counts(result)]
 
             def hook(progress: PhaseProgress, a: float = a, b: float = b,
                      result: FormingResult = result, clock: list = clock) -> bool:
                 now = time.perf_counter()
                 spent = {k: v - clock[1][k] for k, v in result.timings.items()}
+                counts = {k: v - clock[2][k] for k, v in _counts(result).items()}
                 timing = Timings(spent["assembly"], spent["contact"], spent["factorization"],
                                  max(0.0, now - clock[0] - sum(spent.values())),
                                  spent["solve"])
@@ -361,10 +363,8 @@ class _Run:
                         and size < phase.max_increment * (1 - 1e-9)):
                     limit = "phase_end" if b >= phase.travel * (1 - 1e-12) else "output"
                 self.record(phase, result, size, a + progress.factor * (b - a), limit, timing,
-                            result.cuts - clock[2], result.factorizations - clock[3],
-                            result.krylov_iterations - clock[4])
-                clock[:] = [time.perf_counter(), dict(result.timings), result.cuts,
-                            result.factorizations, result.krylov_iterations]
+                            counts)
+                clock[:] = [time.perf_counter(), dict(result.timings), _counts(result)]
                 if progress.factor >= 1.0 - 1e-12 or (
                         phase.output_every and self.phase_increments % phase.output_every == 0):
                     self.fields(result)  # output_every, output_at, the phase end
@@ -400,9 +400,9 @@ class _Run:
                         Timings(t["assembly"] / phase.increments, t["contact"] / phase.increments,
                                 t["factorization"] / phase.increments,
                                 max(0.0, share - sum(t.values()) / phase.increments),
-                                t["solve"] / phase.increments), 0,
-                        *[_share(total, k, phase.increments) for total in
-                          (result.factorizations, result.krylov_iterations)])
+                                t["solve"] / phase.increments),
+                        {name: _share(total, k, phase.increments)
+                         for name, total in _counts(result).items()})
         self.fields(None)
 
     def run(self) -> None:
@@ -421,6 +421,15 @@ class _Run:
             self.save(None)
             if self.phase_index < len(phases) and self._should_halt():
                 return
+
+
+#: What a FormingResult counts over its increments (cut increments, LU factorizations,
+#: GMRES iterations, Newton corrections and evaluations of all trials).
+COUNTERS = ("cuts", "factorizations", "krylov_iterations", "newton_iterations", "evaluations")
+
+
+def _counts(result: FormingResult) -> dict[str, int]:
+    return {name: int(getattr(result, name)) for name in COUNTERS}
 
 
 def _share(total: int, k: int, parts: int) -> int:

@@ -98,6 +98,13 @@ def test_run_writes_every_phase_and_the_outputs(reference: tuple[Path, Path]) ->
         # default): the force residual over the force scale, the correction over the step.
         assert np.all(r.curve("residual_force") <= 1e-4)
         assert np.all(r.curve("residual_displacement") <= 1e-4)
+        # The work behind the converged iterations: the corrections of every trial (a
+        # rejected one included) and the evaluations (line search included).
+        forming, iterations = phase < 2, r.curve("iterations")
+        newton, evaluations = r.curve("newton_iterations"), r.curve("evaluations")
+        assert np.all(newton[forming] >= iterations[forming])
+        assert np.all(evaluations[forming] >= newton[forming] + 1)
+        assert newton.sum() >= iterations.sum() and evaluations.sum() > newton.sum()
         first = r.iterations()["iteration"] == 1  # before the first correction
         assert first.sum() == len(phase)
         assert np.all(np.isinf(r.iterations()["residual_displacement"][first]))

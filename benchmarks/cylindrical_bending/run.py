@@ -99,6 +99,10 @@ class Run:
     factorizations: int = 0
     krylov_iterations: int = 0
     all_iterations: int = 0       # Newton iterations of the whole run, springback included
+    #: Newton corrections and residual evaluations of all trials of the forming, the
+    #: rejected ones and the line search included (0: not recorded)
+    newton_iterations: int = 0
+    evaluations: int = 0
     threads: int = 0              # OpenMP threads of the run (0: not recorded)
     #: code version (git describe) and date of the run; numbers of a run kept in the runs
     #: file (no shapes): summary() returns them as they are
@@ -148,7 +152,14 @@ def from_results(path: Path, output_at: tuple[float, ...] = make_case.OUTPUT_AT)
                    krylov_iterations=int(history.get("krylov_iterations",
                                                      np.zeros(1)).sum()),
                    all_iterations=int(history["iterations"].sum()),
+                   newton_iterations=_forming_sum(history, "newton_iterations", forming),
+                   evaluations=_forming_sum(history, "evaluations", forming),
                    threads=r.threads, **_code_of(path.parent))
+
+
+def _forming_sum(history: dict[str, np.ndarray], name: str, forming: np.ndarray) -> int:
+    """A counter over the forming increments (0 in a file that does not record it)."""
+    return int(history[name][forming].sum()) if name in history else 0
 
 
 #: The parts of an iteration's time that add up to it (Table 3).
@@ -330,6 +341,8 @@ def summary(model: str, run: Run) -> dict[str, Any]:
         "full_size_increments": int(np.sum(run.sizes >= 0.999 * make_case.MAX_INCREMENT)),
         "factorizations": run.factorizations,
         "krylov_iterations": run.krylov_iterations,
+        "newton_iterations_all": run.newton_iterations,
+        "evaluations": run.evaluations,
         # seconds per Newton iteration of the whole run (springback included), by part
         "per_iteration_s": {part: round(t / max(run.all_iterations, 1), 4)
                             for part, t in (run.times or {}).items()},
@@ -552,6 +565,11 @@ def report(mesh: str, hexahedra: int, numbers: dict[str, dict[str, Any]],
               *["" for _ in models]]),
         _row(["GMRES iterations (older factors)", *[numbers[m]["krylov_iterations"]
                                                    for m in models], *["" for _ in models]]),
+        _row(["Newton corrections of all trials (rejected increments included, forming)",
+              *[numbers[m].get("newton_iterations_all") or "?" for m in models],
+              *["" for _ in models]]),
+        _row(["residual evaluations (line search included, forming)",
+              *[numbers[m].get("evaluations") or "?" for m in models], *["" for _ in models]]),
         "",
         "",
         "Time per Newton iteration (whole run, springback included; wall time of each part "

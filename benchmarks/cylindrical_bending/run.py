@@ -747,22 +747,25 @@ def findings(numbers: dict[str, dict[str, Any]], mesh: str = "coarse") -> list[s
             per = {m: numbers[m]["iterations"] / max(numbers[m]["increments"], 1)
                    for m in ("nagata", "facets_coarse")}
             ln, lf = n.get("limited_by", {}), f.get("limited_by", {})
-            out.append(
+            counts = (
                 f"- Coarse facets against Nagata: {per['facets_coarse']:.1f} against "
                 f"{per['nagata']:.1f} iterations per increment, {f['cuts']} against "
-                f"{n['cuts']} cut increments; the difference is in the increments the r_min "
-                "control shortens: a release ended "
-                f"{lf.get('contact_release', 0)} against {ln.get('contact_release', 0)}, a "
-                f"first touch {lf.get('contact_touch', 0)} against "
-                f"{ln.get('contact_touch', 0)}: nodes of the sheet that wraps the smooth "
+                f"{n['cuts']} cut increments; increments ended by a release "
+                f"{lf.get('contact_release', 0)} against {ln.get('contact_release', 0)}, by "
+                f"a first touch {lf.get('contact_touch', 0)} against "
+                f"{ln.get('contact_touch', 0)}, by the yield limit "
+                f"{lf.get('yield', 0)} against {ln.get('yield', 0)}.")
+            out.append(counts if mesh != "coarse" else counts[:-1] + (
+                ": the difference is in the increments the r_min control shortens. Nodes "
+                "of the sheet that wraps the smooth "
                 "punch touch it and lift off again as the wrap proceeds; on a flat facet of "
                 "22.5 degrees the sheet touches at the facet's corners only (theta_1 = "
                 f"{f['theta_deg'][0]:g} degrees at 7 mm: the centre node alone), so fewer "
                 "nodes touch and release. The paper's runs (fine blank) had the opposite; on "
-                "this coarse blank the events of the blank's own nodes dominate.")
+                "this coarse blank the events of the blank's own nodes dominate."))
     if {"bezier", "nagata", "facets_fine"} <= set(numbers):
         osc = {m: numbers[m]["oscillation_N"] for m in numbers}
-        if osc["facets_fine"] <= max(osc["bezier"], osc["nagata"]):
+        if osc["facets_fine"] <= max(osc["bezier"], osc["nagata"]) and mesh == "coarse":
             out.append(
                 f"- Fine facets against the smooth models: oscillation {osc['facets_fine']:.3g} "
                 f"N against {osc['bezier']:.3g} (Bezier) and {osc['nagata']:.3g} N (Nagata). "

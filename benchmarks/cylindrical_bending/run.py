@@ -202,13 +202,21 @@ def _count_limits(codes: np.ndarray) -> dict[str, int]:
     return {LIMITS[int(v)]: int(c) for v, c in zip(values, counts, strict=True)}
 
 
+#: What makes a run's numbers: a change elsewhere (the reports in docs/) leaves them.
+CODE_PATHS = ("ddpy", "fortran", "meson.build", "pyproject.toml", "benchmarks")
+
+
 def code_version() -> str:
-    """The checkout's ``git describe --always --dirty`` (empty outside a git checkout)."""
+    """The checkout's ``git describe --always``, with "-dirty" when the code (CODE_PATHS)
+    differs from it; empty outside a git checkout."""
     try:
-        return subprocess.run(["git", "describe", "--always", "--dirty"], cwd=ROOT,
-                              capture_output=True, text=True, check=True).stdout.strip()
+        described = subprocess.run(["git", "describe", "--always"], cwd=ROOT,
+                                   capture_output=True, text=True, check=True).stdout.strip()
+        changed = subprocess.run(["git", "diff", "--quiet", "HEAD", "--", *CODE_PATHS],
+                                 cwd=ROOT).returncode != 0
     except (OSError, subprocess.CalledProcessError):
         return ""
+    return described + ("-dirty" if changed else "")
 
 
 def cores() -> int:

@@ -816,7 +816,8 @@ def main(argv: list[str] | None = None) -> int:
             not (HERE / "tools" / "tools.step").exists():
         make_case.main(["--mesh", args.mesh])
     stem = "cylindrical_bending" + ("_paper" if args.mesh == "paper" else "")
-    kept = kept_runs(runs_file(stem)) if args.reuse else {}
+    stored = kept_runs(runs_file(stem))  # also the earlier timings alone
+    kept = stored if args.reuse else {}
     runs: dict[str, Run] = {}
     for model in models:
         saved = HERE / "results" / args.mesh / model / "results.h5"
@@ -841,10 +842,9 @@ def main(argv: list[str] | None = None) -> int:
         print(f"  {runs[model].stroke.size} increments, {runs[model].wall_s:.0f} s",
               file=sys.stderr, flush=True)
     numbers = {m: summary(m, r) for m, r in runs.items()}
-    earlier = json.loads(runs_file(stem).read_text()) if runs_file(stem).exists() else {}
     for model, run in runs.items():
         if not run.kept:  # a kept run's numbers hold their own record
-            record = earlier.get(model, {}).get("numbers", {}).get("timed_alone")
+            record = stored[model].kept.get("timed_alone") if model in stored else None
             numbers[model]["timed_alone"] = timed_alone(numbers[model], record, cores())
     if args.json:
         print(json.dumps({"mesh": args.mesh, "models": numbers,

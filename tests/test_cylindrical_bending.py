@@ -189,6 +189,16 @@ def test_a_kept_run_reports_the_numbers_it_was_kept_with(tmp_path: Path) -> None
     assert bench.summary("bezier", runs["bezier"])["code"] == "def5678"
 
 
+def test_a_continued_run_keeps_the_code_it_started_with(tmp_path: Path) -> None:
+    bench = _module("run")
+    first = bench.record_code(tmp_path, "abc1234", restart=False)
+    assert bench.record_code(tmp_path, "abc1234", restart=True) == first
+    again = bench.record_code(tmp_path, "def5678", restart=True)
+    assert again == {"code": "abc1234, continued at def5678", "date": first["date"]}
+    assert bench.record_code(tmp_path, "def5678", restart=True) == again
+    assert bench.record_code(tmp_path, "0123abc", restart=False)["code"] == "0123abc"
+
+
 def test_the_target_is_timed_by_a_run_alone_on_the_machine() -> None:
     """A run that shared the cores (1 thread) does not time the target: the wall time comes
     from a run alone with a thread per core that took the same path, or the target is not

@@ -280,6 +280,20 @@ def kept_runs(path: Path) -> dict[str, Run]:
     return runs
 
 
+def record_code(output: Path, code: str, restart: bool) -> dict[str, str]:
+    """Write the code version and date of the run in ``output`` next to its results. A run
+    continued (``restart``) with other code keeps its history: "<first>, continued at
+    <code>", and the date it started."""
+    output.mkdir(parents=True, exist_ok=True)
+    earlier = _code_of(output) if restart else {}
+    if earlier.get("code"):
+        code = earlier["code"] if earlier["code"].endswith(code) else \
+            f"{earlier['code']}, continued at {code}"
+    record = {"code": code, "date": earlier.get("date", datetime.date.today().isoformat())}
+    (output / CODE_FILE).write_text(json.dumps(record))
+    return record
+
+
 def run_case_folder(folder: Path, output: Path | None = None, verbose: bool = False,
                     max_increments: int | None = None, restart: bool = False) -> Run:
     """Run one case folder with the case runner (``ddpy run``) into ``output`` (default:
@@ -297,9 +311,7 @@ def run_case_folder(folder: Path, output: Path | None = None, verbose: bool = Fa
                   f"{p.travel:.3f} of {p.phase_travel:g} mm", file=sys.stderr, flush=True)
 
     case = read_case(folder)
-    output.mkdir(parents=True, exist_ok=True)
-    (output / CODE_FILE).write_text(json.dumps({
-        "code": code_version(), "date": datetime.date.today().isoformat()}))
+    record_code(output, code_version(), restart)
     outcome = run_case(case, output, overwrite=not restart, restart=restart,
                        progress=progress if verbose else None, max_increments=max_increments)
     run = from_results(outcome.results, case.phases[0].output_at)
@@ -752,8 +764,10 @@ def findings(numbers: dict[str, dict[str, Any]], mesh: str = "coarse") -> list[s
             "a reconstruction (design.md) that matches the paper's rigid wrap angles only, and "
             "theta_4 stays below the paper's 155 degrees. The springback, "
             f"{b2 - b1:.1f} degrees against the paper's 14, is smaller: the reconstructed "
-            "tools, the assumed elastic constants (E, nu are lost from the paper's text) and "
-            f"this mesh of {make_case.COARSE_X[0]} elements over the bend all bear on it.")
+            "tools" + (", " if mesh == "coarse" else " and ") + "the assumed elastic "
+            "constants (E, nu are lost from the paper's text)" + (
+                f" and this mesh of {make_case.COARSE_X[0]} elements over the bend all bear "
+                "on it." if mesh == "coarse" else " bear on it (the blank is the paper's)."))
     if {"nagata", "facets_coarse"} <= set(numbers):
         n, f = numbers["nagata"], numbers["facets_coarse"]
         if not (f["increments"] > n["increments"] and f["iterations"] > n["iterations"]):

@@ -199,6 +199,26 @@ def test_a_continued_run_keeps_the_code_it_started_with(tmp_path: Path) -> None:
     assert bench.record_code(tmp_path, "0123abc", restart=False)["code"] == "0123abc"
 
 
+def test_the_release_effort_finding_counts_the_redone_work() -> None:
+    bench = _module("run")
+    numbers = {
+        "bezier": {"effort_by_limit": {"max_increment": [10, 50, 50, 40.0],
+                                       "contact_release": [5, 30, 60, 60.0]},
+                   "contact_nodes": {"punch": 40.0, "die": 20.0}},
+        "nagata": {"effort_by_limit": {"contact_release": [5, 30, 0, 50.0]}},
+        "facets_coarse": {"effort_by_limit": {"contact_touch": [10, 60, 70, 20.0],
+                                              "contact_release": [20, 100, 400, 180.0]},
+                          "contact_nodes": {"punch": 14.0, "die": 12.0}}}
+    text = " ".join(bench._release_effort(numbers))
+    assert "Bezier: 5 of 15 increments ended at a release, and took 60% of" in text
+    assert "60 Newton corrections for 30 accepted (30 of the 30 corrections" in text
+    assert "Faceted-coarse: 20 of 30 increments ended at a release, and took 90%" in text
+    assert "(300 of the 310 corrections of rejected trials)" in text
+    assert "Nagata:" not in text.split("(nodes in contact")[0]  # no counters: left out
+    assert "Faceted-coarse: punch 14, die 12" in text
+    assert bench._release_effort({"nagata": numbers["nagata"]}) == []
+
+
 def test_the_target_is_timed_by_a_run_alone_on_the_machine() -> None:
     """A run that shared the cores (1 thread) does not time the target: the wall time comes
     from a run alone with a thread per core that took the same path, or the target is not

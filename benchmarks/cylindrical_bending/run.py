@@ -93,6 +93,11 @@ class Run:
     springback_iterations: int = 0
     status: str = "completed"
     limits: dict[str, int] | None = None  # what limited the forming increments, counted
+    #: by what ended each forming increment: increments, accepted iterations, Newton
+    #: corrections of all its trials (0 where not recorded) and wall time, s
+    effort_by_limit: dict[str, list[float]] | None = None
+    #: nodes in contact with each tool, mean over the forming increments
+    contact_nodes: dict[str, float] | None = None
     #: wall time of the whole run (forming and springback) by part, s: assembly, contact,
     #: linear (factorizations, solves, GMRES), rest
     times: dict[str, float] | None = None
@@ -147,6 +152,10 @@ def from_results(path: Path, output_at: tuple[float, ...] = make_case.OUTPUT_AT)
                    wall_s=float(history["time_total"].sum()),
                    springback_iterations=int(history["iterations"][~forming].sum()),
                    status=status, limits=_count_limits(history["limit"][forming]),
+                   effort_by_limit=_effort_by_limit(history, forming),
+                   contact_nodes={tool: round(float(np.mean(
+                       history["nodes_in_contact"][forming][:, i])), 1)
+                       for i, tool in enumerate(r.tools)},
                    times=_times(history),
                    factorizations=int(history.get("factorizations", np.zeros(1)).sum()),
                    krylov_iterations=int(history.get("krylov_iterations",
@@ -155,6 +164,23 @@ def from_results(path: Path, output_at: tuple[float, ...] = make_case.OUTPUT_AT)
                    newton_iterations=_forming_sum(history, "newton_iterations", forming),
                    evaluations=_forming_sum(history, "evaluations", forming),
                    threads=r.threads, **_code_of(path.parent))
+
+
+def _effort_by_limit(history: dict[str, np.ndarray], forming: np.ndarray
+                     ) -> dict[str, list[float]]:
+    """Per limit that ended a forming increment: increments, accepted iterations, Newton
+    corrections of all trials (rejected ones included; 0 where not recorded), wall time."""
+    from ddpy.results import LIMITS
+
+    codes = np.asarray(history["limit"], dtype=int)
+    out = {}
+    for code in np.unique(codes[forming]):
+        mask = forming & (codes == code)
+        out[LIMITS[int(code)]] = [
+            int(mask.sum()), int(history["iterations"][mask].sum()),
+            _forming_sum(history, "newton_iterations", mask),
+            round(float(history["time_total"][mask].sum()), 1)]
+    return out
 
 
 def _forming_sum(history: dict[str, np.ndarray], name: str, forming: np.ndarray) -> int:
@@ -367,6 +393,8 @@ def summary(model: str, run: Run) -> dict[str, Any]:
         "per_iteration_s": {part: round(t / max(run.all_iterations, 1), 4)
                             for part, t in (run.times or {}).items()},
         "limited_by": run.limits or {},
+        "effort_by_limit": run.effort_by_limit or {},
+        "contact_nodes": run.contact_nodes or {},
         "end_xz_mm": [round(float(v), 2) for v in
                       run.shape_formed[run.initial[:, 0] >= make_case.LENGTH - 1e-9]
                       .mean(axis=0)[[0, 2]]],
@@ -722,6 +750,41 @@ def target(mesh: str, numbers: dict[str, dict[str, Any]]) -> list[str]:
             "precision factors.", ""])
 
 
+def _release_effort(numbers: dict[str, dict[str, Any]]) -> list[str]:
+    """Where the forming's Newton work and time went, by the limit that ended the
+    increments: the share of the increments redone at a release (docs/theory/contact.md)."""
+    parts = []
+    for model in MODELS:
+        effort = numbers.get(model, {}).get("effort_by_limit", {})
+        if not effort or not all(e[2] for e in effort.values()):
+            continue  # a run without the counters of rejected trials
+        release = effort.get("contact_release", [0, 0, 0, 0.0])
+        wall = sum(e[3] for e in effort.values())
+        rejected = sum(e[2] - e[1] for e in effort.values())
+        parts.append(
+            f"{LABELS[model]}: {release[0]} of {sum(e[0] for e in effort.values())} "
+            f"increments ended at a release, and took {release[3] / max(wall, 1e-9):.0%} of "
+            f"the forming's wall time; their trials made {release[2]} Newton corrections "
+            f"for {release[1]} accepted ({release[2] - release[1]} of the "
+            f"{rejected} corrections of rejected trials)")
+    if not parts:
+        return []
+    contact = "; ".join(
+        f"{LABELS[m]}: " + ", ".join(f"{t} {c:g}" for t, c in numbers[m]["contact_nodes"].items())
+        for m in MODELS if numbers.get(m, {}).get("contact_nodes"))
+    contact = "nodes in contact, mean over the forming: " + contact if contact else \
+        "the nodes in contact are counted in the results"
+    return ["- Increments redone at a release (a node in contact at the start of an "
+            "increment that carries more than `rmin_release`, 10 %, of its tool's normal "
+            "force and is free at the end makes it be redone shorter, docs/theory/"
+            "contact.md): " + "; ".join(parts) + ". A node leaves a facet where the sheet "
+            "passes its edge (the normal turns by 22.5 degrees there on the coarse facets), "
+            "and every node of the unstructured blank passes it at its own stroke; the "
+            "tools' forces rest on few nodes (" + contact + "), so most of these releases "
+            "carry more than the share, and each is found only after the increment has "
+            "converged, often more than once for one increment."]
+
+
 def findings(numbers: dict[str, dict[str, Any]], mesh: str = "coarse") -> list[str]:
     """What the numbers say beyond the claims: where the sheet's end went, and the cause of
     a claim that does not hold."""
@@ -790,6 +853,8 @@ def findings(numbers: dict[str, dict[str, Any]], mesh: str = "coarse") -> list[s
                 f"{f['theta_deg'][0]:g} degrees at 7 mm: the centre node alone), so fewer "
                 "nodes touch and release. The paper's runs (fine blank) had the opposite; on "
                 "this coarse blank the events of the blank's own nodes dominate."))
+    if mesh != "coarse":
+        out += _release_effort(numbers)
     if {"bezier", "nagata", "facets_fine"} <= set(numbers):
         osc = {m: numbers[m]["oscillation_N"] for m in numbers}
         if osc["facets_fine"] <= max(osc["bezier"], osc["nagata"]) and mesh == "coarse":

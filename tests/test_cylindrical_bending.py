@@ -202,11 +202,14 @@ def test_a_continued_run_keeps_the_code_it_started_with(tmp_path: Path) -> None:
 def test_the_release_effort_finding_counts_the_redone_work() -> None:
     bench = _module("run")
     numbers = {
-        "bezier": {"effort_by_limit": {"max_increment": [10, 50, 50, 40.0],
+        "bezier": {"newton_iterations_all": 110,
+                   "effort_by_limit": {"max_increment": [10, 50, 50, 40.0],
                                        "contact_release": [5, 30, 60, 60.0]},
                    "contact_nodes": {"punch": 40.0, "die": 20.0}},
-        "nagata": {"effort_by_limit": {"contact_release": [5, 30, 0, 50.0]}},
-        "facets_coarse": {"effort_by_limit": {"contact_touch": [10, 60, 70, 20.0],
+        "nagata": {"newton_iterations_all": 0,
+                   "effort_by_limit": {"contact_release": [5, 30, 0, 50.0]}},
+        "facets_coarse": {"newton_iterations_all": 470,
+                          "effort_by_limit": {"contact_touch": [10, 60, 70, 20.0],
                                               "contact_release": [20, 100, 400, 180.0]},
                           "contact_nodes": {"punch": 14.0, "die": 12.0}}}
     text = " ".join(bench._release_effort(numbers))

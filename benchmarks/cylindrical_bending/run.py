@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 
 from ddpy.bending import contact_angle, force_oscillation, line_angle
+from ddpy.case import RminLimits
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
@@ -143,6 +144,7 @@ def from_results(path: Path, output_at: tuple[float, ...] = make_case.OUTPUT_AT)
         formed = max((f for f in frames if f.phase == 0), key=lambda f: f.increment)
         sprung = frames[-1] if frames[-1].phase == 1 else None
         status = "completed" if sprung is not None else "partial"
+        effort = _effort_by_limit(history, forming)
         return Run(stroke=stroke, force=force, sizes=history["step"][forming],
                    iterations=history["iterations"][forming],
                    cuts=int(history["cutbacks"][forming].sum()), theta=theta,
@@ -151,8 +153,8 @@ def from_results(path: Path, output_at: tuple[float, ...] = make_case.OUTPUT_AT)
                    np.full_like(r.nodes, np.nan), initial=r.nodes,
                    wall_s=float(history["time_total"].sum()),
                    springback_iterations=int(history["iterations"][~forming].sum()),
-                   status=status, limits=_count_limits(history["limit"][forming]),
-                   effort_by_limit=_effort_by_limit(history, forming),
+                   status=status, limits={k: e[0] for k, e in effort.items()},
+                   effort_by_limit=effort,
                    contact_nodes={tool: round(float(np.mean(
                        history["nodes_in_contact"][forming][:, i])), 1)
                        for i, tool in enumerate(r.tools)},
@@ -219,13 +221,6 @@ def _code_of(folder: Path) -> dict[str, str]:
         return json.loads((folder / CODE_FILE).read_text())
     except (OSError, ValueError):
         return {}
-
-
-def _count_limits(codes: np.ndarray) -> dict[str, int]:
-    from ddpy.results import LIMITS
-
-    values, counts = np.unique(np.asarray(codes, dtype=int), return_counts=True)
-    return {LIMITS[int(v)]: int(c) for v, c in zip(values, counts, strict=True)}
 
 
 #: What makes a run's numbers: a change elsewhere (the reports in docs/) leaves them.
@@ -760,7 +755,7 @@ def _release_effort(numbers: dict[str, dict[str, Any]]) -> list[str]:
     parts = []
     for model in MODELS:
         effort = numbers.get(model, {}).get("effort_by_limit", {})
-        if not effort or not all(e[2] for e in effort.values()):
+        if not effort or not numbers[model].get("newton_iterations_all"):
             continue  # a run without the counters of rejected trials
         release = effort.get("contact_release", [0, 0, 0, 0.0])
         wall = sum(e[3] for e in effort.values())
@@ -778,8 +773,9 @@ def _release_effort(numbers: dict[str, dict[str, Any]]) -> list[str]:
         for m in MODELS if numbers.get(m, {}).get("contact_nodes"))
     contact = "nodes in contact, mean over the forming: " + contact if contact else \
         "the nodes in contact are counted in the results"
+    share = RminLimits().release_share  # the decks leave rmin_release at its default
     return ["- Increments redone at a release (a node in contact at the start of an "
-            "increment that carries more than `rmin_release`, 10 %, of its tool's normal "
+            f"increment that carries more than `rmin_release`, {share:.0%}, of its tool's normal "
             "force and is free at the end makes it be redone shorter, docs/theory/"
             "contact.md): " + "; ".join(parts) + ". A node leaves a facet where the sheet "
             "passes its edge (the normal turns by 22.5 degrees there on the coarse facets), "

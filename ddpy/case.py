@@ -346,6 +346,10 @@ class Tool:
 
 # ----------------------------------------------------------------------------------- control
 
+#: Default redos of one increment at a release (deck rmin_release_redos): on faceted tools
+#: each redo tends to find another node released earlier, a cascade the cap ends.
+RELEASE_REDOS: int | None = 1
+
 
 @dataclass(frozen=True)
 class RminLimits:
@@ -357,13 +361,15 @@ class RminLimits:
     rotation increment at a Gauss point, degrees; ``contact``: limit the increment at the first
     touch of a free node and the release of a node in contact; ``release_share``: a node
     that carries at most this share of its tool's normal force is released inside an
-    increment instead (docs/theory/contact.md)."""
+    increment instead; ``release_redos``: redos of one increment at a release, after which
+    it is accepted with the release inside it (None: no cap) (docs/theory/contact.md)."""
 
     yield_tolerance: float = 0.1
     strain: float = 0.02
     rotation: float = 1.0
     contact: bool = True
     release_share: float = 0.1
+    release_redos: int | None = RELEASE_REDOS
 
 
 @dataclass(frozen=True)

@@ -317,6 +317,8 @@ _SETTINGS: dict[str, Callable[[str], Any]] = {
     "rmin_rotation": lambda w: _float(w, "rmin_rotation", gt=0, le=90),
     "rmin_contact": lambda w: _choice(w, "rmin_contact", ("on", "off")) == "on",
     "rmin_release": lambda w: _float(w, "rmin_release", ge=0, le=1),
+    "rmin_release_redos": lambda w: (None if w == "off"
+                                     else _int(w, "rmin_release_redos", 0, 10**6)),
     "newton_force": lambda w: _float(w, "newton_force", gt=0, lt=1),
     "newton_displacement": lambda w: _float(w, "newton_displacement", gt=0, lt=1),
     "max_iterations": lambda w: _int(w, "max_iterations", 1, 1000),
@@ -1192,7 +1194,8 @@ class _Cross:
         return dict(
             rmin=RminLimits(s("rmin_yield", r.yield_tolerance), s("rmin_strain", r.strain),
                             s("rmin_rotation", r.rotation), s("rmin_contact", r.contact),
-                            s("rmin_release", r.release_share)),
+                            s("rmin_release", r.release_share),
+                            s("rmin_release_redos", r.release_redos)),
             newton=Newton(s("newton_force", n.force_tolerance),
                           s("newton_displacement", n.displacement_tolerance),
                           s("max_iterations", n.max_iterations), s("cutback", n.cutback)),

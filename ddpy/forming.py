@@ -71,8 +71,9 @@ class IncrementLimits:
     falls before the last ``release`` fraction of the increment, makes the increment be
     redone to end just past the release (None: off); a node that carries at most
     ``release_share`` of its tool's normal force at the start of the increment is released
-    inside it instead (0: every release limits the increment). No increment is made
-    smaller than ``min_fraction`` of the nominal one."""
+    inside it instead (0: every release limits the increment); after ``release_redos``
+    redos at a release the increment is accepted with the release inside it (None: no
+    cap). No increment is made smaller than ``min_fraction`` of the nominal one."""
 
     strain: float = 0.02
     rotation_deg: float = 5.0
@@ -81,6 +82,7 @@ class IncrementLimits:
     touch_gap: float = 1e-3
     release: float | None = 0.05
     release_share: float = 0.0
+    release_redos: int | None = None
     min_fraction: float = 1e-3
 
     def __post_init__(self) -> None:
@@ -93,6 +95,8 @@ class IncrementLimits:
             raise ValueError("min_fraction must lie in (0, 1] and touch_gap be >= 0")
         if not 0.0 <= self.release_share <= 1.0:
             raise ValueError(f"release_share must lie in [0, 1], got {self.release_share}")
+        if self.release_redos is not None and not self.release_redos >= 0:
+            raise ValueError(f"release_redos must be >= 0 or None, got {self.release_redos}")
         for name in ("yield_tolerance", "release"):
             value = getattr(self, name)
             if value is not None and not 0.0 < value < 1.0:
@@ -395,6 +399,7 @@ class FormingProblem:
         start = {name: p.copy() for name, p in self.position.items()}
         nominal = min(1.0, max_increment / travel) if travel > 0.0 else 1.0
         factor, step, cuts_in_row, reason = 0.0, nominal, 0, "max"
+        redos = 0  # redos at a release of the present increment
         last_du: NDArray[np.float64] | None = None
         last_dp: NDArray[np.float64] | None = None  # pressure rate of the last increment
         if resume is not None:
@@ -461,7 +466,8 @@ class FormingProblem:
                 step = max(step * limit / rotation, limits.min_fraction * nominal)
                 reason = "rotation"
                 continue
-            if limits.release is not None and step > limits.min_fraction * nominal:
+            if (limits.release is not None and step > limits.min_fraction * nominal
+                    and (limits.release_redos is None or redos < limits.release_redos)):
                 change = None if last_dp is None else last_dp * (target - factor)
                 release = self._release_factor(force, in_contact, gap, change,
                                                self._minor(layout, limits.release_share))
@@ -471,6 +477,7 @@ class FormingProblem:
                     step = max(step * release * (1.0 + limits.release / 2.0),
                                limits.min_fraction * nominal)
                     reason = "release"
+                    redos += 1
                     continue
 
             last_du = (u - self.u) / (target - factor)
@@ -492,7 +499,7 @@ class FormingProblem:
                 result.tool_forces[t.name].append(-force[pairs].sum(axis=0))
                 result.contacts[t.name].append(int((in_contact[pairs] != INACTIVE).sum()))
                 result.status[t.name].append(in_contact[pairs].copy())
-            cuts_in_row = 0
+            cuts_in_row = redos = 0
             step, reason = _next_step(step, nominal, reason, strain / limits.strain,
                                       rotation / limit)
             if on_increment is not None and on_increment(

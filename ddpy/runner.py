@@ -332,7 +332,7 @@ class _Run:
             strain=phase.rmin.strain, rotation_deg=phase.rmin.rotation,
             yield_tolerance=max(phase.rmin.yield_tolerance, 1e-6),
             first_touch=phase.rmin.contact, release=0.05 if phase.rmin.contact else None,
-            release_share=phase.rmin.release_share,
+            release_share=phase.rmin.release_share, release_redos=phase.rmin.release_redos,
             min_fraction=min(1.0, phase.min_increment / phase.max_increment))
         max_cuts = max(1, math.ceil(math.log(phase.max_increment / phase.min_increment)
                                     / -math.log(newton.cutback)))

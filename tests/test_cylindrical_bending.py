@@ -208,14 +208,15 @@ def test_the_release_effort_finding_counts_the_redone_work() -> None:
                    "contact_nodes": {"punch": 40.0, "die": 20.0}},
         "nagata": {"newton_iterations_all": 0,
                    "effort_by_limit": {"contact_release": [5, 30, 0, 50.0]}},
-        "facets_coarse": {"newton_iterations_all": 470,
+        "facets_coarse": {"newton_iterations_all": 470, "release_redos": 1,
                           "effort_by_limit": {"contact_touch": [10, 60, 70, 20.0],
                                               "contact_release": [20, 100, 400, 180.0]},
                           "contact_nodes": {"punch": 14.0, "die": 12.0}}}
     text = " ".join(bench._release_effort(numbers))
-    assert "Bezier: 5 of 15 increments ended at a release, and took 60% of" in text
+    assert "Bezier (no cap): 5 of 15 increments ended at a release, and took 60% of" in text
     assert "60 Newton corrections for 30 accepted (30 of the 30 corrections" in text
-    assert "Faceted-coarse: 20 of 30 increments ended at a release, and took 90%" in text
+    assert "Faceted-coarse (1 redo): 20 of 30 increments ended at a release, and took 90%" \
+        in text
     assert "(300 of the 310 corrections of rejected trials)" in text
     assert "Nagata:" not in text.split("(nodes in contact")[0]  # no counters: left out
     assert "Faceted-coarse: punch 14, die 12" in text

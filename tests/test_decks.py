@@ -169,6 +169,10 @@ CONTROL_ERRORS = [
     ("rmin_contact         on", "rmin_contact maybe", "expected rmin_contact among on, off"),
     ("rmin_contact         on", "rmin_contact on\nrmin_release 2", "rmin_release must be <= 1"),
     ("rmin_rotation        1.0", "rmin_rotation 120", "rmin_rotation must be <= 90"),
+    ("rmin_contact         on", "rmin_contact on\nrmin_release_redos -1",
+     "rmin_release_redos must be >= 0, got -1"),
+    ("rmin_contact         on", "rmin_contact on\nrmin_release_redos 1.5",
+     "expected an integer for rmin_release_redos"),
     ("newton_force         1e-4", "newton_force 0", "newton_force must be > 0"),
     ("max_iterations       25", "max_iterations 2.5", "expected an integer for max_iterations"),
     ("max_iterations       25", "max_iterations 0", "max_iterations must be >= 1"),
@@ -240,6 +244,12 @@ def test_control_defaults(tmp_path: Path) -> None:
     assert p.max_increment == pytest.approx(0.2) and p.min_increment == pytest.approx(2e-4)
     assert p.rmin == RminLimits() and p.newton == Newton() and p.output_every == 10
     assert p.lead == "punch" and c.title == "bending"
+    # The release redo cap: a count, or off (no cap), at the top or in a phase.
+    (case / "control.dat").write_text("rmin_release_redos off\nphase only\n tools punch die\n"
+                                      " move punch 0 0 -20\n rmin_release_redos 3\nend\n"
+                                      "phase springback\n type springback\nend\n")
+    c = read_case(case)
+    assert c.phases[0].rmin.release_redos == 3 and c.phases[1].rmin.release_redos is None
 
 
 def test_warnings(tmp_path: Path) -> None:

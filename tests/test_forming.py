@@ -393,6 +393,22 @@ def test_release_of_the_nodes_ends_an_increment(max_increment: float) -> None:
     assert heights[k + 1] < -0.1 * (heights[k] - heights[k + 1])
 
 
+def test_release_redos_are_capped() -> None:
+    # In the first increment of the phase the release is seen only after the increment,
+    # which is redone to end just past it. With no redo allowed the increment is accepted
+    # with the release inside it, as without the release limit.
+    for redos, limited in ((1, True), (None, True), (0, False)):
+        heights, limited_by, contacts, _ = lift_off(
+            1.5e-3, IncrementLimits(release_redos=redos))
+        k = contacts.index(0)
+        assert (limited_by[k] == "release") is limited, (redos, limited_by)
+        before, after = heights[k], heights[k + 1]
+        assert (after > -0.05 * (before - after)) is limited, (redos, before, after)
+        assert heights[-1] == pytest.approx(-1e-3)
+    with pytest.raises(ValueError, match="release_redos must be >= 0"):
+        IncrementLimits(release_redos=-1)
+
+
 def test_release_of_nodes_with_a_small_share_of_the_force_does_not_limit() -> None:
     # The 16 nodes under the clamped block carry 1/16 of the force on average, the corner
     # ones less. A share of 1 exempts every node (as no release limit); a share below the

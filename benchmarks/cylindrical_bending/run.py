@@ -114,6 +114,8 @@ class Run:
     #: file (no shapes): summary() returns them as they are
     code: str = ""
     date: str = ""
+    #: the deck's rmin_release_redos (None: no cap; runs recorded before the cap had none)
+    release_redos: int | None = None
     kept: dict[str, Any] = field(default_factory=dict)
 
 
@@ -215,7 +217,7 @@ def _per_iteration(numbers: dict[str, Any]) -> tuple[dict[str, float], float]:
     return per, sum(per.values())
 
 
-def _code_of(folder: Path) -> dict[str, str]:
+def _code_of(folder: Path) -> dict[str, Any]:
     """Code version and date recorded by run_case_folder next to a run's results."""
     try:
         return json.loads((folder / CODE_FILE).read_text())
@@ -297,20 +299,22 @@ def kept_runs(path: Path) -> dict[str, Run]:
             cuts=numbers["cuts"], theta=numbers["theta_deg"], shape_formed=empty,
             shape_sprung=empty, initial=empty, wall_s=numbers["wall_s"],
             status=numbers["status"], code=numbers.get("code", ""),
-            date=numbers.get("date", ""), kept=numbers)
+            date=numbers.get("date", ""), release_redos=numbers.get("release_redos"),
+            kept=numbers)
     return runs
 
 
-def record_code(output: Path, code: str, restart: bool) -> dict[str, str]:
-    """Write the code version and date of the run in ``output`` next to its results. A run
-    continued (``restart``) with other code keeps its history: "<first>, continued at
-    <code>", and the date it started."""
+def record_code(output: Path, code: str, restart: bool, **settings: Any) -> dict[str, Any]:
+    """Write the code version and date of the run in ``output`` next to its results, with
+    the deck ``settings`` the report states. A run continued (``restart``) with other code
+    keeps its history: "<first>, continued at <code>", and the date it started."""
     output.mkdir(parents=True, exist_ok=True)
     earlier = _code_of(output) if restart else {}
     if earlier.get("code"):
         code = earlier["code"] if earlier["code"].endswith(code) else \
             f"{earlier['code']}, continued at {code}"
-    record = {"code": code, "date": earlier.get("date", datetime.date.today().isoformat())}
+    record = {"code": code, "date": earlier.get("date", datetime.date.today().isoformat()),
+              **settings}
     (output / CODE_FILE).write_text(json.dumps(record))
     return record
 
@@ -332,7 +336,8 @@ def run_case_folder(folder: Path, output: Path | None = None, verbose: bool = Fa
                   f"{p.travel:.3f} of {p.phase_travel:g} mm", file=sys.stderr, flush=True)
 
     case = read_case(folder)
-    record_code(output, code_version(), restart)
+    record_code(output, code_version(), restart,
+                release_redos=case.phases[0].rmin.release_redos)
     outcome = run_case(case, output, overwrite=not restart, restart=restart,
                        progress=progress if verbose else None, max_increments=max_increments)
     run = from_results(outcome.results, case.phases[0].output_at)
@@ -357,7 +362,8 @@ def summary(model: str, run: Run) -> dict[str, Any]:
     if run.kept:
         return run.kept
     beta1, beta2 = betas(run)
-    osc = force_oscillation(run.stroke, run.force, WINDOW, start=START)
+    osc = (force_oscillation(run.stroke, run.force, WINDOW, start=START)
+           if run.stroke.size and run.stroke[-1] >= START + WINDOW else float("nan"))
     late = (force_oscillation(run.stroke, run.force, WINDOW, start=20.0)
             if run.stroke.size and run.stroke[-1] >= 21.0 else float("nan"))
     return {
@@ -365,6 +371,7 @@ def summary(model: str, run: Run) -> dict[str, Any]:
         "status": run.status,
         "code": run.code,
         "date": run.date,
+        "release_redos": run.release_redos,
         "stroke_mm": round(float(run.stroke[-1]), 3) if run.stroke.size else 0.0,
         "theta_deg": [round(t, 2) for t in run.theta],
         "beta1_deg": round(beta1, 2),
@@ -604,6 +611,9 @@ def report(mesh: str, hexahedra: int, numbers: dict[str, dict[str, Any]],
               *["" for _ in models]]),
         _row(["code, date", *[f"{numbers[m].get('code') or '?'}, {numbers[m].get('date') or '?'}"
                               for m in models], *["" for _ in models]]),
+        _row(["redos at a release, most per increment (`rmin_release_redos`)",
+              *[_redos(numbers[m].get("release_redos")) for m in models],
+              *["" for _ in models]]),
         _row(["LU factorizations", *[numbers[m]["factorizations"] for m in models],
               *["" for _ in models]]),
         _row(["GMRES iterations (older factors)", *[numbers[m]["krylov_iterations"]
@@ -749,6 +759,11 @@ def target(mesh: str, numbers: dict[str, dict[str, Any]]) -> list[str]:
             "precision factors.", ""])
 
 
+def _redos(cap: int | None) -> str:
+    """The release redo cap of a run as the report states it."""
+    return "no cap" if cap is None else str(cap)
+
+
 def _release_effort(numbers: dict[str, dict[str, Any]]) -> list[str]:
     """Where the forming's Newton work and time went, by the limit that ended the
     increments: the share of the increments redone at a release (docs/theory/contact.md)."""
@@ -760,8 +775,11 @@ def _release_effort(numbers: dict[str, dict[str, Any]]) -> list[str]:
         release = effort.get("contact_release", [0, 0, 0, 0.0])
         wall = sum(e[3] for e in effort.values())
         rejected = sum(e[2] - e[1] for e in effort.values())
+        cap = numbers[model].get("release_redos")
         parts.append(
-            f"{LABELS[model]}: {release[0]} of {sum(e[0] for e in effort.values())} "
+            f"{LABELS[model]} ({_redos(cap)}" + (" redo" if cap == 1 else " redos"
+                                                  if cap is not None else "") + "): "
+            f"{release[0]} of {sum(e[0] for e in effort.values())} "
             f"increments ended at a release, and took {release[3] / max(wall, 1e-9):.0%} of "
             f"the forming's wall time; their trials made {release[2]} Newton corrections "
             f"for {release[1]} accepted ({release[2] - release[1]} of the "
@@ -782,7 +800,10 @@ def _release_effort(numbers: dict[str, dict[str, Any]]) -> list[str]:
             "and every node of the unstructured blank passes it at its own stroke; the "
             "tools' forces rest on few nodes (" + contact + "), so most of these releases "
             "carry more than the share, and each is found only after the increment has "
-            "converged, often more than once for one increment."]
+            "converged. Without a cap on the redos, one increment was often redone several "
+            "times, each redo finding another node released earlier; `rmin_release_redos` "
+            f"(default {_redos(RminLimits().release_redos)}) accepts the increment with the "
+            "release inside it after that many redos."]
 
 
 def findings(numbers: dict[str, dict[str, Any]], mesh: str = "coarse") -> list[str]:

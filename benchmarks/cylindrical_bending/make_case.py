@@ -48,6 +48,8 @@ COARSE_SPLIT, COARSE_X, COARSE_Y = 42.0, (28, 5), 2
 TOOL_FILES = {"bezier": ("bezier", "bezier"), "nagata": ("nagata", "nagata"),
               "facets_coarse": ("facets", "nagata"), "facets_fine": ("facets", "facets")}
 STROKE, MAX_INCREMENT, FRICTION = 28.5, 0.114, 0.148
+#: Nagata patches (and coarse facets) and fine facets per 90 degrees of arc (the paper's).
+PATCHES_PER_ARC, FACETS_PER_ARC = 4, 30
 #: r_min elasto-plastic transition: how far (fraction of the yield stress) an elastic Gauss
 #: point may overshoot before the increment is scaled back. The deck default, 0.01, lands the
 #: yield front of a bend point by point (thousands of increments of 1e-4 mm on the coarse
@@ -91,9 +93,11 @@ def build_tools(folder: Path = HERE / "tools", size: float = 5.0) -> dict[str, d
         die = [f for f in faces if f not in punch]
         gmsh.clear()
     return {
-        "punch": build_tool_models(step, folder, "punch", patches_per_arc=4, facets_per_arc=30,
+        "punch": build_tool_models(step, folder, "punch", patches_per_arc=PATCHES_PER_ARC,
+                                   facets_per_arc=FACETS_PER_ARC,
                                    size=size, blank_side=(0, 0, -1), faces=punch),
-        "die": build_tool_models(step, folder, "die", patches_per_arc=4, facets_per_arc=30,
+        "die": build_tool_models(step, folder, "die", patches_per_arc=PATCHES_PER_ARC,
+                                 facets_per_arc=FACETS_PER_ARC,
                                  size=size, blank_side=(0, 0, 1), faces=die),
     }
 

@@ -759,6 +759,28 @@ def target(mesh: str, numbers: dict[str, dict[str, Any]]) -> list[str]:
             "precision factors.", ""])
 
 
+def _polygon_angles(numbers: dict[str, dict[str, Any]]) -> list[str]:
+    """The coarse facets' contact angles when they fall on the punch polygon's vertices."""
+    if "facets_coarse" not in numbers:
+        return []
+    theta = [t for t in numbers["facets_coarse"]["theta_deg"] if np.isfinite(t)]
+    facet = 90.0 / make_case.PATCHES_PER_ARC
+    if not theta or max(abs(t / (2 * facet) - round(t / (2 * facet))) for t in theta) \
+            > 1.0 / (2 * facet):  # more than a degree off the vertices
+        return []
+    paper = ", ".join(f"{t:g}" for t in PAPER["facets_coarse"]["theta"])
+    return [
+        "- Coarse facets, theta " + ", ".join(f"{t:g}" for t in theta) + " degrees (the "
+        f"paper: {paper}): the punch of {make_case.PATCHES_PER_ARC} flat facets per 90 "
+        f"degrees is a polygon with vertices {facet:g} degrees apart from its bottom line, "
+        "and the bent sheet spans each facet as a chord, touching it at the vertices only; "
+        f"theta, twice the angle of the farthest node in contact, moves in steps of "
+        f"{2 * facet:g} degrees" + (": 0 at 7 mm, where the sheet touches the bottom "
+                                    "vertex alone" if theta[0] < 1.0 else "") + ". "
+        "The paper's coarse-facet angles do not fall on such steps: its punch mesh (not in "
+        "its text) had other vertices."]
+
+
 def _redos(cap: int | None) -> str:
     """The release redo cap of a run as the report states it."""
     return "no cap" if cap is None else str(cap)
@@ -875,6 +897,7 @@ def findings(numbers: dict[str, dict[str, Any]], mesh: str = "coarse") -> list[s
                 "nodes touch and release. The paper's runs (fine blank) had the opposite; on "
                 "this coarse blank the events of the blank's own nodes dominate."))
     if mesh != "coarse":
+        out += _polygon_angles(numbers)
         out += _release_effort(numbers)
     if {"bezier", "nagata", "facets_fine"} <= set(numbers):
         osc = {m: numbers[m]["oscillation_N"] for m in numbers}

@@ -346,9 +346,10 @@ class Tool:
 
 # ----------------------------------------------------------------------------------- control
 
-#: Default redos of one increment at a release (deck rmin_release_redos): on faceted tools
-#: each redo tends to find another node released earlier, a cascade the cap ends.
-RELEASE_REDOS: int | None = 1
+#: Default redos of one increment at a release (deck rmin_release_redos): none, the release
+#: limit acts ahead only. On faceted tools each redo tends to find another node released
+#: earlier, a cascade that took half of a run's time (docs/theory/contact.md).
+RELEASE_REDOS: int | None = 0
 
 
 @dataclass(frozen=True)

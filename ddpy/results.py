@@ -282,6 +282,10 @@ class ResultsWriter:
         self._write_xdmf()
         return self
 
+    def attribute(self, name: str, default: Any = None) -> Any:
+        """A root attribute set before (e.g. by an earlier part of a continued run)."""
+        return self._file.attrs.get(name, default)
+
     def annotate(self, **attrs: Any) -> None:
         """Set root attributes (e.g. the run's status) and flush."""
         self._file.attrs.update(attrs)

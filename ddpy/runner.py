@@ -478,7 +478,12 @@ def run_case(case: Case, output: str | os.PathLike[str], restart: bool = False,
     leads = [p.lead or "" for p in case.phases]
     from ddpy.parallel import max_threads
 
-    run.writer.annotate(status="running", message="", leads=leads, threads=max_threads())
+    # A continued run records the fewest threads of its parts: its wall time is that of a
+    # run with a thread per core only if every part had them.
+    threads = max_threads()
+    before = int(run.writer.attribute("threads", 0)) if restart else 0
+    threads = min(threads, before) if before > 0 else threads
+    run.writer.annotate(status="running", message="", leads=leads, threads=threads)
     _write_atomic(output / STATUS, json.dumps({"status": "running", "case": str(case.folder)}))
     status, message = "failed", "stopped by an error"
     try:

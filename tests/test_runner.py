@@ -125,6 +125,23 @@ def test_restart_after_a_stop_ends_as_the_uninterrupted_run(
     compare(ref, tmp_path)
 
 
+def test_a_continued_run_records_the_fewest_threads_of_its_parts(
+        reference: tuple[Path, Path], tmp_path: Path, monkeypatch) -> None:
+    import ddpy.parallel
+
+    case, _ = reference
+    loaded = read_case(case)
+    monkeypatch.setattr(ddpy.parallel, "max_threads", lambda: 1)
+    run_case(loaded, tmp_path, max_increments=3)
+    monkeypatch.setattr(ddpy.parallel, "max_threads", lambda: 2)
+    run_case(loaded, tmp_path, restart=True, max_increments=6)
+    with ResultsReader(tmp_path / "results.h5") as r:
+        assert r.threads == 1  # the first part shared the cores: not a run alone
+    run_case(loaded, tmp_path, overwrite=True, max_increments=3)
+    with ResultsReader(tmp_path / "results.h5") as r:
+        assert r.threads == 2
+
+
 def test_restart_refuses_a_changed_case_and_a_missing_checkpoint(
         reference: tuple[Path, Path], tmp_path: Path) -> None:
     case, ref = reference

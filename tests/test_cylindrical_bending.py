@@ -220,6 +220,7 @@ def test_the_release_effort_finding_counts_the_redone_work() -> None:
     assert "(300 of the 310 corrections of rejected trials)" in text
     assert "Nagata:" not in text.split("(nodes in contact")[0]  # no counters: left out
     assert "Faceted-coarse: punch 14, die 12" in text
+    assert "The runs differ in this setting" in text  # Bezier had no cap, the facets 1
     assert bench._release_effort({"nagata": numbers["nagata"]}) == []
 
 

@@ -814,18 +814,22 @@ def _release_effort(numbers: dict[str, dict[str, Any]]) -> list[str]:
     contact = "nodes in contact, mean over the forming: " + contact if contact else \
         "the nodes in contact are counted in the results"
     share = RminLimits().release_share  # the decks leave rmin_release at its default
-    return ["- Increments redone at a release (a node in contact at the start of an "
-            f"increment that carries more than `rmin_release`, {share:.0%}, of its tool's normal "
-            "force and is free at the end makes it be redone shorter, docs/theory/"
-            "contact.md): " + "; ".join(parts) + ". A node leaves a facet where the sheet "
-            "passes its edge (the normal turns by 22.5 degrees there on the coarse facets), "
-            "and every node of the unstructured blank passes it at its own stroke; the "
-            "tools' forces rest on few nodes (" + contact + "), so most of these releases "
-            "carry more than the share, and each is found only after the increment has "
-            "converged. Without a cap on the redos, one increment was often redone several "
-            "times, each redo finding another node released earlier; `rmin_release_redos` "
-            f"(default {_redos(RminLimits().release_redos)}) accepts the increment with the "
-            "release inside it after that many redos."]
+    caps = {numbers[m].get("release_redos") for m in MODELS if m in numbers}
+    mixed = (" The runs differ in this setting (Table 3), and the increments and iterations "
+             "compared between them include it." if len(caps) > 1 else "")
+    return ["- Increments ended at a release (a node in contact at the start of an "
+            f"increment that carries more than `rmin_release`, {share:.0%}, of its tool's "
+            "normal force and is free at the end; the increment is shortened ahead when the "
+            "pressure trend of the last one predicts it, and redone shorter when the release "
+            "is seen only after it has converged, up to `rmin_release_redos` times; "
+            "docs/theory/contact.md): " + "; ".join(parts) + ". A node leaves a facet where "
+            "the sheet passes its edge (the normal turns by 22.5 degrees there on the coarse "
+            "facets), and every node of the unstructured blank passes it at its own stroke; "
+            "the tools' forces rest on few nodes (" + contact + "), so most of these "
+            "releases carry more than the share. With no cap, one increment was often redone "
+            "several times, each redo finding another node released earlier; with the "
+            f"default, {_redos(RminLimits().release_redos)}, a release seen only after the "
+            "increment is accepted inside it." + mixed]
 
 
 def findings(numbers: dict[str, dict[str, Any]], mesh: str = "coarse") -> list[str]:

@@ -272,7 +272,8 @@ class ToolBuilder:
 
     # -------------------------------------------------------------------------- meshing
 
-    def mesh(self, per_arc: int, element: str = "quad", size: float | None = None) -> _Mesh:
+    def mesh(self, per_arc: int, element: str = "quad", size: float | None = None,
+             arc_size: float | None = None) -> _Mesh:
         """Mesh the faces, orient them towards the blank and give each corner its normal."""
         import gmsh
 
@@ -282,7 +283,9 @@ class ToolBuilder:
             raise ValueError(f"the number of patches per arc must be >= 1, got {per_arc}")
         if size is not None and not size > 0.0:
             raise ValueError(f"size must be positive (mm), got {size}")
-        plan = prepare_mesh(self.faces, per_arc, element, size)
+        if arc_size is not None and not arc_size > 0.0:
+            raise ValueError(f"arc_size must be positive (mm), got {arc_size}")
+        plan = prepare_mesh(self.faces, per_arc, element, size, arc_size)
         gmsh.model.mesh.clear()
         failure = ""
         try:
@@ -429,9 +432,9 @@ class ToolBuilder:
 
     def mesh_model(self, name: str, per_arc: int, element: str = "quad",
                    size: float | None = None, smooth: bool = True,
-                   source: str | None = None) -> ToolModel:
+                   source: str | None = None, arc_size: float | None = None) -> ToolModel:
         """A Nagata (``smooth``) or facet model from a mesh of ``per_arc`` patches per arc."""
-        mesh = self.mesh(per_arc, element, size)
+        mesh = self.mesh(per_arc, element, size, arc_size)
         surface = NagataSurface(mesh.vertices, mesh.corner_normals, mesh.elements, smooth=smooth)
         return ToolModel(name, "nagata" if smooth else "facets", surface, mesh.element_face,
                          source)
@@ -581,13 +584,16 @@ def build_tool_models(
     bezier_angle_tol: float = 0.01,
     faces: Sequence[int] | None = None,
     models: Sequence[str] = MODELS,
+    arc_size: float | None = None,
 ) -> dict[str, Path]:
     """Write ``<name>.nagata.tool``, ``<name>.facets.tool`` and ``<name>.bezier.tool``.
 
     ``cad`` is a STEP, IGES or BREP file, or None (or the ``gmsh.model`` module) for the faces
     of the current gmsh model. ``faces`` selects CAD face tags (default: all). Densities are
-    per 90 degrees of arc along curved edges; ``size`` (mm) bounds straight edges (default:
-    one element). Returns the paths written, by model.
+    per 90 degrees of arc along curved edges, whose elements ``arc_size`` (mm) also bounds
+    if given (for both meshes: write the facets in a call of their own to give them another);
+    ``size`` (mm) bounds straight edges (default: one element). Returns the paths written, by
+    model.
     """
     unknown = [m for m in models if m not in MODELS]
     if unknown or not models:
@@ -604,7 +610,8 @@ def build_tool_models(
         paths: dict[str, Path] = {}
         nagata = None
         if "nagata" in models or ("facets" in models and facets_per_arc == patches_per_arc):
-            nagata = builder.mesh_model(name, patches_per_arc, element, size, True, source)
+            nagata = builder.mesh_model(name, patches_per_arc, element, size, True, source,
+                                        arc_size)
             if "nagata" in models:
                 paths["nagata"] = write_tool(out / f"{name}.nagata.tool", nagata)
         if "facets" in models:
@@ -612,8 +619,9 @@ def build_tool_models(
                 facets = nagata.facets()
             else:
                 if builder.flips is None:  # orientation comes from the coarser mesh
-                    builder.mesh(min(patches_per_arc, facets_per_arc), element, size)
-                facets = builder.mesh_model(name, facets_per_arc, element, size, False, source)
+                    builder.mesh(min(patches_per_arc, facets_per_arc), element, size, arc_size)
+                facets = builder.mesh_model(name, facets_per_arc, element, size, False, source,
+                                            arc_size)
             paths["facets"] = write_tool(out / f"{name}.facets.tool", facets)
         if "bezier" in models:
             bezier = builder.bezier_model(name, bezier_tol, bezier_angle_tol, source)

@@ -13,8 +13,8 @@ import numpy as np
 
 from ddpy.cad import quiet
 
-__all__ = ["bending_tools", "cylinder_segment", "cylindrical_punch", "die_profile", "sphere_patch",
-           "write_cad"]
+__all__ = ["bending_tools", "cylinder_segment", "cylindrical_punch", "die_profile",
+           "reverse_drawing_tools", "sphere_patch", "write_cad"]
 
 
 def write_cad(path: str | os.PathLike[str] | None) -> Path | None:
@@ -146,5 +146,160 @@ def bending_tools(path: str | os.PathLike[str] | None = None, punch_radius: floa
         out = occ.extrude([(1, k) for k in curves], 0, y1 - y0, 0)
         faces[name] = [t for d, t in out if d == 2]
     occ.synchronize()
+    write_cad(path)
+    return faces
+
+
+#: A profile piece in the (r, z) half-plane: ("line", (r0, z0), (r1, z1)) or
+#: ("arc", (r0, z0), (rc, zc), (r1, z1)) from its start through its centre to its end.
+Piece = tuple
+
+
+def revolve_profiles(profiles: dict[str, list[Piece]], angles: tuple[float, ...]
+                     ) -> dict[str, list[int]]:
+    """Revolve profiles drawn in the (r, z) half-plane about the z axis through ``angles``
+    (degrees from +x towards +y, increasing; more than two split every face at the ones
+    between). Returns the face tags by profile name."""
+    import gmsh
+
+    occ = gmsh.model.occ
+    if len(angles) < 2 or any(b <= a for a, b in zip(angles, angles[1:], strict=False)):
+        raise ValueError(f"angles must increase, got {angles}")
+    faces: dict[str, list[int]] = {}
+    for name, pieces in profiles.items():
+        faces[name] = []
+        for start, stop in zip(np.radians(angles[:-1]), np.radians(angles[1:]), strict=True):
+            faces[name] += _revolve(pieces, float(start), float(stop))
+    occ.synchronize()
+    return faces
+
+
+def _revolve(pieces: list[Piece], start: float, stop: float) -> list[int]:
+    """The faces of one profile revolved from ``start`` to ``stop`` (radians)."""
+    import gmsh
+
+    occ = gmsh.model.occ
+    points: dict[tuple[float, float], int] = {}
+
+    def point(rz: tuple[float, float]) -> int:
+        key = (round(float(rz[0]), 12), round(float(rz[1]), 12))
+        if key not in points:
+            points[key] = occ.addPoint(key[0], 0.0, key[1])
+        return points[key]
+
+    curves = []
+    for piece in pieces:
+        if piece[0] == "line":
+            curves.append(occ.addLine(point(piece[1]), point(piece[2])))
+        elif piece[0] == "arc":
+            curves.append(occ.addCircleArc(point(piece[1]), point(piece[2]),
+                                           point(piece[3])))
+        else:
+            raise ValueError(f"profile piece must be a line or an arc, got {piece[0]!r}")
+    dim_tags = [(1, c) for c in curves]
+    occ.rotate(dim_tags, 0, 0, 0, 0, 0, 1, start)
+    out = occ.revolve(dim_tags, 0, 0, 0, 0, 0, 1, stop - start)
+    return [t for d, t in out if d == 2]
+
+
+def _disc_sector(radius: float, z: float, angles: tuple[float, float, float]) -> list[int]:
+    """A flat disc sector at height ``z`` between the outer two of ``angles`` (degrees), in
+    three four-sided faces (an inner quadrilateral and two pieces of the rim, split at the
+    middle angle) so that every face can be one Bezier patch and a structured mesh."""
+    import gmsh
+
+    occ = gmsh.model.occ
+    a0, a1, a2 = np.radians(angles)
+    inner, corner = 0.5 * radius, 0.6 * radius
+    centre = occ.addPoint(0, 0, z)
+
+    def at(r: float, a: float) -> int:
+        return occ.addPoint(r * np.cos(a), r * np.sin(a), z)
+
+    p0, p1, p2 = at(inner, a0), at(corner, a1), at(inner, a2)
+    q0, q1, q2 = at(radius, a0), at(radius, a1), at(radius, a2)
+    lines = {k: occ.addLine(*k) for k in ((centre, p0), (p0, p1), (p1, p2), (p2, centre),
+                                          (p0, q0), (p1, q1), (p2, q2))}
+    arcs = [occ.addCircleArc(q0, centre, q1), occ.addCircleArc(q1, centre, q2)]
+    loops = [[lines[(centre, p0)], lines[(p0, p1)], lines[(p1, p2)], lines[(p2, centre)]],
+             [lines[(p0, q0)], arcs[0], -lines[(p1, q1)], -lines[(p0, p1)]],
+             [lines[(p1, q1)], arcs[1], -lines[(p2, q2)], -lines[(p1, p2)]]]
+    return [occ.addPlaneSurface([occ.addCurveLoop(loop)]) for loop in loops]
+
+
+def reverse_drawing_tools(path: str | os.PathLike[str] | None = None, *, thickness: float = 0.98,
+                          die_bore: float = 51.25, die_shoulder: float = 8.0,
+                          die_outer: float = 90.0, die_depth: float = 20.0,
+                          punch1_radius: float = 50.0, punch1_nose: float = 6.0,
+                          punch1_edge: float = 4.0, punch1_bore: float = 37.75,
+                          punch1_height: float = 70.0, holder1_gap: float = 1.13,
+                          punch2_radius: float = 36.5, punch2_nose: float = 5.0,
+                          punch2_height: float = 50.0, punch2_start: float = -42.0,
+                          holder2_inner: float = 38.0, holder2_outer: float = 48.0,
+                          holder2_edge: float = 2.0, holder2_top: float = -40.42,
+                          angles: tuple[float, float] = (-3.0, 93.0)) -> dict[str, list[int]]:
+    """The five tools of the reverse deep drawing of a cylindrical cup (Numisheet'99
+    benchmark C), quarter model, as surfaces of revolution about z. The dimensions are a
+    reconstruction (docs/benchmarks/reverse_deep_drawing.md): the benchmark's drawing is not
+    in the paper.
+
+    The flat blank lies on 0 <= z <= ``thickness``, centred on the axis. Stage 1: punch 1
+    (above, hollow) draws it into die 1 (below) while blank-holder 1 (above, a flat annulus
+    over the die's flat, ``holder1_gap`` above it) holds the flange. Stage 2: punch 2 (below,
+    its flat end at ``punch2_start``) pushes the cup's bottom up through punch 1's bore; punch
+    1's end ring and its inner edge of radius ``punch1_edge`` are die 2, and blank-holder 2
+    (below, its flat top at ``holder2_top``) holds the bottom's annulus against that ring.
+
+    Faces span ``angles`` (degrees about z, a little beyond the quarter so that the blank's
+    symmetry planes lie inside them). Returns the face tags by tool: die1 (bore wall,
+    shoulder, flat), holder1 (flat), punch1 (bore wall, inner edge, end ring, outer nose,
+    outer wall), holder2 (inner wall, inner edge, flat, outer edge, outer wall), punch2 (its
+    flat end in three four-sided faces, then nose and wall, each in two halves).
+    """
+    import gmsh
+
+    t = thickness
+    shoulder_r = die_bore + die_shoulder
+    edge_r, nose_r = punch1_bore + punch1_edge, punch1_radius - punch1_nose
+    if not (0.0 < die_shoulder and shoulder_r < die_outer and 0.0 < punch1_edge
+            and 0.0 < punch1_nose and edge_r < nose_r and punch1_radius < die_bore
+            and 0.0 < punch2_nose < punch2_radius < punch1_bore
+            and punch2_radius < holder2_inner and 2 * holder2_edge < holder2_outer - holder2_inner
+            and holder1_gap > t):
+        raise ValueError("reverse drawing tools: the dimensions do not fit together")
+    flat2 = punch2_radius - punch2_nose
+    h_in, h_out, f = holder2_inner, holder2_outer, holder2_edge
+    profiles: dict[str, list[Piece]] = {
+        "die1": [("line", (die_bore, -die_shoulder - die_depth), (die_bore, -die_shoulder)),
+                 ("arc", (die_bore, -die_shoulder), (shoulder_r, -die_shoulder), (shoulder_r, 0.0)),
+                 ("line", (shoulder_r, 0.0), (die_outer, 0.0))],
+        "holder1": [("line", (shoulder_r, holder1_gap), (die_outer, holder1_gap))],
+        "punch1": [("line", (punch1_bore, t + punch1_height), (punch1_bore, t + punch1_edge)),
+                   ("arc", (punch1_bore, t + punch1_edge), (edge_r, t + punch1_edge), (edge_r, t)),
+                   ("line", (edge_r, t), (nose_r, t)),
+                   ("arc", (nose_r, t), (nose_r, t + punch1_nose),
+                    (punch1_radius, t + punch1_nose)),
+                   ("line", (punch1_radius, t + punch1_nose), (punch1_radius, t + punch1_height))],
+        "punch2": [("arc", (flat2, punch2_start), (flat2, punch2_start - punch2_nose),
+                    (punch2_radius, punch2_start - punch2_nose)),
+                   ("line", (punch2_radius, punch2_start - punch2_nose),
+                    (punch2_radius, punch2_start - punch2_height))],
+        "holder2": [("line", (h_in, holder2_top - 2 * f), (h_in, holder2_top - f)),
+                    ("arc", (h_in, holder2_top - f), (h_in + f, holder2_top - f),
+                     (h_in + f, holder2_top)),
+                    ("line", (h_in + f, holder2_top), (h_out - f, holder2_top)),
+                    ("arc", (h_out - f, holder2_top), (h_out - f, holder2_top - f),
+                     (h_out, holder2_top - f)),
+                    ("line", (h_out, holder2_top - f), (h_out, holder2_top - 2 * f))],
+    }
+    punch2 = profiles.pop("punch2")
+    faces = revolve_profiles(profiles, angles)
+    # Punch 2's flat end reaches the axis: a disc sector in four-sided faces, the rest split
+    # at the same middle angle so that the faces meet edge to edge.
+    middle = 0.5 * (angles[0] + angles[1])
+    faces["punch2"] = (_disc_sector(flat2, punch2_start, (angles[0], middle, angles[1]))
+                       + revolve_profiles({"punch2": punch2},
+                                          (angles[0], middle, angles[1]))["punch2"])
+    gmsh.model.occ.synchronize()
     write_cad(path)
     return faces

@@ -99,8 +99,14 @@ def _param_sides(face: int, curves: list[int],
     return sides
 
 
-def prepare_mesh(faces: list[int], per_arc: int, element: str, size: float | None) -> MeshPlan:
-    """Set the gmsh mesh constraints of the faces; what is left to :func:`grid_mesh`."""
+def prepare_mesh(faces: list[int], per_arc: int, element: str, size: float | None,
+                 arc_size: float | None = None) -> MeshPlan:
+    """Set the gmsh mesh constraints of the faces; what is left to :func:`grid_mesh`.
+
+    Curved edges get ``per_arc`` elements per 90 degrees of turning, and elements of at most
+    ``arc_size`` (mm) if given: along the circumference of a large surface of revolution the
+    turning angle alone leaves long elements. Straight edges get elements of at most
+    ``size``, one without it."""
     import gmsh
 
     boundary: dict[int, list[int]] = {}
@@ -118,8 +124,11 @@ def prepare_mesh(faces: list[int], per_arc: int, element: str, size: float | Non
     for c, (angle, length) in shape.items():
         if c in degenerate:
             continue
-        if angle > 1e-6:  # curved: by the angle only
-            plan.divisions[c] = max(1, int(np.ceil(per_arc * angle / (np.pi / 2) - 1e-6)))
+        if angle > 1e-6:  # curved: by the angle, and by the length given arc_size
+            n = max(1, int(np.ceil(per_arc * angle / (np.pi / 2) - 1e-6)))
+            if arc_size is not None:
+                n = max(n, int(np.ceil(length / arc_size - 1e-6)))
+            plan.divisions[c] = n
         else:             # straight: by the size, one element without it
             plan.divisions[c] = 1 if size is None else max(1, int(np.ceil(length / size - 1e-6)))
     pairs = []

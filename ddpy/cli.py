@@ -87,7 +87,8 @@ def _tools_build(args: argparse.Namespace) -> int:
         paths = build_tool_models(
             args.cad, args.out, args.name or Path(args.cad).stem,
             patches_per_arc=args.patches_per_arc, facets_per_arc=args.facets_per_arc,
-            element=args.element, size=args.size, blank_side=args.blank_side,
+            element=args.element, size=args.size, arc_size=args.arc_size,
+            blank_side=args.blank_side,
             blank_point=args.blank_point, bezier_tol=args.bezier_tol,
             bezier_angle_tol=args.bezier_angle_tol, faces=args.faces, models=models)
     except (CadError, ValueError) as error:
@@ -143,6 +144,9 @@ def _add_tools(commands: argparse._SubParsersAction) -> None:
     build.add_argument("--element", choices=("quad", "tri"), default="quad")
     build.add_argument("--size", type=float, metavar="MM",
                        help="largest element along straight edges (default: one element)")
+    build.add_argument("--arc-size", type=float, metavar="MM",
+                       help="largest element along curved edges too, e.g. around a large "
+                       "surface of revolution (default: by the angle only)")
     build.add_argument("--blank-side", type=_triple, default=(0.0, 0.0, 1.0), metavar="X,Y,Z",
                        help="direction towards the blank (default 0,0,1)")
     build.add_argument("--blank-point", type=_triple, metavar="X,Y,Z",

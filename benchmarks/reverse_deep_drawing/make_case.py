@@ -1,0 +1,375 @@
+"""Write the cases of the reverse deep drawing of a cylindrical cup (paper Fig. 13-21).
+
+    python benchmarks/reverse_deep_drawing/make_case.py              # all meshes
+    python benchmarks/reverse_deep_drawing/make_case.py --mesh coarse
+    python benchmarks/reverse_deep_drawing/make_case.py --default-case   # `ddpy run deep-drawing`
+
+Writes, next to this script (all generated, git-ignored):
+
+- ``tools/tools.step``: one CAD model of the five tools (``ddpy.cad_examples.
+  reverse_drawing_tools``), surfaces of revolution with the dimensions of :class:`Dimensions`,
+  a reconstruction: the benchmark's drawing is not in the paper;
+- ``tools/<tool>.<model>.tool``: the tool models built from it by
+  ``ddpy.cad.build_tool_models`` (what ``ddpy tools build`` runs): Bezier patches; Nagata with
+  3 patches per 90 degrees of arc in the radial direction (the paper's); facets 6 (coarse) and
+  12 (fine) per arc. Around the axis, where the paper gives no density, each model has
+  :data:`AROUND` elements per 90 degrees on each tool's largest circle (``arc_size``), and
+  straight edges (flat and cylindrical parts, which every model describes exactly) twice
+  that length;
+- ``meshes/<mesh>.msh``: the blank, a quarter of the 170 mm disc, 0.98 mm thick, 2 layers of
+  hexahedra from an unstructured quadrilateral mesh (gmsh): ``paper`` as close to the
+  paper's 15,408 hexahedra as gmsh's recombination gets, ``medium`` and ``coarse``;
+- ``cases/<mesh>/<model>/``: the five decks of each case, for the models ``bezier``,
+  ``nagata``, ``facets_coarse`` and ``facets_fine``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+MODELS = ("bezier", "nagata", "facets_coarse", "facets_fine")
+MESHES = ("coarse", "medium", "paper")
+TOOLS = ("die1", "holder1", "punch1", "holder2", "punch2")
+#: The blank (paper): 170 mm in diameter, 0.98 mm thick, 2 layers; quarter model.
+RADIUS, THICKNESS, LAYERS = 85.0, 0.98, 2
+PAPER_HEXAHEDRA = 15408
+#: Target element size (mm) of the quadrilateral mesh of each blank; the paper's from its
+#: element count (the quarter disc's area over 15,408 / 2 quadrilaterals).
+ELEMENT_SIZE = {"coarse": 4.0, "medium": 2.0,
+                "paper": math.sqrt(math.pi * RADIUS**2 / 4 / (PAPER_HEXAHEDRA / LAYERS))}
+#: DDQ steel (paper Table 4), friction (benchmark), gaps of the blank-holders (paper).
+FRICTION, GAP1, GAP2 = 0.15, 1.13, 1.4
+#: Tool file of each model and the description the deck gives it.
+TOOL_FILES = {"bezier": ("bezier", "bezier"), "nagata": ("nagata", "nagata"),
+              "facets_coarse": ("facets_coarse", "facets"),
+              "facets_fine": ("facets_fine", "facets")}
+#: Patches per 90 degrees of arc in the radial direction (the paper's: Nagata 3, facets 6
+#: and 12), and around the axis on each tool's largest circle (ours: the paper gives only
+#: the totals of Table 5, which these approach; see the report).
+PER_ARC = {"nagata": 3, "facets_coarse": 6, "facets_fine": 12}
+AROUND = {"nagata": 15, "facets_coarse": 24, "facets_fine": 48}
+#: The contact side of each tool on the blank (mesh normal +z: the blank's top faces punch 1).
+SIDE = {"die1": "bottom", "holder1": "top", "punch1": "top", "holder2": "bottom",
+        "punch2": "bottom"}
+#: Direction from each tool towards the blank, to orient its normals.
+BLANK_SIDE = {"die1": (0, 0, 1), "holder1": (0, 0, -1), "punch1": (0, 0, -1),
+              "holder2": (0, 0, 1), "punch2": (0, 0, 1)}
+
+
+@dataclass(frozen=True)
+class Dimensions:
+    """The tools and the punch travels (mm): a reconstruction, not the benchmark's drawing
+    (see the report). Radii are measured from the axis; the flat blank lies on
+    0 <= z <= 0.98."""
+
+    die_bore: float = 51.25       #: die 1: radius of the bore
+    die_shoulder: float = 8.0     #: die 1: shoulder radius (stage 1's die radius)
+    die_outer: float = 90.0       #: die 1 and blank-holder 1: outer radius of the flat
+    die_depth: float = 20.0       #: die 1: bore wall below the shoulder
+    punch1_radius: float = 50.0   #: punch 1: outer radius
+    punch1_nose: float = 6.0      #: punch 1: outer nose radius
+    punch1_edge: float = 4.0      #: punch 1's inner edge = die 2's shoulder radius
+    punch1_bore: float = 37.75    #: punch 1's bore = die 2's opening
+    punch1_height: float = 70.0   #: punch 1: height of its walls above its end ring
+    punch2_radius: float = 36.5   #: punch 2: radius
+    punch2_nose: float = 5.0      #: punch 2: nose radius
+    punch2_height: float = 50.0   #: punch 2: height of its wall
+    holder2_inner: float = 38.0   #: blank-holder 2: inner radius
+    holder2_outer: float = 48.0   #: blank-holder 2: outer radius
+    holder2_edge: float = 2.0     #: blank-holder 2: radius of its two edges
+    stage1: float = 40.0          #: punch 1's travel down (stage 1)
+    stage2: float = 40.0          #: punch 2's travel up from the cup's bottom (stage 2)
+    approach: float = 2.0         #: punch 2's start below the cup's bottom
+
+    def cad(self) -> dict[str, float]:
+        """Keyword arguments of ``reverse_drawing_tools``: the tools where stage 2 starts
+        (punch 2 ``approach`` below the cup's bottom, blank-holder 2 at its gap)."""
+        values = asdict(self)
+        for key in ("stage1", "stage2", "approach"):
+            values.pop(key)
+        return {**values, "thickness": THICKNESS, "holder1_gap": GAP1,
+                "punch2_start": -self.stage1 - self.approach,
+                "holder2_top": THICKNESS - self.stage1 - GAP2}
+
+    def largest_radius(self, tool: str) -> float:
+        return {"die1": self.die_outer, "holder1": self.die_outer,
+                "punch1": self.punch1_radius, "holder2": self.holder2_outer,
+                "punch2": self.punch2_radius}[tool]
+
+
+DIMENSIONS = Dimensions()
+
+
+def build_tools(folder: Path = HERE / "tools", dims: Dimensions = DIMENSIONS,
+                models: tuple[str, ...] = MODELS) -> dict[str, dict[str, Path]]:
+    """Write the CAD model and each tool's model files; return the paths by tool and model."""
+    import gmsh
+
+    from ddpy.cad import build_tool_models, gmsh_session, load_cad
+    from ddpy.cad_examples import reverse_drawing_tools
+
+    folder.mkdir(parents=True, exist_ok=True)
+    step = folder / "tools.step"
+    with gmsh_session():
+        gmsh.clear()
+        made = reverse_drawing_tools(step, **dims.cad())
+        marks = {t: _inner_point(t) for faces in made.values() for t in faces}
+        gmsh.clear()
+        loaded = load_cad(step)
+        # The faces read back, matched to those made by the point at the middle of each.
+        back = {f: _inner_point(f) for f in loaded}
+        found = {t: min(loaded, key=lambda f: math.dist(back[f], x)) for t, x in marks.items()}
+        if sorted(found.values()) != sorted(loaded) or any(
+                math.dist(back[found[t]], x) > 1e-6 for t, x in marks.items()):
+            raise RuntimeError(f"{step}: the faces read back differ from those written")
+        made = {tool: [found[t] for t in faces] for tool, faces in made.items()}
+        gmsh.clear()
+    paths: dict[str, dict[str, Path]] = {}
+    for tool, faces in made.items():
+        paths[tool] = {}
+        for model in models:
+            if model == "bezier":
+                written = build_tool_models(step, folder, tool, models=("bezier",),
+                                            blank_side=BLANK_SIDE[tool], faces=faces)
+                paths[tool][model] = written["bezier"]
+                continue
+            arc_size = dims.largest_radius(tool) * math.pi / 2 / AROUND[model]
+            kind = "nagata" if model == "nagata" else "facets"
+            written = build_tool_models(
+                step, folder, tool, patches_per_arc=PER_ARC[model],
+                facets_per_arc=PER_ARC[model], size=2 * arc_size, arc_size=arc_size,
+                blank_side=BLANK_SIDE[tool], faces=faces, models=(kind,))
+            target = folder / f"{tool}.{model}.tool"
+            written[kind].replace(target)
+            paths[tool][model] = target
+    return paths
+
+
+def _inner_point(face: int) -> list[float]:
+    """A point of a gmsh face, at the middle of its parameter range."""
+    import gmsh
+
+    lo, hi = gmsh.model.getParametrizationBounds(2, face)
+    return list(gmsh.model.getValue(2, face, [0.5 * (a + b) for a, b in zip(lo, hi, strict=True)]))
+
+
+def disc_mesh(path: Path, size: float, target: int | None = None, tries: int = 8) -> int:
+    """The blank: a quarter disc of radius RADIUS meshed in unstructured quadrilaterals of
+    about ``size`` mm (gmsh Frontal-Delaunay for quads, Blossom recombination; with
+    ``target``, the size is tuned towards that many hexahedra), extruded in LAYERS layers
+    through THICKNESS. Writes a Gmsh file; returns the hexahedra."""
+    import gmsh
+
+    from ddpy.cad import gmsh_session
+
+    def quarter() -> int:
+        occ = gmsh.model.occ
+        centre, a, b = occ.addPoint(0, 0, 0), occ.addPoint(RADIUS, 0, 0), occ.addPoint(0, RADIUS, 0)
+        loop = occ.addCurveLoop([occ.addLine(centre, a), occ.addCircleArc(a, centre, b),
+                                 occ.addLine(b, centre)])
+        return occ.addPlaneSurface([loop])
+
+    def quads(size: float) -> int:
+        gmsh.clear()
+        surface = quarter()
+        gmsh.model.occ.synchronize()
+        gmsh.option.setNumber("Mesh.Algorithm", 8)
+        gmsh.option.setNumber("Mesh.RecombinationAlgorithm", 1)
+        gmsh.option.setNumber("Mesh.MeshSizeMin", size)
+        gmsh.option.setNumber("Mesh.MeshSizeMax", size)
+        gmsh.model.mesh.setRecombine(2, surface)
+        gmsh.model.mesh.generate(2)
+        return sum(len(t) for t in gmsh.model.mesh.getElements(2, surface)[1])
+
+    with gmsh_session():
+        if target is not None:
+            want = target // LAYERS
+            best: tuple[int, float] | None = None
+            for _ in range(tries):
+                count = quads(size)
+                if best is None or abs(count - want) < abs(best[0] - want):
+                    best = (count, size)
+                if count == want:
+                    break
+                size *= math.sqrt(count / want) ** 0.9
+            assert best is not None
+            size = best[1]
+        gmsh.clear()
+        surface = quarter()
+        gmsh.model.occ.extrude([(2, surface)], 0, 0, THICKNESS, numElements=[LAYERS],
+                               recombine=True)
+        gmsh.model.occ.synchronize()
+        gmsh.option.setNumber("Mesh.Algorithm", 8)
+        gmsh.option.setNumber("Mesh.RecombinationAlgorithm", 1)
+        gmsh.model.mesh.setRecombine(2, surface)
+        gmsh.option.setNumber("Mesh.MeshSizeMin", size)
+        gmsh.option.setNumber("Mesh.MeshSizeMax", size)
+        gmsh.model.mesh.generate(3)
+        hexahedra = sum(len(t) for t in gmsh.model.mesh.getElements(3)[1])
+        gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        gmsh.write(str(path))
+        gmsh.clear()
+    return hexahedra
+
+
+def make_mesh(mesh: str, path: Path) -> int:
+    """Write blank ``mesh`` ('coarse', 'medium' or 'paper'); return its hexahedra."""
+    target = PAPER_HEXAHEDRA if mesh == "paper" else None
+    return disc_mesh(path, ELEMENT_SIZE[mesh], target)
+
+
+CONTROL = """\
+# ddpy control deck.  Units mm, N, MPa, s.  Written by benchmarks/reverse_deep_drawing/make_case.py
+# Reverse deep drawing of a cylindrical cup (Numisheet'99 benchmark C), quarter model.
+
+title  Reverse deep drawing, {model} tools, {mesh} blank
+
+max_increment  {max_increment}     # mm of the lead punch's travel
+output_every   0         # fields at output_at and at the end of each stage
+
+phase stage1
+  type      forming
+  tools     punch1 die1 holder1
+  move      punch1  0 0 -{stage1:g}
+  gap       holder1 die1 {gap1:g}       # blank-holder 1 held at a fixed gap (paper)
+  lead      punch1
+end
+
+phase stage2
+  type      forming
+  tools     punch2 punch1 holder2 die1 holder1
+  move      punch2  0 0 {stage2:g}
+  gap       holder2 punch1 {gap2:g}      # blank-holder 2 against die 2, punch 1's end ring
+  lead      punch2
+end
+"""
+
+MESH = """\
+# ddpy mesh deck: the blank.  Units mm.  Written by make_case.py
+# A quarter of the 170 mm disc, 0.98 mm thick: {what}.
+normal  z
+file    ../../../meshes/{mesh}.msh
+"""
+
+BC = """\
+# ddpy boundary deck.  Units mm.  Written by make_case.py
+tolerance  1e-4
+symmetry   x 0                     # plane x = 0
+symmetry   y 0                     # plane y = 0
+"""
+
+MATERIAL = """\
+# ddpy material deck.  Units MPa.  Written by make_case.py
+# DDQ mild steel of the Numisheet'99 benchmark C (paper Table 4).
+elastic            E 210000  nu 0.3
+yield              hill48  F 0.3137  G 0.3663  H 0.6337  L 1.5  M 1.5  N 1.1764
+hardening          swift   K 568.3  eps0 0.0059  n 0.233
+rolling_direction  0          # along x
+"""
+
+TOOL = """\
+tool {tool}
+  description  {description}
+  file         {prefix}{tool}.{file}.tool
+  friction     {friction}
+  contact      {side}
+end
+"""
+
+#: Largest increment (mm of punch travel) of each blank.
+MAX_INCREMENT = {"coarse": 0.5, "medium": 0.25, "paper": 0.1}
+
+
+def write_case(folder: Path, model: str, mesh: str, dims: Dimensions = DIMENSIONS,
+               max_increment: float | None = None, tools_prefix: str = "../../../tools/",
+               mesh_file: str | None = None) -> Path:
+    """Write the five decks of one case. By default the tool and mesh files are referred to
+    relatively: the folder must be ``<root>/cases/<mesh>/<model>`` next to ``tools/`` and
+    ``meshes/``."""
+    description, file = TOOL_FILES[model]
+    folder.mkdir(parents=True, exist_ok=True)
+    what = {"paper": f"unstructured, {LAYERS} layers (paper: 15,408 hexahedra)"}.get(
+        mesh, f"unstructured, {LAYERS} layers, elements of about {ELEMENT_SIZE.get(mesh, 0):g} mm")
+    mesh_text = MESH.format(mesh=mesh, what=what)
+    if mesh_file is not None:
+        mesh_text = mesh_text.replace(f"../../../meshes/{mesh}.msh", mesh_file)
+    decks = {
+        "control.dat": CONTROL.format(
+            model=model, mesh=mesh, stage1=dims.stage1, stage2=dims.stage2 + dims.approach,
+            gap1=GAP1, gap2=GAP2,
+            max_increment=f"{max_increment or MAX_INCREMENT.get(mesh, 0.25):g}"),
+        "mesh.dat": mesh_text,
+        "bc.dat": BC,
+        "material.dat": MATERIAL,
+        "tools.dat": "# ddpy tools deck.  Units mm.  Written by make_case.py: the "
+                     f"{model} model.\n" + "\n".join(
+                         TOOL.format(tool=t, description=description, file=file,
+                                     prefix=tools_prefix, friction=FRICTION, side=SIDE[t])
+                         for t in TOOLS),
+    }
+    for name, text in decks.items():
+        (folder / name).write_text(text)
+    return folder
+
+
+#: The second built-in case of ``ddpy run``: this benchmark's coarse Nagata case.
+DEFAULT_CASE = HERE.parents[1] / "ddpy" / "cases" / "reverse_deep_drawing"
+DEFAULT_HEADER = """\
+# A built-in case of `ddpy run` (`ddpy run deep-drawing`): the coarse blank and Nagata tools of
+# benchmarks/reverse_deep_drawing, written by its make_case.py --default-case (do not edit
+# here: tests/test_reverse_deep_drawing.py checks that the two agree).
+"""
+
+
+def write_default_case(folder: Path = DEFAULT_CASE) -> Path:
+    """Write the built-in case into ``folder``: the decks of the coarse Nagata case with the
+    mesh (``mesh.msh``) and the tool files (``tools/<tool>.tool``) beside them."""
+    import shutil
+    import tempfile
+
+    folder.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory() as scratch:
+        built = build_tools(Path(scratch) / "tools", models=("nagata",))
+        (folder / "tools").mkdir(exist_ok=True)
+        for tool, paths in built.items():
+            shutil.copyfile(paths["nagata"], folder / "tools" / f"{tool}.nagata.tool")
+    make_mesh("coarse", folder / "mesh.msh")
+    write_case(folder, "nagata", "coarse", tools_prefix="tools/", mesh_file="mesh.msh")
+    for name in ("control.dat", "mesh.dat", "tools.dat", "bc.dat", "material.dat"):
+        path = folder / name
+        path.write_text(DEFAULT_HEADER + path.read_text())
+    return folder
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--mesh", choices=(*MESHES, "all"), default="all")
+    parser.add_argument("--root", type=Path, default=HERE,
+                        help="where tools/, meshes/ and cases/ go (default: next to this script)")
+    parser.add_argument("--default-case", type=Path, nargs="?", const=DEFAULT_CASE,
+                        metavar="FOLDER", help="write only the built-in case of `ddpy run "
+                        "deep-drawing` (default folder: ddpy/cases/reverse_deep_drawing)")
+    args = parser.parse_args(argv)
+    if args.default_case is not None:
+        print(write_default_case(args.default_case))
+        return 0
+    root: Path = args.root
+    for tool, paths in build_tools(root / "tools").items():
+        print(f"{tool}: " + ", ".join(str(p) for p in paths.values()), file=sys.stderr)
+    meshes = MESHES if args.mesh == "all" else (args.mesh,)
+    for mesh in meshes:
+        count = make_mesh(mesh, root / "meshes" / f"{mesh}.msh")
+        print(f"mesh {mesh}: {count} hexahedra", file=sys.stderr)
+        for model in MODELS:
+            print(write_case(root / "cases" / mesh / model, model, mesh))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -27,9 +27,10 @@ def _accuracy(args: argparse.Namespace) -> int:
 
 def _check(args: argparse.Namespace) -> int:
     from ddpy.decks import DeckError, read_case
+    from ddpy.runner import case_folder
 
     try:
-        case = read_case(args.case, geometry=not args.no_geometry)
+        case = read_case(case_folder(args.case), geometry=not args.no_geometry)
     except DeckError as error:
         for e in error.errors:
             print(e, file=sys.stderr)
@@ -194,7 +195,8 @@ def build_parser() -> argparse.ArgumentParser:
         "check", help="validate a case folder: print its summary, or every error as file:line "
         "(exit code 2)")
     check.add_argument("case", metavar="CASE", help="the case folder (control.dat, mesh.dat, "
-                       "bc.dat, material.dat, tools.dat)")
+                       "bc.dat, material.dat, tools.dat), or a built-in case: "
+                       "cylindrical-bending, deep-drawing")
     check.add_argument("--no-geometry", action="store_true",
                        help="skip the checks of the tool positions against the blank")
     check.set_defaults(handler=_check)

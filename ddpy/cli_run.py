@@ -86,9 +86,9 @@ class _Interrupt:
 def _run(args: argparse.Namespace) -> int:
     from ddpy.checkpoint import CheckpointError
     from ddpy.decks import DeckError, read_case
-    from ddpy.runner import DEFAULT_CASE, RunError, run_case
+    from ddpy.runner import RunError, case_folder, run_case
 
-    folder = Path(args.case) if args.case else DEFAULT_CASE
+    folder = case_folder(args.case)
     try:
         case = read_case(folder)
     except DeckError as error:
@@ -136,7 +136,8 @@ def add_run(commands: argparse._SubParsersAction) -> None:
         "and status.json to the output folder. Ctrl-C stops after the current increment and "
         "keeps the results; --restart continues from the last checkpoint.")
     run.add_argument("case", nargs="?", metavar="CASE",
-                     help="case folder (default: the built-in cylindrical bending case)")
+                     help="case folder, or a built-in case: cylindrical-bending (the "
+                     "default) or deep-drawing")
     run.add_argument("--output", metavar="DIR",
                      help="output folder (default: results/<case folder name>)")
     run.add_argument("--restart", action="store_true",

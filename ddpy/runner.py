@@ -49,14 +49,30 @@ from ddpy.mesh import HexMesh
 from ddpy.results import ResultsWriter, Timings
 from ddpy.solid import Solid, SolidState
 
-__all__ = ["CHECKPOINT", "DEFAULT_CASE", "RESULTS", "STATUS", "Progress", "RunError",
-           "RunOutcome", "build_problem", "read_status", "run_case"]
+__all__ = ["BUILT_IN_CASES", "CHECKPOINT", "DEFAULT_CASE", "RESULTS", "STATUS", "Progress",
+           "RunError", "RunOutcome", "build_problem", "case_folder", "read_status", "run_case"]
 
 #: The case ``ddpy run`` runs when given none: the coarse cylindrical bending packaged with
 #: ddpy (for now a copy of examples/bending, kept equal by a test). To change the default,
 #: replace the decks and tool files in this folder (and their list in meson.build).
 DEFAULT_CASE = Path(__file__).resolve().parent / "cases" / "cylindrical_bending"
+#: The cases packaged with ddpy, by the name ``ddpy run NAME`` and ``ddpy check NAME`` take:
+#: the coarse cases of the paper's two examples (benchmarks/*/make_case.py --default-case).
+BUILT_IN_CASES = {"cylindrical-bending": DEFAULT_CASE,
+                  "deep-drawing": DEFAULT_CASE.parent / "reverse_deep_drawing"}
 RESULTS = "results.h5"
+
+
+def case_folder(case: str | os.PathLike[str] | None) -> Path:
+    """The folder of a case given as a folder or as the name of a built-in case (a folder of
+    that name wins); the default case for None."""
+    if case is None:
+        return DEFAULT_CASE
+    path = Path(case)
+    if not path.exists() and str(case) in BUILT_IN_CASES:
+        return BUILT_IN_CASES[str(case)]
+    return path
+
 CHECKPOINT = "checkpoint.npz"
 STATUS = "status.json"
 #: Checkpoint every this many increments by default (and at the end of every phase).

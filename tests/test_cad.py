@@ -351,6 +351,22 @@ def test_errors_name_file_and_face(cad: dict[str, Path], tmp_path: Path, name: s
     assert message in str(error.value)
 
 
+def test_arc_size_bounds_the_elements_along_curved_edges(cad: dict[str, Path],
+                                                         tmp_path: Path) -> None:
+    # The quarter cylinder's arcs are 5 pi = 15.7 mm long: by the angle 2 (Nagata) and 4
+    # (facets) elements; elements of at most 1.5 mm need 11. The straight edges keep one.
+    paths = build_tool_models(cad["cylinder"], tmp_path, "c", patches_per_arc=2,
+                              facets_per_arc=4, blank_point=(0, 0, 10), arc_size=1.5,
+                              models=("nagata", "facets"))
+    assert read_tool(paths["nagata"]).n_patches == 11
+    assert read_tool(paths["facets"]).n_patches == 11
+    paths = build_tool_models(cad["cylinder"], tmp_path, "d", patches_per_arc=2,
+                              blank_point=(0, 0, 10), arc_size=100.0, models=("nagata",))
+    assert read_tool(paths["nagata"]).n_patches == 2
+    with pytest.raises(ValueError, match="arc_size must be positive"):
+        build_tool_models(cad["cylinder"], tmp_path, "e", arc_size=0.0, models=("nagata",))
+
+
 def test_bad_arguments(cad: dict[str, Path], tmp_path: Path) -> None:
     with pytest.raises(CadError, match="unknown CAD format '.stl'"):
         build_tool_models(tmp_path / "a.stl", tmp_path, "a")
@@ -382,6 +398,11 @@ def test_cli_build_and_error(cad: dict[str, Path], tmp_path: Path,
     assert [Path(f).name for f in files] == ["cyl.nagata.tool", "cyl.facets.tool",
                                               "cyl.bezier.tool"]
     assert read_tool(files[0]).n_patches == 2 and read_tool(files[1]).n_patches == 8
+    code, out, err = ddpy("tools", "build", str(cad["cylinder"]), "--name", "cyl3", "--out",
+                          str(tmp_path), "--patches-per-arc", "2", "--arc-size", "1.5",
+                          "--models", "nagata", "--blank-point=0,0,10")
+    assert code == 0, err
+    assert read_tool(out.split()[0]).n_patches == 11
     code, out, err = ddpy("tools", "error", *files, "--json", "--png", str(tmp_path))
     assert code == 0, err
     rows = json.loads(out)

@@ -741,8 +741,9 @@ class FormingProblem:
                 # closed branch there (stick, C = r g n + r s, when nothing slides yet),
                 # which does not depend on the shift.
                 r = self.r[pairs]
-                p_aug = np.einsum("ij,ij->i", lam, found.normal) - r * found.distance
-                close = hit & (p_aug <= 0.0) & (np.abs(found.distance) <= touching)
+                distance = np.where(hit, found.distance, 0.0)  # no patch: no finite gap
+                p_aug = np.einsum("ij,ij->i", lam, found.normal) - r * distance
+                close = hit & (p_aug <= 0.0) & (np.abs(distance) <= touching)
                 if close.any():
                     lift = -p_aug[close] + 1e-9 * r[close] * self.size
                     lam = lam.copy()

@@ -241,9 +241,9 @@ phase stage1
   lead      punch1
 end
 
-phase stage2                     # die 1 and blank-holder 1 lifted: the flange left is free
+phase stage2                     # blank-holder 1 lifted: the flange left is drawn freely
   type      forming
-  tools     punch2 punch1 holder2
+  tools     punch2 punch1 holder2 die1
   move      punch2  0 0 {stage2:g}
   gap       holder2 punch1 {gap2:g}      # blank-holder 2 against die 2, punch 1's end ring
   lead      punch2

@@ -295,9 +295,16 @@ tool {tool}
   file         {prefix}{tool}.{file}.tool
   friction     {friction}
   contact      {side}
-end
+{augmentation}end
 """
 
+#: Augmentation r of the contact law (N/mm) set in the decks of a blank, else the solver's
+#: default (E t^2 / h of the elements: 1.3e4 on the coarse blank, 2.5e4 on the medium one).
+#: The medium blank failed its first increment with the default (10 cuts to a step of 4e-8
+#: of the stage, 25 iterations each) and with 5e3; with 6e4 its first increment converged in
+#: 25 iterations and the next ones in 3 to 15, with 2e5 only after cuts. The blank starts
+#: held by contact alone, flat on die 1 and under the ring of punch 1's end.
+AUGMENTATION = {"medium": 6e4, "paper": 6e4}
 #: Largest increment (mm of punch travel) of each blank.
 MAX_INCREMENT = {"coarse": 0.5, "medium": 0.25, "paper": 0.1}
 
@@ -313,6 +320,8 @@ def write_case(folder: Path, model: str, mesh: str, dims: Dimensions = DIMENSION
     what = {"paper": f"unstructured, {LAYERS} layers (paper: 15,408 hexahedra)"}.get(
         mesh, f"unstructured, {LAYERS} layers, elements of about {ELEMENT_SIZE.get(mesh, 0):g} mm")
     mesh_text = MESH.format(mesh=mesh, what=what)
+    augmentation = (f"  augmentation {AUGMENTATION[mesh]:g}    # N/mm, see make_case.py\n"
+                    if mesh in AUGMENTATION else "")
     if mesh_file is not None:
         mesh_text = mesh_text.replace(f"../../../meshes/{mesh}.msh", mesh_file)
     decks = {
@@ -326,7 +335,8 @@ def write_case(folder: Path, model: str, mesh: str, dims: Dimensions = DIMENSION
         "tools.dat": "# ddpy tools deck.  Units mm.  Written by make_case.py: the "
                      f"{model} model.\n" + "\n".join(
                          TOOL.format(tool=t, description=description, file=file,
-                                     prefix=tools_prefix, friction=FRICTION, side=SIDE[t])
+                                     prefix=tools_prefix, friction=FRICTION, side=SIDE[t],
+                                     augmentation=augmentation)
                          for t in TOOLS),
     }
     for name, text in decks.items():

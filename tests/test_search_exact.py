@@ -316,3 +316,17 @@ def test_far_points_edges_and_a_sphere_centre() -> None:
         for smooth in (True, False):
             sphere = ContactSearch(NagataSurface(v, n, f, smooth=smooth))
             assert_same_as_brute_force(sphere, np.array([[0.0, 0.0, 0.0], [0.1, -0.2, 0.3]]))
+
+
+@pytest.mark.parametrize("left_out", [0, 5, 13])
+def test_a_tree_that_leaves_out_a_patch_fails_the_comparison(left_out: int) -> None:
+    # The comparison has teeth: the tree of the split die with one patch's leaf pointing
+    # at another patch (so that patch is never projected on) misses points above it.
+    surface = split_die(1, 20)
+    search = ContactSearch(surface)
+    x = query_points(np.random.default_rng(3), surface, search)
+    assert_same_as_brute_force(search, x)
+    child = search._tree_child  # private: the core's 1-based tree, leaves -(patch + 1)
+    child[child == -(left_out + 1)] = -((left_out + 1) % surface.n_patches + 1)
+    with pytest.raises(AssertionError, match="misses"):
+        assert_same_as_brute_force(search, x)

@@ -292,7 +292,7 @@ def write_case(folder: Path, model: str, mesh: str, dims: Dimensions = DIMENSION
     """Write the five decks of one case. By default the tool and mesh files are referred to
     relatively: the folder must be ``<root>/cases/<mesh>/<model>`` next to ``tools/`` and
     ``meshes/``."""
-    description, file = TOOL_FILES[model]
+    file, description = TOOL_FILES[model]
     folder.mkdir(parents=True, exist_ok=True)
     what = {"paper": f"unstructured, {LAYERS} layers (paper: 15,408 hexahedra)"}.get(
         mesh, f"unstructured, {LAYERS} layers, elements of about {ELEMENT_SIZE.get(mesh, 0):g} mm")

@@ -1148,6 +1148,15 @@ def findings(numbers: dict[str, dict[str, Any]], models: list[str]) -> list[str]
                        "cut" + (": the trials failed at every size tried, and the run could "
                                 "not pass this point." if last.get("cut_increments")
                                 == last["increments"] else ".")))
+    for stage in STAGES:
+        short = {m: numbers[m]["reached"]["travel_mm"] for m in models
+                 if numbers[m]["status"] != "completed" and
+                 numbers[m]["reached"]["stage"] == stage}
+        if len(short) > 1:
+            out.append(f"- {len(short)} runs stopped in {stage}, between "
+                       f"{min(short.values()):g} and {max(short.values()):g} mm of its "
+                       f"{numbers[next(iter(short))]['stages'][stage]['travel_mm']:g} mm ("
+                       + ", ".join(f"{LABELS[m]} {t:g}" for m, t in short.items()) + ").")
     for m in models:
         end = _end(numbers[m], STAGES[-1])
         if end is None:

@@ -24,6 +24,8 @@ import argparse
 import datetime
 import importlib.util
 import json
+import os
+import platform
 import subprocess
 import sys
 from dataclasses import dataclass, fields
@@ -93,6 +95,13 @@ PAPER: dict[str, Any] = {
 #: elastic start; punch 2 starts `approach` below the cup).
 WINDOW = 1.0
 START = {"stage1": 1.0, "stage2": make_case.DIMENSIONS.approach + 1.0}
+#: The colour scale of the plastic strain maps ends at this percentile of their values
+#: (a few elements strain far more than the rest).
+STRAIN_SCALE = 98.0
+#: Shape error samples per patch direction (``ddpy.shape_error.shape_error``).
+SAMPLES = 9
+#: A finding when one element's volume changes by more than this fraction.
+ELEMENT_VOLUME = 0.05
 #: Claim (b): Nagata and Bezier "give the same" plastic strain when their largest values
 #: differ by at most this fraction.
 SAME_STRAIN = 0.05
@@ -295,7 +304,7 @@ def from_results(path: Path, case_folder: Path) -> Run:
                     r, case, end, h, searches)
             stages[phase.name] = stage
             curves[phase.name] = {"travel": _rounded(travel, 6), "force": _rounded(force, 3),
-                                  "sizes": _rounded(h["step"][mask], 9),
+                                  "sizes": [float(f"{v:.6g}") for v in h["step"][mask]],
                                   "iterations": h["iterations"][mask].astype(int).tolist(),
                                   "die_contact": contact.astype(int).tolist()}
         last = max(frames, key=lambda f: f.increment) if frames else None
@@ -345,6 +354,12 @@ def _travel_mean(travel: np.ndarray, values: np.ndarray) -> float:
 
 
 # ------------------------------------------------------------------------- running a run
+
+
+def cores() -> int:
+    """The cores this process may run on."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else \
+        os.cpu_count() or 1
 
 
 def code_version() -> str:
@@ -504,7 +519,7 @@ def shape_errors(tools: Path, stem: str | None = None
         out[tool] = {}
         for model in MODELS:
             tool_model = read_tool(tools / f"{tool}.{model}.tool")
-            error = shape_error(tool_model, tools / "tools.step")
+            error = shape_error(tool_model, tools / "tools.step", samples=SAMPLES)
             out[tool][model] = {**error.summary(),
                                 "cad_faces": int(np.unique(tool_model.face_tags).size)}
             errors[model][tool] = error
@@ -547,30 +562,41 @@ def _reached(n: dict[str, Any]) -> str:
 
 
 def _claim(text: str, parts: list[str], verdicts: list[bool], checked: bool,
-           needs: str) -> tuple[str, str, str]:
-    """A claim's verdict: holds when every part holds, not checked (with what it needs)
-    when a run it needs did not complete; the parts that could be compared in the detail."""
-    detail = "; ".join(parts)
+           needs: str, reached: list[str]) -> tuple[str, str, str]:
+    """A claim's verdict: holds when every part holds; not checked when a run it needs did
+    not complete, with what it needs and the values as far as each run got (``reached``)."""
     if not checked:
-        return text, "not checked", needs + (f"; compared where the runs reached: {detail}"
-                                             if detail else "")
-    return text, _verdict(all(verdicts)), detail
+        return text, "not checked", needs + (
+            "; as far as each run got, not a check: " + "; ".join(reached) if reached else "")
+    return text, _verdict(all(verdicts)), "; ".join(parts)
+
+
+def _values(numbers: dict[str, dict[str, Any]], models: tuple[str, ...], stage: str,
+            key: str, fmt: str, unit: str = "") -> str:
+    """``key`` of a stage for the models that ran in it, a partial stage marked with the
+    travel it reached: "Nagata 26.7 N, Faceted-coarse 197 N (to 30.8 mm)"."""
+    out = []
+    for m in models:
+        s = numbers.get(m, {}).get("stages", {}).get(stage)
+        if not s or not s["increments"] or s.get(key) is None:
+            continue
+        out.append(f"{LABELS[m]} {format(s[key], fmt)}{unit}"
+                   + ("" if s["complete"] else f" (to {s['reached_mm']:g} mm)"))
+    return ", ".join(out)
 
 
 def claims(numbers: dict[str, dict[str, Any]]) -> list[tuple[str, str, str]]:
     """The paper's claims: (claim, "holds" / "does not hold" / "not checked", detail). A
     claim is checked on completed runs only; the smooth side of (a) is the smooth models
-    that completed (at least one; else, for the detail, those that completed the stage)."""
+    that completed (at least one). A claim not checked states the values as far as each
+    run got."""
     facets = ("facets_coarse", "facets_fine")
     out = []
     # (a) oscillation of the punch force
     parts, verdicts, ratio = [], [], {}
-    smooth_done = [m for m in ("bezier", "nagata") if _complete(numbers, m)]
-    for stage in STAGES:
-        smooth = smooth_done or [m for m in ("bezier", "nagata")
-                                 if _complete(numbers, m, stage)]
-        if not smooth or not all(_complete(numbers, m, stage) for m in facets):
-            continue
+    smooth = [m for m in ("bezier", "nagata") if _complete(numbers, m)]
+    checked = bool(smooth) and all(_complete(numbers, m) for m in facets)
+    for stage in STAGES if checked else ():
         osc = {m: numbers[m]["stages"][stage]["oscillation_N"] for m in (*smooth, *facets)}
         top = max(osc[m] for m in smooth)
         above = min(osc[m] for m in facets) > top
@@ -580,82 +606,89 @@ def claims(numbers: dict[str, dict[str, Any]]) -> list[tuple[str, str, str]]:
         parts.append(f"{stage}: " + ", ".join(f"{LABELS[m]} {osc[m]:.3g} N" for m in osc)
                      + f" (both facet models above the smooth: {_yes(above)}; fine below "
                      f"coarse: {_yes(refined)})")
-    if len(ratio) == len(STAGES):
+    if checked:
         more = ratio["stage2"] > ratio["stage1"]
         verdicts.append(more)
         parts.append(f"coarse facets over the smooth: {ratio['stage1']:.2f} times in stage 1, "
                      f"{ratio['stage2']:.2f} in stage 2 (larger in stage 2: {_yes(more)})")
+    reached = [f"{stage} oscillation: {v}" for stage in STAGES
+               if (v := _values(numbers, MODELS, stage, "oscillation_N", ".3g", " N"))]
     out.append(_claim(
         "(a) Facets make the punch force oscillate and refining them reduces it, more in "
-        "stage 2 (Fig. 17-18)", parts, verdicts, len(ratio) == len(STAGES),
-        _not_reached(numbers, (*facets, *(smooth_done[:1] or ("bezier", "nagata"))))))
+        "stage 2 (Fig. 17-18)", parts, verdicts, checked,
+        _not_reached(numbers, (*facets, *(smooth[:1] or ("bezier", "nagata")))), reached))
     # (b) equivalent plastic strain at the end of stage 2
     parts, verdicts = [], []
-    ends = {m: numbers[m]["stages"]["stage2"]["end"] for m in MODELS if _complete(numbers, m)}
-    ep = {m: e["plastic_strain_max"] for m, e in ends.items()}
-    if ep:
-        parts.append("largest at the end of stage 2: " + ", ".join(
-            f"{LABELS[m]} {v:.3f}" for m, v in ep.items()) + "; volume mean " + ", ".join(
-            f"{LABELS[m]} {ends[m]['plastic_strain_mean']:.3f}" for m in ends))
-    if {"nagata", "bezier"} <= set(ep):
+    checked = all(_complete(numbers, m) for m in MODELS)
+    if checked:
+        ends = {m: numbers[m]["stages"]["stage2"]["end"] for m in MODELS}
+        ep = {m: e["plastic_strain_max"] for m, e in ends.items()}
         same = abs(ep["nagata"] - ep["bezier"]) <= SAME_STRAIN * ep["bezier"]
-        verdicts.append(same)
-        parts.append(f"Nagata within {100 * SAME_STRAIN:g} % of Bezier: {_yes(same)}")
-    smooth = [m for m in ("bezier", "nagata") if m in ep]
-    if smooth and all(m in ep for m in facets):
-        over = min(ep[m] for m in facets) > max(ep[m] for m in smooth)
+        over = min(ep[m] for m in facets) > max(ep["nagata"], ep["bezier"])
         coarse_more = ep["facets_coarse"] > ep["facets_fine"]
-        verdicts += [over, coarse_more]
-        parts.append(f"both facet models above the smooth: {_yes(over)}; coarse above fine: "
-                     f"{_yes(coarse_more)}")
+        verdicts += [same, over, coarse_more]
+        parts += ["largest at the end of stage 2: " + ", ".join(
+                      f"{LABELS[m]} {v:.3f}" for m, v in ep.items()) + "; volume mean "
+                  + ", ".join(f"{LABELS[m]} {e['plastic_strain_mean']:.3f}"
+                              for m, e in ends.items()),
+                  f"Nagata within {100 * SAME_STRAIN:g} % of Bezier: {_yes(same)}; both facet "
+                  f"models above both smooth ones: {_yes(over)}; coarse above fine: "
+                  f"{_yes(coarse_more)}"]
+    reached = []
+    for stage in STAGES:
+        ends = {m: numbers[m]["stages"][stage]["end"] for m in MODELS
+                if m in numbers and numbers[m]["stages"][stage]["end"]}
+        if ends:
+            reached.append(f"largest at the end of {stage}: " + ", ".join(
+                f"{LABELS[m]} {e['plastic_strain_max']:.3f}"
+                + ("" if numbers[m]["stages"][stage]["complete"] else
+                   f" (at {e['travel_mm']:g} mm)") for m, e in ends.items()))
     out.append(_claim(
         "(b) Nagata and Bezier give the same equivalent plastic strain, facets overestimate "
-        "it, the coarse ones more (Fig. 19)", parts, verdicts, len(ep) == len(MODELS),
-        _not_reached(numbers, MODELS)))
+        "it, the coarse ones more (Fig. 19)", parts, verdicts, checked,
+        _not_reached(numbers, MODELS), reached))
     # (c) nodes in contact with the die
     parts, verdicts, excess = [], [], {}
-    for stage in STAGES:
-        have = [m for m in MODELS if _complete(numbers, m, stage)]
-        if not all(m in have for m in facets):
-            continue
-        n = {m: numbers[m]["stages"][stage]["die_contact_mean"] for m in have}
-        text = f"{stage} ({DIE[stage]}), mean over the travel: " + ", ".join(
-            f"{LABELS[m]} {v:.1f}" for m, v in n.items())
-        if "bezier" in n:
-            more = n["bezier"] > max(n[m] for m in facets)
-            excess[stage] = (n["bezier"] - 0.5 * sum(n[m] for m in facets)) / max(
-                n["bezier"], 1e-12)
-            verdicts.append(more)
-            text += f" (Bezier above both facet models: {_yes(more)})"
-        parts.append(text)
-    if len(excess) == len(STAGES):
+    trio = ("bezier", *facets)
+    checked = all(_complete(numbers, m) for m in trio)
+    for stage in STAGES if checked else ():
+        n = {m: numbers[m]["stages"][stage]["die_contact_mean"] for m in trio}
+        more = n["bezier"] > max(n[m] for m in facets)
+        excess[stage] = (n["bezier"] - 0.5 * sum(n[m] for m in facets)) / max(n["bezier"],
+                                                                                 1e-12)
+        verdicts.append(more)
+        parts.append(f"{stage} ({DIE[stage]}), mean over the travel: "
+                     + _values(numbers, MODELS, stage, "die_contact_mean", ".1f")
+                     + f" (Bezier above both facet models: {_yes(more)})")
+    if checked:
         most = excess["stage1"] > excess["stage2"]
         verdicts.append(most)
         parts.append(f"Bezier's excess over the facets' mean: {100 * excess['stage1']:.0f} % "
                      f"in stage 1, {100 * excess['stage2']:.0f} % in stage 2 (larger in "
                      f"stage 1: {_yes(most)})")
+    reached = [f"{stage} ({DIE[stage]}), mean over the travel: {v}" for stage in STAGES
+               if (v := _values(numbers, MODELS, stage, "die_contact_mean", ".1f"))]
     out.append(_claim(
         "(c) More nodes touch the die with Bezier than with facets, most of all in stage 1 "
-        "(Fig. 20)", parts, verdicts, len(excess) == len(STAGES),
-        _not_reached(numbers, ("bezier", *facets))))
+        "(Fig. 20)", parts, verdicts, checked, _not_reached(numbers, trio), reached))
     # (d) increments and iterations
     trio = ("nagata", *facets)
     parts, verdicts = [], []
-    for stage in (*STAGES, None):
-        if not all(_complete(numbers, m, stage) for m in trio):
-            continue
-        counts = {m: numbers[m] if stage is None else numbers[m]["stages"][stage] for m in trio}
-        ratios = {f"{LABELS[m]} {what}": counts[m][what] / max(counts["nagata"][what], 1)
+    checked = all(_complete(numbers, m) for m in trio)
+    if checked:
+        n = numbers["nagata"]
+        ratios = {f"{LABELS[m]} {what}": numbers[m][what] / max(n[what], 1)
                   for m in facets for what in ("increments", "iterations")}
-        if stage is None:
-            verdicts = [TWICE[0] <= v <= TWICE[1] for v in ratios.values()]
-        parts.append(("whole process" if stage is None else stage) + ", ratios to Nagata: "
-                     + ", ".join(f"{k} {v:.2f}" for k, v in ratios.items()))
-    if verdicts:
-        parts.append(f"about twice: all within {TWICE[0]:g}-{TWICE[1]:g}")
+        verdicts = [TWICE[0] <= v <= TWICE[1] for v in ratios.values()]
+        parts.append("ratios to Nagata: " + ", ".join(f"{k} {v:.2f}"
+                                                      for k, v in ratios.items())
+                     + f" (about twice: all within {TWICE[0]:g}-{TWICE[1]:g})")
+    reached = [f"{stage} {what}: {v}" for stage in STAGES
+               for what in ("increments", "iterations")
+               if (v := _values(numbers, MODELS, stage, what, "d"))]
     out.append(_claim(
         "(d) Facets need about twice the increments and iterations of Nagata (Table 6)",
-        parts, verdicts, bool(verdicts), _not_reached(numbers, trio)))
+        parts, verdicts, checked, _not_reached(numbers, trio), reached))
     return out
 
 
@@ -766,7 +799,8 @@ def plot_sections(runs: dict[str, Run], path: Path, key: str, ylabel: str,
         ax.set_ylabel(ylabel)
         ax.set_title(f"end of {stage} (y = 0 plane)")
         ax.grid(alpha=0.3)
-        ax.legend()
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend()
     fig.tight_layout()
     fig.savefig(path, dpi=100)
     plt.close(fig)
@@ -778,21 +812,25 @@ def plot_strain_maps(runs: dict[str, Run], path: Path) -> Path:
     (through-thickness mean of each element column, at its centroid; Fig. 19)."""
     plt = _pyplot()
     maps = {m: r.curves["map"] for m, r in runs.items() if "map" in r.curves}
-    fig, axes = plt.subplots(1, max(len(maps), 1), figsize=(4.2 * max(len(maps), 1), 4.4),
-                             squeeze=False)
-    top = max((max(m["plastic_strain"]) for m in maps.values()), default=1.0)
+    fig, axes = plt.subplots(1, max(len(maps), 1), figsize=(3.6 * max(len(maps), 1) + 1, 4.0),
+                             squeeze=False, layout="constrained")
+    values = np.concatenate([m["plastic_strain"] for m in maps.values()]) if maps else \
+        np.ones(1)
+    top = max(float(np.percentile(values, STRAIN_SCALE)), 1e-9)
     scatter = None
-    for ax, (model, m) in zip(axes[0], maps.items(), strict=False):
-        scatter = ax.scatter(m["x"], m["y"], c=m["plastic_strain"], s=14, cmap="viridis",
+    for k, (ax, (model, m)) in enumerate(zip(axes[0], maps.items(), strict=False)):
+        scatter = ax.scatter(m["x"], m["y"], c=m["plastic_strain"], s=12, cmap="viridis",
                              vmin=0.0, vmax=top)
         ax.set_aspect("equal")
         ax.set_title(f"{LABELS[model]}: {m['stage']} {m['travel']:g} mm\n"
                      f"max {max(m['plastic_strain']):.3f} (column mean)", fontsize=9)
         ax.set_xlabel("initial x [mm]")
-        ax.set_ylabel("initial y [mm]")
+        if k == 0:
+            ax.set_ylabel("initial y [mm]")
     if scatter is not None:
-        fig.colorbar(scatter, ax=axes[0].tolist(), shrink=0.8,
-                     label="equivalent plastic strain")
+        fig.colorbar(scatter, ax=axes[0].tolist(), shrink=0.8, extend="max",
+                     label=f"equivalent plastic strain (scale to the {STRAIN_SCALE:g}th "
+                     "percentile)")
     fig.savefig(path, dpi=100)
     plt.close(fig)
     return path
@@ -841,7 +879,8 @@ def report(mesh: str, numbers: dict[str, dict[str, Any]],
         f"(unstructured, elements of about {make_case.ELEMENT_SIZE[mesh]:.3g} mm; the "
         f"paper: {make_case.PAPER_HEXAHEDRA} hexahedra). Report written on {threads} "
         "thread(s); each run's threads and code version are in the table of runs. Wall "
-        "times are this machine's (x86_64, 2 cores), of runs that may have shared the cores "
+        f"times are this machine's ({platform.machine()}, {cores()} cores), of runs that "
+        "may have shared the cores "
         "with other jobs.",
         "",
         "## Runs",
@@ -856,8 +895,9 @@ def report(mesh: str, numbers: dict[str, dict[str, Any]],
                               for m in models]]),
         "",
         f"A run whose punch advances less than {STALL_MM:g} mm over {STALL_INCREMENTS} "
-        "increments is stopped and reported as partial, with the fields of its last "
-        "increment as its end of stage.",
+        f"increments, or less than {STALL_STEP:g} mm in one, is stopped and reported as "
+        "partial, with the fields of its last increment as its end of stage (a run that "
+        "failed has no fields after its last end of stage).",
         "",
         "## The tools (a reconstruction)",
         "",
@@ -903,7 +943,9 @@ def report(mesh: str, numbers: dict[str, dict[str, Any]],
         "",
         "At the end of stage 2 (or the last increment of a partial run), over the initial "
         "blank: each marker is an element column's centroid, coloured by the mean over its "
-        f"{make_case.LAYERS} layers; the largest value is that of one element.",
+        f"{make_case.LAYERS} layers (the colour scale ends at the {STRAIN_SCALE:g}th "
+        "percentile of all maps' values); the largest value in the table is that of one "
+        "element.",
         "",
         f"![plastic strain]({figures['strain_map']})",
         "",
@@ -925,7 +967,8 @@ def report(mesh: str, numbers: dict[str, dict[str, Any]],
         "",
         head, rule,
         *[_row([f"{stage} ({DIE[stage]}): mean, largest",
-                *[f"{numbers[m]['stages'][stage]['die_contact_mean']:.1f}, "
+                *["-" if not numbers[m]["stages"][stage]["increments"] else
+                  f"{numbers[m]['stages'][stage]['die_contact_mean']:.1f}, "
                   f"{numbers[m]['stages'][stage]['die_contact_max']}" for m in models]])
           for stage in STAGES],
         "",
@@ -978,7 +1021,8 @@ def tool_model_section(shape: dict[str, dict[str, dict[str, Any]]], maps: dict[s
     low, high = PAPER["nagata_shape_error_um"]
     lines += [
         "",
-        "Shape error against the CAD (`ddpy.shape_error`, 9 x 9 samples per patch): the "
+        f"Shape error against the CAD (`ddpy.shape_error`, {SAMPLES} x {SAMPLES} samples "
+        "per patch): the "
         "signed distance, positive where the model stands out of the CAD surface towards "
         "the blank, in micrometres, and the largest angle between the model's normal and "
         "the CAD's, in degrees.",
@@ -1152,16 +1196,19 @@ def findings(numbers: dict[str, dict[str, Any]], models: list[str]) -> list[str]
         short = {m: numbers[m]["reached"]["travel_mm"] for m in models
                  if numbers[m]["status"] != "completed" and
                  numbers[m]["reached"]["stage"] == stage}
-        if len(short) > 1:
-            out.append(f"- {len(short)} runs stopped in {stage}, between "
+        travel = numbers[next(iter(short))]["stages"][stage]["travel_mm"] if short else 0.0
+        if len(short) > 1 and max(short.values()) - min(short.values()) < 0.01 * travel:
+            out.append(f"- {len(short)} runs stopped in {stage} at about the same punch "
+                       "travel, between "
                        f"{min(short.values()):g} and {max(short.values()):g} mm of its "
-                       f"{numbers[next(iter(short))]['stages'][stage]['travel_mm']:g} mm ("
+                       f"{travel:g} mm ("
                        + ", ".join(f"{LABELS[m]} {t:g}" for m, t in short.items()) + ").")
     for m in models:
-        end = _end(numbers[m], STAGES[-1])
-        if end is None:
+        ends = [e for s in STAGES if (e := _end(numbers[m], s))]
+        if not ends:
             continue
-        if abs(end["element_volume_change_max"]) > 0.05:
+        end = ends[-1]
+        if abs(end["element_volume_change_max"]) > ELEMENT_VOLUME:
             out.append(
                 f"- {LABELS[m]}, end of {end['stage']} ({end['travel_mm']:g} mm): one "
                 f"element's volume changed by {100 * end['element_volume_change_max']:+.3g} % "
@@ -1172,7 +1219,7 @@ def findings(numbers: dict[str, dict[str, Any]], models: list[str]) -> list[str]
                 "elements there are too distorted for their solution to hold.")
     if len(out) == 2:
         out.append("- Every run completed; the volume of every element is kept within "
-                   "5 %.")
+                   f"{100 * ELEMENT_VOLUME:g} %.")
     return out
 
 

@@ -1,0 +1,1306 @@
+"""Reverse deep drawing of a cylindrical cup (Numisheet'99 C): the paper's Fig. 14-21, Tables 5-6.
+
+Runs the four tool models (Bezier, Nagata, coarse facets, fine facets) on one blank mesh and
+writes docs/benchmarks/reverse_deep_drawing.md (reverse_deep_drawing_<mesh>.md for the other
+meshes) with its figures, next to the paper's values.
+
+    python benchmarks/reverse_deep_drawing/run.py                    # coarse blank (an hour)
+    python benchmarks/reverse_deep_drawing/run.py --models nagata    # one model
+    python benchmarks/reverse_deep_drawing/run.py --json             # print the numbers only
+    python benchmarks/reverse_deep_drawing/run.py --reuse            # report from saved runs
+
+The cases are written first by make_case.py (tools, meshes, decks) when missing; each case
+runs through the case runner (``ddpy run``) into results/<mesh>/<model>/ (git-ignored), which
+``--reuse`` reads back. A run whose lead tool stops advancing (less than STALL_MM over
+STALL_INCREMENTS increments) is stopped there and reported as partial. Every report keeps
+the numbers and curves of its runs, with the code version and date of each, in
+docs/benchmarks/<report>_runs.json (merged: a model not run keeps its entry); ``--reuse``
+takes a model without results/ from there.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import importlib.util
+import json
+import os
+import platform
+import subprocess
+import sys
+from dataclasses import dataclass, fields
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ddpy.bending import force_oscillation
+from ddpy.drawing import (
+    contact_force_balance,
+    cup_height,
+    element_centroids,
+    hexahedron_volumes,
+    penetration,
+    plane_section,
+    rim_nodes,
+    rim_radius,
+)
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parents[1]
+DOCS = ROOT / "docs" / "benchmarks"
+
+
+def _load_make_case() -> Any:
+    spec = importlib.util.spec_from_file_location("drawing_make_case", HERE / "make_case.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # dataclasses look their module up
+    spec.loader.exec_module(module)
+    return module
+
+
+make_case = _load_make_case()
+MODELS: tuple[str, ...] = make_case.MODELS
+TOOLS: tuple[str, ...] = make_case.TOOLS
+STAGES = ("stage1", "stage2")
+LABELS = {"bezier": "Bezier", "nagata": "Nagata", "facets_coarse": "Faceted-coarse",
+          "facets_fine": "Faceted-fine"}
+#: The die of each stage, whose nodes in contact the paper counts (Fig. 20): die 1, then
+#: punch 1's end (die 2).
+DIE = {"stage1": "die1", "stage2": "punch1"}
+#: The paper's published values.
+PAPER: dict[str, Any] = {
+    #: Table 5: patches of each tool model.
+    "table5_patches": {
+        "die1": {"bezier": 8, "nagata": 90, "facets_coarse": 324, "facets_fine": 960},
+        "holder1": {"bezier": 2, "nagata": 15, "facets_coarse": 60, "facets_fine": 180},
+        "punch1": {"bezier": 12, "nagata": 120, "facets_coarse": 540, "facets_fine": 1680},
+        "holder2": {"bezier": 8, "nagata": 75, "facets_coarse": 240, "facets_fine": 840},
+        "punch2": {"bezier": 12, "nagata": 86, "facets_coarse": 254, "facets_fine": 1012},
+        "total": {"bezier": 42, "nagata": 386, "facets_coarse": 1418, "facets_fine": 4672},
+    },
+    #: Text with Fig. 14-16: the Nagata model's shape error (um), and the fine facets'
+    #: largest error, about this many times the Nagata one.
+    "nagata_shape_error_um": (-6.2, 9.6),
+    "fine_facets_error_ratio": 2.0,
+    #: Table 6: increments, iterations, CPU time (hours) of the whole process.
+    "table6": {"bezier": {"increments": 1917, "iterations": 12925, "cpu_h": 3.62},
+               "nagata": {"increments": 1788, "iterations": 12460, "cpu_h": 3.28},
+               "facets_coarse": {"increments": 4248, "iterations": 25939, "cpu_h": 6.41},
+               "facets_fine": {"increments": 4103, "iterations": 24103, "cpu_h": 6.01}},
+}
+#: Force oscillation: RMS deviation from a moving quadratic over WINDOW mm of punch travel
+#: (the bending benchmark's window, kept on every mesh), from START mm of each stage on (the
+#: elastic start; punch 2 starts `approach` below the cup).
+WINDOW = 1.0
+START = {"stage1": 1.0, "stage2": make_case.DIMENSIONS.approach + 1.0}
+#: The colour scale of the plastic strain maps ends at this percentile of their values
+#: (a few elements strain far more than the rest).
+STRAIN_SCALE = 98.0
+#: Shape error samples per patch direction (``ddpy.shape_error.shape_error``).
+SAMPLES = 9
+#: A finding when one element's volume changes by more than this fraction.
+ELEMENT_VOLUME = 0.05
+#: Claim (b): Nagata and Bezier "give the same" plastic strain when their largest values
+#: differ by at most this fraction.
+SAME_STRAIN = 0.05
+#: Claim (d): "about twice" the increments and iterations: a ratio in this range.
+TWICE = (1.5, 2.5)
+#: A run is stopped when its lead tool advances less than STALL_MM in STALL_INCREMENTS
+#: increments (each cut to a sliver of the smallest size), or by less than STALL_STEP mm in
+#: one increment, and reported as partial.
+STALL_INCREMENTS, STALL_MM, STALL_STEP = 20, 1e-3, 1e-9
+#: A node counts as inside a tool when deeper than this (mm): below, round-off.
+INSIDE_MM = 1e-9
+#: Written by run_case_folder next to a run's results: its code version and date.
+CODE_FILE = "code.json"
+#: What makes a run's numbers: a change elsewhere (the reports in docs/) leaves them.
+CODE_PATHS = ("ddpy", "fortran", "meson.build", "pyproject.toml", "benchmarks")
+#: The parts of a Newton iteration's time (Table 6).
+PARTS = ("assembly", "contact", "factorization", "solve", "rest")
+#: What each of make_case.Dimensions is.
+DIMENSION_TEXT = {
+    "die_bore": "die 1: radius of the bore",
+    "die_shoulder": "die 1: shoulder radius (stage 1's die radius)",
+    "die_outer": "die 1 and blank-holder 1: outer radius of the flat",
+    "die_depth": "die 1: bore wall below the shoulder",
+    "punch1_radius": "punch 1: outer radius",
+    "punch1_nose": "punch 1: outer nose radius",
+    "punch1_edge": "punch 1's inner edge = die 2's shoulder radius",
+    "punch1_bore": "punch 1's bore = die 2's opening",
+    "punch1_height": "punch 1: height of its walls above its end ring",
+    "punch2_radius": "punch 2: radius",
+    "punch2_nose": "punch 2: nose radius",
+    "punch2_height": "punch 2: height of its wall",
+    "holder2_inner": "blank-holder 2: inner radius",
+    "holder2_outer": "blank-holder 2: outer radius",
+    "holder2_edge": "blank-holder 2: radius of its two edges",
+    "stage1": "punch 1's travel down (stage 1)",
+    "stage2": "punch 2's travel up from the cup's bottom (stage 2)",
+    "approach": "punch 2's start below the cup's bottom",
+}
+
+
+@dataclass
+class Run:
+    """What the report needs of one run: ``numbers`` (summary) and ``curves`` (per stage:
+    travel, force, increment sizes, iterations, die contact; sections; the plastic strain
+    map), both JSON-ready; ``kept``: read from the runs file."""
+
+    numbers: dict[str, Any]
+    curves: dict[str, Any]
+    kept: bool = False
+
+
+# ------------------------------------------------------------------------ reading a run
+
+
+def _code_of(folder: Path) -> dict[str, Any]:
+    """Code version, date (and why a run was stopped) recorded next to a run's results."""
+    try:
+        return json.loads((folder / CODE_FILE).read_text())
+    except (OSError, ValueError):
+        return {}
+
+
+def _rounded(values: Any, digits: int) -> list[Any]:
+    return np.round(np.asarray(values, dtype=float), digits).tolist()
+
+
+def _column_means(points: np.ndarray, values: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Mean of ``values`` over the elements of each through-thickness column (same initial
+    x, y to 1e-6 mm): the columns' x, y and means."""
+    keys = np.round(points[:, :2], 6)
+    unique, inverse = np.unique(keys, axis=0, return_inverse=True)
+    inverse = inverse.reshape(-1)
+    sums = np.bincount(inverse, weights=values, minlength=len(unique))
+    counts = np.bincount(inverse, minlength=len(unique))
+    return unique[:, 0], unique[:, 1], sums / counts
+
+
+def frame_numbers(reader: Any, case: Any, frame: Any, history: dict[str, np.ndarray],
+                  searches: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The numbers and sections of one frame (the end of a stage): cup height, flange
+    radius, plastic strain, thickness, volume change, force balance and penetration of the
+    stage's tools. Returns (numbers, sections)."""
+    fields_ = reader.frame(frame.index)
+    x0, x = reader.nodes, fields_["coordinates"]
+    elements = reader.elements
+    row = int(np.flatnonzero(history["increment"] == frame.increment)[0])
+    phase = case.phases[frame.phase]
+    v0 = hexahedron_volumes(x0, elements)
+    v = hexahedron_volumes(x, elements)
+    change = v / v0 - 1.0
+    worst = int(np.argmax(np.abs(change)))
+    centroids0 = element_centroids(x0, elements)
+    ep = fields_["plastic_strain"]
+    rim = rim_nodes(x0, make_case.RADIUS, 1e-3)
+    mean_r, min_r, max_r = rim_radius(x, rim)
+    balance, depth = {}, {}
+    for tool in phase.tools:
+        i = reader.tools.index(tool)
+        b = contact_force_balance(history["tool_force"][row, i], fields_["contact_force"],
+                                  fields_["contact_tool"], i)
+        balance[tool] = {"reaction_N": round(float(np.linalg.norm(b.reaction)), 3),
+                         "mismatch_N": float(f"{b.mismatch:.3g}"),
+                         "relative": float(f"{b.relative:.3g}"), "nodes": b.nodes}
+        if tool not in searches:
+            from ddpy.search import ContactSearch
+
+            searches[tool] = ContactSearch(case.tool(tool).model().surface)
+        p = penetration(x, searches[tool], history["tool_displacement"][row, i],
+                        case.tool(tool).contact_nodes(case.mesh))
+        depth[tool] = {"depth_mm": float(f"{p.depth:.3g}"),
+                       "inside": int(p.inside if p.depth > INSIDE_MM else 0)}
+    deepest = max(depth, key=lambda t: depth[t]["depth_mm"])
+    worst_balance = max(balance, key=lambda t: balance[t]["relative"])
+    # Sections: nodes of the bottom layer on the symmetry plane y = 0 (thickness is a
+    # node column's), elements with a face on it (plastic strain, column means).
+    bottom = np.flatnonzero(np.abs(x0[:, 2] - x0[:, 2].min()) < 1e-6)
+    r_t, t = plane_section(x0[bottom], fields_["thickness"][bottom], 1e-6)
+    on_plane = np.sum(np.abs(x0[elements][:, :, 1]) < 1e-6, axis=1) >= 4
+    cx, cy, ep_columns = _column_means(centroids0[on_plane], ep[on_plane])
+    order = np.argsort(np.hypot(cx, cy))
+    numbers = {
+        "stage": phase.name, "travel_mm": round(frame.travel, 4),
+        "cup_height_mm": round(cup_height(x), 3),
+        "flange_radius_mm": [round(mean_r, 3), round(min_r, 3), round(max_r, 3)],
+        "plastic_strain_max": round(float(ep.max()), 4),
+        "plastic_strain_mean": round(float(np.sum(ep * v0) / v0.sum()), 4),
+        "thickness_mm": [round(float(fields_["thickness"].min()), 4),
+                         round(float(fields_["thickness"].max()), 4)],
+        "volume_change": float(f"{v.sum() / v0.sum() - 1.0:.4g}"),
+        "element_volume_change_max": float(f"{change[worst]:.4g}"),
+        "element_volume_change_at_radius_mm": round(float(np.hypot(*centroids0[worst, :2])), 2),
+        "element_volume_change_strain": round(float(ep[worst]), 3),
+        "balance": balance, "balance_worst": worst_balance,
+        "penetration": depth, "penetration_worst": deepest,
+        "nodes_in_contact": {tool: int(history["nodes_in_contact"][row, reader.tools.index(tool)])
+                             for tool in phase.tools},
+    }
+    sections = {"thickness": [_rounded(r_t, 3), _rounded(t, 4)],
+                "plastic_strain": [_rounded(np.hypot(cx, cy)[order], 3),
+                                   _rounded(ep_columns[order], 4)]}
+    return numbers, sections
+
+
+def from_results(path: Path, case_folder: Path) -> Run:
+    """Read one run back from its results file (docs/results-format.md) and its case
+    folder (the tools, for the penetration check)."""
+    from ddpy.decks import read_case
+    from ddpy.results import ResultsReader
+    from ddpy.runner import read_status
+
+    case = read_case(case_folder)
+    record = _code_of(path.parent)
+    try:
+        state = read_status(path.parent)
+    except (OSError, ValueError):
+        state = {}
+    status, message = str(state.get("status", "unknown")), str(state.get("message", ""))
+    with ResultsReader(path) as r:
+        h = r.history()
+        stages: dict[str, Any] = {}
+        curves: dict[str, Any] = {"sections": {}}
+        searches: dict[str, Any] = {}
+        frames = [f for f in r.frames if f.index > 0]
+        for p, phase in enumerate(case.phases):
+            mask = h["phase"] == p
+            lead = phase.lead
+            direction = phase.displacement(lead)
+            direction = direction / np.linalg.norm(direction)
+            travel = h["travel"][mask]
+            force = -(r.tool_force(lead)[mask] @ direction)  # the blank resists the punch
+            die = r.tools.index(DIE[phase.name])
+            contact = h["nodes_in_contact"][mask][:, die]
+            reached = float(travel[-1]) if travel.size else 0.0
+            start = START[phase.name]
+            osc = (force_oscillation(travel, force, WINDOW, start=start)
+                   if reached >= start + WINDOW else None)
+            times = {part: float(h[f"time_{part}"][mask].sum()) for part in PARTS
+                     if f"time_{part}" in h}
+            stage = {
+                "travel_mm": phase.travel, "reached_mm": round(reached, 4),
+                "complete": bool(travel.size) and reached >= phase.travel - 1e-6,
+                "increments": int(mask.sum()), "iterations": int(h["iterations"][mask].sum()),
+                "cuts": int(h["cutbacks"][mask].sum()),
+                "wall_s": round(float(h["time_total"][mask].sum()), 1),
+                "times_s": {k: round(v, 2) for k, v in times.items()},
+                "max_force_N": round(float(force.max()), 2) if force.size else None,
+                "oscillation_N": None if osc is None else round(osc, 3),
+                "oscillation_rel": None if osc is None else float(
+                    f"{osc / float(np.mean(np.abs(force[travel >= start]))):.4g}"),
+                "die": DIE[phase.name],
+                "die_contact_mean": round(_travel_mean(travel, contact), 2),
+                "die_contact_max": int(contact.max()) if contact.size else 0,
+                "end": None,
+            }
+            ends = [f for f in frames if f.phase == p]
+            if ends:
+                end = max(ends, key=lambda f: f.increment)
+                stage["end"], curves["sections"][phase.name] = frame_numbers(
+                    r, case, end, h, searches)
+            stages[phase.name] = stage
+            curves[phase.name] = {"travel": _rounded(travel, 6), "force": _rounded(force, 3),
+                                  "sizes": [float(f"{v:.6g}") for v in h["step"][mask]],
+                                  "iterations": h["iterations"][mask].astype(int).tolist(),
+                                  "die_contact": contact.astype(int).tolist()}
+        last = max(frames, key=lambda f: f.increment) if frames else None
+        if last is not None:
+            x0 = r.nodes
+            c0 = element_centroids(x0, r.elements)
+            cx, cy, ep = _column_means(c0, r.field("plastic_strain", last.index))
+            curves["map"] = {"stage": case.phases[last.phase].name,
+                             "travel": round(last.travel, 4), "x": _rounded(cx, 3),
+                             "y": _rounded(cy, 3), "plastic_strain": _rounded(ep, 4)}
+        threads = r.threads
+    done = [s for s in STAGES if stages.get(s, {}).get("increments")]
+    complete = all(stages[s]["complete"] for s in STAGES)
+    reached = done[-1] if done else STAGES[0]
+    iterations = sum(s["iterations"] for s in stages.values())
+    totals = {part: sum(s["times_s"].get(part, 0.0) for s in stages.values()) for part in PARTS}
+    stopped = record.get("stopped", "")
+    last = slice(-STALL_INCREMENTS, None)
+    ending = {"increments": int(h["step"][last].size), "cuts": int(h["cutbacks"][last].sum()),
+              "cut_increments": int(np.sum(h["cutbacks"][last] > 0)),
+              "smallest_mm": float(f"{h['step'][last].min():.3g}") if h["step"].size else 0.0,
+              "most_iterations": int(h["iterations"][last].max()) if h["step"].size else 0}
+    numbers = {
+        "model": case_folder.name, "status": "completed" if complete else "partial",
+        "run_status": status + (f": {message}" if message else ""), "stopped": stopped,
+        "reached": {"stage": reached, "travel_mm": stages[reached]["reached_mm"]},
+        "code": record.get("code", ""), "date": record.get("date", ""), "threads": threads,
+        "increments": sum(s["increments"] for s in stages.values()),
+        "iterations": iterations,
+        "wall_s": round(sum(s["wall_s"] for s in stages.values()), 1),
+        "per_iteration_s": {part: float(f"{t / max(iterations, 1):.4g}")
+                            for part, t in totals.items()},
+        "hexahedra": int(case.mesh.n_elements),
+        "last_increments": ending,
+        "stages": stages,
+    }
+    return Run(numbers, curves)
+
+
+def _travel_mean(travel: np.ndarray, values: np.ndarray) -> float:
+    """Mean of ``values`` over the travel (a step function: each increment's value holds
+    over its step), not over the increments, which crowd where the steps are small."""
+    if travel.size == 0:
+        return 0.0
+    steps = np.diff(np.concatenate([[0.0], travel]))
+    return float(np.sum(values * steps) / max(float(np.sum(steps)), 1e-300))
+
+
+# ------------------------------------------------------------------------- running a run
+
+
+def cores() -> int:
+    """The cores this process may run on."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else \
+        os.cpu_count() or 1
+
+
+def code_version() -> str:
+    """The checkout's ``git describe --always``, with "-dirty" when the code (CODE_PATHS)
+    differs from it; empty outside a git checkout."""
+    try:
+        described = subprocess.run(["git", "describe", "--always"], cwd=ROOT,
+                                   capture_output=True, text=True, check=True).stdout.strip()
+        changed = subprocess.run(["git", "diff", "--quiet", "HEAD", "--", *CODE_PATHS],
+                                 cwd=ROOT).returncode != 0
+    except (OSError, subprocess.CalledProcessError):
+        return ""
+    return described + ("-dirty" if changed else "")
+
+
+class StallWatch:
+    """Progress callback and stop test of a run: stop when the lead tool has advanced less
+    than STALL_MM over the last STALL_INCREMENTS increments, or less than STALL_STEP in
+    one; ``reason`` says where."""
+
+    def __init__(self, name: str, verbose: bool = False) -> None:
+        self.name, self.verbose = name, verbose
+        self.steps: list[float] = []
+        self.reason = ""
+
+    def progress(self, p: Any) -> None:
+        self.steps.append(p.step)
+        if self.verbose and p.increment % 100 == 0:
+            print(f"  {self.name}: {p.phase} increment {p.increment}, travel "
+                  f"{p.travel:.3f} of {p.phase_travel:g} mm", file=sys.stderr, flush=True)
+        recent = self.steps[-STALL_INCREMENTS:]
+        if self.reason:
+            return
+        if len(recent) == STALL_INCREMENTS and sum(recent) < STALL_MM:
+            self.reason = (f"stalled: the lead tool advanced {sum(recent):.2g} mm in the "
+                           f"last {STALL_INCREMENTS} increments, at {p.phase} "
+                           f"{p.travel:.4f} mm")
+        elif p.step < STALL_STEP:
+            self.reason = (f"stalled: an increment of {p.step:.2g} mm, at {p.phase} "
+                           f"{p.travel:.4f} mm")
+
+    def stop(self) -> bool:
+        return bool(self.reason)
+
+
+def run_case_folder(folder: Path, output: Path | None = None, verbose: bool = False,
+                    threads: int | None = None) -> Run:
+    """Run one case folder with the case runner (``ddpy run``) into ``output`` (default:
+    results/<mesh>/<model> next to this script), stopping it if it stalls, and read back
+    what the report needs. A stopped or failed run is read as far as it got."""
+    from ddpy.decks import read_case
+    from ddpy.runner import run_case
+
+    output = output or HERE / "results" / folder.parent.name / folder.name
+    output.mkdir(parents=True, exist_ok=True)
+    record: dict[str, Any] = {"code": code_version(),
+                              "date": datetime.date.today().isoformat()}
+    (output / CODE_FILE).write_text(json.dumps(record))
+    watch = StallWatch(folder.name, verbose)
+    try:
+        run_case(read_case(folder), output, overwrite=True, progress=watch.progress,
+                 stop=watch.stop, threads=threads)
+    except Exception as error:  # kept as a partial run, with the reason
+        watch.reason = f"failed: {type(error).__name__}: {error}"
+    if watch.reason:
+        record["stopped"] = watch.reason
+        (output / CODE_FILE).write_text(json.dumps(record))
+    return from_results(output / "results.h5", folder)
+
+
+# ------------------------------------------------------------------------ kept runs
+
+
+def runs_file(stem: str) -> Path:
+    """The kept runs of a report: docs/benchmarks/<stem>_runs.json."""
+    return DOCS / f"{stem}_runs.json"
+
+
+def keep_runs(path: Path, runs: dict[str, Run]) -> None:
+    """Merge the numbers and curves of ``runs`` into the runs file ``path``."""
+    kept = json.loads(path.read_text()) if path.exists() else {}
+    for model, run in runs.items():
+        kept[model] = {"numbers": run.numbers, "curves": run.curves}
+    path.write_text(json_text(kept) + "\n")
+
+
+def json_text(value: Any, level: int = 0) -> str:
+    """JSON with one key per line and every list of numbers on one line (the curves)."""
+    pad = " " * (level + 1)
+    if isinstance(value, dict) and value:
+        items = [f"{pad}{json.dumps(str(k))}: {json_text(v, level + 1)}"
+                 for k, v in value.items()]
+        return "{\n" + ",\n".join(items) + "\n" + " " * level + "}"
+    if isinstance(value, list) and any(isinstance(v, (dict, list)) for v in value):
+        items = [pad + json_text(v, level + 1) for v in value]
+        return "[\n" + ",\n".join(items) + "\n" + " " * level + "]"
+    return json.dumps(value, separators=(", ", ": "))
+
+
+def kept_runs(path: Path) -> dict[str, Run]:
+    """The runs of the runs file ``path`` by model (none when it does not exist)."""
+    if not path.exists():
+        return {}
+    return {model: Run(entry["numbers"], entry["curves"], kept=True)
+            for model, entry in json.loads(path.read_text()).items()}
+
+
+# ------------------------------------------------------------------------ tool models
+
+
+def plot_tool_errors(errors: dict[str, Any], path: Path, title: str) -> Path:
+    """Map of the distance error (um) of one model's tools, a 3D panel per tool on a
+    common colour scale (the paper's Fig. 14-16)."""
+    from matplotlib import colormaps
+    from matplotlib.cm import ScalarMappable
+    from matplotlib.colors import Normalize
+    from matplotlib.figure import Figure
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    limit = max(max(1e3 * e.max_distance for e in errors.values()), 1e-6)
+    norm = Normalize(-limit, limit)
+    fig = Figure(figsize=(3.2 * len(errors) + 1.0, 3.8), layout="constrained")
+    axes = []
+    for k, (tool, error) in enumerate(errors.items()):
+        ax = fig.add_subplot(1, len(errors), k + 1, projection="3d")
+        um = 1e3 * error.distance
+        colours = colormaps["coolwarm"](norm(um[error.cells].mean(axis=1)))
+        ax.add_collection3d(Poly3DCollection(error.points[error.cells], facecolors=colours,
+                                             linewidths=0))
+        x = error.points
+        for axis, low, high in zip("xyz", x.min(axis=0), x.max(axis=0), strict=True):
+            pad = 0.5 if high - low < 1e-6 else 0.0   # a flat tool
+            getattr(ax, f"set_{axis}lim")(low - pad, high + pad)
+        ax.set_box_aspect(tuple(np.maximum(np.ptp(x, axis=0), 1e-3 * np.ptp(x, axis=0).max())))
+        ax.view_init(25.0, -60.0)
+        ax.tick_params(labelsize=6)
+        ax.set_title(f"{tool}: {um.min():.3g} to {um.max():.3g} um", fontsize=9)
+        axes.append(ax)
+    fig.colorbar(ScalarMappable(norm, "coolwarm"), ax=axes, shrink=0.7,
+                 label="distance error [um]")
+    fig.suptitle(title)
+    fig.savefig(path, dpi=100)
+    return path
+
+
+def shape_errors(tools: Path, stem: str | None = None
+                 ) -> tuple[dict[str, dict[str, dict[str, Any]]], dict[str, str]]:
+    """Patches and shape error of the four models of each tool against the CAD (paper
+    Table 5, Fig. 14-16); with ``stem``, maps of the Nagata and facet models (all tools
+    on one map). Returns ({tool: {model: summary}}, {model: map file name})."""
+    from ddpy.shape_error import shape_error
+    from ddpy.toolfile import read_tool
+
+    out: dict[str, dict[str, dict[str, Any]]] = {}
+    errors: dict[str, dict[str, Any]] = {m: {} for m in MODELS}
+    for tool in TOOLS:
+        out[tool] = {}
+        for model in MODELS:
+            tool_model = read_tool(tools / f"{tool}.{model}.tool")
+            error = shape_error(tool_model, tools / "tools.step", samples=SAMPLES)
+            out[tool][model] = {**error.summary(),
+                                "cad_faces": int(np.unique(tool_model.face_tags).size)}
+            errors[model][tool] = error
+    maps = {}
+    if stem is not None:
+        for model in ("nagata", "facets_coarse", "facets_fine"):
+            total = sum(e.n_patches for e in errors[model].values())
+            png = plot_tool_errors(errors[model], DOCS / f"{stem}_shape_{model}.png",
+                                   f"{LABELS[model]} tools ({total} patches): distance to "
+                                   "the CAD")
+            maps[model] = png.name
+    return out, maps
+
+
+# ------------------------------------------------------------------------ claims
+
+
+def _complete(numbers: dict[str, dict[str, Any]], model: str, stage: str | None = None
+              ) -> bool:
+    """Whether ``model`` ran and completed ``stage`` (default: both)."""
+    if model not in numbers:
+        return False
+    stages = STAGES if stage is None else (stage,)
+    return all(numbers[model]["stages"][s]["complete"] for s in stages)
+
+
+def _not_reached(numbers: dict[str, dict[str, Any]], models: tuple[str, ...]) -> str:
+    """Why a claim is not checked: the runs it needs that are missing or partial."""
+    missing = [LABELS[m] for m in models if m not in numbers]
+    partial = [f"{LABELS[m]} partial, {_reached(numbers[m])}" for m in models
+               if m in numbers and numbers[m]["status"] != "completed"]
+    return "; ".join(([f"not run: {', '.join(missing)}"] if missing else [])
+                         + partial)
+
+
+def _reached(n: dict[str, Any]) -> str:
+    stage = n["reached"]["stage"]
+    return (f"{stage} {n['reached']['travel_mm']:g} of "
+            f"{n['stages'][stage]['travel_mm']:g} mm")
+
+
+def _claim(text: str, parts: list[str], verdicts: list[bool], checked: bool,
+           needs: str, reached: list[str]) -> tuple[str, str, str]:
+    """A claim's verdict: holds when every part holds; not checked when a run it needs did
+    not complete, with what it needs and the values as far as each run got (``reached``)."""
+    if not checked:
+        return text, "not checked", needs + (
+            "; as far as each run got, not a check: " + "; ".join(reached) if reached else "")
+    return text, _verdict(all(verdicts)), "; ".join(parts)
+
+
+def _values(numbers: dict[str, dict[str, Any]], models: tuple[str, ...], stage: str,
+            key: str, fmt: str, unit: str = "") -> str:
+    """``key`` of a stage for the models that ran in it, a partial stage marked with the
+    travel it reached: "Nagata 26.7 N, Faceted-coarse 197 N (to 30.8 mm)"."""
+    out = []
+    for m in models:
+        s = numbers.get(m, {}).get("stages", {}).get(stage)
+        if not s or not s["increments"] or s.get(key) is None:
+            continue
+        out.append(f"{LABELS[m]} {format(s[key], fmt)}{unit}"
+                   + ("" if s["complete"] else f" (to {s['reached_mm']:g} mm)"))
+    return ", ".join(out)
+
+
+def claims(numbers: dict[str, dict[str, Any]]) -> list[tuple[str, str, str]]:
+    """The paper's claims: (claim, "holds" / "does not hold" / "not checked", detail). A
+    claim is checked on completed runs only; the smooth side of (a) is the smooth models
+    that completed (at least one). A claim not checked states the values as far as each
+    run got."""
+    facets = ("facets_coarse", "facets_fine")
+    out = []
+    # (a) oscillation of the punch force
+    parts, verdicts, ratio = [], [], {}
+    smooth = [m for m in ("bezier", "nagata") if _complete(numbers, m)]
+    checked = bool(smooth) and all(_complete(numbers, m) for m in facets)
+    for stage in STAGES if checked else ():
+        osc = {m: numbers[m]["stages"][stage]["oscillation_N"] for m in (*smooth, *facets)}
+        top = max(osc[m] for m in smooth)
+        above = min(osc[m] for m in facets) > top
+        refined = osc["facets_fine"] < osc["facets_coarse"]
+        ratio[stage] = osc["facets_coarse"] / max(top, 1e-12)
+        verdicts += [above, refined]
+        parts.append(f"{stage}: " + ", ".join(f"{LABELS[m]} {osc[m]:.3g} N" for m in osc)
+                     + f" (both facet models above the smooth: {_yes(above)}; fine below "
+                     f"coarse: {_yes(refined)})")
+    if checked:
+        more = ratio["stage2"] > ratio["stage1"]
+        verdicts.append(more)
+        parts.append(f"coarse facets over the smooth: {ratio['stage1']:.2f} times in stage 1, "
+                     f"{ratio['stage2']:.2f} in stage 2 (larger in stage 2: {_yes(more)})")
+    reached = [f"{stage} oscillation: {v}" for stage in STAGES
+               if (v := _values(numbers, MODELS, stage, "oscillation_N", ".3g", " N"))]
+    out.append(_claim(
+        "(a) Facets make the punch force oscillate and refining them reduces it, more in "
+        "stage 2 (Fig. 17-18)", parts, verdicts, checked,
+        _not_reached(numbers, (*facets, *(smooth[:1] or ("bezier", "nagata")))), reached))
+    # (b) equivalent plastic strain at the end of stage 2
+    parts, verdicts = [], []
+    checked = all(_complete(numbers, m) for m in MODELS)
+    if checked:
+        ends = {m: numbers[m]["stages"]["stage2"]["end"] for m in MODELS}
+        ep = {m: e["plastic_strain_max"] for m, e in ends.items()}
+        same = abs(ep["nagata"] - ep["bezier"]) <= SAME_STRAIN * ep["bezier"]
+        over = min(ep[m] for m in facets) > max(ep["nagata"], ep["bezier"])
+        coarse_more = ep["facets_coarse"] > ep["facets_fine"]
+        verdicts += [same, over, coarse_more]
+        parts += ["largest at the end of stage 2: " + ", ".join(
+                      f"{LABELS[m]} {v:.3f}" for m, v in ep.items()) + "; volume mean "
+                  + ", ".join(f"{LABELS[m]} {e['plastic_strain_mean']:.3f}"
+                              for m, e in ends.items()),
+                  f"Nagata within {100 * SAME_STRAIN:g} % of Bezier: {_yes(same)}; both facet "
+                  f"models above both smooth ones: {_yes(over)}; coarse above fine: "
+                  f"{_yes(coarse_more)}"]
+    reached = []
+    for stage in STAGES:
+        ends = {m: numbers[m]["stages"][stage]["end"] for m in MODELS
+                if m in numbers and numbers[m]["stages"][stage]["end"]}
+        if ends:
+            reached.append(f"largest at the end of {stage}: " + ", ".join(
+                f"{LABELS[m]} {e['plastic_strain_max']:.3f}"
+                + ("" if numbers[m]["stages"][stage]["complete"] else
+                   f" (at {e['travel_mm']:g} mm)") for m, e in ends.items()))
+    out.append(_claim(
+        "(b) Nagata and Bezier give the same equivalent plastic strain, facets overestimate "
+        "it, the coarse ones more (Fig. 19)", parts, verdicts, checked,
+        _not_reached(numbers, MODELS), reached))
+    # (c) nodes in contact with the die
+    parts, verdicts, excess = [], [], {}
+    trio = ("bezier", *facets)
+    checked = all(_complete(numbers, m) for m in trio)
+    for stage in STAGES if checked else ():
+        n = {m: numbers[m]["stages"][stage]["die_contact_mean"] for m in trio}
+        more = n["bezier"] > max(n[m] for m in facets)
+        excess[stage] = (n["bezier"] - 0.5 * sum(n[m] for m in facets)) / max(n["bezier"],
+                                                                                 1e-12)
+        verdicts.append(more)
+        parts.append(f"{stage} ({DIE[stage]}), mean over the travel: "
+                     + _values(numbers, MODELS, stage, "die_contact_mean", ".1f")
+                     + f" (Bezier above both facet models: {_yes(more)})")
+    if checked:
+        most = excess["stage1"] > excess["stage2"]
+        verdicts.append(most)
+        parts.append(f"Bezier's excess over the facets' mean: {100 * excess['stage1']:.0f} % "
+                     f"in stage 1, {100 * excess['stage2']:.0f} % in stage 2 (larger in "
+                     f"stage 1: {_yes(most)})")
+    reached = [f"{stage} ({DIE[stage]}), mean over the travel: {v}" for stage in STAGES
+               if (v := _values(numbers, MODELS, stage, "die_contact_mean", ".1f"))]
+    out.append(_claim(
+        "(c) More nodes touch the die with Bezier than with facets, most of all in stage 1 "
+        "(Fig. 20)", parts, verdicts, checked, _not_reached(numbers, trio), reached))
+    # (d) increments and iterations
+    trio = ("nagata", *facets)
+    parts, verdicts = [], []
+    checked = all(_complete(numbers, m) for m in trio)
+    if checked:
+        n = numbers["nagata"]
+        ratios = {f"{LABELS[m]} {what}": numbers[m][what] / max(n[what], 1)
+                  for m in facets for what in ("increments", "iterations")}
+        verdicts = [TWICE[0] <= v <= TWICE[1] for v in ratios.values()]
+        parts.append("ratios to Nagata: " + ", ".join(f"{k} {v:.2f}"
+                                                      for k, v in ratios.items())
+                     + f" (about twice: all within {TWICE[0]:g}-{TWICE[1]:g})")
+    reached = [f"{stage} {what}: {v}" for stage in STAGES
+               for what in ("increments", "iterations")
+               if (v := _values(numbers, MODELS, stage, what, "d"))]
+    out.append(_claim(
+        "(d) Facets need about twice the increments and iterations of Nagata (Table 6)",
+        parts, verdicts, checked, _not_reached(numbers, trio), reached))
+    return out
+
+
+def _yes(flag: bool) -> str:
+    return "yes" if flag else "no"
+
+
+def _verdict(flag: bool) -> str:
+    return "holds" if flag else "does not hold"
+
+
+# ------------------------------------------------------------------------ figures
+
+
+def _pyplot() -> Any:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _stage_curves(runs: dict[str, Run], stage: str) -> dict[str, dict[str, np.ndarray]]:
+    return {m: {k: np.asarray(v) for k, v in r.curves[stage].items()}
+            for m, r in runs.items() if stage in r.curves}
+
+
+def zoom_window(stage: str) -> tuple[float, float]:
+    """The zoomed travel of a stage's force figure: 5 mm from the stage's middle."""
+    travel = make_case.DIMENSIONS.stage1 if stage == "stage1" else \
+        make_case.DIMENSIONS.stage2 + make_case.DIMENSIONS.approach
+    return 0.5 * travel, 0.5 * travel + 5.0
+
+
+def plot_force(runs: dict[str, Run], path: Path) -> Path:
+    """Punch force against punch travel per stage, with a zoom (paper Fig. 17-18)."""
+    plt = _pyplot()
+    fig, axes = plt.subplots(2, 2, figsize=(11, 8))
+    for row, stage in enumerate(STAGES):
+        zoom = zoom_window(stage)
+        inside = []
+        for model, c in _stage_curves(runs, stage).items():
+            for ax in axes[row]:
+                ax.plot(c["travel"], c["force"], lw=0.9, label=LABELS[model])
+            inside.append(c["force"][(c["travel"] >= zoom[0]) & (c["travel"] <= zoom[1])])
+        values = np.concatenate(inside) if inside else np.zeros(0)
+        if values.size:
+            pad = 0.05 * max(float(np.ptp(values)), 1e-9)
+            axes[row, 1].set_ylim(float(values.min()) - pad, float(values.max()) + pad)
+        axes[row, 1].set_xlim(*zoom)
+        lead = "punch 1" if stage == "stage1" else "punch 2"
+        for ax, title in ((axes[row, 0], f"{stage}: {lead}"),
+                          (axes[row, 1], f"{stage}: zoom {zoom[0]:g}-{zoom[1]:g} mm")):
+            ax.set_xlabel(f"{lead} travel [mm]")
+            ax.set_ylabel("punch force, quarter model [N]")
+            ax.set_title(title)
+            ax.grid(alpha=0.3)
+        axes[row, 0].legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return path
+
+
+def plot_stage_curve(runs: dict[str, Run], path: Path, key: str, ylabel: str,
+                     log: bool = False, marker: bool = False) -> Path:
+    """One curve per model against the punch travel, a panel per stage (Fig. 20, 21)."""
+    plt = _pyplot()
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+    for ax, stage in zip(axes, STAGES, strict=True):
+        for model, c in _stage_curves(runs, stage).items():
+            if marker:
+                ax.plot(c["travel"], c[key], ".", ms=2.5, label=LABELS[model])
+            else:
+                ax.step(c["travel"], c[key], where="pre", lw=0.9, label=LABELS[model])
+        if log:
+            ax.set_yscale("log")
+            low = [float(np.min(c[key][c[key] > 0])) for c in
+                   _stage_curves(runs, stage).values() if np.any(c[key] > 0)]
+            if low:
+                ax.set_ylim(bottom=0.5 * min(low))
+        lead = "punch 1" if stage == "stage1" else "punch 2"
+        ax.set_xlabel(f"{lead} travel [mm]")
+        ax.set_ylabel(ylabel if key != "die_contact" else
+                      f"nodes in contact with {DIE[stage]}")
+        ax.set_title(stage)
+        ax.grid(alpha=0.3)
+    axes[0].legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return path
+
+
+def plot_sections(runs: dict[str, Run], path: Path, key: str, ylabel: str,
+                  stages: tuple[str, ...] = STAGES) -> Path:
+    """A section value against the initial radius, a panel per stage end."""
+    plt = _pyplot()
+    fig, axes = plt.subplots(1, len(stages), figsize=(5.5 * len(stages), 4.2), squeeze=False)
+    for ax, stage in zip(axes[0], stages, strict=True):
+        for model, run in runs.items():
+            section = run.curves.get("sections", {}).get(stage)
+            if section:
+                r, v = section[key]
+                ax.plot(r, v, ".-", ms=3, lw=0.8, label=LABELS[model])
+        ax.set_xlabel("initial radius [mm]")
+        ax.set_ylabel(ylabel)
+        ax.set_title(f"end of {stage} (y = 0 plane)")
+        ax.grid(alpha=0.3)
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return path
+
+
+def plot_strain_maps(runs: dict[str, Run], path: Path) -> Path:
+    """Equivalent plastic strain at the last frame of each run over the initial blank
+    (through-thickness mean of each element column, at its centroid; Fig. 19)."""
+    plt = _pyplot()
+    maps = {m: r.curves["map"] for m, r in runs.items() if "map" in r.curves}
+    fig, axes = plt.subplots(1, max(len(maps), 1), figsize=(3.6 * max(len(maps), 1) + 1, 4.0),
+                             squeeze=False, layout="constrained")
+    values = np.concatenate([m["plastic_strain"] for m in maps.values()]) if maps else \
+        np.ones(1)
+    top = max(float(np.percentile(values, STRAIN_SCALE)), 1e-9)
+    scatter = None
+    for k, (ax, (model, m)) in enumerate(zip(axes[0], maps.items(), strict=False)):
+        scatter = ax.scatter(m["x"], m["y"], c=m["plastic_strain"], s=12, cmap="viridis",
+                             vmin=0.0, vmax=top)
+        ax.set_aspect("equal")
+        ax.set_title(f"{LABELS[model]}: {m['stage']} {m['travel']:g} mm\n"
+                     f"max {max(m['plastic_strain']):.3f} (column mean)", fontsize=9)
+        ax.set_xlabel("initial x [mm]")
+        if k == 0:
+            ax.set_ylabel("initial y [mm]")
+    if scatter is not None:
+        fig.colorbar(scatter, ax=axes[0].tolist(), shrink=0.8, extend="max",
+                     label=f"equivalent plastic strain (scale to the {STRAIN_SCALE:g}th "
+                     "percentile)")
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return path
+
+
+# ------------------------------------------------------------------------ the report
+
+
+def _row(cells: list[Any]) -> str:
+    return "| " + " | ".join(str(c) for c in cells) + " |"
+
+
+def _num(value: Any, fmt: str = ".3g") -> str:
+    return "-" if value is None else format(value, fmt)
+
+
+def _end(n: dict[str, Any], stage: str) -> dict[str, Any] | None:
+    return n["stages"][stage]["end"]
+
+
+def report(mesh: str, numbers: dict[str, dict[str, Any]],
+           shape: dict[str, dict[str, dict[str, Any]]], maps: dict[str, str],
+           figures: dict[str, str], threads: int) -> str:
+    """The markdown report: every number from ``numbers`` (the runs), ``shape`` (the tool
+    models), make_case and PAPER."""
+    models = [m for m in MODELS if m in numbers]
+    dims = make_case.DIMENSIONS
+    hexahedra = next((numbers[m]["hexahedra"] for m in models), 0)
+    head = _row(["", *[LABELS[m] for m in models]])
+    rule = _row(["---"] * (1 + len(models)))
+    suffix = "" if mesh == "coarse" else f" --mesh {mesh}"
+    lines = [
+        "# Reverse deep drawing of a cylindrical cup (paper Fig. 14-21, Tables 5-6)",
+        "",
+        f"Written by `benchmarks/reverse_deep_drawing/run.py{suffix}`; the cases by "
+        "`make_case.py` next to it. Numisheet'99 benchmark C, quarter model: DDQ steel "
+        f"(Hill'48, Swift), friction {make_case.FRICTION:g}, a disc of radius "
+        f"{make_case.RADIUS:g} mm, {make_case.THICKNESS:g} mm thick. Stage 1: punch 1 moves "
+        f"down {dims.stage1:g} mm, blank-holder 1 held {make_case.GAP1:g} mm from die 1. "
+        f"Stage 2: punch 2 moves up {dims.stage2 + dims.approach:g} mm (from "
+        f"{dims.approach:g} mm below the cup), blank-holder 2 held {make_case.GAP2:g} mm "
+        "from punch 1's end (die 2); die 1 and blank-holder 1 stay. Largest increment "
+        f"{make_case.MAX_INCREMENT.get(mesh, 0.25):g} mm of punch travel.",
+        "",
+        f"Blank: **{mesh}** mesh, {hexahedra} hexahedra in {make_case.LAYERS} layers "
+        f"(unstructured, elements of about {make_case.ELEMENT_SIZE[mesh]:.3g} mm; the "
+        f"paper: {make_case.PAPER_HEXAHEDRA} hexahedra). Report written on {threads} "
+        "thread(s); each run's threads and code version are in the table of runs. Wall "
+        f"times are this machine's ({platform.machine()}, {cores()} cores), of runs that "
+        "may have shared the cores "
+        "with other jobs.",
+        "",
+        "## Runs",
+        "",
+        head, rule,
+        _row(["run", *[f"**{numbers[m]['status']}**" for m in models]]),
+        _row(["reached (stage, punch travel)", *[_reached(numbers[m]) for m in models]]),
+        _row(["stopped", *[numbers[m]["stopped"] or numbers[m]["run_status"]
+                           for m in models]]),
+        _row(["threads", *[numbers[m]["threads"] or "?" for m in models]]),
+        _row(["code, date", *[f"{numbers[m]['code'] or '?'}, {numbers[m]['date'] or '?'}"
+                              for m in models]]),
+        "",
+        f"A run whose punch advances less than {STALL_MM:g} mm over {STALL_INCREMENTS} "
+        f"increments, or less than {STALL_STEP:g} mm in one, is stopped and reported as "
+        "partial, with the fields of its last increment as its end of stage (a run that "
+        "failed has no fields after its last end of stage).",
+        "",
+        "## The tools (a reconstruction)",
+        "",
+        "**The benchmark's drawing is not in the paper**: the dimensions below "
+        "(`make_case.Dimensions`) are a reconstruction, surfaces of revolution about z in "
+        "one STEP model (`ddpy.cad_examples.reverse_drawing_tools`). The flat blank lies on "
+        f"0 <= z <= {make_case.THICKNESS:g} mm; radii from the axis.",
+        "",
+        _row(["dimension", "value [mm]", "what"]),
+        _row(["---"] * 3),
+        *[_row([f"`{f.name}`", f"{getattr(dims, f.name):g}", DIMENSION_TEXT.get(f.name, "")])
+          for f in fields(dims)],
+        "",
+        *tool_model_section(shape, maps),
+        "## Punch force (Fig. 17-18)",
+        "",
+        "Punch 1's force in stage 1, punch 2's in stage 2 (the blank's reaction on the "
+        "moving punch against its motion: the drawing force, positive), quarter model.",
+        "",
+        f"![punch force]({figures['force']})",
+        "",
+        "Oscillation: root mean square deviation of the punch force from a moving quadratic "
+        f"over {WINDOW:g} mm of punch travel (`ddpy.bending.force_oscillation`; the window "
+        "of the bending benchmark, not scaled to the mesh), from "
+        + " and ".join(f"{START[s]:g} mm of {s}" for s in STAGES) + " on (the elastic "
+        "start; punch 2 travels in the air before it meets the cup).",
+        "",
+        head, rule,
+    ]
+    for stage in STAGES:
+        s = {m: numbers[m]["stages"][stage] for m in models}
+        lines += [
+            _row([f"{stage}: largest force [N]", *[_num(s[m]["max_force_N"], ".0f")
+                                                  for m in models]]),
+            _row([f"{stage}: oscillation [N]", *[_num(s[m]["oscillation_N"]) for m in models]]),
+            _row([f"{stage}: oscillation / mean force",
+                  *["-" if s[m]["oscillation_rel"] is None else
+                    f"{100 * s[m]['oscillation_rel']:.2g} %" for m in models]]),
+        ]
+    lines += [
+        "",
+        "## Equivalent plastic strain (Fig. 19)",
+        "",
+        "At the end of stage 2 (or the last increment of a partial run), over the initial "
+        "blank: each marker is an element column's centroid, coloured by the mean over its "
+        f"{make_case.LAYERS} layers (the colour scale ends at the {STRAIN_SCALE:g}th "
+        "percentile of all maps' values); the largest value in the table is that of one "
+        "element.",
+        "",
+        f"![plastic strain]({figures['strain_map']})",
+        "",
+        head, rule,
+        *[_row([f"{label}, end of {stage}",
+                *[_num(_end(numbers[m], stage) and _end(numbers[m], stage)[key], ".3f")
+                  for m in models]])
+          for stage in STAGES for key, label in (("plastic_strain_max", "largest"),
+                                                 ("plastic_strain_mean", "volume mean"))],
+        "",
+        "Along the radial section (elements with a face on the symmetry plane y = 0, "
+        "column means, against the initial radius of their centroid):",
+        "",
+        f"![plastic strain section]({figures['strain_section']})",
+        "",
+        "## Nodes in contact with the die (Fig. 20)",
+        "",
+        "Die 1 in stage 1, punch 1's end (die 2) in stage 2. Mean over the punch travel:",
+        "",
+        head, rule,
+        *[_row([f"{stage} ({DIE[stage]}): mean, largest",
+                *["-" if not numbers[m]["stages"][stage]["increments"] else
+                  f"{numbers[m]['stages'][stage]['die_contact_mean']:.1f}, "
+                  f"{numbers[m]['stages'][stage]['die_contact_max']}" for m in models]])
+          for stage in STAGES],
+        "",
+        f"![nodes in contact]({figures['contact']})",
+        "",
+        *effort_section(numbers, models, figures),
+        *cup_section(numbers, models, figures),
+        *checks_section(numbers, models),
+        "## The claims of the paper",
+        "",
+    ]
+    for text, verdict, detail in claims(numbers):
+        lines.append(f"- {text}: **{verdict}** ({detail}).")
+    missing = [LABELS[m] for m in MODELS if m not in numbers]
+    if missing:
+        lines.append(f"- Not in this report: {', '.join(missing)}.")
+    lines += ["", *findings(numbers, models), ""]
+    return "\n".join(lines)
+
+
+def tool_model_section(shape: dict[str, dict[str, dict[str, Any]]], maps: dict[str, str]
+                       ) -> list[str]:
+    """Table 5 (patches per tool) and the shape error of each tool model (Fig. 14-16)."""
+    table5 = PAPER["table5_patches"]
+    head = _row(["tool", "CAD faces", *[f"{LABELS[m]} ddpy" for m in MODELS],
+                 *[f"{LABELS[m]} paper" for m in MODELS]])
+    lines = [
+        "## Tool models (Table 5) and their shape error (Fig. 14-16)",
+        "",
+        "Built from the STEP model by `ddpy.cad.build_tool_models`: Bezier patches (one per "
+        "CAD face, a quarter of a surface of revolution); Nagata with "
+        f"{make_case.PER_ARC['nagata']} patches per 90 degrees of arc in the radial "
+        f"direction, facets {make_case.PER_ARC['facets_coarse']} (coarse) and "
+        f"{make_case.PER_ARC['facets_fine']} (fine), the paper's; around the axis, where the "
+        "paper gives no density, " + ", ".join(
+            f"{make_case.AROUND[m]} ({LABELS[m]})" for m in make_case.AROUND)
+        + " elements per 90 degrees on each tool's largest circle. Patches per tool:",
+        "",
+        head, _row(["---"] * (2 + 2 * len(MODELS))),
+    ]
+    totals = dict.fromkeys(MODELS, 0)
+    for tool in TOOLS:
+        for m in MODELS:
+            totals[m] += shape[tool][m]["patches"]
+        lines.append(_row([tool, shape[tool]["nagata"]["cad_faces"],
+                           *[shape[tool][m]["patches"] for m in MODELS],
+                           *[table5[tool][m] for m in MODELS]]))
+    lines.append(_row(["**total**", "", *[f"**{totals[m]}**" for m in MODELS],
+                       *[f"**{table5['total'][m]}**" for m in MODELS]]))
+    low, high = PAPER["nagata_shape_error_um"]
+    lines += [
+        "",
+        f"Shape error against the CAD (`ddpy.shape_error`, {SAMPLES} x {SAMPLES} samples "
+        "per patch): the "
+        "signed distance, positive where the model stands out of the CAD surface towards "
+        "the blank, in micrometres, and the largest angle between the model's normal and "
+        "the CAD's, in degrees.",
+        "",
+        _row(["tool", *[f"{LABELS[m]} [um]" for m in MODELS],
+              *[f"{LABELS[m]} [deg]" for m in MODELS]]),
+        _row(["---"] * (1 + 2 * len(MODELS))),
+    ]
+    for tool in TOOLS:
+        lines.append(_row([tool, *[f"{shape[tool][m]['min_signed_um']:.3g} to "
+                                   f"{shape[tool][m]['max_signed_um']:.3g}" for m in MODELS],
+                           *[f"{shape[tool][m]['max_angle_deg']:.3g}" for m in MODELS]]))
+    span = {m: (min(shape[t][m]["min_signed_um"] for t in TOOLS),
+                max(shape[t][m]["max_signed_um"] for t in TOOLS)) for m in MODELS}
+    largest = {m: max(abs(v) for v in span[m]) for m in MODELS}
+    lines += [
+        _row(["**all tools**", *[f"**{span[m][0]:.3g} to {span[m][1]:.3g}**" for m in MODELS],
+              *[f"**{max(shape[t][m]['max_angle_deg'] for t in TOOLS):.3g}**"
+                for m in MODELS]]),
+        "",
+        f"The paper: Nagata from {low:g} to {high:g} um, the fine facets' largest error "
+        f"about {PAPER['fine_facets_error_ratio']:g} times that. Here: Nagata from "
+        f"{span['nagata'][0]:.3g} to {span['nagata'][1]:.3g} um, the fine facets' largest "
+        f"{largest['facets_fine']:.3g} um, {largest['facets_fine'] / largest['nagata']:.2g} "
+        "times the Nagata one.",
+        "",
+    ]
+    for model, png in maps.items():
+        lines += [f"![{LABELS[model]} shape error]({png})", ""]
+    return lines
+
+
+def effort_section(numbers: dict[str, dict[str, Any]], models: list[str],
+                   figures: dict[str, str]) -> list[str]:
+    """Table 6 next to the paper's, the time per iteration by part, Fig. 21."""
+    table6 = PAPER["table6"]
+    head = _row(["", *[f"{LABELS[m]} ddpy" for m in models],
+                 *[f"{LABELS[m]} paper" for m in models]])
+    blank = ["" for _ in models]
+    lines = ["## Computational effort (Table 6) and increment size (Fig. 21)", "",
+             head, _row(["---"] * (1 + 2 * len(models)))]
+    for stage in STAGES:
+        s = {m: numbers[m]["stages"][stage] for m in models}
+        lines += [
+            _row([f"{stage}: increments", *[s[m]["increments"] for m in models], *blank]),
+            _row([f"{stage}: iterations", *[s[m]["iterations"] for m in models], *blank]),
+            _row([f"{stage}: cut increments", *[s[m]["cuts"] for m in models], *blank]),
+            _row([f"{stage}: wall time", *[f"{s[m]['wall_s'] / 60:.1f} min" for m in models],
+                  *blank]),
+        ]
+    lines += [
+        _row(["**increments**", *[f"**{numbers[m]['increments']}**" for m in models],
+              *[table6[m]["increments"] for m in models]]),
+        _row(["**iterations**", *[f"**{numbers[m]['iterations']}**" for m in models],
+              *[table6[m]["iterations"] for m in models]]),
+        _row(["**time**", *[f"**{numbers[m]['wall_s'] / 60:.1f} min**" for m in models],
+              *[f"{table6[m]['cpu_h']:g} h" for m in models]]),
+        _row(["threads", *[numbers[m]["threads"] or "?" for m in models], *blank]),
+        "",
+        "The paper's runs are of its mesh, to the end; a partial run's counts stop where "
+        "it stopped. Time per Newton iteration (wall time of each part over the run's "
+        "accepted iterations, s; the parts include the work of rejected trials):",
+        "",
+        _row(["", *[LABELS[m] for m in models]]),
+        _row(["---"] * (1 + len(models))),
+        *[_row([part, *[_num(numbers[m]["per_iteration_s"].get(part), ".4f")
+                        for m in models]]) for part in PARTS],
+        _row(["**per iteration**",
+              *[f"**{sum(numbers[m]['per_iteration_s'].values()):.4f}**" for m in models]]),
+        "",
+        f"![increment size]({figures['increments']})",
+        "",
+    ]
+    return lines
+
+
+def cup_section(numbers: dict[str, dict[str, Any]], models: list[str],
+                figures: dict[str, str]) -> list[str]:
+    """Cup height, flange radius and thickness after each stage."""
+    head = _row(["", *[LABELS[m] for m in models]])
+    lines = ["## The cup", "",
+             "Cup height: the part's extent along z (outside of the bottom to the top of the "
+             "flange, thickness included). Flange radius: the current radius of the nodes "
+             f"initially on the blank's edge (r = {make_case.RADIUS:g} mm), mean (smallest "
+             "to largest: the ears of the anisotropic sheet).", "",
+             head, _row(["---"] * (1 + len(models)))]
+    for stage in STAGES:
+        ends = {m: _end(numbers[m], stage) for m in models}
+        lines += [
+            _row([f"end of {stage}: at punch travel [mm]",
+                  *[_num(e and e["travel_mm"], "g") for e in ends.values()]]),
+            _row([f"end of {stage}: cup height [mm]",
+                  *[_num(e and e["cup_height_mm"], ".2f") for e in ends.values()]]),
+            _row([f"end of {stage}: flange radius [mm]",
+                  *["-" if e is None else f"{e['flange_radius_mm'][0]:.2f} "
+                    f"({e['flange_radius_mm'][1]:.2f} to {e['flange_radius_mm'][2]:.2f})"
+                    for e in ends.values()]]),
+            _row([f"end of {stage}: thickness [mm]",
+                  *["-" if e is None else f"{e['thickness_mm'][0]:.3f} to "
+                    f"{e['thickness_mm'][1]:.3f}" for e in ends.values()]]),
+        ]
+    lines += ["", "Thickness along the radial section (nodes of the bottom layer on the "
+              "symmetry plane y = 0, against their initial radius):", "",
+              f"![thickness]({figures['thickness']})", ""]
+    return lines
+
+
+def checks_section(numbers: dict[str, dict[str, Any]], models: list[str]) -> list[str]:
+    """Physical checks per run at the end of each stage."""
+    head = _row(["", *[LABELS[m] for m in models]])
+    lines = [
+        "## Physical checks", "",
+        "At the end of each stage: the blank's volume change (plastic flow keeps the "
+        "volume; exact volumes of the trilinear hexahedra, `ddpy.drawing`), and the "
+        "largest change of one element; the tool reactions against the sums of the nodal "
+        "contact forces of the nodes in contact with each tool (Newton's third law: the "
+        "worst tool's |reaction + sum| over |reaction|; the solver writes each reaction as "
+        "minus the sum of its tool's contact pair forces, so this checks the nodal fields "
+        "of the results against it: a node pressed by two tools, or a force on a node "
+        "marked free, would show); the deepest node of the blank's "
+        "surface facing a tool inside that tool (`ddpy.search.ContactSearch` on the tool "
+        f"at its position), against the thickness {make_case.THICKNESS:g} mm.",
+        "", head, _row(["---"] * (1 + len(models)))]
+    for stage in STAGES:
+        ends = {m: _end(numbers[m], stage) for m in models}
+        lines += [
+            _row([f"{stage}: volume change",
+                  *["-" if e is None else f"{100 * e['volume_change']:+.3g} %"
+                    for e in ends.values()]]),
+            _row([f"{stage}: largest element volume change (initial radius, its plastic "
+                  "strain)",
+                  *["-" if e is None else f"{100 * e['element_volume_change_max']:+.3g} % "
+                    f"({e['element_volume_change_at_radius_mm']:g} mm, "
+                    f"{e['element_volume_change_strain']:g})" for e in ends.values()]]),
+            _row([f"{stage}: reaction mismatch (tool)",
+                  *["-" if e is None else
+                    f"{e['balance'][e['balance_worst']]['relative']:.2g} "
+                    f"({e['balance_worst']})" for e in ends.values()]]),
+            _row([f"{stage}: deepest penetration (tool; / thickness)",
+                  *["-" if e is None else _penetration(e) for e in ends.values()]]),
+        ]
+    lines.append("")
+    return lines
+
+
+def _penetration(end: dict[str, Any]) -> str:
+    worst = end["penetration"][end["penetration_worst"]]
+    depth = worst["depth_mm"]
+    return (f"{depth:.2g} mm ({end['penetration_worst']}; "
+            f"{depth / make_case.THICKNESS:.2g})")
+
+
+def findings(numbers: dict[str, dict[str, Any]], models: list[str]) -> list[str]:
+    """What the numbers say beyond the claims: runs that stopped, volume not kept."""
+    out = ["## Findings", ""]
+    for m in models:
+        n = numbers[m]
+        if n["status"] != "completed":
+            last = n.get("last_increments")
+            out.append(f"- {LABELS[m]} is partial: {_reached(n)}"
+                       + (f" ({n['stopped']})" if n["stopped"] else
+                          f" ({n['run_status']})") + "." + ("" if not last else
+                       f" Of its last {last['increments']} increments, "
+                       f"{last.get('cut_increments', '?')} were cut ({last['cuts']} cuts in "
+                       f"all), down to {last['smallest_mm']:.2g} mm of punch travel, each "
+                       f"converging in at most {last['most_iterations']} iteration(s) once "
+                       "cut" + (": the trials failed at every size tried, and the run could "
+                                "not pass this point." if last.get("cut_increments")
+                                == last["increments"] else ".")))
+    for stage in STAGES:
+        short = {m: numbers[m]["reached"]["travel_mm"] for m in models
+                 if numbers[m]["status"] != "completed" and
+                 numbers[m]["reached"]["stage"] == stage}
+        travel = numbers[next(iter(short))]["stages"][stage]["travel_mm"] if short else 0.0
+        if len(short) > 1 and max(short.values()) - min(short.values()) < 0.01 * travel:
+            out.append(f"- {len(short)} runs stopped in {stage} at about the same punch "
+                       "travel, between "
+                       f"{min(short.values()):g} and {max(short.values()):g} mm of its "
+                       f"{travel:g} mm ("
+                       + ", ".join(f"{LABELS[m]} {t:g}" for m, t in short.items()) + ").")
+    for m in models:
+        ends = [e for s in STAGES if (e := _end(numbers[m], s))]
+        if not ends:
+            continue
+        end = ends[-1]
+        if abs(end["element_volume_change_max"]) > ELEMENT_VOLUME:
+            out.append(
+                f"- {LABELS[m]}, end of {end['stage']} ({end['travel_mm']:g} mm): one "
+                f"element's volume changed by {100 * end['element_volume_change_max']:+.3g} % "
+                f"(initial radius {end['element_volume_change_at_radius_mm']:g} mm, plastic "
+                f"strain {end['element_volume_change_strain']:g}; the thickness down to "
+                f"{end['thickness_mm'][0]:.3g} mm), the blank's by "
+                f"{100 * end['volume_change']:+.3g} %: plastic flow keeps the volume, so the "
+                "elements there are too distorted for their solution to hold.")
+    if len(out) == 2:
+        out.append("- Every run completed; the volume of every element is kept within "
+                   f"{100 * ELEMENT_VOLUME:g} %.")
+    return out
+
+
+# ------------------------------------------------------------------------ main
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--mesh", choices=make_case.MESHES, default="coarse")
+    parser.add_argument("--models", default=",".join(MODELS),
+                        help="comma-separated among " + ", ".join(MODELS))
+    parser.add_argument("--json", action="store_true", help="print the numbers only")
+    parser.add_argument("--reuse", action="store_true",
+                        help="report from the runs saved in results/, else kept in the "
+                        "report's runs file (no new run)")
+    parser.add_argument("--threads", type=int, default=None,
+                        help="OpenMP threads of each run (default: OMP_NUM_THREADS)")
+    args = parser.parse_args(argv)
+    from ddpy.parallel import max_threads
+
+    models = [m.strip() for m in args.models.split(",") if m.strip()]
+    if set(models) - set(MODELS):
+        parser.error(f"--models must be among {', '.join(MODELS)}")
+    case_root = HERE / "cases" / args.mesh
+    if not all((case_root / m / "control.dat").exists() for m in models) or \
+            not (HERE / "tools" / "tools.step").exists():
+        make_case.main(["--mesh", args.mesh])
+    stem = "reverse_deep_drawing" + ("" if args.mesh == "coarse" else f"_{args.mesh}")
+    kept = kept_runs(runs_file(stem)) if args.reuse else {}
+    runs: dict[str, Run] = {}
+    for model in models:
+        saved = HERE / "results" / args.mesh / model / "results.h5"
+        if args.reuse and saved.exists():
+            runs[model] = from_results(saved, case_root / model)
+        elif model in kept:
+            runs[model] = kept[model]
+        elif args.reuse:
+            print(f"no saved run of {args.mesh}/{model}", file=sys.stderr)
+        else:
+            print(f"running {args.mesh}/{model} ...", file=sys.stderr, flush=True)
+            runs[model] = run_case_folder(case_root / model, verbose=True,
+                                          threads=args.threads)
+            n = runs[model].numbers
+            print(f"  {n['status']}, {n['increments']} increments, {n['wall_s']:.0f} s",
+                  file=sys.stderr, flush=True)
+    if not runs:
+        parser.error("no run to report")
+    numbers = {m: r.numbers for m, r in runs.items()}
+    if args.json:
+        print(json.dumps({"mesh": args.mesh, "models": numbers,
+                          "claims": [{"claim": c, "verdict": v, "detail": d}
+                                     for c, v, d in claims(numbers)]}, indent=1))
+        return 0
+    DOCS.mkdir(parents=True, exist_ok=True)
+    keep_runs(runs_file(stem), {m: r for m, r in runs.items() if not r.kept})
+    shape, maps = shape_errors(HERE / "tools", stem)
+    figures = make_figures(runs, stem)
+    text = report(args.mesh, numbers, shape, maps, figures, max_threads())
+    out = DOCS / f"{stem}.md"
+    out.write_text(text)
+    print(f"wrote {out}", file=sys.stderr)
+    return 0
+
+
+def make_figures(runs: dict[str, Run], stem: str, folder: Path = DOCS) -> dict[str, str]:
+    """The report's figures (PNG) in ``folder``; their file names by key."""
+    paths = {
+        "force": plot_force(runs, folder / f"{stem}_force.png"),
+        "strain_map": plot_strain_maps(runs, folder / f"{stem}_plastic_strain.png"),
+        "strain_section": plot_sections(runs, folder / f"{stem}_plastic_strain_section.png",
+                                        "plastic_strain", "equivalent plastic strain",
+                                        stages=(STAGES[-1],)),
+        "contact": plot_stage_curve(runs, folder / f"{stem}_contact.png", "die_contact",
+                                    "nodes in contact"),
+        "increments": plot_stage_curve(runs, folder / f"{stem}_increments.png", "sizes",
+                                       "increment size [mm]", log=True, marker=True),
+        "thickness": plot_sections(runs, folder / f"{stem}_thickness.png", "thickness",
+                                   "thickness [mm]"),
+    }
+    return {key: path.name for key, path in paths.items()}
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,172 @@
+"""The reverse deep drawing report (benchmarks/reverse_deep_drawing/run.py) assembled from
+synthetic runs: claims, partial runs, the kept-runs file and the figures. No simulation."""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+BENCH = Path(__file__).resolve().parents[1] / "benchmarks" / "reverse_deep_drawing"
+
+
+def _module() -> Any:
+    spec = importlib.util.spec_from_file_location("drawing_run", BENCH / "run.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # dataclasses look their module up
+    spec.loader.exec_module(module)
+    return module
+
+
+run = _module()
+
+#: Per model: oscillation per stage (N), largest plastic strain, die contact per stage,
+#: increments and iterations per stage: facets oscillate, strain more and need twice the
+#: increments of Nagata; Bezier touches the die with more nodes, most in stage 1.
+SYNTHETIC = {
+    "bezier": ((10.0, 12.0), 0.60, (80.0, 60.0), (500, 450), (2000, 1800)),
+    "nagata": ((11.0, 12.5), 0.61, (78.0, 59.0), (480, 440), (1900, 1750)),
+    "facets_coarse": ((40.0, 90.0), 0.75, (50.0, 50.0), (1000, 900), (4000, 3500)),
+    "facets_fine": ((20.0, 40.0), 0.68, (60.0, 55.0), (950, 880), (3800, 3400)),
+}
+
+
+def _end(stage: str, travel: float, ep: float) -> dict[str, Any]:
+    return {"stage": stage, "travel_mm": travel, "cup_height_mm": 41.0,
+            "flange_radius_mm": [62.0, 60.0, 64.0], "plastic_strain_max": ep,
+            "plastic_strain_mean": ep / 3, "thickness_mm": [0.8, 1.2],
+            "volume_change": 1e-3, "element_volume_change_max": 2e-3,
+            "element_volume_change_at_radius_mm": 40.0, "element_volume_change_strain": 0.3,
+            "balance": {"die1": {"reaction_N": 100.0, "mismatch_N": 0.0, "relative": 0.0,
+                                 "nodes": 5}},
+            "balance_worst": "die1",
+            "penetration": {"die1": {"depth_mm": 1e-15, "inside": 0}},
+            "penetration_worst": "die1", "nodes_in_contact": {"die1": 5}}
+
+
+def synthetic_run(model: str, partial: bool = False) -> Any:
+    """A run of ``model`` with the numbers of SYNTHETIC; ``partial``: it stopped in stage 2
+    at 30 mm."""
+    osc, ep, contact, increments, iterations = SYNTHETIC[model]
+    stages, curves = {}, {"sections": {}}
+    for k, stage in enumerate(run.STAGES):
+        full = 40.0 if stage == "stage1" else 42.0
+        reached = 30.0 if partial and stage == "stage2" else full
+        travel = np.linspace(0.1, reached, 50)
+        force = 1e4 * np.sin(np.pi * travel / full) + osc[k] * np.sin(37.0 * travel)
+        stages[stage] = {
+            "travel_mm": full, "reached_mm": reached, "complete": reached == full,
+            "increments": increments[k], "iterations": iterations[k], "cuts": 0,
+            "wall_s": 60.0, "times_s": {p: 10.0 for p in run.PARTS},
+            "max_force_N": float(force.max()), "oscillation_N": osc[k],
+            "oscillation_rel": osc[k] / 1e4, "die": run.DIE[stage],
+            "die_contact_mean": contact[k], "die_contact_max": int(contact[k]) + 5,
+            "end": _end(stage, reached, ep * (k + 1) / 2)}
+        curves[stage] = {"travel": travel.tolist(), "force": force.tolist(),
+                         "sizes": np.full(50, 0.1).tolist(), "iterations": [3] * 50,
+                         "die_contact": [int(contact[k])] * 50}
+        radius = np.linspace(0.0, 85.0, 20)
+        curves["sections"][stage] = {"thickness": [radius.tolist(), (0.98 + 0 * radius).tolist()],
+                                     "plastic_strain": [radius.tolist(),
+                                                        (ep * radius / 85).tolist()]}
+    x, y = np.meshgrid(np.linspace(0, 80, 6), np.linspace(0, 80, 6))
+    curves["map"] = {"stage": "stage2", "travel": stages["stage2"]["reached_mm"],
+                     "x": x.ravel().tolist(), "y": y.ravel().tolist(),
+                     "plastic_strain": (ep * np.hypot(x, y).ravel() / 120).tolist()}
+    numbers = {
+        "model": model, "status": "partial" if partial else "completed",
+        "run_status": "interrupted" if partial else "completed",
+        "stopped": "stalled: the lead tool advanced 1e-09 mm" if partial else "",
+        "reached": {"stage": "stage2", "travel_mm": stages["stage2"]["reached_mm"]},
+        "code": "abc1234", "date": "2026-01-01", "threads": 1,
+        "increments": sum(increments), "iterations": sum(iterations), "wall_s": 120.0,
+        "per_iteration_s": {p: 0.01 for p in run.PARTS}, "hexahedra": 768, "stages": stages}
+    return run.Run(numbers, curves)
+
+
+SHAPE = {tool: {model: {"patches": 10, "cad_faces": 2, "min_signed_um": -5.0,
+                        "max_signed_um": 9.0 if model == "nagata" else 18.0,
+                        "max_angle_deg": 0.5} for model in run.MODELS}
+         for tool in run.TOOLS}
+FIGURES = {key: f"{key}.png" for key in ("force", "strain_map", "strain_section", "contact",
+                                         "increments", "thickness")}
+
+
+def test_claims_hold_on_runs_made_to_hold_them() -> None:
+    numbers = {m: synthetic_run(m).numbers for m in run.MODELS}
+    verdicts = {text[:3]: verdict for text, verdict, _ in run.claims(numbers)}
+    assert verdicts == {"(a)": "holds", "(b)": "holds", "(c)": "holds", "(d)": "holds"}
+
+
+def test_claims_that_do_not_hold() -> None:
+    numbers = {m: synthetic_run(m).numbers for m in run.MODELS}
+    numbers["facets_fine"]["stages"]["stage2"]["oscillation_N"] = 200.0  # refining: worse
+    numbers["facets_coarse"]["increments"] = numbers["nagata"]["increments"]
+    verdicts = {text[:3]: verdict for text, verdict, _ in run.claims(numbers)}
+    assert verdicts["(a)"] == "does not hold" and verdicts["(d)"] == "does not hold"
+    assert verdicts["(b)"] == verdicts["(c)"] == "holds"
+
+
+def test_a_partial_run_leaves_its_claims_not_checked() -> None:
+    numbers = {m: synthetic_run(m, partial=m == "facets_coarse").numbers for m in run.MODELS}
+    found = {text[:3]: (verdict, detail) for text, verdict, detail in run.claims(numbers)}
+    for claim in ("(a)", "(b)", "(c)", "(d)"):
+        assert found[claim][0] == "not checked", claim
+        assert "Faceted-coarse partial, stage2 30 of 42 mm" in found[claim][1]
+    # the values as far as each run got, the partial one marked
+    assert "stage1 oscillation: Bezier 10 N, Nagata 11 N, Faceted-coarse 40 N" in found["(a)"][1]
+    assert "Faceted-coarse 90 N (to 30 mm)" in found["(a)"][1]
+    assert "stage2 increments: Bezier 450, Nagata 440, Faceted-coarse 900 (to 30 mm)" \
+        in found["(d)"][1]
+
+
+def test_a_partial_bezier_run_leaves_the_claims_that_need_it() -> None:
+    # Nagata stands for the smooth models in (a); (b) and (c) need Bezier; (d) does not.
+    numbers = {m: synthetic_run(m, partial=m == "bezier").numbers for m in run.MODELS}
+    found = {text[:3]: (verdict, detail) for text, verdict, detail in run.claims(numbers)}
+    assert found["(a)"][0] == found["(d)"][0] == "holds"
+    assert "Bezier" not in found["(a)"][1]
+    assert found["(b)"][0] == found["(c)"][0] == "not checked"
+    assert "Bezier partial, stage2 30 of 42 mm" in found["(b)"][1]
+    assert "Nagata" in found["(c)"][1]            # the other smooth model, for comparison
+
+
+def test_report_states_every_section_and_the_partial_run(tmp_path: Path) -> None:
+    runs = {m: synthetic_run(m, partial=m == "nagata") for m in run.MODELS}
+    numbers = {m: r.numbers for m, r in runs.items()}
+    text = run.report("coarse", numbers, SHAPE, {"nagata": "map.png"}, FIGURES, 1)
+    for heading in ("## Runs", "## The tools (a reconstruction)", "## Tool models (Table 5)",
+                    "## Punch force (Fig. 17-18)", "## Equivalent plastic strain (Fig. 19)",
+                    "## Nodes in contact with the die (Fig. 20)",
+                    "## Computational effort (Table 6)", "## The cup", "## Physical checks",
+                    "## The claims of the paper", "## Findings"):
+        assert heading in text, heading
+    assert "**partial**" in text and "stage2 30 of 42 mm" in text
+    assert "Nagata is partial" in text
+    assert "| **total** |  | **50** | **50** | **50** | **50** | **42** | **386** | **1418** " \
+           "| **4672** |" in text
+    assert "12925" in text and "3.62 h" in text      # the paper's Table 6
+    assert f"`punch2_radius` | {run.make_case.DIMENSIONS.punch2_radius:g}" in text
+    assert "not checked" in text
+    for name in FIGURES.values():
+        assert f"({name})" in text
+
+
+def test_kept_runs_round_trip_and_figures(tmp_path: Path) -> None:
+    runs = {m: synthetic_run(m) for m in ("nagata", "facets_fine")}
+    path = tmp_path / "runs.json"
+    run.keep_runs(path, runs)
+    run.keep_runs(path, {"bezier": synthetic_run("bezier")})  # merged, not replaced
+    kept = run.kept_runs(path)
+    assert set(kept) == {"nagata", "facets_fine", "bezier"} and all(r.kept for r in kept.values())
+    assert kept["nagata"].numbers == runs["nagata"].numbers
+    assert kept["nagata"].curves["stage1"]["force"] == pytest.approx(
+        runs["nagata"].curves["stage1"]["force"])
+    figures = run.make_figures(kept, "test", tmp_path)
+    for name in figures.values():
+        assert (tmp_path / name).stat().st_size > 1000

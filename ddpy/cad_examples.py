@@ -229,7 +229,7 @@ def _disc_sector(radius: float, z: float, angles: tuple[float, float, float]) ->
 
 def reverse_drawing_tools(path: str | os.PathLike[str] | None = None, *, thickness: float = 0.98,
                           die_bore: float = 51.25, die_shoulder: float = 8.0,
-                          die_outer: float = 90.0, die_depth: float = 20.0,
+                          die_outer: float = 90.0, die_depth: float = 50.0,
                           punch1_radius: float = 50.0, punch1_nose: float = 6.0,
                           punch1_edge: float = 4.0, punch1_bore: float = 37.75,
                           punch1_height: float = 70.0, holder1_gap: float = 1.13,

@@ -452,6 +452,14 @@ class FormingProblem:
                 if cuts_in_row > max_cuts:
                     raise FormingError(f"increment to phase factor {target:.6g} failed after "
                                        f"{max_cuts} cuts: {outcome}", result)
+                if step * cutback < limits.min_fraction * nominal and \
+                        1.0 - factor > limits.min_fraction * nominal:
+                    # Below the smallest increment a run only crawls: cut after cut, each
+                    # tiny step converging and the next, larger one failing again.
+                    raise FormingError(
+                        f"increment to phase factor {target:.6g} failed: a cut would make it "
+                        f"smaller than the smallest increment ({limits.min_fraction:g} of the "
+                        f"largest): {outcome}", result)
                 step, reason = step * cutback, "cut"
                 continue
             u, state, force, residuals, in_contact, gap, relative = outcome

@@ -76,6 +76,11 @@ class Dimensions:
     smaller than die 1's 8 mm, as in the paper) stage 2 draws: 25 kN at the end, the wall no
     thinner than 0.80 mm, plastic strain at most 0.96. End ring flat: 0.25 mm wide.
 
+    Die 1's bore wall reaches 50 mm below its shoulder, past the cup's bottom: with 20 mm
+    the cup wall slid off its free lower edge at 28 to 31 mm of stage 1, and every model
+    and blank stopped there (coarse Bezier at 30.6 mm: an element at the die's shoulder
+    inverted; medium Nagata at 28.2 mm and a 3 mm Bezier blank at 29.3 mm: no convergence).
+
     Blank-holder 1's inner edge is rounded (radius 3 mm, from the die shoulder's start
     upwards): with a sharp edge the medium blank's stage 1 failed at 39.77 mm, where the
     trough of an ear (Hill'48 earing: the flange edge between 59.2 and 63.7 mm) reached the
@@ -91,7 +96,7 @@ class Dimensions:
     die_bore: float = 51.25       #: die 1: radius of the bore
     die_shoulder: float = 8.0     #: die 1: shoulder radius (stage 1's die radius)
     die_outer: float = 90.0       #: die 1 and blank-holder 1: outer radius of the flat
-    die_depth: float = 20.0       #: die 1: bore wall below the shoulder
+    die_depth: float = 50.0       #: die 1: bore wall below the shoulder
     punch1_radius: float = 50.0   #: punch 1: outer radius
     punch1_nose: float = 7.0      #: punch 1: outer nose radius
     punch1_edge: float = 5.0      #: punch 1's inner edge = die 2's shoulder radius

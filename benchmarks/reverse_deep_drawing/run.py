@@ -872,7 +872,8 @@ def report(mesh: str, numbers: dict[str, dict[str, Any]],
         f"down {dims.stage1:g} mm, blank-holder 1 held {make_case.GAP1:g} mm from die 1. "
         f"Stage 2: punch 2 moves up {dims.stage2 + dims.approach:g} mm (from "
         f"{dims.approach:g} mm below the cup), blank-holder 2 held {make_case.GAP2:g} mm "
-        "from punch 1's end (die 2); die 1 and blank-holder 1 stay. Largest increment "
+        "from punch 1's end (die 2); die 1 and blank-holder 1 are lifted (off), the flange "
+        "left by stage 1 is free (make_case.Dimensions says why). Largest increment "
         f"{make_case.MAX_INCREMENT.get(mesh, 0.25):g} mm of punch travel.",
         "",
         f"Blank: **{mesh}** mesh, {hexahedra} hexahedra in {make_case.LAYERS} layers "
@@ -910,6 +911,10 @@ def report(mesh: str, numbers: dict[str, dict[str, Any]],
         _row(["---"] * 3),
         *[_row([f"`{f.name}`", f"{getattr(dims, f.name):g}", DIMENSION_TEXT.get(f.name, "")])
           for f in fields(dims)],
+        "",
+        "Where these depart from the first guess (punch 1's radii, die 1's depth, "
+        "blank-holder 1's rounded edge, die 1 and blank-holder 1 lifted for stage 2), the "
+        "docstring of `make_case.Dimensions` records the failed runs that made each change.",
         "",
         *tool_model_section(shape, maps),
         "## Punch force (Fig. 17-18)",

@@ -233,7 +233,7 @@ def reverse_drawing_tools(path: str | os.PathLike[str] | None = None, *, thickne
                           punch1_radius: float = 50.0, punch1_nose: float = 6.0,
                           punch1_edge: float = 4.0, punch1_bore: float = 37.75,
                           punch1_height: float = 70.0, holder1_gap: float = 1.13,
-                          holder1_edge: float = 3.0,
+                          holder1_edge: float = 3.0, holder1_inner: float = 61.25,
                           punch2_radius: float = 36.5, punch2_nose: float = 5.0,
                           punch2_height: float = 50.0, punch2_start: float = -42.0,
                           holder2_inner: float = 38.0, holder2_outer: float = 48.0,
@@ -246,8 +246,8 @@ def reverse_drawing_tools(path: str | os.PathLike[str] | None = None, *, thickne
 
     The flat blank lies on 0 <= z <= ``thickness``, centred on the axis. Stage 1: punch 1
     (above, hollow) draws it into die 1 (below) while blank-holder 1 (above, a flat annulus
-    over the die's flat, ``holder1_gap`` above it, its inner edge rounded by
-    ``holder1_edge``) holds the flange. Stage 2: punch 2 (below,
+    over the die's flat from ``holder1_inner`` out, ``holder1_gap`` above it, its inner edge
+    rounded by ``holder1_edge``) holds the flange. Stage 2: punch 2 (below,
     its flat end at ``punch2_start``) pushes the cup's bottom up through punch 1's bore; punch
     1's end ring and its inner edge of radius ``punch1_edge`` are die 2, and blank-holder 2
     (below, its flat top at ``holder2_top``) holds the bottom's annulus against that ring.
@@ -265,7 +265,8 @@ def reverse_drawing_tools(path: str | os.PathLike[str] | None = None, *, thickne
     shoulder_r = die_bore + die_shoulder
     edge_r, nose_r = punch1_bore + punch1_edge, punch1_radius - punch1_nose
     if not (0.0 < die_shoulder and shoulder_r < die_outer and 0.0 < punch1_edge
-            and 0.0 < holder1_edge < shoulder_r - punch1_radius
+            and 0.0 < holder1_edge < holder1_inner - punch1_radius
+            and shoulder_r <= holder1_inner < die_outer
             and 0.0 < punch1_nose and edge_r < nose_r and punch1_radius < die_bore
             and 0.0 < punch2_nose < punch2_radius < punch1_bore
             and punch2_radius < holder2_inner and 2 * holder2_edge < holder2_outer - holder2_inner
@@ -277,9 +278,9 @@ def reverse_drawing_tools(path: str | os.PathLike[str] | None = None, *, thickne
         "die1": [("line", (die_bore, -die_shoulder - die_depth), (die_bore, -die_shoulder)),
                  ("arc", (die_bore, -die_shoulder), (shoulder_r, -die_shoulder), (shoulder_r, 0.0)),
                  ("line", (shoulder_r, 0.0), (die_outer, 0.0))],
-        "holder1": [("arc", (shoulder_r - holder1_edge, holder1_gap + holder1_edge),
-                     (shoulder_r, holder1_gap + holder1_edge), (shoulder_r, holder1_gap)),
-                    ("line", (shoulder_r, holder1_gap), (die_outer, holder1_gap))],
+        "holder1": [("arc", (holder1_inner - holder1_edge, holder1_gap + holder1_edge),
+                     (holder1_inner, holder1_gap + holder1_edge), (holder1_inner, holder1_gap)),
+                    ("line", (holder1_inner, holder1_gap), (die_outer, holder1_gap))],
         "punch1": [("line", (punch1_bore, t + punch1_height), (punch1_bore, t + punch1_edge)),
                    ("arc", (punch1_bore, t + punch1_edge), (edge_r, t + punch1_edge), (edge_r, t)),
                    ("line", (edge_r, t), (nose_r, t)),

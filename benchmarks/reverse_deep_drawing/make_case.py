@@ -76,17 +76,15 @@ class Dimensions:
     smaller than die 1's 8 mm, as in the paper) stage 2 draws: 25 kN at the end, the wall no
     thinner than 0.80 mm, plastic strain at most 0.96. End ring flat: 0.25 mm wide.
 
-    Die 1's bore wall reaches 50 mm below its shoulder, past the cup's bottom: with 20 mm
-    the cup wall slid off its free lower edge at 28 to 31 mm of stage 1, and every model
-    and blank stopped there (coarse Bezier at 30.6 mm: an element at the die's shoulder
-    inverted; medium Nagata at 28.2 mm and a 3 mm Bezier blank at 29.3 mm: no convergence).
+    Die 1's bore wall reaches 50 mm below its shoulder, past the cup's bottom at the end of
+    stage 1, so that the cup wall never meets its free lower edge.
 
-    Blank-holder 1's inner edge is rounded (radius 3 mm, from the die shoulder's start
-    upwards): with a sharp edge the medium blank's stage 1 failed at 39.77 mm, where the
-    trough of an ear (Hill'48 earing: the flange edge between 59.2 and 63.7 mm) reached the
-    edge and a node slid off it.
+    Blank-holder 1's flat begins 2 mm outside the die shoulder and its inner edge is rounded
+    (radius 3 mm): with a sharp edge at the shoulder's start the medium blank's stage 1
+    failed at 39.77 mm, where the trough of an ear (Hill'48 earing: the flange edge between
+    59.2 and 63.7 mm) reached the edge and a node slid off it.
 
-    Stage 1 draws 40 mm and leaves a flange (its edge at about 62 mm, under blank-holder 1).
+    Stage 1 draws 40 mm and leaves a flange under blank-holder 1.
     Stage 2 lifts die 1 and blank-holder 1 (they are off): with them on, the top of the wall,
     thickened to 1.27 mm, stayed wedged in die 1's 1.25 mm clearance and the bottom tore
     instead of drawing the wall back. Punch 2 starts ``approach`` below the cup's bottom;
@@ -106,6 +104,7 @@ class Dimensions:
     punch2_nose: float = 5.0      #: punch 2: nose radius
     punch2_height: float = 50.0   #: punch 2: height of its wall
     holder1_edge: float = 3.0     #: blank-holder 1: radius of its inner edge
+    holder1_inner: float = 61.25  #: blank-holder 1: where its flat begins
     holder2_inner: float = 38.0   #: blank-holder 2: inner radius
     holder2_outer: float = 48.0   #: blank-holder 2: outer radius
     holder2_edge: float = 2.0     #: blank-holder 2: radius of its two edges

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import logging
 import signal
 import sys
 import time
@@ -97,6 +98,12 @@ def _run(args: argparse.Namespace) -> int:
         print(f"{folder}: {len(error.errors)} error(s); see 'ddpy check'", file=sys.stderr)
         return 2
     output = Path(args.output) if args.output else default_output(folder)
+    if args.verbose:
+        handler = logging.StreamHandler(sys.stderr)
+        handler.setFormatter(logging.Formatter("  %(message)s"))
+        logger = logging.getLogger("ddpy")
+        logger.addHandler(handler)
+        logger.setLevel(logging.INFO if args.verbose == 1 else logging.DEBUG)
     display = ProgressDisplay(sys.stdout)
     verb = "continuing" if args.restart else "running"
     print(f"ddpy run: {verb} {case.title} ({folder}) -> {output}", flush=True)
@@ -151,6 +158,9 @@ def add_run(commands: argparse._SubParsersAction) -> None:
                      "end of every phase)")
     run.add_argument("--stop-after", type=int, metavar="N",
                      help="stop after N increments of the whole run (restartable)")
+    run.add_argument("-v", "--verbose", action="count", default=0,
+                     help="report every cut increment and why (-v), and every Newton "
+                     "iteration's residual and step length (-vv), on standard error")
     run.set_defaults(handler=_run)
 
 

@@ -15,6 +15,7 @@ Example::
 
 from __future__ import annotations
 
+import logging
 import time
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
@@ -30,6 +31,8 @@ from ddpy.ordering import mesh_solver
 from ddpy.search import NONE, ContactSearch
 from ddpy.solid import ElementError, Solid, SolidState, _components
 from ddpy.surfaces import BezierSurface, NagataSurface
+
+_log = logging.getLogger(__name__)
 
 __all__ = ["RigidTool", "FormingProblem", "FormingResult", "FormingError", "IncrementLimits",
            "PhaseProgress", "default_augmentation"]
@@ -447,6 +450,8 @@ class FormingProblem:
                 reason = "yield"
                 continue
             if isinstance(outcome, str):
+                _log.info("increment to phase factor %.6g (step %.3g) cut: %s", target, step,
+                          outcome)
                 cuts_in_row += 1
                 result.cuts += 1
                 if cuts_in_row > max_cuts:
@@ -897,6 +902,10 @@ class FormingProblem:
             if not np.isfinite(norm):
                 return "the residual is not finite"
             relative.append((norm / scale, moved))
+            if _log.isEnabledFor(logging.DEBUG):
+                _log.debug("iteration %d: residual %.3e of the force scale, correction %.3e "
+                           "of the motion, %d pairs closed", iteration, norm / scale, moved,
+                           int((on & (state != INACTIVE)).sum()))
             if converged:
                 return (u, out.state, force, residuals, np.where(on, state, INACTIVE), gap,
                         relative)
@@ -956,11 +965,17 @@ class FormingProblem:
             if isinstance(trial, str):
                 return trial
             u, force, current = trial_u, trial_force, trial
+            _log.debug("step length %.4g", alpha)
             hint = simplified  # M^-1 of the new residual, while the factors stay
             correction = alpha * float(np.linalg.norm(du))
-            if iteration == 0 and yield_tolerance is not None:
+            if yield_tolerance is not None and alpha == 1.0:
+                # The elastic predictor is the first full Newton step: a step shortened by
+                # the line search or the penetration limit starts from a poor iterate (a
+                # punch pushed into the extrapolated blank), whose strains say little of
+                # where the converged path yields.
                 landing = _yield_factor(solid.props, self.state, trial[3].state,
                                         yield_tolerance)
+                yield_tolerance = None
                 if landing < 1.0:
                     return landing
         return "no convergence"

@@ -132,8 +132,9 @@ class ContactSearch:
         brute_force: bool = False,
     ) -> Projection:
         """Closest point on the tool of each of ``points`` (k, 3), the tool moved by
-        ``tool_displacement``. With ``node_normals`` (k, 3), only patches whose outward
-        normal opposes the node's are candidates (a zero row disables the filter).
+        ``tool_displacement``. With ``node_normals`` (k, 3), only patch points whose outward
+        normal opposes the node's within 60 degrees make their patch a candidate (a zero
+        row disables the filter).
         ``brute_force`` projects on every patch: the reference for tests."""
         x = float_array(np.reshape(points, (-1, 3)) if np.size(points) == 0 else points,
                         "points", (None, 3))
@@ -143,6 +144,8 @@ class ContactSearch:
             nn = np.zeros_like(x)
         else:
             nn = float_array(node_normals, "node_normals", (k, 3))
+            length = np.linalg.norm(nn, axis=1, keepdims=True)
+            nn = nn / np.where(length > 0.0, length, 1.0)  # the cone test needs unit rows
         if k == 0:
             empty = np.zeros(0, dtype=np.int32)
             return Projection(empty, np.zeros((0, 2)), np.zeros((0, 3)), np.zeros((0, 3)),

@@ -241,3 +241,20 @@ def test_default_case_is_packaged(tmp_path: Path) -> None:
     assert "running Unconstrained cylindrical bending" in done.stdout
     assert str(DEFAULT_CASE) in done.stdout
     assert "results/cylindrical_bending/results.h5 exists" in done.stderr
+
+
+def test_verbose_run_reports_newton_iterations_and_cuts(tmp_path: Path) -> None:
+    # -vv: every Newton iteration's residual and step length on standard error, so that a
+    # run that cuts back is seen doing so; without -v, nothing of it.
+    case = tiny_case(tmp_path / "case")
+    quiet = subprocess.run([sys.executable, "-m", "ddpy", "run", str(case), "--output",
+                            str(tmp_path / "quiet"), "--stop-after", "2"],
+                           capture_output=True, text=True)
+    loud = subprocess.run([sys.executable, "-m", "ddpy", "run", str(case), "--output",
+                           str(tmp_path / "loud"), "--stop-after", "2", "-vv"],
+                          capture_output=True, text=True)
+    assert quiet.returncode == loud.returncode == 0, loud.stderr
+    assert "iteration" not in quiet.stderr
+    lines = [x for x in loud.stderr.splitlines() if "iteration 0: residual" in x]
+    assert len(lines) >= 2
+    assert "step length" in loud.stderr

@@ -96,3 +96,22 @@ def test_projection_on_cad_tool_within_shape_error(die_models, kind: str) -> Non
     brute = ContactSearch(model.surface).project(x, brute_force=True)
     fast_d = np.linalg.norm(x - found.point, axis=1)
     assert (fast_d <= np.linalg.norm(x - brute.point, axis=1) + 1e-9).all()
+
+
+def test_orientation_filter_finds_the_fillet_where_it_meets_the_wall(die_models) -> None:
+    # Blank nodes facing down onto the die, their normals within a few tenths of a degree of
+    # -z. Where the fillet meets the vertical wall its normal is horizontal, so for nodes
+    # beside the wall the fillet's nearest point faces away from some of them while the rest
+    # of the fillet faces them: it must stay a candidate (a Bezier punch lost its nose this
+    # way and closed the blank's rim on a flat 42 mm away).
+    x = points_above_die(3000)
+    x[:, 0] = RNG.uniform(FILLET - 1.0, FILLET + 6.0, len(x))
+    normals = RNG.normal(size=x.shape) * 1e-3
+    normals[:, 2] = -1.0
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    search = ContactSearch(die_models["bezier"].surface)
+    fast = search.project(x, node_normals=normals)
+    brute = search.project(x, node_normals=normals, brute_force=True)
+    np.testing.assert_array_equal(fast.status == 0, brute.status == 0)
+    fast_d = np.linalg.norm(x - fast.point, axis=1)
+    assert (fast_d <= np.linalg.norm(x - brute.point, axis=1) + 1e-9).all()

@@ -60,6 +60,10 @@ MAX_ID = 2**31 - 1
 _MAX_REPORTED = 5
 _NAME = re.compile(r"[A-Za-z][A-Za-z0-9_.\-]{0,63}")
 _INT = re.compile(r"[+-]?[0-9]+")
+#: The numbers of the decks (docs/input-format.md): decimal with an optional exponent, in
+#: ASCII digits; float() alone would also take '210_000', full-width digits and 'nan'.
+_NUMBER = re.compile(r"[+-]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][+-]?[0-9]+)?|[+-]?(inf|nan)",
+                     re.ASCII)
 
 
 class DeckError(ValueError):
@@ -117,7 +121,13 @@ class _Deck:
         self.lines: list[_Line] = []
         self.errors: list[DeckError] = []
         self.warnings: list[str] = []
-        raw_lines = text.splitlines()
+        # Only ASCII line ends end a line (str.splitlines also splits at form feeds and
+        # Unicode separators: a comment holding one would turn the rest into live text and
+        # shift every later line number); a UTF-8 byte order mark is not content.
+        raw_lines = text.removeprefix("\ufeff").replace("\r\n", "\n").replace(
+            "\r", "\n").split("\n")
+        if raw_lines and raw_lines[-1] == "":
+            raw_lines.pop()
         self.last = len(raw_lines)
         for number, raw in enumerate(raw_lines, start=1):
             content = raw.split("#", 1)[0].strip()
@@ -161,10 +171,10 @@ def _arity(line: _Line, form: str, low: int, high: int | None = None) -> None:
 
 def _float(word: str, what: str, *, gt: float | None = None, ge: float | None = None,
            lt: float | None = None, le: float | None = None, allow_inf: bool = False) -> float:
-    try:
-        value = float(word)
-    except ValueError:
-        raise _Bad(f"expected a number for {what}, got {_show(word)}") from None
+    if not _NUMBER.fullmatch(word):
+        raise _Bad(f"expected a number for {what} (decimal, e.g. 0.114, -28.5 or 1e-4), got "
+                   f"{_show(word)}")
+    value = float(word)
     if math.isnan(value) or (math.isinf(value) and not allow_inf):
         raise _Bad(f"expected a finite number for {what}, got {_show(word)}")
     for bound, ok, sign in ((gt, lambda b: value > b, ">"), (ge, lambda b: value >= b, ">="),
@@ -621,16 +631,16 @@ def _own_arrays(deck: _Deck, blocks: dict) -> _RawMesh | None:
 
     def numbers(rows: list[list[str]], lines: NDArray, kind: type, what: str) -> NDArray | None:
         """The rows as an array; on a bad word, an error at its line and None."""
-        if kind is float:
-            try:
-                return np.array(rows, dtype=float)
-            except ValueError:
-                pass
+        pattern = _NUMBER if kind is float else _INT
+        if kind is float and all(pattern.fullmatch(word) for row in rows for word in row):
+            return np.array(rows, dtype=float)  # non-finite values are refused below
         for row, number in zip(rows, lines, strict=True):
             for word in row:
                 try:
-                    value = float(word) if kind is float else int(_INT.fullmatch(word)[0])
-                except (ValueError, TypeError):
+                    if not pattern.fullmatch(word):
+                        raise ValueError(word)
+                    value = float(word) if kind is float else int(word)
+                except ValueError:
                     deck.error(int(number), f"expected {what}, got {_show(' '.join(row))}")
                     return None
                 if kind is not float and abs(value) > MAX_ID:
@@ -692,6 +702,8 @@ def _mesh_file(deck: _Deck, line: _Line) -> _RawMesh:
                    f"or Gmsh), got {_show(line.words[1])}")
     if not path.is_file():
         raise _Bad(f"mesh file {path} not found")
+    if path.suffix.lower() == ".msh":
+        _check_gmsh_counts(path)
     try:
         import meshio
 
@@ -730,6 +742,59 @@ def _mesh_file(deck: _Deck, line: _Line) -> _RawMesh:
         nodesets[name] = kept[kept >= 0]
     return _RawMesh(points[used], renumber[elements], used + 1,
                     np.arange(1, len(elements) + 1), None, nodesets, path.name)
+
+
+def _check_gmsh_counts(path: Path) -> None:
+    """The counts of an ASCII Gmsh file's $Nodes and $Elements sections against the lines they
+    hold: meshio reads as many entries as a count says and ignores the rest, so a count made
+    too small would silently drop elements. Binary files are left to meshio."""
+    try:
+        with open(path, encoding="latin-1") as f:
+            lines = f.read().split("\n")
+    except OSError as error:
+        raise _Bad(f"cannot read mesh file {path}: {error.strerror or error}") from None
+    version, binary = None, False
+    sections: dict[str, tuple[int, list[str]]] = {}
+    start = None
+    for number, raw in enumerate(lines, start=1):
+        text = raw.strip()
+        if text in ("$MeshFormat", "$Nodes", "$Elements"):
+            start = (text[1:], number)
+            body: list[str] = []
+        elif start is not None and text == f"$End{start[0]}":
+            sections[start[0]] = (start[1], body)
+            start = None
+        elif start is not None:
+            body.append(text)
+    if "MeshFormat" in sections and sections["MeshFormat"][1]:
+        words = sections["MeshFormat"][1][0].split()
+        version = words[0] if words else None
+        binary = len(words) > 1 and words[1] == "1"
+    if binary or version is None:
+        return
+    for name in ("Nodes", "Elements"):
+        if name not in sections:
+            continue
+        first, body = sections[name]
+        body = [b for b in body if b]
+        try:
+            header = [int(w) for w in body[0].split()] if body else []
+            if version.startswith("2"):
+                expected, found = header[0], len(body) - 1
+            else:  # 4.x: blocks, each a header line and its entries (nodes: tags, then xyz)
+                expected, found, row = header[1], 0, 1
+                while row < len(body):
+                    count = int(body[row].split()[3])
+                    found += count
+                    row += 1 + (2 * count if name == "Nodes" else count)
+                if row != len(body):
+                    raise ValueError
+        except (IndexError, ValueError):
+            raise _Bad(f"mesh file {path.name}:{first}: the ${name} section is malformed") \
+                from None
+        if expected != found:
+            raise _Bad(f"mesh file {path.name}:{first + 1}: ${name} says {expected} entries, "
+                       f"the section holds {found}")
 
 
 def _file_nodesets(data: Any) -> dict[str, NDArray[np.int64]]:

@@ -230,3 +230,18 @@ def test_bad_input() -> None:
     with pytest.raises(ValueError, match="candidates"):
         ContactSearch(search.surface, candidates=0)
     assert search.project(np.zeros((0, 3))).patch.shape == (0,)
+
+
+def test_orientation_filter_ignores_surfaces_side_on_to_the_node() -> None:
+    # A flat sheet's node beside a vertical wall: the wall's normal is perpendicular to the
+    # node's, so it cannot be a contact partner, whichever way the node's normal tilts by a
+    # thousandth. With the bound at 90 degrees the tilt decided (a punch's bore then closed
+    # a flange node 27 mm deep); the wall counts once the node's normal opposes it.
+    search = ContactSearch(bezier_cylinder(10.0, 20.0, 6))
+    radial = np.array([np.cos(np.pi / 6), np.sin(np.pi / 6), 0.0])  # mid-patch
+    up = np.array([0.0, 0.0, 1.0])
+    x = np.tile(15.0 * radial + 10.0 * up, (4, 1))
+    normals = np.array([up - 1e-3 * radial, up + 1e-3 * radial, -radial, 0.9 * up - radial])
+    found = search.project(x, node_normals=normals)
+    assert found.status.tolist() == [NONE, NONE, INSIDE, INSIDE]
+    np.testing.assert_allclose(found.distance[2:], 5.0, atol=1e-3)

@@ -117,6 +117,12 @@ def _run(args: argparse.Namespace) -> int:
         display.close()
         print(f"ddpy run: error: {error}", file=sys.stderr)
         return 1
+    except OSError as error:  # the file system: permissions, space, a vanished folder
+        display.close()
+        where = error.filename or output
+        print(f"ddpy run: error: {where}: {error.strerror or error}; the results written so "
+              "far are kept", file=sys.stderr)
+        return 1
     except KeyboardInterrupt:
         display.close()
         print("ddpy run: aborted; the results and the last checkpoint are kept",
@@ -135,6 +141,28 @@ def _run(args: argparse.Namespace) -> int:
     return EXIT[outcome.status]
 
 
+def _at_least_one(text: str) -> int:
+    """An argparse type: an integer >= 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got '{text}'") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
+    return value
+
+
+def _threads(text: str) -> int:
+    """An argparse type: a thread count that ddpy.parallel.set_threads accepts."""
+    from ddpy.parallel import thread_limit
+
+    value = _at_least_one(text)
+    if value > thread_limit():
+        raise argparse.ArgumentTypeError(f"must be at most {thread_limit()} (four per core of "
+                                         f"this machine, at least 64), got {value}")
+    return value
+
+
 def add_run(commands: argparse._SubParsersAction) -> None:
     """The ``run`` subcommand."""
     run = commands.add_parser(
@@ -151,12 +179,12 @@ def add_run(commands: argparse._SubParsersAction) -> None:
                      help="continue from the output folder's last checkpoint")
     run.add_argument("--overwrite", action="store_true",
                      help="replace results already in the output folder")
-    run.add_argument("--threads", type=int, metavar="N",
+    run.add_argument("--threads", type=_threads, metavar="N",
                      help="OpenMP threads of the core (default: OMP_NUM_THREADS)")
-    run.add_argument("--checkpoint-every", type=int, default=10, metavar="N",
+    run.add_argument("--checkpoint-every", type=_at_least_one, default=10, metavar="N",
                      help="write a checkpoint every N increments (default 10; also at the "
                      "end of every phase)")
-    run.add_argument("--stop-after", type=int, metavar="N",
+    run.add_argument("--stop-after", type=_at_least_one, metavar="N",
                      help="stop after N increments of the whole run (restartable)")
     run.add_argument("-v", "--verbose", action="count", default=0,
                      help="report every cut increment and why (-v), and every Newton "

@@ -40,6 +40,7 @@ from ddpy.case import (
     Tool,
     rigid_body_modes_free,
 )
+from ddpy.forming import MAX_INCREMENTS
 from ddpy.material import Hill48, Material, Swift, Voce
 
 __all__ = ["DECKS", "DeckError", "parse_case", "read_case"]
@@ -1360,6 +1361,12 @@ class _Cross:
         if min_inc > max_inc:
             deck.error(line, f"phase '{p.name}': min_increment {min_inc:g} mm exceeds "
                        f"max_increment {max_inc:g} mm")
+            return None
+        if travel / max_inc > MAX_INCREMENTS:
+            deck.error(self._line_of(p, control, "max_increment") or p.line,
+                       f"phase '{p.name}': max_increment {max_inc:g} mm would take more than "
+                       f"{MAX_INCREMENTS:,} increments over the travel {travel:g} mm of the "
+                       f"lead tool '{lead}'")
             return None
         if max_inc > travel:
             deck.warn(self._line_of(p, control, "max_increment"), f"phase '{p.name}': "

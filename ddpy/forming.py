@@ -37,6 +37,9 @@ _log = logging.getLogger(__name__)
 __all__ = ["RigidTool", "FormingProblem", "FormingResult", "FormingError", "IncrementLimits",
            "PhaseProgress", "default_augmentation"]
 
+#: Most increments a phase may take at its largest increment: a max_increment smaller than
+#: the travel over this would only keep the process busy (1e-300 mm ran for ever).
+MAX_INCREMENTS = 1_000_000
 #: A release interpolated on the augmented pressure before this fraction of the increment
 #: is not trusted: the increment is halved instead.
 BISECT_BELOW = 0.1
@@ -389,6 +392,9 @@ class FormingProblem:
         travel = max(float(np.linalg.norm(m)) for m in moves.values())
         if not max_increment > 0.0:
             raise ValueError(f"max_increment must be > 0, got {max_increment}")
+        if travel / max_increment > MAX_INCREMENTS:
+            raise ValueError(f"max_increment {max_increment:g} mm would take more than "
+                             f"{MAX_INCREMENTS:,} increments over the travel {travel:g} mm")
         if not 0.0 < cutback < 1.0:
             raise ValueError(f"cutback must lie in (0, 1), got {cutback}")
         result = FormingResult() if result is None else result

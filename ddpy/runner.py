@@ -263,8 +263,16 @@ class _Run:
                 factor=float(prog["factor"]), step=float(prog["step"]),
                 reason=str(prog["reason"]), last_du=arrays.get("last_du"),
                 last_dp=arrays.get("last_dp"))
-        self.writer = ResultsWriter.reopen(self.output / RESULTS, int(meta["increments"]),
-                                           int(meta["iterations"]), int(meta["frames"]))
+        results = self.output / RESULTS
+        if not results.is_file():
+            raise RunError(f"{results}: missing; the checkpoint continues it, so run again "
+                           "without --restart")
+        try:
+            self.writer = ResultsWriter.reopen(results, int(meta["increments"]),
+                                               int(meta["iterations"]), int(meta["frames"]))
+        except (OSError, KeyError, ValueError) as error:
+            raise RunError(f"{results}: cannot be continued ({error}); run again without "
+                           "--restart") from None
 
     # -- output ----------------------------------------------------------------------
 
@@ -475,6 +483,8 @@ def run_case(case: Case, output: str | os.PathLike[str], restart: bool = False,
         from ddpy.parallel import set_threads
 
         set_threads(threads)
+    if output.exists() and not output.is_dir():
+        raise RunError(f"{output}: a file is there; the output must be a folder")
     run = _Run(case, output, progress, stop, checkpoint_every, max_increments)
     results = output / RESULTS
     if restart:

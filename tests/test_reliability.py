@@ -4,12 +4,16 @@ the line (or the option), before any numerics start; legitimate input is not ref
 from __future__ import annotations
 
 import shutil
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
 
 from ddpy.decks import DeckError, read_case
+from ddpy.parallel import set_threads, thread_limit
 from tests.deckutil import copy_example, edit
+from tests.test_forming import block_on_plane
 
 BUILT_IN = Path(__file__).resolve().parents[1] / "ddpy" / "cases" / "cylindrical_bending"
 
@@ -73,3 +77,90 @@ def test_gmsh_element_count_is_checked(tmp_path: Path, version: str) -> None:
     msh.write_text("\n".join(lines))
     message = errors_of(case)
     assert f"mesh.msh:{at + 2}: $Elements says" in message
+
+
+@pytest.mark.parametrize("option, value, message", [
+    ("--threads", "100000", "must be at most"),
+    ("--threads", str(2**40), "must be at most"),
+    ("--threads", "0", "must be at least 1"),
+    ("--stop-after", "0", "must be at least 1"),
+    ("--checkpoint-every", "1.5", "expected an integer"),
+])
+def test_run_options_out_of_range_are_refused(tmp_path: Path, option: str, value: str,
+                                              message: str) -> None:
+    done = subprocess.run([sys.executable, "-m", "ddpy", "run", option, value, "--output",
+                           str(tmp_path / "out")], capture_output=True, text=True)
+    assert done.returncode == 2
+    assert f"argument {option}: {message}" in done.stderr
+    assert "Traceback" not in done.stderr
+    assert not (tmp_path / "out").exists()
+
+
+def test_thread_counts_beyond_the_machine_are_refused() -> None:
+    for n in (0, thread_limit() + 1, 2**40):
+        with pytest.raises(ValueError, match="number of threads"):
+            set_threads(n)
+    with pytest.raises(TypeError):
+        set_threads(2.0)
+
+
+def test_an_increment_too_small_for_the_travel_is_refused(tmp_path: Path) -> None:
+    # 1e-300 mm increments would keep the process busy for ever.
+    case = copy_example("bending", tmp_path)
+    text = (case / "control.dat").read_text()
+    line = next(n for n, x in enumerate(text.split("\n"), start=1)
+                if x.split()[:1] == ["max_increment"])
+    edit(case, "control.dat", text.split("\n")[line - 1].split()[1], "1e-300")
+    message = errors_of(case)
+    assert f"control.dat:{line}:" in message and "more than 1,000,000 increments" in message
+    problem, _ = block_on_plane(0.0)
+    with pytest.raises(ValueError, match="more than 1,000,000 increments"):
+        problem.run({"plane": (0, 0, 1e-3)}, max_increment=1e-300)
+
+
+@pytest.fixture(scope="module")
+def stopped_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Two increments of the built-in case, a checkpoint after each."""
+    out = tmp_path_factory.mktemp("stopped") / "out"
+    done = subprocess.run([sys.executable, "-m", "ddpy", "run", "--output", str(out),
+                           "--stop-after", "2", "--checkpoint-every", "1"],
+                          capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    return out
+
+
+def damage(folder: Path, name: str, how: str) -> None:
+    path = folder / name
+    if how == "remove":
+        path.unlink()
+    else:  # truncate to half
+        data = path.read_bytes()
+        path.write_bytes(data[: len(data) // 2])
+
+
+@pytest.mark.parametrize("name, how, message", [
+    ("checkpoint.npz", "truncate", "checkpoint.npz: not a readable checkpoint"),
+    ("results.h5", "remove", "results.h5: missing"),
+    ("results.h5", "truncate", "results.h5: cannot be continued"),
+])
+def test_restart_from_damaged_output_says_what_is_wrong(stopped_run: Path, tmp_path: Path,
+                                                       name: str, how: str,
+                                                       message: str) -> None:
+    out = tmp_path / "out"
+    shutil.copytree(stopped_run, out)
+    damage(out, name, how)
+    done = subprocess.run([sys.executable, "-m", "ddpy", "run", "--output", str(out),
+                           "--restart"], capture_output=True, text=True)
+    assert done.returncode == 1
+    assert message in done.stderr and "without --restart" in done.stderr
+    assert "Traceback" not in done.stderr
+
+
+def test_output_naming_a_file_is_refused(tmp_path: Path) -> None:
+    taken = tmp_path / "taken"
+    taken.write_text("not a folder")
+    done = subprocess.run([sys.executable, "-m", "ddpy", "run", "--output", str(taken)],
+                          capture_output=True, text=True)
+    assert done.returncode == 1
+    assert "a file is there; the output must be a folder" in done.stderr
+    assert "Traceback" not in done.stderr and taken.read_text() == "not a folder"

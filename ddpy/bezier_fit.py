@@ -34,6 +34,9 @@ _CHECK = np.linspace(0.0, 1.0, 31)
 _VERIFY = (np.arange(40) + 0.5) / 40.0
 #: Regions narrower than this fraction of the face are not split further.
 MIN_REGION = 1.0 / 4096
+#: Most Bezier patches one face may take: a tolerance no patch can meet would otherwise halve
+#: regions towards MIN_REGION in both directions, millions of them (--bezier-tol 1e-15).
+MAX_PATCHES_PER_FACE = 1024
 DEGREES = range(1, MAX_BEZIER_DEGREE + 1)
 
 Mapping = Callable[[NDArray[np.float64], NDArray[np.float64]], NDArray[np.float64]]
@@ -219,6 +222,10 @@ def fit_face(builder: ToolBuilder, face: int, tol: float, angle_tol: float,
         mapping, region = regions.pop(0)
         net, errors = _fit_region(face, mapping, region, tol, angle_tol)
         s0, s1, t0, t1 = region
+        if net is None and len(nets) + len(regions) + 2 > MAX_PATCHES_PER_FACE:
+            raise builder.error(face, f"needs more than {MAX_PATCHES_PER_FACE} Bezier patches "
+                                f"of degree <= {MAX_BEZIER_DEGREE} within {tol:g} mm and "
+                                f"{angle_tol:g} degrees; raise the tolerances")
         if net is None:
             split_s = errors[MAX_BEZIER_DEGREE - 1, MAX_BEZIER_DEGREE] >= errors[
                 MAX_BEZIER_DEGREE, MAX_BEZIER_DEGREE - 1]

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import re
 import sys
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
@@ -43,6 +44,11 @@ TANGENT_ANGLE = 0.1
 #: A face whose normals point away from the blank on average (mean n . d < -tol) fails.
 AWAY_TOL = 1.0e-3
 MODELS = ("nagata", "facets", "bezier")
+#: Smallest Bezier fitting tolerances: ten times the CAD kernel's precision, and a thousandth
+#: of a degree.
+MIN_BEZIER_TOL, MIN_BEZIER_ANGLE_TOL = 1.0e-6, 1.0e-3
+#: A tool name becomes a file name in the output folder: no path separators, no '..'.
+_PLAIN_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]{0,63}")
 
 
 class CadError(ValueError):
@@ -598,6 +604,16 @@ def build_tool_models(
     unknown = [m for m in models if m not in MODELS]
     if unknown or not models:
         raise ValueError(f"models must be among {MODELS}, got {list(models)}")
+    # Below the CAD kernel's own precision (1e-7 mm) a fit cannot be checked.
+    if not (MIN_BEZIER_TOL <= bezier_tol <= 1e3):
+        raise ValueError(f"bezier_tol must lie between {MIN_BEZIER_TOL:g} and 1000 mm, got "
+                         f"{bezier_tol:g}")
+    if not (MIN_BEZIER_ANGLE_TOL <= bezier_angle_tol <= 90.0):
+        raise ValueError(f"bezier_angle_tol must lie between {MIN_BEZIER_ANGLE_TOL:g} and 90 "
+                         f"degrees, got {bezier_angle_tol:g}")
+    if not _PLAIN_NAME.fullmatch(name):
+        raise ValueError(f"name must be a plain file name (letters, digits, '_', '.', '-', "
+                         f"not starting with '.'), got '{name}'")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     with gmsh_session(), _cad_model(cad) as (available, label, source):

@@ -75,9 +75,9 @@ def _int_list(text: str) -> list[int]:
             from None
 
 
-def _fail(command: str, error: Exception) -> int:
+def _fail(command: str, error: Exception, code: int = 1) -> int:
     print(f"ddpy {command}: error: {error}", file=sys.stderr)
-    return 1
+    return code
 
 
 def _tools_build(args: argparse.Namespace) -> int:
@@ -93,7 +93,7 @@ def _tools_build(args: argparse.Namespace) -> int:
             blank_point=args.blank_point, bezier_tol=args.bezier_tol,
             bezier_angle_tol=args.bezier_angle_tol, faces=args.faces, models=models)
     except (CadError, ValueError) as error:
-        return _fail("tools build", error)
+        return _fail("tools build", error, 2)  # the CAD file or an option
     for path in paths.values():
         print(path)
     return 0

@@ -412,7 +412,28 @@ def test_cli_build_and_error(cad: dict[str, Path], tmp_path: Path,
     code, out, _ = ddpy("tools", "error", *files)
     assert code == 0 and "max |d| um" in out
     code, _, err = ddpy("tools", "build", str(cad["cone"]), "--out", str(tmp_path))
-    assert code == 1
+    assert code == 2
     assert "ddpy tools build: error: " in err and "cone.brep: face 1" in err
+    # A name with a path in it would write outside --out; a tolerance below the CAD kernel's
+    # precision would split the faces for ever.
+    for option, value, message in (("--name", "../x", "plain file name"),
+                                   ("--bezier-tol", "1e-15", "bezier_tol must lie between"),
+                                   ("--bezier-angle-tol", "0", "bezier_angle_tol must lie")):
+        code, _, err = ddpy("tools", "build", str(cad["cylinder"]), "--out",
+                            str(tmp_path / "sub"), option, value)
+        assert code == 2 and message in err, err
+    assert not (tmp_path / "x.nagata.tool").exists() and not (tmp_path / "sub").exists()
     code, _, err = ddpy("tools", "build", str(cad["die"]), "--blank-side", "1,2")
     assert code == 2 and "expected X,Y,Z" in err
+
+
+def test_bezier_fit_stops_at_the_patch_limit(cad: dict[str, Path], tmp_path: Path,
+                                             monkeypatch: pytest.MonkeyPatch) -> None:
+    # A face the tolerances make split again and again ends with a message, not in millions
+    # of regions: here the limit is lowered to 1 and the cylinder needs 2 patches.
+    import ddpy.bezier_fit
+
+    monkeypatch.setattr(ddpy.bezier_fit, "MAX_PATCHES_PER_FACE", 1)
+    with pytest.raises(CadError, match="needs more than 1 Bezier patches"):
+        build_tool_models(cad["cylinder"], tmp_path, "c", models=("bezier",),
+                          blank_point=(0.0, 0.0, 10.0), bezier_tol=1e-6)

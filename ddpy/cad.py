@@ -110,6 +110,8 @@ def load_cad(path: str | os.PathLike[str]) -> list[int]:
                        ".stp), IGES (.iges, .igs) or BREP (.brep)")
     if not path.is_file():
         raise CadError(f"{path}: no such CAD file")
+    if kind == "STEP":
+        check_step(path)
     gmsh.model.add(path.stem)
     occ = gmsh.model.occ
     try:
@@ -123,6 +125,57 @@ def load_cad(path: str | os.PathLike[str]) -> list[int]:
     if not tags:
         raise CadError(f"{path}: the {kind} file holds no faces (surfaces): nothing to model")
     return tags
+
+
+_STEP_STRING = re.compile(r"'(?:[^']|'')*'")
+_STEP_ENTITY = re.compile(r"#(\d+)\s*=\s*([A-Za-z_0-9]*)")
+_STEP_REFERENCE = re.compile(r"#(\d+)")
+_STEP_NOT_A_NUMBER = re.compile(r"(?<![A-Za-z_0-9.])[+-]?(?:nan|inf(?:inity)?)(?![A-Za-z_0-9])",
+                                re.IGNORECASE)
+
+
+def check_step(path: Path) -> None:
+    """Refuse a STEP file that gmsh's reader (OpenCASCADE) would crash or hang on: a value
+    that is not a number (nan, inf) or a reference to an entity the file does not define
+    (a CARTESIAN_POINT of nans and a deleted LINE each ended the process with a
+    segmentation fault, a VECTOR of magnitude nan never returned). CadError names the line.
+    """
+    try:
+        text = path.read_bytes().decode("latin-1")
+    except OSError as error:
+        raise CadError(f"{path}: cannot read: {error.strerror or error}") from None
+    # Strings may hold anything, ';' and '#' included: blank them out, keeping the length.
+    bare = _STEP_STRING.sub(lambda m: "'" + " " * (len(m.group()) - 2) + "'", text)
+    start = bare.find("DATA;")
+    if start < 0:
+        raise CadError(f"{path}: not a STEP file (no DATA section)")
+    end = bare.find("ENDSEC;", start)
+    end = len(bare) if end < 0 else end
+
+    def line_of(position: int) -> int:
+        return text.count("\n", 0, position) + 1
+
+    defined: set[int] = set()
+    uses: list[tuple[int, int, int]] = []  # (referenced id, position, entity id)
+    position = start + len("DATA;")
+    for record in bare[position:end].split(";"):
+        head = _STEP_ENTITY.search(record)
+        if head is not None:
+            entity = int(head.group(1))
+            defined.add(entity)
+            body = record[head.end():]
+            bad = _STEP_NOT_A_NUMBER.search(body)
+            if bad is not None:
+                where = position + head.end() + bad.start()
+                raise CadError(f"{path}:{line_of(where)}: entity #{entity} {head.group(2)} "
+                               f"holds '{bad.group()}' where a number is expected")
+            uses += [(int(m.group(1)), position + head.end() + m.start(), entity)
+                     for m in _STEP_REFERENCE.finditer(body)]
+        position += len(record) + 1
+    for target, where, entity in uses:
+        if target not in defined:
+            raise CadError(f"{path}:{line_of(where)}: entity #{entity} refers to #{target}, "
+                           "which the file does not define")
 
 
 def closest_points(face: int, points: ArrayLike) -> tuple[NDArray[np.float64],

@@ -437,3 +437,32 @@ def test_bezier_fit_stops_at_the_patch_limit(cad: dict[str, Path], tmp_path: Pat
     with pytest.raises(CadError, match="needs more than 1 Bezier patches"):
         build_tool_models(cad["cylinder"], tmp_path, "c", models=("bezier",),
                           blank_point=(0.0, 0.0, 10.0), bezier_tol=1e-6)
+
+
+@pytest.mark.parametrize("damage, message", [
+    ("point", "CARTESIAN_POINT holds 'nan' where a number is expected"),
+    ("vector", "VECTOR holds 'NaN' where a number is expected"),
+    ("line", "which the file does not define"),
+])
+def test_step_files_that_crash_the_cad_reader_are_refused(cad: dict[str, Path], tmp_path: Path,
+                                                          damage: str, message: str) -> None:
+    # Each of these ended the process inside gmsh (segmentation fault, or no return).
+    import re
+
+    text = cad["cylinder"].read_text()
+    if damage == "point":
+        text = re.sub(r"CARTESIAN_POINT\('([^']*)',\([^)]*\)\)",
+                      r"CARTESIAN_POINT('\1',(nan,nan,nan))", text, count=1)
+    elif damage == "vector":
+        text = re.sub(r"(VECTOR\('[^']*',#\d+,)[^)]*\)", r"\1NaN)", text, count=1)
+    else:
+        text = re.sub(r"\n#\d+ ?= ?LINE\([^;]*;", "", text, count=1)
+    bad = tmp_path / "bad.step"
+    bad.write_text(text)
+    lines = text.split("\n")
+    with pytest.raises(CadError, match=re.escape(message)) as error:
+        build_tool_models(bad, tmp_path, "bad", blank_point=(0.0, 0.0, 10.0))
+    number = int(str(error.value).split(":")[1])
+    assert 1 <= number <= len(lines)
+    if damage != "line":
+        assert re.search(r"nan", lines[number - 1], re.IGNORECASE)

@@ -97,6 +97,8 @@ def _run(args: argparse.Namespace) -> int:
             print(e, file=sys.stderr)
         print(f"{folder}: {len(error.errors)} error(s); see 'ddpy check'", file=sys.stderr)
         return 2
+    for warning in case.warnings:  # the same as 'ddpy check' prints
+        print(f"warning: {warning}", file=sys.stderr)
     output = Path(args.output) if args.output else default_output(folder)
     if args.verbose:
         handler = logging.StreamHandler(sys.stderr)

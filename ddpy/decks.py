@@ -42,6 +42,7 @@ from ddpy.case import (
 )
 from ddpy.forming import MAX_INCREMENTS
 from ddpy.material import Hill48, Material, Swift, Voce
+from ddpy.mesh import HEX_EDGES
 
 __all__ = ["DECKS", "DeckError", "parse_case", "read_case"]
 
@@ -55,6 +56,10 @@ MESH_SUFFIXES = (".inp", ".msh")
 MIN_SCALED_JACOBIAN = 1e-6
 #: Largest length a deck may give (mm): displacements, gaps, increments, box sizes.
 MAX_LENGTH = 1e6
+#: Plausibility bounds of the material (docs/input-format.md): stresses, including the
+#: initial yield stress, at most 1e5 MPa (a hundred times the strongest steels); Swift's
+#: eps0 at most 10 (a strain: 1e300 made the yield stress infinite).
+MAX_STRESS, MAX_EPS0 = 1e5, 10.0
 #: Largest node or element id.
 MAX_ID = 2**31 - 1
 #: Largest number of errors reported for one kind of defect in a block of data lines.
@@ -1033,12 +1038,19 @@ def _hardening(line: _Line) -> Swift | Voce:
         if kind == "swift":
             v = _pairs(line, 2, ("K", "eps0", "n"), ("K", "eps0", "n"),
                        "hardening swift K VALUE eps0 VALUE n VALUE")
-            return Swift(_float(v["K"], "Swift K", gt=0), _float(v["eps0"], "Swift eps0", gt=0),
-                         _float(v["n"], "Swift n", ge=0, le=1))
+            law = Swift(_float(v["K"], "Swift K", gt=0),
+                        _float(v["eps0"], "Swift eps0", gt=0, le=MAX_EPS0),
+                        _float(v["n"], "Swift n", ge=0, le=1))
+            initial = law.K * law.eps0**law.n
+            if not initial <= MAX_STRESS:
+                raise _Bad(f"the initial yield stress K eps0^n = {initial:.3g} MPa is beyond "
+                           f"{MAX_STRESS:g} MPa: K or eps0 is not in MPa or not a strain")
+            return law
         v = _pairs(line, 2, ("Y0", "Q", "b"), ("Y0", "Q", "b"),
                    "hardening voce Y0 VALUE Q VALUE b VALUE")
-        return Voce(_float(v["Y0"], "Voce Y0", gt=0), _float(v["Q"], "Voce Q", ge=0),
-                    _float(v["b"], "Voce b", ge=0))
+        return Voce(_float(v["Y0"], "Voce Y0", gt=0, le=MAX_STRESS),
+                    _float(v["Q"], "Voce Q", ge=0, le=MAX_STRESS),
+                    _float(v["b"], "Voce b", ge=0, le=1e6))
     except (ValueError, TypeError) as error:
         raise _Bad(str(error)) from None
 
@@ -1416,6 +1428,18 @@ class _Cross:
         deck = self.bc
         tol = bc.tolerance[0] if bc.tolerance else 1e-4
         x = mesh.nodes
+        if bc.tolerance and mesh.elements.size:
+            # A tolerance that reaches the next row of nodes selects it too (100 mm fixed
+            # every node of a blank).
+            pairs = HEX_EDGES.reshape(-1, 2)
+            edges = np.linalg.norm(x[mesh.elements[:, pairs[:, 0]]]
+                                   - x[mesh.elements[:, pairs[:, 1]]], axis=2)
+            shortest = float(edges.min())
+            if tol >= 0.5 * shortest:
+                deck.error(bc.tolerance[1], f"tolerance {tol:g} mm is not below half the "
+                           f"shortest element edge ({shortest:.3g} mm): a plane or box would "
+                           "also select the next row of nodes")
+                return None
         sets: dict[str, NodeSet] = {}
         lines: dict[str, int] = {}
         for name, nodes in mesh_sets.items():

@@ -164,3 +164,43 @@ def test_output_naming_a_file_is_refused(tmp_path: Path) -> None:
     assert done.returncode == 1
     assert "a file is there; the output must be a folder" in done.stderr
     assert "Traceback" not in done.stderr and taken.read_text() == "not a folder"
+
+
+@pytest.mark.parametrize("old, new, line, message", [
+    ("eps0 0.0102", "eps0 1e300", 5, "Swift eps0 must be <= 10"),
+    ("K 645.3", "K 6.453e8", 5, "initial yield stress K eps0^n"),
+])
+def test_absurd_material_values_are_refused(tmp_path: Path, old: str, new: str, line: int,
+                                            message: str) -> None:
+    case = edit(copy_example("bending", tmp_path), "material.dat", old, new)
+    text = errors_of(case)
+    assert f"material.dat:{line}:" in text and message in text
+
+
+def test_a_tolerance_that_reaches_the_next_row_of_nodes_is_refused(tmp_path: Path) -> None:
+    # 100 mm fixed every node of the blank.
+    case = copy_example("bending", tmp_path)
+    text = (case / "bc.dat").read_text()
+    if "tolerance" not in text:
+        (case / "bc.dat").write_text("tolerance 100\n" + text)
+        line = 1
+    else:
+        line = next(n for n, x in enumerate(text.split("\n"), start=1)
+                    if x.split()[:1] == ["tolerance"])
+        edit(case, "bc.dat", text.split("\n")[line - 1], "tolerance 100")
+    message = errors_of(case)
+    assert f"bc.dat:{line}: tolerance 100 mm is not below half the shortest element edge" \
+        in message
+
+
+def test_run_prints_the_warnings_of_check(tmp_path: Path) -> None:
+    case = edit(copy_example("bending", tmp_path), "tools.dat", "friction     0.148",
+                "friction     1.5")
+    check = subprocess.run([sys.executable, "-m", "ddpy", "check", str(case)],
+                           capture_output=True, text=True)
+    run = subprocess.run([sys.executable, "-m", "ddpy", "run", str(case), "--output",
+                          str(tmp_path / "out"), "--stop-after", "1"],
+                         capture_output=True, text=True)
+    assert check.returncode == 0 and run.returncode == 0, run.stderr
+    assert "friction coefficient 1.5 is above 1" in check.stdout
+    assert "warning: " in run.stderr and "friction coefficient 1.5 is above 1" in run.stderr

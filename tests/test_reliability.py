@@ -204,3 +204,25 @@ def test_run_prints_the_warnings_of_check(tmp_path: Path) -> None:
     assert check.returncode == 0 and run.returncode == 0, run.stderr
     assert "friction coefficient 1.5 is above 1" in check.stdout
     assert "warning: " in run.stderr and "friction coefficient 1.5 is above 1" in run.stderr
+
+
+def test_exit_codes_say_how_the_run_ended(tmp_path: Path) -> None:
+    # 0 completed or stopped (docs/running.md), 1 failed (here: one Newton iteration allowed
+    # and no room to cut), 2 deck errors.
+    def run(case: Path, *extra: str) -> subprocess.CompletedProcess[str]:
+        return subprocess.run([sys.executable, "-m", "ddpy", "run", str(case), "--output",
+                               str(case.parent / "out"), *extra],
+                              capture_output=True, text=True)
+
+    ok = copy_example("bending", tmp_path / "ok")
+    assert run(ok, "--stop-after", "2").returncode == 0
+    failing = copy_example("bending", tmp_path / "failing")
+    control = (failing / "control.dat").read_text()
+    line = next(x for x in control.split("\n") if x.split()[:1] == ["max_iterations"])
+    edit(failing, "control.dat", line, "max_iterations 1\nmin_increment 0.114")
+    failed = run(failing)
+    assert failed.returncode == 1 and "failed after" in failed.stdout, failed.stdout
+    broken = edit(copy_example("bending", tmp_path / "broken"), "material.dat", "nu 0.3",
+                  "nu 0.7")
+    refused = run(broken)
+    assert refused.returncode == 2 and "material.dat:3:" in refused.stderr

@@ -125,6 +125,24 @@ def test_restart_after_a_stop_ends_as_the_uninterrupted_run(
     compare(ref, tmp_path)
 
 
+def test_restart_after_every_increment_ends_as_the_uninterrupted_run(
+        reference: tuple[Path, Path], tmp_path: Path) -> None:
+    # Every increment of the three phases is continued from a checkpoint: whatever the
+    # solver carries from one increment to the next (contact forces and states, the last
+    # rates, the increment size) must be in the checkpoint.
+    case, ref = reference
+    loaded = read_case(case)
+    outcome = run_case(loaded, tmp_path, max_increments=1, checkpoint_every=1)
+    done = 1
+    while outcome.status == "stopped":
+        done += 1
+        outcome = run_case(loaded, tmp_path, restart=True, max_increments=done,
+                           checkpoint_every=1)
+        assert done < 500
+    assert outcome.status == "completed"
+    compare(ref, tmp_path)
+
+
 def test_a_continued_run_records_the_fewest_threads_of_its_parts(
         reference: tuple[Path, Path], tmp_path: Path, monkeypatch) -> None:
     import ddpy.parallel

@@ -211,7 +211,12 @@ def _plastic_strain_map(results: Path, path: Path) -> Path:
     polygons = x[faces[facing]][..., axes]
     depth = x[faces[facing]][..., view].mean(axis=1)
     order = np.argsort(depth)                                          # far to near
-    fig, ax = plt.subplots(figsize=(7.0, 3.8))
+    # The figure takes the blank's aspect ratio (within 1:3 and 3:1): an equal-aspect plot
+    # of a quarter disc in a wide, fixed frame left a third of the image empty.
+    span = np.ptp(x[:, axes], axis=0)
+    ratio = float(np.clip(span[0] / max(span[1], 1e-12), 1.0 / 3.0, 3.0))
+    height = 3.8 if ratio >= 1.0 else 5.2
+    fig, ax = plt.subplots(figsize=(min(height * ratio + 1.6, 9.0), height))
     collection = PolyCollection(polygons[order], array=ep[owner][order], cmap="viridis",
                                 edgecolors="k", linewidths=0.2)
     ax.add_collection(collection)

@@ -98,3 +98,19 @@ def test_compare_overlays_runs_and_tabulates_them(runs: tuple[Path, Path, Path],
     assert int(rows[0]["increments"]) > int(rows[1]["increments"]) == 12
     bad = cli("compare", str(full), "--labels", "a,b", "--output", str(tmp_path))
     assert bad.returncode == 1 and "2 labels for 1 runs" in bad.stderr
+
+
+def test_plastic_strain_map_fills_its_frame(tmp_path: Path) -> None:
+    # The map takes the blank's proportions: the quarter disc of the deep drawing case in a
+    # wide, fixed frame left a third of the image empty.
+    import matplotlib.image
+
+    run = cli("run", "deep-drawing", "--output", str(tmp_path / "run"), "--stop-after", "2")
+    assert run.returncode == 0, run.stderr
+    done = cli("post", str(tmp_path / "run"), "--output", str(tmp_path / "post"))
+    assert done.returncode == 0, done.stderr
+    image = matplotlib.image.imread(tmp_path / "post" / "plastic_strain.png")[..., :3]
+    inked = (image < 0.95).any(axis=2).any(axis=0)
+    used = np.flatnonzero(inked)
+    assert (used[-1] - used[0]) / image.shape[1] > 0.8
+    assert (~inked[used[0]:used[-1]]).sum() < 0.15 * image.shape[1]  # no wide empty band

@@ -21,7 +21,7 @@ from ddpy.decks import DeckError, blank_thickness
 from ddpy.search import INSIDE, ContactSearch
 from ddpy.surfaces import NagataSurface
 
-__all__ = ["geometry_errors"]
+__all__ = ["geometry_errors", "geometry_warnings"]
 
 #: A tool may start this fraction of the blank thickness inside it (Nagata bulge, rounding).
 START_TOLERANCE = 0.1
@@ -53,6 +53,46 @@ def geometry_errors(case: Case) -> list[DeckError]:
                                                                         thickness)
 
 
+def geometry_warnings(case: Case) -> list[str]:
+    """What is legal but most likely a slip: the lead tool of a forming phase moving away
+    from the blank, or, in the first phase (the blank as meshed), starting so far from it
+    that its travel never brings it there."""
+    try:
+        models = {t.name: t.model() for t in case.tools}
+    except ImportError:  # ddpy.toolfile is not part of this build
+        return []
+    mesh = case.mesh
+    thickness = blank_thickness(mesh) or 1.0
+    warnings = []
+    first = next((p for p in case.phases if not p.is_springback), None)
+    for phase in case.phases:
+        if phase.is_springback:
+            continue
+        moving = [n for n in phase.tools if isinstance(phase.motion(n), Move)
+                  and phase.displacement(n).any()]
+        lead = phase.lead or max(moving, key=lambda n: float(np.linalg.norm(
+            phase.displacement(n))), default=None)
+        if lead is not None:
+            tool, move = case.tool(lead), phase.displacement(lead)
+            mover = phase.motion(lead)
+            where = mover.origin if isinstance(mover, Move) else phase.origin
+            towards = -float(np.dot(move, tool.facing))
+            if towards <= 0.0:
+                warnings.append(f"{where}: phase '{phase.name}': the lead tool '{lead}' moves "
+                                f"away from the blank (its {tool.contact} faces the tool, the "
+                                f"motion {_xyz(move)} points the other way)")
+            elif phase is first:
+                nodes = tool.contact_nodes(mesh)
+                found = ContactSearch(models[lead].surface).project(mesh.nodes[nodes])
+                gap = np.where(found.status != 0, np.abs(found.distance), np.inf).min() \
+                    if nodes.size else np.inf
+                if gap > towards + thickness:
+                    warnings.append(f"{where}: phase '{phase.name}': the lead tool '{lead}' "
+                                    f"starts {gap:.4g} mm from the blank and moves "
+                                    f"{towards:.4g} mm towards it: it never reaches it")
+    return warnings
+
+
 def _start_errors(case: Case, searches: dict[str, ContactSearch], thickness: float
                   ) -> list[DeckError]:
     errors = []
@@ -66,6 +106,14 @@ def _start_errors(case: Case, searches: dict[str, ContactSearch], thickness: flo
         inside = found.status == INSIDE
         along = found.normal @ np.asarray(tool.facing)
         clear = inside & (np.abs(along) > 0.5)
+        if inside.any() and not clear.any():
+            errors.append(_error(tool.origin, f"tool '{name}' faces no node of the "
+                                 f"blank's {tool.contact}: its normals are side-on to the "
+                                 f"contact direction {_xyz(np.asarray(tool.facing))} (the "
+                                 "search only pairs a node with a tool surface within 60 "
+                                 "degrees of facing it); expected the side of the blank the "
+                                 "tool touches"))
+            continue
         if clear.any() and (along[clear] > 0).all():
             errors.append(_error(tool.origin, f"the normals of tool '{name}' point away from "
                                  f"the blank (the {tool.contact} of the blank faces them): "

@@ -13,6 +13,7 @@ each as ``file:line: what is wrong, what was expected``.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 from collections.abc import Callable, Mapping
@@ -314,11 +315,14 @@ def parse_case(texts: Mapping[str, str], folder: str | Path = ".",
     if errors or case is None:
         raise DeckError.collect(errors or [DeckError("invalid case", folder)])
     if geometry:
-        from ddpy.casecheck import geometry_errors
+        from ddpy.casecheck import geometry_errors, geometry_warnings
 
         errors = geometry_errors(case)
         if errors:
             raise DeckError.collect(errors)
+        warnings = geometry_warnings(case)
+        if warnings:
+            case = dataclasses.replace(case, warnings=case.warnings + tuple(warnings))
     return case
 
 

@@ -226,3 +226,35 @@ def test_exit_codes_say_how_the_run_ended(tmp_path: Path) -> None:
                   "nu 0.7")
     refused = run(broken)
     assert refused.returncode == 2 and "material.dat:3:" in refused.stderr
+
+
+def lift_tool_file(path: Path, dz: float) -> None:
+    """Move the vertices of a Nagata tool file by dz along z."""
+    lines = path.read_text().split("\n")
+    at = next(i for i, x in enumerate(lines) if x.split()[:1] == ["vertices"])
+    for i in range(at + 1, at + 1 + int(lines[at].split()[1])):
+        x, y, z = (float(w) for w in lines[i].split()[:3])
+        lines[i] = f"{x!r} {y!r} {z + dz!r}"
+    path.write_text("\n".join(lines))
+
+
+def test_a_punch_moving_away_or_never_reaching_the_blank_is_questioned(tmp_path: Path) -> None:
+    assert not read_case(copy_example("bending", tmp_path / "as_given")).warnings
+    away = edit(copy_example("bending", tmp_path / "away"), "control.dat", "0 0 -28.5",
+                "0 0 28.5")
+    assert any("the lead tool 'punch' moves away from the blank" in w
+               for w in read_case(away).warnings)
+    far = copy_example("bending", tmp_path / "far")
+    lift_tool_file(far / "tools" / "punch.tool", 1000.0)
+    warnings = read_case(far).warnings
+    assert any("starts 1000 mm from the blank and moves 28.5 mm towards it" in w
+               for w in warnings), warnings
+
+
+def test_contact_facing_side_on_to_the_tool_is_refused(tmp_path: Path) -> None:
+    # The search pairs a node with a tool surface within 60 degrees of facing it: a die
+    # whose contact direction is horizontal would never be touched.
+    case = edit(copy_example("bending", tmp_path), "tools.dat", "contact      bottom",
+                "contact      facing 1 0 0")
+    message = errors_of(case)
+    assert "faces no node of the blank's" in message and "tools.dat" in message

@@ -172,12 +172,18 @@ class _Lines:
     def __init__(self, path: Path, text: str) -> None:
         self.path = path
         self._lines: list[tuple[int, list[str], str]] = []
-        for number, raw in enumerate(text.splitlines(), start=1):
+        # Only ASCII line ends end a line, as in the decks (str.splitlines would also split
+        # at form feeds and Unicode separators and shift the line numbers).
+        raw_lines = text.removeprefix("\ufeff").replace("\r\n", "\n").replace(
+            "\r", "\n").split("\n")
+        if raw_lines and raw_lines[-1] == "":
+            raw_lines.pop()
+        for number, raw in enumerate(raw_lines, start=1):
             content = raw.split("#", 1)[0].strip()
             if content:
                 self._lines.append((number, content.split(), content))
         self._next = 0
-        self.last_line = len(text.splitlines())
+        self.last_line = len(raw_lines)
 
     def error(self, line: int, message: str) -> ToolFileError:
         return ToolFileError(f"{self.path}:{line}: {message}")
@@ -203,6 +209,9 @@ class _Lines:
         count = _int(self, number, words[1], f"the number of {keyword}")
         if count < 1:
             raise self.error(number, f"expected at least one entry in {keyword}, got {count}")
+        if count > len(self._lines) - self._next:  # also before allocating for them
+            raise self.error(self.last_line, f"the file ends where {keyword} ({count} "
+                             "expected) was expected")
         return number, count
 
     def rows(self, count: int, what: str) -> Iterator[tuple[int, list[str]]]:
@@ -295,9 +304,10 @@ def _read_header(lines: _Lines) -> dict[str, str]:
 
 def _read_bezier(lines: _Lines) -> tuple[BezierSurface, NDArray[np.int64]]:
     _, count = lines.block("patches")
-    nets, tags = [], []
+    nets, tags, patch_lines = [], [], []
     for _ in range(count):
         number, words, _ = lines.take(f"a line 'patch <n> <m> face <tag>' ({count} patches)")
+        patch_lines.append(number)
         if words[0] != "patch" or len(words) != 5 or words[3] != "face":
             raise lines.error(number, "expected 'patch <n> <m> face <CAD face tag>', got "
                               f"'{' '.join(words)}'")
@@ -311,7 +321,19 @@ def _read_bezier(lines: _Lines) -> tuple[BezierSurface, NDArray[np.int64]]:
         points = [_floats(lines, k, w, "a control point")
                   for k, w in lines.rows((n + 1) * (m + 1), f"control points of patch {len(nets)}")]
         nets.append(np.array(points).reshape(n + 1, m + 1, 3))
-    return BezierSurface(nets), np.array(tags, dtype=np.int64)
+    surface = BezierSurface(nets)
+    # A patch may have a singular edge (a pole of a disc-shaped face), never a singular
+    # inside: there the normal of a patch collapsed to a point or a line would be zero.
+    u = np.linspace(0.25, 0.75, 3)
+    params = np.column_stack([np.repeat(u, 3), np.tile(u, 3)])
+    ids = np.repeat(np.arange(count), len(params))
+    normals = surface.evaluate(ids, np.tile(params, (count, 1)))[2].reshape(count, -1, 3)
+    flat = np.linalg.norm(normals, axis=2).min(axis=1) < 0.5
+    if flat.any():
+        k = int(np.flatnonzero(flat)[0])
+        raise lines.error(patch_lines[k], f"patch {k} is degenerate: its tangents are zero or "
+                          "parallel inside it (control points collapsed to a point or a line)")
+    return surface, np.array(tags, dtype=np.int64)
 
 
 def _read_nagata(lines: _Lines, smooth: bool) -> tuple[NagataSurface, NDArray[np.int64]]:

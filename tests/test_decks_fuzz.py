@@ -11,6 +11,7 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
+import numpy as np
 import pytest
 from deckutil import EXAMPLES, install_toolfile
 from hypothesis import HealthCheck, given, settings
@@ -161,7 +162,7 @@ def _read_or_refuse(case: Path) -> None:
         signal.signal(signal.SIGALRM, previous)
 
 
-@settings(max_examples=EXAMPLES_RUN or 150, deadline=5000, derandomize=not EXAMPLES_RUN,
+@settings(max_examples=EXAMPLES_RUN or 1000, deadline=5000, derandomize=not EXAMPLES_RUN,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(mutated_case())
 def test_mutated_decks_accepted_or_refused(folder: Path, mutated) -> None:
@@ -169,7 +170,7 @@ def test_mutated_decks_accepted_or_refused(folder: Path, mutated) -> None:
     _read_or_refuse(_write(folder, name, decks))
 
 
-@settings(max_examples=EXAMPLES_RUN // 4 or 50, deadline=5000, derandomize=not EXAMPLES_RUN,
+@settings(max_examples=EXAMPLES_RUN // 4 or 300, deadline=5000, derandomize=not EXAMPLES_RUN,
           suppress_health_check=[HealthCheck.too_slow])
 @given(st.sampled_from(DECKS), st.lists(st.lists(token, min_size=1, max_size=8), max_size=12))
 def test_random_lines_accepted_or_refused(folder: Path, deck: str, rows: list[list[str]]
@@ -183,3 +184,44 @@ def test_valid_examples_still_read(folder: Path) -> None:
     for name, decks in BASES.items():
         case = _write(folder, name, decks)
         assert read_case(case).mesh.n_elements > 0
+
+
+def _bezier_tool_text() -> str:
+    """A small Bezier tool file written by ddpy: a flat patch and a curved one."""
+    from ddpy.surfaces import BezierSurface
+    from ddpy.toolfile import ToolModel, write_tool
+
+    u, v = np.meshgrid(np.linspace(0, 1, 3), np.linspace(0, 1, 4), indexing="ij")
+    flat = np.stack([u, v, np.zeros_like(u)], axis=-1)
+    bent = np.stack([u + 1.0, v, 0.3 * u**2], axis=-1)
+    with tempfile.TemporaryDirectory() as tmp:
+        model = ToolModel("die", "bezier", BezierSurface([flat, bent]), [1, 2])
+        return write_tool(Path(tmp) / "die.bezier.tool", model).read_text()
+
+
+TOOL_TEXTS = {"nagata": TOOL_FILES["bending"]["tools/punch.tool"],
+              "bezier": _bezier_tool_text()}
+
+
+@settings(max_examples=EXAMPLES_RUN or 600, deadline=5000, derandomize=not EXAMPLES_RUN,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+@given(st.sampled_from(sorted(TOOL_TEXTS)), st.data())
+def test_mutated_tool_files_read_or_refused(tmp_path_factory: pytest.TempPathFactory,
+                                            kind: str, data: st.DataObject) -> None:
+    from ddpy.toolfile import ToolFileError, read_tool
+
+    text = TOOL_TEXTS[kind]
+    for _ in range(data.draw(st.integers(1, 3))):
+        text = data.draw(mutation(text))
+    path = tmp_path_factory.mktemp("tool") / f"die.{kind}.tool"
+    path.write_text(text, encoding="utf-8", errors="surrogatepass")
+    previous = signal.signal(signal.SIGALRM, _alarm)
+    signal.alarm(HANG)
+    try:
+        model = read_tool(path)
+        assert np.isfinite(model.surface.evaluate([0], [[0.5, 0.5]])[0]).all()
+    except ToolFileError as error:
+        assert str(error).startswith(str(path))
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, previous)

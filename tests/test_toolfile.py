@@ -230,3 +230,21 @@ def test_documented_examples_read(tmp_path: Path) -> None:
         assert model.n_patches == 2
         np.testing.assert_array_equal(model.face_tags, [1, 2])
     assert kinds == ["nagata", "bezier"]
+
+
+def test_a_bezier_patch_collapsed_inside_is_refused(tmp_path: Path) -> None:
+    # All control points of the third patch at one point: its normals would be zero. A
+    # patch with one edge collapsed (the pole of a disc) keeps its normals inside: accepted.
+    u, v = np.meshgrid([0.0, 1.0], [0.0, 1.0], indexing="ij")
+    square = np.stack([u, v, np.zeros((2, 2))], axis=-1)
+    pole = square.copy()
+    pole[0, :] = 0.0  # the edge u = 0 collapsed to the origin
+    point = np.zeros((3, 3, 3))
+    model = ToolModel("die", "bezier", BezierSurface([square, pole, point]), [1, 2, 3])
+    path = write_tool(tmp_path / "die.bezier.tool", model)
+    line = next(n for n, x in enumerate(path.read_text().split("\n"), start=1)
+                if x.startswith("patch 2 2"))
+    with pytest.raises(ToolFileError, match=rf"die.bezier.tool:{line}: patch 2 is degenerate"):
+        read_tool(path)
+    model = ToolModel("die", "bezier", BezierSurface([square, pole]), [1, 2])
+    assert read_tool(write_tool(tmp_path / "ok.bezier.tool", model)).surface.n_patches == 2

@@ -217,7 +217,14 @@ def main(argv: list[str] | None = None) -> int:
     if args.command is None:
         parser.print_help()
         return 0
-    return int(args.handler(args))
+    try:
+        return int(args.handler(args))
+    except MemoryError as error:  # a model too large for this machine, at any stage
+        detail = f" ({error})" if str(error) else ""
+        print(f"ddpy {args.command}: error: out of memory{detail}: the model needs more "
+              "memory than this machine has free; use a coarser mesh or a larger machine",
+              file=sys.stderr)
+        return 1
 
 
 if __name__ == "__main__":

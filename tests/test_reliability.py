@@ -258,3 +258,20 @@ def test_contact_facing_side_on_to_the_tool_is_refused(tmp_path: Path) -> None:
                 "contact      facing 1 0 0")
     message = errors_of(case)
     assert "faces no node of the blank's" in message and "tools.dat" in message
+
+
+def test_a_model_too_large_for_memory_ends_with_a_message(tmp_path: Path) -> None:
+    # 4,000,000 hexahedra in a process allowed 2 GB: out of memory while checking the mesh.
+    resource = pytest.importorskip("resource")
+    case = copy_example("bending", tmp_path)
+    (case / "mesh.dat").write_text("normal z\nbox 60 15 1  2000 1000 2\n")
+
+    def limit() -> None:
+        resource.setrlimit(resource.RLIMIT_AS, (2_000_000_000, 2_000_000_000))
+
+    for argv in (["check", str(case)], ["run", str(case), "--output", str(tmp_path / "out")]):
+        done = subprocess.run([sys.executable, "-m", "ddpy", *argv], capture_output=True,
+                              text=True, preexec_fn=limit)
+        assert done.returncode == 1, done.stderr
+        assert f"ddpy {argv[0]}: error: out of memory" in done.stderr
+        assert "Traceback" not in done.stderr

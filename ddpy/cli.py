@@ -181,6 +181,8 @@ def build_parser() -> argparse.ArgumentParser:
         "faceted tool surfaces.",
     )
     parser.add_argument("--version", action="version", version=f"ddpy {__version__}")
+    parser.add_argument("--debug", action="store_true",
+                        help="show the Python traceback of an unexpected error")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND")
 
     accuracy = commands.add_parser(
@@ -224,6 +226,12 @@ def main(argv: list[str] | None = None) -> int:
         print(f"ddpy {args.command}: error: out of memory{detail}: the model needs more "
               "memory than this machine has free; use a coarser mesh or a larger machine",
               file=sys.stderr)
+        return 1
+    except Exception as error:  # a defect of ddpy itself: one line, the traceback on demand
+        if args.debug:
+            raise
+        print(f"ddpy {args.command}: internal error: {type(error).__name__}: {error} (please "
+              "report it; 'ddpy --debug ...' shows where it happened)", file=sys.stderr)
         return 1
 
 

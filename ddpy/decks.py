@@ -981,8 +981,12 @@ def _parse_material(deck: _Deck) -> BlankMaterial | None:
             if key == "elastic":
                 if _once(deck, seen, line):
                     v = _pairs(line, 1, ("E", "nu"), ("E", "nu"), "elastic E VALUE nu VALUE")
-                    elastic = (_float(v["E"], "Young's modulus E", gt=0),
+                    elastic = (_float(v["E"], "Young's modulus E", gt=0, le=MAX_STRESS * 10),
                                _float(v["nu"], "Poisson's ratio nu", gt=-1, lt=0.5))
+                    if not 1e3 <= elastic[0] <= 1e6:
+                        deck.warn(line.number, f"Young's modulus {elastic[0]:g} MPa is outside "
+                                  "1e3 to 1e6 MPa (polymers to tungsten carbide): is it in "
+                                  "MPa?")
             elif key == "yield":
                 _arity(line, "yield vonmises|hill48 ...", 1, -1)
                 if _once(deck, seen, line):

@@ -275,3 +275,28 @@ def test_a_model_too_large_for_memory_ends_with_a_message(tmp_path: Path) -> Non
         assert done.returncode == 1, done.stderr
         assert f"ddpy {argv[0]}: error: out of memory" in done.stderr
         assert "Traceback" not in done.stderr
+
+
+def test_an_internal_error_is_one_line_unless_debug(monkeypatch: pytest.MonkeyPatch,
+                                                    capsys: pytest.CaptureFixture[str]) -> None:
+    import ddpy.decks
+    from ddpy.cli import main
+
+    def broken(*args: object, **kwargs: object) -> None:
+        raise RuntimeError("a defect")
+
+    monkeypatch.setattr(ddpy.decks, "read_case", broken)
+    assert main(["check", str(BUILT_IN)]) == 1
+    err = capsys.readouterr().err
+    assert "ddpy check: internal error: RuntimeError: a defect" in err and "--debug" in err
+    with pytest.raises(RuntimeError, match="a defect"):
+        main(["--debug", "check", str(BUILT_IN)])
+
+
+def test_a_modulus_not_in_mpa_is_questioned(tmp_path: Path) -> None:
+    case = edit(copy_example("bending", tmp_path / "gpa"), "material.dat", "E 210000", "E 210")
+    assert any("material.dat:3: Young's modulus 210 MPa is outside" in w
+               for w in read_case(case).warnings)
+    case = edit(copy_example("bending", tmp_path / "pa"), "material.dat", "E 210000",
+                "E 2.1e11")
+    assert "Young's modulus E must be <= 1e+06" in errors_of(case)

@@ -300,3 +300,22 @@ def test_a_modulus_not_in_mpa_is_questioned(tmp_path: Path) -> None:
     case = edit(copy_example("bending", tmp_path / "pa"), "material.dat", "E 210000",
                 "E 2.1e11")
     assert "Young's modulus E must be <= 1e+06" in errors_of(case)
+
+
+def test_a_run_on_a_full_file_system_does_not_start(tmp_path: Path) -> None:
+    # 64 KB free: HDF5 ended the run in a segmentation fault while it closed the file.
+    full = tmp_path / "full"
+    full.mkdir()
+    mounted = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(full)],
+                             capture_output=True)
+    if mounted.returncode != 0:
+        pytest.skip("cannot mount a small file system here (needs root)")
+    try:
+        done = subprocess.run([sys.executable, "-m", "ddpy", "run", "--output",
+                               str(full / "out"), "--stop-after", "3"],
+                              capture_output=True, text=True)
+        assert done.returncode == 1, done.stderr
+        assert "MB free, the results of this mesh need at least" in done.stderr
+        assert "Traceback" not in done.stderr
+    finally:
+        subprocess.run(["umount", str(full)], capture_output=True)

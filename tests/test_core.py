@@ -28,7 +28,7 @@ def test_threads_context_restores() -> None:
     with threads(1):
         assert max_threads() == 1
     assert max_threads() == before
-    with pytest.raises(ValueError, match="at least 1"):
+    with pytest.raises(ValueError, match="between 1 and"):
         set_threads(0)
 
 

@@ -899,10 +899,12 @@ def report(mesh: str, numbers: dict[str, dict[str, Any]],
         f"increments, or less than {STALL_STEP:g} mm in one, is stopped and reported as "
         "partial, with the fields of its last increment as its end of stage (a run that "
         "failed has no fields after its last end of stage).",
-        *(["", "Faceted runs that fail stop where a blank node is pressed onto a facet edge: "
-           "there the closest point has two normals and the Newton loop no smooth equation; "
+        *(["", "Where a failed faceted run was analysed (the coarse facets on the coarse "
+           "blank), it stopped on a blank node pressed onto a facet edge: there the closest "
+           "point has two normals and the Newton loop no smooth equation. "
            "[docs/theory/contact.md](../theory/contact.md#a-limit-a-node-on-a-facet-edge) "
-           "gives the coarse-facet case's numbers and the cures tried."]
+           "gives the numbers and the cures tried; the other faceted stops are not analysed "
+           "yet."]
           if any(m.startswith("facets") and numbers[m]["status"] != "completed"
                  for m in models) else []),
         "",

@@ -557,8 +557,12 @@ def _not_reached(numbers: dict[str, dict[str, Any]], models: tuple[str, ...]) ->
 
 def _reached(n: dict[str, Any]) -> str:
     stage = n["reached"]["stage"]
-    return (f"{stage} {n['reached']['travel_mm']:g} of "
-            f"{n['stages'][stage]['travel_mm']:g} mm")
+    text = f"{stage} {n['reached']['travel_mm']:g} of {n['stages'][stage]['travel_mm']:g} mm"
+    later = STAGES[STAGES.index(stage) + 1:] if stage in STAGES else ()
+    if (n["status"] != "completed" and later
+            and n["reached"]["travel_mm"] >= n["stages"][stage]["travel_mm"] * (1 - 1e-9)):
+        text += f" ({later[0]}'s first increment failed)"
+    return text
 
 
 def _claim(text: str, parts: list[str], verdicts: list[bool], checked: bool,
@@ -1208,7 +1212,9 @@ def findings(numbers: dict[str, dict[str, Any]], models: list[str]) -> list[str]
     for stage in STAGES:
         short = {m: numbers[m]["reached"]["travel_mm"] for m in models
                  if numbers[m]["status"] != "completed" and
-                 numbers[m]["reached"]["stage"] == stage}
+                 numbers[m]["reached"]["stage"] == stage and
+                 numbers[m]["reached"]["travel_mm"]
+                 < numbers[m]["stages"][stage]["travel_mm"] * (1 - 1e-9)}
         travel = numbers[next(iter(short))]["stages"][stage]["travel_mm"] if short else 0.0
         if len(short) > 1 and max(short.values()) - min(short.values()) < 0.01 * travel:
             out.append(f"- {len(short)} runs stopped in {stage} at about the same punch "

@@ -110,17 +110,20 @@ def load_cad(path: str | os.PathLike[str]) -> list[int]:
                        ".stp), IGES (.iges, .igs) or BREP (.brep)")
     if not path.is_file():
         raise CadError(f"{path}: no such CAD file")
-    if kind == "STEP":
-        check_step(path)
+    declared = check_step(path) if kind == "STEP" else 0
     gmsh.model.add(path.stem)
     occ = gmsh.model.occ
     try:
         with quiet():
             occ.importShapes(str(path))
+            read = len(occ.getEntities(2))
             occ.removeAllDuplicates()
             occ.synchronize()
     except Exception as error:  # gmsh raises a bare Exception with its last message
         raise CadError(f"{path}: cannot read the {kind} file: {error}") from None
+    if read < declared:
+        raise CadError(f"{path}: the CAD kernel read {read} of the {declared} faces the file "
+                       f"defines: {declared - read} are broken (their surface or edges)")
     tags = [t for _, t in gmsh.model.getEntities(2)]
     if not tags:
         raise CadError(f"{path}: the {kind} file holds no faces (surfaces): nothing to model")
@@ -130,15 +133,22 @@ def load_cad(path: str | os.PathLike[str]) -> list[int]:
 _STEP_STRING = re.compile(r"'(?:[^']|'')*'")
 _STEP_ENTITY = re.compile(r"#(\d+)\s*=\s*([A-Za-z_0-9]*)")
 _STEP_REFERENCE = re.compile(r"#(\d+)")
+#: Entities whose first (count) numbers after their last reference are radii, > 0.
+_STEP_RADII = {"CIRCLE": 1, "CYLINDRICAL_SURFACE": 1, "SPHERICAL_SURFACE": 1,
+               "TOROIDAL_SURFACE": 2, "ELLIPSE": 2}
+_STEP_FACES = ("ADVANCED_FACE", "FACE_SURFACE")
+_STEP_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
 _STEP_NOT_A_NUMBER = re.compile(r"(?<![A-Za-z_0-9.])[+-]?(?:nan|inf(?:inity)?)(?![A-Za-z_0-9])",
                                 re.IGNORECASE)
 
 
-def check_step(path: Path) -> None:
+def check_step(path: Path) -> int:
     """Refuse a STEP file that gmsh's reader (OpenCASCADE) would crash or hang on: a value
     that is not a number (nan, inf) or a reference to an entity the file does not define
     (a CARTESIAN_POINT of nans and a deleted LINE each ended the process with a
-    segmentation fault, a VECTOR of magnitude nan never returned). CadError names the line.
+    segmentation fault, a VECTOR of magnitude nan never returned), or a circle or surface
+    whose radius is not positive (a cylinder of radius 0 made the kernel merge 13 of 17
+    faces into 4). CadError names the line. Returns the number of faces the file defines.
     """
     try:
         text = path.read_bytes().decode("latin-1")
@@ -156,6 +166,7 @@ def check_step(path: Path) -> None:
         return text.count("\n", 0, position) + 1
 
     defined: set[int] = set()
+    faces = 0
     uses: list[tuple[int, int, int]] = []  # (referenced id, position, entity id)
     position = start + len("DATA;")
     for record in bare[position:end].split(";"):
@@ -171,11 +182,24 @@ def check_step(path: Path) -> None:
                                f"holds '{bad.group()}' where a number is expected")
             uses += [(int(m.group(1)), position + head.end() + m.start(), entity)
                      for m in _STEP_REFERENCE.finditer(body)]
+            kind = head.group(2).upper()
+            if kind in _STEP_RADII:
+                tail = _STEP_REFERENCE.sub("", "#" + body.rsplit("#", 1)[-1])  # without the id
+                values = [float(v) for v in _STEP_NUMBER.findall(tail)]
+                if len(values) < _STEP_RADII[kind] or min(values[:_STEP_RADII[kind]]) <= 0.0:
+                    where = position + head.end()
+                    raise CadError(f"{path}:{line_of(where)}: entity #{entity} {kind} needs "
+                                   f"{_STEP_RADII[kind]} positive radius value(s), got "
+                                   f"{values[:_STEP_RADII[kind]]} (a degenerate surface or "
+                                   "curve: the CAD kernel drops or merges such faces)")
+            if kind in _STEP_FACES:
+                faces += 1
         position += len(record) + 1
     for target, where, entity in uses:
         if target not in defined:
             raise CadError(f"{path}:{line_of(where)}: entity #{entity} refers to #{target}, "
                            "which the file does not define")
+    return faces
 
 
 def closest_points(face: int, points: ArrayLike) -> tuple[NDArray[np.float64],

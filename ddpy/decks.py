@@ -41,7 +41,7 @@ from ddpy.case import (
     Tool,
     rigid_body_modes_free,
 )
-from ddpy.forming import MAX_INCREMENTS
+from ddpy.forming import MAX_INCREMENTS, blank_stiffness
 from ddpy.material import Hill48, Material, Swift, Voce
 from ddpy.mesh import HEX_EDGES
 
@@ -1211,9 +1211,17 @@ class _Cross:
             return None
         self._springback_constraints(phases, control, boundary, mesh)
         used = {name for p in phases for name in p.tools}
+        stiffness = blank_stiffness(mesh.nodes, mesh.elements, material.material.E) \
+            if mesh.elements.size else 0.0
         for t, draft in zip(tools, tool_drafts, strict=True):
             if t.name not in used:
                 self.tools_deck.warn(draft.line, f"tool '{t.name}' is active in no phase")
+            r = draft.values.get("augmentation")
+            if r is not None and stiffness > 0.0 and not 1e-3 <= r / stiffness <= 1e3:
+                self.tools_deck.warn(draft.seen["augmentation"], f"augmentation {r:g} N/mm is "
+                                     f"{r / stiffness:.3g} times the blank's stiffness E t^2 / "
+                                     f"h = {stiffness:.4g} N/mm (the default): far from it, "
+                                     "contact states flip on tiny gaps or forces")
         title = control.title or self.folder.resolve().name
         warnings = tuple(w for d in self.decks.values() for w in d.warnings)
         return Case(self.folder, Control(title, tuple(phases), str(self.control.path)), mesh,

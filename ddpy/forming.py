@@ -1068,12 +1068,17 @@ def default_augmentation(solid: Solid) -> float:
     r changes only how the Newton loop decides between open, stick and slip (p - r g,
     lambda_T - r s): a value far above the blank's stiffness decides on gaps of 1e-3 mm
     and flips contact states from iteration to iteration (docs/theory/contact.md)."""
-    edges = solid.mesh.elements[:, HEX_EDGES]  # (m, 3, 4, 2)
-    x = solid.mesh.nodes
+    return blank_stiffness(solid.mesh.nodes, solid.mesh.elements, float(solid.props[0]))
+
+
+def blank_stiffness(nodes: ArrayLike, elements: ArrayLike, young: float) -> float:
+    """E t^2 / h of default_augmentation, from the nodes (n, 3) and hexahedra (m, 8)."""
+    x = np.asarray(nodes, dtype=float)
+    edges = np.asarray(elements)[:, HEX_EDGES]  # (m, 3, 4, 2)
     lengths = np.linalg.norm(x[edges[..., 1]] - x[edges[..., 0]], axis=-1).mean(axis=2)
     lengths.sort(axis=1)
     ratio = lengths[:, 0] ** 2 / np.sqrt(lengths[:, 1] * lengths[:, 2])
-    return float(solid.props[0] * np.median(ratio))
+    return float(young * np.median(ratio))
 
 
 def _next_step(step: float, nominal: float, reason: str, strain_ratio: float,

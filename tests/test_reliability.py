@@ -319,3 +319,11 @@ def test_a_run_on_a_full_file_system_does_not_start(tmp_path: Path) -> None:
         assert "Traceback" not in done.stderr
     finally:
         subprocess.run(["umount", str(full)], capture_output=True)
+
+
+def test_an_augmentation_far_from_the_blank_stiffness_is_questioned(tmp_path: Path) -> None:
+    case = copy_example("bending", tmp_path)
+    edit(case, "tools.dat", "  contact      top", "  contact      top\n  augmentation 1e300")
+    warnings = read_case(case).warnings
+    assert any("augmentation 1e+300 N/mm is" in w and "times the blank's stiffness" in w
+               for w in warnings), warnings

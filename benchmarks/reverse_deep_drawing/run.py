@@ -1294,7 +1294,8 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     DOCS.mkdir(parents=True, exist_ok=True)
     keep_runs(runs_file(stem), {m: r for m, r in runs.items() if not r.kept})
-    shape, maps = shape_errors(HERE / "tools", stem)
+    # The tools are the same for every blank: one set of maps, the coarse report's.
+    shape, maps = shape_errors(HERE / "tools", "reverse_deep_drawing")
     figures = make_figures(runs, stem)
     text = report(args.mesh, numbers, shape, maps, figures, max_threads())
     out = DOCS / f"{stem}.md"

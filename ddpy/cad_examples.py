@@ -116,7 +116,7 @@ def bending_tools(path: str | os.PathLike[str] | None = None, punch_radius: floa
                   thickness: float = 1.0, die_end: float = 70.0, wall_depth: float = 20.0,
                   width: tuple[float, float] = (-5.0, 20.0)) -> dict[str, list[int]]:
     """The tools of the unconstrained cylindrical bending benchmark (Numisheet 2002 B),
-    quarter model, as reconstructed in design.md (the paper's Fig. 6 is not in its text).
+    quarter model, a reconstruction (the paper's Fig. 6 is not in its text).
 
     Symmetry planes x = 0 and y = 0; the flat blank lies on 0 <= z <= ``thickness``. The punch
     is a quarter cylinder of radius ``punch_radius``, axis along y through x = 0,

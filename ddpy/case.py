@@ -354,7 +354,7 @@ RELEASE_REDOS: int | None = 0
 
 @dataclass(frozen=True)
 class RminLimits:
-    """Limits of the r_min increment control (math.md §8) for one phase.
+    """Limits of the r_min increment control (docs/theory/contact.md) for one phase.
 
     ``yield_tolerance``: an elastic Gauss point may overshoot the yield surface by this
     fraction of the yield stress before the increment is scaled back to the transition;

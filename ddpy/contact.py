@@ -1,4 +1,4 @@
-"""Frictional contact of nodes with rigid tools: the Alart-Curnier law (math.md §6).
+"""Frictional contact of nodes with rigid tools: the Alart-Curnier law (docs/theory/contact.md).
 
 The force ``lambda`` that a tool exerts on a node is an unknown beside the displacements.
 Its equation C(lambda, x) = 0 holds the Kuhn-Tucker conditions in the normal direction and

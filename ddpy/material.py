@@ -133,7 +133,7 @@ class Hill48:
     @classmethod
     def from_r_values(cls, r0: float, r45: float, r90: float) -> Hill48:
         """Coefficients with G + H = 1 and L = M = 1.5 from the r-values at 0, 45 and 90
-        degrees to RD (../shared/reference/math.md §7)."""
+        degrees to RD (docs/theory/material.md)."""
         r = [_real(v, name) for v, name in ((r0, "r0"), (r45, "r45"), (r90, "r90"))]
         if min(r) <= 0:
             raise ValueError(f"r-values must be positive, got r0={r0}, r45={r45}, r90={r90}")

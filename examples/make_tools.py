@@ -67,7 +67,7 @@ def write(path: Path, name: str, points, normals, width: float, comment: str) ->
 
 
 def bending() -> None:
-    """Unconstrained cylindrical bending, quarter model (design.md: a reconstruction):
+    """Unconstrained cylindrical bending, quarter model (a reconstruction of the paper's Fig. 6):
     punch radius 23.5 mm over the blank's top at x = 0; die shoulder radius 4 mm, centre
     29.5 mm from the symmetry plane, under the blank's bottom at z = 0."""
     folder = HERE / "bending" / "tools"

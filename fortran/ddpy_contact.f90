@@ -1,5 +1,5 @@
 !> Frictional contact of a node with a rigid tool: the Alart-Curnier augmented Lagrangian
-!> residual and its exact derivatives (math.md §6, docs/theory/contact.md).
+!> residual and its exact derivatives (docs/theory/contact.md).
 !>
 !> Unknowns of a node in contact with a tool: its displacement (in x = X + u) and the force
 !> lambda (3 components) the tool exerts on it. With the closest point on the tool, the

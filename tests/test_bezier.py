@@ -1,4 +1,4 @@
-"""Bezier patches against an independent Bernstein-sum reference (math.md section 4).
+"""Bezier patches against an independent Bernstein-sum reference (docs/theory/surfaces.md).
 
 Tolerances are relative to the size of the control net plus the rounding level of the power
 basis: Horner on a monomial form over [0, 1]^2 rounds at about eps * sum_kl |A_kl| (``noise``),

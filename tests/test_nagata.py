@@ -1,4 +1,5 @@
-"""Nagata patches and facets (math.md sections 1-3), checked through their defining properties."""
+"""Nagata patches and facets (docs/theory/surfaces.md), checked through their defining
+properties."""
 
 from __future__ import annotations
 
@@ -29,7 +30,7 @@ def unit(v: np.ndarray) -> np.ndarray:
 
 
 def reference_coefficient(x0, x1, n0, n1, ratio=NAGATA_DEGENERATE_RATIO):
-    """math.md section 1, written out for one edge, with the degenerate rule of
+    """The paper's Nagata edge coefficient, written out for one edge, with the degenerate rule of
     docs/theory/surfaces.md (straight when |c| > ratio |d| tan(phi / 2))."""
     d = x1 - x0
     a = n0 @ n1

@@ -7,7 +7,7 @@
 Writes, next to this script (all generated, git-ignored):
 
 - ``tools/tools.step``: one CAD model of the punch and the open die (ddpy.cad_examples.
-  bending_tools, a reconstruction of the paper's Fig. 6, design.md);
+  bending_tools, a reconstruction: the paper's Fig. 6 is not in its text);
 - ``tools/{punch,die}.{bezier,nagata,facets}.tool``: the tool models built from it by
   ``ddpy.cad.build_tool_models`` (what ``ddpy tools build`` runs): Bezier patches, Nagata
   4 patches per 90 degrees of arc, facets 30 per arc. The paper's coarse facets are the Nagata
@@ -33,7 +33,7 @@ MESHES = ("coarse", "paper")
 #: The quarter blank, mm (the paper: 120 x 30 x 1 mm, rolling direction along the length).
 LENGTH, WIDTH, THICKNESS = 60.0, 15.0, 1.0
 PAPER_HEXAHEDRA, LAYERS = 19950, 3
-#: Tools (design.md's reconstruction of Fig. 6): punch radius, die shoulder radius and the
+#: Tools (a reconstruction of the paper's Fig. 6): punch radius, die shoulder radius and the
 #: distance of the shoulder's centre from the symmetry plane.
 PUNCH_RADIUS, SHOULDER_RADIUS, SHOULDER_X = 23.5, 4.0, 29.5
 #: Coarse blank: elements along x in [0, COARSE_SPLIT] and beyond, across y, through z.

@@ -538,7 +538,7 @@ def report(mesh: str, hexahedra: int, numbers: dict[str, dict[str, Any]],
            if mesh in make_case.AUGMENTATION else "contact augmentation the solver's default "
            "(E t^2 / h of the elements)."),
         "",
-        "**The tools are a reconstruction** (the paper's Fig. 6 is not in its text, design.md): "
+        "**The tools are a reconstruction** (the paper's Fig. 6 is not in its text): "
         f"punch radius {make_case.PUNCH_RADIUS} mm; open die, shoulders of radius "
         f"{make_case.SHOULDER_RADIUS} mm centred {make_case.SHOULDER_X} mm from the symmetry "
         "plane, flat tops beyond, an inner wall below, no bottom. One STEP model "
@@ -871,7 +871,7 @@ def findings(numbers: dict[str, dict[str, Any]], mesh: str = "coarse") -> list[s
             f"shoulder to beta_1 = {b1:g} degrees from the vertical, {b2:g} after springback "
             f"(the paper: 20.7 and 35.0). At full stroke the flange lies along the tangent "
             "from the punch to the shoulder, so beta_1 is set by the tools; the tools here are "
-            "a reconstruction (design.md) that matches the paper's rigid wrap angles only, and "
+            "a reconstruction that matches the paper's rigid wrap angles only, and "
             "theta_4 stays below the paper's 155 degrees. The springback, "
             f"{b2 - b1:.1f} degrees against the paper's 14, is smaller: the reconstructed "
             "tools" + (", " if mesh == "coarse" else " and ") + "the assumed elastic "

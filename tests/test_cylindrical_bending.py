@@ -20,7 +20,6 @@ node column reaches the punch); increments and iterations 30 %.
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import subprocess
 import sys
@@ -33,6 +32,9 @@ import pytest
 from ddpy.toolfile import read_tool
 
 BENCH = Path(__file__).resolve().parents[1] / "benchmarks" / "cylindrical_bending"
+sys.path.insert(0, str(BENCH.parent))  # the benchmarks' shared module
+from bench_common import load_module  # noqa: E402
+
 REFERENCE = Path(__file__).resolve().parent / "data" / "cylindrical_bending_reference.json"
 #: The test blank: elements over the bending zone and beyond, across, through the thickness.
 TEST_MESH = {"nx": (28, 5), "ny": 1, "layers": 3}
@@ -48,12 +50,7 @@ WINDOW = 0.3
 
 
 def _module(name: str) -> Any:
-    spec = importlib.util.spec_from_file_location(f"bending_{name}", BENCH / f"{name}.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look their module up
-    spec.loader.exec_module(module)
-    return module
+    return load_module(BENCH / f"{name}.py", f"bending_{name}")
 
 
 def run_test_case(root: Path) -> dict[str, Any]:

@@ -22,7 +22,6 @@ checks it twice:
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import math
 import subprocess
@@ -41,6 +40,9 @@ from ddpy.toolfile import read_tool
 
 ROOT = Path(__file__).resolve().parents[1]
 BENCH = ROOT / "benchmarks" / "reverse_deep_drawing"
+sys.path.insert(0, str(BENCH.parent))  # the benchmarks' shared module
+from bench_common import load_module  # noqa: E402
+
 CASE = BUILT_IN_CASES["deep-drawing"]
 REFERENCE = Path(__file__).resolve().parent / "data" / "reverse_deep_drawing_reference.json"
 #: Where the force curves are compared: fractions of each stage's travel.
@@ -55,12 +57,7 @@ SECTION = np.linspace(5.0, 80.0, 16)
 
 
 def _make_case() -> Any:
-    spec = importlib.util.spec_from_file_location("drawing_make_case", BENCH / "make_case.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look their module up
-    spec.loader.exec_module(module)
-    return module
+    return load_module(BENCH / "make_case.py", "drawing_make_case")
 
 
 def _stage_curves(r: ResultsReader, history: dict[str, np.ndarray]

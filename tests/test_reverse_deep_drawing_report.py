@@ -3,7 +3,6 @@ synthetic runs: claims, partial runs, the kept-runs file and the figures. No sim
 
 from __future__ import annotations
 
-import importlib.util
 import sys
 from pathlib import Path
 from typing import Any
@@ -12,18 +11,10 @@ import numpy as np
 import pytest
 
 BENCH = Path(__file__).resolve().parents[1] / "benchmarks" / "reverse_deep_drawing"
+sys.path.insert(0, str(BENCH.parent))  # the benchmarks' shared module
+from bench_common import load_module  # noqa: E402
 
-
-def _module() -> Any:
-    spec = importlib.util.spec_from_file_location("drawing_run", BENCH / "run.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look their module up
-    spec.loader.exec_module(module)
-    return module
-
-
-run = _module()
+run = load_module(BENCH / "run.py", "drawing_run")
 
 #: Per model: oscillation per stage (N), largest plastic strain, die contact per stage,
 #: increments and iterations per stage: facets oscillate, strain more and need twice the

@@ -23,10 +23,7 @@ from __future__ import annotations
 
 import argparse
 import datetime
-import importlib.util
 import json
-import os
-import subprocess
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -38,20 +35,17 @@ from ddpy.bending import contact_angle, force_oscillation, line_angle
 from ddpy.case import RminLimits
 
 HERE = Path(__file__).resolve().parent
-ROOT = HERE.parents[1]
-DOCS = ROOT / "docs" / "benchmarks"
+sys.path.insert(0, str(HERE.parent))  # the benchmarks' shared module
+from bench_common import (  # noqa: E402
+    DOCS,
+    code_version,
+    cores,
+    load_module,
+    runs_file,
+)
+from bench_common import table_row as _row  # noqa: E402
 
-
-def _load_make_case() -> Any:
-    spec = importlib.util.spec_from_file_location("bending_make_case", HERE / "make_case.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look their module up
-    spec.loader.exec_module(module)
-    return module
-
-
-make_case = _load_make_case()
+make_case = load_module(HERE / "make_case.py", "bending_make_case")
 MODELS: tuple[str, ...] = make_case.MODELS
 LABELS = {"bezier": "Bezier", "nagata": "Nagata", "facets_coarse": "Faceted-coarse",
           "facets_fine": "Faceted-fine"}
@@ -225,29 +219,6 @@ def _code_of(folder: Path) -> dict[str, Any]:
         return {}
 
 
-#: What makes a run's numbers: a change elsewhere (the reports in docs/) leaves them.
-CODE_PATHS = ("ddpy", "fortran", "meson.build", "pyproject.toml", "benchmarks")
-
-
-def code_version() -> str:
-    """The checkout's ``git describe --always``, with "-dirty" when the code (CODE_PATHS)
-    differs from it; empty outside a git checkout."""
-    try:
-        described = subprocess.run(["git", "describe", "--always"], cwd=ROOT,
-                                   capture_output=True, text=True, check=True).stdout.strip()
-        changed = subprocess.run(["git", "diff", "--quiet", "HEAD", "--", *CODE_PATHS],
-                                 cwd=ROOT).returncode != 0
-    except (OSError, subprocess.CalledProcessError):
-        return ""
-    return described + ("-dirty" if changed else "")
-
-
-def cores() -> int:
-    """The cores this process may run on."""
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else \
-        os.cpu_count() or 1
-
-
 #: What a run says about time (Table 3, the target), kept from a run alone on the machine.
 TIMING = ("wall_s", "threads", "code", "date", "increments", "iterations", "per_iteration_s",
           "factorizations", "krylov_iterations")
@@ -266,11 +237,6 @@ def timed_alone(numbers: dict[str, Any], earlier: dict[str, Any] | None,
             (numbers["increments"], numbers["iterations"]):
         return earlier
     return None
-
-
-def runs_file(stem: str) -> Path:
-    """The kept runs of a report: docs/benchmarks/<stem>_runs.json."""
-    return DOCS / f"{stem}_runs.json"
 
 
 def keep_runs(path: Path, numbers: dict[str, dict[str, Any]], runs: dict[str, Run]) -> None:
@@ -513,10 +479,6 @@ def _alone(numbers: dict[str, Any]) -> str:
     if not timed:
         return "not measured"
     return f"{timed['wall_s'] / 60:.1f} min ({timed['threads']}, {timed['code'] or '?'})"
-
-
-def _row(cells: list[Any]) -> str:
-    return "| " + " | ".join(str(c) for c in cells) + " |"
 
 
 def report(mesh: str, hexahedra: int, numbers: dict[str, dict[str, Any]],

@@ -22,11 +22,8 @@ from __future__ import annotations
 
 import argparse
 import datetime
-import importlib.util
 import json
-import os
 import platform
-import subprocess
 import sys
 from dataclasses import dataclass, fields
 from pathlib import Path
@@ -47,20 +44,17 @@ from ddpy.drawing import (
 )
 
 HERE = Path(__file__).resolve().parent
-ROOT = HERE.parents[1]
-DOCS = ROOT / "docs" / "benchmarks"
+sys.path.insert(0, str(HERE.parent))  # the benchmarks' shared module
+from bench_common import (  # noqa: E402
+    DOCS,
+    code_version,
+    cores,
+    load_module,
+    runs_file,
+)
+from bench_common import table_row as _row  # noqa: E402
 
-
-def _load_make_case() -> Any:
-    spec = importlib.util.spec_from_file_location("drawing_make_case", HERE / "make_case.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look their module up
-    spec.loader.exec_module(module)
-    return module
-
-
-make_case = _load_make_case()
+make_case = load_module(HERE / "make_case.py", "drawing_make_case")
 MODELS: tuple[str, ...] = make_case.MODELS
 TOOLS: tuple[str, ...] = make_case.TOOLS
 STAGES = ("stage1", "stage2")
@@ -115,8 +109,6 @@ STALL_INCREMENTS, STALL_MM, STALL_STEP = 20, 1e-3, 1e-9
 INSIDE_MM = 1e-9
 #: Written by run_case_folder next to a run's results: its code version and date.
 CODE_FILE = "code.json"
-#: What makes a run's numbers: a change elsewhere (the reports in docs/) leaves them.
-CODE_PATHS = ("ddpy", "fortran", "meson.build", "pyproject.toml", "benchmarks")
 #: The parts of a Newton iteration's time (Table 6).
 PARTS = ("assembly", "contact", "factorization", "solve", "rest")
 #: What each of make_case.Dimensions is.
@@ -356,25 +348,6 @@ def _travel_mean(travel: np.ndarray, values: np.ndarray) -> float:
 # ------------------------------------------------------------------------- running a run
 
 
-def cores() -> int:
-    """The cores this process may run on."""
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else \
-        os.cpu_count() or 1
-
-
-def code_version() -> str:
-    """The checkout's ``git describe --always``, with "-dirty" when the code (CODE_PATHS)
-    differs from it; empty outside a git checkout."""
-    try:
-        described = subprocess.run(["git", "describe", "--always"], cwd=ROOT,
-                                   capture_output=True, text=True, check=True).stdout.strip()
-        changed = subprocess.run(["git", "diff", "--quiet", "HEAD", "--", *CODE_PATHS],
-                                 cwd=ROOT).returncode != 0
-    except (OSError, subprocess.CalledProcessError):
-        return ""
-    return described + ("-dirty" if changed else "")
-
-
 class StallWatch:
     """Progress callback and stop test of a run: stop when the lead tool has advanced less
     than STALL_MM over the last STALL_INCREMENTS increments, or less than STALL_STEP in
@@ -431,11 +404,6 @@ def run_case_folder(folder: Path, output: Path | None = None, verbose: bool = Fa
 
 
 # ------------------------------------------------------------------------ kept runs
-
-
-def runs_file(stem: str) -> Path:
-    """The kept runs of a report: docs/benchmarks/<stem>_runs.json."""
-    return DOCS / f"{stem}_runs.json"
 
 
 def keep_runs(path: Path, runs: dict[str, Run]) -> None:
@@ -841,10 +809,6 @@ def plot_strain_maps(runs: dict[str, Run], path: Path) -> Path:
 
 
 # ------------------------------------------------------------------------ the report
-
-
-def _row(cells: list[Any]) -> str:
-    return "| " + " | ".join(str(c) for c in cells) + " |"
 
 
 def _num(value: Any, fmt: str = ".3g") -> str:

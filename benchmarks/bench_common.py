@@ -1,0 +1,60 @@
+"""What the benchmark scripts share: loading a sibling script as a module, the code version
+a run records, the cores, the kept-runs file and a markdown table row.
+
+A script puts this folder on ``sys.path`` and imports it; tests do the same to load a
+benchmark's scripts (``load_module``)."""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+import subprocess
+import sys
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+ROOT = Path(__file__).resolve().parents[1]
+DOCS = ROOT / "docs" / "benchmarks"
+#: What makes a run's numbers: a change elsewhere (the reports in docs/) leaves them.
+CODE_PATHS = ("ddpy", "fortran", "meson.build", "pyproject.toml", "benchmarks")
+
+
+def load_module(path: Path, name: str) -> ModuleType:
+    """The script at ``path`` as a module named ``name`` (unique: two benchmarks both have a
+    make_case.py), registered in sys.modules, where dataclasses look their module up."""
+    spec = importlib.util.spec_from_file_location(name, path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+def code_version() -> str:
+    """The checkout's ``git describe --always``, with "-dirty" when the code (CODE_PATHS)
+    differs from it; empty outside a git checkout."""
+    try:
+        described = subprocess.run(["git", "describe", "--always"], cwd=ROOT,
+                                   capture_output=True, text=True, check=True).stdout.strip()
+        changed = subprocess.run(["git", "diff", "--quiet", "HEAD", "--", *CODE_PATHS],
+                                 cwd=ROOT).returncode != 0
+    except (OSError, subprocess.CalledProcessError):
+        return ""
+    return described + ("-dirty" if changed else "")
+
+
+def cores() -> int:
+    """The cores this process may run on."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else \
+        os.cpu_count() or 1
+
+
+def runs_file(stem: str) -> Path:
+    """The kept runs of a report: docs/benchmarks/<stem>_runs.json."""
+    return DOCS / f"{stem}_runs.json"
+
+
+def table_row(cells: list[Any]) -> str:
+    """A markdown table row."""
+    return "| " + " | ".join(str(c) for c in cells) + " |"

@@ -1,4 +1,5 @@
-"""Checks of array arguments before they reach the core: clear errors, never a crash."""
+"""Checks of array arguments before they reach the core (clear errors, never a crash), and
+the lines of an input file as its reader numbers them."""
 
 from __future__ import annotations
 
@@ -42,3 +43,14 @@ def check_shape(array: np.ndarray, name: str, shape: tuple[int | None, ...]) -> 
         s is not None and s != n for s, n in zip(shape, array.shape, strict=True)
     ):
         raise ValueError(f"{name} must have shape {expected}, got {array.shape}")
+
+
+def input_lines(text: str) -> list[str]:
+    """The lines of a deck or tool file. Only ASCII line ends end a line: str.splitlines also
+    splits at form feeds and Unicode separators, so a comment holding one would turn the rest
+    into live text and shift every later line number. A UTF-8 byte order mark is not
+    content."""
+    lines = text.removeprefix("\ufeff").replace("\r\n", "\n").replace("\r", "\n").split("\n")
+    if lines and lines[-1] == "":
+        lines.pop()
+    return lines

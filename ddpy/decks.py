@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ddpy._validate import input_lines
 from ddpy.case import (
     AXES,
     BlankMaterial,
@@ -128,13 +129,7 @@ class _Deck:
         self.lines: list[_Line] = []
         self.errors: list[DeckError] = []
         self.warnings: list[str] = []
-        # Only ASCII line ends end a line (str.splitlines also splits at form feeds and
-        # Unicode separators: a comment holding one would turn the rest into live text and
-        # shift every later line number); a UTF-8 byte order mark is not content.
-        raw_lines = text.removeprefix("\ufeff").replace("\r\n", "\n").replace(
-            "\r", "\n").split("\n")
-        if raw_lines and raw_lines[-1] == "":
-            raw_lines.pop()
+        raw_lines = input_lines(text)
         self.last = len(raw_lines)
         for number, raw in enumerate(raw_lines, start=1):
             content = raw.split("#", 1)[0].strip()

@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from ddpy._validate import input_lines
 from ddpy.surfaces import MAX_BEZIER_DEGREE, BezierSurface, NagataSurface
 
 __all__ = ["DESCRIPTIONS", "ToolFileError", "ToolModel", "read_tool", "write_tool"]
@@ -172,12 +173,7 @@ class _Lines:
     def __init__(self, path: Path, text: str) -> None:
         self.path = path
         self._lines: list[tuple[int, list[str], str]] = []
-        # Only ASCII line ends end a line, as in the decks (str.splitlines would also split
-        # at form feeds and Unicode separators and shift the line numbers).
-        raw_lines = text.removeprefix("\ufeff").replace("\r\n", "\n").replace(
-            "\r", "\n").split("\n")
-        if raw_lines and raw_lines[-1] == "":
-            raw_lines.pop()
+        raw_lines = input_lines(text)
         for number, raw in enumerate(raw_lines, start=1):
             content = raw.split("#", 1)[0].strip()
             if content:

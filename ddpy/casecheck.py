@@ -21,7 +21,7 @@ from ddpy.decks import DeckError, blank_thickness
 from ddpy.search import INSIDE, ContactSearch
 from ddpy.surfaces import NagataSurface
 
-__all__ = ["geometry_errors", "geometry_warnings"]
+__all__ = ["geometry_checks", "geometry_errors", "geometry_warnings"]
 
 #: A tool may start this fraction of the blank thickness inside it (Nagata bulge, rounding).
 START_TOLERANCE = 0.1
@@ -41,37 +41,49 @@ def _error(origin: str, message: str) -> DeckError:
     return DeckError(message, Path(origin) if origin else None)
 
 
-def geometry_errors(case: Case) -> list[DeckError]:
-    """Errors of the tool positions and motions; [] when the tool models cannot be read here."""
+def geometry_checks(case: Case) -> tuple[list[DeckError], list[str]]:
+    """Errors and warnings of the tool positions and motions (geometry_errors and
+    geometry_warnings), with one search per tool; none when the tool models cannot be read
+    here."""
+    searches = _searches(case)
+    if searches is None:
+        return [], []
+    return geometry_errors(case, searches), geometry_warnings(case, searches)
+
+
+def _searches(case: Case) -> dict[str, ContactSearch] | None:
+    """A contact search per tool; None when ddpy.toolfile is not part of this build."""
     try:
-        models = {t.name: t.model() for t in case.tools}
-    except ImportError:  # ddpy.toolfile is not part of this build
+        return {t.name: ContactSearch(t.model().surface) for t in case.tools}
+    except ImportError:
+        return None
+
+
+def geometry_errors(case: Case, searches: dict[str, ContactSearch] | None = None
+                    ) -> list[DeckError]:
+    """Errors of the tool positions and motions; [] when the tool models cannot be read here."""
+    searches = _searches(case) if searches is None else searches
+    if searches is None:
         return []
     thickness = blank_thickness(case.mesh) or 1.0
-    searches = {name: ContactSearch(m.surface) for name, m in models.items()}
     return _start_errors(case, searches, thickness) + _clearance_errors(case, searches,
                                                                         thickness)
 
 
-def geometry_warnings(case: Case) -> list[str]:
+def geometry_warnings(case: Case, searches: dict[str, ContactSearch] | None = None
+                      ) -> list[str]:
     """What is legal but most likely a slip: the lead tool of a forming phase moving away
     from the blank, or, in the first phase (the blank as meshed), starting so far from it
     that its travel never brings it there."""
-    try:
-        models = {t.name: t.model() for t in case.tools}
-    except ImportError:  # ddpy.toolfile is not part of this build
+    searches = _searches(case) if searches is None else searches
+    if searches is None:
         return []
     mesh = case.mesh
     thickness = blank_thickness(mesh) or 1.0
     warnings = []
     first = next((p for p in case.phases if not p.is_springback), None)
     for phase in case.phases:
-        if phase.is_springback:
-            continue
-        moving = [n for n in phase.tools if isinstance(phase.motion(n), Move)
-                  and phase.displacement(n).any()]
-        lead = phase.lead or max(moving, key=lambda n: float(np.linalg.norm(
-            phase.displacement(n))), default=None)
+        lead = phase.lead  # resolved by the deck reader for every forming phase
         if lead is not None:
             tool, move = case.tool(lead), phase.displacement(lead)
             mover = phase.motion(lead)
@@ -83,7 +95,7 @@ def geometry_warnings(case: Case) -> list[str]:
                                 f"motion {_xyz(move)} points the other way)")
             elif phase is first:
                 nodes = tool.contact_nodes(mesh)
-                found = ContactSearch(models[lead].surface).project(mesh.nodes[nodes])
+                found = searches[lead].project(mesh.nodes[nodes])
                 gap = np.where(found.status != 0, np.abs(found.distance), np.inf).min() \
                     if nodes.size else np.inf
                 if gap > towards + thickness:

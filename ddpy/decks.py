@@ -310,12 +310,11 @@ def parse_case(texts: Mapping[str, str], folder: str | Path = ".",
     if errors or case is None:
         raise DeckError.collect(errors or [DeckError("invalid case", folder)])
     if geometry:
-        from ddpy.casecheck import geometry_errors, geometry_warnings
+        from ddpy.casecheck import geometry_checks
 
-        errors = geometry_errors(case)
+        errors, warnings = geometry_checks(case)
         if errors:
             raise DeckError.collect(errors)
-        warnings = geometry_warnings(case)
         if warnings:
             case = dataclasses.replace(case, warnings=case.warnings + tuple(warnings))
     return case
@@ -1206,8 +1205,10 @@ class _Cross:
             return None
         self._springback_constraints(phases, control, boundary, mesh)
         used = {name for p in phases for name in p.tools}
+        # Only a tool that sets its augmentation needs the blank's stiffness to compare it with.
         stiffness = blank_stiffness(mesh.nodes, mesh.elements, material.material.E) \
-            if mesh.elements.size else 0.0
+            if mesh.elements.size and any("augmentation" in d.values for d in tool_drafts) \
+            else 0.0
         for t, draft in zip(tools, tool_drafts, strict=True):
             if t.name not in used:
                 self.tools_deck.warn(draft.line, f"tool '{t.name}' is active in no phase")

@@ -7,6 +7,8 @@ import logging
 import signal
 import sys
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from types import FrameType
 from typing import TYPE_CHECKING, TextIO
@@ -84,6 +86,26 @@ class _Interrupt:
         signal.signal(signal.SIGINT, self._previous)
 
 
+@contextmanager
+def _solver_log(verbose: int) -> Iterator[None]:
+    """The solver's cut increments (verbose 1) and Newton iterations (2) on standard error
+    while the run lasts; the handler goes with it (ddpy.cli.main may be called again)."""
+    if not verbose:
+        yield
+        return
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(logging.Formatter("  %(message)s"))
+    logger = logging.getLogger("ddpy")
+    level = logger.level
+    logger.addHandler(handler)
+    logger.setLevel(logging.INFO if verbose == 1 else logging.DEBUG)
+    try:
+        yield
+    finally:
+        logger.removeHandler(handler)
+        logger.setLevel(level)
+
+
 def _run(args: argparse.Namespace) -> int:
     from ddpy.checkpoint import CheckpointError
     from ddpy.decks import DeckError, read_case
@@ -100,17 +122,11 @@ def _run(args: argparse.Namespace) -> int:
     for warning in case.warnings:  # the same as 'ddpy check' prints
         print(f"warning: {warning}", file=sys.stderr)
     output = Path(args.output) if args.output else default_output(folder)
-    if args.verbose:
-        handler = logging.StreamHandler(sys.stderr)
-        handler.setFormatter(logging.Formatter("  %(message)s"))
-        logger = logging.getLogger("ddpy")
-        logger.addHandler(handler)
-        logger.setLevel(logging.INFO if args.verbose == 1 else logging.DEBUG)
     display = ProgressDisplay(sys.stdout)
     verb = "continuing" if args.restart else "running"
     print(f"ddpy run: {verb} {case.title} ({folder}) -> {output}", flush=True)
     try:
-        with _Interrupt() as interrupt:
+        with _Interrupt() as interrupt, _solver_log(args.verbose):
             outcome = run_case(case, output, restart=args.restart, progress=display,
                                stop=interrupt, overwrite=args.overwrite,
                                checkpoint_every=args.checkpoint_every,

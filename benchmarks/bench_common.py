@@ -1,5 +1,5 @@
 """What the benchmark scripts share: loading a sibling script as a module, the code version
-a run records, the cores, the kept-runs file and a markdown table row.
+a run records (and reading it back), the cores, the kept-runs file and a markdown table row.
 
 A script puts this folder on ``sys.path`` and imports it; tests do the same to load a
 benchmark's scripts (``load_module``)."""
@@ -7,6 +7,7 @@ benchmark's scripts (``load_module``)."""
 from __future__ import annotations
 
 import importlib.util
+import json
 import os
 import subprocess
 import sys
@@ -16,6 +17,9 @@ from typing import Any
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs" / "benchmarks"
+#: Written next to a run's results by a benchmark's run_case_folder: its code version and
+#: date (and why a run was stopped).
+CODE_FILE = "code.json"
 #: What makes a run's numbers: a change elsewhere (the reports in docs/) leaves them.
 CODE_PATHS = ("ddpy", "fortran", "meson.build", "pyproject.toml", "benchmarks")
 
@@ -48,6 +52,14 @@ def cores() -> int:
     """The cores this process may run on."""
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else \
         os.cpu_count() or 1
+
+
+def recorded_code(folder: Path) -> dict[str, Any]:
+    """What CODE_FILE in a run's results folder records; {} when it has none."""
+    try:
+        return json.loads((folder / CODE_FILE).read_text())
+    except (OSError, ValueError):
+        return {}
 
 
 def runs_file(stem: str) -> Path:

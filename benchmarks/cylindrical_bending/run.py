@@ -37,10 +37,12 @@ from ddpy.case import RminLimits
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))  # the benchmarks' shared module
 from bench_common import (  # noqa: E402
+    CODE_FILE,
     DOCS,
     code_version,
     cores,
     load_module,
+    recorded_code,
     runs_file,
 )
 from bench_common import table_row as _row  # noqa: E402
@@ -65,8 +67,6 @@ AXIS0 = np.array([0.0, 0.0, make_case.THICKNESS + make_case.PUNCH_RADIUS])
 #: Force oscillation: moving quadratic over 1 mm of stroke, from 1 mm on (the first
 #: millimetre is the elastic-plastic transition, a real bend in the curve).
 WINDOW, START = 1.0, 1.0
-#: Written by run_case_folder next to a run's results: its code version and date.
-CODE_FILE = "code.json"
 #: The free flange for beta: material initially beyond this x, past the die shoulder.
 FLANGE_X = 45.0
 
@@ -161,7 +161,7 @@ def from_results(path: Path, output_at: tuple[float, ...] = make_case.OUTPUT_AT)
                    all_iterations=int(history["iterations"].sum()),
                    newton_iterations=_forming_sum(history, "newton_iterations", forming),
                    evaluations=_forming_sum(history, "evaluations", forming),
-                   threads=r.threads, **_code_of(path.parent))
+                   threads=r.threads, **recorded_code(path.parent))
 
 
 def _effort_by_limit(history: dict[str, np.ndarray], forming: np.ndarray
@@ -209,14 +209,6 @@ def _per_iteration(numbers: dict[str, Any]) -> tuple[dict[str, float], float]:
     """A run's seconds per iteration by part (PARTS) and their sum."""
     per = {k: v for k, v in numbers["per_iteration_s"].items() if k in PARTS}
     return per, sum(per.values())
-
-
-def _code_of(folder: Path) -> dict[str, Any]:
-    """Code version and date recorded by run_case_folder next to a run's results."""
-    try:
-        return json.loads((folder / CODE_FILE).read_text())
-    except (OSError, ValueError):
-        return {}
 
 
 #: What a run says about time (Table 3, the target), kept from a run alone on the machine.
@@ -275,7 +267,7 @@ def record_code(output: Path, code: str, restart: bool, **settings: Any) -> dict
     the deck ``settings`` the report states. A run continued (``restart``) with other code
     keeps its history: "<first>, continued at <code>", and the date it started."""
     output.mkdir(parents=True, exist_ok=True)
-    earlier = _code_of(output) if restart else {}
+    earlier = recorded_code(output) if restart else {}
     if earlier.get("code"):
         code = earlier["code"] if earlier["code"].endswith(code) else \
             f"{earlier['code']}, continued at {code}"

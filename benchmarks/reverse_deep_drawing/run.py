@@ -46,10 +46,12 @@ from ddpy.drawing import (
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))  # the benchmarks' shared module
 from bench_common import (  # noqa: E402
+    CODE_FILE,
     DOCS,
     code_version,
     cores,
     load_module,
+    recorded_code,
     runs_file,
 )
 from bench_common import table_row as _row  # noqa: E402
@@ -107,8 +109,6 @@ TWICE = (1.5, 2.5)
 STALL_INCREMENTS, STALL_MM, STALL_STEP = 20, 1e-3, 1e-9
 #: A node counts as inside a tool when deeper than this (mm): below, round-off.
 INSIDE_MM = 1e-9
-#: Written by run_case_folder next to a run's results: its code version and date.
-CODE_FILE = "code.json"
 #: The parts of a Newton iteration's time (Table 6).
 PARTS = ("assembly", "contact", "factorization", "solve", "rest")
 #: What each of make_case.Dimensions is.
@@ -146,14 +146,6 @@ class Run:
 
 
 # ------------------------------------------------------------------------ reading a run
-
-
-def _code_of(folder: Path) -> dict[str, Any]:
-    """Code version, date (and why a run was stopped) recorded next to a run's results."""
-    try:
-        return json.loads((folder / CODE_FILE).read_text())
-    except (OSError, ValueError):
-        return {}
 
 
 def _rounded(values: Any, digits: int) -> list[Any]:
@@ -246,7 +238,7 @@ def from_results(path: Path, case_folder: Path) -> Run:
     from ddpy.runner import read_status
 
     case = read_case(case_folder)
-    record = _code_of(path.parent)
+    record = recorded_code(path.parent)
     try:
         state = read_status(path.parent)
     except (OSError, ValueError):

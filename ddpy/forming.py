@@ -306,7 +306,6 @@ class FormingProblem:
         self._layout: _Layout | None = None
         self._solver: MumpsSolver | None = None
         self._factored = False  # the solver holds factors of a Jacobian of this layout
-        self._factored_states: NDArray[np.int32] | None = None  # contact states of those
         self._reuse_next = True  # the last GMRES converged fast: try the factors again
 
     # -- set-up ------------------------------------------------------------------------
@@ -925,11 +924,8 @@ class FormingProblem:
             forcing = min(KRYLOV_LOOSE, max(KRYLOV_TIGHT, 0.1 * rel,
                                             0.1 * tol_force / max(rel, 1e-300)))
             result.newton_iterations += 1
-            # The first increment of a phase starts from contact states that are a guess
-            # (every pair that touches a tool closed): older factors only for their states.
             direction = self._direction(layout, solver, values, residual, weight, result,
-                                        forcing, np.where(on, state, INACTIVE),
-                                        guess is None, hint)
+                                        forcing, hint)
             if isinstance(direction, str):
                 return direction
             delta, size = direction
@@ -1013,8 +1009,8 @@ class FormingProblem:
 
     def _direction(self, layout: _Layout, solver: MumpsSolver, values: NDArray[np.float64],
                    residual: NDArray[np.float64], weight: NDArray[np.float64],
-                   result: FormingResult, tolerance: float, states: NDArray[np.int32],
-                   same_states: bool, hint: NDArray[np.float64] | None = None
+                   result: FormingResult, tolerance: float,
+                   hint: NDArray[np.float64] | None = None
                    ) -> tuple[NDArray[np.float64], float] | str:
         """Newton correction for the Jacobian ``values`` at ``residual``, and its size as the
         line search measures it: ||W M^-1 r||, W the unknowns' weights and M the factored
@@ -1025,19 +1021,12 @@ class FormingProblem:
         weighted unknowns) to ``tolerance``; each iteration costs a solve and a product, a
         factorization about 14 of them on the paper's bending blank. It gives up after
         KRYLOV_MAX iterations, and when it needed more than KRYLOV_KEEP the next iteration
-        factorizes at once (the Jacobian has moved too far). With ``same_states``, only
-        while the contact ``states`` (open, stick, slip per pair) are those the factors
-        were computed with: where the contact set is still being found, the law decides
-        the next states on gaps far below the correction (a blank lying on a die at zero
-        gap lifts by 1e-6 mm next to the shoulder while the punch moves 1e-3 mm), and a
-        correction 1 % off flips them back and forth (docs/theory/linear-solver.md).
-        ``hint``: M^-1 (-residual) when the line search has solved it already with the
-        same factors."""
+        factorizes at once (the Jacobian has moved too far). ``hint``: M^-1 (-residual)
+        when the line search has solved it already with the same factors."""
         timings = result.timings
         reuse = self.linear_solver == "reuse" or (
             self.linear_solver == "auto" and layout.n >= REUSE_FROM)
-        if reuse and self._factored and self._reuse_next and (
-                not same_states or np.array_equal(states, self._factored_states)):
+        if reuse and self._factored and self._reuse_next:
             tick = time.perf_counter()
             if layout.matrix is None:
                 layout.matrix = CoordinateMatrix(layout.n, layout.rows, layout.cols)
@@ -1061,7 +1050,6 @@ class FormingProblem:
         timings["factorization"] += tock - tick
         result.factorizations += 1
         self._factored, self._reuse_next = True, True
-        self._factored_states = states.copy()
         delta = solver.solve(-residual)
         timings["solve"] += time.perf_counter() - tock
         return delta, float(np.linalg.norm(delta * weight))

@@ -3,18 +3,13 @@ forming run that reuses factorizations against one that factorizes every iterati
 
 from __future__ import annotations
 
-import shutil
-from pathlib import Path
-
 import numpy as np
 import pytest
 
-from ddpy.contact import INACTIVE, SLIP
-from ddpy.decks import read_case
-from ddpy.forming import FormingProblem, FormingResult, RigidTool
+from ddpy.contact import SLIP
+from ddpy.forming import FormingProblem, RigidTool
 from ddpy.linalg import CoordinateMatrix, gmres
 from ddpy.mesh import HexMesh
-from ddpy.runner import build_problem, case_folder
 from ddpy.solid import Solid
 from tests.test_forming import ELASTIC, cylinder_crest
 
@@ -83,12 +78,11 @@ def test_reused_factors_give_the_direct_solution_with_fewer_factorizations() -> 
                        atol=1e-5 * np.abs(direct.force).max())
     assert result_reuse.factorizations < sum(result_reuse.iterations) / 2
     assert result_reuse.krylov_iterations > 0
-    # Still Newton: at most a tenth more iterations than the direct run (measured: 42
-    # against 39; the increments land a little differently). GMRES solves each correction
+    # Still Newton: no more iterations than the direct run. GMRES solves each correction
     # only as well as the residual needs (a tenth of it, or of the tolerance in the last
     # iteration), so the last step is not quadratic by design; the quadratic rate of the
     # tangent itself is tested with the direct solver (tests/test_forming.py).
-    assert sum(result_reuse.iterations) <= 1.1 * sum(result_direct.iterations)
+    assert sum(result_reuse.iterations) <= sum(result_direct.iterations) + 2
 
 
 def test_linear_solver_choice_is_checked() -> None:
@@ -96,40 +90,3 @@ def test_linear_solver_choice_is_checked() -> None:
     tool = RigidTool("cylinder", cylinder_crest("nagata", 4), mesh.select(z=0.0))
     with pytest.raises(ValueError, match="linear_solver"):
         FormingProblem(Solid(mesh, ELASTIC), [tool], linear_solver="iterative")
-
-
-def first_bending_increment(tmp_path: Path, linear_solver: str) -> tuple[FormingProblem,
-                                                                        FormingResult]:
-    """The first increment of the built-in case's forming phase on a finer blank, 120 x 3 x 2
-    hexahedra of 0.5 mm: it lies on the die at zero gap along 30 mm and lifts off all of
-    it but the row at the shoulder."""
-    case_dir = tmp_path / "case"
-    shutil.copytree(case_folder("cylindrical-bending"), case_dir)
-    (case_dir / "mesh.dat").write_text("normal z\nbox 60 15 1  120 3 2\n")
-    case = read_case(case_dir)
-    built = build_problem(case)
-    problem = FormingProblem(built.solid, built.tools, linear_solver=linear_solver)
-    phase = case.control.phases[0]
-    nodes, components = case.boundary.constrained(phase.name)
-    for c in range(3):
-        problem.fix(nodes[components == c], c)
-    motion = {name: phase.displacement(name) for name in phase.tools}
-    return problem, problem.run(motion, max_increment=0.1, on_increment=lambda _: True)
-
-
-def test_older_factors_only_for_the_contact_states_they_were_computed_with(
-        tmp_path: Path) -> None:
-    # Before: GMRES with the factors of the last iteration while the contact set still
-    # changed, to 1 % of the correction, flipped the die's pairs from open to closed and
-    # back (they lift by 1e-6 mm next to the shoulder): each cut failed in 25 iterations
-    # down to the smallest increment.
-    reuse, result_reuse = first_bending_increment(tmp_path / "reuse", "reuse")
-    direct, result_direct = first_bending_increment(tmp_path / "direct", "direct")
-    assert len(result_reuse.iterations) == 1 and result_reuse.factors == result_direct.factors
-    # The die holds the blank at the shoulder row alone (x = 29.5 mm, 4 nodes across).
-    die = [t.name for t in reuse.tools].index("die")
-    closed = reuse.solid.mesh.nodes[reuse.tools[die].slaves[
-        result_reuse.status["die"][-1] != INACTIVE]]
-    assert np.allclose(closed[:, 0], 29.5) and len(closed) == 4
-    scale = np.abs(direct.u).max()
-    assert np.allclose(reuse.u, direct.u, rtol=0, atol=1e-6 * scale)

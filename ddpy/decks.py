@@ -62,6 +62,9 @@ MAX_LENGTH = 1e6
 #: initial yield stress, at most 1e5 MPa (a hundred times the strongest steels); Swift's
 #: eps0 at most 10 (a strain: 1e300 made the yield stress infinite).
 MAX_STRESS, MAX_EPS0 = 1e5, 10.0
+#: Young's modulus (MPa): above the largest it is refused, below the smallest a warning
+#: asks whether it is in MPa (polymers to tungsten carbide lie between).
+MIN_MODULUS, MAX_MODULUS = 1e3, 1e6
 #: Largest node or element id.
 MAX_ID = 2**31 - 1
 #: Largest number of errors reported for one kind of defect in a block of data lines.
@@ -975,9 +978,9 @@ def _parse_material(deck: _Deck) -> BlankMaterial | None:
             if key == "elastic":
                 if _once(deck, seen, line):
                     v = _pairs(line, 1, ("E", "nu"), ("E", "nu"), "elastic E VALUE nu VALUE")
-                    elastic = (_float(v["E"], "Young's modulus E", gt=0, le=MAX_STRESS * 10),
+                    elastic = (_float(v["E"], "Young's modulus E", gt=0, le=MAX_MODULUS),
                                _float(v["nu"], "Poisson's ratio nu", gt=-1, lt=0.5))
-                    if not 1e3 <= elastic[0] <= 1e6:
+                    if elastic[0] < MIN_MODULUS:
                         deck.warn(line.number, f"Young's modulus {elastic[0]:g} MPa is outside "
                                   "1e3 to 1e6 MPa (polymers to tungsten carbide): is it in "
                                   "MPa?")

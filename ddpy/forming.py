@@ -62,6 +62,16 @@ KRYLOV_KEEP = 8
 
 
 @dataclass(frozen=True)
+class _Touching:
+    """The closed predictor of an increment's first iteration: pairs the law leaves open
+    within ``distance`` of their tool close; those of a tool at rest in the increment only
+    where the blank needs them (``resting`` False) or all of them (True)."""
+
+    distance: float
+    resting: bool = True
+
+
+@dataclass(frozen=True)
 class IncrementLimits:
     """Limits of the r_min increment control (docs/theory/contact.md). An increment is
     scaled by r_min = min(1, r_i) over: ``strain``, the largest equivalent strain increment
@@ -448,9 +458,19 @@ class FormingProblem:
                                step <= limits.min_fraction * nominal) else limits.yield_tolerance
             # Start from the last increment's displacement rate (docs/theory/contact.md).
             guess = None if last_du is None else self.u + (target - factor) * last_du
+            touching = _Touching(TOUCHING * self.size)
             outcome = self._increment(layout, solver, positions, on, tol_force, tol_disp,
-                                      max_iterations, result, landing,
-                                      TOUCHING * self.size, guess)
+                                      max_iterations, result, landing, touching, guess)
+            if isinstance(outcome, str) and last_du is None:
+                # The first increment of a phase starts with the blank lying on its tools:
+                # a second start keeps open the touching pairs of the tools at rest that
+                # the blank does not need (docs/theory/contact.md), before cutting.
+                _log.info("increment to phase factor %.6g (step %.3g) starts again with the "
+                          "resting tools' touching pairs open: %s", target, step, outcome)
+                touching = _Touching(TOUCHING * self.size, resting=False)
+                outcome = self._increment(layout, solver, positions, on, tol_force,
+                                          tol_disp, max_iterations, result, landing,
+                                          touching, guess)
             if isinstance(outcome, float):  # an elastic point would overshoot the yield stress
                 step = max(step * outcome, limits.min_fraction * nominal)
                 reason = "yield"
@@ -730,10 +750,10 @@ class FormingProblem:
 
     def _contact(self, layout: _Layout, x: NDArray[np.float64], x_n: NDArray[np.float64],
                  positions: Mapping[str, NDArray[np.float64]], on: NDArray[np.bool_],
-                 force: NDArray[np.float64], touching: float | None = None):
+                 force: NDArray[np.float64], touching: _Touching | None = None):
         """Contact law of every pair at positions x: residual, derivatives, states. With
-        ``touching`` (a distance), a pair the law leaves open (p_aug <= 0) whose gap is
-        within it takes the closed branch at p_aug = 0+ instead (the predictor of the first
+        ``touching``, a pair the law leaves open (p_aug <= 0) whose gap is within its
+        distance takes the closed branch at p_aug = 0+ instead (the predictor of the first
         iteration, docs/theory/contact.md): an unloaded node lying on a tool then holds the
         blank against it, as the generalized Jacobian allows at the kink."""
         npair = layout.node.size
@@ -743,30 +763,35 @@ class FormingProblem:
         d_lambda = np.broadcast_to(np.eye(3), (npair, 3, 3)).copy()
         d_x = np.zeros((npair, 3, 3))
         state = np.zeros(npair, dtype=np.int32)
+        searched = {}
         for i, tool in enumerate(self.tools):
             pairs = slice(layout.first[i], layout.first[i + 1])
             if not on[pairs].any():
                 continue
-            nodes = tool.slaves
             normals = None if tool.facing is None else self._facing_normals(i, x)
-            found = tool.search.project(x[nodes], positions[tool.name], normals)
+            searched[i] = tool.search.project(x[tool.slaves], positions[tool.name], normals)
+        close = {} if touching is None else self._touching(layout, x, positions, force,
+                                                            searched, touching)
+        for i, found in searched.items():
+            tool = self.tools[i]
+            pairs = slice(layout.first[i], layout.first[i + 1])
+            nodes = tool.slaves
             hit = found.status != NONE
             patch = np.where(hit, found.patch, 0)
             second = tool.surface.second_derivatives(patch, found.params)
             v = (x[nodes] - x_n[nodes]) - (positions[tool.name] - self.position[tool.name])
             lam = force[pairs]
-            if touching is not None:
+            shut = close.get(i)
+            if shut is not None and shut.any():
                 # A normal force that lifts p_aug just above zero: the law then gives its
                 # closed branch there (stick, C = r g n + r s, when nothing slides yet),
                 # which does not depend on the shift.
                 r = self.r[pairs]
-                distance = np.where(hit, found.distance, 0.0)  # no patch: no finite gap
+                distance = np.where(hit, found.distance, 0.0)
                 p_aug = np.einsum("ij,ij->i", lam, found.normal) - r * distance
-                close = hit & (p_aug <= 0.0) & (np.abs(distance) <= touching)
-                if close.any():
-                    lift = -p_aug[close] + 1e-9 * r[close] * self.size
-                    lam = lam.copy()
-                    lam[close] += lift[:, None] * found.normal[close]
+                lift = -p_aug[shut] + 1e-9 * r[shut] * self.size
+                lam = lam.copy()
+                lam[shut] += lift[:, None] * found.normal[shut]
             law = contact_law(lam, found, second, v, self.mu[pairs], self.r[pairs])
             # Slices are views: write the pairs that found a patch; the others stay free.
             c[pairs][hit] = law.residual[hit]
@@ -783,6 +808,51 @@ class FormingProblem:
         d_lambda[hp, hk, hk] = 1.0
         d_x[hp, hk, :] = 0.0
         return c, d_lambda, d_x, state, (gap, normal)
+
+    def _touching(self, layout: _Layout, x: NDArray[np.float64],
+                  positions: Mapping[str, NDArray[np.float64]], force: NDArray[np.float64],
+                  searched: Mapping[int, object], touching: _Touching
+                  ) -> dict[int, NDArray[np.bool_]]:
+        """The pairs the first iteration's predictor closes, per tool: those the law leaves
+        open (p_aug <= 0) within the touching distance of their tool. Unless
+        ``touching.resting``, those of a tool at rest in the increment only when the blank
+        needs them: when the supports, the pairs the law closes and the touching pairs of
+        the moving tools leave a rigid motion free. A touching pair of a resting tool that
+        nothing pushes is otherwise held at g = 0, p = 0, where the law cannot tell its
+        state (docs/theory/contact.md)."""
+        close: dict[int, NDArray[np.bool_]] = {}
+        resting: list[int] = []
+        holding = [self._restrained_modes(self.fixed)]
+        for i, found in searched.items():
+            tool = self.tools[i]
+            pairs = slice(layout.first[i], layout.first[i + 1])
+            hit = found.status != NONE
+            distance = np.where(hit, found.distance, 0.0)  # no patch: no finite gap
+            p_aug = np.einsum("ij,ij->i", force[pairs], found.normal) - self.r[pairs] * distance
+            close[i] = hit & (p_aug <= 0.0) & (np.abs(distance) <= touching.distance)
+            if np.array_equal(positions[tool.name], self.position[tool.name]):
+                resting.append(i)
+                held = hit & (p_aug > 0.0)
+            else:
+                held = hit & ((p_aug > 0.0) | close[i])
+            if held.any():
+                holding.append(self._normal_modes(x[tool.slaves[held]], found.normal[held]))
+        if not touching.resting and any(close[i].any() for i in resting):
+            rows = np.concatenate(holding)
+            if np.linalg.matrix_rank(rows, tol=1e-9) == 6:
+                for i in resting:
+                    close[i][:] = False
+        return close
+
+    def _normal_modes(self, points: NDArray[np.float64],
+                      normals: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Rows: the six rigid modes of the blank (as in ``_restrained_modes``) along the
+        normal of a contact at each point."""
+        x = self.solid.mesh.nodes + self.u
+        centre = x.mean(axis=0)
+        scale = max(float(np.ptp(x, axis=0).max()), 1e-300)
+        arm = (points - centre) / scale
+        return np.concatenate([normals, np.cross(arm, normals)], axis=1)
 
     def _facing_normals(self, i: int, x: NDArray[np.float64]) -> NDArray[np.float64]:
         """Outward normals (k, 3) of the blank surface at the slaves of tool ``i``, in the
@@ -813,7 +883,7 @@ class FormingProblem:
     def _evaluate(self, layout: _Layout, u: NDArray[np.float64], force: NDArray[np.float64],
                   x_n: NDArray[np.float64], positions: Mapping[str, NDArray[np.float64]],
                   on: NDArray[np.bool_], timings: dict[str, float],
-                  touching: float | None = None, buffer: int = 0):
+                  touching: _Touching | None = None, buffer: int = 0):
         """Residual (free equilibrium rows, then the contact law) at (u, force), with the
         Jacobian values in the layout's slots and the contact states; or a failure. The
         values are the layout's buffer ``buffer`` (0 or 1): the next evaluation into the
@@ -846,11 +916,12 @@ class FormingProblem:
                    positions: Mapping[str, NDArray[np.float64]], on: NDArray[np.bool_],
                    tol_force: float, tol_disp: float, max_iterations: int,
                    result: FormingResult, yield_tolerance: float | None = None,
-                   touching: float | None = None, guess: NDArray[np.float64] | None = None):
+                   touching: _Touching | None = None,
+                   guess: NDArray[np.float64] | None = None):
         """Newton iterations of one increment; the new state, or the reason of failure, or
         (with ``yield_tolerance``) the fraction of the increment at which the first elastic
         Gauss point reaches the yield surface, from the strains of the first (elastic
-        predictor) iteration, when that fraction is below 1. With ``touching`` (a distance),
+        predictor) iteration, when that fraction is below 1. With ``touching``,
         the first iteration takes pairs within that gap as closed (see ``_contact``). With
         ``guess`` (displacements, the last increment's rate times this one's size) the
         iterations start there instead of at the converged u_n, unless an element fails
@@ -901,6 +972,7 @@ class FormingProblem:
             return (norm, scale, correction / moved,
                     norm <= tol_force * scale and correction <= tol_disp * moved)
 
+        previous = None  # contact states of the last iteration
         for iteration in range(max_iterations + 1):
             residual, values, state, out, gap = current
             norm, scale, moved, converged = measures(u, force, current, correction)
@@ -916,7 +988,8 @@ class FormingProblem:
                 return (u, out.state, force, residuals, np.where(on, state, INACTIVE), gap,
                         relative)
             if iteration == max_iterations:
-                return f"no convergence in {max_iterations} iterations"
+                return _stalled(max_iterations, norm / scale, moved, tol_force, tol_disp,
+                                on & (state != previous) if previous is not None else None)
             # Inexact Newton (Eisenstat and Walker): the correction's relative error may be
             # a tenth of the relative residual (the rate stays quadratic), or as large as
             # leaves the next residual a tenth of the tolerance (the last iteration).
@@ -970,6 +1043,7 @@ class FormingProblem:
                     alpha *= 2.0
             if isinstance(trial, str):
                 return trial
+            previous = state
             u, force, current = trial_u, trial_force, trial
             _log.debug("step length %.4g", alpha)
             hint = simplified  # M^-1 of the new residual, while the factors stay
@@ -1140,6 +1214,19 @@ def _yield_factor(props: NDArray[np.float64], before: SolidState, after: SolidSt
     disc = np.maximum(qab[over] ** 2 - qb[over] * (qa[over] - y[over] ** 2), 0.0)
     r = (-qab[over] + np.sqrt(disc)) / qb[over]
     return float(np.clip(r.min() * (1.0 + tolerance / 2.0), 1e-6, 1.0))
+
+
+def _stalled(iterations: int, residual: float, correction: float, tol_force: float,
+             tol_disp: float, flipped: NDArray[np.bool_] | None) -> str:
+    """Why an increment did not converge: its last residual and correction against their
+    tolerances, and how many contact pairs changed state in its last iteration."""
+    text = (f"no convergence in {iterations} iterations: residual {residual:.2e} of the force "
+            f"scale (tolerance {tol_force:.0e}), correction {correction:.2e} of the motion "
+            f"(tolerance {tol_disp:.0e})")
+    if flipped is not None and flipped.any():
+        text += (f"; {int(flipped.sum())} contact pair(s) still changed state in the last "
+                 "iteration")
+    return text
 
 
 def _equivalent_strain_increment(delta: NDArray[np.float64]) -> float:

@@ -97,7 +97,7 @@ def test_contact_multipliers_first_halve_the_factorization_flops() -> None:
     multipliers eliminated before the displacements give the same solution as with their
     nodes, with fewer flops (a closed stick pair's zero pivot is delayed by MUMPS)."""
     from ddpy.decks import read_case
-    from ddpy.forming import _Layout
+    from ddpy.forming import _Layout, _Touching
     from ddpy.runner import DEFAULT_CASE, build_problem
 
     problem = build_problem(read_case(DEFAULT_CASE))
@@ -108,7 +108,7 @@ def test_contact_multipliers_first_halve_the_factorization_flops() -> None:
     on = np.ones(layout.node.size, dtype=bool)
     residual, values, state, _, _ = problem._evaluate(
         layout, np.zeros_like(x), np.zeros((layout.node.size, 3)), x, positions, on, timings,
-        touching=1e-6 * problem.size)
+        touching=_Touching(1e-6 * problem.size))
     assert (state == 1).sum() >= 5 and (state == 0).sum() >= 100  # stick and open pairs
     nodes = np.concatenate([np.flatnonzero(~problem.fixed.ravel()) // 3,
                             np.repeat(layout.node, 3)])

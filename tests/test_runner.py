@@ -276,3 +276,20 @@ def test_verbose_run_reports_newton_iterations_and_cuts(tmp_path: Path) -> None:
     lines = [x for x in loud.stderr.splitlines() if "iteration 0: residual" in x]
     assert len(lines) >= 2
     assert "step length" in loud.stderr
+
+
+def test_a_fine_blank_lying_on_the_die_converges_in_its_first_increment(tmp_path) -> None:
+    # The built-in case with its blank refined to 240 x 6 x 2 hexahedra (0.25 mm) starts
+    # with 868 bottom nodes on the die at zero gap; its first increment (ended by the first
+    # touch of the next punch row) failed at every cut down to the smallest increment. The
+    # second start of a phase's first increment, with the touching pairs of the die (at
+    # rest) left open, converges at the first size (docs/theory/contact.md).
+    case = tmp_path / "case"
+    shutil.copytree(DEFAULT_CASE, case)
+    (case / "mesh.dat").write_text("normal z\nbox 60 15 1 240 6 2\n")
+    seen = []
+    outcome = run_case(read_case(case), tmp_path / "out", max_increments=1, threads=1,
+                       progress=seen.append)
+    assert outcome.status == "stopped"
+    assert [p.limit for p in seen] == ["contact_touch"]   # no cut
+    assert seen[0].iterations < 25

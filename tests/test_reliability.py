@@ -3,16 +3,22 @@ the line (or the option), before any numerics start; legitimate input is not ref
 
 from __future__ import annotations
 
+import contextlib
+import io
 import shutil
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 import pytest
+from hypothesis import HealthCheck, example, given, settings
+from hypothesis import strategies as st
 
+from ddpy.cli import main
 from ddpy.decks import DeckError, read_case
 from ddpy.parallel import set_threads, thread_limit
-from tests.deckutil import copy_example, edit
+from tests.deckutil import EXAMPLES, copy_example, edit
 from tests.test_forming import block_on_plane
 
 BUILT_IN = Path(__file__).resolve().parents[1] / "ddpy" / "cases" / "cylindrical_bending"
@@ -327,3 +333,90 @@ def test_an_augmentation_far_from_the_blank_stiffness_is_questioned(tmp_path: Pa
     warnings = read_case(case).warnings
     assert any("augmentation 1e+300 N/mm is" in w and "times the blank's stiffness" in w
                for w in warnings), warnings
+
+
+#: The cases whose mutations must run when ddpy check accepts them.
+AGREE_CASES = {"bending": EXAMPLES / "bending", "strip_draw": EXAMPLES / "strip_draw",
+               "cylindrical_bending": BUILT_IN}
+#: Control settings and values at and beyond the edges of what the decks and the run take.
+AGREE_SETTINGS = ["rmin_strain", "rmin_yield", "rmin_rotation", "rmin_release", "cutback",
+                  "newton_force", "newton_displacement", "max_iterations", "min_increment"]
+AGREE_VALUES = ["0", "1e-6", "0.02", "0.5", "0.999", "1", "1.0", "1.5", "90", "91"]
+#: Depths (mm) a tool is moved into the blank: around rmin_strain x element size.
+AGREE_DEPTHS = [0.0, 0.01, 0.02, 0.03, 0.05, 0.2]
+
+
+def set_control(case: Path, key: str, value: str) -> None:
+    """Give a control setting at the top of control.dat (replacing one given there)."""
+    path = case / "control.dat"
+    lines = path.read_text().split("\n")
+    first_phase = next(i for i, x in enumerate(lines) if x.split()[:1] == ["phase"])
+    given_at = [i for i in range(first_phase) if lines[i].split()[:1] == [key]]
+    if given_at:
+        lines[given_at[0]] = f"{key} {value}"
+    else:
+        lines.insert(first_phase, f"{key} {value}")
+    path.write_text("\n".join(lines))
+
+
+def cli(argv: list[str]) -> tuple[int, str, str]:
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main(argv)
+    return code, out.getvalue(), err.getvalue()
+
+
+mutation = st.one_of(
+    st.tuples(st.just("setting"), st.sampled_from(AGREE_SETTINGS), st.sampled_from(AGREE_VALUES)),
+    st.tuples(st.just("sink"), st.integers(0, 2), st.sampled_from(AGREE_DEPTHS)))
+
+
+@settings(max_examples=30, deadline=None, derandomize=True,
+          suppress_health_check=[HealthCheck.too_slow])
+@given(st.sampled_from(sorted(AGREE_CASES)), mutation)
+@example("cylindrical_bending", ("setting", "rmin_strain", "1.5"))
+@example("cylindrical_bending", ("setting", "rmin_yield", "1.0"))
+@example("cylindrical_bending", ("sink", 0, 0.05))
+@example("cylindrical_bending", ("sink", 0, 0.03))
+def test_what_check_accepts_run_starts(name: str, change: tuple[str, object, object]) -> None:
+    # ddpy check and the start of ddpy run agree: a deck check passes runs its first
+    # increment (or fails it as a run, exit 1), a deck check refuses is refused by run.
+    with tempfile.TemporaryDirectory() as tmp:
+        case = Path(tmp) / name
+        shutil.copytree(AGREE_CASES[name], case)
+        kind, what, value = change
+        if kind == "setting":
+            set_control(case, str(what), str(value))
+        else:
+            tools = read_case(case).tools
+            tool = tools[int(str(what)) % len(tools)]
+            lift_tool_file(tool.file, -float(tool.facing[2]) * float(str(value)))
+        checked, _, check_err = cli(["check", str(case)])
+        ran, out, err = cli(["run", str(case), "--output", str(Path(tmp) / "out"),
+                             "--stop-after", "1"])
+    assert "Traceback" not in check_err + err
+    if checked == 0:
+        assert ran == 0 or (ran == 1 and "failed after" in out), (change, out, err)
+    else:
+        assert checked == ran == 2, (change, check_err, err)
+
+
+@pytest.mark.parametrize("change, where, message", [
+    ("rmin_strain 1.5", "control.dat:11", "rmin_strain must be < 1, got 1.5"),
+    ("rmin_yield 1.0", "control.dat:10", "rmin_yield must be < 1, got 1.0"),
+    ("sink 0.05", "tools.dat:5", "tool 'punch' starts inside the blank: node 4 at (0, 0, 1) "
+     "is 0.05 mm behind its surface, more than the first phase's rmin_strain times the "
+     "element size (0.02 x 1.66 = 0.0331 mm)"),
+])
+def test_check_refuses_what_run_refuses_at_once(tmp_path: Path, change: str, where: str,
+                                                message: str,
+                                                capsys: pytest.CaptureFixture[str]) -> None:
+    case = tmp_path / "case"
+    shutil.copytree(BUILT_IN, case)
+    key, value = change.split()
+    if key == "sink":
+        lift_tool_file(case / "tools" / "punch.tool", -float(value))
+    else:
+        set_control(case, key, value)
+    assert main(["check", str(case)]) == 2
+    assert f"{case / where}: {message}" in capsys.readouterr().err

@@ -420,3 +420,24 @@ def test_check_refuses_what_run_refuses_at_once(tmp_path: Path, change: str, whe
         set_control(case, key, value)
     assert main(["check", str(case)]) == 2
     assert f"{case / where}: {message}" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("n, rows, message", [
+    (2**30, [0], "has empty rows: structurally singular"),        # MUMPS wanted ~23 GB
+    (2**31, [0], "matrix size must lie in 1..2147483647"),        # an OverflowError
+    (2**31 - 1, [0], "has empty rows"),                           # a Fortran abort
+    (0, [], "matrix size must lie in 1.."),
+    (2.5, [0], "matrix size must be an integer"),
+    (3, [0, 1, 3], "rows and cols must lie in 0..2"),
+])
+def test_a_matrix_size_mumps_cannot_take_is_refused_before_it(
+        monkeypatch: pytest.MonkeyPatch, n: object, rows: list[int], message: str) -> None:
+    import ddpy.linalg
+    from ddpy.linalg import MumpsSolver
+
+    def analyse(*args: object) -> int:  # the core's analysis would allocate for all n
+        raise AssertionError("MUMPS was called")
+
+    monkeypatch.setattr(ddpy.linalg._core, "solver_analyse", analyse)
+    with MumpsSolver() as solver, pytest.raises(ValueError, match=message):
+        solver.analyse(n, rows, rows)  # type: ignore[arg-type]

@@ -200,6 +200,8 @@ class _Run:
         self.elapsed = 0.0
         self.resume: PhaseProgress | None = None
         self.writer: ResultsWriter | None = None
+        # Increments, iteration rows and frames of the results file at the checkpoint.
+        self._reopen_at = (0, 0, 0)
         self.halt = ""  # why the run stops early: "interrupted" or "stopped"
         self._clock = time.perf_counter()
         self._since_checkpoint = 0
@@ -235,15 +237,34 @@ class _Run:
         """Restore the state and counters of the checkpoint, reopen the results there."""
         path = self.output / CHECKPOINT
         meta, arrays = read_checkpoint(path)
+        try:
+            self._restore(path, meta, arrays)
+        except CheckpointError:
+            raise
+        except KeyError as error:  # an array or counter removed (an edited or foreign file)
+            raise CheckpointError(f"{path}: the entry '{error.args[0]}' is missing; run again "
+                                  "without --restart") from None
+        except (TypeError, ValueError, AttributeError, IndexError) as error:
+            raise CheckpointError(f"{path}: damaged ({error}); run again without --restart"
+                                  ) from None
+        results = self.output / RESULTS
+        if not results.is_file():
+            raise RunError(f"{results}: missing; the checkpoint continues it, so run again "
+                           "without --restart")
+        try:
+            self.writer = ResultsWriter.reopen(results, *self._reopen_at)
+        except (OSError, KeyError, ValueError) as error:
+            raise RunError(f"{results}: cannot be continued ({error}); run again without "
+                           "--restart") from None
+
+    def _restore(self, path: Path, meta: dict[str, Any], arrays: dict[str, NDArray]) -> None:
+        """The problem's state and the counters from a checkpoint read from ``path``."""
         if meta["fingerprint"] != self.fingerprint:
             raise CheckpointError(f"{path}: the case's decks or tool files changed since the "
                                   "checkpoint was written; run again without --restart")
         p = self.problem
-        try:
-            carried = {k: arrays[k] for k in _CARRIED}
-            positions = {k: arrays[f"position/{k}"] for k in self.names}
-        except KeyError as error:
-            raise CheckpointError(f"{path}: {error.args[0]} missing") from None
+        carried = {k: arrays[k] for k in _CARRIED}
+        positions = {k: arrays[f"position/{k}"] for k in self.names}
         for name, value in carried.items():
             if value.shape != getattr(p, name).shape:
                 raise CheckpointError(f"{path}: written for another mesh or tools ({name} "
@@ -263,16 +284,8 @@ class _Run:
                 factor=float(prog["factor"]), step=float(prog["step"]),
                 reason=str(prog["reason"]), last_du=arrays.get("last_du"),
                 last_dp=arrays.get("last_dp"))
-        results = self.output / RESULTS
-        if not results.is_file():
-            raise RunError(f"{results}: missing; the checkpoint continues it, so run again "
-                           "without --restart")
-        try:
-            self.writer = ResultsWriter.reopen(results, int(meta["increments"]),
-                                               int(meta["iterations"]), int(meta["frames"]))
-        except (OSError, KeyError, ValueError) as error:
-            raise RunError(f"{results}: cannot be continued ({error}); run again without "
-                           "--restart") from None
+        self._reopen_at = (int(meta["increments"]), int(meta["iterations"]),
+                           int(meta["frames"]))
 
     # -- output ----------------------------------------------------------------------
 

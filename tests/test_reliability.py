@@ -441,3 +441,23 @@ def test_a_matrix_size_mumps_cannot_take_is_refused_before_it(
     monkeypatch.setattr(ddpy.linalg._core, "solver_analyse", analyse)
     with MumpsSolver() as solver, pytest.raises(ValueError, match=message):
         solver.analyse(n, rows, rows)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("entry", ["start/die", "position/punch", "u"])
+def test_restart_from_a_checkpoint_without_an_entry_names_it(
+        stopped_run: Path, tmp_path: Path, entry: str,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    import numpy as np
+
+    out = tmp_path / "out"
+    shutil.copytree(stopped_run, out)
+    checkpoint = out / "checkpoint.npz"
+    with np.load(checkpoint) as data:
+        arrays = {name: data[name] for name in data.files}
+    del arrays[entry]
+    with open(checkpoint, "wb") as file:  # np.savez adds '.npz' to a name without it
+        np.savez(file, **arrays)
+    assert main(["run", "--output", str(out), "--restart"]) == 1
+    err = capsys.readouterr().err
+    assert f"{checkpoint}: the entry '{entry}' is missing; run again without --restart" in err
+    assert "internal error" not in err and "Traceback" not in err

@@ -795,34 +795,60 @@ def build_tool_models(
         raise ValueError(f"name must be a plain file name (letters, digits, '_', '.', '-', "
                          f"not starting with '.'), got '{name}'")
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    with gmsh_session(), _cad_model(cad) as (available, label, source):
-        selected = list(available) if faces is None else [int(f) for f in faces]
-        missing = sorted(set(selected) - set(available))
-        if missing:
-            raise CadError(f"{label}: face {missing[0]} is not in the model (faces: "
-                           f"{_ranges(available)})")
-        builder = ToolBuilder(selected, label, blank_side, blank_point)
-        paths: dict[str, Path] = {}
-        nagata = None
-        if "nagata" in models or ("facets" in models and facets_per_arc == patches_per_arc):
-            nagata = builder.mesh_model(name, patches_per_arc, element, size, True, source,
-                                        arc_size)
-            if "nagata" in models:
-                paths["nagata"] = write_tool(out / f"{name}.nagata.tool", nagata)
-        if "facets" in models:
-            if nagata is not None and facets_per_arc == patches_per_arc:
-                facets = nagata.facets()
-            else:
-                if builder.flips is None:  # orientation comes from the coarser mesh
-                    builder.mesh(min(patches_per_arc, facets_per_arc), element, size, arc_size)
-                facets = builder.mesh_model(name, facets_per_arc, element, size, False, source,
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"{out}: a file is there; the output must be a folder")
+    created: list[Path] = []  # folders made for the output, removed again if left empty
+
+    def target(file: str) -> Path:
+        if not out.is_dir():
+            created.extend(_missing_folders(out))
+            out.mkdir(parents=True, exist_ok=True)
+        return out / file
+
+    try:
+        with gmsh_session(), _cad_model(cad) as (available, label, source):
+            selected = list(available) if faces is None else [int(f) for f in faces]
+            missing = sorted(set(selected) - set(available))
+            if missing:
+                raise CadError(f"{label}: face {missing[0]} is not in the model (faces: "
+                               f"{_ranges(available)})")
+            builder = ToolBuilder(selected, label, blank_side, blank_point)
+            paths: dict[str, Path] = {}
+            nagata = None
+            if "nagata" in models or ("facets" in models and facets_per_arc == patches_per_arc):
+                nagata = builder.mesh_model(name, patches_per_arc, element, size, True, source,
                                             arc_size)
-            paths["facets"] = write_tool(out / f"{name}.facets.tool", facets)
-        if "bezier" in models:
-            bezier = builder.bezier_model(name, bezier_tol, bezier_angle_tol, source)
-            paths["bezier"] = write_tool(out / f"{name}.bezier.tool", bezier)
+                if "nagata" in models:
+                    paths["nagata"] = write_tool(target(f"{name}.nagata.tool"), nagata)
+            if "facets" in models:
+                if nagata is not None and facets_per_arc == patches_per_arc:
+                    facets = nagata.facets()
+                else:
+                    if builder.flips is None:  # orientation comes from the coarser mesh
+                        builder.mesh(min(patches_per_arc, facets_per_arc), element, size, arc_size)
+                    facets = builder.mesh_model(name, facets_per_arc, element, size, False, source,
+                                                arc_size)
+                paths["facets"] = write_tool(target(f"{name}.facets.tool"), facets)
+            if "bezier" in models:
+                bezier = builder.bezier_model(name, bezier_tol, bezier_angle_tol, source)
+                paths["bezier"] = write_tool(target(f"{name}.bezier.tool"), bezier)
+    except BaseException:
+        for folder in reversed(created):  # innermost first; stop at one that is not empty
+            try:
+                folder.rmdir()
+            except OSError:
+                break
+        raise
     return paths
+
+
+def _missing_folders(path: Path) -> list[Path]:
+    """The folders of ``path`` (itself included) that do not exist, outermost first."""
+    missing = []
+    while not path.exists() and path != path.parent:
+        missing.append(path)
+        path = path.parent
+    return missing[::-1]
 
 
 @contextlib.contextmanager

@@ -515,3 +515,42 @@ def test_step_faces_the_cad_kernel_drops_are_reported(cad: dict[str, Path],
     bad.write_text(text)
     with pytest.raises(CadError, match=r"the CAD kernel read \d+ of the \d+ faces"):
         build_tool_models(bad, tmp_path, "bad", blank_side=(0.0, 0.0, 1.0))
+
+
+@pytest.mark.parametrize("name", ["garbage", "cone", "missing"])
+def test_a_failing_build_leaves_no_new_folder(cad: dict[str, Path], tmp_path: Path,
+                                              name: str,
+                                              capsys: pytest.CaptureFixture[str]) -> None:
+    # The file cannot be read (garbage, missing) or a face fails once meshed (cone).
+    from ddpy.cli import main
+
+    path = cad.get(name, tmp_path / "missing.step")
+    out = tmp_path / "new" / "tools"
+    assert main(["tools", "build", str(path), "--out", str(out)]) == 2
+    assert "ddpy tools build: error: " in capsys.readouterr().err
+    assert not (tmp_path / "new").exists()
+    kept = tmp_path / "kept"
+    kept.mkdir()
+    assert main(["tools", "build", str(path), "--out", str(kept)]) == 2
+    assert kept.is_dir() and not any(kept.iterdir())
+
+
+def test_a_build_failing_to_write_leaves_no_new_folder(cad: dict[str, Path], tmp_path: Path,
+                                                       monkeypatch: pytest.MonkeyPatch,
+                                                       capsys: pytest.CaptureFixture[str]
+                                                       ) -> None:
+    import errno
+
+    import ddpy.cad
+    from ddpy.cli import main
+
+    def full(path: Path, model: ToolModel) -> Path:
+        raise OSError(errno.ENOSPC, "No space left on device", str(path))
+
+    monkeypatch.setattr(ddpy.cad, "write_tool", full)
+    out = tmp_path / "new" / "tools"
+    assert main(["tools", "build", str(cad["cylinder"]), "--out", str(out),
+                 "--blank-point=0,0,10"]) == 1
+    err = capsys.readouterr().err
+    assert f"ddpy tools build: error: {out / 'cylinder.nagata.tool'}: No space left" in err
+    assert not (tmp_path / "new").exists()

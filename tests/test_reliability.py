@@ -461,3 +461,69 @@ def test_restart_from_a_checkpoint_without_an_entry_names_it(
     err = capsys.readouterr().err
     assert f"{checkpoint}: the entry '{entry}' is missing; run again without --restart" in err
     assert "internal error" not in err and "Traceback" not in err
+
+
+def test_a_disk_filling_during_a_run_ends_it_with_one_message(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    # HDF5 fails to write the second increment's row, as on a full disk: h5py raised a
+    # traceback and the process ended in a segmentation fault.
+    import errno
+
+    import h5py
+
+    from ddpy.results import ResultsReader
+
+    write = h5py.Dataset.__setitem__
+
+    def full(self: h5py.Dataset, key: object, value: object) -> None:
+        if self.name.startswith("/increments/") and key == 1:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        write(self, key, value)
+
+    monkeypatch.setattr(h5py.Dataset, "__setitem__", full)
+    out = tmp_path / "out"
+    assert main(["run", "--output", str(out), "--stop-after", "3"]) == 1
+    err = capsys.readouterr().err
+    results = out / "results.h5"
+    assert (f"ddpy run: error: writing {results} failed: No space left on device; the "
+            "results written so far are kept") in err
+    assert "Traceback" not in err and "internal error" not in err
+    monkeypatch.undo()
+    with ResultsReader(results) as reader:
+        assert reader.n_increments == 1 and len(reader.frames) == 1
+        assert reader.field("displacement", 0).shape == reader.nodes.shape
+
+
+def test_a_run_stops_writing_before_the_disk_is_full(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    # The free space seen by the writer drops to 100 KB after the first increment: HDF5
+    # running out of space failed its later writes and crashed while closing the file.
+    import shutil as shutil_module
+
+    from ddpy.results import ResultsReader
+
+    out = tmp_path / "out"
+    results = out / "results.h5"
+    usage = shutil_module.disk_usage
+    seen: list[int] = []
+
+    def disk_usage(path: str | Path) -> object:
+        real = usage(path)
+        if results.exists():
+            seen.append(1)
+            if len(seen) > 2:  # frame 0 and the first increment written
+                return real._replace(free=100_000)
+        return real
+
+    monkeypatch.setattr(shutil_module, "disk_usage", disk_usage)
+    assert main(["run", "--output", str(out), "--stop-after", "3"]) == 1
+    err = capsys.readouterr().err
+    assert (f"ddpy run: error: writing {results} failed: No space left on device (0.1 MB "
+            "free, the next frame needs") in err
+    assert err.count("\n") == 1 and "Traceback" not in err
+    monkeypatch.undo()
+    with ResultsReader(results) as reader:
+        assert reader.n_increments == 1 and len(reader.frames) == 1
+        assert reader.field("displacement", 0).shape == reader.nodes.shape

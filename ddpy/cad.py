@@ -23,7 +23,7 @@ import contextlib
 import os
 import re
 import sys
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -137,6 +137,30 @@ _STEP_REFERENCE = re.compile(r"#(\d+)")
 _STEP_RADII = {"CIRCLE": 1, "CYLINDRICAL_SURFACE": 1, "SPHERICAL_SURFACE": 1,
                "TOROIDAL_SURFACE": 2, "ELLIPSE": 2}
 _STEP_FACES = ("ADVANCED_FACE", "FACE_SURFACE")
+_POINT, _DIRECTION, _PLACEMENT_3D = ("CARTESIAN_POINT",), ("DIRECTION",), ("AXIS2_PLACEMENT_3D",)
+#: The references of entities OpenCASCADE follows without checking what they are (a VECTOR
+#: whose direction was a product definition ended gmsh in a segmentation fault): per entity,
+#: (argument index, its name in ISO 10303-42, the entity types allowed, may be '$').
+_STEP_TYPES: dict[str, tuple[tuple[int, str, tuple[str, ...], bool], ...]] = {
+    "VECTOR": ((1, "orientation", _DIRECTION, False),),
+    "AXIS1_PLACEMENT": ((1, "location", _POINT, False), (2, "axis", _DIRECTION, True)),
+    "AXIS2_PLACEMENT_2D": ((1, "location", _POINT, False),
+                           (2, "ref_direction", _DIRECTION, True)),
+    "AXIS2_PLACEMENT_3D": ((1, "location", _POINT, False), (2, "axis", _DIRECTION, True),
+                           (3, "ref_direction", _DIRECTION, True)),
+    "LINE": ((1, "pnt", _POINT, False), (2, "dir", ("VECTOR",), False)),
+    "CIRCLE": ((1, "position", ("AXIS2_PLACEMENT_2D", "AXIS2_PLACEMENT_3D"), False),),
+    "ELLIPSE": ((1, "position", ("AXIS2_PLACEMENT_2D", "AXIS2_PLACEMENT_3D"), False),),
+    "PLANE": ((1, "position", _PLACEMENT_3D, False),),
+    "CYLINDRICAL_SURFACE": ((1, "position", _PLACEMENT_3D, False),),
+    "CONICAL_SURFACE": ((1, "position", _PLACEMENT_3D, False),),
+    "SPHERICAL_SURFACE": ((1, "position", _PLACEMENT_3D, False),),
+    "TOROIDAL_SURFACE": ((1, "position", _PLACEMENT_3D, False),),
+    "VERTEX_POINT": ((1, "vertex_geometry", _POINT, False),),
+    "EDGE_CURVE": ((1, "edge_start", ("VERTEX_POINT",), False),
+                   (2, "edge_end", ("VERTEX_POINT",), False)),
+}
+_STEP_NAME = re.compile(r"([A-Za-z_][A-Za-z_0-9]*)\s*\(")
 _STEP_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
 _STEP_NOT_A_NUMBER = re.compile(r"(?<![A-Za-z_0-9.])[+-]?(?:nan|inf(?:inity)?)(?![A-Za-z_0-9])",
                                 re.IGNORECASE)
@@ -146,9 +170,13 @@ def check_step(path: Path) -> int:
     """Refuse a STEP file that gmsh's reader (OpenCASCADE) would crash or hang on: a value
     that is not a number (nan, inf) or a reference to an entity the file does not define
     (a CARTESIAN_POINT of nans and a deleted LINE each ended the process with a
-    segmentation fault, a VECTOR of magnitude nan never returned), or a circle or surface
+    segmentation fault, a VECTOR of magnitude nan never returned), a circle or surface
     whose radius is not positive (a cylinder of radius 0 made the kernel merge 13 of 17
-    faces into 4). CadError names the line. Returns the number of faces the file defines.
+    faces into 4), a VECTOR whose magnitude is not positive (0 never returned), a DIRECTION
+    of zeros, or a reference of a placement, point, vector, line, conic, elementary surface,
+    vertex or edge to an entity of the wrong type (a VECTOR whose orientation is not a
+    DIRECTION: a segmentation fault). CadError names the line and what was expected.
+    Returns the number of faces the file defines.
     """
     try:
         text = path.read_bytes().decode("latin-1")
@@ -165,16 +193,19 @@ def check_step(path: Path) -> int:
     def line_of(position: int) -> int:
         return text.count("\n", 0, position) + 1
 
-    defined: set[int] = set()
+    kinds: dict[int, set[str]] = {}  # entity id -> its type (the parts of a complex one)
     faces = 0
     uses: list[tuple[int, int, int]] = []  # (referenced id, position, entity id)
+    # (referenced id, position, entity id, its type, argument name, types allowed)
+    typed: list[tuple[int, int, int, str, str, tuple[str, ...]]] = []
     position = start + len("DATA;")
     for record in bare[position:end].split(";"):
         head = _STEP_ENTITY.search(record)
         if head is not None:
             entity = int(head.group(1))
-            defined.add(entity)
             body = record[head.end():]
+            kinds[entity] = ({head.group(2).upper()} if head.group(2) else
+                             {m.group(1).upper() for m in _STEP_NAME.finditer(body)})
             bad = _STEP_NOT_A_NUMBER.search(body)
             if bad is not None:
                 where = position + head.end() + bad.start()
@@ -194,12 +225,84 @@ def check_step(path: Path) -> int:
                                    "curve: the CAD kernel drops or merges such faces)")
             if kind in _STEP_FACES:
                 faces += 1
+            if kind in _STEP_TYPES or kind in ("VECTOR", "DIRECTION"):
+                at = position + head.end()
+                arguments = _step_arguments(body)
+                if arguments is None:
+                    raise CadError(f"{path}:{line_of(at)}: entity #{entity} {kind}: expected "
+                                   "its arguments in parentheses")
+                typed += _step_references(path, line_of, entity, kind, arguments, at)
+                _step_values(path, line_of, entity, kind, arguments, at)
         position += len(record) + 1
     for target, where, entity in uses:
-        if target not in defined:
+        if target not in kinds:
             raise CadError(f"{path}:{line_of(where)}: entity #{entity} refers to #{target}, "
                            "which the file does not define")
+    for target, where, entity, kind, name, allowed in typed:
+        if not kinds[target] & set(allowed):
+            raise CadError(f"{path}:{line_of(where)}: entity #{entity} {kind}: its {name} "
+                           f"#{target} is {' '.join(sorted(kinds[target])) or 'a nameless entity'}"
+                           f", expected {' or '.join(allowed)}")
     return faces
+
+
+def _step_arguments(body: str) -> list[tuple[str, int]] | None:
+    """The top-level arguments of an entity instance ``(a, (b, c), #1)`` (strings blanked)
+    with their offsets in ``body``; None when the parentheses do not enclose them."""
+    opening = body.find("(")
+    if opening < 0 or body[:opening].strip():
+        return None
+    arguments, depth, begin = [], 0, opening + 1
+    for i in range(opening, len(body)):
+        c = body[i]
+        if c == "(":
+            depth += 1
+        elif c == ")":
+            depth -= 1
+            if depth == 0:
+                arguments.append((body[begin:i].strip(), begin))
+                return arguments if body[i + 1:].strip() == "" else None
+        elif c == "," and depth == 1:
+            arguments.append((body[begin:i].strip(), begin))
+            begin = i + 1
+    return None
+
+
+def _step_references(path: Path, line_of: Callable[[int], int], entity: int, kind: str,
+                     arguments: list[tuple[str, int]], at: int
+                     ) -> list[tuple[int, int, int, str, str, tuple[str, ...]]]:
+    """The references of a typed entity to check once every entity is known; CadError for
+    one that is missing or not a reference."""
+    found = []
+    for index, name, allowed, optional in _STEP_TYPES.get(kind, ()):
+        text, offset = arguments[index] if index < len(arguments) else ("", 0)
+        match = re.fullmatch(r"#(\d+)", text)
+        if match is not None:
+            found.append((int(match.group(1)), at + offset, entity, kind, name, allowed))
+        elif not (optional and text == "$"):
+            raise CadError(f"{path}:{line_of(at + offset)}: entity #{entity} {kind}: expected "
+                           f"a reference to a {' or '.join(allowed)} as its {name} (argument "
+                           f"{index + 1}), got '{text}'")
+    return found
+
+
+def _step_values(path: Path, line_of: Callable[[int], int], entity: int, kind: str,
+                 arguments: list[tuple[str, int]], at: int) -> None:
+    """Refuse a VECTOR whose magnitude is not positive (OpenCASCADE never returned from
+    one of 0) and a DIRECTION whose ratios are all zero (accepted without a word)."""
+    if kind == "VECTOR":
+        text, offset = arguments[2] if len(arguments) > 2 else ("", 0)
+        if not _STEP_NUMBER.fullmatch(text) or float(text) <= 0.0:
+            raise CadError(f"{path}:{line_of(at + offset)}: entity #{entity} VECTOR: expected "
+                           f"a positive magnitude (argument 3), got '{text}'")
+    elif kind == "DIRECTION":
+        text, offset = arguments[1] if len(arguments) > 1 else ("", 0)
+        ratios = text[1:-1].split(",") if text.startswith("(") and text.endswith(")") else []
+        numbers = [float(r) for r in ratios if _STEP_NUMBER.fullmatch(r.strip())]
+        if not 2 <= len(ratios) <= 3 or len(numbers) != len(ratios) or \
+                not any(abs(r) > 0.0 for r in numbers):
+            raise CadError(f"{path}:{line_of(at + offset)}: entity #{entity} DIRECTION: "
+                           f"expected 2 or 3 direction ratios, not all zero, got '{text}'")
 
 
 def closest_points(face: int, points: ArrayLike) -> tuple[NDArray[np.float64],
@@ -692,34 +795,60 @@ def build_tool_models(
         raise ValueError(f"name must be a plain file name (letters, digits, '_', '.', '-', "
                          f"not starting with '.'), got '{name}'")
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    with gmsh_session(), _cad_model(cad) as (available, label, source):
-        selected = list(available) if faces is None else [int(f) for f in faces]
-        missing = sorted(set(selected) - set(available))
-        if missing:
-            raise CadError(f"{label}: face {missing[0]} is not in the model (faces: "
-                           f"{_ranges(available)})")
-        builder = ToolBuilder(selected, label, blank_side, blank_point)
-        paths: dict[str, Path] = {}
-        nagata = None
-        if "nagata" in models or ("facets" in models and facets_per_arc == patches_per_arc):
-            nagata = builder.mesh_model(name, patches_per_arc, element, size, True, source,
-                                        arc_size)
-            if "nagata" in models:
-                paths["nagata"] = write_tool(out / f"{name}.nagata.tool", nagata)
-        if "facets" in models:
-            if nagata is not None and facets_per_arc == patches_per_arc:
-                facets = nagata.facets()
-            else:
-                if builder.flips is None:  # orientation comes from the coarser mesh
-                    builder.mesh(min(patches_per_arc, facets_per_arc), element, size, arc_size)
-                facets = builder.mesh_model(name, facets_per_arc, element, size, False, source,
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"{out}: a file is there; the output must be a folder")
+    created: list[Path] = []  # folders made for the output, removed again if left empty
+
+    def target(file: str) -> Path:
+        if not out.is_dir():
+            created.extend(_missing_folders(out))
+            out.mkdir(parents=True, exist_ok=True)
+        return out / file
+
+    try:
+        with gmsh_session(), _cad_model(cad) as (available, label, source):
+            selected = list(available) if faces is None else [int(f) for f in faces]
+            missing = sorted(set(selected) - set(available))
+            if missing:
+                raise CadError(f"{label}: face {missing[0]} is not in the model (faces: "
+                               f"{_ranges(available)})")
+            builder = ToolBuilder(selected, label, blank_side, blank_point)
+            paths: dict[str, Path] = {}
+            nagata = None
+            if "nagata" in models or ("facets" in models and facets_per_arc == patches_per_arc):
+                nagata = builder.mesh_model(name, patches_per_arc, element, size, True, source,
                                             arc_size)
-            paths["facets"] = write_tool(out / f"{name}.facets.tool", facets)
-        if "bezier" in models:
-            bezier = builder.bezier_model(name, bezier_tol, bezier_angle_tol, source)
-            paths["bezier"] = write_tool(out / f"{name}.bezier.tool", bezier)
+                if "nagata" in models:
+                    paths["nagata"] = write_tool(target(f"{name}.nagata.tool"), nagata)
+            if "facets" in models:
+                if nagata is not None and facets_per_arc == patches_per_arc:
+                    facets = nagata.facets()
+                else:
+                    if builder.flips is None:  # orientation comes from the coarser mesh
+                        builder.mesh(min(patches_per_arc, facets_per_arc), element, size, arc_size)
+                    facets = builder.mesh_model(name, facets_per_arc, element, size, False, source,
+                                                arc_size)
+                paths["facets"] = write_tool(target(f"{name}.facets.tool"), facets)
+            if "bezier" in models:
+                bezier = builder.bezier_model(name, bezier_tol, bezier_angle_tol, source)
+                paths["bezier"] = write_tool(target(f"{name}.bezier.tool"), bezier)
+    except BaseException:
+        for folder in reversed(created):  # innermost first; stop at one that is not empty
+            try:
+                folder.rmdir()
+            except OSError:
+                break
+        raise
     return paths
+
+
+def _missing_folders(path: Path) -> list[Path]:
+    """The folders of ``path`` (itself included) that do not exist, outermost first."""
+    missing = []
+    while not path.exists() and path != path.parent:
+        missing.append(path)
+        path = path.parent
+    return missing[::-1]
 
 
 @contextlib.contextmanager

@@ -18,13 +18,13 @@ from numpy.typing import NDArray
 
 from ddpy.case import Case, HoldGap, Move
 from ddpy.decks import DeckError, blank_thickness
+from ddpy.forming import start_depth_limit
+from ddpy.mesh import HexMesh
 from ddpy.search import INSIDE, ContactSearch
 from ddpy.surfaces import NagataSurface
 
 __all__ = ["geometry_checks", "geometry_errors", "geometry_warnings"]
 
-#: A tool may start this fraction of the blank thickness inside it (Nagata bulge, rounding).
-START_TOLERANCE = 0.1
 #: Tools on opposite sides of the blank may not come closer than this fraction of its
 #: thickness during a phase.
 CLEARANCE = 0.5
@@ -66,8 +66,7 @@ def geometry_errors(case: Case, searches: dict[str, ContactSearch] | None = None
     if searches is None:
         return []
     thickness = blank_thickness(case.mesh) or 1.0
-    return _start_errors(case, searches, thickness) + _clearance_errors(case, searches,
-                                                                        thickness)
+    return _start_errors(case, searches) + _clearance_errors(case, searches, thickness)
 
 
 def geometry_warnings(case: Case, searches: dict[str, ContactSearch] | None = None
@@ -105,10 +104,12 @@ def geometry_warnings(case: Case, searches: dict[str, ContactSearch] | None = No
     return warnings
 
 
-def _start_errors(case: Case, searches: dict[str, ContactSearch], thickness: float
-                  ) -> list[DeckError]:
+def _start_errors(case: Case, searches: dict[str, ContactSearch]) -> list[DeckError]:
     errors = []
     mesh, first = case.mesh, case.phases[0]
+    # The run refuses a tool deeper than its first increment may push the blank out by.
+    size = HexMesh(np.array(mesh.nodes), np.array(mesh.elements)).element_size()
+    allowed = start_depth_limit(first.rmin.strain, size)
     for name in first.tools:
         if isinstance(first.motion(name), HoldGap):
             continue  # placed by its gap
@@ -133,12 +134,15 @@ def _start_errors(case: Case, searches: dict[str, ContactSearch], thickness: flo
             continue
         depth = np.where(inside, -found.distance, -np.inf)
         worst = int(np.argmax(depth))
-        if depth[worst] > START_TOLERANCE * thickness:
+        if depth[worst] > allowed:
             x = mesh.nodes[nodes[worst]]
             errors.append(_error(tool.origin, f"tool '{name}' starts inside the blank: node "
                                  f"{mesh.node_ids[nodes[worst]]} at ({_xyz(x)}) is "
-                                 f"{depth[worst]:.3g} mm behind its surface (expected the tool "
-                                 f"on the {tool.contact} of the blank, touching it at most)"))
+                                 f"{depth[worst]:.3g} mm behind its surface, more than the "
+                                 f"first phase's rmin_strain times the element size "
+                                 f"({first.rmin.strain:g} x {size:.3g} = {allowed:.3g} mm); "
+                                 f"expected the tool on the {tool.contact} of the blank, "
+                                 "at most that deep in it"))
     return errors
 
 

@@ -94,6 +94,10 @@ def _tools_build(args: argparse.Namespace) -> int:
             bezier_angle_tol=args.bezier_angle_tol, faces=args.faces, models=models)
     except (CadError, ValueError) as error:
         return _fail("tools build", error, 2)  # the CAD file or an option
+    except OSError as error:  # the output folder: permissions, space
+        where = error.filename or args.out
+        print(f"ddpy tools build: error: {where}: {error.strerror or error}", file=sys.stderr)
+        return 1
     for path in paths.values():
         print(path)
     return 0

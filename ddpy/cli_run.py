@@ -109,6 +109,7 @@ def _solver_log(verbose: int) -> Iterator[None]:
 def _run(args: argparse.Namespace) -> int:
     from ddpy.checkpoint import CheckpointError
     from ddpy.decks import DeckError, read_case
+    from ddpy.results import ResultsWriteError
     from ddpy.runner import RunError, case_folder, run_case
 
     folder = case_folder(args.case)
@@ -131,6 +132,11 @@ def _run(args: argparse.Namespace) -> int:
                                stop=interrupt, overwrite=args.overwrite,
                                checkpoint_every=args.checkpoint_every,
                                max_increments=args.stop_after, threads=args.threads)
+    except ResultsWriteError as error:  # disk full or an I/O error while running
+        display.close()
+        print(f"ddpy run: error: {error}; the results written so far are kept",
+              file=sys.stderr)
+        return 1
     except (RunError, CheckpointError, ValueError) as error:
         display.close()
         print(f"ddpy run: error: {error}", file=sys.stderr)

@@ -329,8 +329,9 @@ def parse_case(texts: Mapping[str, str], folder: str | Path = ".",
 _SETTINGS: dict[str, Callable[[str], Any]] = {
     "max_increment": lambda w: _float(w, "max_increment", gt=0, le=MAX_LENGTH),
     "min_increment": lambda w: _float(w, "min_increment", gt=0, le=MAX_LENGTH),
-    "rmin_yield": lambda w: _float(w, "rmin_yield", ge=0),
-    "rmin_strain": lambda w: _float(w, "rmin_strain", gt=0),
+    # The run's increment control (forming.IncrementLimits) takes fractions below 1 only.
+    "rmin_yield": lambda w: _float(w, "rmin_yield", ge=0, lt=1),
+    "rmin_strain": lambda w: _float(w, "rmin_strain", gt=0, lt=1),
     "rmin_rotation": lambda w: _float(w, "rmin_rotation", gt=0, le=90),
     "rmin_contact": lambda w: _choice(w, "rmin_contact", ("on", "off")) == "on",
     "rmin_release": lambda w: _float(w, "rmin_release", ge=0, le=1),

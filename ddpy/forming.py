@@ -35,7 +35,7 @@ from ddpy.surfaces import BezierSurface, NagataSurface
 _log = logging.getLogger(__name__)
 
 __all__ = ["RigidTool", "FormingProblem", "FormingResult", "FormingError", "IncrementLimits",
-           "PhaseProgress", "default_augmentation"]
+           "PhaseProgress", "default_augmentation", "start_depth_limit"]
 
 #: Most increments a phase may take at its largest increment: a max_increment smaller than
 #: the travel over this would only keep the process busy (1e-300 mm ran for ever).
@@ -117,6 +117,14 @@ class IncrementLimits:
             value = getattr(self, name)
             if value is not None and not 0.0 < value < 1.0:
                 raise ValueError(f"{name} must lie in (0, 1) or be None, got {value}")
+
+
+def start_depth_limit(strain: float, size: float) -> float:
+    """How deep a tool may start inside the blank (mm): what the first increment can push
+    a node out by without exceeding the strain limit ``strain`` over an element of mean
+    size ``size`` (HexMesh.element_size). ``ddpy check`` and ``FormingProblem.run`` both
+    use it, so what the check accepts the run starts."""
+    return strain * size
 
 
 @dataclass
@@ -296,7 +304,7 @@ class FormingProblem:
         self.ordering = ordering
         self.fixed = np.zeros((n, 3), dtype=bool)
         mesh = solid.mesh
-        self.size = (mesh.volume() / mesh.n_elements) ** (1.0 / 3.0)
+        self.size = mesh.element_size()
         default_r = default_augmentation(solid)
         self.r = np.concatenate([np.full(t.slaves.size, t.augmentation or default_r)
                                  for t in self.tools])
@@ -433,7 +441,7 @@ class FormingProblem:
         self._gap = self._contact(layout, x, x, initial, on, self.force)[4]
         depth = np.where(on & np.isfinite(self._gap[0]), -self._gap[0], -np.inf)
         worst = int(np.argmax(depth)) if depth.size else 0
-        if depth.size and depth[worst] > limits.strain * self.size:
+        if depth.size and depth[worst] > start_depth_limit(limits.strain, self.size):
             raise ValueError(
                 f"tool {self.tools[int(layout.tool_of[worst])].name} starts inside the blank: "
                 f"slave node {int(layout.node[worst])} is {depth[worst]:.3g} mm deep, more "

@@ -8,6 +8,7 @@ the preconditioner instead of factorizing again (docs/theory/linear-solver.md).
 
 from __future__ import annotations
 
+import operator
 from typing import Any
 
 import numpy as np
@@ -19,6 +20,8 @@ from ddpy._validate import float_array, int_array
 
 __all__ = ["MumpsSolver", "LinearSolverError", "spsolve", "gmres", "CoordinateMatrix"]
 
+#: MUMPS's integers (sizes, indices, entry counts) are 32-bit here.
+INT32_MAX = 2**31 - 1
 _SYMMETRY = {"unsymmetric": 0, "spd": 1, "symmetric": 2}
 _ORDERING = {"amd": 0, "amf": 2, "scotch": 3, "pord": 4, "metis": 5, "qamd": 6, "auto": 7}
 _MESSAGES = {
@@ -88,14 +91,27 @@ class MumpsSolver:
             raise LinearSolverError(-1001, "ordering")
 
     def analyse(self, n: int, rows: ArrayLike, cols: ArrayLike) -> None:
-        """Symbolic analysis of an n x n matrix with entries at 0-based (rows, cols)."""
+        """Symbolic analysis of an n x n matrix with entries at 0-based (rows, cols).
+
+        ValueError, before MUMPS sees it: n not a positive 32-bit integer (MUMPS's
+        integers), an entry outside 0..n-1, or fewer entries than unknowns: such a matrix
+        has empty rows (structurally singular) and MUMPS would allocate for all n, 23 GB for
+        n = 2**30 with one entry."""
         rows = int_array(rows, "rows", (None,))
         cols = int_array(cols, "cols", (rows.shape[0],))
-        n = int(n)
-        if n < 1:
-            raise ValueError(f"matrix size must be positive, got {n}")
+        try:
+            n = operator.index(n)
+        except TypeError:
+            raise ValueError(f"matrix size must be an integer, got {n!r}") from None
+        if not 1 <= n <= INT32_MAX:
+            raise ValueError(f"matrix size must lie in 1..{INT32_MAX} (32-bit MUMPS), got {n}")
+        if rows.shape[0] > INT32_MAX:
+            raise ValueError(f"at most {INT32_MAX} entries (32-bit MUMPS), got {rows.shape[0]}")
         if rows.size and (min(rows.min(), cols.min()) < 0 or max(rows.max(), cols.max()) >= n):
             raise ValueError(f"rows and cols must lie in 0..{n - 1}")
+        if rows.shape[0] < n:
+            raise ValueError(f"a {n} x {n} matrix with {rows.shape[0]} entries has empty rows: "
+                             "structurally singular (expected at least one entry per row)")
         status = _core.solver_analyse(self._live(), n, rows, cols)
         if status < 0:
             raise LinearSolverError(int(status), "analysis")

@@ -100,6 +100,10 @@ class HexMesh:
         """Total volume (2 x 2 x 2 Gauss points: exact for trilinear hexahedra)."""
         return float(self.jacobians()[:, :8].sum())
 
+    def element_size(self) -> float:
+        """The mean element size: the cube root of the mean element volume (mm)."""
+        return (self.volume() / self.n_elements) ** (1.0 / 3.0)
+
     def select(self, x: float | None = None, y: float | None = None, z: float | None = None,
                tol: float = 1e-9) -> NDArray[np.int32]:
         """Indices of the nodes with the given coordinates (within tol), e.g. on a plane."""

@@ -19,10 +19,13 @@ increment. The XDMF file is rewritten (atomically) after each frame.
 
 from __future__ import annotations
 
+import contextlib
 import datetime
 import os
+import re
+import shutil
 import tempfile
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -35,10 +38,14 @@ from ddpy import __version__
 from ddpy.case import through_thickness_columns
 
 __all__ = ["CONTACT_STATUS", "FORMAT", "LIMITS", "TENSOR6", "VOIGT", "Frame", "ResultsReader",
-           "ResultsWriter", "Timings", "xdmf_text"]
+           "ResultsWriteError", "ResultsWriter", "Timings", "xdmf_text"]
 
 FORMAT = "ddpy-results"
 VERSION = 1
+#: Free disk space kept beyond what the next frame needs: a write that would leave less
+#: ends the run first. HDF5 that ran out of space in a write failed its later writes, then
+#: crashed the process while closing the file and left groups pointing past its end.
+MIN_FREE = 1 << 20
 #: Contact status of a node in the fields.
 CONTACT_STATUS = {0: "free", 1: "stick", 2: "slip"}
 #: What limited an increment (the ``limit`` column): codes and meanings.
@@ -154,6 +161,15 @@ def _mesh_arrays(mesh: Any) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray
     return nodes, elements.astype(np.int32), ids, eids, np.asarray(normal, dtype=float)
 
 
+class ResultsWriteError(OSError):
+    """Writing the results failed (disk full, I/O error); the file was closed at once, so
+    the increments and frames written before stay readable."""
+
+    def __init__(self, path: Path, reason: str) -> None:
+        super().__init__(f"writing {path} failed: {reason}")
+        self.path, self.reason = path, reason
+
+
 class ResultsWriter:
     """Writes the results of one run to ``path`` (HDF5) and ``path`` with suffix .xdmf.
 
@@ -182,6 +198,13 @@ class ResultsWriter:
         except ValueError:
             self._columns = None  # not layered: no thickness unless given
         self._file = h5py.File(self.path, "w" if overwrite else "w-")
+        self.failed = ""  # why a write failed; the file is closed then
+        with self._writing():
+            self._create(nodes, elements, ids, eids, normal, title, case)
+
+    def _create(self, nodes: NDArray, elements: NDArray, ids: NDArray, eids: NDArray,
+                normal: NDArray, title: str, case: str) -> None:
+        """The groups and columns of a new file, and frame 0."""
         f = self._file
         f.attrs.update({"format": FORMAT, "version": VERSION, "title": title, "case": case,
                         "units": "mm N MPa s", "tools": list(self.tools),
@@ -220,6 +243,46 @@ class ResultsWriter:
                           np.zeros_like(nodes), np.full(len(nodes), -1, np.int16), None, 0.0,
                           {})
 
+    @contextlib.contextmanager
+    def _writing(self, frame: bool = True) -> Iterator[None]:
+        """Where the file is written. Less free space than a frame and MIN_FREE ends the
+        writing of a row or a ``frame`` while HDF5 can still close the file cleanly; a
+        write that fails (h5py raises OSError or RuntimeError) closes the file at once.
+        Either becomes ResultsWriteError, and so does any later write."""
+        if self.failed:
+            raise ResultsWriteError(self.path, self.failed)
+        free, needed = (shutil.disk_usage(self.path.parent).free, self._needed()) if frame \
+            else (1, 0)
+        if free < needed:
+            self.failed = (f"No space left on device ({free / 1e6:.3g} MB free, the next "
+                           f"frame needs {needed / 1e6:.3g} MB)")
+            with contextlib.suppress(Exception):
+                self._file.attrs.update(status="failed", message=self.failed)
+                self._file.close()
+            raise ResultsWriteError(self.path, self.failed)
+        try:
+            yield
+        except (OSError, RuntimeError) as error:
+            # HDF5's messages run over several lines; its errno text says what happened.
+            cause = re.search(r"error message = '([^']+)'", str(error))
+            self.failed = (error.strerror if isinstance(error, OSError) and error.strerror
+                           else cause.group(1) if cause
+                           else str(error).split("\n")[0] or type(error).__name__)
+            with contextlib.suppress(Exception):
+                self._file.close()
+            where = error.filename if isinstance(error, OSError) and error.filename else None
+            raise ResultsWriteError(Path(where or self.path), self.failed) from error
+
+    def _needed(self) -> int:
+        """Bytes a frame takes (its fields, 8 bytes a number), the XDMF file rewritten
+        beside the old one, and MIN_FREE."""
+        n, m = len(self.nodes), len(self.elements)
+        try:
+            xdmf = self.xdmf_path.stat().st_size
+        except OSError:
+            xdmf = 0
+        return 8 * (16 * n + 10 * m) + xdmf + MIN_FREE
+
     @classmethod
     def for_case(cls, path: str | os.PathLike[str], case: Any, overwrite: bool = False
                  ) -> ResultsWriter:
@@ -235,6 +298,7 @@ class ResultsWriter:
         import h5py
 
         self = cls.__new__(cls)
+        self.failed = ""
         self.path = Path(path)
         self.xdmf_path = self.path.with_suffix(".xdmf")
         f = h5py.File(self.path, "r+")
@@ -288,8 +352,9 @@ class ResultsWriter:
 
     def annotate(self, **attrs: Any) -> None:
         """Set root attributes (e.g. the run's status) and flush."""
-        self._file.attrs.update(attrs)
-        self._file.flush()
+        with self._writing(frame=False):
+            self._file.attrs.update(attrs)
+            self._file.flush()
 
     @staticmethod
     def _column(group: Any, name: str, dtype: str, shape: tuple[int, ...], units: str,
@@ -347,27 +412,29 @@ class ResultsWriter:
                "time_contact": timings.contact, "time_factorization": timings.factorization,
                "time_solve": timings.solve, "time_rest": timings.rest, "time_total": timings.total,
                "tool_displacement": u, "tool_force": force, "nodes_in_contact": contact}
-        inc = self._file["increments"]
-        for name, value in row.items():
-            _append(inc[name], k, value)
-        if residual_history is not None:
-            history = np.asarray(residual_history, dtype=float).reshape(-1, 2)
-            it = self._file["iterations"]
-            start = self._iterations
-            columns = {"increment": np.full(len(history), k + 1),
-                       "iteration": np.arange(1, len(history) + 1),
-                       "residual_force": history[:, 0], "residual_displacement": history[:, 1]}
-            for name, values in columns.items():
-                d = it[name]
-                d.resize(start + len(history), axis=0)
-                d[start:] = values
-            self._iterations = start + len(history)
-            it.attrs["count"] = self._iterations
-        self._count = k + 1
-        self._phase, self._travel = int(phase), float(travel)
-        inc.attrs["count"] = self._count  # last: the row is complete
-        self._file.flush()
-        return self._count
+        with self._writing():
+            inc = self._file["increments"]
+            for name, value in row.items():
+                _append(inc[name], k, value)
+            if residual_history is not None:
+                history = np.asarray(residual_history, dtype=float).reshape(-1, 2)
+                it = self._file["iterations"]
+                start = self._iterations
+                columns = {"increment": np.full(len(history), k + 1),
+                           "iteration": np.arange(1, len(history) + 1),
+                           "residual_force": history[:, 0],
+                           "residual_displacement": history[:, 1]}
+                for name, values in columns.items():
+                    d = it[name]
+                    d.resize(start + len(history), axis=0)
+                    d[start:] = values
+                self._iterations = start + len(history)
+                it.attrs["count"] = self._iterations
+            self._count = k + 1
+            self._phase, self._travel = int(phase), float(travel)
+            inc.attrs["count"] = self._count  # last: the row is complete
+            self._file.flush()
+            return self._count
 
     # --------------------------------------------------------------------------- fields
 
@@ -404,8 +471,9 @@ class ResultsWriter:
         if self._frames and frame_time <= self._frames[-1].time:
             raise ValueError(f"frame time {frame_time} must exceed the previous frame's "
                              f"{self._frames[-1].time}")
-        return self._write_frame(index, u, s, ep, status, cf, tool, th, frame_time,
-                                 dict(extra or {}))
+        with self._writing():
+            return self._write_frame(index, u, s, ep, status, cf, tool, th, frame_time,
+                                     dict(extra or {}))
 
     def _write_frame(self, index: int, u: NDArray, s: NDArray, ep: NDArray, status: NDArray,
                      cf: NDArray, tool: NDArray, thickness: NDArray | None, time: float,
@@ -450,19 +518,29 @@ class ResultsWriter:
 
     def _write_xdmf(self) -> None:
         text = xdmf_text(self.path.name, self._file)
-        fd, tmp = tempfile.mkstemp(dir=self.xdmf_path.parent, prefix=".xdmf-")
-        with os.fdopen(fd, "w") as out:
-            out.write(text)
-            out.flush()
-            os.fsync(out.fileno())
-        os.replace(tmp, self.xdmf_path)
+        try:
+            fd, tmp = tempfile.mkstemp(dir=self.xdmf_path.parent, prefix=".xdmf-")
+        except OSError as error:
+            raise OSError(error.errno, error.strerror, str(self.xdmf_path)) from error
+        try:
+            with os.fdopen(fd, "w") as out:
+                out.write(text)
+                out.flush()
+                os.fsync(out.fileno())
+            os.replace(tmp, self.xdmf_path)
+        except OSError as error:  # the last complete XDMF stays; name it, not the temporary
+            Path(tmp).unlink(missing_ok=True)
+            raise OSError(error.errno, error.strerror, str(self.xdmf_path)) from error
 
     # --------------------------------------------------------------------------- closing
 
     def close(self) -> None:
+        """Mark the file closed and close it (nothing to do after a failed write)."""
         if self._file.id.valid:
-            self._file.attrs["closed"] = datetime.datetime.now().isoformat(timespec="seconds")
-            self._file.close()
+            with self._writing(frame=False):
+                self._file.attrs["closed"] = datetime.datetime.now().isoformat(
+                    timespec="seconds")
+                self._file.close()
 
     def __enter__(self) -> ResultsWriter:
         return self

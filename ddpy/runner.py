@@ -46,7 +46,7 @@ from ddpy.forming import (
     RigidTool,
 )
 from ddpy.mesh import HexMesh
-from ddpy.results import ResultsWriter, Timings
+from ddpy.results import MIN_FREE, ResultsWriteError, ResultsWriter, Timings
 from ddpy.solid import Solid, SolidState
 
 __all__ = ["BUILT_IN_CASES", "CHECKPOINT", "DEFAULT_CASE", "RESULTS", "STATUS", "Progress",
@@ -165,10 +165,14 @@ def build_problem(case: Case) -> FormingProblem:
 
 def _write_atomic(path: Path, text: str) -> None:
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".status-")
-    with os.fdopen(fd, "w") as out:
-        out.write(text)
-    os.chmod(tmp, 0o644)
-    os.replace(tmp, path)
+    try:
+        with os.fdopen(fd, "w") as out:
+            out.write(text)
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    except BaseException:  # a full disk: no empty temporary left behind
+        Path(tmp).unlink(missing_ok=True)
+        raise
 
 
 def _segments(phase: Phase) -> list[float]:
@@ -200,6 +204,8 @@ class _Run:
         self.elapsed = 0.0
         self.resume: PhaseProgress | None = None
         self.writer: ResultsWriter | None = None
+        # Increments, iteration rows and frames of the results file at the checkpoint.
+        self._reopen_at = (0, 0, 0)
         self.halt = ""  # why the run stops early: "interrupted" or "stopped"
         self._clock = time.perf_counter()
         self._since_checkpoint = 0
@@ -235,15 +241,34 @@ class _Run:
         """Restore the state and counters of the checkpoint, reopen the results there."""
         path = self.output / CHECKPOINT
         meta, arrays = read_checkpoint(path)
+        try:
+            self._restore(path, meta, arrays)
+        except CheckpointError:
+            raise
+        except KeyError as error:  # an array or counter removed (an edited or foreign file)
+            raise CheckpointError(f"{path}: the entry '{error.args[0]}' is missing; run again "
+                                  "without --restart") from None
+        except (TypeError, ValueError, AttributeError, IndexError) as error:
+            raise CheckpointError(f"{path}: damaged ({error}); run again without --restart"
+                                  ) from None
+        results = self.output / RESULTS
+        if not results.is_file():
+            raise RunError(f"{results}: missing; the checkpoint continues it, so run again "
+                           "without --restart")
+        try:
+            self.writer = ResultsWriter.reopen(results, *self._reopen_at)
+        except (OSError, KeyError, ValueError) as error:
+            raise RunError(f"{results}: cannot be continued ({error}); run again without "
+                           "--restart") from None
+
+    def _restore(self, path: Path, meta: dict[str, Any], arrays: dict[str, NDArray]) -> None:
+        """The problem's state and the counters from a checkpoint read from ``path``."""
         if meta["fingerprint"] != self.fingerprint:
             raise CheckpointError(f"{path}: the case's decks or tool files changed since the "
                                   "checkpoint was written; run again without --restart")
         p = self.problem
-        try:
-            carried = {k: arrays[k] for k in _CARRIED}
-            positions = {k: arrays[f"position/{k}"] for k in self.names}
-        except KeyError as error:
-            raise CheckpointError(f"{path}: {error.args[0]} missing") from None
+        carried = {k: arrays[k] for k in _CARRIED}
+        positions = {k: arrays[f"position/{k}"] for k in self.names}
         for name, value in carried.items():
             if value.shape != getattr(p, name).shape:
                 raise CheckpointError(f"{path}: written for another mesh or tools ({name} "
@@ -263,16 +288,8 @@ class _Run:
                 factor=float(prog["factor"]), step=float(prog["step"]),
                 reason=str(prog["reason"]), last_du=arrays.get("last_du"),
                 last_dp=arrays.get("last_dp"))
-        results = self.output / RESULTS
-        if not results.is_file():
-            raise RunError(f"{results}: missing; the checkpoint continues it, so run again "
-                           "without --restart")
-        try:
-            self.writer = ResultsWriter.reopen(results, int(meta["increments"]),
-                                               int(meta["iterations"]), int(meta["frames"]))
-        except (OSError, KeyError, ValueError) as error:
-            raise RunError(f"{results}: cannot be continued ({error}); run again without "
-                           "--restart") from None
+        self._reopen_at = (int(meta["increments"]), int(meta["iterations"]),
+                           int(meta["frames"]))
 
     # -- output ----------------------------------------------------------------------
 
@@ -465,7 +482,7 @@ def _share(total: int, k: int, parts: int) -> int:
 def _check_free_space(case: Case, output: Path) -> None:
     """Refuse to start where the results cannot be written: less free space than a few
     frames and checkpoints of this mesh (per node about 15 numbers, per element 8 Gauss
-    points of 8), at least 1 MB. HDF5 ended a run started with 64 KB free in a
+    points of 8) beyond the results writer's MIN_FREE. HDF5 ended a run started with 64 KB free in a
     segmentation fault while it closed the file."""
     import shutil
 
@@ -477,7 +494,7 @@ def _check_free_space(case: Case, output: Path) -> None:
     except OSError:
         return  # the first write will say what is wrong
     per_frame = 8 * (15 * case.mesh.n_nodes + 64 * case.mesh.n_elements)
-    needed = max(1 << 20, 8 * per_frame)
+    needed = MIN_FREE + 8 * per_frame  # what the writer keeps free, and a few frames
     if free < needed:
         raise RunError(f"{folder}: {free / 1e6:.3g} MB free, the results of this mesh need "
                        f"at least {needed / 1e6:.3g} MB to start; free some space or choose "
@@ -551,14 +568,23 @@ def run_case(case: Case, output: str | os.PathLike[str], restart: bool = False,
     finally:
         wall = run.elapsed + time.perf_counter() - run._clock
         increments, frames = run.writer.increments, run.writer.frame_count
-        run.writer.annotate(status=status, message=message, wall_time=wall)
-        run.writer.close()
         run.problem.close()
+        failure: ResultsWriteError | None = None
+        if not run.writer.failed:  # after a failed write the file is closed as it was
+            try:
+                run.writer.annotate(status=status, message=message, wall_time=wall)
+                run.writer.close()
+            except ResultsWriteError as error:
+                failure = error
+        if run.writer.failed:
+            status, message = "failed", f"writing {RESULTS} failed: {run.writer.failed}"
         try:
             _write_atomic(output / STATUS, json.dumps({
                 "status": status, "message": message, "case": str(case.folder),
                 "increments": increments, "frames": frames, "wall_time": wall}, indent=1))
-        except OSError:  # the output folder went away: keep the run's own error
+        except OSError:  # the output folder went away or is full: keep the run's own error
             if status != "failed":
                 raise
+        if failure is not None:
+            raise failure
     return RunOutcome(status, message, increments, frames, wall, output)

@@ -444,10 +444,18 @@ def test_bezier_fit_stops_at_the_patch_limit(cad: dict[str, Path], tmp_path: Pat
     ("vector", "VECTOR holds 'NaN' where a number is expected"),
     ("line", "which the file does not define"),
     ("radius", "CYLINDRICAL_SURFACE needs 1 positive radius value(s), got [0.0]"),
+    ("magnitude", "VECTOR: expected a positive magnitude (argument 3), got '0.'"),
+    ("orientation", "VECTOR: its orientation #1 is APPLICATION_PROTOCOL_DEFINITION, "
+     "expected DIRECTION"),
+    ("direction", "DIRECTION: expected 2 or 3 direction ratios, not all zero, got "
+     "'(0.,0.,0.)'"),
+    ("placement", "CYLINDRICAL_SURFACE: its position #"),
+    ("absent", "LINE: expected a reference to a VECTOR as its dir (argument 3), got '$'"),
 ])
 def test_step_files_that_crash_the_cad_reader_are_refused(cad: dict[str, Path], tmp_path: Path,
                                                           damage: str, message: str) -> None:
-    # Each of these ended the process inside gmsh (segmentation fault, or no return).
+    # Each of these ended the process inside gmsh (segmentation fault, or no return), or
+    # (a direction of zeros) was read without a word.
     import re
 
     text = cad["cylinder"].read_text()
@@ -459,6 +467,20 @@ def test_step_files_that_crash_the_cad_reader_are_refused(cad: dict[str, Path], 
     elif damage == "radius":  # the kernel merged the faces of such a file into a few
         text = re.sub(r"(CYLINDRICAL_SURFACE\('[^']*',#\d+,)[^)]*\)", r"\g<1>0.)", text,
                       count=1)
+    elif damage == "magnitude":  # never returned
+        text = re.sub(r"(VECTOR\('[^']*',#\d+,)[^)]*\)", r"\g<1>0.)", text, count=1)
+    elif damage == "orientation":  # a segmentation fault
+        text = re.sub(r"(VECTOR\('[^']*',)#\d+", r"\1#1", text, count=1)
+    elif damage == "direction":
+        text = re.sub(r"DIRECTION\('([^']*)',\([^)]*\)\)", r"DIRECTION('\1',(0.,0.,0.))",
+                      text, count=1)
+    elif damage == "placement":  # placed by a point
+        point = re.search(r"#(\d+) ?= ?CARTESIAN_POINT", text)
+        assert point is not None
+        text = re.sub(r"(CYLINDRICAL_SURFACE\('[^']*',)#\d+", rf"\g<1>#{point.group(1)}", text,
+                      count=1)
+    elif damage == "absent":
+        text = re.sub(r"(LINE\('[^']*',#\d+,)#\d+", r"\1$", text, count=1)
     else:
         text = re.sub(r"\n#\d+ ?= ?LINE\([^;]*;", "", text, count=1)
     bad = tmp_path / "bad.step"
@@ -470,20 +492,65 @@ def test_step_files_that_crash_the_cad_reader_are_refused(cad: dict[str, Path], 
     assert 1 <= number <= len(lines)
     if damage in ("point", "vector"):
         assert re.search(r"nan", lines[number - 1], re.IGNORECASE)
+    if damage in ("magnitude", "orientation", "direction", "placement", "absent"):
+        assert str(error.value).split(": ")[1].split()[1] in lines[number - 1]
+    from ddpy.cli import main
+
+    assert main(["tools", "build", str(bad), "--out", str(tmp_path / "out"),
+                 "--blank-point=0,0,10"]) == 2
 
 
 def test_step_faces_the_cad_kernel_drops_are_reported(cad: dict[str, Path],
                                                       tmp_path: Path) -> None:
-    # A plane placed by a reference to something that is not a placement: the kernel drops
-    # that face and reads the rest, without a word.
+    # A face whose surface is a point: the kernel drops that face and reads the rest,
+    # without a word.
     import re
 
     text = cad["die"].read_text()
-    surface = re.search(r"#(\d+) ?= ?CYLINDRICAL_SURFACE", text)
-    assert surface is not None and "PLANE(" in text
-    text = re.sub(r"PLANE\('([^']*)',#\d+\)", rf"PLANE('\1',#{surface.group(1)})", text,
+    point = re.search(r"#(\d+) ?= ?CARTESIAN_POINT", text)
+    assert point is not None
+    text = re.sub(r"(ADVANCED_FACE\('[^']*',\([^)]*\),)#\d+", rf"\g<1>#{point.group(1)}", text,
                   count=1)
     bad = tmp_path / "bad.step"
     bad.write_text(text)
     with pytest.raises(CadError, match=r"the CAD kernel read \d+ of the \d+ faces"):
         build_tool_models(bad, tmp_path, "bad", blank_side=(0.0, 0.0, 1.0))
+
+
+@pytest.mark.parametrize("name", ["garbage", "cone", "missing"])
+def test_a_failing_build_leaves_no_new_folder(cad: dict[str, Path], tmp_path: Path,
+                                              name: str,
+                                              capsys: pytest.CaptureFixture[str]) -> None:
+    # The file cannot be read (garbage, missing) or a face fails once meshed (cone).
+    from ddpy.cli import main
+
+    path = cad.get(name, tmp_path / "missing.step")
+    out = tmp_path / "new" / "tools"
+    assert main(["tools", "build", str(path), "--out", str(out)]) == 2
+    assert "ddpy tools build: error: " in capsys.readouterr().err
+    assert not (tmp_path / "new").exists()
+    kept = tmp_path / "kept"
+    kept.mkdir()
+    assert main(["tools", "build", str(path), "--out", str(kept)]) == 2
+    assert kept.is_dir() and not any(kept.iterdir())
+
+
+def test_a_build_failing_to_write_leaves_no_new_folder(cad: dict[str, Path], tmp_path: Path,
+                                                       monkeypatch: pytest.MonkeyPatch,
+                                                       capsys: pytest.CaptureFixture[str]
+                                                       ) -> None:
+    import errno
+
+    import ddpy.cad
+    from ddpy.cli import main
+
+    def full(path: Path, model: ToolModel) -> Path:
+        raise OSError(errno.ENOSPC, "No space left on device", str(path))
+
+    monkeypatch.setattr(ddpy.cad, "write_tool", full)
+    out = tmp_path / "new" / "tools"
+    assert main(["tools", "build", str(cad["cylinder"]), "--out", str(out),
+                 "--blank-point=0,0,10"]) == 1
+    err = capsys.readouterr().err
+    assert f"ddpy tools build: error: {out / 'cylinder.nagata.tool'}: No space left" in err
+    assert not (tmp_path / "new").exists()

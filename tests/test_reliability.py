@@ -3,16 +3,22 @@ the line (or the option), before any numerics start; legitimate input is not ref
 
 from __future__ import annotations
 
+import contextlib
+import io
 import shutil
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 import pytest
+from hypothesis import HealthCheck, example, given, settings
+from hypothesis import strategies as st
 
+from ddpy.cli import main
 from ddpy.decks import DeckError, read_case
 from ddpy.parallel import set_threads, thread_limit
-from tests.deckutil import copy_example, edit
+from tests.deckutil import EXAMPLES, copy_example, edit
 from tests.test_forming import block_on_plane
 
 BUILT_IN = Path(__file__).resolve().parents[1] / "ddpy" / "cases" / "cylindrical_bending"
@@ -327,3 +333,197 @@ def test_an_augmentation_far_from_the_blank_stiffness_is_questioned(tmp_path: Pa
     warnings = read_case(case).warnings
     assert any("augmentation 1e+300 N/mm is" in w and "times the blank's stiffness" in w
                for w in warnings), warnings
+
+
+#: The cases whose mutations must run when ddpy check accepts them.
+AGREE_CASES = {"bending": EXAMPLES / "bending", "strip_draw": EXAMPLES / "strip_draw",
+               "cylindrical_bending": BUILT_IN}
+#: Control settings and values at and beyond the edges of what the decks and the run take.
+AGREE_SETTINGS = ["rmin_strain", "rmin_yield", "rmin_rotation", "rmin_release", "cutback",
+                  "newton_force", "newton_displacement", "max_iterations", "min_increment"]
+AGREE_VALUES = ["0", "1e-6", "0.02", "0.5", "0.999", "1", "1.0", "1.5", "90", "91"]
+#: Depths (mm) a tool is moved into the blank: around rmin_strain x element size.
+AGREE_DEPTHS = [0.0, 0.01, 0.02, 0.03, 0.05, 0.2]
+
+
+def set_control(case: Path, key: str, value: str) -> None:
+    """Give a control setting at the top of control.dat (replacing one given there)."""
+    path = case / "control.dat"
+    lines = path.read_text().split("\n")
+    first_phase = next(i for i, x in enumerate(lines) if x.split()[:1] == ["phase"])
+    given_at = [i for i in range(first_phase) if lines[i].split()[:1] == [key]]
+    if given_at:
+        lines[given_at[0]] = f"{key} {value}"
+    else:
+        lines.insert(first_phase, f"{key} {value}")
+    path.write_text("\n".join(lines))
+
+
+def cli(argv: list[str]) -> tuple[int, str, str]:
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main(argv)
+    return code, out.getvalue(), err.getvalue()
+
+
+mutation = st.one_of(
+    st.tuples(st.just("setting"), st.sampled_from(AGREE_SETTINGS), st.sampled_from(AGREE_VALUES)),
+    st.tuples(st.just("sink"), st.integers(0, 2), st.sampled_from(AGREE_DEPTHS)))
+
+
+@settings(max_examples=30, deadline=None, derandomize=True,
+          suppress_health_check=[HealthCheck.too_slow])
+@given(st.sampled_from(sorted(AGREE_CASES)), mutation)
+@example("cylindrical_bending", ("setting", "rmin_strain", "1.5"))
+@example("cylindrical_bending", ("setting", "rmin_yield", "1.0"))
+@example("cylindrical_bending", ("sink", 0, 0.05))
+@example("cylindrical_bending", ("sink", 0, 0.03))
+def test_what_check_accepts_run_starts(name: str, change: tuple[str, object, object]) -> None:
+    # ddpy check and the start of ddpy run agree: a deck check passes runs its first
+    # increment (or fails it as a run, exit 1), a deck check refuses is refused by run.
+    with tempfile.TemporaryDirectory() as tmp:
+        case = Path(tmp) / name
+        shutil.copytree(AGREE_CASES[name], case)
+        kind, what, value = change
+        if kind == "setting":
+            set_control(case, str(what), str(value))
+        else:
+            tools = read_case(case).tools
+            tool = tools[int(str(what)) % len(tools)]
+            lift_tool_file(tool.file, -float(tool.facing[2]) * float(str(value)))
+        checked, _, check_err = cli(["check", str(case)])
+        ran, out, err = cli(["run", str(case), "--output", str(Path(tmp) / "out"),
+                             "--stop-after", "1"])
+    assert "Traceback" not in check_err + err
+    if checked == 0:
+        assert ran == 0 or (ran == 1 and "failed after" in out), (change, out, err)
+    else:
+        assert checked == ran == 2, (change, check_err, err)
+
+
+@pytest.mark.parametrize("change, where, message", [
+    ("rmin_strain 1.5", "control.dat:11", "rmin_strain must be < 1, got 1.5"),
+    ("rmin_yield 1.0", "control.dat:10", "rmin_yield must be < 1, got 1.0"),
+    ("sink 0.05", "tools.dat:5", "tool 'punch' starts inside the blank: node 4 at (0, 0, 1) "
+     "is 0.05 mm behind its surface, more than the first phase's rmin_strain times the "
+     "element size (0.02 x 1.66 = 0.0331 mm)"),
+])
+def test_check_refuses_what_run_refuses_at_once(tmp_path: Path, change: str, where: str,
+                                                message: str,
+                                                capsys: pytest.CaptureFixture[str]) -> None:
+    case = tmp_path / "case"
+    shutil.copytree(BUILT_IN, case)
+    key, value = change.split()
+    if key == "sink":
+        lift_tool_file(case / "tools" / "punch.tool", -float(value))
+    else:
+        set_control(case, key, value)
+    assert main(["check", str(case)]) == 2
+    assert f"{case / where}: {message}" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("n, rows, message", [
+    (2**30, [0], "has empty rows: structurally singular"),        # MUMPS wanted ~23 GB
+    (2**31, [0], "matrix size must lie in 1..2147483647"),        # an OverflowError
+    (2**31 - 1, [0], "has empty rows"),                           # a Fortran abort
+    (0, [], "matrix size must lie in 1.."),
+    (2.5, [0], "matrix size must be an integer"),
+    (3, [0, 1, 3], "rows and cols must lie in 0..2"),
+])
+def test_a_matrix_size_mumps_cannot_take_is_refused_before_it(
+        monkeypatch: pytest.MonkeyPatch, n: object, rows: list[int], message: str) -> None:
+    import ddpy.linalg
+    from ddpy.linalg import MumpsSolver
+
+    def analyse(*args: object) -> int:  # the core's analysis would allocate for all n
+        raise AssertionError("MUMPS was called")
+
+    monkeypatch.setattr(ddpy.linalg._core, "solver_analyse", analyse)
+    with MumpsSolver() as solver, pytest.raises(ValueError, match=message):
+        solver.analyse(n, rows, rows)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("entry", ["start/die", "position/punch", "u"])
+def test_restart_from_a_checkpoint_without_an_entry_names_it(
+        stopped_run: Path, tmp_path: Path, entry: str,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    import numpy as np
+
+    out = tmp_path / "out"
+    shutil.copytree(stopped_run, out)
+    checkpoint = out / "checkpoint.npz"
+    with np.load(checkpoint) as data:
+        arrays = {name: data[name] for name in data.files}
+    del arrays[entry]
+    with open(checkpoint, "wb") as file:  # np.savez adds '.npz' to a name without it
+        np.savez(file, **arrays)
+    assert main(["run", "--output", str(out), "--restart"]) == 1
+    err = capsys.readouterr().err
+    assert f"{checkpoint}: the entry '{entry}' is missing; run again without --restart" in err
+    assert "internal error" not in err and "Traceback" not in err
+
+
+def test_a_disk_filling_during_a_run_ends_it_with_one_message(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    # HDF5 fails to write the second increment's row, as on a full disk: h5py raised a
+    # traceback and the process ended in a segmentation fault.
+    import errno
+
+    import h5py
+
+    from ddpy.results import ResultsReader
+
+    write = h5py.Dataset.__setitem__
+
+    def full(self: h5py.Dataset, key: object, value: object) -> None:
+        if self.name.startswith("/increments/") and key == 1:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        write(self, key, value)
+
+    monkeypatch.setattr(h5py.Dataset, "__setitem__", full)
+    out = tmp_path / "out"
+    assert main(["run", "--output", str(out), "--stop-after", "3"]) == 1
+    err = capsys.readouterr().err
+    results = out / "results.h5"
+    assert (f"ddpy run: error: writing {results} failed: No space left on device; the "
+            "results written so far are kept") in err
+    assert "Traceback" not in err and "internal error" not in err
+    monkeypatch.undo()
+    with ResultsReader(results) as reader:
+        assert reader.n_increments == 1 and len(reader.frames) == 1
+        assert reader.field("displacement", 0).shape == reader.nodes.shape
+
+
+def test_a_run_stops_writing_before_the_disk_is_full(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    # The free space seen by the writer drops to 100 KB after the first increment: HDF5
+    # running out of space failed its later writes and crashed while closing the file.
+    import shutil as shutil_module
+
+    from ddpy.results import ResultsReader
+
+    out = tmp_path / "out"
+    results = out / "results.h5"
+    usage = shutil_module.disk_usage
+    seen: list[int] = []
+
+    def disk_usage(path: str | Path) -> object:
+        real = usage(path)
+        if results.exists():
+            seen.append(1)
+            if len(seen) > 2:  # frame 0 and the first increment written
+                return real._replace(free=100_000)
+        return real
+
+    monkeypatch.setattr(shutil_module, "disk_usage", disk_usage)
+    assert main(["run", "--output", str(out), "--stop-after", "3"]) == 1
+    err = capsys.readouterr().err
+    assert (f"ddpy run: error: writing {results} failed: No space left on device (0.1 MB "
+            "free, the next frame needs") in err
+    assert err.count("\n") == 1 and "Traceback" not in err
+    monkeypatch.undo()
+    with ResultsReader(results) as reader:
+        assert reader.n_increments == 1 and len(reader.frames) == 1
+        assert reader.field("displacement", 0).shape == reader.nodes.shape

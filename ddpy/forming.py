@@ -588,16 +588,20 @@ class FormingProblem:
         return 6 - int(np.linalg.matrix_rank(self._restrained_modes(self.fixed), tol=1e-9))
 
     def _restrained_modes(self, fixed: NDArray[np.bool_]) -> NDArray[np.float64]:
-        """Rows: the six rigid modes (unit translations and rotations about the centroid,
-        scaled by the blank's size) at every fixed dof."""
+        """Rows: the six rigid modes at every fixed dof (see ``_modes_along``)."""
+        node, axis = np.nonzero(fixed)
+        if not node.size:
+            return np.zeros((1, 6))
+        return self._modes_along((self.solid.mesh.nodes + self.u)[node], np.eye(3)[axis])
+
+    def _modes_along(self, points: NDArray[np.float64],
+                     directions: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Rows: the six rigid modes of the blank (unit translations and rotations about
+        its centroid, scaled by its size) along a direction at each point: a fixed dof,
+        or the normal of a contact."""
         x = self.solid.mesh.nodes + self.u
-        x = (x - x.mean(axis=0)) / max(float(np.ptp(x, axis=0).max()), 1e-300)
-        modes = np.zeros((x.shape[0], 3, 6))
-        for axis in range(3):
-            modes[:, axis, axis] = 1.0
-            modes[:, :, 3 + axis] = np.cross(np.eye(3)[axis], x)
-        rows = modes.reshape(-1, 6)[fixed.ravel()]
-        return rows if rows.size else np.zeros((1, 6))
+        arm = (points - x.mean(axis=0)) / max(float(np.ptp(x, axis=0).max()), 1e-300)
+        return np.concatenate([directions, np.cross(arm, directions)], axis=1)
 
     def support_rigid_modes(self) -> list[tuple[int, int]]:
         """Fix the fewest dofs (a 3-2-1 set on three far apart nodes of the deformed blank)
@@ -789,14 +793,12 @@ class FormingProblem:
             second = tool.surface.second_derivatives(patch, found.params)
             v = (x[nodes] - x_n[nodes]) - (positions[tool.name] - self.position[tool.name])
             lam = force[pairs]
-            shut = close.get(i)
+            shut, p_aug = close.get(i, (None, None))
             if shut is not None and shut.any():
                 # A normal force that lifts p_aug just above zero: the law then gives its
                 # closed branch there (stick, C = r g n + r s, when nothing slides yet),
                 # which does not depend on the shift.
                 r = self.r[pairs]
-                distance = np.where(hit, found.distance, 0.0)
-                p_aug = np.einsum("ij,ij->i", lam, found.normal) - r * distance
                 lift = -p_aug[shut] + 1e-9 * r[shut] * self.size
                 lam = lam.copy()
                 lam[shut] += lift[:, None] * found.normal[shut]
@@ -820,47 +822,40 @@ class FormingProblem:
     def _touching(self, layout: _Layout, x: NDArray[np.float64],
                   positions: Mapping[str, NDArray[np.float64]], force: NDArray[np.float64],
                   searched: Mapping[int, object], touching: _Touching
-                  ) -> dict[int, NDArray[np.bool_]]:
-        """The pairs the first iteration's predictor closes, per tool: those the law leaves
-        open (p_aug <= 0) within the touching distance of their tool. Unless
+                  ) -> dict[int, tuple[NDArray[np.bool_], NDArray[np.float64]]]:
+        """The pairs the first iteration's predictor closes, per tool, with the augmented
+        pressure p_aug of every pair: those the law leaves open (p_aug <= 0) within the
+        touching distance of their tool. Unless
         ``touching.resting``, those of a tool at rest in the increment only when the blank
         needs them: when the supports, the pairs the law closes and the touching pairs of
         the moving tools leave a rigid motion free. A touching pair of a resting tool that
         nothing pushes is otherwise held at g = 0, p = 0, where the law cannot tell its
         state (docs/theory/contact.md)."""
-        close: dict[int, NDArray[np.bool_]] = {}
-        resting: list[int] = []
-        holding = [self._restrained_modes(self.fixed)]
+        out: dict[int, tuple[NDArray[np.bool_], NDArray[np.float64]]] = {}
+        resting = [i for i in searched
+                   if np.array_equal(positions[self.tools[i].name],
+                                     self.position[self.tools[i].name])]
         for i, found in searched.items():
-            tool = self.tools[i]
             pairs = slice(layout.first[i], layout.first[i + 1])
             hit = found.status != NONE
             distance = np.where(hit, found.distance, 0.0)  # no patch: no finite gap
             p_aug = np.einsum("ij,ij->i", force[pairs], found.normal) - self.r[pairs] * distance
-            close[i] = hit & (p_aug <= 0.0) & (np.abs(distance) <= touching.distance)
-            if np.array_equal(positions[tool.name], self.position[tool.name]):
-                resting.append(i)
-                held = hit & (p_aug > 0.0)
-            else:
-                held = hit & ((p_aug > 0.0) | close[i])
+            out[i] = hit & (p_aug <= 0.0) & (np.abs(distance) <= touching.distance), p_aug
+        if touching.resting or not any(out[i][0].any() for i in resting):
+            return out
+        holding = [self._restrained_modes(self.fixed)]
+        for i, found in searched.items():
+            close, p_aug = out[i]
+            held = (found.status != NONE) & (p_aug > 0.0)
+            if i not in resting:
+                held |= close
             if held.any():
-                holding.append(self._normal_modes(x[tool.slaves[held]], found.normal[held]))
-        if not touching.resting and any(close[i].any() for i in resting):
-            rows = np.concatenate(holding)
-            if np.linalg.matrix_rank(rows, tol=1e-9) == 6:
-                for i in resting:
-                    close[i][:] = False
-        return close
-
-    def _normal_modes(self, points: NDArray[np.float64],
-                      normals: NDArray[np.float64]) -> NDArray[np.float64]:
-        """Rows: the six rigid modes of the blank (as in ``_restrained_modes``) along the
-        normal of a contact at each point."""
-        x = self.solid.mesh.nodes + self.u
-        centre = x.mean(axis=0)
-        scale = max(float(np.ptp(x, axis=0).max()), 1e-300)
-        arm = (points - centre) / scale
-        return np.concatenate([normals, np.cross(arm, normals)], axis=1)
+                holding.append(self._modes_along(x[self.tools[i].slaves[held]],
+                                                 found.normal[held]))
+        if np.linalg.matrix_rank(np.concatenate(holding), tol=1e-9) == 6:
+            for i in resting:
+                out[i][0][:] = False
+        return out
 
     def _facing_normals(self, i: int, x: NDArray[np.float64]) -> NDArray[np.float64]:
         """Outward normals (k, 3) of the blank surface at the slaves of tool ``i``, in the

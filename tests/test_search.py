@@ -227,8 +227,8 @@ def test_bad_input() -> None:
         search.project([[0.0, 0.0, 1.0]], node_normals=[[0.0, 0.0]])
     with pytest.raises(TypeError, match="BezierSurface or NagataSurface"):
         ContactSearch("die.tool")
-    with pytest.raises(ValueError, match="candidates"):
-        ContactSearch(search.surface, candidates=0)
+    with pytest.raises(ValueError, match="max_iterations"):
+        ContactSearch(search.surface, max_iterations=0)
     assert search.project(np.zeros((0, 3))).patch.shape == (0,)
 
 

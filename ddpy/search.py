@@ -62,10 +62,10 @@ class ContactSearch:
     finds that patch exactly, whatever the sizes of the patches: a bounding volume hierarchy
     over boxes that contain each patch (from its Bernstein control points) gives a lower
     bound of the distance to every patch, patches are projected on in the order of their
-    bounds, and the search stops at the first bound beyond the nearest projection found
-    (docs/theory/contact.md). The grid on each patch, ``(n + 2) x (m + 2)`` points for a
-    Bezier patch, 4 to 12 per direction for a Nagata patch (more for a long thin one),
-    only gives the local search its start.
+    bounds, and the search stops at the first bound beyond the nearest projection found,
+    or beyond the reach of ``project`` (docs/theory/contact.md). The grid on each patch,
+    ``(n + 2) x (m + 2)`` points for a Bezier patch, 4 to 12 per direction for a Nagata
+    patch (more for a long thin one), only gives the local search its start.
     """
 
     def __init__(
@@ -112,12 +112,16 @@ class ContactSearch:
         tool_displacement: ArrayLike = (0.0, 0.0, 0.0),
         node_normals: ArrayLike | None = None,
         brute_force: bool = False,
+        reach: float | None = None,
     ) -> Projection:
         """Closest point on the tool of each of ``points`` (k, 3), the tool moved by
         ``tool_displacement``. With ``node_normals`` (k, 3), only patch points whose outward
         normal opposes the node's within 60 degrees make their patch a candidate (a zero
-        row disables the filter).
-        ``brute_force`` projects on every patch: the reference for tests."""
+        row disables the filter). With ``reach`` (mm), projections farther than it
+        (Euclidean distance) do not count: a node with none nearer gets status NONE, and
+        the search does not look at patches beyond it (None: no limit).
+        ``brute_force`` projects on every patch (within the same reach): the reference for
+        tests."""
         x = float_array(np.reshape(points, (-1, 3)) if np.size(points) == 0 else points,
                         "points", (None, 3))
         k = x.shape[0]
@@ -128,6 +132,13 @@ class ContactSearch:
             nn = float_array(node_normals, "node_normals", (k, 3))
             length = np.linalg.norm(nn, axis=1, keepdims=True)
             nn = nn / np.where(length > 0.0, length, 1.0)  # the cone test needs unit rows
+        if reach is None:
+            limit = float(np.finfo(np.float64).max)
+        else:
+            limit = float(reach)
+            if not limit >= 0.0:
+                raise ValueError(f"reach must be >= 0 or None, got {reach}")
+            limit = min(limit, float(np.finfo(np.float64).max))
         if k == 0:
             empty = np.zeros(0, dtype=np.int32)
             return Projection(empty, np.zeros((0, 2)), np.zeros((0, 3)), np.zeros((0, 3)),
@@ -138,7 +149,7 @@ class ContactSearch:
             mode, self._tree_lower, self._tree_upper, self._tree_child, self._frame,
             self._frame_lower, self._frame_upper, self._grid_start1, self.grid_params.ravel(),
             self.grid_normals.ravel(), self.grid_points.ravel(), x.ravel(), nn.ravel(), u,
-            self.max_iterations, self.tol,
+            self.max_iterations, self.tol, limit,
         )
         patch, params, point, normal, tangents, distance, status, iterations, ncand_out = out
         return Projection(patch, params.reshape(k, 2), point.reshape(k, 3),

@@ -35,7 +35,8 @@ contains
     call box_tree_build(npatch, lower, upper, tree_lower, tree_upper, tree_child)
   end subroutine api_search_tree
 
-  !> Global and local search of nnode nodes against one tool (see ddpy_global_search).
+  !> Global and local search of nnode nodes against one tool (see ddpy_global_search);
+  !> projections farther than reach are dropped (huge: no limit).
   !> tree_child and grid_start arrive 1-based (see above).
   !> Outputs: patch (0-based, -1 for none), parameters, closest point (moved with the tool),
   !> unit normal, tangents, signed normal distance, status, Newton iterations, projections.
@@ -43,12 +44,13 @@ contains
                                 tree_lower, tree_upper, tree_child, frame, frame_lower, &
                                 frame_upper, ngrid, grid_start, grid_params, grid_normals, &
                                 grid_points, nnode, nodes, node_normals, tool_displacement, &
-                                max_iterations, tol, patch, params, points, normals, &
-                                tangents, distance, status, iterations, ncandidates) &
+                                max_iterations, tol, reach, patch, params, points, &
+                                normals, tangents, distance, status, iterations, &
+                                ncandidates) &
     bind(C, name="ddpy_contact_search")
     integer(c_int), value, intent(in) :: kind, npatch, stride, mode, ntree, ngrid, nnode, &
                                          max_iterations
-    real(c_double), value, intent(in) :: tol
+    real(c_double), value, intent(in) :: tol, reach
     real(c_double), intent(in) :: coef(stride, npatch), tree_lower(3, ntree), &
                                   tree_upper(3, ntree), frame(3, 3, npatch), &
                                   frame_lower(3, npatch), frame_upper(3, npatch), &
@@ -64,9 +66,9 @@ contains
     call contact_search(kind, npatch, stride, coef, degrees, triangle, mode, ntree, &
                         tree_lower, tree_upper, tree_child, frame, frame_lower, frame_upper, &
                         ngrid, grid_start, grid_params, grid_normals, grid_points, nnode, &
-                        nodes, node_normals, tool_displacement, max_iterations, tol, patch, &
-                        params, points, normals, tangents, distance, status, iterations, &
-                        ncandidates)
+                        nodes, node_normals, tool_displacement, max_iterations, tol, reach, &
+                        patch, params, points, normals, tangents, distance, status, &
+                        iterations, ncandidates)
     patch = patch - 1
   end subroutine api_contact_search
 

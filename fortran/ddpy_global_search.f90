@@ -10,7 +10,10 @@
 !> bound of their distance (their boxes in a bounding volume hierarchy, ddpy_box_tree and
 !> ddpy_patch_bounds), and the search stops when the next bound exceeds the nearest
 !> projection found. No patch it leaves out can be nearer: every point of a patch lies in
-!> its boxes. Nodes are independent: one OpenMP loop (docs/theory/contact.md).
+!> its boxes. A reach limits the answer: projections farther than it are dropped (both
+!> modes), so a node with none nearer gets no patch; the tree search starts with the reach
+!> as its bound and never projects on a patch whose box lies beyond it. Nodes are
+!> independent: one OpenMP loop (docs/theory/contact.md).
 module ddpy_global_search
   use ddpy_kinds, only: wp
   use ddpy_box_tree, only: box_distance
@@ -52,18 +55,19 @@ contains
   !> (ddpy_patch_bounds). grid_start(p):grid_start(p+1)-1 are the grid points of patch p,
   !> whose nearest to a node starts the local search on p. node_normals (zero = no filter)
   !> keep only patches with a grid point whose normal opposes the node's within 60 degrees.
+  !> Projections farther than reach (Euclidean distance) are dropped.
   subroutine contact_search(kind, npatch, stride, coef, degrees, triangle, mode, ntree, &
                             tree_lower, tree_upper, tree_child, frame, frame_lower, &
                             frame_upper, ngrid, grid_start, grid_params, grid_normals, &
                             grid_points, nnode, nodes, node_normals, tool_displacement, &
-                            max_iterations, tol, patch, params, points, normals, tangents, &
-                            distance, status, iterations, ncandidates)
+                            max_iterations, tol, reach, patch, params, points, normals, &
+                            tangents, distance, status, iterations, ncandidates)
     integer, intent(in) :: kind, npatch, stride, mode, ntree, ngrid, nnode, max_iterations
     real(wp), intent(in) :: coef(stride, npatch), tree_lower(3, ntree), tree_upper(3, ntree), &
                             frame(3, 3, npatch), frame_lower(3, npatch), &
                             frame_upper(3, npatch), grid_params(2, ngrid), &
                             grid_normals(3, ngrid), grid_points(3, ngrid), nodes(3, nnode), &
-                            node_normals(3, nnode), tool_displacement(3), tol
+                            node_normals(3, nnode), tool_displacement(3), tol, reach
     integer, intent(in) :: degrees(2, npatch), triangle(npatch), tree_child(ntree), &
                            grid_start(npatch + 1)
     integer, intent(out) :: patch(nnode), status(nnode), iterations(nnode), &
@@ -109,15 +113,17 @@ contains
         end do
       else if (ntree > 0) then
         nheap = 0
-        call heap_push(node_bound(x, 1), 1, nheap, heap_key, heap_item)
-        bound = huge(1.0_wp)
+        ! The reach is the first bound: no box beyond it is opened, no patch projected on.
+        bound = reach
+        key = node_bound(x, 1)
+        if (key <= bound) call heap_push(key, 1, nheap, heap_key, heap_item)
         do while (nheap > 0)
           call heap_pop(nheap, heap_key, heap_item, key, item)
           ! Every box still in the heap is at least key away, and so is every patch in it.
           if (key > bound) exit
           if (tree_child(item) < 0) then
             call consider(i, x, filter, -tree_child(item), nearest, nearest_inside)
-            if (nearest%patch > 0) bound = nearest%measure + tie(nearest%measure)
+            if (nearest%patch > 0) bound = min(reach, nearest%measure + tie(nearest%measure))
           else
             do j = 0, 1
               c = tree_child(item) + j
@@ -160,7 +166,8 @@ contains
     end function node_bound
 
     !> Project node i (at x) on patch pp, if the filter lets it, and keep the projection
-    !> if it is the nearest so far, or the nearest inside one (the lower patch on a tie).
+    !> if it lies within the reach and is the nearest so far, or the nearest inside one
+    !> (the lower patch on a tie).
     subroutine consider(i, x, filter, pp, nearest, nearest_inside)
       integer, intent(in) :: i, pp
       real(wp), intent(in) :: x(3)
@@ -178,6 +185,7 @@ contains
       iterations(i) = iterations(i) + its
       ncandidates(i) = ncandidates(i) + 1
       trial%measure = norm2(x - trial%point)
+      if (trial%measure > reach) return
       trial%patch = pp
       if (before(trial, nearest)) nearest = trial
       if (inside .and. before(trial, nearest_inside)) nearest_inside = trial

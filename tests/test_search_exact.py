@@ -22,7 +22,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from ddpy.search import EDGE, INSIDE, ContactSearch
+from ddpy.search import EDGE, INSIDE, NONE, ContactSearch
 from ddpy.shapes import Sphere
 from ddpy.surfaces import BezierSurface, NagataSurface
 from ddpy.toolfile import read_tool
@@ -193,10 +193,12 @@ def query_points(rng: np.random.Generator, surface: NagataSurface | BezierSurfac
 
 
 def assert_same_as_brute_force(search: ContactSearch, x: np.ndarray,
-                               node_normals: np.ndarray | None = None) -> None:
-    """The tree search returns brute force's patch, point and status for every point."""
-    fast = search.project(x, node_normals=node_normals)
-    slow = search.project(x, node_normals=node_normals, brute_force=True)
+                               node_normals: np.ndarray | None = None,
+                               reach: float | None = None) -> None:
+    """The tree search returns brute force's patch, point and status for every point (both
+    within ``reach``)."""
+    fast = search.project(x, node_normals=node_normals, reach=reach)
+    slow = search.project(x, node_normals=node_normals, brute_force=True, reach=reach)
     d_fast = np.linalg.norm(x - fast.point, axis=1)
     d_slow = np.linalg.norm(x - slow.point, axis=1)
     worst = int(np.argmax(d_fast - d_slow))
@@ -224,6 +226,30 @@ def test_tree_search_returns_the_brute_force_patch(tool, seed: int) -> None:
     # With the orientation filter: random node normals, some of them zero (no filter).
     normals = rng.normal(size=x.shape) * (rng.uniform(size=(len(x), 1)) < 0.8)
     assert_same_as_brute_force(search, x, normals)
+    # Within a reach that leaves about half of the points without a patch.
+    for node_normals in (None, normals):
+        unlimited = search.project(x, node_normals=node_normals, brute_force=True)
+        measure = np.linalg.norm(x - unlimited.point, axis=1)
+        reach = float(np.median(measure))
+        assert_same_as_brute_force(search, x, node_normals, reach)
+        assert_reach(search, x, node_normals, reach, unlimited)
+
+
+def assert_reach(search: ContactSearch, x: np.ndarray, node_normals: np.ndarray | None,
+                 reach: float, unlimited) -> None:
+    """With ``reach``, a point whose closest point (``unlimited``: without reach) lies within
+    it gets that point; one beyond it gets none (a point at the reach up to rounding, where
+    either may happen, is left out)."""
+    found = search.project(x, node_normals=node_normals, reach=reach)
+    measure = np.linalg.norm(x - unlimited.point, axis=1)
+    within = (unlimited.status != NONE) & (measure <= reach * (1 - 1e-9))
+    beyond = (unlimited.status == NONE) | (measure > reach * (1 + 1e-9))
+    np.testing.assert_array_equal(found.patch[within], unlimited.patch[within])
+    np.testing.assert_array_equal(found.status[within], unlimited.status[within])
+    np.testing.assert_array_equal(found.distance[within], unlimited.distance[within])
+    assert np.all(found.status[beyond] == NONE)
+    assert np.all(found.patch[beyond] == -1)
+    assert np.all(found.candidates <= search.project(x, node_normals=node_normals).candidates)
 
 
 @settings(max_examples=EXAMPLES_RUN // 2 or 30, deadline=None, derandomize=not EXAMPLES_RUN,
@@ -330,3 +356,45 @@ def test_a_tree_that_leaves_out_a_patch_fails_the_comparison(left_out: int) -> N
     child[child == -(left_out + 1)] = -((left_out + 1) % surface.n_patches + 1)
     with pytest.raises(AssertionError, match="misses"):
         assert_same_as_brute_force(search, x)
+
+
+def test_a_reach_leaves_far_points_without_a_patch() -> None:
+    # Issue 19: a node whose nearby patches the facing filter leaves out found a patch 20 to
+    # 56 mm away (an EDGE point) and that pair stopped a deep drawing run. Within a reach
+    # the search returns brute force's patch; beyond it, none (status NONE).
+    surface = split_die(8, 8)
+    search = ContactSearch(surface)
+    x = np.array([[80.0, 10.0, 1.0], [49.75, 10.0, 500.0], [27.5, 7.5, 0.0]])
+    near = search.project(x, reach=20.0)
+    assert near.status.tolist() == [EDGE, NONE, INSIDE]
+    np.testing.assert_allclose(near.point[0], [70.0, 10.0, 0.0], atol=1e-12)
+    assert near.patch[2] == 4  # the shoulder, 0.47 mm away
+    brute = search.project(x, reach=20.0, brute_force=True)
+    np.testing.assert_array_equal(near.patch, brute.patch)
+    np.testing.assert_array_equal(near.distance, brute.distance)
+    # Beyond the reach of 5 mm, the free edge (10.05 mm away) is no answer either.
+    far = search.project(x, reach=5.0)
+    assert far.status.tolist() == [NONE, NONE, INSIDE]
+    assert far.patch[:2].tolist() == [-1, -1]
+    assert search.project(x, reach=5.0, brute_force=True).status.tolist() == [NONE, NONE,
+                                                                              INSIDE]
+    # The tree search does not project on any patch beyond the reach; brute force does.
+    assert far.candidates[1] == 0 and search.project(x[1:2]).candidates[0] > 0
+    # The facing filter: nodes facing +x see only the shoulder (normals towards -x). One
+    # 1 mm below the flat is then held on the shoulder's edge 12 mm away, on the far side
+    # of its patch (distance -12 mm: a deep penetration to the contact law), and one beyond
+    # the free edge 52 mm away; within a reach of 5 mm neither has a patch.
+    x = np.vstack([x, [[40.0, 10.0, -1.0]]])
+    facing = np.tile([1.0, 0.0, 0.0], (len(x), 1))
+    unlimited = search.project(x, node_normals=facing)
+    assert unlimited.status.tolist() == [EDGE, EDGE, INSIDE, EDGE]
+    assert unlimited.patch.tolist() == [4, 4, 4, 4]
+    np.testing.assert_allclose(unlimited.distance[[0, 3]], [-52.05, -12.05], atol=0.01)
+    limited = search.project(x, node_normals=facing, reach=5.0)
+    assert limited.status.tolist() == [NONE, NONE, INSIDE, NONE]
+    assert limited.patch[2] == 4 and limited.distance[2] == unlimited.distance[2]
+    assert_same_as_brute_force(search, x, facing, reach=5.0)
+    with pytest.raises(ValueError, match="reach"):
+        search.project(x, reach=-1.0)
+    with pytest.raises(ValueError, match="reach"):
+        search.project(x, reach=float("nan"))

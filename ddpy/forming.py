@@ -59,6 +59,20 @@ KRYLOV_MAX = 12
 #: the shortest step that limit may leave (FormingProblem._penetration_step).
 PENETRATION, MIN_STEP = 0.02, 1.0 / 64.0
 KRYLOV_KEEP = 8
+#: Reach of the contact search of a forming run: a slave node whose nearest admissible
+#: point of a tool (the facing filter applied) lies farther than
+#: max(REACH_SIZES x element size, REACH_TRAVELS x the leading tool's largest travel of an
+#: increment) has no partner on it (status NONE: a free node, no gap). What the run needs
+#: of a gap lies well within: first touch sees a free node once it is nearer than the
+#: largest approach of the next increment, the tool's travel plus the node's (at most as
+#: fast as the tools that carry it: 2 travels), here with a margin of 2; the contact law,
+#: the touching predictor and the penetration limit of a Newton step look at gaps of a few
+#: hundredths of an element (TOUCHING, touch_gap, PENETRATION). Without a reach the exact
+#: search pairs a node whose nearby patches the filter leaves out with a far patch edge,
+#: 20 to 56 mm away on the coarse reverse deep drawing (an EDGE point, signed by the side
+#: of its patch: it may be a deep penetration to the law), and that run stopped at 31.7 mm
+#: of its 40 mm first stage (docs/theory/contact.md, "Reach").
+REACH_SIZES, REACH_TRAVELS = 2.0, 4.0
 
 
 @dataclass(frozen=True)
@@ -319,6 +333,8 @@ class FormingProblem:
         npair = sum(t.slaves.size for t in self.tools)
         self.force = np.zeros((npair, 3))
         self._gap = (np.full(npair, np.inf), np.zeros((npair, 3)))
+        #: reach of the contact search (mm): see REACH_SIZES; run() adds its tool travel
+        self._reach = REACH_SIZES * self.size
         self._status = np.zeros(npair, dtype=np.int32)  # of the law, last increment
         self.external = np.zeros((n, 3))
         self._layout: _Layout | None = None
@@ -425,6 +441,8 @@ class FormingProblem:
         on = np.concatenate([np.full(t.slaves.size, t.name in active_set) for t in self.tools])
         start = {name: p.copy() for name, p in self.position.items()}
         nominal = min(1.0, max_increment / travel) if travel > 0.0 else 1.0
+        self._reach = max(REACH_SIZES * self.size,
+                          REACH_TRAVELS * min(max_increment, travel))
         factor, step, cuts_in_row, reason = 0.0, nominal, 0, "max"
         redos = 0  # redos at a release of the present increment
         last_du: NDArray[np.float64] | None = None
@@ -433,7 +451,8 @@ class FormingProblem:
             start, factor, step = resume.start, resume.factor, resume.step
             reason, last_du, last_dp = resume.reason, resume.last_du, resume.last_dp
         # Gaps at the start of the phase (tools held at a gap placed there), for first touch;
-        # a tool deeper in the blank than one increment may push it out is refused.
+        # a tool deeper in the blank than one increment may push it out is refused (seen
+        # here within the search's reach; the deck's checks search without one).
         x = self.solid.mesh.nodes + self.u
         initial = dict(self.position)
         for name, (other, offset) in offsets.items():
@@ -781,7 +800,8 @@ class FormingProblem:
             if not on[pairs].any():
                 continue
             normals = None if tool.facing is None else self._facing_normals(i, x)
-            searched[i] = tool.search.project(x[tool.slaves], positions[tool.name], normals)
+            searched[i] = tool.search.project(x[tool.slaves], positions[tool.name], normals,
+                                              reach=self._reach)
         close = {} if touching is None else self._touching(layout, x, positions, force,
                                                             searched, touching)
         for i, found in searched.items():

@@ -415,7 +415,6 @@ def measure_series(variant: str, description: str, nodes: int, repeats: int,
     rows: dict[str, list[dict[str, Any]]] = {}
     for patches, tool in tools.items():
         search = tool["search"]
-        occupied = np.diff(search._cell_start)  # the spatial index (private: for the analysis)
         for name in tool["nodes"]:
             result = found[patches, name]
             rows.setdefault(name, []).append({
@@ -430,8 +429,7 @@ def measure_series(variant: str, description: str, nodes: int, repeats: int,
                 "none": int((result.status == NONE).sum()),
                 "one_node_call_us": min(ones[patches, "one"]["wall"], t[patches, "one"]["wall"])
                 * 1e6,
-                "index_points_per_cell": float(occupied[occupied > 0].mean()),
-                "index_cell_mm": float(search._h), "other_processes_cpus": load})
+                "other_processes_cpus": load})
     return rows
 
 
@@ -573,8 +571,8 @@ def split_table(numbers: dict[str, Any]) -> str:
 def scaling_table(numbers: dict[str, Any], name: str) -> str:
     """Markdown: one node set of the scaling study, every description and tool size."""
     lines = ["| description | patches | tool side [mm] | set-up [ms] | query [us/node] "
-             "| query, CPU time [us/node] | mean Newton iterations | index points per "
-             "occupied cell | one-node call [us] | model build [ms] | other load [CPUs] |",
+             "| query, CPU time [us/node] | mean Newton iterations | projections per node "
+             "| one-node call [us] | model build [ms] | other load [CPUs] |",
              "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for description, entry in numbers["scaling"][name].items():
         for r in entry["rows"]:
@@ -582,7 +580,7 @@ def scaling_table(numbers: dict[str, Any], name: str) -> str:
                 f"| {description} | {r['patches']} | {r['side_mm']:.0f} "
                 f"| {r['setup_s'] * 1e3:.1f} | {r['query_us_per_node']:.2f} "
                 f"| {r['query_cpu_us_per_node']:.2f} | {r['mean_iterations']:.2f} "
-                f"| {r['index_points_per_cell']:.1f} | {r['one_node_call_us']:.0f} "
+                f"| {r['candidates_per_node']:.2f} | {r['one_node_call_us']:.0f} "
                 f"| {r['model_build_s'] * 1e3:.0f} "
                 f"| {r['other_processes_cpus']:.2f} |")
     return "\n".join(lines)
@@ -655,9 +653,9 @@ def findings(numbers: dict[str, Any]) -> list[str]:
                     f"{entry['query_slope']:.2f} (CPU time {entry['query_cpu_slope']:.2f}; "
                     f"{rows[0]['query_cpu_us_per_node']:.1f} to "
                     f"{rows[-1]['query_cpu_us_per_node']:.1f} us/node CPU from "
-                    f"{rows[0]['patches']} to {rows[-1]['patches']} patches; index points per "
-                    f"occupied cell {rows[0]['index_points_per_cell']:.1f} to "
-                    f"{rows[-1]['index_points_per_cell']:.1f}).")
+                    f"{rows[0]['patches']} to {rows[-1]['patches']} patches; projections per "
+                    f"node {rows[0]['candidates_per_node']:.2f} to "
+                    f"{rows[-1]['candidates_per_node']:.2f}).")
             if node_set == "window" and entry["one_node_slope"] > 0.3:
                 text.append(
                     f"The fixed cost of one `project` call grows with the tool: "
@@ -720,13 +718,14 @@ few % above the wall time).
   penetrate). The gap is below the radius of curvature, so it is the exact signed distance:
   the error below is |distance found - gap|, the model's shape error where the node
   projects.
-* Set-up: `ContactSearch(surface)` (defaults: 10 candidates, 8 vertices per query): grid on
-  every patch, spatial index. Query: `project(points)` (no node normals). One projection is
-  one local search (Newton) on one candidate patch; projections per node is
-  `candidates.mean()`. Best of {numbers['repeats']} after a warm-up, 1 and 2 core threads
-  (`ddpy.parallel.threads`) interleaved. Misses: nodes of a random sample of
-  {numbers['brute_force_sample']} whose closest point is farther than the one of
-  `project(..., brute_force=True)` (every patch projected on).
+* Set-up: `ContactSearch(surface)`: grid on every patch (the starts of the local search),
+  bounds of every patch and their tree. Query: `project(points)` (no node normals). One
+  projection is one local search (Newton) on one patch; the exact global search projects
+  on the patches whose bound is below the nearest distance found (docs/theory/contact.md);
+  projections per node is `candidates.mean()`. Best of {numbers['repeats']} after a
+  warm-up, 1 and 2 core threads (`ddpy.parallel.threads`) interleaved. Misses: nodes of a
+  random sample of {numbers['brute_force_sample']} whose closest point is farther than the
+  one of `project(..., brute_force=True)` (every patch projected on).
 
 ## Projections and nodes per second
 
@@ -749,14 +748,16 @@ check. Inside / edge / none: the closest point is inside a patch, held on a patc
 
 ### Where the time of a query goes (1 thread, CPU time)
 
-The global search (spatial index, ranking of the candidates) does not depend on the Newton
-iterations, so the query is also run with Newton capped at one iteration and forced to up
-to twelve (`max_iterations=1`; `max_iterations=12, tol=0`: many stop earlier, on a zero
-step) on the same candidates. Their difference in each round gives the cost of one
-iteration (an evaluation with second derivatives and a 2 x 2 solve); the local search is
-that cost times (iterations + one final evaluation) per projection, as a share of the
-query of the same round (median over the rounds); the global search is the rest of the
-query (with the Python and f2py call overhead). CPU times, because a difference of two wall
+The global search (the walk through the tree of patch bounds, the nearest grid point of
+each patch projected on) hardly depends on the Newton iterations, so the query is also run
+with Newton capped at one iteration and forced to up to twelve (`max_iterations=1`;
+`max_iterations=12, tol=0`: many stop earlier, on a zero step) on nearly the same patches
+(the search stops on the distance found, which a projection cut short overestimates a
+little). Their difference in each round gives the cost of one iteration (an evaluation
+with second derivatives and a 2 x 2 solve); the local search is that cost times
+(iterations + one final evaluation) per projection, as a share of the query of the same
+round (median over the rounds); the global search is the rest of the query (with the
+Python and f2py call overhead). CPU times, because a difference of two wall
 times on a loaded machine is mostly noise; still expect +-20 % on the split. Model build is
 the construction of the surface object (`BezierSurface(nets)` / `NagataSurface(...)`), not
 part of the set-up.
@@ -779,9 +780,8 @@ slopes.
 * **spread** (grow): the same tools, the nodes over the whole tool, from 100 nodes per
   patch down to 0.1: adds the memory traffic of a large tool (cache misses).
 {refine_text}* One-node call: the wall time of `project` with a single node (best of 30), i.e. the
-  fixed cost of a call whatever the batch size. Index points per occupied cell: the mean
-  number of points (Bezier: grid points, Nagata/facets: vertices) in a non-empty cell of
-  the spatial index, read from the `ContactSearch` object.
+  fixed cost of a call whatever the batch size. Projections per node: local searches per
+  node, the patches whose bound is below the nearest distance found.
 
 ![scaling]({figures[1].name})
 

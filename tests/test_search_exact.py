@@ -398,3 +398,34 @@ def test_a_reach_leaves_far_points_without_a_patch() -> None:
         search.project(x, reach=-1.0)
     with pytest.raises(ValueError, match="reach"):
         search.project(x, reach=float("nan"))
+
+
+@pytest.mark.parametrize("nx, ny", [(1, 20), (8, 8)])
+def test_the_bending_example_runs_on_a_die_of_mixed_sizes(nx: int, ny: int,
+                                                          tmp_path: Path) -> None:
+    # Issue 19: with the die's flat split finely, the former search missed the shoulder
+    # under the blank's nodes and the first increment diverged. The geometry is the same,
+    # so the run must give the original die's punch forces (the flat is the plane z = 0
+    # either way; only round-off in the projections differs).
+    import shutil
+
+    from ddpy.decks import read_case
+    from ddpy.results import ResultsReader
+    from ddpy.runner import run_case
+    from ddpy.toolfile import ToolModel, write_tool
+
+    forces = []
+    for split in (False, True):
+        case = tmp_path / f"case{int(split)}"
+        shutil.copytree(DIE.parents[1], case)
+        if split:
+            original = read_tool(DIE)
+            write_tool(case / "tools" / "die.tool",
+                       ToolModel("die", "nagata", split_die(nx, ny),
+                                 np.zeros(split_die(nx, ny).n_patches, dtype=np.int64)))
+        outcome = run_case(read_case(case), case / "out", max_increments=6)
+        assert outcome.status == "stopped" and outcome.increments == 6
+        with ResultsReader(case / "out" / "results.h5") as r:
+            forces.append(r.tool_force("punch")[:, 2])
+    assert original.surface.n_patches < split_die(nx, ny).n_patches
+    np.testing.assert_allclose(forces[1], forces[0], rtol=1e-6, atol=1e-9)

@@ -293,3 +293,24 @@ def test_a_fine_blank_lying_on_the_die_converges_in_its_first_increment(tmp_path
     assert outcome.status == "stopped"
     assert [p.limit for p in seen] == ["contact_touch"]   # no cut
     assert seen[0].iterations < 25
+
+
+def test_restart_at_a_phase_boundary_is_the_same_run_with_reused_factors(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    # With older factors reused (GMRES on them), a run continued from a checkpoint has none
+    # to reuse. Every phase sets its constraints, and with them a new solver, anew: so a
+    # restart at a phase boundary is the same run as the uninterrupted one
+    # (docs/theory/contact.md).
+    import ddpy.forming
+
+    monkeypatch.setattr(ddpy.forming, "REUSE_FROM", 0)  # the tiny case is below it
+    case = read_case(tiny_case(tmp_path / "case"))
+    assert run_case(case, tmp_path / "whole").status == "completed"
+    with ResultsReader(tmp_path / "whole" / RESULTS) as r:
+        phase = r.curve("phase")
+        assert r.curve("krylov_iterations").sum() > 0  # the factors were reused
+    for end in np.flatnonzero(np.diff(phase)) + 1:  # increments up to each phase's end
+        first = run_case(case, tmp_path / f"part{end}", max_increments=int(end))
+        assert first.status == "stopped"
+        assert run_case(case, tmp_path / f"part{end}", restart=True).status == "completed"
+        compare(tmp_path / "whole", tmp_path / f"part{end}")

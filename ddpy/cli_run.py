@@ -86,19 +86,30 @@ class _Interrupt:
         signal.signal(signal.SIGINT, self._previous)
 
 
+class _LogLines(logging.Handler):
+    """The solver's messages on standard error, each on a line of its own: an open progress
+    bar line is ended first."""
+
+    def __init__(self, display: ProgressDisplay) -> None:
+        super().__init__()
+        self.display = display
+        self.setFormatter(logging.Formatter("  %(message)s"))
+
+    def emit(self, record: logging.LogRecord) -> None:
+        self.display.close()
+        print(self.format(record), file=sys.stderr, flush=True)
+
+
 @contextmanager
-def _solver_log(verbose: int) -> Iterator[None]:
-    """The solver's cut increments (verbose 1) and Newton iterations (2) on standard error
-    while the run lasts; the handler goes with it (ddpy.cli.main may be called again)."""
-    if not verbose:
-        yield
-        return
-    handler = logging.StreamHandler(sys.stderr)
-    handler.setFormatter(logging.Formatter("  %(message)s"))
+def _solver_log(verbose: int, display: ProgressDisplay) -> Iterator[None]:
+    """The solver's cut and restarted increments, and with -v every Newton iteration, on
+    standard error while the run lasts: a run that cuts back is seen doing so. The handler
+    goes with it (ddpy.cli.main may be called again)."""
+    handler = _LogLines(display)
     logger = logging.getLogger("ddpy")
     level = logger.level
     logger.addHandler(handler)
-    logger.setLevel(logging.INFO if verbose == 1 else logging.DEBUG)
+    logger.setLevel(logging.DEBUG if verbose else logging.INFO)
     try:
         yield
     finally:
@@ -127,7 +138,7 @@ def _run(args: argparse.Namespace) -> int:
     verb = "continuing" if args.restart else "running"
     print(f"ddpy run: {verb} {case.title} ({folder}) -> {output}", flush=True)
     try:
-        with _Interrupt() as interrupt, _solver_log(args.verbose):
+        with _Interrupt() as interrupt, _solver_log(args.verbose, display):
             outcome = run_case(case, output, restart=args.restart, progress=display,
                                stop=interrupt, overwrite=args.overwrite,
                                checkpoint_every=args.checkpoint_every,
@@ -211,8 +222,8 @@ def add_run(commands: argparse._SubParsersAction) -> None:
     run.add_argument("--stop-after", type=_at_least_one, metavar="N",
                      help="stop after N increments of the whole run (restartable)")
     run.add_argument("-v", "--verbose", action="count", default=0,
-                     help="report every cut increment and why (-v), and every Newton "
-                     "iteration's residual and step length (-vv), on standard error")
+                     help="report every Newton iteration's residual and step length on "
+                     "standard error, besides the cut increments and why (always)")
     run.set_defaults(handler=_run)
 
 

@@ -262,20 +262,30 @@ def test_default_case_is_packaged(tmp_path: Path) -> None:
 
 
 def test_verbose_run_reports_newton_iterations_and_cuts(tmp_path: Path) -> None:
-    # -vv: every Newton iteration's residual and step length on standard error, so that a
-    # run that cuts back is seen doing so; without -v, nothing of it.
+    # -v: every Newton iteration's residual and step length on standard error; without it,
+    # none of them. A cut increment is reported always, with its reason, so that a run that
+    # cuts back hundreds of times is seen doing so (issue 19).
     case = tiny_case(tmp_path / "case")
     quiet = subprocess.run([sys.executable, "-m", "ddpy", "run", str(case), "--output",
                             str(tmp_path / "quiet"), "--stop-after", "2"],
                            capture_output=True, text=True)
     loud = subprocess.run([sys.executable, "-m", "ddpy", "run", str(case), "--output",
-                           str(tmp_path / "loud"), "--stop-after", "2", "-vv"],
+                           str(tmp_path / "loud"), "--stop-after", "2", "-v"],
                           capture_output=True, text=True)
     assert quiet.returncode == loud.returncode == 0, loud.stderr
     assert "iteration" not in quiet.stderr
     lines = [x for x in loud.stderr.splitlines() if "iteration 0: residual" in x]
     assert len(lines) >= 2
     assert "step length" in loud.stderr
+    # One Newton iteration per increment at most: every increment is cut, each cut says so.
+    control = case / "control.dat"
+    control.write_text(control.read_text().replace("max_increment  0.2",
+                                                   "max_increment  0.2\nmax_iterations 1"))
+    cutting = subprocess.run([sys.executable, "-m", "ddpy", "run", str(case), "--output",
+                              str(tmp_path / "cutting")], capture_output=True, text=True)
+    assert cutting.returncode == 1
+    cuts = [x for x in cutting.stderr.splitlines() if " cut: no convergence in 1 " in x]
+    assert len(cuts) >= 3, cutting.stderr
 
 
 def test_a_fine_blank_lying_on_the_die_converges_in_its_first_increment(tmp_path) -> None:

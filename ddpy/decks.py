@@ -65,6 +65,12 @@ MAX_STRESS, MAX_EPS0 = 1e5, 10.0
 #: Young's modulus (MPa): above the largest it is refused, below the smallest a warning
 #: asks whether it is in MPa (polymers to tungsten carbide lie between).
 MIN_MODULUS, MAX_MODULUS = 1e3, 1e6
+#: Hill'48 coefficients at most 100: the uniaxial yield stress along an axis,
+#: 1 / sqrt(G + H) etc. times the hardening law's, is then at least a tenth of it.
+MAX_HILL = 100.0
+#: Lankford coefficients (given, or H/G and H/F of the coefficients) outside this range are
+#: warned about: sheet metals lie between about 0.2 and 3.
+R_VALUE_RANGE = (0.1, 10.0)
 #: Largest node or element id.
 MAX_ID = 2**31 - 1
 #: Largest number of errors reported for one kind of defect in a block of data lines.
@@ -988,7 +994,7 @@ def _parse_material(deck: _Deck) -> BlankMaterial | None:
             elif key == "yield":
                 _arity(line, "yield vonmises|hill48 ...", 1, -1)
                 if _once(deck, seen, line):
-                    criterion = _yield(line)
+                    criterion = _yield(line, deck)
             elif key == "hardening":
                 _arity(line, "hardening swift|voce ...", 1, -1)
                 if _once(deck, seen, line):
@@ -1017,7 +1023,7 @@ def _parse_material(deck: _Deck) -> BlankMaterial | None:
     return BlankMaterial(material, angle, criterion[1], deck.where(seen["yield"]))
 
 
-def _yield(line: _Line) -> tuple[Hill48, str]:
+def _yield(line: _Line, deck: _Deck) -> tuple[Hill48, str]:
     kind = _choice(line.words[1], "the yield criterion", ("vonmises", "hill48"))
     if kind == "vonmises":
         _arity(line, "yield vonmises", 1)
@@ -1027,15 +1033,31 @@ def _yield(line: _Line) -> tuple[Hill48, str]:
         if "r0" in keys or "r45" in keys or "r90" in keys:
             form = "yield hill48 r0 VALUE r45 VALUE r90 VALUE"
             v = _pairs(line, 2, ("r0", "r45", "r90"), ("r0", "r45", "r90"), form)
-            r = [_float(v[k], k, gt=0) for k in ("r0", "r45", "r90")]
-            return Hill48.from_r_values(*r), (
-                f"Hill'48 from r0 = {r[0]:g}, r45 = {r[1]:g}, r90 = {r[2]:g}")
-        form = "yield hill48 F VALUE G VALUE H VALUE [L VALUE M VALUE] N VALUE"
-        v = _pairs(line, 2, ("F", "G", "H", "L", "M", "N"), ("F", "G", "H", "N"), form)
-        c = {k: _float(x, f"Hill48 {k}") for k, x in v.items()}
-        return Hill48(**c), "Hill'48 " + ", ".join(f"{k} = {x:g}" for k, x in c.items())
+            r = {k: _float(v[k], k, gt=0) for k in ("r0", "r45", "r90")}
+            hill = Hill48.from_r_values(r["r0"], r["r45"], r["r90"])
+            text = f"Hill'48 from r0 = {r['r0']:g}, r45 = {r['r45']:g}, r90 = {r['r90']:g}"
+        else:
+            form = "yield hill48 F VALUE G VALUE H VALUE [L VALUE M VALUE] N VALUE"
+            v = _pairs(line, 2, ("F", "G", "H", "L", "M", "N"), ("F", "G", "H", "N"), form)
+            c = {k: _float(x, f"Hill48 {k}") for k, x in v.items()}
+            hill = Hill48(**c)
+            text = "Hill'48 " + ", ".join(f"{k} = {x:g}" for k, x in c.items())
+            r = {k: hill.H / d for k, d in (("r0", hill.G), ("r90", hill.F)) if d > 0}
     except (ValueError, TypeError) as error:
         raise _Bad(str(error)) from None
+    large = {k: x for k in "FGHLMN" if (x := getattr(hill, k)) > MAX_HILL}
+    if large:
+        raise _Bad(f"Hill'48 {', '.join(f'{k} = {x:.3g}' for k, x in large.items())} above "
+                   f"{MAX_HILL:g}: a yield stress below a tenth of the hardening law's along "
+                   "an axis (coefficients are normalized so that G + H = 1 for the rolling "
+                   "direction)")
+    low, high = R_VALUE_RANGE
+    odd = {k: x for k, x in r.items() if not low <= x <= high}
+    if odd:
+        listed = ", ".join(f"{k} = {x:.3g}" for k, x in odd.items())
+        deck.warn(line.number, f"Lankford coefficient(s) {listed} outside {low:g} to "
+                  f"{high:g} (sheet metals: about 0.2 to 3)")
+    return hill, text
 
 
 def _hardening(line: _Line) -> Swift | Voce:

@@ -448,6 +448,8 @@ MATERIAL_ERRORS = [
     ("F 0.254  G 0.397  H 0.603", "F -1 G -1 H 0.603",
      "do not define a convex yield surface"),
     ("L 1.5", "L 0", "Hill48 L must be positive"),
+    ("N 1.689", "N 1e6", "Hill'48 N = 1e+06 above 100"),
+    ("F 0.254", "F 250", "Hill'48 F = 250 above 100"),
     ("hill48 ", "hill ", "expected the yield criterion among vonmises, hill48"),
     ("n 0.252", "n 1.5", "Swift n must be <= 1, got 1.5"),
     ("eps0 0.0102", "eps0 0", "Swift eps0 must be > 0"),
@@ -484,6 +486,26 @@ def test_material_yield_forms(tmp_path: Path, line: str, check) -> None:
                 "yield              hill48  F 0.254  G 0.397  H 0.603  L 1.5  M 1.5  N 1.689",
                 line)
     assert check(read_case(case, geometry=False).material.material)
+
+
+@pytest.mark.parametrize(("line", "warned"), [
+    ("yield hill48 r0 2 r45 1 r90 1.5", None),
+    ("yield hill48 r0 20 r45 1 r90 1.5", "r0 = 20"),
+    ("yield hill48 r0 2 r45 1 r90 0.05", "r90 = 0.05"),
+    ("yield hill48 F 0.5 G 0.5 H 0.5 N 1.5", None),
+    ("yield hill48 F 0.01 G 0.5 H 0.5 N 1.5", "r90 = 50"),
+])
+def test_material_implausible_r_values_are_warned_about(tmp_path: Path, line: str,
+                                                        warned: str | None) -> None:
+    case = edit(copy_example("bending", tmp_path), "material.dat",
+                "yield              hill48  F 0.254  G 0.397  H 0.603  L 1.5  M 1.5  N 1.689",
+                line)
+    warnings = [w for w in read_case(case, geometry=False).warnings if "Lankford" in w]
+    if warned is None:
+        assert warnings == []
+    else:
+        assert len(warnings) == 1 and warned in warnings[0]
+        assert "material.dat:" in warnings[0]
 
 
 def test_material_axes() -> None:

@@ -22,6 +22,8 @@ from __future__ import annotations
 import contextlib
 import os
 import re
+import signal
+import subprocess
 import sys
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
@@ -47,6 +49,8 @@ MODELS = ("nagata", "facets", "bezier")
 #: Smallest Bezier fitting tolerances: ten times the CAD kernel's precision, and a thousandth
 #: of a degree.
 MIN_BEZIER_TOL, MIN_BEZIER_ANGLE_TOL = 1.0e-6, 1.0e-3
+#: Longest time (s) the CAD kernel may take to read a file in the trial read of load_cad.
+CAD_READ_TIMEOUT = 600.0
 #: A tool name becomes a file name in the output folder: no path separators, no '..'.
 _PLAIN_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]{0,63}")
 
@@ -111,6 +115,7 @@ def load_cad(path: str | os.PathLike[str]) -> list[int]:
     if not path.is_file():
         raise CadError(f"{path}: no such CAD file")
     declared = check_step(path) if kind == "STEP" else 0
+    _trial_read(path, kind)
     gmsh.model.add(path.stem)
     occ = gmsh.model.occ
     try:
@@ -130,6 +135,34 @@ def load_cad(path: str | os.PathLike[str]) -> list[int]:
     return tags
 
 
+def _trial_read(path: Path, kind: str) -> None:
+    """Read the file once in a child process first: a file the checks let through may still
+    crash the CAD kernel (a segmentation fault inside OpenCASCADE) or keep it reading for
+    ever. Either then ends that process only, and here becomes a CadError. Costs about half
+    a second (a Python with gmsh started)."""
+    if not sys.executable:
+        return
+    script = ("import sys, gmsh\n"
+              "gmsh.initialize(['', '-nopopup'], readConfigFiles=False, interruptible=False)\n"
+              "gmsh.option.setNumber('General.Terminal', 0)\n"
+              "gmsh.model.occ.importShapes(sys.argv[1])\n"
+              "gmsh.model.occ.removeAllDuplicates()\n"
+              "gmsh.model.occ.synchronize()\n")
+    try:
+        child = subprocess.run([sys.executable, "-c", script, str(path)],
+                               capture_output=True, timeout=CAD_READ_TIMEOUT)
+    except subprocess.TimeoutExpired:
+        raise CadError(f"{path}: the CAD kernel did not finish reading the {kind} file in "
+                       f"{CAD_READ_TIMEOUT:g} s") from None
+    if child.returncode < 0:  # killed by a signal: the kernel crashed on this file
+        try:
+            name = signal.Signals(-child.returncode).name
+        except ValueError:
+            name = f"signal {-child.returncode}"
+        raise CadError(f"{path}: the CAD kernel crashed reading the {kind} file ({name}): "
+                       "the file is damaged or uses what the kernel cannot read")
+
+
 _STEP_STRING = re.compile(r"'(?:[^']|'')*'")
 _STEP_ENTITY = re.compile(r"#(\d+)\s*=\s*([A-Za-z_0-9]*)")
 _STEP_REFERENCE = re.compile(r"#(\d+)")
@@ -137,6 +170,10 @@ _STEP_REFERENCE = re.compile(r"#(\d+)")
 _STEP_RADII = {"CIRCLE": 1, "CYLINDRICAL_SURFACE": 1, "SPHERICAL_SURFACE": 1,
                "TOROIDAL_SURFACE": 2, "ELLIPSE": 2}
 _STEP_FACES = ("ADVANCED_FACE", "FACE_SURFACE")
+#: Smallest and largest lengths (radii, VECTOR magnitudes, in the file's unit) taken: the
+#: CAD kernel's confusion tolerance is 1e-7, and a VECTOR of magnitude 1e-300 kept it
+#: reading for ever; beyond 1e10 a length is no tool's either.
+_STEP_LENGTHS = (1e-7, 1e10)
 _POINT, _DIRECTION, _PLACEMENT_3D = ("CARTESIAN_POINT",), ("DIRECTION",), ("AXIS2_PLACEMENT_3D",)
 #: The references of entities OpenCASCADE follows without checking what they are (a VECTOR
 #: whose direction was a product definition ended gmsh in a segmentation fault): per entity,
@@ -217,10 +254,13 @@ def check_step(path: Path) -> int:
             if kind in _STEP_RADII:
                 tail = _STEP_REFERENCE.sub("", "#" + body.rsplit("#", 1)[-1])  # without the id
                 values = [float(v) for v in _STEP_NUMBER.findall(tail)]
-                if len(values) < _STEP_RADII[kind] or min(values[:_STEP_RADII[kind]]) <= 0.0:
+                lo, hi = _STEP_LENGTHS
+                if len(values) < _STEP_RADII[kind] or \
+                        not all(lo <= v <= hi for v in values[:_STEP_RADII[kind]]):
                     where = position + head.end()
                     raise CadError(f"{path}:{line_of(where)}: entity #{entity} {kind} needs "
-                                   f"{_STEP_RADII[kind]} positive radius value(s), got "
+                                   f"{_STEP_RADII[kind]} radius value(s) from {lo:g} to "
+                                   f"{hi:g}, got "
                                    f"{values[:_STEP_RADII[kind]]} (a degenerate surface or "
                                    "curve: the CAD kernel drops or merges such faces)")
             if kind in _STEP_FACES:
@@ -288,13 +328,15 @@ def _step_references(path: Path, line_of: Callable[[int], int], entity: int, kin
 
 def _step_values(path: Path, line_of: Callable[[int], int], entity: int, kind: str,
                  arguments: list[tuple[str, int]], at: int) -> None:
-    """Refuse a VECTOR whose magnitude is not positive (OpenCASCADE never returned from
-    one of 0) and a DIRECTION whose ratios are all zero (accepted without a word)."""
+    """Refuse a VECTOR whose magnitude is not within _STEP_LENGTHS (OpenCASCADE never
+    returned from one of 0 or 1e-300) and a DIRECTION whose ratios are all zero (accepted
+    without a word)."""
     if kind == "VECTOR":
         text, offset = arguments[2] if len(arguments) > 2 else ("", 0)
-        if not _STEP_NUMBER.fullmatch(text) or float(text) <= 0.0:
+        lo, hi = _STEP_LENGTHS
+        if not _STEP_NUMBER.fullmatch(text) or not lo <= float(text) <= hi:
             raise CadError(f"{path}:{line_of(at + offset)}: entity #{entity} VECTOR: expected "
-                           f"a positive magnitude (argument 3), got '{text}'")
+                           f"a magnitude from {lo:g} to {hi:g} (argument 3), got '{text}'")
     elif kind == "DIRECTION":
         text, offset = arguments[1] if len(arguments) > 1 else ("", 0)
         ratios = text[1:-1].split(",") if text.startswith("(") and text.endswith(")") else []

@@ -20,7 +20,10 @@ increment. The XDMF file is rewritten (atomically) after each frame.
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import datetime
+import errno
+import functools
 import os
 import re
 import shutil
@@ -46,6 +49,8 @@ VERSION = 1
 #: ends the run first. HDF5 that ran out of space in a write failed its later writes, then
 #: crashed the process while closing the file and left groups pointing past its end.
 MIN_FREE = 1 << 20
+#: fallocate(2)'s flag: allocate blocks beyond the end of the file, its size unchanged.
+_KEEP_SIZE = 1
 #: Contact status of a node in the fields.
 CONTACT_STATUS = {0: "free", 1: "stick", 2: "slip"}
 #: What limited an increment (the ``limit`` column): codes and meanings.
@@ -245,33 +250,64 @@ class ResultsWriter:
 
     @contextlib.contextmanager
     def _writing(self, frame: bool = True) -> Iterator[None]:
-        """Where the file is written. Less free space than a frame and MIN_FREE ends the
-        writing of a row or a ``frame`` while HDF5 can still close the file cleanly; a
-        write that fails (h5py raises OSError or RuntimeError) closes the file at once.
-        Either becomes ResultsWriteError, and so does any later write."""
+        """Where the file is written. HDF5 must not run out of disk inside a write: it then
+        fails its later writes, prints errors while it frees its objects and crashes the
+        process when the file is closed. So before each write the disk blocks for a frame
+        and MIN_FREE are allocated beyond the file's end (``_hold``): once held, another
+        process filling the disk cannot take them. When they cannot be held (or, where
+        the file system cannot allocate ahead, less free space is left), the file is
+        closed while HDF5 can still do so cleanly. A write that fails all the same (h5py
+        raises OSError or RuntimeError) closes the file at once. Each becomes
+        ResultsWriteError, and so does any later write."""
         if self.failed:
             raise ResultsWriteError(self.path, self.failed)
-        free, needed = (shutil.disk_usage(self.path.parent).free, self._needed()) if frame \
-            else (1, 0)
-        if free < needed:
-            self.failed = (f"No space left on device ({free / 1e6:.3g} MB free, the next "
-                           f"frame needs {needed / 1e6:.3g} MB)")
+        needed = self._needed() if frame else MIN_FREE
+        held = self._hold(needed)
+        free = shutil.disk_usage(self.path.parent).free if held is None else 0
+        if held is False or (held is None and frame and free < needed):
+            self.failed = (f"No space left on device (the next frame needs "
+                           f"{needed / 1e6:.3g} MB" + (f", {free / 1e6:.3g} MB free)"
+                                                       if held is None else ")"))
             with contextlib.suppress(Exception):
                 self._file.attrs.update(status="failed", message=self.failed)
-                self._file.close()
+            self._close()
             raise ResultsWriteError(self.path, self.failed)
         try:
             yield
+            if self._file.id.valid:
+                self._file.flush()  # written now, into the blocks held
         except (OSError, RuntimeError) as error:
             # HDF5's messages run over several lines; its errno text says what happened.
             cause = re.search(r"error message = '([^']+)'", str(error))
             self.failed = (error.strerror if isinstance(error, OSError) and error.strerror
                            else cause.group(1) if cause
                            else str(error).split("\n")[0] or type(error).__name__)
-            with contextlib.suppress(Exception):
-                self._file.close()
+            self._close()
             where = error.filename if isinstance(error, OSError) and error.filename else None
             raise ResultsWriteError(Path(where or self.path), self.failed) from error
+
+    def _close(self) -> None:
+        """Close the file (as far as HDF5 can) and give back the blocks held beyond its
+        end: a truncation to its own size frees them (ext4, tmpfs)."""
+        with contextlib.suppress(Exception):
+            self._file.close()
+        with contextlib.suppress(OSError):
+            os.truncate(self.path, self.path.stat().st_size)
+
+    def _hold(self, size: int) -> bool | None:
+        """Allocate ``size`` bytes of disk beyond the end of the file, its size unchanged
+        (Linux fallocate with FALLOC_FL_KEEP_SIZE): True when held, False when the disk
+        has not that much room, None when this system or file system cannot."""
+        try:
+            handle = self._file.id.get_vfd_handle()
+            fallocate = _libc().fallocate
+        except (AttributeError, OSError, RuntimeError, TypeError):
+            return None
+        end = os.fstat(handle).st_size
+        if fallocate(handle, _KEEP_SIZE, end, size) == 0:
+            return True
+        code = ctypes.get_errno()
+        return False if code in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG) else None
 
     def _needed(self) -> int:
         """Bytes a frame takes (its fields, 8 bytes a number), the XDMF file rewritten
@@ -540,7 +576,7 @@ class ResultsWriter:
             with self._writing(frame=False):
                 self._file.attrs["closed"] = datetime.datetime.now().isoformat(
                     timespec="seconds")
-                self._file.close()
+            self._close()
 
     def __enter__(self) -> ResultsWriter:
         return self
@@ -556,6 +592,15 @@ def _shaped(value: ArrayLike, shape: tuple[int, ...], name: str) -> NDArray:
     if a.shape != shape:
         raise ValueError(f"{name} must have shape {shape}, got {a.shape}")
     return a
+
+
+@functools.cache
+def _libc() -> ctypes.CDLL:
+    """The C library, for fallocate (not in the os module)."""
+    libc = ctypes.CDLL(None, use_errno=True)
+    libc.fallocate.argtypes = [ctypes.c_int, ctypes.c_int, ctypes.c_int64, ctypes.c_int64]
+    libc.fallocate.restype = ctypes.c_int
+    return libc
 
 
 def _append(dataset: Any, k: int, value: Any) -> None:

@@ -443,8 +443,12 @@ def test_bezier_fit_stops_at_the_patch_limit(cad: dict[str, Path], tmp_path: Pat
     ("point", "CARTESIAN_POINT holds 'nan' where a number is expected"),
     ("vector", "VECTOR holds 'NaN' where a number is expected"),
     ("line", "which the file does not define"),
-    ("radius", "CYLINDRICAL_SURFACE needs 1 positive radius value(s), got [0.0]"),
-    ("magnitude", "VECTOR: expected a positive magnitude (argument 3), got '0.'"),
+    ("radius", "CYLINDRICAL_SURFACE needs 1 radius value(s) from 1e-07 to 1e+10, got [0.0]"),
+    ("tiny radius", "CYLINDRICAL_SURFACE needs 1 radius value(s) from 1e-07 to 1e+10, got "
+     "[1e-300]"),
+    ("magnitude", "VECTOR: expected a magnitude from 1e-07 to 1e+10 (argument 3), got '0.'"),
+    ("tiny magnitude", "VECTOR: expected a magnitude from 1e-07 to 1e+10 (argument 3), got "
+     "'1.E-300'"),
     ("orientation", "VECTOR: its orientation #1 is APPLICATION_PROTOCOL_DEFINITION, "
      "expected DIRECTION"),
     ("direction", "DIRECTION: expected 2 or 3 direction ratios, not all zero, got "
@@ -467,8 +471,13 @@ def test_step_files_that_crash_the_cad_reader_are_refused(cad: dict[str, Path], 
     elif damage == "radius":  # the kernel merged the faces of such a file into a few
         text = re.sub(r"(CYLINDRICAL_SURFACE\('[^']*',#\d+,)[^)]*\)", r"\g<1>0.)", text,
                       count=1)
+    elif damage == "tiny radius":
+        text = re.sub(r"(CYLINDRICAL_SURFACE\('[^']*',#\d+,)[^)]*\)", r"\g<1>1.E-300)", text,
+                      count=1)
     elif damage == "magnitude":  # never returned
         text = re.sub(r"(VECTOR\('[^']*',#\d+,)[^)]*\)", r"\g<1>0.)", text, count=1)
+    elif damage == "tiny magnitude":  # never returned either (found by the fuzz test)
+        text = re.sub(r"(VECTOR\('[^']*',#\d+,)[^)]*\)", r"\g<1>1.E-300)", text, count=1)
     elif damage == "orientation":  # a segmentation fault
         text = re.sub(r"(VECTOR\('[^']*',)#\d+", r"\1#1", text, count=1)
     elif damage == "direction":
@@ -492,7 +501,8 @@ def test_step_files_that_crash_the_cad_reader_are_refused(cad: dict[str, Path], 
     assert 1 <= number <= len(lines)
     if damage in ("point", "vector"):
         assert re.search(r"nan", lines[number - 1], re.IGNORECASE)
-    if damage in ("magnitude", "orientation", "direction", "placement", "absent"):
+    if damage in ("magnitude", "tiny magnitude", "orientation", "direction", "placement",
+                  "absent"):
         assert str(error.value).split(": ")[1].split()[1] in lines[number - 1]
     from ddpy.cli import main
 

@@ -142,7 +142,9 @@ def _trial_read(path: Path, kind: str) -> None:
     a second (a Python with gmsh started)."""
     if not sys.executable:
         return
-    script = ("import sys, gmsh\n"
+    # The child ends itself a little after the timeout (SIGALRM), should this process be
+    # killed meanwhile and leave it reading.
+    script = (f"import signal, sys, gmsh\nsignal.alarm({int(CAD_READ_TIMEOUT) + 5})\n"
               "gmsh.initialize(['', '-nopopup'], readConfigFiles=False, interruptible=False)\n"
               "gmsh.option.setNumber('General.Terminal', 0)\n"
               "gmsh.model.occ.importShapes(sys.argv[1])\n"
@@ -175,6 +177,11 @@ _STEP_FACES = ("ADVANCED_FACE", "FACE_SURFACE")
 #: reading for ever; beyond 1e10 a length is no tool's either.
 _STEP_LENGTHS = (1e-7, 1e10)
 _POINT, _DIRECTION, _PLACEMENT_3D = ("CARTESIAN_POINT",), ("DIRECTION",), ("AXIS2_PLACEMENT_3D",)
+#: Curves, surfaces and loops of ISO 10303-42; '*' stands for any start of the name.
+_CURVES = ("*_CURVE", "LINE", "CIRCLE", "ELLIPSE", "PARABOLA", "HYPERBOLA", "POLYLINE", "PCURVE",
+           "*_CURVE_WITH_KNOTS")
+_SURFACES = ("*_SURFACE", "PLANE", "*_SURFACE_WITH_KNOTS")
+_LOOPS = ("EDGE_LOOP", "VERTEX_LOOP", "POLY_LOOP")
 #: The references of entities OpenCASCADE follows without checking what they are (a VECTOR
 #: whose direction was a product definition ended gmsh in a segmentation fault): per entity,
 #: (argument index, its name in ISO 10303-42, the entity types allowed, may be '$').
@@ -195,7 +202,12 @@ _STEP_TYPES: dict[str, tuple[tuple[int, str, tuple[str, ...], bool], ...]] = {
     "TOROIDAL_SURFACE": ((1, "position", _PLACEMENT_3D, False),),
     "VERTEX_POINT": ((1, "vertex_geometry", _POINT, False),),
     "EDGE_CURVE": ((1, "edge_start", ("VERTEX_POINT",), False),
-                   (2, "edge_end", ("VERTEX_POINT",), False)),
+                   (2, "edge_end", ("VERTEX_POINT",), False),
+                   (3, "edge_geometry", _CURVES, False)),
+    "ORIENTED_EDGE": ((3, "edge_element", ("EDGE_CURVE", "ORIENTED_EDGE"), False),),
+    "FACE_BOUND": ((1, "bound", _LOOPS, False),),
+    "FACE_OUTER_BOUND": ((1, "bound", _LOOPS, False),),
+    "ADVANCED_FACE": ((2, "face_geometry", _SURFACES, False),),
 }
 _STEP_NAME = re.compile(r"([A-Za-z_][A-Za-z_0-9]*)\s*\(")
 _STEP_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
@@ -248,6 +260,9 @@ def check_step(path: Path) -> int:
                 where = position + head.end() + bad.start()
                 raise CadError(f"{path}:{line_of(where)}: entity #{entity} {head.group(2)} "
                                f"holds '{bad.group()}' where a number is expected")
+            if body.count("(") != body.count(")"):  # strings are blanked: no parentheses
+                raise CadError(f"{path}:{line_of(position + head.end())}: entity #{entity}: "
+                               f"{body.count('(')} '(' against {body.count(')')} ')'")
             uses += [(int(m.group(1)), position + head.end() + m.start(), entity)
                      for m in _STEP_REFERENCE.finditer(body)]
             kind = head.group(2).upper()
@@ -279,11 +294,16 @@ def check_step(path: Path) -> int:
             raise CadError(f"{path}:{line_of(where)}: entity #{entity} refers to #{target}, "
                            "which the file does not define")
     for target, where, entity, kind, name, allowed in typed:
-        if not kinds[target] & set(allowed):
+        if not any(_step_is(k, allowed) for k in kinds[target]):
             raise CadError(f"{path}:{line_of(where)}: entity #{entity} {kind}: its {name} "
                            f"#{target} is {' '.join(sorted(kinds[target])) or 'a nameless entity'}"
                            f", expected {' or '.join(allowed)}")
     return faces
+
+
+def _step_is(kind: str, allowed: tuple[str, ...]) -> bool:
+    """Whether an entity type is among ``allowed`` ('*X' also takes any name ending in X)."""
+    return any(kind == a or (a.startswith("*") and kind.endswith(a[1:])) for a in allowed)
 
 
 def _step_arguments(body: str) -> list[tuple[str, int]] | None:

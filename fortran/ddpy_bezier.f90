@@ -10,14 +10,14 @@ module ddpy_bezier
   use ddpy_kinds, only: wp
   implicit none
   private
-  public :: max_bezier_degree, bernstein_to_power_matrix, bezier_power_coefficients, &
+  public :: max_bezier_degree, binomial, bernstein_to_power_matrix, bezier_power_coefficients, &
             bezier_evaluate, bezier_de_casteljau
 
   integer, parameter :: max_bezier_degree = 6
 
 contains
 
-  !> Binomial coefficient C(n, k) for 0 <= k <= n <= max_bezier_degree.
+  !> Binomial coefficient C(n, k), 0 <= k <= n.
   pure function binomial(n, k) result(c)
     integer, intent(in) :: n, k
     real(wp) :: c

@@ -14,7 +14,7 @@
 !> core computes on the patch lies in them (docs/theory/contact.md, "Closest points").
 module ddpy_patch_bounds
   use ddpy_kinds, only: wp
-  use ddpy_bezier, only: max_bezier_degree
+  use ddpy_bezier, only: max_bezier_degree, binomial
   use ddpy_nagata, only: nagata_coefficient_count
   use ddpy_surface, only: patch_evaluate, unit_normal, surface_bezier
   implicit none
@@ -136,15 +136,6 @@ contains
       end do
     end do
   end subroutine monomial_to_bernstein
-
-  pure real(wp) function binomial(n, k)
-    integer, intent(in) :: n, k
-    integer :: i
-    binomial = 1.0_wp
-    do i = 1, k
-      binomial = binomial*real(n - k + i, wp)/real(i, wp)
-    end do
-  end function binomial
 
   !> Control net of a Bezier patch from its centred power-basis coefficients
   !> (ddpy_bezier): P = B_n A B_m^T per coordinate, B from bernstein_conversions.

@@ -9,6 +9,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -22,6 +23,20 @@ from tests.deckutil import EXAMPLES, copy_example, edit
 from tests.test_forming import block_on_plane
 
 BUILT_IN = Path(__file__).resolve().parents[1] / "ddpy" / "cases" / "cylindrical_bending"
+
+
+@contextlib.contextmanager
+def small_disk(folder: Path, size: str) -> Iterator[Path]:
+    """A tmpfs of ``size`` mounted on ``folder`` while the block runs (skips without root)."""
+    folder.mkdir()
+    mounted = subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size}", "tmpfs",
+                              str(folder)], capture_output=True)
+    if mounted.returncode != 0:
+        pytest.skip("cannot mount a small file system here (needs root)")
+    try:
+        yield folder
+    finally:
+        subprocess.run(["umount", str(folder)], capture_output=True)
 
 
 def errors_of(case: Path) -> str:
@@ -310,21 +325,13 @@ def test_a_modulus_not_in_mpa_is_questioned(tmp_path: Path) -> None:
 
 def test_a_run_on_a_full_file_system_does_not_start(tmp_path: Path) -> None:
     # 64 KB free: HDF5 ended the run in a segmentation fault while it closed the file.
-    full = tmp_path / "full"
-    full.mkdir()
-    mounted = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(full)],
-                             capture_output=True)
-    if mounted.returncode != 0:
-        pytest.skip("cannot mount a small file system here (needs root)")
-    try:
+    with small_disk(tmp_path / "full", "64k") as full:
         done = subprocess.run([sys.executable, "-m", "ddpy", "run", "--output",
                                str(full / "out"), "--stop-after", "3"],
                               capture_output=True, text=True)
         assert done.returncode == 1, done.stderr
         assert "MB free, the results of this mesh need at least" in done.stderr
         assert "Traceback" not in done.stderr
-    finally:
-        subprocess.run(["umount", str(full)], capture_output=True)
 
 
 def test_an_augmentation_far_from_the_blank_stiffness_is_questioned(tmp_path: Path) -> None:
@@ -529,13 +536,7 @@ def test_a_disk_filled_by_another_process_during_a_run(tmp_path: Path) -> None:
     # the run stops with one message, the results readable up to the last increment.
     from ddpy.results import ResultsReader
 
-    disk = tmp_path / "disk"
-    disk.mkdir()
-    mounted = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=4m", "tmpfs", str(disk)],
-                             capture_output=True)
-    if mounted.returncode != 0:
-        pytest.skip("cannot mount a small file system here (needs root)")
-    try:
+    with small_disk(tmp_path / "disk", "4m") as disk:
         done = subprocess.run([sys.executable, "-c", FILL_THE_DISK, str(disk)],
                               capture_output=True, text=True)
         results = disk / "out" / "results.h5"
@@ -547,5 +548,3 @@ def test_a_disk_filled_by_another_process_during_a_run(tmp_path: Path) -> None:
         with ResultsReader(results) as reader:
             assert reader.n_increments == 3 and len(reader.frames) >= 1
             assert reader.field("displacement", 0).shape == reader.nodes.shape
-    finally:
-        subprocess.run(["umount", str(disk)], capture_output=True)

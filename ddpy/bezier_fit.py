@@ -10,22 +10,29 @@ as the distance to the CAD point of the same parameters (a bound of the distance
 that also keeps patch edges on the face edges). The cheapest pair within the tolerance wins;
 when none is, the region is split in two across its worse direction. The accepted patches are
 checked again with the true point-to-surface distance on a third grid
-(:func:`ddpy.cad.closest_points`).
+(:func:`ddpy.cad_geometry.closest_points`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from math import comb
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
+from ddpy.cad_geometry import closest_points
 from ddpy.surfaces import MAX_BEZIER_DEGREE
 
-if TYPE_CHECKING:
-    from ddpy.cad import ToolBuilder
+
+class FaceSource(Protocol):
+    """What the fit needs of :class:`ddpy.cad.ToolBuilder`: its errors naming the file and
+    the face, and where it records each face's deviation."""
+
+    bezier_deviation: dict[int, float]
+
+    def error(self, face: int | None, message: str) -> Exception: ...
 
 __all__ = ["bernstein", "evaluate_net", "fit_face"]
 
@@ -92,7 +99,7 @@ def _segment(p: NDArray[np.float64], q: NDArray[np.float64]) -> Curve:
     return lambda f: p + np.asarray(f)[:, None] * (q - p)
 
 
-def _face_mappings(builder: ToolBuilder, face: int) -> list[Mapping]:
+def _face_mappings(builder: FaceSource, face: int) -> list[Mapping]:
     """Maps (s, t) in [0, 1]^2 -> (u, v) covering the face: its parameter box; a Coons patch of
     its edges if it is a trimmed 4-sided face; an O-grid of five Coons patches if it is
     bounded by one closed edge (a disc)."""
@@ -210,7 +217,7 @@ def _fit_region(face: int, mapping: Mapping, region: tuple[float, float, float, 
     return None, errors
 
 
-def fit_face(builder: ToolBuilder, face: int, tol: float, angle_tol: float,
+def fit_face(builder: FaceSource, face: int, tol: float, angle_tol: float,
              flip: int) -> list[NDArray[np.float64]]:
     """Bezier nets (n+1, m+1, 3) covering one face within ``tol`` mm and ``angle_tol``
     degrees, their normals along ``flip`` times the CAD normal."""
@@ -259,8 +266,6 @@ def fit_face(builder: ToolBuilder, face: int, tol: float, angle_tol: float,
 
 def surface_distance(face: int, net: NDArray[np.float64]) -> float:
     """Largest distance from a 40 x 40 grid of the patch to the CAD face's surface."""
-    from ddpy.cad import closest_points
-
     points = evaluate_net(net, _VERIFY, _VERIFY).reshape(-1, 3)
     closest = closest_points(face, points)[0]
     return float(np.linalg.norm(points - closest, axis=1).max())

@@ -29,8 +29,8 @@ if TYPE_CHECKING:
     from ddpy.toolfile import ToolModel
 
 __all__ = ["AXES", "BlankMaterial", "BoundaryConditions", "Case", "Constraint", "Control",
-           "HoldGap", "Mesh", "Move", "Newton", "NodeSet", "Phase", "RminLimits", "Tool",
-           "HEX_FACES", "through_thickness_columns"]
+           "DeckError", "HoldGap", "Mesh", "Move", "Newton", "NodeSet", "Phase", "RminLimits",
+           "Tool", "HEX_FACES", "blank_thickness", "through_thickness_columns"]
 
 #: Axis names and their index.
 AXES = {"x": 0, "y": 1, "z": 2}
@@ -49,6 +49,38 @@ def _frozen(array: ArrayLike, dtype: type) -> NDArray:
 
 
 # ----------------------------------------------------------------------------------- mesh
+
+
+class DeckError(ValueError):
+    """Bad input in a case folder. ``path`` and ``line`` locate the (first) error, ``line`` is
+    None for a whole file; ``errors`` holds every error found (each a DeckError)."""
+
+    def __init__(self, message: str, path: str | Path | None = None, line: int | None = None,
+                 errors: tuple[DeckError, ...] = ()) -> None:
+        self.path = Path(path) if path is not None else None
+        self.line = line
+        self.message = message
+        self.errors: tuple[DeckError, ...] = errors or (self,)
+        super().__init__(str(self))
+
+    @property
+    def location(self) -> str:
+        if self.path is None:
+            return ""
+        return f"{self.path}:{self.line}" if self.line is not None else str(self.path)
+
+    def __str__(self) -> str:
+        if len(self.errors) > 1:
+            return "\n".join(str(e) for e in self.errors)
+        return f"{self.location}: {self.message}" if self.path is not None else self.message
+
+    @classmethod
+    def collect(cls, errors: list[DeckError]) -> DeckError:
+        """One error standing for several (located at the first)."""
+        if len(errors) == 1:
+            return errors[0]
+        first = errors[0]
+        return cls(first.message, first.path, first.line, tuple(errors))
 
 
 @dataclass(frozen=True, eq=False)
@@ -190,6 +222,21 @@ def through_thickness_columns(nodes: ArrayLike, elements: ArrayLike, normal: Arr
 
 
 # ------------------------------------------------------------------------- boundary conditions
+
+
+def blank_thickness(mesh: Mesh) -> float | None:
+    """Smallest initial thickness of a layered blank (mm); its extent along the normal else."""
+    try:
+        bottom, top = mesh.columns()
+    except ValueError:
+        pass
+    else:
+        spanning = top != bottom
+        if spanning.any():
+            x = mesh.nodes
+            return float(np.linalg.norm(x[top[spanning]] - x[bottom[spanning]], axis=1).min())
+    axis = mesh.normal_axis
+    return float(np.ptp(mesh.nodes[:, axis])) or None
 
 
 @dataclass(frozen=True, eq=False)

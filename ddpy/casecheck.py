@@ -16,8 +16,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from ddpy.case import Case, HoldGap, Move
-from ddpy.decks import DeckError, blank_thickness
+from ddpy.case import Case, DeckError, HoldGap, Move, blank_thickness
 from ddpy.forming import start_depth_limit
 from ddpy.mesh import HexMesh
 from ddpy.search import INSIDE, ContactSearch

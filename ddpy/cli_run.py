@@ -16,15 +16,10 @@ from typing import TYPE_CHECKING, TextIO
 if TYPE_CHECKING:
     from ddpy.runner import Progress
 
-__all__ = ["ProgressDisplay", "add_post", "add_run", "default_output"]
+__all__ = ["ProgressDisplay", "add_post", "add_run"]
 
 #: Exit codes of ``ddpy run``.
 EXIT = {"completed": 0, "stopped": 0, "failed": 1, "interrupted": 130}
-
-
-def default_output(case_folder: Path) -> Path:
-    """Where a run writes when no --output is given: results/<case folder name>."""
-    return Path("results") / case_folder.resolve().name
 
 
 class ProgressDisplay:
@@ -121,7 +116,7 @@ def _run(args: argparse.Namespace) -> int:
     from ddpy.checkpoint import CheckpointError
     from ddpy.decks import DeckError, read_case
     from ddpy.results import ResultsWriteError
-    from ddpy.runner import RunError, case_folder, run_case
+    from ddpy.runner import RunError, case_folder, default_output, run_case
 
     folder = case_folder(args.case)
     try:

@@ -32,6 +32,7 @@ from ddpy.case import (
     Case,
     Constraint,
     Control,
+    DeckError,
     HoldGap,
     Mesh,
     Move,
@@ -40,6 +41,7 @@ from ddpy.case import (
     Phase,
     RminLimits,
     Tool,
+    blank_thickness,
     rigid_body_modes_free,
 )
 from ddpy.forming import MAX_INCREMENTS, blank_stiffness
@@ -81,38 +83,6 @@ _INT = re.compile(r"[+-]?[0-9]+")
 #: ASCII digits; float() alone would also take '210_000', full-width digits and 'nan'.
 _NUMBER = re.compile(r"[+-]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][+-]?[0-9]+)?|[+-]?(inf|nan)",
                      re.ASCII)
-
-
-class DeckError(ValueError):
-    """Bad input in a case folder. ``path`` and ``line`` locate the (first) error, ``line`` is
-    None for a whole file; ``errors`` holds every error found (each a DeckError)."""
-
-    def __init__(self, message: str, path: str | Path | None = None, line: int | None = None,
-                 errors: tuple[DeckError, ...] = ()) -> None:
-        self.path = Path(path) if path is not None else None
-        self.line = line
-        self.message = message
-        self.errors: tuple[DeckError, ...] = errors or (self,)
-        super().__init__(str(self))
-
-    @property
-    def location(self) -> str:
-        if self.path is None:
-            return ""
-        return f"{self.path}:{self.line}" if self.line is not None else str(self.path)
-
-    def __str__(self) -> str:
-        if len(self.errors) > 1:
-            return "\n".join(str(e) for e in self.errors)
-        return f"{self.location}: {self.message}" if self.path is not None else self.message
-
-    @classmethod
-    def collect(cls, errors: list[DeckError]) -> DeckError:
-        """One error standing for several (located at the first)."""
-        if len(errors) == 1:
-            return errors[0]
-        first = errors[0]
-        return cls(first.message, first.path, first.line, tuple(errors))
 
 
 class _Bad(Exception):
@@ -1574,16 +1544,3 @@ def _select(kind: str, args: list[str], mesh: Mesh, tol: float) -> NDArray[np.in
     return index.astype(np.int64)
 
 
-def blank_thickness(mesh: Mesh) -> float | None:
-    """Smallest initial thickness of a layered blank (mm); its extent along the normal else."""
-    try:
-        bottom, top = mesh.columns()
-    except ValueError:
-        pass
-    else:
-        spanning = top != bottom
-        if spanning.any():
-            x = mesh.nodes
-            return float(np.linalg.norm(x[top[spanning]] - x[bottom[spanning]], axis=1).min())
-    axis = mesh.normal_axis
-    return float(np.ptp(mesh.nodes[:, axis])) or None

@@ -54,8 +54,7 @@ class Run:
 def find_results(target: str | os.PathLike[str]) -> Path:
     """The results file of ``target``: a results file, an output folder holding
     results.h5, or a case folder whose default output (results/<name>) holds one."""
-    from ddpy.cli_run import default_output
-    from ddpy.runner import RESULTS
+    from ddpy.runner import RESULTS, default_output
 
     path = Path(target)
     candidates = [path] if path.is_file() else [path / RESULTS,

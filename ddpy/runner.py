@@ -50,7 +50,8 @@ from ddpy.results import MIN_FREE, ResultsWriteError, ResultsWriter, Timings
 from ddpy.solid import Solid, SolidState
 
 __all__ = ["BUILT_IN_CASES", "CHECKPOINT", "DEFAULT_CASE", "RESULTS", "STATUS", "Progress",
-           "RunError", "RunOutcome", "build_problem", "case_folder", "read_status", "run_case"]
+           "RunError", "RunOutcome", "build_problem", "case_folder", "default_output",
+           "read_status", "run_case"]
 
 #: The case ``ddpy run`` runs when given none: the coarse cylindrical bending packaged with
 #: ddpy (for now a copy of examples/bending, kept equal by a test). To change the default,
@@ -61,6 +62,11 @@ DEFAULT_CASE = Path(__file__).resolve().parent / "cases" / "cylindrical_bending"
 BUILT_IN_CASES = {"cylindrical-bending": DEFAULT_CASE,
                   "deep-drawing": DEFAULT_CASE.parent / "reverse_deep_drawing"}
 RESULTS = "results.h5"
+
+
+def default_output(case_folder: Path) -> Path:
+    """Where a run writes when no --output is given: results/<case folder name>."""
+    return Path("results") / case_folder.resolve().name
 
 
 def case_folder(case: str | os.PathLike[str] | None) -> Path:

@@ -62,10 +62,10 @@ control, so their iteration counts differ; the time per iteration is the compari
 
 What dominates on the paper mesh is still MUMPS's LU (one per iteration, see the findings):
 the 0.45 s per iteration of the target is out of reach while every iteration factorizes
-afresh, and the iterations per increment (about 15 with Nagata tools on the coarse mesh,
-the paper's DD3IMP 11.5) weigh as much: contact states of a band of nodes grazing the punch
-flip between iterations (docs/benchmarks/cylindrical_bending.md). Outside MUMPS the assembly
-(Fortran element kernel) leads."""
+afresh, and the iterations per increment (in the findings below; the paper's DD3IMP needed
+11.5) weigh as much: contact states of a band of nodes grazing the punch flip between
+iterations (docs/benchmarks/cylindrical_bending.md). Outside MUMPS the assembly (Fortran
+element kernel) leads."""
 
 
 def cpu_busy() -> float:

@@ -282,7 +282,7 @@ def check_step(path: Path) -> int:
                                    "curve: the CAD kernel drops or merges such faces)")
             if kind in _STEP_FACES:
                 faces += 1
-            if kind in _STEP_TYPES or kind in ("VECTOR", "DIRECTION"):
+            if kind in _STEP_TYPES or kind in ("VECTOR", "DIRECTION", "CARTESIAN_POINT"):
                 at = position + head.end()
                 arguments = _step_arguments(body)
                 if arguments is None:
@@ -351,22 +351,29 @@ def _step_references(path: Path, line_of: Callable[[int], int], entity: int, kin
 def _step_values(path: Path, line_of: Callable[[int], int], entity: int, kind: str,
                  arguments: list[tuple[str, int]], at: int) -> None:
     """Refuse a VECTOR whose magnitude is not within _STEP_LENGTHS (OpenCASCADE never
-    returned from one of 0 or 1e-300) and a DIRECTION whose ratios are all zero (accepted
-    without a word)."""
+    returned from one of 0 or 1e-300), a DIRECTION whose ratios are all zero (accepted
+    without a word) or one beyond 1e10 (1e300 never returned), and a CARTESIAN_POINT
+    beyond 1e10."""
     if kind == "VECTOR":
         text, offset = arguments[2] if len(arguments) > 2 else ("", 0)
         lo, hi = _STEP_LENGTHS
         if not _STEP_NUMBER.fullmatch(text) or not lo <= float(text) <= hi:
             raise CadError(f"{path}:{line_of(at + offset)}: entity #{entity} VECTOR: expected "
                            f"a magnitude from {lo:g} to {hi:g} (argument 3), got '{text}'")
-    elif kind == "DIRECTION":
+    elif kind in ("DIRECTION", "CARTESIAN_POINT"):
         text, offset = arguments[1] if len(arguments) > 1 else ("", 0)
-        ratios = text[1:-1].split(",") if text.startswith("(") and text.endswith(")") else []
-        numbers = [float(r) for r in ratios if _STEP_NUMBER.fullmatch(r.strip())]
-        if not 2 <= len(ratios) <= 3 or len(numbers) != len(ratios) or \
-                not any(abs(r) > 0.0 for r in numbers):
+        values = text[1:-1].split(",") if text.startswith("(") and text.endswith(")") else []
+        numbers = [float(r) for r in values if _STEP_NUMBER.fullmatch(r.strip())]
+        lo, hi = _STEP_LENGTHS
+        if kind == "DIRECTION" and (not 2 <= len(values) <= 3 or len(numbers) != len(values)
+                                    or not any(abs(r) > 0.0 for r in numbers)
+                                    or max(abs(r) for r in numbers) > hi):
             raise CadError(f"{path}:{line_of(at + offset)}: entity #{entity} DIRECTION: "
-                           f"expected 2 or 3 direction ratios, not all zero, got '{text}'")
+                           f"expected 2 or 3 direction ratios, not all zero, none beyond "
+                           f"{hi:g}, got '{text}'")
+        if kind == "CARTESIAN_POINT" and any(abs(x) > hi for x in numbers):
+            raise CadError(f"{path}:{line_of(at + offset)}: entity #{entity} CARTESIAN_POINT: "
+                           f"expected coordinates within {hi:g}, got '{text}'")
 
 
 # --------------------------------------------------------------------------------- builder

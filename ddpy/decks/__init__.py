@@ -28,7 +28,7 @@ from ddpy.decks.control import _PHASE_KEYS as _PHASE_KEYS
 from ddpy.decks.control import _SETTINGS as _SETTINGS
 from ddpy.decks.control import _parse_control
 from ddpy.decks.cross import _Cross
-from ddpy.decks.lines import _Deck
+from ddpy.decks.lines import Deck
 from ddpy.decks.material import _parse_material
 from ddpy.decks.mesh import _parse_mesh
 from ddpy.decks.tools import _TOOL_KEYS as _TOOL_KEYS
@@ -77,7 +77,7 @@ def parse_case(texts: Mapping[str, str], folder: str | Path = ".",
     if missing:
         raise DeckError.collect([DeckError("missing: every case needs " + ", ".join(DECKS),
                                            folder / name) for name in missing])
-    decks = {name: _Deck(folder / name, texts[name]) for name in DECKS}
+    decks = {name: Deck(folder / name, texts[name]) for name in DECKS}
     control = _parse_control(decks["control.dat"])
     parsed_mesh = _parse_mesh(decks["mesh.dat"])
     bc = _parse_bc(decks["bc.dat"])

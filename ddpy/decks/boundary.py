@@ -11,7 +11,17 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ddpy.case import AXES, Mesh
-from ddpy.decks.lines import _NAME, _arity, _Bad, _choice, _Deck, _float, _name, _once, _show
+from ddpy.decks.lines import (
+    NAME_PATTERN,
+    BadValue,
+    Deck,
+    check_arity,
+    first_time,
+    read_choice,
+    read_float,
+    read_name,
+    show,
+)
 
 
 @dataclass
@@ -22,64 +32,64 @@ class _BcDraft:
     fixes: list[tuple[str, tuple[int, ...], list[str], int]] = field(default_factory=list)
 
 
-def _parse_bc(deck: _Deck) -> _BcDraft:
+def _parse_bc(deck: Deck) -> _BcDraft:
     draft = _BcDraft()
     seen: dict[str, int] = {}
     for line in deck.lines:
         key, w = line.key, line.words
         try:
             if key == "tolerance":
-                _arity(line, "tolerance VALUE", 1)
-                if _once(deck, seen, line):
-                    draft.tolerance = (_float(w[1], "the tolerance", gt=0), line.number)
+                check_arity(line, "tolerance VALUE", 1)
+                if first_time(deck, seen, line):
+                    draft.tolerance = (read_float(w[1], "the tolerance", gt=0), line.number)
             elif key == "nodeset":
-                _arity(line, "nodeset NAME ids|box|plane ...", 2, -1)
-                name = _name(w[1], "the node set")
-                kind = _choice(w[2], "the node set kind", ("ids", "box", "plane"))
+                check_arity(line, "nodeset NAME ids|box|plane ...", 2, -1)
+                name = read_name(w[1], "the node set")
+                kind = read_choice(w[2], "the node set kind", ("ids", "box", "plane"))
                 if kind == "ids":
-                    _arity(line, "nodeset NAME ids ID...", 3, -1)
+                    check_arity(line, "nodeset NAME ids ID...", 3, -1)
                     for word in w[3:]:
                         _id_range(word)
                 elif kind == "box":
-                    _arity(line, "nodeset NAME box XMIN XMAX YMIN YMAX ZMIN ZMAX", 8)
-                    b = [_float(v, "a box bound", allow_inf=True) for v in w[3:]]
+                    check_arity(line, "nodeset NAME box XMIN XMAX YMIN YMAX ZMIN ZMAX", 8)
+                    b = [read_float(v, "a box bound", allow_inf=True) for v in w[3:]]
                     for a in range(3):
                         if b[2 * a] > b[2 * a + 1]:
-                            raise _Bad(f"box bounds of {'xyz'[a]}: min {w[3 + 2 * a]} > max "
+                            raise BadValue(f"box bounds of {'xyz'[a]}: min {w[3 + 2 * a]} > max "
                                        f"{w[4 + 2 * a]}")
                 else:
-                    _arity(line, "nodeset NAME plane AXIS VALUE", 4)
-                    _choice(w[3], "the plane axis", ("x", "y", "z"))
-                    _float(w[4], "the plane position")
+                    check_arity(line, "nodeset NAME plane AXIS VALUE", 4)
+                    read_choice(w[3], "the plane axis", ("x", "y", "z"))
+                    read_float(w[4], "the plane position")
                 draft.nodesets.append((name, kind, w[3:], line.number))
             elif key == "symmetry":
-                _arity(line, "symmetry AXIS VALUE|NODESET", 2)
-                axis = AXES[_choice(w[1], "the symmetry axis", ("x", "y", "z"))]
-                if not _NAME.fullmatch(w[2]):
-                    _float(w[2], "the plane position")
+                check_arity(line, "symmetry AXIS VALUE|NODESET", 2)
+                axis = AXES[read_choice(w[1], "the symmetry axis", ("x", "y", "z"))]
+                if not NAME_PATTERN.fullmatch(w[2]):
+                    read_float(w[2], "the plane position")
                 draft.symmetries.append((axis, w[2], line.number))
             elif key == "fix":
-                _arity(line, "fix NODESET COMPONENTS [phase PHASE...]", 2, -1)
-                name = _name(w[1], "the node set")
+                check_arity(line, "fix NODESET COMPONENTS [phase PHASE...]", 2, -1)
+                name = read_name(w[1], "the node set")
                 comps = w[2]
                 if comps == "all":
                     comps = "xyz"
                 if not comps or any(c not in "xyz" for c in comps) or len(set(comps)) != len(
                         comps):
-                    raise _Bad(f"expected components among x, y, z (such as 'z', 'xy', 'xyz' "
-                               f"or 'all'), got {_show(w[2])}")
+                    raise BadValue(f"expected components among x, y, z (such as 'z', 'xy', 'xyz' "
+                               f"or 'all'), got {show(w[2])}")
                 phases: list[str] = []
                 if len(w) > 3:
                     if w[3] != "phase" or len(w) < 5:
-                        raise _Bad(f"expected 'fix NODESET COMPONENTS [phase PHASE...]', got "
-                                   f"{_show(line.text)}")
-                    phases = [_name(p, "a phase") for p in w[4:]]
+                        raise BadValue(f"expected 'fix NODESET COMPONENTS [phase PHASE...]', got "
+                                   f"{show(line.text)}")
+                    phases = [read_name(p, "a phase") for p in w[4:]]
                 draft.fixes.append((name, tuple(sorted(AXES[c] for c in comps)), phases,
                                     line.number))
             else:
-                raise _Bad(f"unknown keyword {_show(key)}: expected tolerance, nodeset, "
+                raise BadValue(f"unknown keyword {show(key)}: expected tolerance, nodeset, "
                            "symmetry or fix")
-        except _Bad as bad:
+        except BadValue as bad:
             deck.error(line.number, str(bad))
     return draft
 
@@ -87,11 +97,11 @@ def _parse_bc(deck: _Deck) -> _BcDraft:
 def _id_range(word: str) -> tuple[int, int]:
     match = re.fullmatch(r"([0-9]+)(?:-([0-9]+))?", word)
     if not match:
-        raise _Bad(f"expected a node id or a range FIRST-LAST, got {_show(word)}")
+        raise BadValue(f"expected a node id or a range FIRST-LAST, got {show(word)}")
     first = int(match.group(1))
     last = int(match.group(2)) if match.group(2) else first
     if first < 1 or last < first:
-        raise _Bad(f"expected a range FIRST-LAST with 1 <= FIRST <= LAST, got {_show(word)}")
+        raise BadValue(f"expected a range FIRST-LAST with 1 <= FIRST <= LAST, got {show(word)}")
     return first, last
 
 
@@ -111,12 +121,12 @@ def _select(kind: str, args: list[str], mesh: Mesh, tol: float) -> NDArray[np.in
         first, last = _id_range(word)
         total += last - first + 1
         if total > mesh.n_nodes:
-            raise _Bad(f"the ids list more nodes than the mesh has ({mesh.n_nodes})")
+            raise BadValue(f"the ids list more nodes than the mesh has ({mesh.n_nodes})")
         parts.append(np.arange(first, last + 1))
     ids = np.concatenate(parts)
     index = mesh.index(ids)
     if (index < 0).any():
         missing = ids[index < 0]
-        raise _Bad(f"node {missing[0]} is not in the mesh"
+        raise BadValue(f"node {missing[0]} is not in the mesh"
                    + (f" (and {missing.size - 1} more ids)" if missing.size > 1 else ""))
     return index.astype(np.int64)

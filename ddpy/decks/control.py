@@ -10,36 +10,36 @@ from typing import Any
 
 from ddpy.decks.lines import (
     MAX_LENGTH,
-    _arity,
-    _Bad,
-    _choice,
-    _Deck,
-    _float,
-    _int,
-    _Line,
-    _name,
-    _once,
-    _show,
-    _vector,
+    BadValue,
+    Deck,
+    Line,
+    check_arity,
+    first_time,
+    read_choice,
+    read_float,
+    read_int,
+    read_name,
+    read_vector,
+    show,
 )
 
 #: Settings allowed at the top of control.dat (defaults of every phase) and inside a phase.
 _SETTINGS: dict[str, Callable[[str], Any]] = {
-    "max_increment": lambda w: _float(w, "max_increment", gt=0, le=MAX_LENGTH),
-    "min_increment": lambda w: _float(w, "min_increment", gt=0, le=MAX_LENGTH),
+    "max_increment": lambda w: read_float(w, "max_increment", gt=0, le=MAX_LENGTH),
+    "min_increment": lambda w: read_float(w, "min_increment", gt=0, le=MAX_LENGTH),
     # The run's increment control (forming.IncrementLimits) takes fractions below 1 only.
-    "rmin_yield": lambda w: _float(w, "rmin_yield", ge=0, lt=1),
-    "rmin_strain": lambda w: _float(w, "rmin_strain", gt=0, lt=1),
-    "rmin_rotation": lambda w: _float(w, "rmin_rotation", gt=0, le=90),
-    "rmin_contact": lambda w: _choice(w, "rmin_contact", ("on", "off")) == "on",
-    "rmin_release": lambda w: _float(w, "rmin_release", ge=0, le=1),
+    "rmin_yield": lambda w: read_float(w, "rmin_yield", ge=0, lt=1),
+    "rmin_strain": lambda w: read_float(w, "rmin_strain", gt=0, lt=1),
+    "rmin_rotation": lambda w: read_float(w, "rmin_rotation", gt=0, le=90),
+    "rmin_contact": lambda w: read_choice(w, "rmin_contact", ("on", "off")) == "on",
+    "rmin_release": lambda w: read_float(w, "rmin_release", ge=0, le=1),
     "rmin_release_redos": lambda w: (None if w == "off"
-                                     else _int(w, "rmin_release_redos", 0, 10**6)),
-    "newton_force": lambda w: _float(w, "newton_force", gt=0, lt=1),
-    "newton_displacement": lambda w: _float(w, "newton_displacement", gt=0, lt=1),
-    "max_iterations": lambda w: _int(w, "max_iterations", 1, 1000),
-    "cutback": lambda w: _float(w, "cutback", gt=0, lt=1),
-    "output_every": lambda w: _int(w, "output_every", 0, 10**9),
+                                     else read_int(w, "rmin_release_redos", 0, 10**6)),
+    "newton_force": lambda w: read_float(w, "newton_force", gt=0, lt=1),
+    "newton_displacement": lambda w: read_float(w, "newton_displacement", gt=0, lt=1),
+    "max_iterations": lambda w: read_int(w, "max_iterations", 1, 1000),
+    "cutback": lambda w: read_float(w, "cutback", gt=0, lt=1),
+    "output_every": lambda w: read_int(w, "output_every", 0, 10**9),
 }
 _PHASE_KEYS = ("type", "tools", "move", "gap", "lead", "output_at", "increments")
 #: Default largest increment: this fraction of the lead tool's travel.
@@ -72,7 +72,7 @@ class _ControlDraft:
     phases: list[_PhaseDraft] = field(default_factory=list)
 
 
-def _parse_control(deck: _Deck) -> _ControlDraft:
+def _parse_control(deck: Deck) -> _ControlDraft:
     draft = _ControlDraft()
     seen: dict[str, int] = {}
     phase: _PhaseDraft | None = None
@@ -80,42 +80,42 @@ def _parse_control(deck: _Deck) -> _ControlDraft:
         key = line.key
         try:
             if key == "phase":
-                _arity(line, "phase NAME", 1)
+                check_arity(line, "phase NAME", 1)
                 if phase is not None:
                     deck.error(phase.line, f"phase '{phase.name}' is not closed: expected "
                                f"'end' before the next 'phase' (line {line.number})")
-                phase = _PhaseDraft(_name(line.words[1], "the phase"), line.number)
+                phase = _PhaseDraft(read_name(line.words[1], "the phase"), line.number)
                 draft.phases.append(phase)
             elif key == "end":
-                _arity(line, "end", 0)
+                check_arity(line, "end", 0)
                 if phase is None:
-                    raise _Bad("'end' without a 'phase NAME' to close")
+                    raise BadValue("'end' without a 'phase NAME' to close")
                 phase = None
             elif key == "title":
                 if phase is not None:
-                    raise _Bad("'title' belongs at the top of control.dat, not in a phase")
-                if _once(deck, seen, line):
+                    raise BadValue("'title' belongs at the top of control.dat, not in a phase")
+                if first_time(deck, seen, line):
                     draft.title = line.text[len("title"):].strip() or None
                     if draft.title is None:
-                        raise _Bad("expected 'title TEXT'")
+                        raise BadValue("expected 'title TEXT'")
             elif key in _SETTINGS:
-                _arity(line, f"{key} VALUE", 1)
+                check_arity(line, f"{key} VALUE", 1)
                 target = phase.settings if phase is not None else draft.settings
                 where = phase.seen if phase is not None else seen
-                if _once(deck, where, line):
+                if first_time(deck, where, line):
                     target[key] = (_SETTINGS[key](line.words[1]), line.number)
             elif key in _PHASE_KEYS:
                 if phase is None:
-                    raise _Bad(f"'{key}' belongs inside a phase: expected 'phase NAME' ... "
+                    raise BadValue(f"'{key}' belongs inside a phase: expected 'phase NAME' ... "
                                "'end' around it")
                 _phase_line(deck, phase, line)
             else:
                 where = "in a phase" if phase is not None else "at the top of control.dat"
                 allowed = (_PHASE_KEYS + ("end",)) if phase is not None else (
                     "title", "phase")
-                raise _Bad(f"unknown keyword {_show(key)} {where}: expected one of "
+                raise BadValue(f"unknown keyword {show(key)} {where}: expected one of "
                            f"{', '.join(allowed + tuple(_SETTINGS))}")
-        except _Bad as bad:
+        except BadValue as bad:
             deck.error(line.number, str(bad))
     if phase is not None:
         deck.error(phase.line, f"phase '{phase.name}' is not closed: expected 'end' before "
@@ -125,46 +125,46 @@ def _parse_control(deck: _Deck) -> _ControlDraft:
     return draft
 
 
-def _phase_line(deck: _Deck, phase: _PhaseDraft, line: _Line) -> None:
+def _phase_line(deck: Deck, phase: _PhaseDraft, line: Line) -> None:
     key, words = line.key, line.words
     if key == "type":
-        _arity(line, "type forming|springback", 1)
-        if _once(deck, phase.seen, line):
-            phase.kind = _choice(words[1], "the phase type", ("forming", "springback"))
+        check_arity(line, "type forming|springback", 1)
+        if first_time(deck, phase.seen, line):
+            phase.kind = read_choice(words[1], "the phase type", ("forming", "springback"))
     elif key == "tools":
-        _arity(line, "tools TOOL...", 1, -1)
-        if _once(deck, phase.seen, line):
-            names = [_name(w, "a tool") for w in words[1:]]
+        check_arity(line, "tools TOOL...", 1, -1)
+        if first_time(deck, phase.seen, line):
+            names = [read_name(w, "a tool") for w in words[1:]]
             repeated = sorted({n for n in names if names.count(n) > 1})
             if repeated:
-                raise _Bad(f"tool '{repeated[0]}' listed twice")
+                raise BadValue(f"tool '{repeated[0]}' listed twice")
             phase.tools, phase.tools_line = names, line.number
     elif key == "move":
-        _arity(line, "move TOOL DX DY DZ", 4)
-        tool = _name(words[1], "the tool")
-        phase.moves.append((tool, _vector(words[2:], "the displacement", MAX_LENGTH),
+        check_arity(line, "move TOOL DX DY DZ", 4)
+        tool = read_name(words[1], "the tool")
+        phase.moves.append((tool, read_vector(words[2:], "the displacement", MAX_LENGTH),
                             line.number))
     elif key == "gap":
-        _arity(line, "gap TOOL OTHER VALUE", 3)
-        tool, other = _name(words[1], "the tool"), _name(words[2], "the other tool")
+        check_arity(line, "gap TOOL OTHER VALUE", 3)
+        tool, other = read_name(words[1], "the tool"), read_name(words[2], "the other tool")
         if tool == other:
-            raise _Bad(f"a tool cannot keep a gap to itself: expected 'gap TOOL OTHER VALUE' "
+            raise BadValue(f"a tool cannot keep a gap to itself: expected 'gap TOOL OTHER VALUE' "
                        f"with two tools, got '{tool}' twice")
-        gap = _float(words[3], "the gap", gt=0, le=MAX_LENGTH)
+        gap = read_float(words[3], "the gap", gt=0, le=MAX_LENGTH)
         phase.gaps.append((tool, other, gap, line.number))
     elif key == "lead":
-        _arity(line, "lead TOOL", 1)
-        if _once(deck, phase.seen, line):
-            phase.lead = (_name(words[1], "the lead tool"), line.number)
+        check_arity(line, "lead TOOL", 1)
+        if first_time(deck, phase.seen, line):
+            phase.lead = (read_name(words[1], "the lead tool"), line.number)
     elif key == "output_at":
-        _arity(line, "output_at TRAVEL...", 1, -1)
-        if _once(deck, phase.seen, line):
-            values = [_float(w, "an output travel", gt=0, le=MAX_LENGTH) for w in words[1:]]
+        check_arity(line, "output_at TRAVEL...", 1, -1)
+        if first_time(deck, phase.seen, line):
+            values = [read_float(w, "an output travel", gt=0, le=MAX_LENGTH) for w in words[1:]]
             if any(b <= a for a, b in zip(values, values[1:], strict=False)):
-                raise _Bad("output_at travels must increase strictly, got "
+                raise BadValue("output_at travels must increase strictly, got "
                            + " ".join(words[1:]))
             phase.output_at = (values, line.number)
     elif key == "increments":
-        _arity(line, "increments N", 1)
-        if _once(deck, phase.seen, line):
-            phase.increments = (_int(words[1], "increments", 1, 1_000_000), line.number)
+        check_arity(line, "increments N", 1)
+        if first_time(deck, phase.seen, line):
+            phase.increments = (read_int(words[1], "increments", 1, 1_000_000), line.number)

@@ -36,7 +36,7 @@ from ddpy.decks.control import (
     _ControlDraft,
     _PhaseDraft,
 )
-from ddpy.decks.lines import _NAME, _Deck, _guard
+from ddpy.decks.lines import NAME_PATTERN, Deck, guard
 from ddpy.decks.tools import _ToolDraft
 from ddpy.forming import MAX_INCREMENTS, blank_stiffness
 from ddpy.mesh import HEX_EDGES
@@ -45,7 +45,7 @@ from ddpy.mesh import HEX_EDGES
 class _Cross:
     """Checks across decks and the build of the Case."""
 
-    def __init__(self, decks: dict[str, _Deck], folder: Path) -> None:
+    def __init__(self, decks: dict[str, Deck], folder: Path) -> None:
         self.decks = decks
         self.folder = folder
         self.control = decks["control.dat"]
@@ -320,7 +320,7 @@ class _Cross:
                 deck.error(line, f"node set '{name}' defined twice (first at {first})")
                 continue
             lines[name] = line
-            selected = _guard(deck, line, lambda k=kind, a=args: _select(k, a, mesh, tol))
+            selected = guard(deck, line, lambda k=kind, a=args: _select(k, a, mesh, tol))
             if selected is None:
                 continue
             if selected.size == 0:
@@ -330,7 +330,7 @@ class _Cross:
             sets[name] = NodeSet(name, selected, deck.where(line))
         constraints = []
         for axis, target, line in bc.symmetries:
-            if _NAME.fullmatch(target):
+            if NAME_PATTERN.fullmatch(target):
                 if target not in sets:
                     self._unknown_set(line, target, sets)
                     continue

@@ -15,19 +15,19 @@ from numpy.typing import NDArray
 
 from ddpy.case import AXES, Mesh
 from ddpy.decks.lines import (
-    _INT,
-    _NUMBER,
+    INT_PATTERN,
     MAX_LENGTH,
-    _arity,
-    _Bad,
-    _choice,
-    _Deck,
-    _float,
-    _int,
-    _Line,
-    _once,
-    _show,
-    _vector,
+    NUMBER_PATTERN,
+    BadValue,
+    Deck,
+    Line,
+    check_arity,
+    first_time,
+    read_choice,
+    read_float,
+    read_int,
+    read_vector,
+    show,
 )
 
 #: Largest mesh a deck may generate or list (elements).
@@ -54,7 +54,7 @@ class _RawMesh:
     node_lines: NDArray[np.int64] | None = None  # deck line of each node (own format)
 
 
-def _parse_mesh(deck: _Deck) -> tuple[Mesh, dict[str, NDArray[np.int64]]] | None:
+def _parse_mesh(deck: Deck) -> tuple[Mesh, dict[str, NDArray[np.int64]]] | None:
     seen: dict[str, int] = {}
     normal: tuple[float, float, float] = (0.0, 0.0, 1.0)
     scale = 1.0
@@ -69,21 +69,21 @@ def _parse_mesh(deck: _Deck) -> tuple[Mesh, dict[str, NDArray[np.int64]]] | None
         key = line.key
         try:
             if key == "normal":
-                _arity(line, "normal x|y|z|-x|-y|-z", 1)
-                if _once(deck, seen, line):
-                    word = _choice(line.words[1], "the sheet normal",
+                check_arity(line, "normal x|y|z|-x|-y|-z", 1)
+                if first_time(deck, seen, line):
+                    word = read_choice(line.words[1], "the sheet normal",
                                    ("x", "y", "z", "+x", "+y", "+z", "-x", "-y", "-z"))
                     vector = [0.0, 0.0, 0.0]
                     vector[AXES[word[-1]]] = -1.0 if word.startswith("-") else 1.0
                     normal = (vector[0], vector[1], vector[2])
             elif key == "scale":
-                _arity(line, "scale FACTOR", 1)
-                if _once(deck, seen, line):
-                    scale = _float(line.words[1], "the scale factor", gt=0)
+                check_arity(line, "scale FACTOR", 1)
+                if first_time(deck, seen, line):
+                    scale = read_float(line.words[1], "the scale factor", gt=0)
             elif key == "origin":
-                _arity(line, "origin X Y Z", 3)
-                if _once(deck, seen, line):
-                    origin = np.array(_vector(line.words[1:], "the origin", MAX_LENGTH))
+                check_arity(line, "origin X Y Z", 3)
+                if first_time(deck, seen, line):
+                    origin = np.array(read_vector(line.words[1:], "the origin", MAX_LENGTH))
             elif key in ("nodes", "hexahedra", "box", "file"):
                 if key != "hexahedra":
                     if sources:
@@ -93,24 +93,24 @@ def _parse_mesh(deck: _Deck) -> tuple[Mesh, dict[str, NDArray[np.int64]]] | None
                         return None
                     sources.append((key, line.number))
                 if key == "box":
-                    _arity(line, "box LX LY LZ NX NY NZ", 6)
-                    if _once(deck, seen, line):
+                    check_arity(line, "box LX LY LZ NX NY NZ", 6)
+                    if first_time(deck, seen, line):
                         raw = _box(line)
                 elif key == "file":
-                    _arity(line, "file PATH", 1)
-                    if _once(deck, seen, line):
+                    check_arity(line, "file PATH", 1)
+                    if first_time(deck, seen, line):
                         raw = _mesh_file(deck, line)
                 elif key == "nodes":
-                    if _once(deck, seen, line):
+                    if first_time(deck, seen, line):
                         i, raw = _own_mesh(deck, lines, i - 1)
                         if raw is None:
                             return None  # the rest of the file cannot be told apart
                 else:
-                    raise _Bad("'hexahedra' must follow the 'nodes' block")
+                    raise BadValue("'hexahedra' must follow the 'nodes' block")
             else:
-                raise _Bad(f"unknown keyword {_show(key)}: expected normal, scale, origin, "
+                raise BadValue(f"unknown keyword {show(key)}: expected normal, scale, origin, "
                            "nodes, hexahedra, box or file")
-        except _Bad as bad:
+        except BadValue as bad:
             deck.error(line.number, str(bad))
     if deck.errors:
         return None
@@ -134,15 +134,15 @@ def _parse_mesh(deck: _Deck) -> tuple[Mesh, dict[str, NDArray[np.int64]]] | None
     return mesh, raw.nodesets
 
 
-def _box(line: _Line) -> _RawMesh:
+def _box(line: Line) -> _RawMesh:
     w = line.words
-    size = [_float(v, f"the box length L{a}", gt=0, le=MAX_LENGTH)
+    size = [read_float(v, f"the box length L{a}", gt=0, le=MAX_LENGTH)
             for v, a in zip(w[1:4], "XYZ", strict=True)]
-    counts = [_int(v, f"the element count N{a}", 1, MAX_ELEMENTS)
+    counts = [read_int(v, f"the element count N{a}", 1, MAX_ELEMENTS)
               for v, a in zip(w[4:7], "XYZ", strict=True)]
     nx, ny, nz = counts
     if nx * ny * nz > MAX_ELEMENTS:
-        raise _Bad(f"the box has {nx * ny * nz} elements: at most {MAX_ELEMENTS}")
+        raise BadValue(f"the box has {nx * ny * nz} elements: at most {MAX_ELEMENTS}")
     gx, gy, gz = (np.linspace(0.0, s, c + 1) for s, c in zip(size, counts, strict=True))
     zz, yy, xx = np.meshgrid(gz, gy, gx, indexing="ij")
     nodes = np.column_stack([xx.ravel(), yy.ravel(), zz.ravel()])
@@ -156,7 +156,7 @@ def _box(line: _Line) -> _RawMesh:
                     f"box {' '.join(w[1:7])}")
 
 
-def _own_mesh(deck: _Deck, lines: list[_Line], start: int) -> tuple[int, _RawMesh | None]:
+def _own_mesh(deck: Deck, lines: list[Line], start: int) -> tuple[int, _RawMesh | None]:
     """The 'nodes N' block at lines[start] and the 'hexahedra M' block after it."""
     blocks = {}
     i = start
@@ -166,12 +166,12 @@ def _own_mesh(deck: _Deck, lines: list[_Line], start: int) -> tuple[int, _RawMes
             return i, None
         head = lines[i]
         if head.key != keyword:
-            deck.error(head.number, f"expected '{keyword} COUNT', got {_show(head.text)}")
+            deck.error(head.number, f"expected '{keyword} COUNT', got {show(head.text)}")
             return i, None
         try:
-            _arity(head, f"{keyword} COUNT", 1)
-            count = _int(head.words[1], f"the number of {keyword}", 1, 8 * MAX_ELEMENTS)
-        except _Bad as bad:
+            check_arity(head, f"{keyword} COUNT", 1)
+            count = read_int(head.words[1], f"the number of {keyword}", 1, 8 * MAX_ELEMENTS)
+        except BadValue as bad:
             deck.error(head.number, str(bad))
             return i + 1, None
         i += 1
@@ -191,7 +191,7 @@ def _own_mesh(deck: _Deck, lines: list[_Line], start: int) -> tuple[int, _RawMes
         if bad:
             for k in bad[:_MAX_REPORTED]:
                 deck.error(numbers[k], f"expected '{form}' ({width} numbers), got "
-                           f"{_show(' '.join(rows[k]))}")
+                           f"{show(' '.join(rows[k]))}")
             return i, None
         blocks[keyword] = (rows, np.array(numbers))
     return i, _own_arrays(deck, blocks)
@@ -200,13 +200,13 @@ def _own_mesh(deck: _Deck, lines: list[_Line], start: int) -> tuple[int, _RawMes
 _MESH_KEYS = ("normal", "scale", "origin", "nodes", "hexahedra", "box", "file")
 
 
-def _own_arrays(deck: _Deck, blocks: dict) -> _RawMesh | None:
+def _own_arrays(deck: Deck, blocks: dict) -> _RawMesh | None:
     (node_rows, node_lines), (elem_rows, elem_lines) = blocks["nodes"], blocks["hexahedra"]
     ok = True
 
     def numbers(rows: list[list[str]], lines: NDArray, kind: type, what: str) -> NDArray | None:
         """The rows as an array; on a bad word, an error at its line and None."""
-        pattern = _NUMBER if kind is float else _INT
+        pattern = NUMBER_PATTERN if kind is float else INT_PATTERN
         if kind is float and all(pattern.fullmatch(word) for row in rows for word in row):
             return np.array(rows, dtype=float)  # non-finite values are refused below
         for row, number in zip(rows, lines, strict=True):
@@ -216,7 +216,7 @@ def _own_arrays(deck: _Deck, blocks: dict) -> _RawMesh | None:
                         raise ValueError(word)
                     value = float(word) if kind is float else int(word)
                 except ValueError:
-                    deck.error(int(number), f"expected {what}, got {_show(' '.join(row))}")
+                    deck.error(int(number), f"expected {what}, got {show(' '.join(row))}")
                     return None
                 if kind is not float and abs(value) > MAX_ID:
                     deck.error(int(number), f"{word} is out of range: ids are at most {MAX_ID}")
@@ -233,7 +233,7 @@ def _own_arrays(deck: _Deck, blocks: dict) -> _RawMesh | None:
         finite = (np.abs(coords) <= MAX_LENGTH).all(axis=1)
     for k in np.flatnonzero(~finite)[:_MAX_REPORTED]:
         deck.error(int(node_lines[k]), f"expected finite coordinates X Y Z within +-{MAX_LENGTH:g}"
-                   " mm, got " + _show(" ".join(node_rows[k][1:])))
+                   " mm, got " + show(" ".join(node_rows[k][1:])))
     ok &= bool(finite.all())
     for ids, lines, what in ((node_ids, node_lines, "node"), (elem[:, 0], elem_lines,
                                                               "element")):
@@ -268,15 +268,15 @@ def _own_arrays(deck: _Deck, blocks: dict) -> _RawMesh | None:
                     node_lines)
 
 
-def _mesh_file(deck: _Deck, line: _Line) -> _RawMesh:
+def _mesh_file(deck: Deck, line: Line) -> _RawMesh:
     path = Path(line.words[1])
     if not path.is_absolute():
         path = deck.path.parent / path
     if path.suffix.lower() not in MESH_SUFFIXES:
-        raise _Bad(f"expected a mesh file ending in {' or '.join(MESH_SUFFIXES)} (Abaqus input "
-                   f"or Gmsh), got {_show(line.words[1])}")
+        raise BadValue(f"expected a mesh file ending in {' or '.join(MESH_SUFFIXES)} (Abaqus input "
+                   f"or Gmsh), got {show(line.words[1])}")
     if not path.is_file():
-        raise _Bad(f"mesh file {path} not found")
+        raise BadValue(f"mesh file {path} not found")
     if path.suffix.lower() == ".msh":
         _check_gmsh_counts(path)
     try:
@@ -284,7 +284,7 @@ def _mesh_file(deck: _Deck, line: _Line) -> _RawMesh:
 
         data = meshio.read(path)
     except Exception as error:  # meshio raises many types for a bad file
-        raise _Bad(f"cannot read mesh file {path}: {type(error).__name__}: {error}") from None
+        raise BadValue(f"cannot read mesh file {path}: {type(error).__name__}: {error}") from None
     solids = {"tetra", "hexahedron", "wedge", "pyramid"}
     other = {}
     hexes = []
@@ -295,18 +295,19 @@ def _mesh_file(deck: _Deck, line: _Line) -> _RawMesh:
             other[block.type] = other.get(block.type, 0) + len(block.data)
     if other:
         found = ", ".join(f"{n} {t}" for t, n in sorted(other.items()))
-        raise _Bad(f"mesh file {path.name} holds {found} cells: only 8-node hexahedra are "
+        raise BadValue(f"mesh file {path.name} holds {found} cells: only 8-node hexahedra are "
                    "accepted")
     if not hexes:
-        raise _Bad(f"mesh file {path.name} holds no hexahedra")
+        raise BadValue(f"mesh file {path.name} holds no hexahedra")
     elements = np.concatenate(hexes)
     if len(elements) > MAX_ELEMENTS:
-        raise _Bad(f"mesh file {path.name} has {len(elements)} elements: at most {MAX_ELEMENTS}")
+        raise BadValue(f"mesh file {path.name} has {len(elements)} elements: at most "
+                       f"{MAX_ELEMENTS}")
     points = np.asarray(data.points, dtype=float)
     if points.ndim != 2 or points.shape[1] != 3:
-        raise _Bad(f"mesh file {path.name} is not three-dimensional")
+        raise BadValue(f"mesh file {path.name} is not three-dimensional")
     if elements.size and (elements.min() < 0 or elements.max() >= len(points)):
-        raise _Bad(f"mesh file {path.name} has elements with node indices out of range")
+        raise BadValue(f"mesh file {path.name} has elements with node indices out of range")
     # Nodes outside the hexahedra (geometry points, lower-dimensional cells) are dropped.
     used = np.unique(elements)
     renumber = np.full(len(points), -1, dtype=np.int64)
@@ -327,7 +328,7 @@ def _check_gmsh_counts(path: Path) -> None:
         with open(path, encoding="latin-1") as f:
             lines = f.read().split("\n")
     except OSError as error:
-        raise _Bad(f"cannot read mesh file {path}: {error.strerror or error}") from None
+        raise BadValue(f"cannot read mesh file {path}: {error.strerror or error}") from None
     version, binary = None, False
     sections: dict[str, tuple[int, list[str]]] = {}
     start = None
@@ -365,10 +366,10 @@ def _check_gmsh_counts(path: Path) -> None:
                 if row != len(body):
                     raise ValueError
         except (IndexError, ValueError):
-            raise _Bad(f"mesh file {path.name}:{first}: the ${name} section is malformed") \
+            raise BadValue(f"mesh file {path.name}:{first}: the ${name} section is malformed") \
                 from None
         if expected != found:
-            raise _Bad(f"mesh file {path.name}:{first + 1}: ${name} says {expected} entries, "
+            raise BadValue(f"mesh file {path.name}:{first + 1}: ${name} says {expected} entries, "
                        f"the section holds {found}")
 
 
@@ -415,7 +416,7 @@ def scaled_jacobians(nodes: NDArray[np.float64], elements: NDArray[np.int64]
     return np.where(np.isfinite(det), det, 0.0)
 
 
-def _check_elements(deck: _Deck, raw: _RawMesh, nodes: NDArray[np.float64]) -> bool:
+def _check_elements(deck: Deck, raw: _RawMesh, nodes: NDArray[np.float64]) -> bool:
     elements = raw.elements
     ordered = np.sort(elements, axis=1)
     repeats = np.flatnonzero((ordered[:, 1:] == ordered[:, :-1]).any(axis=1))

@@ -9,15 +9,15 @@ from pathlib import Path
 from typing import Any
 
 from ddpy.decks.lines import (
-    _arity,
-    _Bad,
-    _choice,
-    _Deck,
-    _float,
-    _name,
-    _once,
-    _show,
-    _unit,
+    BadValue,
+    Deck,
+    check_arity,
+    first_time,
+    read_choice,
+    read_float,
+    read_name,
+    read_unit,
+    show,
 )
 
 
@@ -35,7 +35,7 @@ _TOOL_REQUIRED = ("description", "file", "friction", "contact")
 _DESCRIPTIONS = ("bezier", "nagata", "facets")
 
 
-def _parse_tools(deck: _Deck) -> list[_ToolDraft]:
+def _parse_tools(deck: Deck) -> list[_ToolDraft]:
     tools: list[_ToolDraft] = []
     names: dict[str, int] = {}
     tool: _ToolDraft | None = None
@@ -43,60 +43,60 @@ def _parse_tools(deck: _Deck) -> list[_ToolDraft]:
         key, w = line.key, line.words
         try:
             if key == "tool":
-                _arity(line, "tool NAME", 1)
+                check_arity(line, "tool NAME", 1)
                 if tool is not None:
                     deck.error(tool.line, f"tool '{tool.name}' is not closed: expected 'end' "
                                f"before the next 'tool' (line {line.number})")
                     _finish_tool(deck, tool)
-                tool = _ToolDraft(_name(w[1], "the tool"), line.number)
+                tool = _ToolDraft(read_name(w[1], "the tool"), line.number)
                 if tool.name in names:
                     deck.error(line.number, f"tool '{tool.name}' defined twice (first at line "
                                f"{names[tool.name]})")
                 names.setdefault(tool.name, line.number)
                 tools.append(tool)
             elif key == "end":
-                _arity(line, "end", 0)
+                check_arity(line, "end", 0)
                 if tool is None:
-                    raise _Bad("'end' without a 'tool NAME' to close")
+                    raise BadValue("'end' without a 'tool NAME' to close")
                 _finish_tool(deck, tool)
                 tool = None
             elif key in _TOOL_KEYS:
                 if tool is None:
-                    raise _Bad(f"'{key}' belongs inside a tool: expected 'tool NAME' ... 'end' "
+                    raise BadValue(f"'{key}' belongs inside a tool: expected 'tool NAME' ... 'end' "
                                "around it")
-                if not _once(deck, tool.seen, line):
+                if not first_time(deck, tool.seen, line):
                     continue
                 if key == "description":
-                    _arity(line, "description bezier|nagata|facets", 1)
-                    tool.values[key] = _choice(w[1], "the description", _DESCRIPTIONS)
+                    check_arity(line, "description bezier|nagata|facets", 1)
+                    tool.values[key] = read_choice(w[1], "the description", _DESCRIPTIONS)
                 elif key == "file":
-                    _arity(line, "file PATH", 1)
+                    check_arity(line, "file PATH", 1)
                     path = Path(w[1])
                     tool.values[key] = path if path.is_absolute() else deck.path.parent / path
                 elif key == "augmentation":
-                    _arity(line, "augmentation R", 1)
-                    tool.values[key] = _float(w[1], "the augmentation parameter", gt=0)
+                    check_arity(line, "augmentation R", 1)
+                    tool.values[key] = read_float(w[1], "the augmentation parameter", gt=0)
                 elif key == "friction":
-                    _arity(line, "friction MU", 1)
-                    mu = _float(w[1], "friction", ge=0)
+                    check_arity(line, "friction MU", 1)
+                    mu = read_float(w[1], "friction", ge=0)
                     if mu > 1:
                         deck.warn(line.number, f"friction coefficient {mu:g} is above 1")
                     tool.values[key] = mu
                 else:
-                    _arity(line, "contact top|bottom|facing NX NY NZ", 1, 4)
-                    side = _choice(w[1], "the contact side", ("top", "bottom", "facing"))
+                    check_arity(line, "contact top|bottom|facing NX NY NZ", 1, 4)
+                    side = read_choice(w[1], "the contact side", ("top", "bottom", "facing"))
                     if side == "facing":
-                        _arity(line, "contact facing NX NY NZ", 4)
-                        tool.values[key] = (side, _unit(w[2:], "the facing direction"))
+                        check_arity(line, "contact facing NX NY NZ", 4)
+                        tool.values[key] = (side, read_unit(w[2:], "the facing direction"))
                     else:
-                        _arity(line, f"contact {side}", 1)
+                        check_arity(line, f"contact {side}", 1)
                         tool.values[key] = (side, None)
             else:
                 where = "in a tool" if tool is not None else "at the top of tools.dat"
-                raise _Bad(f"unknown keyword {_show(key)} {where}: expected "
+                raise BadValue(f"unknown keyword {show(key)} {where}: expected "
                            + ("description, file, friction, contact, augmentation or end" if tool
                    else "tool"))
-        except _Bad as bad:
+        except BadValue as bad:
             deck.error(line.number, str(bad))
     if tool is not None:
         deck.error(tool.line, f"tool '{tool.name}' is not closed: expected 'end' before the "
@@ -106,7 +106,7 @@ def _parse_tools(deck: _Deck) -> list[_ToolDraft]:
     return tools
 
 
-def _finish_tool(deck: _Deck, tool: _ToolDraft) -> None:
+def _finish_tool(deck: Deck, tool: _ToolDraft) -> None:
     """Check a closed tool block: required keywords, the file and its description."""
     forms = {"description": "description bezier|nagata|facets", "file": "file PATH",
              "friction": "friction MU",

@@ -41,7 +41,7 @@ from ddpy import __version__
 from ddpy.case import through_thickness_columns
 
 __all__ = ["CONTACT_STATUS", "FORMAT", "LIMITS", "TENSOR6", "VOIGT", "Frame", "ResultsReader",
-           "ResultsWriteError", "ResultsWriter", "Timings", "xdmf_text"]
+           "ResultsWriteError", "ResultsWriter", "Timings", "frame_bytes", "xdmf_text"]
 
 FORMAT = "ddpy-results"
 VERSION = 1
@@ -164,6 +164,13 @@ def _mesh_arrays(mesh: Any) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray
     ids = np.arange(1, n + 1) if ids is None else np.asarray(ids, dtype=np.int64)
     eids = np.arange(1, m + 1) if eids is None else np.asarray(eids, dtype=np.int64)
     return nodes, elements.astype(np.int32), ids, eids, np.asarray(normal, dtype=float)
+
+
+def frame_bytes(n_nodes: int, n_elements: int) -> int:
+    """Bytes one frame of fields takes in results.h5: 8 a number, 16 numbers per node
+    (displacement, contact force and status, thickness...) and 10 per element (stress,
+    plastic strain...)."""
+    return 8 * (16 * n_nodes + 10 * n_elements)
 
 
 class ResultsWriteError(OSError):
@@ -310,14 +317,13 @@ class ResultsWriter:
         return False if code in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG) else None
 
     def _needed(self) -> int:
-        """Bytes a frame takes (its fields, 8 bytes a number), the XDMF file rewritten
-        beside the old one, and MIN_FREE."""
-        n, m = len(self.nodes), len(self.elements)
+        """Bytes a frame takes (frame_bytes), the XDMF file rewritten beside the old one,
+        and MIN_FREE."""
         try:
             xdmf = self.xdmf_path.stat().st_size
         except OSError:
             xdmf = 0
-        return 8 * (16 * n + 10 * m) + xdmf + MIN_FREE
+        return frame_bytes(len(self.nodes), len(self.elements)) + xdmf + MIN_FREE
 
     @classmethod
     def for_case(cls, path: str | os.PathLike[str], case: Any, overwrite: bool = False

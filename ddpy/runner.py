@@ -46,7 +46,7 @@ from ddpy.forming import (
     RigidTool,
 )
 from ddpy.mesh import HexMesh
-from ddpy.results import MIN_FREE, ResultsWriteError, ResultsWriter, Timings
+from ddpy.results import MIN_FREE, ResultsWriteError, ResultsWriter, Timings, frame_bytes
 from ddpy.solid import Solid, SolidState
 
 __all__ = ["BUILT_IN_CASES", "CHECKPOINT", "DEFAULT_CASE", "RESULTS", "STATUS", "Progress",
@@ -487,9 +487,9 @@ def _share(total: int, k: int, parts: int) -> int:
 
 def _check_free_space(case: Case, output: Path) -> None:
     """Refuse to start where the results cannot be written: less free space than a few
-    frames and checkpoints of this mesh (per node about 15 numbers, per element 8 Gauss
-    points of 8) beyond the results writer's MIN_FREE. HDF5 ended a run started with 64 KB free in a
-    segmentation fault while it closed the file."""
+    frames (results.frame_bytes) and checkpoints (per node about 15 numbers, per element 8
+    Gauss points of 8) of this mesh beyond the results writer's MIN_FREE. HDF5 ended a run
+    started with 64 KB free in a segmentation fault while it closed the file."""
     import shutil
 
     folder = output
@@ -499,8 +499,9 @@ def _check_free_space(case: Case, output: Path) -> None:
         free = shutil.disk_usage(folder).free
     except OSError:
         return  # the first write will say what is wrong
-    per_frame = 8 * (15 * case.mesh.n_nodes + 64 * case.mesh.n_elements)
-    needed = MIN_FREE + 8 * per_frame  # what the writer keeps free, and a few frames
+    n, m = case.mesh.n_nodes, case.mesh.n_elements
+    checkpoint = 8 * (15 * n + 64 * m)
+    needed = MIN_FREE + 4 * (frame_bytes(n, m) + checkpoint)  # the writer's margin, and more
     if free < needed:
         raise RunError(f"{folder}: {free / 1e6:.3g} MB free, the results of this mesh need "
                        f"at least {needed / 1e6:.3g} MB to start; free some space or choose "

@@ -364,7 +364,7 @@ def _step_values(path: Path, line_of: Callable[[int], int], entity: int, kind: s
         text, offset = arguments[1] if len(arguments) > 1 else ("", 0)
         values = text[1:-1].split(",") if text.startswith("(") and text.endswith(")") else []
         numbers = [float(r) for r in values if _STEP_NUMBER.fullmatch(r.strip())]
-        lo, hi = _STEP_LENGTHS
+        hi = _STEP_LENGTHS[1]
         if kind == "DIRECTION" and (not 2 <= len(values) <= 3 or len(numbers) != len(values)
                                     or not any(abs(r) > 0.0 for r in numbers)
                                     or max(abs(r) for r in numbers) > hi):
@@ -596,7 +596,6 @@ class ToolBuilder:
                      source: str | None = None) -> ToolModel:
         """Bezier patches (degree <= 6) within ``tol`` mm and ``angle_tol`` degrees (normal)
         of every face."""
-
         if not tol > 0.0:
             raise ValueError(f"bezier_tol must be positive (mm), got {tol}")
         if not 0.0 < angle_tol < 90.0:

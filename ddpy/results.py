@@ -269,12 +269,13 @@ class ResultsWriter:
         if self.failed:
             raise ResultsWriteError(self.path, self.failed)
         needed = self._needed() if frame else MIN_FREE
-        held = self._hold(needed)
-        free = shutil.disk_usage(self.path.parent).free if held is None else 0
-        if held is False or (held is None and frame and free < needed):
+        held, free = self._hold(needed), ""
+        if held is None and frame:  # nothing held here: the free space as seen now
+            space = shutil.disk_usage(self.path.parent).free
+            held, free = space >= needed, f", {space / 1e6:.3g} MB free"
+        if held is False:
             self.failed = (f"No space left on device (the next frame needs "
-                           f"{needed / 1e6:.3g} MB" + (f", {free / 1e6:.3g} MB free)"
-                                                       if held is None else ")"))
+                           f"{needed / 1e6:.3g} MB{free})")
             with contextlib.suppress(Exception):
                 self._file.attrs.update(status="failed", message=self.failed)
             self._close()

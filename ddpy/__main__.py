@@ -1,5 +1,5 @@
 """Allow ``python -m ddpy``."""
 
-from ddpy.cli import main
+from ddpy.app.cli import main
 
 raise SystemExit(main())

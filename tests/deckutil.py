@@ -1,5 +1,5 @@
 """Helpers of the deck tests: example cases copied to a folder, and a tool file reader for
-the geometry checks when ddpy.toolfile is not part of this build."""
+the geometry checks when ddpy.io.toolfile is not part of this build."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ddpy.surfaces import NagataSurface
+from ddpy.geometry.surfaces import NagataSurface
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 
@@ -60,10 +60,10 @@ def _read_nagata(path: str | Path) -> types.SimpleNamespace:
 
 
 def install_toolfile(monkeypatch) -> None:
-    """Make ddpy.toolfile importable: the real one when present, else a minimal reader."""
+    """Make ddpy.io.toolfile importable: the real one when present, else a minimal reader."""
     try:
-        import ddpy.toolfile  # noqa: F401
+        import ddpy.io.toolfile  # noqa: F401
     except ImportError:
-        stub = types.ModuleType("ddpy.toolfile")
+        stub = types.ModuleType("ddpy.io.toolfile")
         stub.read_tool = _read_nagata  # type: ignore[attr-defined]
-        monkeypatch.setitem(sys.modules, "ddpy.toolfile", stub)
+        monkeypatch.setitem(sys.modules, "ddpy.io.toolfile", stub)

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from ddpy import _core
-from ddpy.mesh import HexMesh
-from ddpy.solid import Solid, SolidState
+from ddpy.model.mesh import HexMesh
+from ddpy.model.solid import Solid, SolidState
 
 E, NU = 210e3, 0.3
 #: DDQ steel of the paper's Table 4 (reverse deep drawing), MPa.

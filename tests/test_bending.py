@@ -1,11 +1,12 @@
-"""Measurements of the cylindrical bending benchmark (ddpy.bending) on synthetic geometry."""
+"""Measurements of the cylindrical bending benchmark (ddpy.studies.bending) on synthetic
+geometry."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from ddpy.bending import contact_angle, force_oscillation, line_angle, smooth_curve
+from ddpy.studies.bending import contact_angle, force_oscillation, line_angle, smooth_curve
 
 CENTRE = np.array([0.0, 0.0, 24.5])
 

@@ -13,7 +13,7 @@ from math import comb
 import numpy as np
 import pytest
 
-from ddpy.surfaces import BezierSurface
+from ddpy.geometry.surfaces import BezierSurface
 
 DEGREES = [(n, m) for n in range(1, 7) for m in range(1, 7)]
 POINTS_PER_PATCH = 40

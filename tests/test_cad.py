@@ -9,15 +9,15 @@ import numpy as np
 import pytest
 
 from ddpy.cad import CadError, build_tool_models, closest_points, gmsh_session, load_cad
-from ddpy.cad_examples import (
+from ddpy.cad.examples import (
     cylinder_segment,
     cylindrical_punch,
     die_profile,
     sphere_patch,
     write_cad,
 )
-from ddpy.shape_error import plot_shape_error, shape_error
-from ddpy.toolfile import ToolModel, read_tool
+from ddpy.cad.shape_error import plot_shape_error, shape_error
+from ddpy.io.toolfile import ToolModel, read_tool
 
 gmsh = pytest.importorskip("gmsh")
 
@@ -380,7 +380,7 @@ def test_bad_arguments(cad: dict[str, Path], tmp_path: Path) -> None:
 
 def test_cli_build_and_error(cad: dict[str, Path], tmp_path: Path,
                              capsys: pytest.CaptureFixture[str]) -> None:
-    from ddpy.cli import main
+    from ddpy.app.cli import main
 
     def ddpy(*args: str) -> tuple[int, str, str]:
         try:
@@ -431,9 +431,9 @@ def test_bezier_fit_stops_at_the_patch_limit(cad: dict[str, Path], tmp_path: Pat
                                              monkeypatch: pytest.MonkeyPatch) -> None:
     # A face the tolerances make split again and again ends with a message, not in millions
     # of regions: here the limit is lowered to 1 and the cylinder needs 2 patches.
-    import ddpy.bezier_fit
+    import ddpy.cad.bezier_fit
 
-    monkeypatch.setattr(ddpy.bezier_fit, "MAX_PATCHES_PER_FACE", 1)
+    monkeypatch.setattr(ddpy.cad.bezier_fit, "MAX_PATCHES_PER_FACE", 1)
     with pytest.raises(CadError, match="needs more than 1 Bezier patches"):
         build_tool_models(cad["cylinder"], tmp_path, "c", models=("bezier",),
                           blank_point=(0.0, 0.0, 10.0), bezier_tol=1e-6)
@@ -509,7 +509,7 @@ def test_step_files_that_crash_the_cad_reader_are_refused(cad: dict[str, Path], 
     if damage in ("magnitude", "tiny magnitude", "orientation", "direction", "huge direction",
                   "placement", "absent"):
         assert str(error.value).split(": ")[1].split()[1] in lines[number - 1]
-    from ddpy.cli import main
+    from ddpy.app.cli import main
 
     assert main(["tools", "build", str(bad), "--out", str(tmp_path / "out"),
                  "--blank-point=0,0,10"]) == 2
@@ -522,7 +522,7 @@ def test_step_faces_the_cad_kernel_drops_are_reported(cad: dict[str, Path], tmp_
     # check, the count of faces read against those the file defines still does.
     import re
 
-    import ddpy.cad
+    import ddpy.cad.read
 
     text = cad["die"].read_text()
     point = re.search(r"#(\d+) ?= ?CARTESIAN_POINT", text)
@@ -534,8 +534,8 @@ def test_step_faces_the_cad_kernel_drops_are_reported(cad: dict[str, Path], tmp_
     with pytest.raises(CadError, match=r"ADVANCED_FACE: its face_geometry #\d+ is "
                                        r"CARTESIAN_POINT, expected \*_SURFACE or PLANE"):
         build_tool_models(bad, tmp_path, "bad", blank_side=(0.0, 0.0, 1.0))
-    types = {k: v for k, v in ddpy.cad._STEP_TYPES.items() if k != "ADVANCED_FACE"}
-    monkeypatch.setattr(ddpy.cad, "_STEP_TYPES", types)
+    types = {k: v for k, v in ddpy.cad.read._STEP_TYPES.items() if k != "ADVANCED_FACE"}
+    monkeypatch.setattr(ddpy.cad.read, "_STEP_TYPES", types)
     with pytest.raises(CadError, match=r"the CAD kernel read \d+ of the \d+ faces"):
         build_tool_models(bad, tmp_path, "bad", blank_side=(0.0, 0.0, 1.0))
 
@@ -545,7 +545,7 @@ def test_a_failing_build_leaves_no_new_folder(cad: dict[str, Path], tmp_path: Pa
                                               name: str,
                                               capsys: pytest.CaptureFixture[str]) -> None:
     # The file cannot be read (garbage, missing) or a face fails once meshed (cone).
-    from ddpy.cli import main
+    from ddpy.app.cli import main
 
     path = cad.get(name, tmp_path / "missing.step")
     out = tmp_path / "new" / "tools"
@@ -564,13 +564,13 @@ def test_a_build_failing_to_write_leaves_no_new_folder(cad: dict[str, Path], tmp
                                                        ) -> None:
     import errno
 
-    import ddpy.cad
-    from ddpy.cli import main
+    import ddpy.cad.build
+    from ddpy.app.cli import main
 
     def full(path: Path, model: ToolModel) -> Path:
         raise OSError(errno.ENOSPC, "No space left on device", str(path))
 
-    monkeypatch.setattr(ddpy.cad, "write_tool", full)
+    monkeypatch.setattr(ddpy.cad.build, "write_tool", full)
     out = tmp_path / "new" / "tools"
     assert main(["tools", "build", str(cad["cylinder"]), "--out", str(out),
                  "--blank-point=0,0,10"]) == 1

@@ -8,16 +8,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ddpy.checkpoint import (
+from ddpy.io.checkpoint import (
     CheckpointError,
     read_checkpoint,
     state_arrays,
     state_from_arrays,
     write_checkpoint,
 )
-from ddpy.material import Hill48, Material, Swift
-from ddpy.mesh import HexMesh
-from ddpy.solid import Solid, SolidState
+from ddpy.model.material import Hill48, Material, Swift
+from ddpy.model.mesh import HexMesh
+from ddpy.model.solid import Solid, SolidState
 
 
 @dataclass

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import ddpy
-from ddpy.accuracy import arc_errors
+from ddpy.studies.accuracy import arc_errors
 
 
 def run(*args: str) -> subprocess.CompletedProcess[str]:

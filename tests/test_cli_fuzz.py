@@ -11,7 +11,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from ddpy.cli import main
+from ddpy.app.cli import main
 
 MISSING = "/nonexistent/ddpy-fuzz"
 OPTIONS = {

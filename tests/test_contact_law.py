@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ddpy.contact import INACTIVE, SLIP, STICK, contact_law
-from ddpy.search import ContactSearch
-from ddpy.surfaces import BezierSurface
+from ddpy.geometry.search import ContactSearch
+from ddpy.geometry.surfaces import BezierSurface
+from ddpy.model.contact import INACTIVE, SLIP, STICK, contact_law
 
 RNG = np.random.default_rng(7)
 

@@ -15,9 +15,9 @@ from functools import cache
 import numpy as np
 import pytest
 
-from ddpy.accuracy import fit_order
-from ddpy.shapes import Cylinder, Sphere, Torus
-from ddpy.surfaces import NAGATA_DEGENERATE_RATIO, NagataSurface
+from ddpy.geometry.shapes import Cylinder, Sphere, Torus
+from ddpy.geometry.surfaces import NAGATA_DEGENERATE_RATIO, NagataSurface
+from ddpy.studies.accuracy import fit_order
 
 SHAPES = {"sphere": Sphere(10.0), "cylinder": Cylinder(10.0, 20.0), "torus": Torus(30.0, 10.0)}
 #: Refinements per shape: the torus has 3x more cells per n (major/minor = 3).

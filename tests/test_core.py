@@ -1,4 +1,4 @@
-"""The build itself: OpenMP in the Fortran core and the MUMPS solver behind ddpy.linalg."""
+"""The build itself: OpenMP in the Fortran core and the MUMPS solver behind ddpy.core.linalg."""
 
 from __future__ import annotations
 
@@ -9,15 +9,15 @@ import sys
 import numpy as np
 import pytest
 
-from ddpy.linalg import LinearSolverError, MumpsSolver, spsolve
-from ddpy.parallel import max_threads, set_threads, threads
+from ddpy.core.linalg import LinearSolverError, MumpsSolver, spsolve
+from ddpy.core.parallel import max_threads, set_threads, threads
 
 
 @pytest.mark.parametrize("n", [1, 2, 3])
 def test_openmp_threads_follow_environment(n: int) -> None:
     env = dict(os.environ, OMP_NUM_THREADS=str(n))
     out = subprocess.run(
-        [sys.executable, "-c", "from ddpy.parallel import max_threads; print(max_threads())"],
+        [sys.executable, "-c", "from ddpy.core.parallel import max_threads; print(max_threads())"],
         env=env, capture_output=True, text=True, check=True,
     )
     assert int(out.stdout.strip()) == n

@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from ddpy.toolfile import read_tool
+from ddpy.io.toolfile import read_tool
 
 BENCH = Path(__file__).resolve().parents[1] / "benchmarks" / "cylindrical_bending"
 sys.path.insert(0, str(BENCH.parent))  # the benchmarks' shared module

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 from deckutil import EXAMPLES, copy_example, edit, install_toolfile
 
-from ddpy.case import HoldGap, Move, Newton, RminLimits, rigid_body_modes_free
-from ddpy.decks import DeckError, parse_case, read_case
-from ddpy.material import Hill48, Swift, Voce
+from ddpy.io.case import HoldGap, Move, Newton, RminLimits, rigid_body_modes_free
+from ddpy.io.decks import DeckError, parse_case, read_case
+from ddpy.model.material import Hill48, Swift, Voce
 
 
 def error_of(case: Path, geometry: bool = False) -> DeckError:
@@ -509,7 +509,7 @@ def test_material_implausible_r_values_are_warned_about(tmp_path: Path, line: st
 
 
 def test_material_axes() -> None:
-    from ddpy.case import BlankMaterial
+    from ddpy.io.case import BlankMaterial
 
     mat = read_case(EXAMPLES / "bending", geometry=False).material.material
     axes = BlankMaterial(mat, 30.0).axes((0.0, 0.0, 1.0))

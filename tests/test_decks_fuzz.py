@@ -17,7 +17,7 @@ from deckutil import EXAMPLES, install_toolfile
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from ddpy.decks import DECKS, DeckError, read_case
+from ddpy.io.decks import DECKS, DeckError, read_case
 
 #: Seconds one example may take before it counts as a hang.
 HANG = 20
@@ -188,8 +188,8 @@ def test_valid_examples_still_read(folder: Path) -> None:
 
 def _bezier_tool_text() -> str:
     """A small Bezier tool file written by ddpy: a flat patch and a curved one."""
-    from ddpy.surfaces import BezierSurface
-    from ddpy.toolfile import ToolModel, write_tool
+    from ddpy.geometry.surfaces import BezierSurface
+    from ddpy.io.toolfile import ToolModel, write_tool
 
     u, v = np.meshgrid(np.linspace(0, 1, 3), np.linspace(0, 1, 4), indexing="ij")
     flat = np.stack([u, v, np.zeros_like(u)], axis=-1)
@@ -208,7 +208,7 @@ TOOL_TEXTS = {"nagata": TOOL_FILES["bending"]["tools/punch.tool"],
 @given(st.sampled_from(sorted(TOOL_TEXTS)), st.data())
 def test_mutated_tool_files_read_or_refused(tmp_path_factory: pytest.TempPathFactory,
                                             kind: str, data: st.DataObject) -> None:
-    from ddpy.toolfile import ToolFileError, read_tool
+    from ddpy.io.toolfile import ToolFileError, read_tool
 
     text = TOOL_TEXTS[kind]
     for _ in range(data.draw(st.integers(1, 3))):

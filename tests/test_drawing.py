@@ -1,4 +1,4 @@
-"""ddpy.drawing against analytic cases: volumes of boxes and distorted hexahedra, a cylinder
+"""ddpy.studies.drawing against analytic cases: volumes of boxes and distorted hexahedra, a cylinder
 cup's height and flange, radial sections, force balance and penetration."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from ddpy.drawing import (
+from ddpy.studies.drawing import (
     contact_force_balance,
     cup_height,
     element_centroids,
@@ -132,8 +132,8 @@ def test_contact_force_balance() -> None:
 
 
 def test_penetration_into_a_plane_tool() -> None:
-    from ddpy.search import ContactSearch
-    from ddpy.surfaces import NagataSurface
+    from ddpy.geometry.search import ContactSearch
+    from ddpy.geometry.surfaces import NagataSurface
 
     # A flat square tool at z = 0 facing +z, moved up by 0.25.
     plane = NagataSurface([[0, 0, 0], [4, 0, 0], [4, 4, 0], [0, 4, 0]], [[0, 0, 1]] * 4,

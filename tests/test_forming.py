@@ -1,4 +1,4 @@
-"""Frictional contact with rigid tools in the single Newton loop (ddpy.forming)."""
+"""Frictional contact with rigid tools in the single Newton loop (ddpy.model.forming)."""
 
 from __future__ import annotations
 
@@ -7,12 +7,12 @@ from math import comb
 import numpy as np
 import pytest
 
-from ddpy.contact import SLIP, STICK
-from ddpy.forming import FormingProblem, IncrementLimits, RigidTool, _yield_factor
-from ddpy.material import Hill48, Material, Swift
-from ddpy.mesh import HexMesh
-from ddpy.solid import Solid, SolidState, StaticProblem, material_props
-from ddpy.surfaces import BezierSurface, NagataSurface
+from ddpy.geometry.surfaces import BezierSurface, NagataSurface
+from ddpy.model.contact import SLIP, STICK
+from ddpy.model.forming import FormingProblem, IncrementLimits, RigidTool, _yield_factor
+from ddpy.model.material import Hill48, Material, Swift
+from ddpy.model.mesh import HexMesh
+from ddpy.model.solid import Solid, SolidState, StaticProblem, material_props
 
 #: Elastic in practice (yield stress 1e7 MPa), no Poisson effect: the analytic answers hold.
 ELASTIC = Material(210e3, 0.0, Hill48.von_mises(), Swift(1e7, 0.01, 0.0))
@@ -528,7 +528,7 @@ def test_springback_of_a_bent_strip_converges_quadratically() -> None:
 
 
 def test_next_increment_tries_the_nominal_size_again_after_a_limit() -> None:
-    from ddpy.forming import _next_step
+    from ddpy.model.forming import _next_step
 
     # Touch, release and yield are found before or in the first iteration: back to nominal
     # unless the rates predict a strain or rotation limit.
@@ -566,8 +566,8 @@ def test_a_newton_step_stops_where_free_nodes_would_enter_a_tool() -> None:
     # The block hangs 0.1 mm above the plane, its bottom nodes free (no contact). A step
     # moving every free node 1 mm down may go only until they are PENETRATION element
     # sizes deep; a step moving them up, or a node already in contact, is not limited.
-    from ddpy.contact import INACTIVE
-    from ddpy.forming import MIN_STEP, PENETRATION
+    from ddpy.model.contact import INACTIVE
+    from ddpy.model.forming import MIN_STEP, PENETRATION
 
     mesh = HexMesh.box(1.0, 1.0, 0.5, 2, 2, 2, origin=(-0.5, -0.5, 0.1))
     tool = RigidTool("plane", plane_tool(), mesh.select(z=0.1), facing=(0, 0, -1))

@@ -6,11 +6,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ddpy.forming import FormingProblem, RigidTool
-from ddpy.material import Hill48, Material, Swift
-from ddpy.mesh import HexMesh
-from ddpy.solid import Solid
-from ddpy.surfaces import NagataSurface
+from ddpy.geometry.surfaces import NagataSurface
+from ddpy.model.forming import FormingProblem, RigidTool
+from ddpy.model.material import Hill48, Material, Swift
+from ddpy.model.mesh import HexMesh
+from ddpy.model.solid import Solid
 
 STEEL = Material(210e3, 0.3, Hill48.von_mises(), Swift(500.0, 0.01, 0.2))
 

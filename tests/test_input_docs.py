@@ -8,7 +8,7 @@ from pathlib import Path
 
 from deckutil import EXAMPLES
 
-from ddpy import decks
+from ddpy.io import decks
 
 DOC = Path(__file__).resolve().parent.parent / "docs" / "input-format.md"
 

@@ -6,11 +6,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ddpy.contact import SLIP
-from ddpy.forming import FormingProblem, RigidTool
-from ddpy.linalg import CoordinateMatrix, gmres
-from ddpy.mesh import HexMesh
-from ddpy.solid import Solid
+from ddpy.core.linalg import CoordinateMatrix, gmres
+from ddpy.model.contact import SLIP
+from ddpy.model.forming import FormingProblem, RigidTool
+from ddpy.model.mesh import HexMesh
+from ddpy.model.solid import Solid
 from tests.test_forming import ELASTIC, cylinder_crest
 
 

@@ -14,8 +14,8 @@ import pytest
 from scipy.optimize import brentq
 
 from ddpy import _core
-from ddpy.material import Hill48, Material, ReturnMappingError, Swift, Voce
-from ddpy.parallel import threads
+from ddpy.core.parallel import threads
+from ddpy.model.material import Hill48, Material, ReturnMappingError, Swift, Voce
 
 E, NU = 210e3, 0.3
 # Reverse deep drawing, DDQ steel (paper Table 4) and cylindrical bending, HSS (Table 1).

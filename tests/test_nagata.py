@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ddpy.surfaces import NAGATA_DEGENERATE_RATIO, NagataSurface, nagata_edge_coefficient
+from ddpy.geometry.surfaces import NAGATA_DEGENERATE_RATIO, NagataSurface, nagata_edge_coefficient
 
 RADIUS = 10.0
 TRIANGLE_CORNERS = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]])

@@ -1,4 +1,4 @@
-"""Nested-dissection pivot orders from the mesh (ddpy.ordering) and their use by MUMPS."""
+"""Nested-dissection pivot orders from the mesh (ddpy.core.ordering) and their use by MUMPS."""
 
 from __future__ import annotations
 
@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 from solid_helpers import props_vector
 
-from ddpy.linalg import MumpsSolver
-from ddpy.mesh import HexMesh
-from ddpy.ordering import equation_order, nested_dissection, node_adjacency
-from ddpy.solid import Solid, StaticProblem
+from ddpy.core.linalg import MumpsSolver
+from ddpy.core.ordering import equation_order, nested_dissection, node_adjacency
+from ddpy.model.mesh import HexMesh
+from ddpy.model.solid import Solid, StaticProblem
 
 
 def test_adjacency_and_separators() -> None:
@@ -96,9 +96,9 @@ def test_contact_multipliers_first_halve_the_factorization_flops() -> None:
     """The forming Jacobian of the built-in bending case, with pairs closed and open: the
     multipliers eliminated before the displacements give the same solution as with their
     nodes, with fewer flops (a closed stick pair's zero pivot is delayed by MUMPS)."""
-    from ddpy.decks import read_case
-    from ddpy.forming import _Layout, _Touching
-    from ddpy.runner import DEFAULT_CASE, build_problem
+    from ddpy.app.runner import DEFAULT_CASE, build_problem
+    from ddpy.io.decks import read_case
+    from ddpy.model.forming import _Layout, _Touching
 
     problem = build_problem(read_case(DEFAULT_CASE))
     layout = _Layout(problem.solid, problem.tools, problem.fixed)

@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 from test_runner import tiny_case
 
-from ddpy.decks import read_case
-from ddpy.post import load_run
-from ddpy.results import ResultsReader
-from ddpy.runner import RESULTS, run_case
+from ddpy.app.post import load_run
+from ddpy.app.runner import RESULTS, run_case
+from ddpy.io.decks import read_case
+from ddpy.io.results import ResultsReader
 
 
 @pytest.fixture(scope="module")

@@ -16,9 +16,9 @@ import pytest
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
-from ddpy.cli import main
-from ddpy.decks import DeckError, read_case
-from ddpy.parallel import set_threads, thread_limit
+from ddpy.app.cli import main
+from ddpy.core.parallel import set_threads, thread_limit
+from ddpy.io.decks import DeckError, read_case
 from tests.deckutil import EXAMPLES, copy_example, edit
 from tests.test_forming import block_on_plane
 
@@ -300,13 +300,13 @@ def test_a_model_too_large_for_memory_ends_with_a_message(tmp_path: Path) -> Non
 
 def test_an_internal_error_is_one_line_unless_debug(monkeypatch: pytest.MonkeyPatch,
                                                     capsys: pytest.CaptureFixture[str]) -> None:
-    import ddpy.decks
-    from ddpy.cli import main
+    import ddpy.io.decks
+    from ddpy.app.cli import main
 
     def broken(*args: object, **kwargs: object) -> None:
         raise RuntimeError("a defect")
 
-    monkeypatch.setattr(ddpy.decks, "read_case", broken)
+    monkeypatch.setattr(ddpy.io.decks, "read_case", broken)
     assert main(["check", str(BUILT_IN)]) == 1
     err = capsys.readouterr().err
     assert "ddpy check: internal error: RuntimeError: a defect" in err and "--debug" in err
@@ -439,13 +439,13 @@ def test_check_refuses_what_run_refuses_at_once(tmp_path: Path, change: str, whe
 ])
 def test_a_matrix_size_mumps_cannot_take_is_refused_before_it(
         monkeypatch: pytest.MonkeyPatch, n: object, rows: list[int], message: str) -> None:
-    import ddpy.linalg
-    from ddpy.linalg import MumpsSolver
+    import ddpy.core.linalg
+    from ddpy.core.linalg import MumpsSolver
 
     def analyse(*args: object) -> int:  # the core's analysis would allocate for all n
         raise AssertionError("MUMPS was called")
 
-    monkeypatch.setattr(ddpy.linalg._core, "solver_analyse", analyse)
+    monkeypatch.setattr(ddpy.core.linalg._core, "solver_analyse", analyse)
     with MumpsSolver() as solver, pytest.raises(ValueError, match=message):
         solver.analyse(n, rows, rows)  # type: ignore[arg-type]
 
@@ -479,7 +479,7 @@ def test_a_disk_filling_during_a_run_ends_it_with_one_message(
 
     import h5py
 
-    from ddpy.results import ResultsReader
+    from ddpy.io.results import ResultsReader
 
     write = h5py.Dataset.__setitem__
 
@@ -505,10 +505,10 @@ def test_a_disk_filling_during_a_run_ends_it_with_one_message(
 FILL_THE_DISK = """
 import sys
 from pathlib import Path
-import ddpy.results
-from ddpy.cli import main
+import ddpy.io.results
+from ddpy.app.cli import main
 
-write_frame = ddpy.results.ResultsWriter._write_frame
+write_frame = ddpy.io.results.ResultsWriter._write_frame
 filler = Path(sys.argv[1]) / "filler"
 
 def fill_then_write(self, index, *args, **kwargs):
@@ -524,7 +524,7 @@ def fill_then_write(self, index, *args, **kwargs):
                     break
     write_frame(self, index, *args, **kwargs)
 
-ddpy.results.ResultsWriter._write_frame = fill_then_write
+ddpy.io.results.ResultsWriter._write_frame = fill_then_write
 sys.exit(main(["run", "--output", str(Path(sys.argv[1]) / "out"), "--stop-after", "3"]))
 """
 
@@ -534,7 +534,7 @@ def test_a_disk_filled_by_another_process_during_a_run(tmp_path: Path) -> None:
     # write, printed tracebacks while freeing its objects and crashed the process at exit.
     # The writer holds the disk blocks of a frame beyond the file's end before it writes;
     # the run stops with one message, the results readable up to the last increment.
-    from ddpy.results import ResultsReader
+    from ddpy.io.results import ResultsReader
 
     with small_disk(tmp_path / "disk", "4m") as disk:
         done = subprocess.run([sys.executable, "-c", FILL_THE_DISK, str(disk)],

@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 from deckutil import EXAMPLES
 
-from ddpy.decks import read_case
-from ddpy.results import LIMITS, Frame, ResultsReader, ResultsWriter, Timings
+from ddpy.io.decks import read_case
+from ddpy.io.results import LIMITS, Frame, ResultsReader, ResultsWriter, Timings
 
 TOOLS = ("punch", "die")
 
@@ -194,8 +194,8 @@ WRITER = textwrap.dedent("""
     import numpy as np
     sys.path.insert(0, {tests!r})
     from test_results import synthetic, TOOLS
-    from ddpy.decks import read_case
-    from ddpy.results import ResultsWriter
+    from ddpy.io.decks import read_case
+    from ddpy.io.results import ResultsWriter
     mesh = read_case({case!r}, geometry=False).mesh
     out = ResultsWriter({path!r}, mesh, TOOLS, ("forming",))
     for k in range(1, {count} + 1):

@@ -32,11 +32,11 @@ from typing import Any
 import numpy as np
 import pytest
 
-from ddpy.decks import read_case
-from ddpy.drawing import element_centroids, hexahedron_volumes
-from ddpy.results import ResultsReader
-from ddpy.runner import BUILT_IN_CASES, run_case
-from ddpy.toolfile import read_tool
+from ddpy.app.runner import BUILT_IN_CASES, run_case
+from ddpy.io.decks import read_case
+from ddpy.io.results import ResultsReader
+from ddpy.io.toolfile import read_tool
+from ddpy.studies.drawing import element_centroids, hexahedron_volumes
 
 ROOT = Path(__file__).resolve().parents[1]
 BENCH = ROOT / "benchmarks" / "reverse_deep_drawing"

@@ -14,10 +14,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ddpy.checkpoint import CheckpointError, read_checkpoint
-from ddpy.decks import read_case
-from ddpy.results import ResultsReader
-from ddpy.runner import CHECKPOINT, DEFAULT_CASE, RESULTS, RunError, read_status, run_case
+from ddpy.app.runner import CHECKPOINT, DEFAULT_CASE, RESULTS, RunError, read_status, run_case
+from ddpy.io.checkpoint import CheckpointError, read_checkpoint
+from ddpy.io.decks import read_case
+from ddpy.io.results import ResultsReader
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -145,13 +145,13 @@ def test_restart_after_every_increment_ends_as_the_uninterrupted_run(
 
 def test_a_continued_run_records_the_fewest_threads_of_its_parts(
         reference: tuple[Path, Path], tmp_path: Path, monkeypatch) -> None:
-    import ddpy.parallel
+    import ddpy.core.parallel
 
     case, _ = reference
     loaded = read_case(case)
-    monkeypatch.setattr(ddpy.parallel, "max_threads", lambda: 1)
+    monkeypatch.setattr(ddpy.core.parallel, "max_threads", lambda: 1)
     run_case(loaded, tmp_path, max_increments=3)
-    monkeypatch.setattr(ddpy.parallel, "max_threads", lambda: 2)
+    monkeypatch.setattr(ddpy.core.parallel, "max_threads", lambda: 2)
     run_case(loaded, tmp_path, restart=True, max_increments=6)
     with ResultsReader(tmp_path / "results.h5") as r:
         assert r.threads == 1  # the first part shared the cores: not a run alone
@@ -311,9 +311,9 @@ def test_restart_at_a_phase_boundary_is_the_same_run_with_reused_factors(
     # to reuse. Every phase sets its constraints, and with them a new solver, anew: so a
     # restart at a phase boundary is the same run as the uninterrupted one
     # (docs/theory/contact.md).
-    import ddpy.forming
+    import ddpy.model.forming
 
-    monkeypatch.setattr(ddpy.forming, "REUSE_FROM", 0)  # the tiny case is below it
+    monkeypatch.setattr(ddpy.model.forming, "REUSE_FROM", 0)  # the tiny case is below it
     case = read_case(tiny_case(tmp_path / "case"))
     assert run_case(case, tmp_path / "whole").status == "completed"
     with ResultsReader(tmp_path / "whole" / RESULTS) as r:

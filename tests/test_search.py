@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ddpy.parallel import threads
-from ddpy.search import EDGE, INSIDE, NONE, ContactSearch
-from ddpy.shapes import Cylinder, Sphere, Torus
-from ddpy.surfaces import BezierSurface, NagataSurface
+from ddpy.core.parallel import threads
+from ddpy.geometry.search import EDGE, INSIDE, NONE, ContactSearch
+from ddpy.geometry.shapes import Cylinder, Sphere, Torus
+from ddpy.geometry.surfaces import BezierSurface, NagataSurface
 
 RNG = np.random.default_rng(20261122)
 

@@ -1,5 +1,5 @@
 """Contact search on tool models built from CAD: the plane-fillet-cylinder die of
-ddpy.cad_examples, meshed by ddpy.cad, against its exact (analytic) profile."""
+ddpy.cad.examples, meshed by ddpy.cad, against its exact (analytic) profile."""
 
 from __future__ import annotations
 
@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from ddpy.cad import build_tool_models, gmsh_session
-from ddpy.cad_examples import die_profile
-from ddpy.search import INSIDE, ContactSearch
-from ddpy.toolfile import read_tool
+from ddpy.cad.examples import die_profile
+from ddpy.geometry.search import INSIDE, ContactSearch
+from ddpy.io.toolfile import read_tool
 
 LAND, FILLET, RADIUS, WIDTH = 20.0, 4.0, 23.5, 30.0
 RNG = np.random.default_rng(3)

@@ -22,10 +22,10 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from ddpy.search import EDGE, INSIDE, NONE, ContactSearch
-from ddpy.shapes import Sphere
-from ddpy.surfaces import BezierSurface, NagataSurface
-from ddpy.toolfile import read_tool
+from ddpy.geometry.search import EDGE, INSIDE, NONE, ContactSearch
+from ddpy.geometry.shapes import Sphere
+from ddpy.geometry.surfaces import BezierSurface, NagataSurface
+from ddpy.io.toolfile import read_tool
 
 #: More examples, drawn afresh each run: DDPY_SEARCH_EXAMPLES=2000 pytest tests/test_search_exact.py
 EXAMPLES_RUN = int(os.environ.get("DDPY_SEARCH_EXAMPLES", "0"))
@@ -409,10 +409,10 @@ def test_the_bending_example_runs_on_a_die_of_mixed_sizes(nx: int, ny: int,
     # either way; only round-off in the projections differs).
     import shutil
 
-    from ddpy.decks import read_case
-    from ddpy.results import ResultsReader
-    from ddpy.runner import run_case
-    from ddpy.toolfile import ToolModel, write_tool
+    from ddpy.app.runner import run_case
+    from ddpy.io.decks import read_case
+    from ddpy.io.results import ResultsReader
+    from ddpy.io.toolfile import ToolModel, write_tool
 
     forces = []
     for split in (False, True):

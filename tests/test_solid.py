@@ -18,9 +18,9 @@ from solid_helpers import (
     voigt,
 )
 
-from ddpy.mesh import HexMesh
-from ddpy.parallel import threads
-from ddpy.solid import ConvergenceError, ElementError, Solid, StaticProblem, material_props
+from ddpy.core.parallel import threads
+from ddpy.model.mesh import HexMesh
+from ddpy.model.solid import ConvergenceError, ElementError, Solid, StaticProblem, material_props
 
 ELASTIC = props_vector()
 

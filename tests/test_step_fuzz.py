@@ -14,9 +14,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-import ddpy.cad
+import ddpy.cad.read
 from ddpy.cad import CadError, gmsh_session, load_cad
-from ddpy.cad_examples import bending_tools
+from ddpy.cad.examples import bending_tools
 
 #: More examples, drawn afresh each run: DDPY_STEP_EXAMPLES=500 pytest tests/test_step_fuzz.py
 EXAMPLES_RUN = int(os.environ.get("DDPY_STEP_EXAMPLES", "0"))
@@ -76,8 +76,8 @@ def test_damaged_step_files_are_read_or_refused(tmp_path_factory: pytest.TempPat
         mutate(lines, entities, pick, kind, seed)
     path = tmp_path_factory.mktemp("step") / "tools.step"
     path.write_text("".join(lines))
-    saved = ddpy.cad.CAD_READ_TIMEOUT
-    ddpy.cad.CAD_READ_TIMEOUT = HANG
+    saved = ddpy.cad.read.CAD_READ_TIMEOUT
+    ddpy.cad.read.CAD_READ_TIMEOUT = HANG
     try:
         with gmsh_session():
             faces = load_cad(path)
@@ -87,7 +87,7 @@ def test_damaged_step_files_are_read_or_refused(tmp_path_factory: pytest.TempPat
         assert message.startswith(str(path)), message
         assert "did not finish" not in message, f"a hang the checks let through: {message}"
     finally:
-        ddpy.cad.CAD_READ_TIMEOUT = saved
+        ddpy.cad.read.CAD_READ_TIMEOUT = saved
 
 
 def test_a_crash_of_the_cad_kernel_becomes_a_message(step: Path,
@@ -109,7 +109,7 @@ def test_a_crash_of_the_cad_kernel_becomes_a_message(step: Path,
     with pytest.raises(CadError, match=r"the CAD kernel crashed reading the STEP file "
                                        r"\(SIGSEGV\)"), gmsh_session():
         load_cad(step)
-    monkeypatch.setattr(ddpy.cad, "CAD_READ_TIMEOUT", 0.01)
+    monkeypatch.setattr(ddpy.cad.read, "CAD_READ_TIMEOUT", 0.01)
     monkeypatch.setattr(subprocess, "run", run)
     with pytest.raises(CadError, match="did not finish reading the STEP file in 0.01 s"), \
             gmsh_session():

@@ -7,7 +7,7 @@ import re
 import numpy as np
 import pytest
 
-from ddpy.surfaces import BezierSurface, NagataSurface, nagata_edge_coefficient
+from ddpy.geometry.surfaces import BezierSurface, NagataSurface, nagata_edge_coefficient
 
 # A unit square (vertices 0-3) in z = 0 with normals +z, and a vertex 4 on the line of 0, 1.
 VERTICES = np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [2, 0, 0]])

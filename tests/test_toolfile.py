@@ -7,8 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ddpy.surfaces import BezierSurface, NagataSurface
-from ddpy.toolfile import ToolFileError, ToolModel, read_tool, write_tool
+from ddpy.geometry.surfaces import BezierSurface, NagataSurface
+from ddpy.io.toolfile import ToolFileError, ToolModel, read_tool, write_tool
 
 NAGATA = """\
 # a comment line

@@ -28,9 +28,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 import ddpy
-from ddpy.parallel import threads
-from ddpy.search import EDGE, INSIDE, NONE, ContactSearch
-from ddpy.surfaces import BezierSurface, NagataSurface
+from ddpy.core.parallel import threads
+from ddpy.geometry.search import EDGE, INSIDE, NONE, ContactSearch
+from ddpy.geometry.surfaces import BezierSurface, NagataSurface
 
 REPO = Path(__file__).resolve().parents[2]
 DEFAULT_OUT = REPO / "docs" / "benchmarks"
@@ -723,7 +723,7 @@ few % above the wall time).
   projection is one local search (Newton) on one patch; the exact global search projects
   on the patches whose bound is below the nearest distance found (docs/theory/contact.md);
   projections per node is `candidates.mean()`. Best of {numbers['repeats']} after a
-  warm-up, 1 and 2 core threads (`ddpy.parallel.threads`) interleaved. Misses: nodes of a
+  warm-up, 1 and 2 core threads (`ddpy.core.parallel.threads`) interleaved. Misses: nodes of a
   random sample of {numbers['brute_force_sample']} whose closest point is farther than the
   one of `project(..., brute_force=True)` (every patch projected on).
 

@@ -6,7 +6,7 @@
 
 Writes, next to this script (all generated, git-ignored):
 
-- ``tools/tools.step``: one CAD model of the punch and the open die (ddpy.cad_examples.
+- ``tools/tools.step``: one CAD model of the punch and the open die (ddpy.cad.examples.
   bending_tools, a reconstruction: the paper's Fig. 6 is not in its text);
 - ``tools/{punch,die}.{bezier,nagata,facets}.tool``: the tool models built from it by
   ``ddpy.cad.build_tool_models`` (what ``ddpy tools build`` runs): Bezier patches, Nagata
@@ -61,7 +61,7 @@ PATCHES_PER_ARC, FACETS_PER_ARC = 4, 30
 #: iterations to 16.05 mm against 21 and 130 with 0.1.
 RMIN_YIELD = {"coarse": 0.1, "paper": 0.3}
 #: Augmentation r of the contact law (N/mm) set in the decks of a blank, else the solver's
-#: default (ddpy.forming.default_augmentation). The default is E t^2 / h of the elements:
+#: default (ddpy.model.forming.default_augmentation). The default is E t^2 / h of the elements:
 #: 7.0e3 on the coarse blank (flat elements) but 6.3e4 on the paper's, whose elements are
 #: nearly cubes (0.33 mm thick, 0.37 mm across). With 6.3e4 the paper blank's Newton loop
 #: needed 10 to 23 iterations per increment from 7.6 mm of stroke on, and cut increments:
@@ -76,7 +76,7 @@ def build_tools(folder: Path = HERE / "tools", size: float = 5.0) -> dict[str, d
     """Write the CAD model and the punch and die tool files; return the paths by tool and
     model ('bezier', 'nagata', 'facets')."""
     from ddpy.cad import build_tool_models, gmsh_session, load_cad
-    from ddpy.cad_examples import bending_tools
+    from ddpy.cad.examples import bending_tools
 
     folder.mkdir(parents=True, exist_ok=True)
     step = folder / "tools.step"

@@ -31,8 +31,8 @@ from typing import Any
 
 import numpy as np
 
-from ddpy.bending import contact_angle, force_oscillation, line_angle
-from ddpy.case import RminLimits
+from ddpy.io.case import RminLimits
+from ddpy.studies.bending import contact_angle, force_oscillation, line_angle
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))  # the benchmarks' shared module
@@ -117,7 +117,7 @@ def from_results(path: Path, output_at: tuple[float, ...] = make_case.OUTPUT_AT)
     """Read one run back from its results file (docs/results-format.md): the curves, the
     contact angles from the frames at the strokes of Table 2 (``output_at`` in the decks),
     the shapes at the end of forming and after springback."""
-    from ddpy.results import ResultsReader
+    from ddpy.io.results import ResultsReader
 
     with ResultsReader(path) as r:
         history = r.history()
@@ -168,7 +168,7 @@ def _effort_by_limit(history: dict[str, np.ndarray], forming: np.ndarray
                      ) -> dict[str, list[float]]:
     """Per limit that ended a forming increment: increments, accepted iterations, Newton
     corrections of all trials (rejected ones included; 0 where not recorded), wall time."""
-    from ddpy.results import LIMITS
+    from ddpy.io.results import LIMITS
 
     codes = np.asarray(history["limit"], dtype=int)
     out = {}
@@ -283,8 +283,8 @@ def run_case_folder(folder: Path, output: Path | None = None, verbose: bool = Fa
     results/<mesh>/<model> next to this script) and read back what the report needs. A run
     stopped after ``max_increments`` or failed is read as far as it got (``Run.status``);
     ``restart`` continues the run saved there from its last checkpoint."""
-    from ddpy.decks import read_case
-    from ddpy.runner import Progress, run_case
+    from ddpy.app.runner import Progress, run_case
+    from ddpy.io.decks import read_case
 
     output = output or HERE / "results" / folder.parent.name / folder.name
 
@@ -364,8 +364,8 @@ def summary(model: str, run: Run) -> dict[str, Any]:
 def shape_errors(tools: Path) -> dict[str, dict[str, dict[str, Any]]]:
     """Shape error of the four models of each tool against the CAD (paper Fig. 8), with the
     maps of the Nagata and fine facet dies. Returns {tool: {model: summary}}."""
-    from ddpy.shape_error import plot_shape_error, shape_error
-    from ddpy.toolfile import read_tool
+    from ddpy.cad.shape_error import plot_shape_error, shape_error
+    from ddpy.io.toolfile import read_tool
 
     out: dict[str, dict[str, dict[str, Any]]] = {}
     for tool in ("die", "punch"):
@@ -496,7 +496,7 @@ def report(mesh: str, hexahedra: int, numbers: dict[str, dict[str, Any]],
         f"punch radius {make_case.PUNCH_RADIUS} mm; open die, shoulders of radius "
         f"{make_case.SHOULDER_RADIUS} mm centred {make_case.SHOULDER_X} mm from the symmetry "
         "plane, flat tops beyond, an inner wall below, no bottom. One STEP model "
-        "(`ddpy.cad_examples.bending_tools`), four tool models built from it "
+        "(`ddpy.cad.examples.bending_tools`), four tool models built from it "
         "(`ddpy.cad.build_tool_models`): Bezier patches; Nagata, 4 patches per 90 degrees of "
         "arc; coarse facets, the Nagata mesh with flat patches (the paper's section *Bilinear "
         "facets*: c = 0, same discretization); fine facets, 30 per arc. Straight edges: "
@@ -520,11 +520,12 @@ def report(mesh: str, hexahedra: int, numbers: dict[str, dict[str, Any]],
         "",
         "theta: the angle, at the punch's axis, between the two contact points with the "
         "punch farthest from the centreline (twice the angle of the farthest node in contact "
-        "in the quarter model, `ddpy.bending.contact_angle`), at 7, 14, 21 and 28.5 mm. beta: "
-        "the paper's Fig. 11 is not in its text: here beta is the angle to the vertical (the "
-        f"punch's direction) of the free flange (the material initially at x >= {FLANGE_X:g} "
-        "mm, beyond the die shoulder; a line fitted through its nodes, "
-        "`ddpy.bending.line_angle`), beta_1 at the end of forming, beta_2 after springback. "
+        "in the quarter model, `ddpy.studies.bending.contact_angle`), at 7, 14, 21 and "
+        "28.5 mm. beta: the paper's Fig. 11 is not in its text: here beta is the angle to the "
+        "vertical (the punch's direction) of the free flange (the material initially at "
+        f"x >= {FLANGE_X:g} mm, beyond the die shoulder; a line fitted through its nodes, "
+        "`ddpy.studies.bending.line_angle`), beta_1 at the end of forming, beta_2 after "
+        "springback. "
         "The paper's text says that after forming the sheet is enclosed between the tools and "
         "that springback is measured by these angles: its beta grows from 20.7 to 35 degrees "
         "as the bend opens, which the angle to the vertical does and the angle to the "
@@ -601,8 +602,8 @@ def report(mesh: str, hexahedra: int, numbers: dict[str, dict[str, Any]],
         f"![punch force]({figures['force'].name})",
         "",
         "Oscillation: root mean square deviation of the punch force from a moving quadratic "
-        f"over {WINDOW:g} mm of stroke (`ddpy.bending.force_oscillation`), from {START:g} mm "
-        "on (before, the elastic-plastic transition bends the curve for real).",
+        f"over {WINDOW:g} mm of stroke (`ddpy.studies.bending.force_oscillation`), from "
+        f"{START:g} mm on (before, the elastic-plastic transition bends the curve for real).",
         "",
         _row(["", *[LABELS[m] for m in models]]),
         _row(["---"] * (1 + len(models))),
@@ -616,7 +617,7 @@ def report(mesh: str, hexahedra: int, numbers: dict[str, dict[str, Any]],
         "",
         "## Shape error of the die models (Fig. 8)",
         "",
-        "`ddpy.shape_error` against the STEP model, 9 x 9 samples per patch.",
+        "`ddpy.cad.shape_error` against the STEP model, 9 x 9 samples per patch.",
         "",
         _row(["tool", "model", "patches", "max |d| [um]", "mean |d| [um]",
               "max normal error [deg]"]),
@@ -887,7 +888,7 @@ def main(argv: list[str] | None = None) -> int:
                         help="continue the runs saved in results/ from their checkpoints "
                         "(a run stopped or cut off; a completed one is read back)")
     args = parser.parse_args(argv)
-    from ddpy.parallel import max_threads
+    from ddpy.core.parallel import max_threads
 
     models = [m.strip() for m in args.models.split(",") if m.strip()]
     if set(models) - set(MODELS):
@@ -937,7 +938,7 @@ def main(argv: list[str] | None = None) -> int:
     figures = {"force": plot_force(runs, DOCS / f"{stem}_force.png", (20.0, 24.0)),
                "increments": plot_increments(runs, DOCS / f"{stem}_increments.png")}
     shape = shape_errors(HERE / "tools")
-    from ddpy.decks import read_case
+    from ddpy.io.decks import read_case
 
     hexahedra = read_case(case_root / models[0], geometry=False).mesh.n_elements
     text = report(args.mesh, hexahedra, numbers, shape, figures, max_threads())

@@ -1,6 +1,6 @@
 """Benchmark: time per Newton iteration of a forming run, split by where it goes.
 
-Runs the first increments of the cylindrical bending case through ``ddpy.runner.run_case``
+Runs the first increments of the cylindrical bending case through ``ddpy.app.runner.run_case``
 (what ``ddpy run CASE --stop-after N`` does) on two meshes: the built-in coarse case (216
 hexahedra, Nagata tools) and the paper's blank (about 20,000 hexahedra, Nagata tools; its
 case is written by benchmarks/cylindrical_bending/make_case.py when missing). Each mesh and
@@ -78,7 +78,7 @@ def cpu_busy() -> float:
 
 def case_folder(mesh: str) -> Path:
     if mesh == "coarse":
-        from ddpy.runner import DEFAULT_CASE
+        from ddpy.app.runner import DEFAULT_CASE
         return Path(DEFAULT_CASE)
     folder = BENDING / "cases" / "paper" / "nagata"
     if not (folder / "control.dat").is_file():
@@ -89,13 +89,14 @@ def case_folder(mesh: str) -> Path:
 
 def worker(mesh: str, increments: int) -> dict[str, Any]:
     """One run in this process (threads from the environment); seconds per part."""
-    from ddpy import checkpoint, runner
-    from ddpy.decks import read_case
-    from ddpy.forming import FormingProblem
-    from ddpy.linalg import MumpsSolver
-    from ddpy.results import ResultsWriter
-    from ddpy.search import ContactSearch
-    from ddpy.solid import Solid
+    from ddpy.app import runner
+    from ddpy.core.linalg import MumpsSolver
+    from ddpy.geometry.search import ContactSearch
+    from ddpy.io import checkpoint
+    from ddpy.io.decks import read_case
+    from ddpy.io.results import ResultsWriter
+    from ddpy.model.forming import FormingProblem
+    from ddpy.model.solid import Solid
 
     spent = dict.fromkeys((*PARTS, "prepare"), 0.0)
     first: list[float] = []
@@ -152,10 +153,10 @@ def worker(mesh: str, increments: int) -> dict[str, Any]:
         wall = time.perf_counter() - start
         cpu = time.process_time() - cpu0
         other = max(cpu_busy() - busy - cpu, 0.0) / wall
-        from ddpy.results import ResultsReader
+        from ddpy.io.results import ResultsReader
         with ResultsReader(Path(output) / runner.RESULTS) as results:
             iterations = int(results.history()["iterations"].sum())
-    from ddpy.parallel import max_threads
+    from ddpy.core.parallel import max_threads
     setup = first[0] - start + spent.pop("prepare")
     return {"mesh": mesh, "threads": max_threads(), "increments": outcome.increments,
             "iterations": iterations, "wall": wall, "cpu": cpu, "setup": setup,
@@ -206,7 +207,7 @@ def report(numbers: dict[str, Any]) -> str:
 with other work: single timings scatter by tens of percent, "other CPUs" says how many of
 the 2 cores other processes used on average during the run, from /proc/stat).
 
-The cylindrical bending case (Nagata tools) through `ddpy.runner.run_case`, its first
+The cylindrical bending case (Nagata tools) through `ddpy.app.runner.run_case`, its first
 increments: **coarse** = the built-in case (`ddpy run`, 216 hexahedra), **paper** = the
 paper's blank from `benchmarks/cylindrical_bending/make_case.py` (about 20,000 hexahedra,
 123,750 unknowns with the contact forces, 11.8 million Jacobian entries, LU). Seconds per

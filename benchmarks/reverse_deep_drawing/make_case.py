@@ -6,7 +6,7 @@
 
 Writes, next to this script (all generated, git-ignored):
 
-- ``tools/tools.step``: one CAD model of the five tools (``ddpy.cad_examples.
+- ``tools/tools.step``: one CAD model of the five tools (``ddpy.cad.examples.
   reverse_drawing_tools``), surfaces of revolution with the dimensions of :class:`Dimensions`,
   a reconstruction: the benchmark's drawing is not in the paper;
 - ``tools/<tool>.<model>.tool``: the tool models built from it by
@@ -137,7 +137,7 @@ def build_tools(folder: Path = HERE / "tools", dims: Dimensions = DIMENSIONS,
     import gmsh
 
     from ddpy.cad import build_tool_models, gmsh_session, load_cad
-    from ddpy.cad_examples import reverse_drawing_tools
+    from ddpy.cad.examples import reverse_drawing_tools
 
     folder.mkdir(parents=True, exist_ok=True)
     step = folder / "tools.step"

@@ -31,8 +31,8 @@ from typing import Any
 
 import numpy as np
 
-from ddpy.bending import force_oscillation
-from ddpy.drawing import (
+from ddpy.studies.bending import force_oscillation
+from ddpy.studies.drawing import (
     contact_force_balance,
     cup_height,
     element_centroids,
@@ -94,7 +94,7 @@ START = {"stage1": 1.0, "stage2": make_case.DIMENSIONS.approach + 1.0}
 #: The colour scale of the plastic strain maps ends at this percentile of their values
 #: (a few elements strain far more than the rest).
 STRAIN_SCALE = 98.0
-#: Shape error samples per patch direction (``ddpy.shape_error.shape_error``).
+#: Shape error samples per patch direction (``ddpy.cad.shape_error.shape_error``).
 SAMPLES = 9
 #: A finding when one element's volume changes by more than this fraction.
 ELEMENT_VOLUME = 0.05
@@ -191,7 +191,7 @@ def frame_numbers(reader: Any, case: Any, frame: Any, history: dict[str, np.ndar
                          "mismatch_N": float(f"{b.mismatch:.3g}"),
                          "relative": float(f"{b.relative:.3g}"), "nodes": b.nodes}
         if tool not in searches:
-            from ddpy.search import ContactSearch
+            from ddpy.geometry.search import ContactSearch
 
             searches[tool] = ContactSearch(case.tool(tool).model().surface)
         p = penetration(x, searches[tool], history["tool_displacement"][row, i],
@@ -233,9 +233,9 @@ def frame_numbers(reader: Any, case: Any, frame: Any, history: dict[str, np.ndar
 def from_results(path: Path, case_folder: Path) -> Run:
     """Read one run back from its results file (docs/results-format.md) and its case
     folder (the tools, for the penetration check)."""
-    from ddpy.decks import read_case
-    from ddpy.results import ResultsReader
-    from ddpy.runner import read_status
+    from ddpy.app.runner import read_status
+    from ddpy.io.decks import read_case
+    from ddpy.io.results import ResultsReader
 
     case = read_case(case_folder)
     record = recorded_code(path.parent)
@@ -375,8 +375,8 @@ def run_case_folder(folder: Path, output: Path | None = None, verbose: bool = Fa
     """Run one case folder with the case runner (``ddpy run``) into ``output`` (default:
     results/<mesh>/<model> next to this script), stopping it if it stalls, and read back
     what the report needs. A stopped or failed run is read as far as it got."""
-    from ddpy.decks import read_case
-    from ddpy.runner import run_case
+    from ddpy.app.runner import run_case
+    from ddpy.io.decks import read_case
 
     output = output or HERE / "results" / folder.parent.name / folder.name
     output.mkdir(parents=True, exist_ok=True)
@@ -470,8 +470,8 @@ def shape_errors(tools: Path, stem: str | None = None
     """Patches and shape error of the four models of each tool against the CAD (paper
     Table 5, Fig. 14-16); with ``stem``, maps of the Nagata and facet models (all tools
     on one map). Returns ({tool: {model: summary}}, {model: map file name})."""
-    from ddpy.shape_error import shape_error
-    from ddpy.toolfile import read_tool
+    from ddpy.cad.shape_error import shape_error
+    from ddpy.io.toolfile import read_tool
 
     out: dict[str, dict[str, dict[str, Any]]] = {}
     errors: dict[str, dict[str, Any]] = {m: {} for m in MODELS}
@@ -872,7 +872,7 @@ def report(mesh: str, numbers: dict[str, dict[str, Any]],
         "",
         "**The benchmark's drawing is not in the paper**: the dimensions below "
         "(`make_case.Dimensions`) are a reconstruction, surfaces of revolution about z in "
-        "one STEP model (`ddpy.cad_examples.reverse_drawing_tools`). The flat blank lies on "
+        "one STEP model (`ddpy.cad.examples.reverse_drawing_tools`). The flat blank lies on "
         f"0 <= z <= {make_case.THICKNESS:g} mm; radii from the axis.",
         "",
         _row(["dimension", "value [mm]", "what"]),
@@ -893,7 +893,7 @@ def report(mesh: str, numbers: dict[str, dict[str, Any]],
         f"![punch force]({figures['force']})",
         "",
         "Oscillation: root mean square deviation of the punch force from a moving quadratic "
-        f"over {WINDOW:g} mm of punch travel (`ddpy.bending.force_oscillation`; the window "
+        f"over {WINDOW:g} mm of punch travel (`ddpy.studies.bending.force_oscillation`; the window "
         "of the bending benchmark, not scaled to the mesh), from "
         + " and ".join(f"{START[s]:g} mm of {s}" for s in STAGES) + " on (the elastic "
         "start; punch 2 travels in the air before it meets the cup).",
@@ -994,7 +994,7 @@ def tool_model_section(shape: dict[str, dict[str, dict[str, Any]]], maps: dict[s
     low, high = PAPER["nagata_shape_error_um"]
     lines += [
         "",
-        f"Shape error against the CAD (`ddpy.shape_error`, {SAMPLES} x {SAMPLES} samples "
+        f"Shape error against the CAD (`ddpy.cad.shape_error`, {SAMPLES} x {SAMPLES} samples "
         "per patch): the "
         "signed distance, positive where the model stands out of the CAD surface towards "
         "the blank, in micrometres, and the largest angle between the model's normal and "
@@ -1109,14 +1109,14 @@ def checks_section(numbers: dict[str, dict[str, Any]], models: list[str]) -> lis
     lines = [
         "## Physical checks", "",
         "At the end of each stage: the blank's volume change (plastic flow keeps the "
-        "volume; exact volumes of the trilinear hexahedra, `ddpy.drawing`), and the "
+        "volume; exact volumes of the trilinear hexahedra, `ddpy.studies.drawing`), and the "
         "largest change of one element; the tool reactions against the sums of the nodal "
         "contact forces of the nodes in contact with each tool (Newton's third law: the "
         "worst tool's |reaction + sum| over |reaction|; the solver writes each reaction as "
         "minus the sum of its tool's contact pair forces, so this checks the nodal fields "
         "of the results against it: a node pressed by two tools, or a force on a node "
         "marked free, would show); the deepest node of the blank's "
-        "surface facing a tool inside that tool (`ddpy.search.ContactSearch` on the tool "
+        "surface facing a tool inside that tool (`ddpy.geometry.search.ContactSearch` on the tool "
         f"at its position), against the thickness {make_case.THICKNESS:g} mm.",
         "", head, _row(["---"] * (1 + len(models)))]
     for stage in STAGES:
@@ -1213,7 +1213,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--threads", type=int, default=None,
                         help="OpenMP threads of each run (default: OMP_NUM_THREADS)")
     args = parser.parse_args(argv)
-    from ddpy.parallel import max_threads
+    from ddpy.core.parallel import max_threads
 
     models = [m.strip() for m in args.models.split(",") if m.strip()]
     if set(models) - set(MODELS):

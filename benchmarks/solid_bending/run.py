@@ -64,10 +64,10 @@ def wait_quiet(timeout: float, threshold: float = 0.2) -> float:
 
 def worker(increments: int) -> dict:
     """One run in this process (threads come from the environment)."""
-    from ddpy.linalg import MumpsSolver
-    from ddpy.mesh import HexMesh
-    from ddpy.parallel import max_threads
-    from ddpy.solid import Solid, StaticProblem
+    from ddpy.core.linalg import MumpsSolver
+    from ddpy.core.parallel import max_threads
+    from ddpy.model.mesh import HexMesh
+    from ddpy.model.solid import Solid, StaticProblem
 
     start = time.perf_counter()
     mesh = HexMesh.box(LENGTH, WIDTH, THICK, NX, NY, NZ)
@@ -116,7 +116,7 @@ def summary(run: dict) -> dict:
     return out
 
 
-ORDERINGS = {0: "AMD", 1: "nested dissection of the mesh (ddpy.ordering)", 2: "AMF",
+ORDERINGS = {0: "AMD", 1: "nested dissection of the mesh (ddpy.core.ordering)", 2: "AMF",
              3: "SCOTCH", 4: "PORD", 5: "METIS", 6: "QAMD"}
 HEADER = ("| threads | assembly | factorization | solve | line search | mean per iteration (all) "
           "| assembly / factorization | iterations | line searches | run (s) | other CPUs |\n"

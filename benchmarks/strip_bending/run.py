@@ -31,14 +31,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ddpy.cad import build_tool_models, gmsh_session
-from ddpy.cad_examples import write_cad
-from ddpy.forming import FormingError, FormingProblem, IncrementLimits, RigidTool
-from ddpy.material import Hill48, Material, Swift
-from ddpy.mesh import HexMesh
-from ddpy.parallel import threads
-from ddpy.shape_error import shape_error
-from ddpy.solid import Solid
-from ddpy.toolfile import ToolModel, read_tool
+from ddpy.cad.examples import write_cad
+from ddpy.cad.shape_error import shape_error
+from ddpy.core.parallel import threads
+from ddpy.io.toolfile import ToolModel, read_tool
+from ddpy.model.forming import FormingError, FormingProblem, IncrementLimits, RigidTool
+from ddpy.model.material import Hill48, Material, Swift
+from ddpy.model.mesh import HexMesh
+from ddpy.model.solid import Solid
 
 ROOT = Path(__file__).resolve().parents[2]
 DOCS = ROOT / "docs" / "benchmarks"
@@ -278,7 +278,7 @@ def report(runs: list[dict], meta: dict, out: Path) -> None:
         f"patches {PER_ARC['nagata']} per 90 degrees with exact CAD normals; facets "
         f"{PER_ARC['facets_coarse']} (coarse) and {PER_ARC['facets_fine']} (fine, as the "
         "paper's) per 90 degrees. Shape and normal errors against the CAD on 21 x 21 points "
-        "per patch (`ddpy.shape_error`).",
+        "per patch (`ddpy.cad.shape_error`).",
         "* Force oscillation: the punch force (both halves, per mm of width) minus its "
         f"smoothed curve (a local quadratic least-squares fit over +-{WINDOW:g} mm of "
         "stroke), past 1 mm of stroke, relative to the mean force there: its RMS and its "

@@ -29,8 +29,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 import ddpy
-from ddpy.parallel import threads
-from ddpy.surfaces import BezierSurface, NagataSurface
+from ddpy.core.parallel import threads
+from ddpy.geometry.surfaces import BezierSurface, NagataSurface
 
 REPO = Path(__file__).resolve().parents[2]
 DEFAULT_OUT = REPO / "docs" / "benchmarks"
@@ -495,7 +495,7 @@ patch ids uniform over ~1e4 patches (int64, as NumPy makes them), parameters uni
 
 `surface.evaluate(ids, params)` and `surface.second_derivatives(ids, params)` are timed with
 `time.perf_counter`, best of {numbers['repeats']} after a warm-up, 1 and 2 core threads
-(`ddpy.parallel.threads(n)`) interleaved; nothing is subtracted. Both calls do the same work
+(`ddpy.core.parallel.threads(n)`) interleaved; nothing is subtracted. Both calls do the same work
 (the core always returns points, derivatives, normals and second derivatives; each method
 keeps part of it), so their throughput is the same within noise.
 

@@ -1,0 +1,276 @@
+"""``ddpy run``: run a case with a progress display; Ctrl-C stops cleanly (docs/running.md)."""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import signal
+import sys
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from types import FrameType
+from typing import TYPE_CHECKING, TextIO
+
+if TYPE_CHECKING:
+    from ddpy.app.runner import Progress
+
+__all__ = ["ProgressDisplay", "add_post", "add_run"]
+
+#: Exit codes of ``ddpy run``.
+EXIT = {"completed": 0, "stopped": 0, "failed": 1, "interrupted": 130}
+
+
+class ProgressDisplay:
+    """A progress bar rewritten in place on a terminal, one plain line per increment
+    otherwise (a log file, a pipe)."""
+
+    def __init__(self, stream: TextIO, width: int = 24) -> None:
+        self.stream, self.width = stream, width
+        self.tty = stream.isatty()
+        self.start = time.perf_counter()
+        self._open = False
+
+    def __call__(self, p: Progress) -> None:
+        elapsed = time.perf_counter() - self.start
+        lead = f"{p.lead} {p.travel:.4f}/{p.phase_travel:g} mm" if p.lead else "tools off"
+        if not self.tty:
+            print(f"increment {p.increment} phase {p.phase} ({p.phase_index + 1}/{p.phases}) "
+                  f"{lead} step {p.step:.4g} iterations {p.iterations} limit {p.limit} "
+                  f"{elapsed:.1f} s", file=self.stream, flush=True)
+            return
+        done = p.travel / p.phase_travel if p.phase_travel > 0 else 1.0
+        filled = int(round(self.width * min(max(done, 0.0), 1.0)))
+        bar = "#" * filled + "-" * (self.width - filled)
+        line = (f"\r{p.phase} ({p.phase_index + 1}/{p.phases}) [{bar}] {100 * done:5.1f}% "
+                f"inc {p.increment}  {lead}  it {p.iterations}  {elapsed:.0f} s")
+        self.stream.write(line + "\033[K")
+        self.stream.flush()
+        self._open = True
+
+    def close(self) -> None:
+        if self._open:
+            self.stream.write("\n")
+            self.stream.flush()
+            self._open = False
+
+
+class _Interrupt:
+    """SIGINT sets a flag the run polls after each increment; a second one aborts."""
+
+    def __init__(self) -> None:
+        self.requested = False
+        self._previous = signal.getsignal(signal.SIGINT)
+
+    def __enter__(self) -> _Interrupt:
+        signal.signal(signal.SIGINT, self._handle)
+        return self
+
+    def _handle(self, signum: int, frame: FrameType | None) -> None:
+        if self.requested:
+            raise KeyboardInterrupt
+        self.requested = True
+        print("\nddpy run: stopping after this increment (Ctrl-C again to abort)",
+              file=sys.stderr, flush=True)
+
+    def __call__(self) -> bool:
+        return self.requested
+
+    def __exit__(self, *exc: object) -> None:
+        signal.signal(signal.SIGINT, self._previous)
+
+
+class _LogLines(logging.Handler):
+    """The solver's messages on standard error, each on a line of its own: an open progress
+    bar line is ended first."""
+
+    def __init__(self, display: ProgressDisplay) -> None:
+        super().__init__()
+        self.display = display
+        self.setFormatter(logging.Formatter("  %(message)s"))
+
+    def emit(self, record: logging.LogRecord) -> None:
+        self.display.close()
+        print(self.format(record), file=sys.stderr, flush=True)
+
+
+@contextmanager
+def _solver_log(verbose: int, display: ProgressDisplay) -> Iterator[None]:
+    """The solver's cut and restarted increments, and with -v every Newton iteration, on
+    standard error while the run lasts: a run that cuts back is seen doing so. The handler
+    goes with it (ddpy.app.cli.main may be called again)."""
+    handler = _LogLines(display)
+    logger = logging.getLogger("ddpy")
+    level = logger.level
+    logger.addHandler(handler)
+    logger.setLevel(logging.DEBUG if verbose else logging.INFO)
+    try:
+        yield
+    finally:
+        logger.removeHandler(handler)
+        logger.setLevel(level)
+
+
+def _run(args: argparse.Namespace) -> int:
+    from ddpy.app.runner import RunError, case_folder, default_output, run_case
+    from ddpy.io.checkpoint import CheckpointError
+    from ddpy.io.decks import DeckError, read_case
+    from ddpy.io.results import ResultsWriteError
+
+    folder = case_folder(args.case)
+    try:
+        case = read_case(folder)
+    except DeckError as error:
+        for e in error.errors:
+            print(e, file=sys.stderr)
+        print(f"{folder}: {len(error.errors)} error(s); see 'ddpy check'", file=sys.stderr)
+        return 2
+    for warning in case.warnings:  # the same as 'ddpy check' prints
+        print(f"warning: {warning}", file=sys.stderr)
+    output = Path(args.output) if args.output else default_output(folder)
+    display = ProgressDisplay(sys.stdout)
+    verb = "continuing" if args.restart else "running"
+    print(f"ddpy run: {verb} {case.title} ({folder}) -> {output}", flush=True)
+    try:
+        with _Interrupt() as interrupt, _solver_log(args.verbose, display):
+            outcome = run_case(case, output, restart=args.restart, progress=display,
+                               stop=interrupt, overwrite=args.overwrite,
+                               checkpoint_every=args.checkpoint_every,
+                               max_increments=args.stop_after, threads=args.threads)
+    except ResultsWriteError as error:  # disk full or an I/O error while running
+        display.close()
+        print(f"ddpy run: error: {error}; the results written so far are kept",
+              file=sys.stderr)
+        return 1
+    except (RunError, CheckpointError, ValueError) as error:
+        display.close()
+        print(f"ddpy run: error: {error}", file=sys.stderr)
+        return 1
+    except OSError as error:  # the file system: permissions, space, a vanished folder
+        display.close()
+        where = error.filename or output
+        print(f"ddpy run: error: {where}: {error.strerror or error}; the results written so "
+              "far are kept", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        display.close()
+        print("ddpy run: aborted; the results and the last checkpoint are kept",
+              file=sys.stderr)
+        return 130
+    display.close()
+    print(f"ddpy run: {outcome.status} after {outcome.increments} increments, "
+          f"{outcome.frames} frames, {outcome.wall_time:.1f} s"
+          + (f": {outcome.message}" if outcome.message else ""))
+    print(f"  results: {outcome.results} (open {outcome.results.with_suffix('.xdmf')} in "
+          "ParaView)")
+    if outcome.status in ("interrupted", "stopped"):
+        again = ["ddpy run", *([str(args.case)] if args.case else []), "--restart",
+                 "--output", str(output)]
+        print(f"  continue with: {' '.join(again)}")
+    return EXIT[outcome.status]
+
+
+def _at_least_one(text: str) -> int:
+    """An argparse type: an integer >= 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got '{text}'") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
+    return value
+
+
+def _threads(text: str) -> int:
+    """An argparse type: a thread count that ddpy.core.parallel.set_threads accepts."""
+    from ddpy.core.parallel import thread_limit
+
+    value = _at_least_one(text)
+    if value > thread_limit():
+        raise argparse.ArgumentTypeError(f"must be at most {thread_limit()} (four per core of "
+                                         f"this machine, at least 64), got {value}")
+    return value
+
+
+def add_run(commands: argparse._SubParsersAction) -> None:
+    """The ``run`` subcommand."""
+    run = commands.add_parser(
+        "run", help="run a case (default: the built-in coarse cylindrical bending)",
+        description="Run the phases of a case folder, writing results.h5/.xdmf, checkpoints "
+        "and status.json to the output folder. Ctrl-C stops after the current increment and "
+        "keeps the results; --restart continues from the last checkpoint.")
+    run.add_argument("case", nargs="?", metavar="CASE",
+                     help="case folder, or a built-in case: cylindrical-bending (the "
+                     "default) or deep-drawing")
+    run.add_argument("--output", metavar="DIR",
+                     help="output folder (default: results/<case folder name>)")
+    run.add_argument("--restart", action="store_true",
+                     help="continue from the output folder's last checkpoint")
+    run.add_argument("--overwrite", action="store_true",
+                     help="replace results already in the output folder")
+    run.add_argument("--threads", type=_threads, metavar="N",
+                     help="OpenMP threads of the core (default: OMP_NUM_THREADS)")
+    run.add_argument("--checkpoint-every", type=_at_least_one, default=10, metavar="N",
+                     help="write a checkpoint every N increments (default 10; also at the "
+                     "end of every phase)")
+    run.add_argument("--stop-after", type=_at_least_one, metavar="N",
+                     help="stop after N increments of the whole run (restartable)")
+    run.add_argument("-v", "--verbose", action="count", default=0,
+                     help="report every Newton iteration's residual and step length on "
+                     "standard error, besides the cut increments and why (always)")
+    run.set_defaults(handler=_run)
+
+
+def _post(args: argparse.Namespace) -> int:
+    from ddpy.app.post import post_run
+
+    try:
+        paths = post_run(args.target, args.output)
+    except (FileNotFoundError, ValueError, KeyError) as error:
+        print(f"ddpy post: error: {error}", file=sys.stderr)
+        return 1
+    for path in paths:
+        print(path)
+    return 0
+
+
+def _compare(args: argparse.Namespace) -> int:
+    from ddpy.app.post import compare_runs
+
+    labels = args.labels.split(",") if args.labels else None
+    try:
+        paths, table = compare_runs(args.runs, args.output, labels)
+    except (FileNotFoundError, ValueError, KeyError) as error:
+        print(f"ddpy compare: error: {error}", file=sys.stderr)
+        return 1
+    print(table, end="")
+    for path in paths:
+        print(path, file=sys.stderr)
+    return 0
+
+
+def add_post(commands: argparse._SubParsersAction) -> None:
+    """The ``post`` and ``compare`` subcommands."""
+    post = commands.add_parser(
+        "post", help="figures (PNG) and tables (CSV, markdown) of a run",
+        description="Write force_stroke.png, increments.png, contact.png, plastic_strain.png, "
+        "increments.csv, phases.csv and summary.md for a run.")
+    post.add_argument("target", metavar="CASE_OR_RESULTS",
+                      help="a results file, an output folder, or a case folder (its default "
+                      "output results/<name>)")
+    post.add_argument("--output", metavar="DIR", help="where to write (default: beside the "
+                      "results file)")
+    post.set_defaults(handler=_post)
+    compare = commands.add_parser(
+        "compare", help="overlay the force-stroke curves of several runs",
+        description="Overlay the lead tool's force against stroke of several runs "
+        "(compare_force.png) and tabulate increments, iterations, cutbacks, force and time "
+        "(compare.csv, compare.md; the table is also printed).")
+    compare.add_argument("runs", nargs="+", metavar="RUN",
+                         help="results files, output folders or case folders")
+    compare.add_argument("--output", default="compare", metavar="DIR",
+                         help="where to write (default: compare)")
+    compare.add_argument("--labels", metavar="A,B,...", help="names of the runs in the legend "
+                         "(default: their folder names)")
+    compare.set_defaults(handler=_compare)

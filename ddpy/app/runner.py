@@ -1,0 +1,597 @@
+"""Run a case: from the validated decks (:class:`ddpy.io.case.Case`) through its phases to the
+results file, with checkpoints to continue an interrupted run (docs/running.md).
+
+>>> from ddpy.io.decks import read_case
+>>> from ddpy.app.runner import run_case
+>>> outcome = run_case(read_case("examples/bending"), "bending-results")  # doctest: +SKIP
+>>> outcome.status, outcome.increments                                     # doctest: +SKIP
+
+The output folder holds ``results.h5`` and ``results.xdmf`` (docs/results-format.md),
+``checkpoint.npz`` (the last checkpoint) and ``status.json`` (running, completed,
+interrupted, stopped or failed). ``run_case(..., restart=True)`` continues from the
+checkpoint; the results then end as those of an uninterrupted run (to the bit while the
+Newton loop factorizes every iteration; docs/running.md).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ddpy.io.case import Case, HoldGap, Move, Phase
+from ddpy.io.checkpoint import (
+    CheckpointError,
+    read_checkpoint,
+    state_arrays,
+    state_from_arrays,
+    write_checkpoint,
+)
+from ddpy.io.results import MIN_FREE, ResultsWriteError, ResultsWriter, Timings, frame_bytes
+from ddpy.model.forming import (
+    FormingError,
+    FormingProblem,
+    FormingResult,
+    IncrementLimits,
+    PhaseProgress,
+    RigidTool,
+)
+from ddpy.model.mesh import HexMesh
+from ddpy.model.solid import Solid, SolidState
+
+__all__ = ["BUILT_IN_CASES", "CHECKPOINT", "DEFAULT_CASE", "RESULTS", "STATUS", "Progress",
+           "RunError", "RunOutcome", "build_problem", "case_folder", "default_output",
+           "read_status", "run_case"]
+
+#: The case ``ddpy run`` runs when given none: the coarse cylindrical bending packaged with
+#: ddpy (for now a copy of examples/bending, kept equal by a test). To change the default,
+#: replace the decks and tool files in this folder (and their list in meson.build).
+DEFAULT_CASE = Path(__file__).resolve().parents[1] / "cases" / "cylindrical_bending"
+#: The cases packaged with ddpy, by the name ``ddpy run NAME`` and ``ddpy check NAME`` take:
+#: the coarse cases of the paper's two examples (benchmarks/*/make_case.py --default-case).
+BUILT_IN_CASES = {"cylindrical-bending": DEFAULT_CASE,
+                  "deep-drawing": DEFAULT_CASE.parent / "reverse_deep_drawing"}
+RESULTS = "results.h5"
+
+
+def default_output(case_folder: Path) -> Path:
+    """Where a run writes when no --output is given: results/<case folder name>."""
+    return Path("results") / case_folder.resolve().name
+
+
+def case_folder(case: str | os.PathLike[str] | None) -> Path:
+    """The folder of a case given as a folder or as the name of a built-in case (a folder of
+    that name wins); the default case for None."""
+    if case is None:
+        return DEFAULT_CASE
+    path = Path(case)
+    if not path.exists() and str(case) in BUILT_IN_CASES:
+        return BUILT_IN_CASES[str(case)]
+    return path
+
+CHECKPOINT = "checkpoint.npz"
+STATUS = "status.json"
+#: Checkpoint every this many increments by default (and at the end of every phase).
+CHECKPOINT_EVERY = 10
+#: What limited an increment in ddpy.model.forming -> the ``limit`` names of ddpy.io.results.
+_LIMITS = {"max": "max_increment", "touch": "contact_touch", "strain": "strain",
+           "rotation": "rotation", "yield": "yield", "cut": "cutback", "regrow": "cutback",
+           "release": "contact_release",
+           "springback": "max_increment"}
+
+
+#: Arrays of FormingProblem carried from one increment to the next (besides the solid state
+#: and the tool positions): a checkpoint stores them. Add here any new state of the loop.
+_CARRIED = ("u", "force", "_status")
+
+
+class RunError(RuntimeError):
+    """A run cannot start or continue (output exists, no checkpoint, the case changed...)."""
+
+
+@dataclass(frozen=True)
+class Progress:
+    """What the progress callback receives after each increment."""
+
+    phase: str
+    phase_index: int
+    phases: int
+    increment: int
+    lead: str | None
+    travel: float
+    phase_travel: float
+    step: float
+    iterations: int
+    limit: str
+
+
+@dataclass(frozen=True)
+class RunOutcome:
+    """How a run ended: ``status`` is completed, interrupted (stop requested), stopped
+    (``max_increments`` reached) or failed (``message`` says why)."""
+
+    status: str
+    message: str
+    increments: int
+    frames: int
+    wall_time: float
+    output: Path
+
+    @property
+    def results(self) -> Path:
+        return self.output / RESULTS
+
+
+def read_status(output: str | os.PathLike[str]) -> dict[str, Any]:
+    """The status document of an output folder."""
+    return json.loads((Path(output) / STATUS).read_text())
+
+
+def case_fingerprint(case: Case) -> str:
+    """SHA-256 of the decks and tool files of a case: a restart refuses a changed case."""
+    digest = hashlib.sha256()
+    from ddpy.io.decks import DECKS
+
+    for path in [case.folder / name for name in DECKS] + [t.file for t in case.tools]:
+        digest.update(path.name.encode())
+        digest.update(Path(path).read_bytes())
+    return digest.hexdigest()
+
+
+def _rolling_angle(case: Case) -> float:
+    """The rolling direction as the Solid takes it: degrees from x about z."""
+    axis = case.mesh.normal_axis
+    if axis != 2:
+        raise RunError(f"{case.material.origin or case.folder}: the solid takes the rolling "
+                       "direction about z only; a sheet normal along "
+                       f"{'xyz'[axis]} is not supported yet")
+    sign = 1.0 if case.mesh.normal[2] > 0 else -1.0
+    return sign * case.material.rolling_angle
+
+
+def build_problem(case: Case) -> FormingProblem:
+    """The Solid (material, rolling direction), the rigid tools and the FormingProblem."""
+    mesh = HexMesh(np.array(case.mesh.nodes), np.array(case.mesh.elements))
+    solid = Solid(mesh, case.material.material, _rolling_angle(case))
+    tools = [RigidTool(t.name, t.model().surface, t.contact_nodes(case.mesh),
+                       friction=t.friction, facing=t.facing, augmentation=t.augmentation)
+             for t in case.tools]
+    return FormingProblem(solid, tools)
+
+
+def _write_atomic(path: Path, text: str) -> None:
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".status-")
+    try:
+        with os.fdopen(fd, "w") as out:
+            out.write(text)
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    except BaseException:  # a full disk: no empty temporary left behind
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def _segments(phase: Phase) -> list[float]:
+    """Lead travels at which the phase's sub-runs end: the output_at travels, then the end."""
+    ends = [t for t in phase.output_at if 0.0 < t < phase.travel * (1 - 1e-12)]
+    return [*ends, phase.travel]
+
+
+class _Run:
+    """One run of a case; its counters are what a checkpoint stores."""
+
+    def __init__(self, case: Case, output: Path, progress: Callable[[Progress], None] | None,
+                 stop: Callable[[], bool] | None, checkpoint_every: int,
+                 max_increments: int | None) -> None:
+        self.case, self.output = case, output
+        self.progress, self.stop = progress, stop
+        self.checkpoint_every, self.max_increments = checkpoint_every, max_increments
+        self.problem = build_problem(case)
+        self.fingerprint = case_fingerprint(case)
+        self.names = [t.name for t in self.problem.tools]
+        self.slaves = np.concatenate([t.slaves for t in self.problem.tools])
+        self.tool_of = np.concatenate([np.full(t.slaves.size, i)
+                                       for i, t in enumerate(self.problem.tools)])
+        # Counters (checkpointed).
+        self.phase_index = 0
+        self.segment = 0
+        self.phase_increments = 0
+        self.last_frame = 0
+        self.elapsed = 0.0
+        self.resume: PhaseProgress | None = None
+        self.writer: ResultsWriter | None = None
+        # Increments, iteration rows and frames of the results file at the checkpoint.
+        self._reopen_at = (0, 0, 0)
+        self.halt = ""  # why the run stops early: "interrupted" or "stopped"
+        self._clock = time.perf_counter()
+        self._since_checkpoint = 0
+
+    # -- checkpoints -----------------------------------------------------------------
+
+    def save(self, progress: PhaseProgress | None) -> None:
+        """Write a checkpoint of the present state (``progress``: inside a forming phase)."""
+        assert self.writer is not None
+        p = self.problem
+        arrays: dict[str, NDArray] = {k: getattr(p, k) for k in _CARRIED}
+        arrays.update(state_arrays(p.state))
+        arrays.update({f"position/{k}": v for k, v in p.position.items()})
+        meta: dict[str, Any] = {
+            "fingerprint": self.fingerprint, "phase_index": self.phase_index,
+            "segment": self.segment, "phase_increments": self.phase_increments,
+            "last_frame": self.last_frame, "increments": self.writer.increments,
+            "iterations": self.writer.iteration_rows, "frames": self.writer.frame_count,
+            "elapsed": self.elapsed + time.perf_counter() - self._clock, "progress": None}
+        if progress is not None:
+            meta["progress"] = {"factor": progress.factor, "step": progress.step,
+                                "reason": progress.reason,
+                                "offsets": {k: o for k, (o, _) in progress.offsets.items()}}
+            arrays.update({f"start/{k}": v for k, v in progress.start.items()})
+            arrays.update({f"offset/{k}": v for k, (_, v) in progress.offsets.items()})
+            for name in ("last_du", "last_dp"):
+                if getattr(progress, name) is not None:
+                    arrays[name] = getattr(progress, name)
+        write_checkpoint(self.output / CHECKPOINT, meta, arrays)
+        self._since_checkpoint = 0
+
+    def load(self) -> None:
+        """Restore the state and counters of the checkpoint, reopen the results there."""
+        path = self.output / CHECKPOINT
+        meta, arrays = read_checkpoint(path)
+        try:
+            self._restore(path, meta, arrays)
+        except CheckpointError:
+            raise
+        except KeyError as error:  # an array or counter removed (an edited or foreign file)
+            raise CheckpointError(f"{path}: the entry '{error.args[0]}' is missing; run again "
+                                  "without --restart") from None
+        except (TypeError, ValueError, AttributeError, IndexError) as error:
+            raise CheckpointError(f"{path}: damaged ({error}); run again without --restart"
+                                  ) from None
+        results = self.output / RESULTS
+        if not results.is_file():
+            raise RunError(f"{results}: missing; the checkpoint continues it, so run again "
+                           "without --restart")
+        try:
+            self.writer = ResultsWriter.reopen(results, *self._reopen_at)
+        except (OSError, KeyError, ValueError) as error:
+            raise RunError(f"{results}: cannot be continued ({error}); run again without "
+                           "--restart") from None
+
+    def _restore(self, path: Path, meta: dict[str, Any], arrays: dict[str, NDArray]) -> None:
+        """The problem's state and the counters from a checkpoint read from ``path``."""
+        if meta["fingerprint"] != self.fingerprint:
+            raise CheckpointError(f"{path}: the case's decks or tool files changed since the "
+                                  "checkpoint was written; run again without --restart")
+        p = self.problem
+        carried = {k: arrays[k] for k in _CARRIED}
+        positions = {k: arrays[f"position/{k}"] for k in self.names}
+        for name, value in carried.items():
+            if value.shape != getattr(p, name).shape:
+                raise CheckpointError(f"{path}: written for another mesh or tools ({name} "
+                                      f"{value.shape}, expected {getattr(p, name).shape})")
+            setattr(p, name, value.copy())
+        p.position = positions
+        p.state = state_from_arrays(SolidState, arrays, where=str(path))
+        self.phase_index, self.segment = int(meta["phase_index"]), int(meta["segment"])
+        self.phase_increments, self.last_frame = (int(meta["phase_increments"]),
+                                                  int(meta["last_frame"]))
+        self.elapsed = float(meta["elapsed"])
+        prog = meta["progress"]
+        if prog is not None:
+            self.resume = PhaseProgress(
+                start={k: arrays[f"start/{k}"] for k in self.names},
+                offsets={k: (o, arrays[f"offset/{k}"]) for k, o in prog["offsets"].items()},
+                factor=float(prog["factor"]), step=float(prog["step"]),
+                reason=str(prog["reason"]), last_du=arrays.get("last_du"),
+                last_dp=arrays.get("last_dp"))
+        self._reopen_at = (int(meta["increments"]), int(meta["iterations"]),
+                           int(meta["frames"]))
+
+    # -- output ----------------------------------------------------------------------
+
+    def fields(self, result: FormingResult | None) -> None:
+        """A frame of the present state (contact states from the last increment)."""
+        assert self.writer is not None
+        p = self.problem
+        if self.writer.increments == self.last_frame:
+            return
+        n = p.u.shape[0]
+        status = np.zeros(n, np.int8)
+        tool = np.full(n, -1, np.int16)
+        if result is not None and result.status and all(result.status[k] for k in self.names):
+            states = np.concatenate([result.status[k][-1] for k in self.names])
+            touching = states != 0
+            status[self.slaves[touching]] = states[touching]
+            tool[self.slaves[touching]] = self.tool_of[touching]
+        contact = np.zeros((n, 3))
+        np.add.at(contact, self.slaves, p.force)
+        cauchy = p.solid.stresses(p.u, p.state)[1]
+        self.writer.fields(displacement=p.u, stress=cauchy, plastic_strain=p.state.ep,
+                           contact_status=status, contact_force=contact, contact_tool=tool)
+        self.last_frame = self.writer.increments
+
+    def record(self, phase: Phase, result: FormingResult, step: float, travel: float,
+               limit: str, timings: Timings, counts: dict[str, int]) -> None:
+        """Write the last increment of ``result`` as a row of the results; ``counts``, the
+        increment's share of the COUNTERS of a FormingResult."""
+        assert self.writer is not None
+        # The measures convergence is judged on (FormingResult.relative): the residual over
+        # the force scale and the correction over the increment's displacement.
+        history = np.asarray(result.relative[-1], dtype=float).reshape(-1, 2)
+        self.writer.increment(
+            phase=self.phase_index, step=step, travel=travel,
+            tool_displacement=np.array([self.problem.position[k] for k in self.names]),
+            tool_force=np.array([result.tool_forces[k][-1] if result.tool_forces.get(k)
+                                 else np.zeros(3) for k in self.names]),
+            iterations=len(history) - 1, residual_force=float(history[-1, 0]),
+            residual_displacement=float(history[-1, 1]), timings=timings,
+            nodes_in_contact=[result.contacts[k][-1] if result.contacts.get(k) else 0
+                              for k in self.names],
+            cutbacks=counts["cuts"], rmin=min(1.0, step / phase.max_increment)
+            if phase.max_increment else 1.0, limit=limit, residual_history=history,
+            factorizations=counts["factorizations"],
+            krylov_iterations=counts["krylov_iterations"],
+            newton_iterations=counts["newton_iterations"], evaluations=counts["evaluations"])
+        self.phase_increments += 1
+        self._since_checkpoint += 1
+        if self.progress is not None:
+            self.progress(Progress(phase.name, self.phase_index, len(self.case.phases),
+                                   self.writer.increments, phase.lead, travel, phase.travel,
+                                   step, len(history) - 1, limit))
+
+    def _should_halt(self) -> bool:
+        if self.stop is not None and self.stop():
+            self.halt = "interrupted"
+        elif (self.max_increments is not None and self.writer is not None
+              and self.writer.increments >= self.max_increments):
+            self.halt = "stopped"
+        return bool(self.halt)
+
+    # -- phases ----------------------------------------------------------------------
+
+    def constrain(self, phase: Phase) -> None:
+        p = self.problem
+        p.fixed[:] = False
+        nodes, components = self.case.boundary.constrained(phase.name)
+        for c in range(3):
+            chosen = nodes[components == c]
+            if chosen.size:
+                p.fix(chosen, c)
+        p._reset()
+
+    def forming(self, phase: Phase) -> None:
+        """The segments of a forming phase (split at output_at), from the resume point."""
+        p, newton = self.problem, phase.newton
+        leads = [m for m in phase.motions if isinstance(m, Move)]
+        longest = max(m.travel for m in leads)
+        ratio = longest / phase.travel if phase.travel > 0 else 1.0
+        limits = IncrementLimits(
+            strain=phase.rmin.strain, rotation_deg=phase.rmin.rotation,
+            yield_tolerance=max(phase.rmin.yield_tolerance, 1e-6),
+            first_touch=phase.rmin.contact, release=0.05 if phase.rmin.contact else None,
+            release_share=phase.rmin.release_share, release_redos=phase.rmin.release_redos,
+            min_fraction=min(1.0, phase.min_increment / phase.max_increment))
+        max_cuts = max(1, math.ceil(math.log(phase.max_increment / phase.min_increment)
+                                    / -math.log(newton.cutback)))
+        ends = _segments(phase)
+        while self.segment < len(ends):
+            a = ends[self.segment - 1] if self.segment else 0.0
+            b = ends[self.segment]
+            share = (b - a) / phase.travel
+            motion = {m.tool: phase.displacement(m.tool) * share for m in phase.motions
+                      if isinstance(m, Move) or self.segment > 0}
+            gaps = {m.tool: (m.other, m.gap, self.case.tool(m.tool).facing)
+                    for m in phase.motions if isinstance(m, HoldGap)} if self.segment == 0 else {}
+            result = FormingResult()
+            clock = [time.perf_counter(), dict(result.timings), _counts(result)]
+
+            def hook(progress: PhaseProgress, a: float = a, b: float = b,
+                     result: FormingResult = result, clock: list = clock) -> bool:
+                now = time.perf_counter()
+                spent = {k: v - clock[1][k] for k, v in result.timings.items()}
+                counts = {k: v - clock[2][k] for k, v in _counts(result).items()}
+                timing = Timings(spent["assembly"], spent["contact"], spent["factorization"],
+                                 max(0.0, now - clock[0] - sum(spent.values())),
+                                 spent["solve"])
+                reason = result.limited_by[-1]
+                limit = _LIMITS.get(reason, "max_increment")
+                size = result.sizes[-1] * (b - a)
+                if (reason == "max" and progress.factor >= 1.0 - 1e-12
+                        and size < phase.max_increment * (1 - 1e-9)):
+                    limit = "phase_end" if b >= phase.travel * (1 - 1e-12) else "output"
+                self.record(phase, result, size, a + progress.factor * (b - a), limit, timing,
+                            counts)
+                clock[:] = [time.perf_counter(), dict(result.timings), _counts(result)]
+                if progress.factor >= 1.0 - 1e-12 or (
+                        phase.output_every and self.phase_increments % phase.output_every == 0):
+                    self.fields(result)  # output_every, output_at, the phase end
+                halt = self._should_halt()
+                if halt or self._since_checkpoint >= self.checkpoint_every:
+                    self.save(progress)
+                return halt
+
+            resume, self.resume = self.resume, None
+            p.run(motion, phase.max_increment * ratio, active=phase.tools,
+                  tol_force=newton.force_tolerance, tol_disp=newton.displacement_tolerance,
+                  max_iterations=newton.max_iterations, max_cuts=max_cuts, limits=limits,
+                  cutback=newton.cutback,
+                  gaps=gaps, result=result, on_increment=hook, resume=resume)
+            if self.halt:
+                self.fields(result)
+                return
+            self.segment += 1
+
+    def springback(self, phase: Phase) -> None:
+        newton = phase.newton
+        result = FormingResult()
+        start = time.perf_counter()
+        self.problem.springback(phase.increments, tol_force=newton.force_tolerance,
+                                tol_disp=newton.displacement_tolerance,
+                                max_iterations=newton.max_iterations, result=result)
+        share = (time.perf_counter() - start) / phase.increments
+        t = result.timings
+        for k in range(len(result.residuals)):
+            part = FormingResult(residuals=[result.residuals[k]],
+                                 relative=[result.relative[k]])
+            self.record(phase, part, 0.0, 0.0, "max_increment",
+                        Timings(t["assembly"] / phase.increments, t["contact"] / phase.increments,
+                                t["factorization"] / phase.increments,
+                                max(0.0, share - sum(t.values()) / phase.increments),
+                                t["solve"] / phase.increments),
+                        {name: _share(total, k, phase.increments)
+                         for name, total in _counts(result).items()})
+        self.fields(None)
+
+    def run(self) -> None:
+        phases = self.case.phases
+        while self.phase_index < len(phases):
+            phase = phases[self.phase_index]
+            self.constrain(phase)
+            if phase.is_springback:
+                self.springback(phase)
+            else:
+                self.forming(phase)
+                if self.halt:
+                    return
+            self.phase_index += 1
+            self.segment, self.phase_increments = 0, 0
+            self.save(None)
+            if self.phase_index < len(phases) and self._should_halt():
+                return
+
+
+#: What a FormingResult counts over its increments (cut increments, LU factorizations,
+#: GMRES iterations, Newton corrections and evaluations of all trials).
+COUNTERS = ("cuts", "factorizations", "krylov_iterations", "newton_iterations", "evaluations")
+
+
+def _counts(result: FormingResult) -> dict[str, int]:
+    return {name: int(getattr(result, name)) for name in COUNTERS}
+
+
+def _share(total: int, k: int, parts: int) -> int:
+    """Part k of a count spread evenly over ``parts`` (the springback's counts are known per
+    phase only, like its timings), the parts summing to ``total``."""
+    return (k + 1) * total // parts - k * total // parts
+
+
+def _check_free_space(case: Case, output: Path) -> None:
+    """Refuse to start where the results cannot be written: less free space than a few
+    frames (results.frame_bytes) and checkpoints (per node about 15 numbers, per element 8
+    Gauss points of 8) of this mesh beyond the results writer's MIN_FREE. HDF5 ended a run
+    started with 64 KB free in a segmentation fault while it closed the file."""
+    import shutil
+
+    folder = output
+    while not folder.exists() and folder != folder.parent:
+        folder = folder.parent
+    try:
+        free = shutil.disk_usage(folder).free
+    except OSError:
+        return  # the first write will say what is wrong
+    n, m = case.mesh.n_nodes, case.mesh.n_elements
+    checkpoint = 8 * (15 * n + 64 * m)
+    needed = MIN_FREE + 4 * (frame_bytes(n, m) + checkpoint)  # the writer's margin, and more
+    if free < needed:
+        raise RunError(f"{folder}: {free / 1e6:.3g} MB free, the results of this mesh need "
+                       f"at least {needed / 1e6:.3g} MB to start; free some space or choose "
+                       "another --output")
+
+
+def run_case(case: Case, output: str | os.PathLike[str], restart: bool = False,
+             progress: Callable[[Progress], None] | None = None,
+             stop: Callable[[], bool] | None = None, overwrite: bool = False,
+             checkpoint_every: int = CHECKPOINT_EVERY, max_increments: int | None = None,
+             threads: int | None = None) -> RunOutcome:
+    """Run the phases of ``case`` in order, writing to the folder ``output``.
+
+    ``restart``: continue from the folder's checkpoint. ``progress`` is called after every
+    increment; ``stop`` is polled after every increment and a true return stops the run
+    there (status interrupted, a checkpoint written: restart continues). ``max_increments``
+    stops after that many increments of the whole run (status stopped). ``overwrite``
+    replaces earlier results; without it an existing results file is an error. ``threads``:
+    OpenMP threads of the core. A failed increment (no convergence after the cuts allowed)
+    ends with status failed; the results so far and the last checkpoint stay."""
+    output = Path(output)
+    if checkpoint_every < 1:
+        raise ValueError(f"checkpoint_every must be >= 1, got {checkpoint_every}")
+    if threads is not None:
+        from ddpy.core.parallel import set_threads
+
+        set_threads(threads)
+    if output.exists() and not output.is_dir():
+        raise RunError(f"{output}: a file is there; the output must be a folder")
+    _check_free_space(case, output)
+    run = _Run(case, output, progress, stop, checkpoint_every, max_increments)
+    results = output / RESULTS
+    if restart:
+        if not (output / CHECKPOINT).is_file():
+            raise RunError(f"{output / CHECKPOINT}: no checkpoint to restart from; run "
+                           "without --restart")
+        run.load()
+    else:
+        if results.exists() and not overwrite:
+            raise RunError(f"{results} exists: continue it with --restart, or replace it "
+                           "with --overwrite")
+        output.mkdir(parents=True, exist_ok=True)
+        (output / CHECKPOINT).unlink(missing_ok=True)
+        run.writer = ResultsWriter.for_case(results, case, overwrite=True)
+        run.save(None)
+    assert run.writer is not None
+    leads = [p.lead or "" for p in case.phases]
+    from ddpy.core.parallel import max_threads
+
+    # A continued run records the fewest threads of its parts: its wall time is that of a
+    # run with a thread per core only if every part had them.
+    threads = max_threads()
+    before = int(run.writer.attribute("threads", 0)) if restart else 0
+    threads = min(threads, before) if before > 0 else threads
+    run.writer.annotate(status="running", message="", leads=leads, threads=threads)
+    _write_atomic(output / STATUS, json.dumps({"status": "running", "case": str(case.folder)}))
+    status, message = "failed", "stopped by an error"
+    try:
+        run.run()
+        status, message = run.halt or "completed", ""
+        if run.halt == "interrupted":
+            message = "stopped at the user's request"
+        elif run.halt == "stopped":
+            message = f"stopped after {run.writer.increments} increments"
+    except FormingError as error:
+        message = str(error)
+        run.fields(error.result)
+    except BaseException as error:
+        message = f"{type(error).__name__}: {error}"
+        raise
+    finally:
+        wall = run.elapsed + time.perf_counter() - run._clock
+        increments, frames = run.writer.increments, run.writer.frame_count
+        run.problem.close()
+        failure: ResultsWriteError | None = None
+        if not run.writer.failed:  # after a failed write the file is closed as it was
+            try:
+                run.writer.annotate(status=status, message=message, wall_time=wall)
+                run.writer.close()
+            except ResultsWriteError as error:
+                failure = error
+        if run.writer.failed:
+            status, message = "failed", f"writing {RESULTS} failed: {run.writer.failed}"
+        try:
+            _write_atomic(output / STATUS, json.dumps({
+                "status": status, "message": message, "case": str(case.folder),
+                "increments": increments, "frames": frames, "wall_time": wall}, indent=1))
+        except OSError:  # the output folder went away or is full: keep the run's own error
+            if status != "failed":
+                raise
+        if failure is not None:
+            raise failure
+    return RunOutcome(status, message, increments, frames, wall, output)

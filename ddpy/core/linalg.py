@@ -1,0 +1,260 @@
+"""Sparse direct solution through the core's MUMPS (sequential) solver.
+
+The structure is analysed once (``analyse``), then factorized (``factorize``) and solved
+(``solve``) as often as the values change, as the Newton loop of a forming run does.
+``gmres`` and ``CoordinateMatrix`` let a Newton loop solve with an older factorization as
+the preconditioner instead of factorizing again (docs/theory/linear-solver.md).
+"""
+
+from __future__ import annotations
+
+import operator
+from typing import Any
+
+import numpy as np
+import scipy.sparse
+from numpy.typing import ArrayLike, NDArray
+
+from ddpy import _core
+from ddpy._validate import float_array, int_array
+
+__all__ = ["MumpsSolver", "LinearSolverError", "spsolve", "gmres", "CoordinateMatrix"]
+
+#: MUMPS's integers (sizes, indices, entry counts) are 32-bit here.
+INT32_MAX = 2**31 - 1
+_SYMMETRY = {"unsymmetric": 0, "spd": 1, "symmetric": 2}
+_ORDERING = {"amd": 0, "amf": 2, "scotch": 3, "pord": 4, "metis": 5, "qamd": 6, "auto": 7}
+_MESSAGES = {
+    -6: "the matrix is structurally singular",
+    -10: "the matrix is numerically singular",
+    -8: "the integer workspace is too small",
+    -9: "the real workspace is too small",
+    -13: "memory allocation failed",
+    -1001: "the solver handle is not valid (closed?)",
+    -1002: "analyse and factorize before solving",
+    -1003: "the size differs from the analysed structure",
+    -1004: "too many solvers open at once; close some",
+}
+
+
+class LinearSolverError(RuntimeError):
+    """MUMPS or the solver handle reported an error; ``code`` is INFOG(1) or ours."""
+
+    def __init__(self, code: int, stage: str) -> None:
+        self.code = code
+        reason = _MESSAGES.get(code, "see the MUMPS user guide, INFOG(1)")
+        super().__init__(f"MUMPS {stage} failed with code {code}: {reason}")
+
+
+class MumpsSolver:
+    """One MUMPS instance: analyse a structure once, then factorize and solve repeatedly.
+
+    ``symmetry`` is "unsymmetric", "symmetric" or "spd" (for the last two give one triangle);
+    ``ordering`` a MUMPS ordering name ("metis" by default; MUMPS
+    falls back to its own choice when the library lacks it); ``controls`` sets further MUMPS
+    ICNTL entries by their 1-based index, e.g. ``{10: -2}`` for two refinement steps, and
+    ``real_controls`` CNTL entries, e.g. ``{7: 1e-9}`` for the block low-rank tolerance.
+    """
+
+    def __init__(
+        self, symmetry: str = "unsymmetric", ordering: str = "metis",
+        controls: dict[int, int] | None = None,
+        real_controls: dict[int, float] | None = None,
+    ) -> None:
+        if symmetry not in _SYMMETRY:
+            raise ValueError(f"symmetry must be one of {sorted(_SYMMETRY)}, got {symmetry!r}")
+        if ordering not in _ORDERING:
+            raise ValueError(f"ordering must be one of {sorted(_ORDERING)}, got {ordering!r}")
+        handle, status = _core.solver_create(_SYMMETRY[symmetry], _ORDERING[ordering])
+        if status < 0:
+            raise LinearSolverError(int(status), "initialization")
+        self._handle = int(handle)
+        for position, value in (controls or {}).items():
+            if _core.solver_set_control(self._handle, int(position), int(value)) < 0:
+                self.close()
+                raise ValueError(f"MUMPS has no control ICNTL({position})")
+        for position, value in (real_controls or {}).items():
+            if _core.solver_set_real_control(self._handle, int(position), float(value)) < 0:
+                self.close()
+                raise ValueError(f"MUMPS has no control CNTL({position})")
+        self.n = 0
+        self.nnz = 0
+
+    def set_ordering(self, position: ArrayLike) -> None:
+        """Use a given pivot order in the next analyses instead of MUMPS's own:
+        ``position[i]`` is the 0-based place of variable i in the elimination (a
+        permutation of 0..n-1; see ddpy.core.ordering)."""
+        position = int_array(position, "position", (None,))
+        if not np.array_equal(np.sort(position), np.arange(position.size)):
+            raise ValueError("position must be a permutation of 0..n-1")
+        if _core.solver_set_ordering(self._live(), position) < 0:
+            raise LinearSolverError(-1001, "ordering")
+
+    def analyse(self, n: int, rows: ArrayLike, cols: ArrayLike) -> None:
+        """Symbolic analysis of an n x n matrix with entries at 0-based (rows, cols).
+
+        ValueError, before MUMPS sees it: n not a positive 32-bit integer (MUMPS's
+        integers), an entry outside 0..n-1, or fewer entries than unknowns: such a matrix
+        has empty rows (structurally singular) and MUMPS would allocate for all n, 23 GB for
+        n = 2**30 with one entry."""
+        rows = int_array(rows, "rows", (None,))
+        cols = int_array(cols, "cols", (rows.shape[0],))
+        try:
+            n = operator.index(n)
+        except TypeError:
+            raise ValueError(f"matrix size must be an integer, got {n!r}") from None
+        if not 1 <= n <= INT32_MAX:
+            raise ValueError(f"matrix size must lie in 1..{INT32_MAX} (32-bit MUMPS), got {n}")
+        if rows.shape[0] > INT32_MAX:
+            raise ValueError(f"at most {INT32_MAX} entries (32-bit MUMPS), got {rows.shape[0]}")
+        if rows.size and (min(rows.min(), cols.min()) < 0 or max(rows.max(), cols.max()) >= n):
+            raise ValueError(f"rows and cols must lie in 0..{n - 1}")
+        if rows.shape[0] < n:
+            raise ValueError(f"a {n} x {n} matrix with {rows.shape[0]} entries has empty rows: "
+                             "structurally singular (expected at least one entry per row)")
+        status = _core.solver_analyse(self._live(), n, rows, cols)
+        if status < 0:
+            raise LinearSolverError(int(status), "analysis")
+        self.n, self.nnz = n, rows.shape[0]
+
+    def factorize(self, values: ArrayLike) -> None:
+        """LU (or LDL^T) factorization with the values of the analysed entries."""
+        values = float_array(values, "values", (self.nnz,))
+        status = _core.solver_factorize(self._live(), values)
+        if status < 0:
+            raise LinearSolverError(int(status), "factorization")
+
+    def solve(self, rhs: ArrayLike) -> NDArray[np.float64]:
+        """Solution x of A x = rhs with the last factorization."""
+        b = float_array(rhs, "rhs", (self.n,))
+        x, status = _core.solver_solve(self._live(), b)
+        if status < 0:
+            raise LinearSolverError(int(status), "solve")
+        return x
+
+    def statistics(self) -> dict[str, float]:
+        """MUMPS figures of the last call: ordering used, entries in factors, flops."""
+        values, flops, status = _core.solver_info(self._live())
+        if status < 0:
+            raise LinearSolverError(int(status), "statistics")
+        entries = int(values[3])
+        return {"infog1": int(values[0]), "ordering": int(values[2]),
+                "factor_entries": entries if entries >= 0 else -entries * 1_000_000,
+                "flops": float(flops)}
+
+    def close(self) -> None:
+        """Free the MUMPS instance (also done when the object is collected)."""
+        if self._handle:
+            _core.solver_destroy(self._handle)
+            self._handle = 0
+
+    def _live(self) -> int:
+        if not self._handle:
+            raise LinearSolverError(-1001, "call")
+        return self._handle
+
+    def __enter__(self) -> MumpsSolver:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def __del__(self) -> None:
+        try:
+            self.close()
+        except Exception:  # interpreter shutdown: the module may already be gone
+            pass
+
+
+def spsolve(matrix: Any, rhs: ArrayLike) -> NDArray[np.float64]:
+    """Solve a sparse system once. ``matrix`` is anything with ``tocoo()`` (SciPy sparse)
+    or a tuple (n, rows, cols, values) of 0-based coordinates (duplicates are summed)."""
+    if hasattr(matrix, "tocoo"):
+        coo = matrix.tocoo()
+        if coo.shape[0] != coo.shape[1]:
+            raise ValueError(f"matrix must be square, got shape {coo.shape}")
+        n, rows, cols, values = coo.shape[0], coo.row, coo.col, coo.data
+    else:
+        n, rows, cols, values = matrix
+    with MumpsSolver() as solver:
+        solver.analyse(n, rows, cols)
+        solver.factorize(values)
+        return solver.solve(rhs)
+
+
+class CoordinateMatrix:
+    """A fixed n x n coordinate structure (duplicates are summed, as MUMPS does) whose
+    values change: ``matrix(values)`` gives the compressed-row matrix of one set of values
+    for products, the structure's sort done once."""
+
+    def __init__(self, n: int, rows: ArrayLike, cols: ArrayLike) -> None:
+        rows = int_array(rows, "rows", (None,)).astype(np.int64)
+        cols = int_array(cols, "cols", (rows.size,)).astype(np.int64)
+        self.n = int(n)
+        key, slot = np.unique(rows * self.n + cols, return_inverse=True)
+        self._indices = (key % self.n).astype(np.int32)
+        self._indptr = np.searchsorted(key // self.n, np.arange(self.n + 1)).astype(np.int32)
+        self.size = rows.size
+        # Each entry's contributions, entry after entry: the core sums them in parallel.
+        self._sources = np.argsort(slot, kind="stable").astype(np.int32)
+        self._starts = np.zeros(key.size + 1, dtype=np.int32)
+        np.cumsum(np.bincount(slot, minlength=key.size), out=self._starts[1:])
+
+    def matrix(self, values: ArrayLike) -> scipy.sparse.csr_matrix:
+        """The matrix with these entries (in the order of the structure's rows, cols)."""
+        values = float_array(values, "values", (self.size,))
+        data = _core.sum_duplicates(values, self._sources, self._starts,
+                                    np.empty(self._indices.size))
+        return scipy.sparse.csr_matrix((data, self._indices, self._indptr),
+                                       shape=(self.n, self.n))
+
+
+def gmres(operator: Any, rhs: ArrayLike, tol: float, max_iterations: int
+          ) -> tuple[NDArray[np.float64], int, bool]:
+    """Solve ``operator(x) = rhs`` by GMRES from x = 0, without restart: the iterate, the
+    number of iterations and whether ||operator(x) - rhs|| <= tol ||rhs|| was reached.
+    ``operator`` is already preconditioned by the caller (e.g. M^-1 A with M^-1 an older
+    factorization), so that the norm minimized is the one that matters to it. Arnoldi with
+    modified Gram-Schmidt run twice (the basis stays orthogonal to rounding when the
+    operator is far from normal) and Givens rotations for the residual norm."""
+    b = float_array(rhs, "rhs", (None,))
+    beta = float(np.linalg.norm(b))
+    if beta == 0.0:
+        return np.zeros_like(b), 0, True
+    m = int(max_iterations)
+    basis = np.zeros((m + 1, b.size))
+    basis[0] = b / beta
+    hessenberg = np.zeros((m + 1, m))
+    cosines, sines = np.zeros(m), np.zeros(m)
+    residual = np.zeros(m + 1)
+    residual[0] = beta
+    k = 0
+    for k in range(1, m + 1):
+        j = k - 1
+        w = np.asarray(operator(basis[j]), dtype=np.float64)
+        for _ in range(2):
+            h = basis[:k] @ w
+            w -= h @ basis[:k]
+            hessenberg[:k, j] += h
+        hessenberg[k, j] = np.linalg.norm(w)
+        breakdown = not hessenberg[k, j] > 1e-14 * np.abs(hessenberg[:k, j]).max(initial=0.0)
+        if not breakdown:  # else the Krylov space is invariant: the solution is in it
+            basis[k] = w / hessenberg[k, j]
+        for i in range(j):  # the earlier rotations on the new column
+            a, c = hessenberg[i, j], hessenberg[i + 1, j]
+            hessenberg[i, j] = cosines[i] * a + sines[i] * c
+            hessenberg[i + 1, j] = -sines[i] * a + cosines[i] * c
+        a, c = hessenberg[j, j], hessenberg[k, j]
+        radius = float(np.hypot(a, c))
+        cosines[j], sines[j] = (a / radius, c / radius) if radius > 0.0 else (1.0, 0.0)
+        hessenberg[j, j], hessenberg[k, j] = radius, 0.0
+        residual[k] = -sines[j] * residual[j]
+        residual[j] = cosines[j] * residual[j]
+        if abs(residual[k]) <= tol * beta or breakdown or radius == 0.0:
+            break
+    r = np.triu(hessenberg[:k, :k])
+    if np.diag(r).min() == 0.0:  # a singular operator on the Krylov space
+        return np.zeros_like(b), k, False
+    y = np.linalg.solve(r, residual[:k])  # triangular and small
+    x = y @ basis[:k]
+    return x, k, bool(abs(residual[k]) <= tol * beta)

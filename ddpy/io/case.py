@@ -1,0 +1,599 @@
+"""The validated model of a case: what a run needs, built by :mod:`ddpy.io.decks` from a folder of
+plain-text decks (docs/input-format.md). Units mm, N, MPa, s.
+
+Everything here has been checked by the parser: the solver may trust it. Arrays are read-only;
+node and element indices are 0-based (``Mesh.node_ids`` keeps the labels of the deck for
+messages). ``origin`` fields say where a value was read (``control.dat:12``).
+
+>>> from ddpy.io.decks import read_case
+>>> case = read_case("examples/bending")                    # doctest: +SKIP
+>>> phase = case.control.phases[0]                          # doctest: +SKIP
+>>> phase.displacement("punch"), case.tool("punch").friction  # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ddpy.model.material import Material
+from ddpy.model.mesh import HEX_EDGES, HEX_FACES, boundary_faces, face_area_vectors
+
+if TYPE_CHECKING:
+    from ddpy.io.toolfile import ToolModel
+
+__all__ = ["AXES", "BlankMaterial", "BoundaryConditions", "Case", "Constraint", "Control",
+           "DeckError", "HoldGap", "Mesh", "Move", "Newton", "NodeSet", "Phase", "RminLimits",
+           "Tool", "HEX_FACES", "blank_thickness", "through_thickness_columns"]
+
+#: Axis names and their index.
+AXES = {"x": 0, "y": 1, "z": 2}
+
+#: A boundary face belongs to a contact side when its outward normal makes less than
+#: about 45 degrees with the side's direction.
+SIDE_COSINE = 0.7
+#: Most element layers through the thickness that through_thickness_columns follows.
+MAX_LAYERS = 64
+
+
+def _frozen(array: ArrayLike, dtype: type) -> NDArray:
+    out = np.array(array, dtype=dtype)
+    out.flags.writeable = False
+    return out
+
+
+# ----------------------------------------------------------------------------------- mesh
+
+
+class DeckError(ValueError):
+    """Bad input in a case folder. ``path`` and ``line`` locate the (first) error, ``line`` is
+    None for a whole file; ``errors`` holds every error found (each a DeckError)."""
+
+    def __init__(self, message: str, path: str | Path | None = None, line: int | None = None,
+                 errors: tuple[DeckError, ...] = ()) -> None:
+        self.path = Path(path) if path is not None else None
+        self.line = line
+        self.message = message
+        self.errors: tuple[DeckError, ...] = errors or (self,)
+        super().__init__(str(self))
+
+    @property
+    def location(self) -> str:
+        if self.path is None:
+            return ""
+        return f"{self.path}:{self.line}" if self.line is not None else str(self.path)
+
+    def __str__(self) -> str:
+        if len(self.errors) > 1:
+            return "\n".join(str(e) for e in self.errors)
+        return f"{self.location}: {self.message}" if self.path is not None else self.message
+
+    @classmethod
+    def collect(cls, errors: list[DeckError]) -> DeckError:
+        """One error standing for several (located at the first)."""
+        if len(errors) == 1:
+            return errors[0]
+        first = errors[0]
+        return cls(first.message, first.path, first.line, tuple(errors))
+
+
+@dataclass(frozen=True, eq=False)
+class Mesh:
+    """The blank: nodes (n, 3) in mm, 8-node hexahedra (m, 8) of 0-based node indices, the
+    labels of the deck, and the sheet normal (a unit vector along a global axis: ``top`` is
+    the side it points to)."""
+
+    nodes: NDArray[np.float64]
+    elements: NDArray[np.int32]
+    node_ids: NDArray[np.int64]
+    element_ids: NDArray[np.int64]
+    normal: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    source: str = ""
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "nodes", _frozen(self.nodes, np.float64).reshape(-1, 3))
+        object.__setattr__(self, "elements", _frozen(self.elements, np.int32).reshape(-1, 8))
+        object.__setattr__(self, "node_ids", _frozen(self.node_ids, np.int64))
+        object.__setattr__(self, "element_ids", _frozen(self.element_ids, np.int64))
+        object.__setattr__(self, "normal", tuple(float(c) for c in self.normal))
+
+    @property
+    def n_nodes(self) -> int:
+        return int(self.nodes.shape[0])
+
+    @property
+    def n_elements(self) -> int:
+        return int(self.elements.shape[0])
+
+    @property
+    def normal_axis(self) -> int:
+        """Index of the global axis of the sheet normal."""
+        return int(np.argmax(np.abs(self.normal)))
+
+    def bounds(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Lower and upper corners of the bounding box."""
+        return self.nodes.min(axis=0), self.nodes.max(axis=0)
+
+    def index(self, ids: ArrayLike) -> NDArray[np.int32]:
+        """0-based indices of node labels; -1 where a label is not in the mesh."""
+        ids = np.asarray(ids, dtype=np.int64).reshape(-1)
+        order = np.argsort(self.node_ids, kind="stable")
+        sorted_ids = self.node_ids[order]
+        pos = np.clip(np.searchsorted(sorted_ids, ids), 0, max(len(sorted_ids) - 1, 0))
+        found = (sorted_ids[pos] == ids) if len(sorted_ids) else np.zeros(len(ids), bool)
+        return np.where(found, order[pos], -1).astype(np.int32)
+
+    def boundary_faces(self) -> NDArray[np.int32]:
+        """Faces (f, 4) that belong to one element only, counter-clockwise seen from outside."""
+        return boundary_faces(self.elements)
+
+    def face_normals(self, faces: NDArray[np.int32],
+                     nodes: NDArray[np.float64] | None = None) -> NDArray[np.float64]:
+        """Unit outward normals (f, 3) of quadrilateral faces (cross product of diagonals)."""
+        n = face_area_vectors(self.nodes if nodes is None else nodes, faces)
+        length = np.linalg.norm(n, axis=1, keepdims=True)
+        return n / np.where(length > 0, length, 1.0)
+
+    def surface_nodes(self, direction: ArrayLike, cosine: float = SIDE_COSINE
+                      ) -> NDArray[np.int32]:
+        """Nodes of the boundary faces whose outward normal makes an angle of less than
+        arccos(cosine) with ``direction``: the nodes a tool on that side can touch."""
+        d = np.asarray(direction, dtype=float)
+        d = d / np.linalg.norm(d)
+        faces = self.boundary_faces()
+        facing = self.face_normals(faces) @ d > cosine
+        return np.unique(faces[facing]).astype(np.int32)
+
+    def columns(self) -> tuple[NDArray[np.int32], NDArray[np.int32]]:
+        """For each node, the bottom and top node of its through-thickness column; ValueError
+        when the mesh is not layered through the thickness (see through_thickness_columns)."""
+        return through_thickness_columns(self.nodes, self.elements, self.normal)
+
+    def thickness(self, displacement: ArrayLike | None = None) -> NDArray[np.float64]:
+        """Per node, the distance between the top and bottom node of its column, in the
+        current configuration (nodes + displacement)."""
+        bottom, top = self.columns()
+        x = self.nodes if displacement is None else self.nodes + np.reshape(displacement,
+                                                                            (-1, 3))
+        return np.linalg.norm(x[top] - x[bottom], axis=1)
+
+
+def through_thickness_columns(nodes: ArrayLike, elements: ArrayLike, normal: ArrayLike
+                              ) -> tuple[NDArray[np.int32], NDArray[np.int32]]:
+    """Bottom and top node of the through-thickness column of every node of a sheet meshed in
+    layers of hexahedra (one element per layer through the thickness at every point).
+
+    In each element, the four edges of the local direction closest to ``normal`` go through
+    the thickness; oriented along ``normal`` they link each node to the one above it. The
+    thickness at a node is then the distance between the top and bottom node of its column.
+    ValueError when a node would have two different nodes above or below it (the mesh is not
+    layered)."""
+    x = np.asarray(nodes, dtype=float).reshape(-1, 3)
+    e = np.asarray(elements, dtype=np.int64).reshape(-1, 8)
+    d = np.asarray(normal, dtype=float)
+    n = len(x)
+    if len(e) == 0:
+        idx = np.arange(n, dtype=np.int32)
+        return idx, idx.copy()
+    edges = e[:, HEX_EDGES]  # (m, 3, 4, 2)
+    vectors = x[edges[..., 1]] - x[edges[..., 0]]  # (m, 3, 4, 3)
+    lengths = np.linalg.norm(vectors, axis=-1)
+    alignment = np.abs((vectors @ d) / np.where(lengths > 0, lengths, 1.0)).mean(axis=2)
+    family = np.argmax(alignment, axis=1)  # (m,)
+    worst = int(np.argmin(alignment.max(axis=1)))
+    if alignment[worst].max() < 0.5:
+        raise ValueError(f"the mesh is not layered through the thickness: no edges of element "
+                         f"{worst} run along the sheet normal")
+    chosen = edges[np.arange(len(e)), family]  # (m, 4, 2)
+    up = (x[chosen[..., 1]] - x[chosen[..., 0]]) @ d >= 0
+    lower = np.where(up, chosen[..., 0], chosen[..., 1]).ravel()
+    upper = np.where(up, chosen[..., 1], chosen[..., 0]).ravel()
+    pairs = np.unique(np.column_stack([lower, upper]), axis=0)
+    above = np.full(n, -1, dtype=np.int64)
+    below = np.full(n, -1, dtype=np.int64)
+    for link, (src, dst) in ((above, (0, 1)), (below, (1, 0))):
+        keys, counts = np.unique(pairs[:, src], return_counts=True)
+        if np.any(counts > 1):
+            node = int(keys[np.argmax(counts > 1)])
+            raise ValueError(f"the mesh is not layered through the thickness: node {node} has "
+                             f"{int(counts.max())} different neighbours "
+                             f"{'above' if src == 0 else 'below'} it")
+        link[pairs[:, src]] = pairs[:, dst]
+    ends = []
+    for link in (below, above):
+        end = np.arange(n, dtype=np.int64)
+        for _ in range(MAX_LAYERS + 1):  # one pass per layer
+            step = link[end]
+            moved = step >= 0
+            if not moved.any():
+                break
+            end = np.where(moved, step, end)
+        else:
+            raise ValueError(f"the mesh is not layered through the thickness: a column of "
+                             f"nodes has more than {MAX_LAYERS} layers, or loops")
+        ends.append(end.astype(np.int32))
+    return ends[0], ends[1]
+
+
+# ------------------------------------------------------------------------- boundary conditions
+
+
+def blank_thickness(mesh: Mesh) -> float | None:
+    """Smallest initial thickness of a layered blank (mm); its extent along the normal else."""
+    try:
+        bottom, top = mesh.columns()
+    except ValueError:
+        pass
+    else:
+        spanning = top != bottom
+        if spanning.any():
+            x = mesh.nodes
+            return float(np.linalg.norm(x[top[spanning]] - x[bottom[spanning]], axis=1).min())
+    axis = mesh.normal_axis
+    return float(np.ptp(mesh.nodes[:, axis])) or None
+
+
+@dataclass(frozen=True, eq=False)
+class NodeSet:
+    """A named set of nodes (0-based indices, sorted, unique)."""
+
+    name: str
+    nodes: NDArray[np.int32]
+    origin: str = ""
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "nodes", _frozen(np.unique(self.nodes), np.int32))
+
+
+@dataclass(frozen=True, eq=False)
+class Constraint:
+    """Zero displacement of ``components`` (0 = x, 1 = y, 2 = z) at ``nodes``, in the phases
+    named (all phases when empty). ``label`` says what it is: ``symmetry x = 0``,
+    ``fix centre z``."""
+
+    label: str
+    nodes: NDArray[np.int32]
+    components: tuple[int, ...]
+    phases: tuple[str, ...] = ()
+    origin: str = ""
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "nodes", _frozen(np.unique(self.nodes), np.int32))
+
+    def applies(self, phase: str) -> bool:
+        return not self.phases or phase in self.phases
+
+
+@dataclass(frozen=True, eq=False)
+class BoundaryConditions:
+    """Node sets and zero-displacement constraints (symmetry planes, fixed nodes)."""
+
+    nodesets: Mapping[str, NodeSet] = field(default_factory=dict)
+    constraints: tuple[Constraint, ...] = ()
+    tolerance: float = 1e-4
+
+    def constrained(self, phase: str) -> tuple[NDArray[np.int32], NDArray[np.int32]]:
+        """Nodes and components held at zero displacement in ``phase``: two arrays of equal
+        length, unique (node, component) pairs sorted by degree of freedom."""
+        dofs = self.dofs(phase)
+        return (dofs // 3).astype(np.int32), (dofs % 3).astype(np.int32)
+
+    def dofs(self, phase: str) -> NDArray[np.int64]:
+        """Sorted global degrees of freedom (3 node + component) held at zero in ``phase``."""
+        parts = [(c.nodes[:, None].astype(np.int64) * 3 + np.array(c.components)).ravel()
+                 for c in self.constraints if c.applies(phase)]
+        if not parts:
+            return np.zeros(0, dtype=np.int64)
+        return np.unique(np.concatenate(parts))
+
+
+def rigid_body_modes_free(nodes: NDArray[np.float64], dofs: NDArray[np.int64]) -> list[str]:
+    """The rigid-body motions of the blank that the constrained ``dofs`` leave free, described
+    in words (empty when all six are stopped)."""
+    centre = nodes.mean(axis=0)
+    size = max(float(np.ptp(nodes, axis=0).max()), 1e-12)
+    r = (nodes - centre) / size
+    modes = np.zeros((nodes.shape[0], 3, 6))
+    for k in range(3):
+        modes[:, k, k] = 1.0
+    # rotation about axis a: u = e_a x r
+    modes[:, 1, 3], modes[:, 2, 3] = -r[:, 2], r[:, 1]
+    modes[:, 0, 4], modes[:, 2, 4] = r[:, 2], -r[:, 0]
+    modes[:, 0, 5], modes[:, 1, 5] = -r[:, 1], r[:, 0]
+    rows = modes.reshape(-1, 6)[dofs]
+    gram = rows.T @ rows
+    values, vectors = np.linalg.eigh(gram)
+    scale = max(float(values.max()), 1.0)
+    free = []
+    for value, vector in zip(values, vectors.T, strict=True):
+        if value > 1e-10 * scale:
+            continue
+        t, w = vector[:3], vector[3:]
+        if np.linalg.norm(t) >= np.linalg.norm(w):
+            free.append(f"translation along {_direction_words(t)}")
+        else:
+            free.append(f"rotation about {_direction_words(w)}")
+    return free
+
+
+def _direction_words(v: NDArray[np.float64]) -> str:
+    v = v / np.linalg.norm(v)
+    axis = int(np.argmax(np.abs(v)))
+    if abs(v[axis]) > 0.999:
+        return "xyz"[axis]
+    return "(" + ", ".join(f"{c:.2f}" for c in v) + ")"
+
+
+# ----------------------------------------------------------------------------------- material
+
+
+@dataclass(frozen=True)
+class BlankMaterial:
+    """The material of the blank (:class:`ddpy.model.material.Material`) and the rolling direction:
+    ``rolling_angle`` degrees in the sheet plane from the first in-plane axis after the normal
+    axis in the order x, y, z (from x towards y when the normal is z)."""
+
+    material: Material
+    rolling_angle: float = 0.0
+    yield_input: str = "von Mises"
+    origin: str = ""
+
+    def axes(self, normal: tuple[float, float, float] = (0.0, 0.0, 1.0)) -> NDArray[np.float64]:
+        """Rows RD, TD, ND of the material axes in global coordinates (a rotation matrix)."""
+        nd = np.asarray(normal, dtype=float)
+        axis = int(np.argmax(np.abs(nd)))
+        a1 = np.eye(3)[(axis + 1) % 3]
+        a2 = np.cross(nd, a1)
+        angle = math.radians(self.rolling_angle)
+        rd = math.cos(angle) * a1 + math.sin(angle) * a2
+        return np.array([rd, np.cross(nd, rd), nd])
+
+
+# ----------------------------------------------------------------------------------- tools
+
+
+@dataclass(frozen=True)
+class Tool:
+    """A rigid tool: its description (bezier, nagata or facets), its tool file, the Coulomb
+    friction coefficient, the side of the blank it touches (``facing``: the outward normal
+    of that blank surface; ``contact`` is top, bottom or facing) and the augmentation
+    parameter r of its contact law, N/mm (None: the solver chooses it)."""
+
+    name: str
+    description: Literal["bezier", "nagata", "facets"]
+    file: Path
+    friction: float
+    contact: str
+    facing: tuple[float, float, float]
+    augmentation: float | None = None
+    origin: str = ""
+
+    def model(self) -> ToolModel:
+        """The tool model read from the file (ddpy.io.toolfile); a Nagata file used with
+        description facets gives its facets (same mesh, flat patches)."""
+        model = self.__dict__.get("_model")  # read once while the decks were checked
+        if model is None:
+            from ddpy.io.toolfile import read_tool
+
+            model = read_tool(self.file)
+        if self.description == "facets" and model.description == "nagata":
+            return model.facets()
+        return model
+
+    def contact_nodes(self, mesh: Mesh) -> NDArray[np.int32]:
+        """The blank nodes this tool can touch: nodes of the boundary faces facing it."""
+        return mesh.surface_nodes(self.facing)
+
+
+# ----------------------------------------------------------------------------------- control
+
+#: Default redos of one increment at a release (deck rmin_release_redos): none, the release
+#: limit acts ahead only. On faceted tools each redo tends to find another node released
+#: earlier, a cascade that took half of a run's time (docs/theory/contact.md).
+RELEASE_REDOS: int | None = 0
+
+
+@dataclass(frozen=True)
+class RminLimits:
+    """Limits of the r_min increment control (docs/theory/contact.md) for one phase.
+
+    ``yield_tolerance``: an elastic Gauss point may overshoot the yield surface by this
+    fraction of the yield stress before the increment is scaled back to the transition;
+    ``strain``: largest equivalent strain increment at a Gauss point; ``rotation``: largest
+    rotation increment at a Gauss point, degrees; ``contact``: limit the increment at the first
+    touch of a free node and the release of a node in contact; ``release_share``: a node
+    that carries at most this share of its tool's normal force is released inside an
+    increment instead; ``release_redos``: redos of one increment at a release, after which
+    it is accepted with the release inside it (None: no cap) (docs/theory/contact.md)."""
+
+    yield_tolerance: float = 0.1
+    strain: float = 0.02
+    rotation: float = 1.0
+    contact: bool = True
+    release_share: float = 0.1
+    release_redos: int | None = RELEASE_REDOS
+
+
+@dataclass(frozen=True)
+class Newton:
+    """Convergence of the Newton loop: relative residual force and relative displacement
+    correction, iterations allowed before the increment is cut by ``cutback``."""
+
+    force_tolerance: float = 1e-4
+    displacement_tolerance: float = 1e-4
+    max_iterations: int = 25
+    cutback: float = 0.5
+
+
+@dataclass(frozen=True)
+class Move:
+    """``tool`` moves by ``displacement`` (mm) over the phase, in straight line."""
+
+    tool: str
+    displacement: tuple[float, float, float]
+    origin: str = ""
+
+    @property
+    def travel(self) -> float:
+        return math.hypot(*self.displacement)
+
+
+@dataclass(frozen=True)
+class HoldGap:
+    """``tool`` is held at ``gap`` mm from ``other`` along the sheet normal: at the start of
+    the phase it is placed so that the distance between its surface and the other's, measured
+    along the sheet normal where they face each other, is ``gap``; then it follows the
+    other's motion (a position-controlled blank-holder)."""
+
+    tool: str
+    other: str
+    gap: float
+    origin: str = ""
+
+
+@dataclass(frozen=True)
+class Phase:
+    """One stage of the process.
+
+    Forming: the ``tools`` listed are active (the others are switched off), each fixed unless
+    it has a :class:`Move` or a :class:`HoldGap`; increments are measured as travel of the
+    ``lead`` tool, at most ``max_increment`` and at least ``min_increment`` mm. Springback:
+    no tool; the contact forces of the previous phase are released in ``increments`` equal
+    steps. Fields are written every ``output_every`` increments (0: never), at each travel
+    of ``output_at`` and at the end of the phase."""
+
+    name: str
+    kind: Literal["forming", "springback"]
+    tools: tuple[str, ...] = ()
+    motions: tuple[Move | HoldGap, ...] = ()
+    lead: str | None = None
+    max_increment: float = 0.0
+    min_increment: float = 0.0
+    rmin: RminLimits = RminLimits()
+    newton: Newton = Newton()
+    output_every: int = 10
+    output_at: tuple[float, ...] = ()
+    increments: int = 1
+    origin: str = ""
+
+    @property
+    def is_springback(self) -> bool:
+        return self.kind == "springback"
+
+    def motion(self, tool: str) -> Move | HoldGap | None:
+        """The motion of an active tool (None: fixed)."""
+        for m in self.motions:
+            if m.tool == tool:
+                return m
+        return None
+
+    def displacement(self, tool: str) -> NDArray[np.float64]:
+        """Prescribed displacement of a tool over the phase (zero when fixed or inactive;
+        a gap-held tool follows its partner: the partner's displacement)."""
+        m = self.motion(tool)
+        if isinstance(m, Move):
+            return np.array(m.displacement)
+        if isinstance(m, HoldGap):
+            return self.displacement(m.other)
+        return np.zeros(3)
+
+    @property
+    def travel(self) -> float:
+        """Travel of the lead tool over the phase, mm (0 for springback)."""
+        m = self.motion(self.lead) if self.lead else None
+        return m.travel if isinstance(m, Move) else 0.0
+
+
+@dataclass(frozen=True)
+class Control:
+    """Title and phases, in order."""
+
+    title: str
+    phases: tuple[Phase, ...]
+    origin: str = ""
+
+    def phase(self, name: str) -> Phase:
+        for p in self.phases:
+            if p.name == name:
+                return p
+        raise KeyError(f"no phase named {name!r}: phases are {[p.name for p in self.phases]}")
+
+
+# ----------------------------------------------------------------------------------- case
+
+
+@dataclass(frozen=True, eq=False)
+class Case:
+    """A validated case: control and phases, blank mesh, boundary conditions, material and
+    tools. ``warnings`` lists what is legal but suspicious."""
+
+    folder: Path
+    control: Control
+    mesh: Mesh
+    boundary: BoundaryConditions
+    material: BlankMaterial
+    tools: tuple[Tool, ...]
+    warnings: tuple[str, ...] = ()
+
+    @property
+    def title(self) -> str:
+        return self.control.title
+
+    @property
+    def phases(self) -> tuple[Phase, ...]:
+        return self.control.phases
+
+    @property
+    def tool_names(self) -> tuple[str, ...]:
+        return tuple(t.name for t in self.tools)
+
+    def tool(self, name: str) -> Tool:
+        for t in self.tools:
+            if t.name == name:
+                return t
+        raise KeyError(f"no tool named {name!r}: tools are {list(self.tool_names)}")
+
+    def summary(self) -> str:
+        """A few lines that say what the case is."""
+        m, mat = self.mesh, self.material.material
+        lo, hi = m.bounds()
+        size = " x ".join(f"{v:.4g}" for v in hi - lo)
+        hard = type(mat.hardening).__name__
+        lines = [
+            f"case {self.folder}: {self.title}",
+            f"  blank: {m.n_nodes} nodes, {m.n_elements} hexahedra, {size} mm, normal "
+            f"{_axis_name(m.normal)} ({m.source})",
+            f"  material: E = {mat.E:g} MPa, nu = {mat.nu:g}, {self.material.yield_input}, "
+            f"{hard} hardening, initial yield {mat.hardening.initial_yield_stress:.4g} MPa, "
+            f"rolling direction {self.material.rolling_angle:g} deg",
+            f"  boundary: {len(self.boundary.nodesets)} node sets, "
+            f"{len(self.boundary.constraints)} constraints",
+        ]
+        for t in self.tools:
+            lines.append(f"  tool {t.name}: {t.description}, {t.file.name}, friction "
+                         f"{t.friction:g}, contacts the {t.contact} of the blank")
+        for p in self.phases:
+            if p.is_springback:
+                lines.append(f"  phase {p.name}: springback in {p.increments} step(s)")
+                continue
+            moves = ", ".join(
+                f"{mv.tool} by ({', '.join(f'{c:g}' for c in mv.displacement)})"
+                if isinstance(mv, Move) else f"{mv.tool} at gap {mv.gap:g} from {mv.other}"
+                for mv in p.motions)
+            estimate = math.ceil(p.travel / p.max_increment - 1e-9) if p.max_increment else 0
+            lines.append(f"  phase {p.name}: forming with {', '.join(p.tools)}; {moves}; lead "
+                         f"{p.lead}, max increment {p.max_increment:g} mm (>= {estimate} "
+                         "increments)")
+        lines += [f"  warning: {w}" for w in self.warnings]
+        return "\n".join(lines)
+
+
+def _axis_name(normal: tuple[float, float, float]) -> str:
+    axis = int(np.argmax(np.abs(normal)))
+    return ("-" if normal[axis] < 0 else "+") + "xyz"[axis]

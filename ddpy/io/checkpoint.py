@@ -1,0 +1,103 @@
+"""Checkpoints of a run: everything needed to continue it exactly, in one ``.npz`` file.
+
+A checkpoint holds named arrays and a JSON document of counters. It is written to a temporary
+file in the same folder, flushed to disk and renamed over the previous one (``os.replace``),
+so the file on disk is always a complete checkpoint, even when the run is killed while
+writing. The solid state is stored field by field (``dataclasses.fields``), so new fields of
+:class:`ddpy.model.solid.SolidState` are saved without changes here.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+import tempfile
+import zipfile
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["CheckpointError", "read_checkpoint", "state_arrays", "state_from_arrays",
+           "write_checkpoint"]
+
+#: Version of the checkpoint layout; a checkpoint of another version is refused.
+VERSION = 1
+_META = "__meta__"
+
+
+class CheckpointError(ValueError):
+    """A checkpoint that cannot be used: missing, damaged, or of another case or version."""
+
+
+def write_checkpoint(path: str | os.PathLike[str], meta: Mapping[str, Any],
+                     arrays: Mapping[str, NDArray]) -> None:
+    """Write ``arrays`` and the JSON-able ``meta`` atomically to ``path``."""
+    path = Path(path)
+    if _META in arrays:
+        raise ValueError(f"array name {_META!r} is reserved")
+    document = json.dumps({"version": VERSION, **meta})
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".checkpoint-", suffix=".npz")
+    try:
+        with os.fdopen(fd, "wb") as out:
+            np.savez(out, **{_META: np.array(document)}, **dict(arrays))
+            out.flush()
+            os.fsync(out.fileno())
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def read_checkpoint(path: str | os.PathLike[str]) -> tuple[dict[str, Any], dict[str, NDArray]]:
+    """The meta document and the arrays of a checkpoint; CheckpointError when unusable."""
+    path = Path(path)
+    if not path.is_file():
+        raise CheckpointError(f"{path}: no checkpoint")
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            arrays = {name: data[name] for name in data.files}
+        meta = json.loads(str(arrays.pop(_META)))
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as error:
+        raise CheckpointError(f"{path}: not a readable checkpoint ({error}); run again "
+                              "without --restart") from None
+    if meta.get("version") != VERSION:
+        raise CheckpointError(f"{path}: checkpoint version {meta.get('version')}, this ddpy "
+                              f"reads version {VERSION}")
+    return meta, arrays
+
+
+def state_arrays(state: Any, prefix: str = "state/") -> dict[str, NDArray]:
+    """The array fields of a dataclass state (e.g. SolidState) under ``prefix`` + name."""
+    out = {}
+    for f in dataclasses.fields(state):
+        value = getattr(state, f.name)
+        if value is not None:
+            out[prefix + f.name] = np.asarray(value)
+    return out
+
+
+def state_from_arrays(cls: type, arrays: Mapping[str, NDArray], prefix: str = "state/",
+                      where: str = "checkpoint") -> Any:
+    """Rebuild a dataclass state of type ``cls`` from :func:`state_arrays`' output. Fields
+    with a default may be missing (None is stored as missing); others must be there."""
+    values: dict[str, Any] = {}
+    names = {f.name for f in dataclasses.fields(cls)}
+    extra = sorted(k[len(prefix):] for k in arrays if k.startswith(prefix)
+                   and k[len(prefix):] not in names)
+    if extra:
+        raise CheckpointError(f"{where}: {cls.__name__} has no fields {extra} (written by "
+                              "another version of ddpy)")
+    for f in dataclasses.fields(cls):
+        key = prefix + f.name
+        if key in arrays:
+            values[f.name] = np.array(arrays[key])
+        elif (f.default is dataclasses.MISSING
+              and f.default_factory is dataclasses.MISSING):  # type: ignore[misc]
+            raise CheckpointError(f"{where}: {cls.__name__} field {f.name!r} is missing "
+                                  "(written by another version of ddpy)")
+    return cls(**values)

@@ -1,0 +1,170 @@
+"""control.dat: the title, solver settings (defaults of every phase) and the phases, each with
+its type, active tools, motions (move, gap), lead tool, output travels and increments.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+from ddpy.io.decks.lines import (
+    MAX_LENGTH,
+    BadValue,
+    Deck,
+    Line,
+    check_arity,
+    first_time,
+    read_choice,
+    read_float,
+    read_int,
+    read_name,
+    read_vector,
+    show,
+)
+
+#: Settings allowed at the top of control.dat (defaults of every phase) and inside a phase.
+_SETTINGS: dict[str, Callable[[str], Any]] = {
+    "max_increment": lambda w: read_float(w, "max_increment", gt=0, le=MAX_LENGTH),
+    "min_increment": lambda w: read_float(w, "min_increment", gt=0, le=MAX_LENGTH),
+    # The run's increment control (forming.IncrementLimits) takes fractions below 1 only.
+    "rmin_yield": lambda w: read_float(w, "rmin_yield", ge=0, lt=1),
+    "rmin_strain": lambda w: read_float(w, "rmin_strain", gt=0, lt=1),
+    "rmin_rotation": lambda w: read_float(w, "rmin_rotation", gt=0, le=90),
+    "rmin_contact": lambda w: read_choice(w, "rmin_contact", ("on", "off")) == "on",
+    "rmin_release": lambda w: read_float(w, "rmin_release", ge=0, le=1),
+    "rmin_release_redos": lambda w: (None if w == "off"
+                                     else read_int(w, "rmin_release_redos", 0, 10**6)),
+    "newton_force": lambda w: read_float(w, "newton_force", gt=0, lt=1),
+    "newton_displacement": lambda w: read_float(w, "newton_displacement", gt=0, lt=1),
+    "max_iterations": lambda w: read_int(w, "max_iterations", 1, 1000),
+    "cutback": lambda w: read_float(w, "cutback", gt=0, lt=1),
+    "output_every": lambda w: read_int(w, "output_every", 0, 10**9),
+}
+_PHASE_KEYS = ("type", "tools", "move", "gap", "lead", "output_at", "increments")
+#: Default largest increment: this fraction of the lead tool's travel.
+DEFAULT_INCREMENT_FRACTION = 0.01
+#: Default smallest increment: this fraction of the largest.
+DEFAULT_MIN_FRACTION = 1e-3
+DEFAULT_OUTPUT_EVERY = 10
+
+
+@dataclass
+class _PhaseDraft:
+    name: str
+    line: int
+    kind: str = "forming"
+    tools: list[str] = field(default_factory=list)
+    tools_line: int | None = None
+    moves: list[tuple[str, tuple[float, float, float], int]] = field(default_factory=list)
+    gaps: list[tuple[str, str, float, int]] = field(default_factory=list)
+    lead: tuple[str, int] | None = None
+    output_at: tuple[list[float], int] | None = None
+    increments: tuple[int, int] | None = None
+    settings: dict[str, tuple[Any, int]] = field(default_factory=dict)
+    seen: dict[str, int] = field(default_factory=dict)
+
+
+@dataclass
+class _ControlDraft:
+    title: str | None = None
+    settings: dict[str, tuple[Any, int]] = field(default_factory=dict)
+    phases: list[_PhaseDraft] = field(default_factory=list)
+
+
+def _parse_control(deck: Deck) -> _ControlDraft:
+    draft = _ControlDraft()
+    seen: dict[str, int] = {}
+    phase: _PhaseDraft | None = None
+    for line in deck.lines:
+        key = line.key
+        try:
+            if key == "phase":
+                check_arity(line, "phase NAME", 1)
+                if phase is not None:
+                    deck.error(phase.line, f"phase '{phase.name}' is not closed: expected "
+                               f"'end' before the next 'phase' (line {line.number})")
+                phase = _PhaseDraft(read_name(line.words[1], "the phase"), line.number)
+                draft.phases.append(phase)
+            elif key == "end":
+                check_arity(line, "end", 0)
+                if phase is None:
+                    raise BadValue("'end' without a 'phase NAME' to close")
+                phase = None
+            elif key == "title":
+                if phase is not None:
+                    raise BadValue("'title' belongs at the top of control.dat, not in a phase")
+                if first_time(deck, seen, line):
+                    draft.title = line.text[len("title"):].strip() or None
+                    if draft.title is None:
+                        raise BadValue("expected 'title TEXT'")
+            elif key in _SETTINGS:
+                check_arity(line, f"{key} VALUE", 1)
+                target = phase.settings if phase is not None else draft.settings
+                where = phase.seen if phase is not None else seen
+                if first_time(deck, where, line):
+                    target[key] = (_SETTINGS[key](line.words[1]), line.number)
+            elif key in _PHASE_KEYS:
+                if phase is None:
+                    raise BadValue(f"'{key}' belongs inside a phase: expected 'phase NAME' ... "
+                               "'end' around it")
+                _phase_line(deck, phase, line)
+            else:
+                where = "in a phase" if phase is not None else "at the top of control.dat"
+                allowed = (_PHASE_KEYS + ("end",)) if phase is not None else (
+                    "title", "phase")
+                raise BadValue(f"unknown keyword {show(key)} {where}: expected one of "
+                           f"{', '.join(allowed + tuple(_SETTINGS))}")
+        except BadValue as bad:
+            deck.error(line.number, str(bad))
+    if phase is not None:
+        deck.error(phase.line, f"phase '{phase.name}' is not closed: expected 'end' before "
+                   "the end of the file")
+    if not draft.phases and not deck.errors:
+        deck.error(None, "no phase: expected at least one 'phase NAME' ... 'end' block")
+    return draft
+
+
+def _phase_line(deck: Deck, phase: _PhaseDraft, line: Line) -> None:
+    key, words = line.key, line.words
+    if key == "type":
+        check_arity(line, "type forming|springback", 1)
+        if first_time(deck, phase.seen, line):
+            phase.kind = read_choice(words[1], "the phase type", ("forming", "springback"))
+    elif key == "tools":
+        check_arity(line, "tools TOOL...", 1, -1)
+        if first_time(deck, phase.seen, line):
+            names = [read_name(w, "a tool") for w in words[1:]]
+            repeated = sorted({n for n in names if names.count(n) > 1})
+            if repeated:
+                raise BadValue(f"tool '{repeated[0]}' listed twice")
+            phase.tools, phase.tools_line = names, line.number
+    elif key == "move":
+        check_arity(line, "move TOOL DX DY DZ", 4)
+        tool = read_name(words[1], "the tool")
+        phase.moves.append((tool, read_vector(words[2:], "the displacement", MAX_LENGTH),
+                            line.number))
+    elif key == "gap":
+        check_arity(line, "gap TOOL OTHER VALUE", 3)
+        tool, other = read_name(words[1], "the tool"), read_name(words[2], "the other tool")
+        if tool == other:
+            raise BadValue(f"a tool cannot keep a gap to itself: expected 'gap TOOL OTHER VALUE' "
+                       f"with two tools, got '{tool}' twice")
+        gap = read_float(words[3], "the gap", gt=0, le=MAX_LENGTH)
+        phase.gaps.append((tool, other, gap, line.number))
+    elif key == "lead":
+        check_arity(line, "lead TOOL", 1)
+        if first_time(deck, phase.seen, line):
+            phase.lead = (read_name(words[1], "the lead tool"), line.number)
+    elif key == "output_at":
+        check_arity(line, "output_at TRAVEL...", 1, -1)
+        if first_time(deck, phase.seen, line):
+            values = [read_float(w, "an output travel", gt=0, le=MAX_LENGTH) for w in words[1:]]
+            if any(b <= a for a, b in zip(values, values[1:], strict=False)):
+                raise BadValue("output_at travels must increase strictly, got "
+                           + " ".join(words[1:]))
+            phase.output_at = (values, line.number)
+    elif key == "increments":
+        check_arity(line, "increments N", 1)
+        if first_time(deck, phase.seen, line):
+            phase.increments = (read_int(words[1], "increments", 1, 1_000_000), line.number)

@@ -1,0 +1,143 @@
+"""material.dat: elasticity, the yield criterion (von Mises, Hill'48 from coefficients or
+Lankford coefficients), hardening (Swift, Voce) and the rolling direction.
+"""
+
+from __future__ import annotations
+
+from ddpy.io.case import BlankMaterial
+from ddpy.io.decks.lines import (
+    BadValue,
+    Deck,
+    Line,
+    check_arity,
+    first_time,
+    read_choice,
+    read_float,
+    read_pairs,
+    show,
+)
+from ddpy.model.material import Hill48, Material, Swift, Voce
+
+#: Plausibility bounds of the material (docs/input-format.md): stresses, including the
+#: initial yield stress, at most 1e5 MPa (a hundred times the strongest steels); Swift's
+#: eps0 at most 10 (a strain: 1e300 made the yield stress infinite).
+MAX_STRESS, MAX_EPS0 = 1e5, 10.0
+#: Young's modulus (MPa): above the largest it is refused, below the smallest a warning
+#: asks whether it is in MPa (polymers to tungsten carbide lie between).
+MIN_MODULUS, MAX_MODULUS = 1e3, 1e6
+#: Hill'48 coefficients at most 100: the uniaxial yield stress along an axis,
+#: 1 / sqrt(G + H) etc. times the hardening law's, is then at least a tenth of it.
+MAX_HILL = 100.0
+#: Lankford coefficients (given, or H/G and H/F of the coefficients) outside this range are
+#: warned about: sheet metals lie between about 0.2 and 3.
+R_VALUE_RANGE = (0.1, 10.0)
+
+
+def _parse_material(deck: Deck) -> BlankMaterial | None:
+    seen: dict[str, int] = {}
+    elastic: tuple[float, float] | None = None
+    criterion: tuple[Hill48, str] | None = None
+    hardening: Swift | Voce | None = None
+    angle = 0.0
+    for line in deck.lines:
+        key, w = line.key, line.words
+        try:
+            if key == "elastic":
+                if first_time(deck, seen, line):
+                    v = read_pairs(line, 1, ("E", "nu"), ("E", "nu"), "elastic E VALUE nu VALUE")
+                    elastic = (read_float(v["E"], "Young's modulus E", gt=0, le=MAX_MODULUS),
+                               read_float(v["nu"], "Poisson's ratio nu", gt=-1, lt=0.5))
+                    if elastic[0] < MIN_MODULUS:
+                        deck.warn(line.number, f"Young's modulus {elastic[0]:g} MPa is outside "
+                                  "1e3 to 1e6 MPa (polymers to tungsten carbide): is it in "
+                                  "MPa?")
+            elif key == "yield":
+                check_arity(line, "yield vonmises|hill48 ...", 1, -1)
+                if first_time(deck, seen, line):
+                    criterion = _yield(line, deck)
+            elif key == "hardening":
+                check_arity(line, "hardening swift|voce ...", 1, -1)
+                if first_time(deck, seen, line):
+                    hardening = _hardening(line)
+            elif key == "rolling_direction":
+                check_arity(line, "rolling_direction ANGLE", 1)
+                if first_time(deck, seen, line):
+                    angle = read_float(w[1], "the rolling direction angle", ge=-360, le=360)
+            else:
+                raise BadValue(f"unknown keyword {show(key)}: expected elastic, yield, hardening "
+                           "or rolling_direction")
+        except BadValue as bad:
+            deck.error(line.number, str(bad))
+    for key, form in (("elastic", "elastic E VALUE nu VALUE"),
+                      ("yield", "yield vonmises | yield hill48 ..."),
+                      ("hardening", "hardening swift ... | hardening voce ...")):
+        if key not in seen:
+            deck.error(None, f"no '{key}' line: expected '{form}'")
+    if deck.errors or elastic is None or criterion is None or hardening is None:
+        return None
+    try:
+        material = Material(elastic[0], elastic[1], criterion[0], hardening)
+    except (ValueError, TypeError) as error:
+        deck.error(seen["elastic"], f"invalid material: {error}")
+        return None
+    return BlankMaterial(material, angle, criterion[1], deck.where(seen["yield"]))
+
+
+def _yield(line: Line, deck: Deck) -> tuple[Hill48, str]:
+    kind = read_choice(line.words[1], "the yield criterion", ("vonmises", "hill48"))
+    if kind == "vonmises":
+        check_arity(line, "yield vonmises", 1)
+        return Hill48.von_mises(), "von Mises"
+    keys = line.words[2::2]
+    try:
+        if "r0" in keys or "r45" in keys or "r90" in keys:
+            form = "yield hill48 r0 VALUE r45 VALUE r90 VALUE"
+            v = read_pairs(line, 2, ("r0", "r45", "r90"), ("r0", "r45", "r90"), form)
+            r = {k: read_float(v[k], k, gt=0) for k in ("r0", "r45", "r90")}
+            hill = Hill48.from_r_values(r["r0"], r["r45"], r["r90"])
+            text = f"Hill'48 from r0 = {r['r0']:g}, r45 = {r['r45']:g}, r90 = {r['r90']:g}"
+        else:
+            form = "yield hill48 F VALUE G VALUE H VALUE [L VALUE M VALUE] N VALUE"
+            v = read_pairs(line, 2, ("F", "G", "H", "L", "M", "N"), ("F", "G", "H", "N"), form)
+            c = {k: read_float(x, f"Hill48 {k}") for k, x in v.items()}
+            hill = Hill48(**c)
+            text = "Hill'48 " + ", ".join(f"{k} = {x:g}" for k, x in c.items())
+            r = {k: hill.H / d for k, d in (("r0", hill.G), ("r90", hill.F)) if d > 0}
+    except (ValueError, TypeError) as error:
+        raise BadValue(str(error)) from None
+    large = {k: x for k in "FGHLMN" if (x := getattr(hill, k)) > MAX_HILL}
+    if large:
+        raise BadValue(f"Hill'48 {', '.join(f'{k} = {x:.3g}' for k, x in large.items())} above "
+                   f"{MAX_HILL:g}: a yield stress below a tenth of the hardening law's along "
+                   "an axis (coefficients are normalized so that G + H = 1 for the rolling "
+                   "direction)")
+    low, high = R_VALUE_RANGE
+    odd = {k: x for k, x in r.items() if not low <= x <= high}
+    if odd:
+        listed = ", ".join(f"{k} = {x:.3g}" for k, x in odd.items())
+        deck.warn(line.number, f"Lankford coefficient(s) {listed} outside {low:g} to "
+                  f"{high:g} (sheet metals: about 0.2 to 3)")
+    return hill, text
+
+
+def _hardening(line: Line) -> Swift | Voce:
+    kind = read_choice(line.words[1], "the hardening law", ("swift", "voce"))
+    try:
+        if kind == "swift":
+            v = read_pairs(line, 2, ("K", "eps0", "n"), ("K", "eps0", "n"),
+                       "hardening swift K VALUE eps0 VALUE n VALUE")
+            law = Swift(read_float(v["K"], "Swift K", gt=0),
+                        read_float(v["eps0"], "Swift eps0", gt=0, le=MAX_EPS0),
+                        read_float(v["n"], "Swift n", ge=0, le=1))
+            initial = law.K * law.eps0**law.n
+            if not initial <= MAX_STRESS:
+                raise BadValue(f"the initial yield stress K eps0^n = {initial:.3g} MPa is beyond "
+                           f"{MAX_STRESS:g} MPa: K or eps0 is not in MPa or not a strain")
+            return law
+        v = read_pairs(line, 2, ("Y0", "Q", "b"), ("Y0", "Q", "b"),
+                   "hardening voce Y0 VALUE Q VALUE b VALUE")
+        return Voce(read_float(v["Y0"], "Voce Y0", gt=0, le=MAX_STRESS),
+                    read_float(v["Q"], "Voce Q", ge=0, le=MAX_STRESS),
+                    read_float(v["b"], "Voce b", ge=0, le=1e6))
+    except (ValueError, TypeError) as error:
+        raise BadValue(str(error)) from None

@@ -1,0 +1,448 @@
+"""mesh.dat: the blank, as own 'nodes' and 'hexahedra' blocks, a generated 'box' or a mesh file
+(Abaqus input or Gmsh, through meshio), with its sheet normal, scale and origin; the elements
+are checked for repeated nodes, inverted or degenerate corners and free nodes.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ddpy.io.case import AXES, Mesh
+from ddpy.io.decks.lines import (
+    INT_PATTERN,
+    MAX_LENGTH,
+    NUMBER_PATTERN,
+    BadValue,
+    Deck,
+    Line,
+    check_arity,
+    first_time,
+    read_choice,
+    read_float,
+    read_int,
+    read_vector,
+    show,
+)
+
+#: Largest mesh a deck may generate or list (elements).
+MAX_ELEMENTS = 5_000_000
+#: Mesh files read through meshio.
+MESH_SUFFIXES = (".inp", ".msh")
+#: A corner of a hexahedron with a scaled Jacobian below this is degenerate.
+MIN_SCALED_JACOBIAN = 1e-6
+#: Largest node or element id.
+MAX_ID = 2**31 - 1
+#: Largest number of errors reported for one kind of defect in a block of data lines.
+_MAX_REPORTED = 5
+
+
+@dataclass
+class _RawMesh:
+    nodes: NDArray[np.float64]
+    elements: NDArray[np.int64]  # 0-based
+    node_ids: NDArray[np.int64]
+    element_ids: NDArray[np.int64]
+    element_lines: NDArray[np.int64] | None  # deck line of each element (own format)
+    nodesets: dict[str, NDArray[np.int64]]
+    source: str
+    node_lines: NDArray[np.int64] | None = None  # deck line of each node (own format)
+
+
+def _parse_mesh(deck: Deck) -> tuple[Mesh, dict[str, NDArray[np.int64]]] | None:
+    seen: dict[str, int] = {}
+    normal: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    scale = 1.0
+    origin = np.zeros(3)
+    raw: _RawMesh | None = None
+    sources: list[tuple[str, int]] = []
+    lines = deck.lines
+    i = 0
+    while i < len(lines):
+        line = lines[i]
+        i += 1
+        key = line.key
+        try:
+            if key == "normal":
+                check_arity(line, "normal x|y|z|-x|-y|-z", 1)
+                if first_time(deck, seen, line):
+                    word = read_choice(line.words[1], "the sheet normal",
+                                   ("x", "y", "z", "+x", "+y", "+z", "-x", "-y", "-z"))
+                    vector = [0.0, 0.0, 0.0]
+                    vector[AXES[word[-1]]] = -1.0 if word.startswith("-") else 1.0
+                    normal = (vector[0], vector[1], vector[2])
+            elif key == "scale":
+                check_arity(line, "scale FACTOR", 1)
+                if first_time(deck, seen, line):
+                    scale = read_float(line.words[1], "the scale factor", gt=0)
+            elif key == "origin":
+                check_arity(line, "origin X Y Z", 3)
+                if first_time(deck, seen, line):
+                    origin = np.array(read_vector(line.words[1:], "the origin", MAX_LENGTH))
+            elif key in ("nodes", "hexahedra", "box", "file"):
+                if key != "hexahedra":
+                    if sources:
+                        deck.error(line.number, f"'{key}' conflicts with '{sources[0][0]}' at "
+                                   f"line {sources[0][1]}: give the mesh one way ('nodes' and "
+                                   "'hexahedra' blocks, 'box' or 'file')")
+                        return None
+                    sources.append((key, line.number))
+                if key == "box":
+                    check_arity(line, "box LX LY LZ NX NY NZ", 6)
+                    if first_time(deck, seen, line):
+                        raw = _box(line)
+                elif key == "file":
+                    check_arity(line, "file PATH", 1)
+                    if first_time(deck, seen, line):
+                        raw = _mesh_file(deck, line)
+                elif key == "nodes":
+                    if first_time(deck, seen, line):
+                        i, raw = _own_mesh(deck, lines, i - 1)
+                        if raw is None:
+                            return None  # the rest of the file cannot be told apart
+                else:
+                    raise BadValue("'hexahedra' must follow the 'nodes' block")
+            else:
+                raise BadValue(f"unknown keyword {show(key)}: expected normal, scale, origin, "
+                           "nodes, hexahedra, box or file")
+        except BadValue as bad:
+            deck.error(line.number, str(bad))
+    if deck.errors:
+        return None
+    if raw is None:
+        deck.error(None, "no mesh: expected 'nodes' and 'hexahedra' blocks, 'box LX LY LZ NX "
+                   "NY NZ' or 'file PATH'")
+        return None
+    if "origin" in seen and sources[0][0] != "box":
+        deck.error(seen["origin"], "'origin' applies to a generated 'box' only")
+        return None
+    with np.errstate(over="ignore", invalid="ignore"):
+        nodes = raw.nodes * scale + (origin if sources[0][0] == "box" else 0.0)
+    with np.errstate(invalid="ignore"):
+        if not np.all(np.abs(nodes) <= MAX_LENGTH):
+            deck.error(seen.get("scale", sources[0][1]), f"node coordinates beyond +-"
+                       f"{MAX_LENGTH:g} mm (after scaling)")
+            return None
+    if not _check_elements(deck, raw, nodes):
+        return None
+    mesh = Mesh(nodes, raw.elements, raw.node_ids, raw.element_ids, normal, raw.source)
+    return mesh, raw.nodesets
+
+
+def _box(line: Line) -> _RawMesh:
+    w = line.words
+    size = [read_float(v, f"the box length L{a}", gt=0, le=MAX_LENGTH)
+            for v, a in zip(w[1:4], "XYZ", strict=True)]
+    counts = [read_int(v, f"the element count N{a}", 1, MAX_ELEMENTS)
+              for v, a in zip(w[4:7], "XYZ", strict=True)]
+    nx, ny, nz = counts
+    if nx * ny * nz > MAX_ELEMENTS:
+        raise BadValue(f"the box has {nx * ny * nz} elements: at most {MAX_ELEMENTS}")
+    gx, gy, gz = (np.linspace(0.0, s, c + 1) for s, c in zip(size, counts, strict=True))
+    zz, yy, xx = np.meshgrid(gz, gy, gx, indexing="ij")
+    nodes = np.column_stack([xx.ravel(), yy.ravel(), zz.ravel()])
+    index = np.arange(len(nodes)).reshape(nz + 1, ny + 1, nx + 1)
+    c = index[:-1, :-1, :-1]
+    elements = np.stack([c, index[:-1, :-1, 1:], index[:-1, 1:, 1:], index[:-1, 1:, :-1],
+                         index[1:, :-1, :-1], index[1:, :-1, 1:], index[1:, 1:, 1:],
+                         index[1:, 1:, :-1]], axis=-1).reshape(-1, 8)
+    return _RawMesh(nodes, elements, np.arange(1, len(nodes) + 1),
+                    np.arange(1, len(elements) + 1), None, {},
+                    f"box {' '.join(w[1:7])}")
+
+
+def _own_mesh(deck: Deck, lines: list[Line], start: int) -> tuple[int, _RawMesh | None]:
+    """The 'nodes N' block at lines[start] and the 'hexahedra M' block after it."""
+    blocks = {}
+    i = start
+    for keyword, width, form in (("nodes", 4, "ID X Y Z"), ("hexahedra", 9, "ID N1 ... N8")):
+        if i >= len(lines):
+            deck.error(deck.last, f"the file ends where '{keyword} COUNT' was expected")
+            return i, None
+        head = lines[i]
+        if head.key != keyword:
+            deck.error(head.number, f"expected '{keyword} COUNT', got {show(head.text)}")
+            return i, None
+        try:
+            check_arity(head, f"{keyword} COUNT", 1)
+            count = read_int(head.words[1], f"the number of {keyword}", 1, 8 * MAX_ELEMENTS)
+        except BadValue as bad:
+            deck.error(head.number, str(bad))
+            return i + 1, None
+        i += 1
+        rows: list[list[str]] = []
+        numbers: list[int] = []
+        while len(rows) < count and i < len(lines) and lines[i].key not in _MESH_KEYS:
+            rows.append(lines[i].words)
+            numbers.append(lines[i].number)
+            i += 1
+        if len(rows) < count:
+            where = lines[i].number if i < len(lines) else deck.last
+            got = f"'{lines[i].key}'" if i < len(lines) else "the end of the file"
+            deck.error(where, f"expected {count} lines '{form}' after line {head.number}, got "
+                       f"{len(rows)} before {got}")
+            return i, None
+        bad = [k for k, r in enumerate(rows) if len(r) != width]
+        if bad:
+            for k in bad[:_MAX_REPORTED]:
+                deck.error(numbers[k], f"expected '{form}' ({width} numbers), got "
+                           f"{show(' '.join(rows[k]))}")
+            return i, None
+        blocks[keyword] = (rows, np.array(numbers))
+    return i, _own_arrays(deck, blocks)
+
+
+_MESH_KEYS = ("normal", "scale", "origin", "nodes", "hexahedra", "box", "file")
+
+
+def _own_arrays(deck: Deck, blocks: dict) -> _RawMesh | None:
+    (node_rows, node_lines), (elem_rows, elem_lines) = blocks["nodes"], blocks["hexahedra"]
+    ok = True
+
+    def numbers(rows: list[list[str]], lines: NDArray, kind: type, what: str) -> NDArray | None:
+        """The rows as an array; on a bad word, an error at its line and None."""
+        pattern = NUMBER_PATTERN if kind is float else INT_PATTERN
+        if kind is float and all(pattern.fullmatch(word) for row in rows for word in row):
+            return np.array(rows, dtype=float)  # non-finite values are refused below
+        for row, number in zip(rows, lines, strict=True):
+            for word in row:
+                try:
+                    if not pattern.fullmatch(word):
+                        raise ValueError(word)
+                    value = float(word) if kind is float else int(word)
+                except ValueError:
+                    deck.error(int(number), f"expected {what}, got {show(' '.join(row))}")
+                    return None
+                if kind is not float and abs(value) > MAX_ID:
+                    deck.error(int(number), f"{word} is out of range: ids are at most {MAX_ID}")
+                    return None
+        return np.array(rows, dtype=float if kind is float else np.int64)
+
+    node_ids = numbers([r[:1] for r in node_rows], node_lines, int, "an integer node id")
+    coords = numbers([r[1:] for r in node_rows], node_lines, float, "numbers X Y Z")
+    elem = numbers(elem_rows, elem_lines, int, "integers ID N1 ... N8")
+    if node_ids is None or coords is None or elem is None:
+        return None
+    node_ids = node_ids[:, 0]
+    with np.errstate(invalid="ignore"):
+        finite = (np.abs(coords) <= MAX_LENGTH).all(axis=1)
+    for k in np.flatnonzero(~finite)[:_MAX_REPORTED]:
+        deck.error(int(node_lines[k]), f"expected finite coordinates X Y Z within +-{MAX_LENGTH:g}"
+                   " mm, got " + show(" ".join(node_rows[k][1:])))
+    ok &= bool(finite.all())
+    for ids, lines, what in ((node_ids, node_lines, "node"), (elem[:, 0], elem_lines,
+                                                              "element")):
+        if (ids < 1).any():
+            k = int(np.argmax(ids < 1))
+            deck.error(int(lines[k]), f"{what} ids must be >= 1, got {ids[k]}")
+            ok = False
+        order = np.argsort(ids, kind="stable")
+        dup = np.flatnonzero(ids[order][1:] == ids[order][:-1])
+        for d in dup[:_MAX_REPORTED]:
+            first, again = order[d], order[d + 1]
+            deck.error(int(lines[again]), f"{what} {ids[again]} defined twice (first at line "
+                       f"{lines[first]})")
+            ok = False
+    if not ok:
+        return None
+    if len(elem) > MAX_ELEMENTS:
+        deck.error(int(elem_lines[0]), f"{len(elem)} elements: at most {MAX_ELEMENTS}")
+        return None
+    order = np.argsort(node_ids)
+    sorted_ids = node_ids[order]
+    refs = elem[:, 1:]
+    pos = np.clip(np.searchsorted(sorted_ids, refs), 0, len(sorted_ids) - 1)
+    known = sorted_ids[pos] == refs
+    for k in np.flatnonzero(~known.all(axis=1))[:_MAX_REPORTED]:
+        missing = refs[k][~known[k]][0]
+        deck.error(int(elem_lines[k]), f"element {elem[k, 0]} refers to node {missing}, which "
+                   "is not in the 'nodes' block")
+    if not known.all():
+        return None
+    return _RawMesh(coords, order[pos], node_ids, elem[:, 0], elem_lines, {}, "mesh.dat",
+                    node_lines)
+
+
+def _mesh_file(deck: Deck, line: Line) -> _RawMesh:
+    path = Path(line.words[1])
+    if not path.is_absolute():
+        path = deck.path.parent / path
+    if path.suffix.lower() not in MESH_SUFFIXES:
+        raise BadValue(f"expected a mesh file ending in {' or '.join(MESH_SUFFIXES)} (Abaqus input "
+                   f"or Gmsh), got {show(line.words[1])}")
+    if not path.is_file():
+        raise BadValue(f"mesh file {path} not found")
+    if path.suffix.lower() == ".msh":
+        _check_gmsh_counts(path)
+    try:
+        import meshio
+
+        data = meshio.read(path)
+    except Exception as error:  # meshio raises many types for a bad file
+        raise BadValue(f"cannot read mesh file {path}: {type(error).__name__}: {error}") from None
+    solids = {"tetra", "hexahedron", "wedge", "pyramid"}
+    other = {}
+    hexes = []
+    for block in data.cells:
+        if block.type == "hexahedron":
+            hexes.append(np.asarray(block.data, dtype=np.int64))
+        elif block.type.rstrip("0123456789") in solids:
+            other[block.type] = other.get(block.type, 0) + len(block.data)
+    if other:
+        found = ", ".join(f"{n} {t}" for t, n in sorted(other.items()))
+        raise BadValue(f"mesh file {path.name} holds {found} cells: only 8-node hexahedra are "
+                   "accepted")
+    if not hexes:
+        raise BadValue(f"mesh file {path.name} holds no hexahedra")
+    elements = np.concatenate(hexes)
+    if len(elements) > MAX_ELEMENTS:
+        raise BadValue(f"mesh file {path.name} has {len(elements)} elements: at most "
+                       f"{MAX_ELEMENTS}")
+    points = np.asarray(data.points, dtype=float)
+    if points.ndim != 2 or points.shape[1] != 3:
+        raise BadValue(f"mesh file {path.name} is not three-dimensional")
+    if elements.size and (elements.min() < 0 or elements.max() >= len(points)):
+        raise BadValue(f"mesh file {path.name} has elements with node indices out of range")
+    # Nodes outside the hexahedra (geometry points, lower-dimensional cells) are dropped.
+    used = np.unique(elements)
+    renumber = np.full(len(points), -1, dtype=np.int64)
+    renumber[used] = np.arange(len(used))
+    nodesets = {}
+    for name, indices in _file_nodesets(data).items():
+        kept = renumber[np.asarray(indices, dtype=np.int64)]
+        nodesets[name] = kept[kept >= 0]
+    return _RawMesh(points[used], renumber[elements], used + 1,
+                    np.arange(1, len(elements) + 1), None, nodesets, path.name)
+
+
+def _check_gmsh_counts(path: Path) -> None:
+    """The counts of an ASCII Gmsh file's $Nodes and $Elements sections against the lines they
+    hold: meshio reads as many entries as a count says and ignores the rest, so a count made
+    too small would silently drop elements. Binary files are left to meshio."""
+    try:
+        with open(path, encoding="latin-1") as f:
+            lines = f.read().split("\n")
+    except OSError as error:
+        raise BadValue(f"cannot read mesh file {path}: {error.strerror or error}") from None
+    version, binary = None, False
+    sections: dict[str, tuple[int, list[str]]] = {}
+    start = None
+    for number, raw in enumerate(lines, start=1):
+        text = raw.strip()
+        if text in ("$MeshFormat", "$Nodes", "$Elements"):
+            start = (text[1:], number)
+            body: list[str] = []
+        elif start is not None and text == f"$End{start[0]}":
+            sections[start[0]] = (start[1], body)
+            start = None
+        elif start is not None:
+            body.append(text)
+    if "MeshFormat" in sections and sections["MeshFormat"][1]:
+        words = sections["MeshFormat"][1][0].split()
+        version = words[0] if words else None
+        binary = len(words) > 1 and words[1] == "1"
+    if binary or version is None:
+        return
+    for name in ("Nodes", "Elements"):
+        if name not in sections:
+            continue
+        first, body = sections[name]
+        body = [b for b in body if b]
+        try:
+            header = [int(w) for w in body[0].split()] if body else []
+            if version.startswith("2"):
+                expected, found = header[0], len(body) - 1
+            else:  # 4.x: blocks, each a header line and its entries (nodes: tags, then xyz)
+                expected, found, row = header[1], 0, 1
+                while row < len(body):
+                    count = int(body[row].split()[3])
+                    found += count
+                    row += 1 + (2 * count if name == "Nodes" else count)
+                if row != len(body):
+                    raise ValueError
+        except (IndexError, ValueError):
+            raise BadValue(f"mesh file {path.name}:{first}: the ${name} section is malformed") \
+                from None
+        if expected != found:
+            raise BadValue(f"mesh file {path.name}:{first + 1}: ${name} says {expected} entries, "
+                       f"the section holds {found}")
+
+
+def _file_nodesets(data: Any) -> dict[str, NDArray[np.int64]]:
+    """Node sets of a mesh file: Abaqus NSETs, and the nodes of each Gmsh physical group."""
+    sets: dict[str, NDArray[np.int64]] = {}
+
+    def clean(name: str) -> str:
+        text = re.sub(r"[^A-Za-z0-9_.\-]", "_", str(name))[:64]
+        return text if text[:1].isalpha() else f"set_{text}"[:64]
+
+    for name, indices in getattr(data, "point_sets", {}).items():
+        sets[clean(name)] = np.asarray(indices, dtype=np.int64).ravel()
+    physical = getattr(data, "cell_data", {}).get("gmsh:physical")
+    if physical is not None:
+        for name, (tag, _dim) in getattr(data, "field_data", {}).items():
+            members = [np.asarray(b.data)[np.asarray(t) == tag].ravel()
+                       for b, t in zip(data.cells, physical, strict=False)
+                       if len(t) == len(b.data)]
+            nodes = np.unique(np.concatenate(members)) if members else np.zeros(0, np.int64)
+            if nodes.size:
+                sets[clean(name)] = nodes
+    return sets
+
+
+#: Corner, and its neighbours along xi, eta, zeta with the sign of each direction.
+_CORNERS = np.array([[0, 1, 3, 4], [1, 0, 2, 5], [2, 3, 1, 6], [3, 2, 0, 7],
+                     [4, 5, 7, 0], [5, 4, 6, 1], [6, 7, 5, 2], [7, 6, 4, 3]])
+_SIGNS = np.array([[1, 1, 1], [-1, 1, 1], [-1, -1, 1], [1, -1, 1],
+                   [1, 1, -1], [-1, 1, -1], [-1, -1, -1], [1, -1, -1]], dtype=float)
+
+
+def scaled_jacobians(nodes: NDArray[np.float64], elements: NDArray[np.int64]
+                     ) -> NDArray[np.float64]:
+    """Scaled Jacobian (det of the three unit edge vectors) at the 8 corners, (m, 8):
+    1 for a cube, <= 0 for an inverted or degenerate corner."""
+    x = nodes[elements]  # (m, 8, 3)
+    corner = x[:, _CORNERS[:, 0]]
+    edges = (x[:, _CORNERS[:, 1:]] - corner[:, :, None, :]) * _SIGNS[None, :, :, None]
+    lengths = np.linalg.norm(edges, axis=-1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        unit = edges / lengths[..., None]
+        det = np.linalg.det(unit)
+    return np.where(np.isfinite(det), det, 0.0)
+
+
+def _check_elements(deck: Deck, raw: _RawMesh, nodes: NDArray[np.float64]) -> bool:
+    elements = raw.elements
+    ordered = np.sort(elements, axis=1)
+    repeats = np.flatnonzero((ordered[:, 1:] == ordered[:, :-1]).any(axis=1))
+    where = (lambda k: int(raw.element_lines[k])) if raw.element_lines is not None else (
+        lambda k: None)
+    label = f" of {raw.source}" if raw.element_lines is None else ""
+    for k in repeats[:_MAX_REPORTED]:
+        deck.error(where(k), f"element {raw.element_ids[k]}{label} repeats a node: "
+                   f"{raw.node_ids[elements[k]].tolist()}")
+    if repeats.size:
+        return False
+    jac = scaled_jacobians(nodes, elements)
+    bad = np.flatnonzero(jac.min(axis=1) <= MIN_SCALED_JACOBIAN)
+    for k in bad[:_MAX_REPORTED]:
+        c = int(np.argmin(jac[k]))
+        kind = "inverted" if jac[k].max() <= 0 else "inverted or degenerate"
+        deck.error(where(k), f"element {raw.element_ids[k]}{label} is {kind} at its corner "
+                   f"{c} (scaled Jacobian {jac[k, c]:.3g}): expected nodes 1-4 counter-"
+                   "clockwise seen from nodes 5-8 above them")
+    if bad.size > _MAX_REPORTED:
+        deck.error(where(int(bad[_MAX_REPORTED])), f"... and {bad.size - _MAX_REPORTED} more "
+                   "inverted or degenerate elements")
+    used = np.zeros(len(nodes), bool)
+    used[elements.ravel()] = True
+    if raw.node_lines is not None:  # mesh files: nodes outside the hexahedra were dropped
+        for k in np.flatnonzero(~used)[:_MAX_REPORTED]:
+            deck.error(int(raw.node_lines[k]), f"node {raw.node_ids[k]} belongs to no element: "
+                       "remove it (a free node makes the stiffness singular)")
+    return not bad.size and bool(used.all())

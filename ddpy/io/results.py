@@ -1,0 +1,776 @@
+"""Results of a run: one HDF5 file (h5py) and an XDMF file beside it that ParaView opens.
+
+Layout (docs/results-format.md; units in each dataset's ``units`` attribute, mm, N, MPa, s)::
+
+    /                     attrs: format, version, title, case, units, tools, phases, created
+    /mesh/nodes           (n, 3)   initial coordinates
+    /mesh/elements        (m, 8)   hexahedra, 0-based node indices
+    /mesh/node_ids        (n,)     labels of the mesh deck;  /mesh/element_ids (m,)
+    /increments/<name>    one row per converged increment (attrs count: rows complete)
+    /iterations/<name>    one row per Newton iteration: increment, iteration, residuals
+    /fields/<frame>       the fields at chosen increments, frame 000000 the initial state
+                          (attrs count: frames complete; each frame attrs increment, phase,
+                          travel, time)
+
+Every increment and every frame is flushed to disk as soon as it is written, the row counts
+last: a run killed at any moment leaves a file that reads back up to the last complete
+increment. The XDMF file is rewritten (atomically) after each frame.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import datetime
+import errno
+import functools
+import os
+import re
+import shutil
+import tempfile
+from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+from xml.sax.saxutils import escape, quoteattr
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ddpy import __version__
+from ddpy.io.case import through_thickness_columns
+
+__all__ = ["CONTACT_STATUS", "FORMAT", "LIMITS", "TENSOR6", "VOIGT", "Frame", "ResultsReader",
+           "ResultsWriteError", "ResultsWriter", "Timings", "frame_bytes", "xdmf_text"]
+
+FORMAT = "ddpy-results"
+VERSION = 1
+#: Free disk space kept beyond what the next frame needs: a write that would leave less
+#: ends the run first. HDF5 that ran out of space in a write failed its later writes, then
+#: crashed the process while closing the file and left groups pointing past its end.
+MIN_FREE = 1 << 20
+#: fallocate(2)'s flag: allocate blocks beyond the end of the file, its size unchanged.
+_KEEP_SIZE = 1
+#: Contact status of a node in the fields.
+CONTACT_STATUS = {0: "free", 1: "stick", 2: "slip"}
+#: What limited an increment (the ``limit`` column): codes and meanings.
+LIMITS = {0: "max_increment", 1: "yield", 2: "strain", 3: "rotation", 4: "contact_touch",
+          5: "contact_release", 6: "phase_end", 7: "output", 8: "cutback"}
+
+#: Stored stress components (XDMF Tensor6 order) from ddpy's Voigt order xx yy zz xy yz zx,
+#: and back.
+TENSOR6 = np.array([0, 3, 5, 1, 4, 2])
+VOIGT = np.argsort(TENSOR6)
+
+#: Per-increment scalar columns: name -> (dtype, units, meaning).
+_SCALARS: dict[str, tuple[str, str, str]] = {
+    "increment": ("i4", "1", "increment number, from 1 over the whole run"),
+    "phase": ("i4", "1", "index of the phase (root attribute 'phases')"),
+    "step": ("f8", "mm", "increment size: travel of the phase's lead tool in the increment"),
+    "travel": ("f8", "mm", "travel of the lead tool since the start of the phase"),
+    "iterations": ("i4", "1", "Newton iterations of the converged increment"),
+    "cutbacks": ("i4", "1", "cuts of the increment before it converged"),
+    "factorizations": ("i4", "1", "LU factorizations in the increment, its rejected trials "
+                       "included (the other corrections are solved with older factors)"),
+    "krylov_iterations": ("i4", "1", "GMRES iterations of the corrections solved with older "
+                          "factors in the increment, rejected trials included"),
+    "newton_iterations": ("i4", "1", "Newton corrections spent on the increment, its "
+                          "rejected trials (cut, or redone shorter by a limit) included"),
+    "evaluations": ("i4", "1", "residual and tangent evaluations of the increment (line-search "
+                    "trials and rejected trials included)"),
+    "residual_force": ("f8", "1", "relative residual force at convergence"),
+    "residual_displacement": ("f8", "1", "relative displacement correction at convergence"),
+    "rmin": ("f8", "1", "r_min factor applied to the trial increment"),
+    "limit": ("i1", "1", "what limited the increment (attribute 'codes')"),
+    "time_assembly": ("f8", "s", "wall time in assembly (internal forces, tangent)"),
+    "time_contact": ("f8", "s", "wall time in the contact search"),
+    "time_factorization": ("f8", "s", "wall time in LU factorizations (files written "
+                           "before time_solve existed: factorizations and solutions)"),
+    "time_solve": ("f8", "s", "wall time in solutions with the LU factors, GMRES with "
+                   "older factors included"),
+    "time_rest": ("f8", "s", "wall time in everything else"),
+    "time_total": ("f8", "s", "wall time of the increment"),
+}
+_ITERATION_COLUMNS: dict[str, tuple[str, str, str]] = {
+    "increment": ("i4", "1", "increment number"),
+    "iteration": ("i4", "1", "Newton iteration, from 1"),
+    "residual_force": ("f8", "1", "relative residual force"),
+    "residual_displacement": ("f8", "1", "relative displacement correction"),
+}
+_CHUNK = 256
+
+
+@dataclass(frozen=True)
+class Timings:
+    """Wall time of one increment, s, by part of the work."""
+
+    assembly: float = 0.0
+    contact: float = 0.0
+    factorization: float = 0.0
+    rest: float = 0.0
+    solve: float = 0.0
+
+    @property
+    def total(self) -> float:
+        return self.assembly + self.contact + self.factorization + self.solve + self.rest
+
+
+@dataclass(frozen=True)
+class Frame:
+    """A set of fields in the file: ``index`` (0 the initial state), the increment it belongs
+    to, the phase index, the lead tool's travel in the phase and the XDMF time."""
+
+    index: int
+    increment: int
+    phase: int
+    travel: float
+    time: float
+
+
+#: Fields of a frame: name -> (centre, components, dtype, units, meaning).
+_FIELDS: dict[str, tuple[str, int, str, str, str]] = {
+    "displacement": ("Node", 3, "f8", "mm", "nodal displacement from the initial state"),
+    "coordinates": ("Node", 3, "f8", "mm", "current nodal coordinates"),
+    "thickness": ("Node", 1, "f8", "mm", "distance between the top and bottom node of the "
+                  "node's through-thickness column"),
+    "contact_status": ("Node", 1, "i1", "1", "0 free, 1 stick, 2 slip"),
+    "contact_tool": ("Node", 1, "i2", "1", "index of the tool in contact, -1 none"),
+    "contact_force": ("Node", 3, "f8", "N", "contact force on the node (from the tool)"),
+    "stress": ("Cell", 6, "f8", "MPa", "Cauchy stress averaged over the Gauss points, "
+               "components xx xy xz yy yz zz (the XDMF Tensor6 order)"),
+    "von_mises": ("Cell", 1, "f8", "MPa", "von Mises equivalent of the averaged stress"),
+    "plastic_strain": ("Cell", 1, "f8", "1", "equivalent plastic strain averaged over the "
+                       "Gauss points"),
+}
+
+
+def _mesh_arrays(mesh: Any) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
+    """Nodes, elements, labels and the sheet normal of a ddpy.io.case.Mesh or (nodes, elements)."""
+    if isinstance(mesh, tuple):
+        nodes, elements = mesh
+        ids, eids, normal = None, None, (0.0, 0.0, 1.0)
+    else:
+        nodes, elements = mesh.nodes, mesh.elements
+        ids, eids = getattr(mesh, "node_ids", None), getattr(mesh, "element_ids", None)
+        normal = getattr(mesh, "normal", (0.0, 0.0, 1.0))
+    nodes = np.asarray(nodes, dtype=np.float64)
+    elements = np.asarray(elements, dtype=np.int64)
+    if nodes.ndim != 2 or nodes.shape[1] != 3 or elements.ndim != 2 or elements.shape[1] != 8:
+        raise ValueError(f"mesh must have nodes (n, 3) and hexahedra (m, 8), got "
+                         f"{nodes.shape} and {elements.shape}")
+    if elements.size and (elements.min() < 0 or elements.max() >= len(nodes)):
+        raise ValueError("mesh elements refer to nodes out of range")
+    n, m = len(nodes), len(elements)
+    ids = np.arange(1, n + 1) if ids is None else np.asarray(ids, dtype=np.int64)
+    eids = np.arange(1, m + 1) if eids is None else np.asarray(eids, dtype=np.int64)
+    return nodes, elements.astype(np.int32), ids, eids, np.asarray(normal, dtype=float)
+
+
+def frame_bytes(n_nodes: int, n_elements: int) -> int:
+    """Bytes one frame of fields takes in results.h5: 8 a number, 16 numbers per node
+    (displacement, contact force and status, thickness...) and 10 per element (stress,
+    plastic strain...)."""
+    return 8 * (16 * n_nodes + 10 * n_elements)
+
+
+class ResultsWriteError(OSError):
+    """Writing the results failed (disk full, I/O error); the file was closed at once, so
+    the increments and frames written before stay readable."""
+
+    def __init__(self, path: Path, reason: str) -> None:
+        super().__init__(f"writing {path} failed: {reason}")
+        self.path, self.reason = path, reason
+
+
+class ResultsWriter:
+    """Writes the results of one run to ``path`` (HDF5) and ``path`` with suffix .xdmf.
+
+    ``mesh`` is a :class:`ddpy.io.case.Mesh` (or a tuple nodes, elements); ``tools`` and
+    ``phases`` name the tools and phases, in the order of the per-tool arrays and phase
+    indices. Frame 0, the initial state, is written at once. Use as a context manager or call
+    :meth:`close`; a writer never closed still leaves a readable file.
+    """
+
+    def __init__(self, path: str | os.PathLike[str], mesh: Any, tools: Sequence[str],
+                 phases: Sequence[str] = (), *, title: str = "", case: str = "",
+                 overwrite: bool = False) -> None:
+        import h5py
+
+        self.path = Path(path)
+        self.xdmf_path = self.path.with_suffix(".xdmf")
+        nodes, elements, ids, eids, normal = _mesh_arrays(mesh)
+        self.nodes, self.elements = nodes, elements
+        self.tools = tuple(str(t) for t in tools)
+        self.phases = tuple(str(p) for p in phases)
+        if not self.tools:
+            raise ValueError("tools must name at least one tool")
+        try:
+            self._columns: tuple[NDArray, NDArray] | None = through_thickness_columns(
+                nodes, elements, normal)
+        except ValueError:
+            self._columns = None  # not layered: no thickness unless given
+        self._file = h5py.File(self.path, "w" if overwrite else "w-")
+        self.failed = ""  # why a write failed; the file is closed then
+        with self._writing():
+            self._create(nodes, elements, ids, eids, normal, title, case)
+
+    def _create(self, nodes: NDArray, elements: NDArray, ids: NDArray, eids: NDArray,
+                normal: NDArray, title: str, case: str) -> None:
+        """The groups and columns of a new file, and frame 0."""
+        f = self._file
+        f.attrs.update({"format": FORMAT, "version": VERSION, "title": title, "case": case,
+                        "units": "mm N MPa s", "tools": list(self.tools),
+                        "phases": list(self.phases), "ddpy": __version__,
+                        "created": datetime.datetime.now().isoformat(timespec="seconds")})
+        g = f.create_group("mesh")
+        for name, data, units in (("nodes", nodes, "mm"), ("elements", elements, "1"),
+                                  ("node_ids", ids, "1"), ("element_ids", eids, "1")):
+            g.create_dataset(name, data=data).attrs["units"] = units
+        g.attrs["normal"] = normal
+        g["elements"].attrs["description"] = ("8-node hexahedra, 0-based node indices, bottom "
+                                              "face 0-3 counter-clockwise seen from 4-7")
+        t = len(self.tools)
+        inc = f.create_group("increments")
+        for name, (dtype, units, meaning) in _SCALARS.items():
+            self._column(inc, name, dtype, (), units, meaning)
+        self._column(inc, "tool_displacement", "f8", (t, 3), "mm",
+                     "displacement of each tool since the start of the run")
+        self._column(inc, "tool_force", "f8", (t, 3), "N", "reaction force on each tool")
+        self._column(inc, "nodes_in_contact", "i4", (t,), "1", "nodes in contact, per tool")
+        inc["limit"].attrs["codes"] = str(LIMITS)
+        inc.attrs["count"] = 0
+        it = f.create_group("iterations")
+        for name, (dtype, units, meaning) in _ITERATION_COLUMNS.items():
+            self._column(it, name, dtype, (), units, meaning)
+        it.attrs["count"] = 0
+        fields = f.create_group("fields")
+        fields.attrs["count"] = 0
+        self._count = 0
+        self._iterations = 0
+        self._frames: list[Frame] = []
+        self._phase = 0
+        self._travel = 0.0
+        self._write_frame(0, np.zeros_like(nodes), np.zeros((len(elements), 6)),
+                          np.zeros(len(elements)), np.zeros(len(nodes), np.int8),
+                          np.zeros_like(nodes), np.full(len(nodes), -1, np.int16), None, 0.0,
+                          {})
+
+    @contextlib.contextmanager
+    def _writing(self, frame: bool = True) -> Iterator[None]:
+        """Where the file is written. HDF5 must not run out of disk inside a write: it then
+        fails its later writes, prints errors while it frees its objects and crashes the
+        process when the file is closed. So before each write the disk blocks for a frame
+        and MIN_FREE are allocated beyond the file's end (``_hold``): once held, another
+        process filling the disk cannot take them. When they cannot be held (or, where
+        the file system cannot allocate ahead, less free space is left), the file is
+        closed while HDF5 can still do so cleanly. A write that fails all the same (h5py
+        raises OSError or RuntimeError) closes the file at once. Each becomes
+        ResultsWriteError, and so does any later write."""
+        if self.failed:
+            raise ResultsWriteError(self.path, self.failed)
+        needed = self._needed() if frame else MIN_FREE
+        held, free = self._hold(needed), ""
+        if held is None and frame:  # nothing held here: the free space as seen now
+            space = shutil.disk_usage(self.path.parent).free
+            held, free = space >= needed, f", {space / 1e6:.3g} MB free"
+        if held is False:
+            self.failed = (f"No space left on device (the next frame needs "
+                           f"{needed / 1e6:.3g} MB{free})")
+            with contextlib.suppress(Exception):
+                self._file.attrs.update(status="failed", message=self.failed)
+            self._close()
+            raise ResultsWriteError(self.path, self.failed)
+        try:
+            yield
+            if self._file.id.valid:
+                self._file.flush()  # written now, into the blocks held
+        except (OSError, RuntimeError) as error:
+            # HDF5's messages run over several lines; its errno text says what happened.
+            cause = re.search(r"error message = '([^']+)'", str(error))
+            self.failed = (error.strerror if isinstance(error, OSError) and error.strerror
+                           else cause.group(1) if cause
+                           else str(error).split("\n")[0] or type(error).__name__)
+            self._close()
+            where = error.filename if isinstance(error, OSError) and error.filename else None
+            raise ResultsWriteError(Path(where or self.path), self.failed) from error
+
+    def _close(self) -> None:
+        """Close the file (as far as HDF5 can) and give back the blocks held beyond its
+        end: a truncation to its own size frees them (ext4, tmpfs)."""
+        with contextlib.suppress(Exception):
+            self._file.close()
+        with contextlib.suppress(OSError):
+            os.truncate(self.path, self.path.stat().st_size)
+
+    def _hold(self, size: int) -> bool | None:
+        """Allocate ``size`` bytes of disk beyond the end of the file, its size unchanged
+        (Linux fallocate with FALLOC_FL_KEEP_SIZE): True when held, False when the disk
+        has not that much room, None when this system or file system cannot."""
+        try:
+            handle = self._file.id.get_vfd_handle()
+            fallocate = _libc().fallocate
+        except (AttributeError, OSError, RuntimeError, TypeError):
+            return None
+        end = os.fstat(handle).st_size
+        if fallocate(handle, _KEEP_SIZE, end, size) == 0:
+            return True
+        code = ctypes.get_errno()
+        return False if code in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG) else None
+
+    def _needed(self) -> int:
+        """Bytes a frame takes (frame_bytes), the XDMF file rewritten beside the old one,
+        and MIN_FREE."""
+        try:
+            xdmf = self.xdmf_path.stat().st_size
+        except OSError:
+            xdmf = 0
+        return frame_bytes(len(self.nodes), len(self.elements)) + xdmf + MIN_FREE
+
+    @classmethod
+    def for_case(cls, path: str | os.PathLike[str], case: Any, overwrite: bool = False
+                 ) -> ResultsWriter:
+        """A writer for a :class:`ddpy.io.case.Case`: its mesh, tools, phases and title."""
+        return cls(path, case.mesh, case.tool_names, [p.name for p in case.phases],
+                   title=case.title, case=str(case.folder), overwrite=overwrite)
+
+    @classmethod
+    def reopen(cls, path: str | os.PathLike[str], increments: int, iterations: int,
+               frames: int) -> ResultsWriter:
+        """Open an existing results file to continue a run from a checkpoint: rows and
+        frames past the counts given (written after the checkpoint) are dropped."""
+        import h5py
+
+        self = cls.__new__(cls)
+        self.failed = ""
+        self.path = Path(path)
+        self.xdmf_path = self.path.with_suffix(".xdmf")
+        f = h5py.File(self.path, "r+")
+        if f.attrs.get("format") != FORMAT:
+            f.close()
+            raise ValueError(f"{self.path} is not a ddpy results file")
+        inc, it, fields = f["increments"], f["iterations"], f["fields"]
+        have = (int(inc.attrs["count"]), int(it.attrs["count"]), int(fields.attrs["count"]))
+        if increments > have[0] or iterations > have[1] or not 1 <= frames <= have[2]:
+            f.close()
+            raise ValueError(f"{self.path} holds {have[0]} increments, {have[1]} iterations "
+                             f"and {have[2]} frames, fewer than the checkpoint's "
+                             f"{increments}, {iterations} and {frames}")
+        for group, count in ((inc, increments), (it, iterations)):
+            group.attrs["count"] = count
+            for d in group.values():
+                d.resize(count, axis=0)
+        for name, (dtype, units, meaning) in _SCALARS.items():
+            if name not in inc:  # a file of an older version: the column starts at zero
+                cls._column(inc, name, dtype, (), units, meaning)
+                inc[name].resize(increments, axis=0)
+        fields.attrs["count"] = frames
+        for index in range(frames, have[2]):
+            del fields[f"{index:06d}"]
+        self._file = f
+        self.nodes, self.elements = f["mesh/nodes"][()], f["mesh/elements"][()]
+        self.tools = tuple(str(t) for t in f.attrs["tools"])
+        self.phases = tuple(str(p) for p in f.attrs["phases"])
+        try:
+            self._columns = through_thickness_columns(self.nodes, self.elements,
+                                                      f["mesh"].attrs["normal"])
+        except ValueError:
+            self._columns = None
+        self._count, self._iterations = increments, iterations
+        self._frames = []
+        for index in range(frames):
+            a = fields[f"{index:06d}"].attrs
+            self._frames.append(Frame(index, int(a["increment"]), int(a["phase"]),
+                                      float(a["travel"]), float(a["time"])))
+        self._phase = int(inc["phase"][increments - 1]) if increments else 0
+        self._travel = float(inc["travel"][increments - 1]) if increments else 0.0
+        if "closed" in f.attrs:
+            del f.attrs["closed"]
+        f.flush()
+        self._write_xdmf()
+        return self
+
+    def attribute(self, name: str, default: Any = None) -> Any:
+        """A root attribute set before (e.g. by an earlier part of a continued run)."""
+        return self._file.attrs.get(name, default)
+
+    def annotate(self, **attrs: Any) -> None:
+        """Set root attributes (e.g. the run's status) and flush."""
+        with self._writing(frame=False):
+            self._file.attrs.update(attrs)
+            self._file.flush()
+
+    @staticmethod
+    def _column(group: Any, name: str, dtype: str, shape: tuple[int, ...], units: str,
+                meaning: str) -> None:
+        d = group.create_dataset(name, shape=(0, *shape), maxshape=(None, *shape), dtype=dtype,
+                                 chunks=(_CHUNK, *shape))
+        d.attrs["units"] = units
+        d.attrs["description"] = meaning
+
+    # --------------------------------------------------------------------------- increments
+
+    @property
+    def increments(self) -> int:
+        """Increments written so far."""
+        return self._count
+
+    @property
+    def iteration_rows(self) -> int:
+        """Newton iteration rows written so far."""
+        return self._iterations
+
+    @property
+    def frame_count(self) -> int:
+        """Frames written so far, the initial state included."""
+        return len(self._frames)
+
+    def increment(self, *, phase: int, step: float, travel: float,
+                  tool_displacement: ArrayLike, tool_force: ArrayLike, iterations: int,
+                  residual_force: float, residual_displacement: float,
+                  timings: Timings = Timings(), nodes_in_contact: ArrayLike | None = None,
+                  cutbacks: int = 0, rmin: float = 1.0, limit: int | str = 0,
+                  residual_history: ArrayLike | None = None, factorizations: int = 0,
+                  krylov_iterations: int = 0, newton_iterations: int = 0,
+                  evaluations: int = 0) -> int:
+        """Append one converged increment; return its number (from 1). ``tool_displacement``
+        and ``tool_force`` are (tools, 3); ``residual_history`` (iterations, 2) holds the
+        force and displacement residuals of each Newton iteration."""
+        t = len(self.tools)
+        u = _shaped(tool_displacement, (t, 3), "tool_displacement")
+        force = _shaped(tool_force, (t, 3), "tool_force")
+        contact = (np.zeros(t, np.int32) if nodes_in_contact is None
+                   else _shaped(nodes_in_contact, (t,), "nodes_in_contact"))
+        if int(phase) < 0 or (self.phases and int(phase) >= len(self.phases)):
+            raise ValueError(f"phase {phase} is not an index of phases {list(self.phases)}")
+        code = _limit_code(limit)
+        k = self._count
+        row = {"increment": k + 1, "phase": int(phase), "step": float(step),
+               "travel": float(travel), "iterations": int(iterations),
+               "cutbacks": int(cutbacks), "factorizations": int(factorizations),
+               "krylov_iterations": int(krylov_iterations),
+               "newton_iterations": int(newton_iterations), "evaluations": int(evaluations),
+               "residual_force": float(residual_force),
+               "residual_displacement": float(residual_displacement), "rmin": float(rmin),
+               "limit": code, "time_assembly": timings.assembly,
+               "time_contact": timings.contact, "time_factorization": timings.factorization,
+               "time_solve": timings.solve, "time_rest": timings.rest, "time_total": timings.total,
+               "tool_displacement": u, "tool_force": force, "nodes_in_contact": contact}
+        with self._writing():
+            inc = self._file["increments"]
+            for name, value in row.items():
+                _append(inc[name], k, value)
+            if residual_history is not None:
+                history = np.asarray(residual_history, dtype=float).reshape(-1, 2)
+                it = self._file["iterations"]
+                start = self._iterations
+                columns = {"increment": np.full(len(history), k + 1),
+                           "iteration": np.arange(1, len(history) + 1),
+                           "residual_force": history[:, 0],
+                           "residual_displacement": history[:, 1]}
+                for name, values in columns.items():
+                    d = it[name]
+                    d.resize(start + len(history), axis=0)
+                    d[start:] = values
+                self._iterations = start + len(history)
+                it.attrs["count"] = self._iterations
+            self._count = k + 1
+            self._phase, self._travel = int(phase), float(travel)
+            inc.attrs["count"] = self._count  # last: the row is complete
+            self._file.flush()
+            return self._count
+
+    # --------------------------------------------------------------------------- fields
+
+    def fields(self, *, displacement: ArrayLike, stress: ArrayLike, plastic_strain: ArrayLike,
+               contact_status: ArrayLike, contact_force: ArrayLike,
+               contact_tool: ArrayLike | None = None, thickness: ArrayLike | None = None,
+               time: float | None = None, extra: Mapping[str, ArrayLike] | None = None
+               ) -> Frame:
+        """Write the fields of the last increment as a new frame (also visible in the XDMF).
+
+        displacement (n, 3); stress (m, 6) or per Gauss point (m, g, 6), Voigt xx yy zz xy
+        yz zx, averaged per element (stored in the XDMF order xx xy xz yy yz zz);
+        plastic_strain (m,) or (m, g); contact_status (n,) 0/1/2; contact_force (n, 3);
+        contact_tool (n,) tool index or -1; thickness (n,)
+        (computed from the displacement when the mesh is layered); ``time`` for the XDMF
+        (default: the increment number); ``extra`` more arrays, (n, ...) or (m, ...)."""
+        n, m = len(self.nodes), len(self.elements)
+        u = _shaped(displacement, (n, 3), "displacement")
+        s = np.asarray(stress, dtype=float)
+        if s.ndim == 3:
+            s = s.mean(axis=1)
+        s = _shaped(s, (m, 6), "stress")
+        ep = np.asarray(plastic_strain, dtype=float)
+        if ep.ndim == 2:
+            ep = ep.mean(axis=1)
+        ep = _shaped(ep, (m,), "plastic_strain")
+        status = _shaped(contact_status, (n,), "contact_status").astype(np.int8)
+        cf = _shaped(contact_force, (n, 3), "contact_force")
+        tool = (np.full(n, -1, np.int16) if contact_tool is None
+                else _shaped(contact_tool, (n,), "contact_tool").astype(np.int16))
+        th = None if thickness is None else _shaped(thickness, (n,), "thickness")
+        index = len(self._frames)
+        frame_time = float(self._count if time is None else time)
+        if self._frames and frame_time <= self._frames[-1].time:
+            raise ValueError(f"frame time {frame_time} must exceed the previous frame's "
+                             f"{self._frames[-1].time}")
+        with self._writing():
+            return self._write_frame(index, u, s, ep, status, cf, tool, th, frame_time,
+                                     dict(extra or {}))
+
+    def _write_frame(self, index: int, u: NDArray, s: NDArray, ep: NDArray, status: NDArray,
+                     cf: NDArray, tool: NDArray, thickness: NDArray | None, time: float,
+                     extra: dict[str, ArrayLike]) -> Frame:
+        n, m = len(self.nodes), len(self.elements)
+        x = self.nodes + u
+        if thickness is None and self._columns is not None:
+            bottom, top = self._columns
+            thickness = np.linalg.norm(x[top] - x[bottom], axis=1)
+        d = s[:, :3] - s[:, :3].mean(axis=1, keepdims=True)
+        mises = np.sqrt(1.5 * ((d**2).sum(axis=1) + 2 * (s[:, 3:] ** 2).sum(axis=1)))
+        data = {"displacement": u, "coordinates": x, "contact_status": status,
+                "contact_tool": tool, "contact_force": cf, "stress": s[:, TENSOR6],
+                "von_mises": mises,
+                "plastic_strain": ep}
+        if thickness is not None:
+            data["thickness"] = thickness
+        fields = self._file["fields"]
+        group = fields.create_group(f"{index:06d}")
+        frame = Frame(index, self._count, self._phase, self._travel, time)
+        group.attrs.update({"increment": frame.increment, "phase": frame.phase,
+                            "travel": frame.travel, "time": frame.time})
+        for name, array in data.items():
+            centre, _, dtype, units, meaning = _FIELDS[name]
+            ds = group.create_dataset(name, data=np.asarray(array, dtype=dtype))
+            ds.attrs.update({"units": units, "centre": centre, "description": meaning})
+        for name, array in extra.items():
+            a = np.asarray(array)
+            if name in data or "/" in name or not name:
+                raise ValueError(f"extra field name {name!r} is empty, taken or has a '/'")
+            if a.shape[:1] not in ((n,), (m,)) or a.dtype.kind not in "iuf" or a.ndim > 2:
+                raise ValueError(f"extra field {name!r} must be numbers of shape (n,), (n, k),"
+                                 f" (m,) or (m, k), got {a.shape} {a.dtype}")
+            ds = group.create_dataset(name, data=a)
+            ds.attrs.update({"units": "", "centre": "Node" if len(a) == n else "Cell",
+                             "description": "extra field"})
+        self._frames.append(frame)
+        fields.attrs["count"] = len(self._frames)  # last: the frame is complete
+        self._file.flush()
+        self._write_xdmf()
+        return frame
+
+    def _write_xdmf(self) -> None:
+        text = xdmf_text(self.path.name, self._file)
+        try:
+            fd, tmp = tempfile.mkstemp(dir=self.xdmf_path.parent, prefix=".xdmf-")
+        except OSError as error:
+            raise OSError(error.errno, error.strerror, str(self.xdmf_path)) from error
+        try:
+            with os.fdopen(fd, "w") as out:
+                out.write(text)
+                out.flush()
+                os.fsync(out.fileno())
+            os.replace(tmp, self.xdmf_path)
+        except OSError as error:  # the last complete XDMF stays; name it, not the temporary
+            Path(tmp).unlink(missing_ok=True)
+            raise OSError(error.errno, error.strerror, str(self.xdmf_path)) from error
+
+    # --------------------------------------------------------------------------- closing
+
+    def close(self) -> None:
+        """Mark the file closed and close it (nothing to do after a failed write)."""
+        if self._file.id.valid:
+            with self._writing(frame=False):
+                self._file.attrs["closed"] = datetime.datetime.now().isoformat(
+                    timespec="seconds")
+            self._close()
+
+    def __enter__(self) -> ResultsWriter:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def _shaped(value: ArrayLike, shape: tuple[int, ...], name: str) -> NDArray:
+    a = np.asarray(value)
+    if a.dtype.kind not in "iuf" and a.dtype != bool:
+        raise TypeError(f"{name} must be numbers, got dtype {a.dtype}")
+    if a.shape != shape:
+        raise ValueError(f"{name} must have shape {shape}, got {a.shape}")
+    return a
+
+
+@functools.cache
+def _libc() -> ctypes.CDLL:
+    """The C library, for fallocate (not in the os module)."""
+    libc = ctypes.CDLL(None, use_errno=True)
+    libc.fallocate.argtypes = [ctypes.c_int, ctypes.c_int, ctypes.c_int64, ctypes.c_int64]
+    libc.fallocate.restype = ctypes.c_int
+    return libc
+
+
+def _append(dataset: Any, k: int, value: Any) -> None:
+    if dataset.shape[0] <= k:
+        dataset.resize(k + 1, axis=0)
+    dataset[k] = value
+
+
+def _limit_code(limit: int | str) -> int:
+    if isinstance(limit, str):
+        for code, name in LIMITS.items():
+            if name == limit:
+                return code
+        raise ValueError(f"unknown limit {limit!r}: expected one of {list(LIMITS.values())}")
+    if int(limit) not in LIMITS:
+        raise ValueError(f"unknown limit code {limit}: expected one of {list(LIMITS)}")
+    return int(limit)
+
+
+def _item(h5name: str, dataset: Any) -> str:
+    kind = dataset.dtype.kind
+    number = "Float" if kind == "f" else ("UInt" if kind == "u" else "Int")
+    dims = " ".join(str(d) for d in dataset.shape)
+    return (f'<DataItem DataType="{number}" Precision="{dataset.dtype.itemsize}" '
+            f'Dimensions="{dims}" Format="HDF">{escape(h5name)}:{dataset.name}</DataItem>')
+
+
+def xdmf_text(h5name: str, f: Any) -> str:
+    """The XDMF 3 document of a results file: a temporal collection of the frames, each with
+    the current coordinates as geometry and its fields as attributes (the HDF5 datasets)."""
+    mesh = f["mesh"]
+    title = str(f.attrs.get("title", ""))
+    topology = (f'<Topology TopologyType="Hexahedron" NumberOfElements='
+                f'"{mesh["elements"].shape[0]}">{_item(h5name, mesh["elements"])}</Topology>')
+    grids = []
+    count = int(f["fields"].attrs["count"])
+    for index in range(count):
+        group = f["fields"][f"{index:06d}"]
+        geometry = mesh["nodes"] if index == 0 else group["coordinates"]
+        parts = [f'<Grid Name="frame {index}" GridType="Uniform">',
+                 f'<Time Value="{float(group.attrs["time"])!r}"/>', topology,
+                 f'<Geometry GeometryType="XYZ">{_item(h5name, geometry)}</Geometry>']
+        for name, ds in group.items():
+            if name == "coordinates":
+                continue
+            centre = str(ds.attrs.get("centre", "Node"))
+            width = ds.shape[1] if ds.ndim == 2 else 1
+            kind = {1: "Scalar", 3: "Vector", 6: "Tensor6", 9: "Tensor"}.get(width, "Matrix")
+            parts.append(f'<Attribute Name={quoteattr(name)} AttributeType="{kind}" '
+                         f'Center="{centre}">{_item(h5name, ds)}</Attribute>')
+        parts.append("</Grid>")
+        grids.append("\n        ".join(parts))
+    body = "\n      ".join(grids)
+    return ("<?xml version=\"1.0\"?>\n<Xdmf Version=\"3.0\">\n  <Domain>\n"
+            f"    <Grid Name={quoteattr(title or 'ddpy')} GridType=\"Collection\" "
+            "CollectionType=\"Temporal\">\n"
+            f"      {body}\n    </Grid>\n  </Domain>\n</Xdmf>\n")
+
+
+class ResultsReader:
+    """Reads a results file back: per-increment curves, Newton iterations and field frames.
+    Reads files of runs still writing or killed: only complete rows and frames are seen."""
+
+    def __init__(self, path: str | os.PathLike[str]) -> None:
+        import h5py
+
+        self.path = Path(path)
+        try:
+            self._file = h5py.File(self.path, "r", locking=False)
+        except TypeError:  # h5py without the locking argument
+            self._file = h5py.File(self.path, "r")
+        f = self._file
+        if f.attrs.get("format") != FORMAT:
+            self._file.close()
+            raise ValueError(f"{self.path} is not a ddpy results file")
+        self.title = str(f.attrs["title"])
+        self.tools = tuple(str(t) for t in f.attrs["tools"])
+        self.phases = tuple(str(p) for p in f.attrs["phases"])
+        self.units = str(f.attrs["units"])
+        #: OpenMP threads of the run (``ddpy run``; 0 when not recorded)
+        self.threads = int(f.attrs.get("threads", 0))
+
+    @property
+    def nodes(self) -> NDArray[np.float64]:
+        return self._file["mesh/nodes"][()]
+
+    @property
+    def elements(self) -> NDArray[np.int32]:
+        return self._file["mesh/elements"][()]
+
+    @property
+    def n_increments(self) -> int:
+        inc = self._file["increments"]
+        return min([int(inc.attrs["count"])] + [d.shape[0] for d in inc.values()])
+
+    def history(self) -> dict[str, NDArray]:
+        """Every per-increment column, complete rows only."""
+        k = self.n_increments
+        return {name: d[:k] for name, d in self._file["increments"].items()}
+
+    def curve(self, name: str) -> NDArray:
+        """One per-increment column (see history)."""
+        if name not in self._file["increments"]:
+            raise KeyError(f"no column {name!r}: columns are {list(self._file['increments'])}")
+        return self._file["increments"][name][: self.n_increments]
+
+    def _tool(self, tool: str) -> int:
+        if tool not in self.tools:
+            raise KeyError(f"no tool {tool!r}: tools are {list(self.tools)}")
+        return self.tools.index(tool)
+
+    def tool_force(self, tool: str) -> NDArray[np.float64]:
+        """Reaction force on ``tool`` at each increment, (k, 3) N."""
+        return self.curve("tool_force")[:, self._tool(tool)]
+
+    def tool_displacement(self, tool: str) -> NDArray[np.float64]:
+        """Displacement of ``tool`` at each increment, (k, 3) mm."""
+        return self.curve("tool_displacement")[:, self._tool(tool)]
+
+    def iterations(self) -> dict[str, NDArray]:
+        """Per Newton iteration: increment, iteration and the two residuals."""
+        it = self._file["iterations"]
+        k = min([int(it.attrs["count"])] + [d.shape[0] for d in it.values()])
+        return {name: d[:k] for name, d in it.items()}
+
+    @property
+    def frames(self) -> list[Frame]:
+        """The complete field frames, frame 0 the initial state."""
+        fields = self._file["fields"]
+        out = []
+        for index in range(int(fields.attrs["count"])):
+            a = fields[f"{index:06d}"].attrs
+            out.append(Frame(index, int(a["increment"]), int(a["phase"]), float(a["travel"]),
+                             float(a["time"])))
+        return out
+
+    def field(self, name: str, frame: int = -1) -> NDArray:
+        """One field of a frame (default the last)."""
+        group = self._frame_group(frame)
+        if name not in group:
+            raise KeyError(f"no field {name!r} in frame: fields are {list(group)}")
+        return group[name][()]
+
+    def stress(self, frame: int = -1) -> NDArray[np.float64]:
+        """Element stresses of a frame in ddpy's Voigt order xx yy zz xy yz zx, (m, 6) MPa."""
+        return self.field("stress", frame)[:, VOIGT]
+
+    def frame(self, frame: int = -1) -> dict[str, NDArray]:
+        """All fields of a frame (default the last)."""
+        return {name: d[()] for name, d in self._frame_group(frame).items()}
+
+    def _frame_group(self, frame: int) -> Any:
+        count = int(self._file["fields"].attrs["count"])
+        index = frame + count if frame < 0 else frame
+        if not 0 <= index < count:
+            raise IndexError(f"frame {frame} out of range: {count} frames")
+        return self._file["fields"][f"{index:06d}"]
+
+    def close(self) -> None:
+        self._file.close()
+
+    def __enter__(self) -> ResultsReader:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()

@@ -1,0 +1,1262 @@
+"""Forming: the blank in frictional contact with moving rigid tools, solved in one loop.
+
+DD3IMP's single Newton loop: the nodal displacements and the contact forces of every
+(tool, slave node) pair are the unknowns of one generalized Newton-Raphson, whose equations
+are the equilibrium of the blank and the Alart-Curnier contact law (ddpy.model.contact). The
+Jacobian is exact (material, geometric and tool curvature terms), so it converges
+quadratically, also through stick-slip changes. See docs/theory/contact.md.
+
+Example::
+
+    problem = FormingProblem(Solid(mesh, material), [RigidTool("punch", surface, slaves)])
+    problem.fix(mesh.select(x=0), "x")                    # symmetry plane
+    result = problem.run({"punch": (0, 0, -5.0)}, max_increment=0.1)
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ddpy._validate import float_array, int_array
+from ddpy.core.linalg import CoordinateMatrix, LinearSolverError, MumpsSolver, gmres
+from ddpy.core.ordering import mesh_solver
+from ddpy.geometry.search import NONE, ContactSearch
+from ddpy.geometry.surfaces import BezierSurface, NagataSurface
+from ddpy.model.contact import INACTIVE, contact_law
+from ddpy.model.mesh import HEX_EDGES, boundary_faces, face_area_vectors
+from ddpy.model.solid import ElementError, Solid, SolidState, _components
+
+_log = logging.getLogger(__name__)
+
+__all__ = ["RigidTool", "FormingProblem", "FormingResult", "FormingError", "IncrementLimits",
+           "PhaseProgress", "default_augmentation", "start_depth_limit"]
+
+#: Most increments a phase may take at its largest increment: a max_increment smaller than
+#: the travel over this would only keep the process busy (1e-300 mm ran for ever).
+MAX_INCREMENTS = 1_000_000
+#: A release interpolated on the augmented pressure before this fraction of the increment
+#: is not trusted: the increment is halved instead.
+BISECT_BELOW = 0.1
+#: Gap (times the element size) within which an unloaded node counts as lying on a tool for
+#: the closed predictor of the first iteration: zero up to the rounding of the positions.
+TOUCHING = 1e-6
+#: Unknowns from which linear_solver "auto" solves with older factors (GMRES) between
+#: factorizations: below, a factorization costs little more than a few solves.
+REUSE_FROM = 20_000
+#: GMRES on the older factors: bounds of its relative tolerance (of the preconditioned,
+#: weighted residual: the correction's relative error; see _increment), the iterations
+#: before it gives up (a factorization costs about 14 on the paper's bending blank), and
+#: the most after which the same factors are tried again.
+KRYLOV_LOOSE, KRYLOV_TIGHT = 1e-2, 1e-10
+KRYLOV_MAX = 12
+#: Deepest a free node may be pushed into a tool by one Newton step, in element sizes, and
+#: the shortest step that limit may leave (FormingProblem._penetration_step).
+PENETRATION, MIN_STEP = 0.02, 1.0 / 64.0
+KRYLOV_KEEP = 8
+#: Reach of the contact search of a forming run: a slave node whose nearest admissible
+#: point of a tool (the facing filter applied) lies farther than
+#: max(REACH_SIZES x element size, REACH_TRAVELS x the leading tool's largest travel of an
+#: increment) has no partner on it (status NONE: a free node, no gap). What the run needs
+#: of a gap lies well within: first touch sees a free node once it is nearer than the
+#: largest approach of the next increment, the tool's travel plus the node's (at most as
+#: fast as the tools that carry it: 2 travels), here with a margin of 2; the contact law,
+#: the touching predictor and the penetration limit of a Newton step look at gaps of a few
+#: hundredths of an element (TOUCHING, touch_gap, PENETRATION). Without a reach the exact
+#: search pairs a node whose nearby patches the filter leaves out with a far patch edge,
+#: 20 to 56 mm away on the coarse reverse deep drawing (an EDGE point, signed by the side
+#: of its patch: it may be a deep penetration to the law), and that run stopped at 31.7 mm
+#: of its 40 mm first stage (docs/theory/contact.md, "Reach").
+REACH_SIZES, REACH_TRAVELS = 2.0, 4.0
+
+
+@dataclass(frozen=True)
+class _Touching:
+    """The closed predictor of an increment's first iteration: pairs the law leaves open
+    within ``distance`` of their tool close; those of a tool at rest in the increment only
+    where the blank needs them (``resting`` False) or all of them (True)."""
+
+    distance: float
+    resting: bool = True
+
+
+@dataclass(frozen=True)
+class IncrementLimits:
+    """Limits of the r_min increment control (docs/theory/contact.md). An increment is
+    scaled by r_min = min(1, r_i) over: ``strain``, the largest equivalent strain increment
+    at a Gauss point; ``rotation_deg``, the largest rigid rotation of an element (from the
+    least-squares linear fit of its nodes' displacement increments); ``yield_tolerance``,
+    the elasto-plastic transition: a Gauss point
+    elastic at the start of the increment whose elastic trial stress would overshoot the
+    yield stress by more than this fraction makes the increment land it on the yield
+    surface (None: off); ``first_touch``, a free node that would pass through a tool (it
+    lands on it instead; gaps below ``touch_gap`` times the element size count as
+    touching); ``release``, a node in contact at the start of the increment and released at
+    its end, whose release (interpolated where its augmented pressure p - r g reaches zero)
+    falls before the last ``release`` fraction of the increment, makes the increment be
+    redone to end just past the release (None: off); a node that carries at most
+    ``release_share`` of its tool's normal force at the start of the increment is released
+    inside it instead (0: every release limits the increment); after ``release_redos``
+    redos at a release the increment is accepted with the release inside it (None: no
+    cap). No increment is made smaller than ``min_fraction`` of the nominal one."""
+
+    strain: float = 0.02
+    rotation_deg: float = 5.0
+    yield_tolerance: float | None = 0.05
+    first_touch: bool = True
+    touch_gap: float = 1e-3
+    release: float | None = 0.05
+    release_share: float = 0.0
+    release_redos: int | None = None
+    min_fraction: float = 1e-3
+
+    def __post_init__(self) -> None:
+        if not 0.0 < self.strain < 1.0:
+            raise ValueError(f"strain limit must lie in (0, 1), got {self.strain}")
+        if not 0.0 < self.rotation_deg <= 90.0:
+            raise ValueError(f"rotation limit must lie in (0, 90] degrees, got "
+                             f"{self.rotation_deg}")
+        if not 0.0 < self.min_fraction <= 1.0 or not self.touch_gap >= 0.0:
+            raise ValueError("min_fraction must lie in (0, 1] and touch_gap be >= 0")
+        if not 0.0 <= self.release_share <= 1.0:
+            raise ValueError(f"release_share must lie in [0, 1], got {self.release_share}")
+        if self.release_redos is not None and not self.release_redos >= 0:
+            raise ValueError(f"release_redos must be >= 0 or None, got {self.release_redos}")
+        for name in ("yield_tolerance", "release"):
+            value = getattr(self, name)
+            if value is not None and not 0.0 < value < 1.0:
+                raise ValueError(f"{name} must lie in (0, 1) or be None, got {value}")
+
+
+def start_depth_limit(strain: float, size: float) -> float:
+    """How deep a tool may start inside the blank (mm): what the first increment can push
+    a node out by without exceeding the strain limit ``strain`` over an element of mean
+    size ``size`` (HexMesh.element_size). ``ddpy check`` and ``FormingProblem.run`` both
+    use it, so what the check accepts the run starts."""
+    return strain * size
+
+
+@dataclass
+class PhaseProgress:
+    """Where a ``FormingProblem.run`` stands after a converged increment: the tool positions
+    at the start of the phase, the offsets of gap-held tools, the phase factor reached, the
+    next trial increment with what set it, and the last displacement increment and pressure
+    change per unit factor. Given back as ``resume`` (with the problem's state restored) the
+    run continues exactly as it would have."""
+
+    start: dict[str, NDArray[np.float64]]
+    offsets: dict[str, tuple[str, NDArray[np.float64]]]
+    factor: float
+    step: float
+    reason: str
+    last_du: NDArray[np.float64] | None
+    last_dp: NDArray[np.float64] | None = None
+
+
+class FormingError(RuntimeError):
+    """A run stopped: ``result`` keeps every increment that converged before."""
+
+    def __init__(self, message: str, result: FormingResult) -> None:
+        super().__init__(message)
+        self.result = result
+
+
+@dataclass
+class RigidTool:
+    """A rigid tool: its surface, the blank nodes that may touch it (``slaves``), Coulomb
+    friction, and optionally the outward normal of the blank face that meets it
+    (``facing``: only patches facing the opposite way are contact candidates) and the
+    augmentation parameter r of the contact law (default: ``default_augmentation``)."""
+
+    name: str
+    surface: BezierSurface | NagataSurface
+    slaves: ArrayLike
+    friction: float = 0.0
+    facing: ArrayLike | None = None
+    augmentation: float | None = None
+    search: ContactSearch = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        if not self.name or not isinstance(self.name, str):
+            raise ValueError("a tool needs a name")
+        self.slaves = int_array(np.atleast_1d(self.slaves), f"slaves of tool {self.name}",
+                                (None,))
+        if self.slaves.size == 0:
+            raise ValueError(f"tool {self.name} has no slave nodes: nothing can touch it")
+        if np.unique(self.slaves).size != self.slaves.size:
+            raise ValueError(f"tool {self.name}: slave nodes are repeated")
+        if not (np.isfinite(self.friction) and self.friction >= 0.0):
+            raise ValueError(f"tool {self.name}: friction must be >= 0, got {self.friction}")
+        if self.augmentation is not None and not self.augmentation > 0.0:
+            raise ValueError(f"tool {self.name}: augmentation must be > 0, got "
+                             f"{self.augmentation}")
+        if self.facing is not None:
+            facing = float_array(self.facing, f"facing of tool {self.name}", (3,))
+            if np.linalg.norm(facing) == 0.0:
+                raise ValueError(f"tool {self.name}: facing must not be zero")
+            self.facing = facing / np.linalg.norm(facing)
+        self.search = ContactSearch(self.surface)
+        if self.facing is not None and not (self.search.grid_normals @ self.facing < 0.0).any():
+            raise ValueError(f"tool {self.name}: no patch faces its slave nodes (every normal "
+                             f"points along facing {self.facing.tolist()}, away from the "
+                             "blank): nothing can touch it; check the normals or facing")
+
+
+@dataclass
+class FormingResult:
+    """Converged increments of a run, per increment: the phase factor and the increment
+    size (as a fraction of the phase), each tool's displacement and the force the blank
+    exerts on it, the nodes in contact per tool, Newton iterations with the residual norms,
+    and the blank displacements. ``timings`` splits the wall time of every iteration."""
+
+    factors: list[float] = field(default_factory=list)
+    sizes: list[float] = field(default_factory=list)
+    #: what set each increment: "max", "touch", "release", "strain", "rotation", "yield",
+    #: "cut" or "regrow" (growing back after a cut, at most doubling per increment)
+    limited_by: list[str] = field(default_factory=list)
+    tool_displacements: dict[str, list[NDArray[np.float64]]] = field(default_factory=dict)
+    tool_forces: dict[str, list[NDArray[np.float64]]] = field(default_factory=dict)
+    contacts: dict[str, list[int]] = field(default_factory=dict)
+    #: per tool and increment, the state of every slave: 0 open, 1 stick, 2 slip
+    status: dict[str, list[NDArray[np.int32]]] = field(default_factory=dict)
+    residuals: list[list[float]] = field(default_factory=list)
+    #: per increment and Newton iteration, what convergence is judged on: the residual norm
+    #: over the force scale and the correction over the increment's displacement (inf
+    #: before the first correction)
+    relative: list[list[tuple[float, float]]] = field(default_factory=list)
+    displacements: list[NDArray[np.float64]] = field(default_factory=list)
+    cuts: int = 0
+    #: LU factorizations, and the GMRES iterations of the Newton corrections solved with an
+    #: older factorization instead (``FormingProblem.linear_solver``)
+    factorizations: int = 0
+    krylov_iterations: int = 0
+    #: Newton corrections and residual evaluations (line-search trials and extrapolated
+    #: starts included) of every trial increment, the rejected ones (cut, or redone shorter
+    #: by an increment limit) included: the work behind ``iterations``
+    newton_iterations: int = 0
+    evaluations: int = 0
+    timings: dict[str, float] = field(default_factory=lambda: {
+        "assembly": 0.0, "contact": 0.0, "factorization": 0.0, "solve": 0.0, "rest": 0.0})
+
+    @property
+    def iterations(self) -> list[int]:
+        """Newton iterations of every converged increment."""
+        return [len(r) - 1 for r in self.residuals]
+
+
+class _Layout:
+    """Unknowns and the fixed coordinate structure of the Jacobian for one constraint set:
+    free displacement dofs first, then 3 force components per (tool, slave) pair."""
+
+    def __init__(self, solid: Solid, tools: list[RigidTool], fixed: NDArray[np.bool_]) -> None:
+        n = solid.mesh.n_nodes
+        free = ~fixed.ravel()
+        self.nf = int(free.sum())
+        eqn = np.full(3 * n, -1, dtype=np.int32)
+        eqn[free] = np.arange(self.nf, dtype=np.int32)
+        self.eqn = eqn
+        self.pattern = solid.pattern(eqn, symmetric=False)
+        self.node = np.concatenate([t.slaves for t in tools]).astype(np.int64)
+        self.tool_of = np.concatenate([np.full(t.slaves.size, i) for i, t in enumerate(tools)])
+        self.first = np.concatenate([[0], np.cumsum([t.slaves.size for t in tools])])
+        npair = self.node.size
+        self.n = self.nf + 3 * npair
+        lam = self.nf + 3 * np.arange(npair)[:, None] + np.arange(3)  # (npair, 3)
+        self.lam = lam
+        equ = eqn.reshape(n, 3)[self.node]                              # (npair, 3)
+        self.equ = equ
+        # Components of a slave whose displacement is fixed: its force there is a support
+        # reaction, so that row of the law becomes lambda_k = 0.
+        self.held = equ < 0
+        coupling = equ >= 0
+        self.coupling = coupling
+        pi, ii, jj = np.nonzero(np.broadcast_to(coupling[:, None, :], (npair, 3, 3)))
+        self.dx_index = (pi, ii, jj)
+        rows = [self.pattern.rows, equ[coupling], lam[pi, ii], np.repeat(lam, 3, axis=1).ravel()]
+        cols = [self.pattern.cols, lam[coupling], equ[pi, jj], np.tile(lam, (1, 3)).ravel()]
+        self.rows = np.concatenate(rows).astype(np.int32)
+        self.cols = np.concatenate(cols).astype(np.int32)
+        self.k_slots = self.pattern.rows.size
+        self.n_coupling = int(coupling.sum())
+        # Two buffers of Jacobian values, reused by the evaluations (the assembly writes its
+        # slots in place): a fresh array of this size per evaluation cost more than the
+        # contact law. Two, so that a line search can keep one trial while it tries others.
+        self.values = (np.empty(self.rows.size), np.empty(self.rows.size))
+        self.matrix: CoordinateMatrix | None = None  # for products, made when first needed
+        for values in self.values:
+            values[self.k_slots:self.k_slots + self.n_coupling] = -1.0
+
+
+class FormingProblem:
+    """The blank (a Solid) and its rigid tools. ``fix`` holds displacement components of
+    nodes at zero (symmetry planes, clamps); ``run`` moves tools through a phase, and
+    successive calls continue from where the last one stopped (multi-stage processes)."""
+
+    def __init__(self, solid: Solid, tools: Iterable[RigidTool], ordering: str = "nested",
+                 linear_solver: str = "auto") -> None:
+        if linear_solver not in ("auto", "direct", "reuse"):
+            raise ValueError(f"linear_solver must be 'auto', 'direct' or 'reuse', got "
+                             f"{linear_solver!r}")
+        #: "direct": factorize the Jacobian at every Newton iteration; "reuse": solve with
+        #: the last factorization as the preconditioner of GMRES while it converges fast,
+        #: factorizing again when it does not; "auto": reuse from REUSE_FROM unknowns
+        self.linear_solver = linear_solver
+        self.solid = solid
+        self.tools = list(tools)
+        names = [t.name for t in self.tools]
+        if len(set(names)) != len(names):
+            raise ValueError(f"tool names must be unique, got {names}")
+        n = solid.mesh.n_nodes
+        for tool in self.tools:
+            if tool.slaves.max() >= n or tool.slaves.min() < 0:
+                raise ValueError(f"tool {tool.name}: slave node out of range 0..{n - 1}")
+        self.ordering = ordering
+        self.fixed = np.zeros((n, 3), dtype=bool)
+        mesh = solid.mesh
+        self.size = mesh.element_size()
+        default_r = default_augmentation(solid)
+        self.r = np.concatenate([np.full(t.slaves.size, t.augmentation or default_r)
+                                 for t in self.tools])
+        # Per tool, the blank's boundary faces that face it and the slave index of their
+        # corners (see _facing_normals), made on first use.
+        self._faces: dict[int, tuple[NDArray[np.int32], NDArray[np.int64]]] = {}
+        self.mu = np.concatenate([np.full(t.slaves.size, t.friction) for t in self.tools])
+        # State carried between increments and phases.
+        self.u = np.zeros((n, 3))
+        self.state: SolidState = solid.initial_state()
+        self.position = {t.name: np.zeros(3) for t in self.tools}
+        npair = sum(t.slaves.size for t in self.tools)
+        self.force = np.zeros((npair, 3))
+        self._gap = (np.full(npair, np.inf), np.zeros((npair, 3)))
+        #: reach of the contact search (mm): see REACH_SIZES; run() adds its tool travel
+        self._reach = REACH_SIZES * self.size
+        self._status = np.zeros(npair, dtype=np.int32)  # of the law, last increment
+        self.external = np.zeros((n, 3))
+        self._layout: _Layout | None = None
+        self._solver: MumpsSolver | None = None
+        self._factored = False  # the solver holds factors of a Jacobian of this layout
+        self._reuse_next = True  # the last GMRES converged fast: try the factors again
+
+    # -- set-up ------------------------------------------------------------------------
+
+    def fix(self, nodes: ArrayLike, components: int | str | Iterable[int | str] = "xyz"
+            ) -> None:
+        """Hold ``components`` of ``nodes`` at their current displacement."""
+        nodes = int_array(np.atleast_1d(nodes), "nodes", (None,))
+        if nodes.size and (nodes.min() < 0 or nodes.max() >= self.solid.mesh.n_nodes):
+            raise ValueError("fixed node out of range")
+        self.fixed[np.ix_(nodes, _components(components))] = True
+        self._reset()
+
+    def release(self, nodes: ArrayLike, components: int | str | Iterable[int | str] = "xyz"
+                ) -> None:
+        """Free components held by ``fix`` (e.g. the clamps of a stage before springback)."""
+        nodes = int_array(np.atleast_1d(nodes), "nodes", (None,))
+        self.fixed[np.ix_(nodes, _components(components))] = False
+        self._reset()
+
+    def _reset(self) -> None:
+        if self._solver is not None:
+            self._solver.close()
+        self._solver, self._layout, self._factored = None, None, False
+
+    def _prepare(self) -> tuple[_Layout, MumpsSolver]:
+        if self._layout is None or self._solver is None:
+            layout = _Layout(self.solid, self.tools, self.fixed)
+            # The contact multipliers first: each couples to its own node only, and
+            # eliminated with it they would widen every separator's front (the paper's
+            # bending mesh: 5.8e10 flops per factorization with them, 4.4e10 first). A
+            # closed stick pair has a zero pivot there (its law does not involve lambda):
+            # MUMPS delays it to its node's front.
+            solver = mesh_solver("unsymmetric", self.ordering, self.solid.node_order,
+                                 np.concatenate([np.flatnonzero(~self.fixed.ravel()) // 3,
+                                                 np.repeat(layout.node, 3)]),
+                                 first=np.arange(layout.n) >= layout.nf)
+            solver.analyse(layout.n, layout.rows, layout.cols)
+            self._layout, self._solver = layout, solver
+        return self._layout, self._solver
+
+    # -- the run -----------------------------------------------------------------------
+
+    def run(
+        self,
+        motion: Mapping[str, ArrayLike],
+        max_increment: float,
+        active: Iterable[str] | None = None,
+        tol_force: float = 1e-6,
+        tol_disp: float = 1e-6,
+        max_iterations: int = 25,
+        max_cuts: int = 10,
+        limits: IncrementLimits | None = None,
+        cutback: float = 0.5,
+        gaps: Mapping[str, tuple[str, float, ArrayLike]] | None = None,
+        result: FormingResult | None = None,
+        on_increment: Callable[[PhaseProgress], bool | None] | None = None,
+        resume: PhaseProgress | None = None,
+    ) -> FormingResult:
+        """Move each tool of ``motion`` by its displacement (3,) over the phase, linearly in
+        the phase factor; tools not in ``active`` (default: all) are lifted off (their
+        forces vanish). ``max_increment`` is the largest travel of the leading (longest
+        moving) tool per increment, in mm; an increment that fails is cut by ``cutback``
+        and retried, at most ``max_cuts`` times in a row. Converged when the free residual and
+        the contact law are below ``tol_force`` times the force scale and the correction
+        below ``tol_disp`` times the increment. ``limits``: the r_min control (default
+        IncrementLimits()). ``gaps``: tools held at a fixed gap from another, e.g.
+        ``{"holder": ("die", 1.13, (0, 0, 1))}``: the holder is set, along the direction,
+        at 1.13 mm from the die (the smallest distance between their surfaces) in the
+        first increment and then follows the die (a position-controlled blank-holder).
+        ``on_increment`` is called after every converged increment (the result holds its
+        data); a true return stops the run there. ``resume`` continues a run from the
+        progress such a call received."""
+        limits = IncrementLimits() if limits is None else limits
+        unknown = set(motion) - {t.name for t in self.tools}
+        if unknown:
+            raise ValueError(f"motion names unknown tools: {sorted(unknown)}")
+        active_set = {t.name for t in self.tools} if active is None else set(active)
+        if active_set - {t.name for t in self.tools}:
+            raise ValueError(f"active names unknown tools: {sorted(active_set)}")
+        moves = {t.name: float_array(motion.get(t.name, (0.0, 0.0, 0.0)),
+                                     f"motion of {t.name}", (3,)) for t in self.tools}
+        offsets = self._gap_offsets(gaps or {}, moves) if resume is None else resume.offsets
+        travel = max(float(np.linalg.norm(m)) for m in moves.values())
+        if not max_increment > 0.0:
+            raise ValueError(f"max_increment must be > 0, got {max_increment}")
+        if travel / max_increment > MAX_INCREMENTS:
+            raise ValueError(f"max_increment {max_increment:g} mm would take more than "
+                             f"{MAX_INCREMENTS:,} increments over the travel {travel:g} mm")
+        if not 0.0 < cutback < 1.0:
+            raise ValueError(f"cutback must lie in (0, 1), got {cutback}")
+        result = FormingResult() if result is None else result
+        for t in self.tools:
+            result.tool_displacements.setdefault(t.name, [])
+            result.tool_forces.setdefault(t.name, [])
+            result.contacts.setdefault(t.name, [])
+            result.status.setdefault(t.name, [])
+        layout, solver = self._prepare()
+        on = np.concatenate([np.full(t.slaves.size, t.name in active_set) for t in self.tools])
+        start = {name: p.copy() for name, p in self.position.items()}
+        nominal = min(1.0, max_increment / travel) if travel > 0.0 else 1.0
+        self._reach = max(REACH_SIZES * self.size,
+                          REACH_TRAVELS * min(max_increment, travel))
+        factor, step, cuts_in_row, reason = 0.0, nominal, 0, "max"
+        redos = 0  # redos at a release of the present increment
+        last_du: NDArray[np.float64] | None = None
+        last_dp: NDArray[np.float64] | None = None  # pressure rate of the last increment
+        if resume is not None:
+            start, factor, step = resume.start, resume.factor, resume.step
+            reason, last_du, last_dp = resume.reason, resume.last_du, resume.last_dp
+        # Gaps at the start of the phase (tools held at a gap placed there), for first touch;
+        # a tool deeper in the blank than one increment may push it out is refused (seen
+        # here within the search's reach; the deck's checks search without one).
+        x = self.solid.mesh.nodes + self.u
+        initial = dict(self.position)
+        for name, (other, offset) in offsets.items():
+            initial[name] = self.position[other] + offset
+        self._gap = self._contact(layout, x, x, initial, on, self.force)[4]
+        depth = np.where(on & np.isfinite(self._gap[0]), -self._gap[0], -np.inf)
+        worst = int(np.argmax(depth)) if depth.size else 0
+        if depth.size and depth[worst] > start_depth_limit(limits.strain, self.size):
+            raise ValueError(
+                f"tool {self.tools[int(layout.tool_of[worst])].name} starts inside the blank: "
+                f"slave node {int(layout.node[worst])} is {depth[worst]:.3g} mm deep, more "
+                f"than the strain limit times the element size ({limits.strain:g} x "
+                f"{self.size:.3g} mm); move the tool out first")
+        while factor < 1.0 - 1e-12:
+            if limits.first_touch and reason != "cut":
+                touch = self._touch_factor(layout, on, moves, step, last_du, limits)
+                if touch < 1.0:
+                    step, reason = max(step * touch, limits.min_fraction * nominal), "touch"
+            if limits.release is not None and reason != "cut" and last_dp is not None:
+                ahead = self._release_ahead(step, last_dp, limits.release,
+                                            self._minor(layout, limits.release_share))
+                if ahead < 1.0:
+                    step = max(step * ahead, limits.min_fraction * nominal)
+                    reason = "release"
+            target = min(1.0, factor + step)
+            positions = {n: start[n] + target * moves[n] for n in start}
+            for name, (other, offset) in offsets.items():
+                positions[name] = positions[other] + offset
+            landing = None if (limits.yield_tolerance is None or
+                               step <= limits.min_fraction * nominal) else limits.yield_tolerance
+            # Start from the last increment's displacement rate (docs/theory/contact.md).
+            guess = None if last_du is None else self.u + (target - factor) * last_du
+            touching = _Touching(TOUCHING * self.size)
+            outcome = self._increment(layout, solver, positions, on, tol_force, tol_disp,
+                                      max_iterations, result, landing, touching, guess)
+            if isinstance(outcome, str) and last_du is None:
+                # The first increment of a phase starts with the blank lying on its tools:
+                # a second start keeps open the touching pairs of the tools at rest that
+                # the blank does not need (docs/theory/contact.md), before cutting.
+                _log.info("increment to phase factor %.6g (step %.3g) starts again with the "
+                          "resting tools' touching pairs open: %s", target, step, outcome)
+                touching = _Touching(TOUCHING * self.size, resting=False)
+                outcome = self._increment(layout, solver, positions, on, tol_force,
+                                          tol_disp, max_iterations, result, landing,
+                                          touching, guess)
+            if isinstance(outcome, float):  # an elastic point would overshoot the yield stress
+                step = max(step * outcome, limits.min_fraction * nominal)
+                reason = "yield"
+                continue
+            if isinstance(outcome, str):
+                _log.info("increment to phase factor %.6g (step %.3g) cut: %s", target, step,
+                          outcome)
+                cuts_in_row += 1
+                result.cuts += 1
+                if cuts_in_row > max_cuts:
+                    raise FormingError(f"increment to phase factor {target:.6g} failed after "
+                                       f"{max_cuts} cuts: {outcome}", result)
+                if step * cutback < limits.min_fraction * nominal and \
+                        1.0 - factor > limits.min_fraction * nominal:
+                    # Below the smallest increment a run only crawls: cut after cut, each
+                    # tiny step converging and the next, larger one failing again.
+                    raise FormingError(
+                        f"increment to phase factor {target:.6g} failed: a cut would make it "
+                        f"smaller than the smallest increment ({limits.min_fraction:g} of the "
+                        f"largest): {outcome}", result)
+                step, reason = step * cutback, "cut"
+                continue
+            u, state, force, residuals, in_contact, gap, relative = outcome
+            strain = _equivalent_strain_increment(state.strain - self.state.strain)
+            if strain > 1.05 * limits.strain and step > limits.min_fraction * nominal:
+                step = max(step * limits.strain / strain, limits.min_fraction * nominal)
+                reason = "strain"
+                continue
+            rotation = self._rotation_increment(u - self.u)
+            limit = np.radians(limits.rotation_deg)
+            if rotation > 1.05 * limit and step > limits.min_fraction * nominal:
+                step = max(step * limit / rotation, limits.min_fraction * nominal)
+                reason = "rotation"
+                continue
+            if (limits.release is not None and step > limits.min_fraction * nominal
+                    and (limits.release_redos is None or redos < limits.release_redos)):
+                change = None if last_dp is None else last_dp * (target - factor)
+                release = self._release_factor(force, in_contact, gap, change,
+                                               self._minor(layout, limits.release_share))
+                if release < 1.0 - limits.release:
+                    # Redo it ending just past the release, so that the node is free at
+                    # the end (a release within the last fraction is accepted).
+                    step = max(step * release * (1.0 + limits.release / 2.0),
+                               limits.min_fraction * nominal)
+                    reason = "release"
+                    redos += 1
+                    continue
+
+            last_du = (u - self.u) / (target - factor)
+            normal = gap[1]
+            last_dp = np.einsum("ij,ij->i", force - self.force, normal) / (target - factor)
+            self.u, self.state, self.force, self._gap = u, state, force, gap
+            self._status = in_contact
+            self.position = positions
+            result.sizes.append(target - factor)
+            result.limited_by.append(reason)
+            factor = target
+            result.factors.append(factor)
+            result.residuals.append(residuals)
+            result.relative.append(relative)
+            result.displacements.append(u.copy())
+            for i, t in enumerate(self.tools):
+                pairs = slice(layout.first[i], layout.first[i + 1])
+                result.tool_displacements[t.name].append(positions[t.name].copy())
+                result.tool_forces[t.name].append(-force[pairs].sum(axis=0))
+                result.contacts[t.name].append(int((in_contact[pairs] != INACTIVE).sum()))
+                result.status[t.name].append(in_contact[pairs].copy())
+            cuts_in_row = redos = 0
+            step, reason = _next_step(step, nominal, reason, strain / limits.strain,
+                                      rotation / limit)
+            if on_increment is not None and on_increment(
+                    PhaseProgress(start, offsets, factor, step, reason, last_du, last_dp)):
+                break
+        return result
+
+    def _gap_offsets(self, gaps: Mapping[str, tuple[str, float, ArrayLike]],
+                     moves: Mapping[str, NDArray[np.float64]],
+                     ) -> dict[str, tuple[str, NDArray[np.float64]]]:
+        """Offset of each gap-held tool from its partner that puts their surfaces at the
+        gap: the holder's grid points projected on the partner give the present gap."""
+        tools = {t.name: t for t in self.tools}
+        out: dict[str, tuple[str, NDArray[np.float64]]] = {}
+        for name, spec in gaps.items():
+            if len(spec) != 3:
+                raise ValueError(f"gap of {name} must be (other tool, gap, direction)")
+            other, gap, direction = spec
+            if name not in tools or other not in tools or name == other:
+                raise ValueError(f"gap {name} -> {other}: both must be tools, and different")
+            if np.any(moves[name] != 0.0):
+                raise ValueError(f"tool {name} is held at a gap: it cannot also be moved")
+            if not (np.isfinite(gap) and gap >= 0.0):
+                raise ValueError(f"gap of {name} must be >= 0, got {gap}")
+            axis = float_array(direction, f"gap direction of {name}", (3,))
+            if np.linalg.norm(axis) == 0.0:
+                raise ValueError(f"gap direction of {name} must not be zero")
+            axis = axis / np.linalg.norm(axis)
+            holder = tools[name].search
+            points = holder.grid_points + self.position[name]
+            found = tools[other].search.project(points, self.position[other])
+            present = float(np.min(np.abs(found.distance[found.status != NONE])))
+            offset = self.position[name] - self.position[other] + (gap - present) * axis
+            out[name] = (other, offset)
+        return out
+
+    def free_rigid_modes(self) -> int:
+        """How many rigid-body motions of the blank the fixed dofs leave free."""
+        return 6 - int(np.linalg.matrix_rank(self._restrained_modes(self.fixed), tol=1e-9))
+
+    def _restrained_modes(self, fixed: NDArray[np.bool_]) -> NDArray[np.float64]:
+        """Rows: the six rigid modes at every fixed dof (see ``_modes_along``)."""
+        node, axis = np.nonzero(fixed)
+        if not node.size:
+            return np.zeros((1, 6))
+        return self._modes_along((self.solid.mesh.nodes + self.u)[node], np.eye(3)[axis])
+
+    def _modes_along(self, points: NDArray[np.float64],
+                     directions: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Rows: the six rigid modes of the blank (unit translations and rotations about
+        its centroid, scaled by its size) along a direction at each point: a fixed dof,
+        or the normal of a contact."""
+        x = self.solid.mesh.nodes + self.u
+        arm = (points - x.mean(axis=0)) / max(float(np.ptp(x, axis=0).max()), 1e-300)
+        return np.concatenate([directions, np.cross(arm, directions)], axis=1)
+
+    def support_rigid_modes(self) -> list[tuple[int, int]]:
+        """Fix the fewest dofs (a 3-2-1 set on three far apart nodes of the deformed blank)
+        that stop the rigid-body motions the present constraints leave free. Returns the
+        (node, component) pairs fixed."""
+        x = self.solid.mesh.nodes + self.u
+        first = int(np.argmin(np.linalg.norm(x - x.mean(axis=0), axis=1)))
+        second = int(np.argmax(np.linalg.norm(x - x[first], axis=1)))
+        along = (x[second] - x[first]) / np.linalg.norm(x[second] - x[first])
+        off = (x - x[first]) - np.outer((x - x[first]) @ along, along)
+        third = int(np.argmax(np.linalg.norm(off, axis=1)))
+        added: list[tuple[int, int]] = []
+        fixed = self.fixed.copy()
+        rank = np.linalg.matrix_rank(self._restrained_modes(fixed), tol=1e-9)
+        for node in (first, second, third):
+            for comp in range(3):
+                if rank == 6 or fixed[node, comp]:
+                    continue
+                fixed[node, comp] = True
+                new_rank = np.linalg.matrix_rank(self._restrained_modes(fixed), tol=1e-9)
+                if new_rank > rank:
+                    rank = new_rank
+                    added.append((node, comp))
+                else:
+                    fixed[node, comp] = False
+        if rank < 6:
+            raise ValueError("could not find supports that stop every rigid-body motion")
+        for node, comp in added:
+            self.fix([node], comp)
+        return added
+
+    def springback(self, increments: int = 5, tol_force: float = 1e-6,
+                   tol_disp: float = 1e-6, max_iterations: int = 25,
+                   result: FormingResult | None = None) -> FormingResult:
+        """Remove the tools and let the blank unload. The forces that held it at the end of
+        forming (contact forces, reactions of released clamps) become nodal loads, brought
+        to zero in ``increments`` steps (unloading is elastic unless it yields in reverse),
+        with the tools lifted off. Keep
+        only the constraints that stop rigid-body motion: ``release`` clamps first; if the
+        remaining constraints leave rigid motions free, ``support_rigid_modes`` adds a
+        3-2-1 set of supports (docs/theory/contact.md)."""
+        if int(increments) < 1:
+            raise ValueError(f"increments must be at least 1, got {increments}")
+        if self.free_rigid_modes():
+            self.support_rigid_modes()
+        result = FormingResult() if result is None else result
+        layout, solver = self._prepare()
+        # The blank is in equilibrium under the tools and the supports it had: its internal
+        # forces are those loads. Every one on a dof that is free now (contact forces, and
+        # reactions of released clamps) is brought to zero.
+        loads, _ = self.solid.internal_force(self.u, self.state)
+        loads[self.fixed] = 0.0
+        self.force = np.zeros_like(self.force)
+        off = np.zeros(layout.node.size, dtype=bool)
+        try:
+            for k in range(1, int(increments) + 1):
+                self.external = loads * (1.0 - k / increments)
+                outcome = self._increment(layout, solver, self.position, off, tol_force,
+                                          tol_disp, max_iterations, result)
+                if isinstance(outcome, str):
+                    raise FormingError(f"springback step {k} failed: {outcome}", result)
+                self.u, self.state = outcome[0], outcome[1]
+                result.factors.append(k / increments)
+                result.sizes.append(1.0 / increments)
+                result.limited_by.append("springback")
+                result.residuals.append(outcome[3])
+                result.relative.append(outcome[6])
+                result.displacements.append(self.u.copy())
+        finally:
+            self.external = np.zeros_like(self.u)
+        return result
+
+    def _rotation_increment(self, du: NDArray[np.float64]) -> float:
+        """Largest element rotation (radians) of a displacement increment: the axial vector
+        of the skew part of the gradient of the linear field that fits each element's nodal
+        increments in least squares."""
+        x = self.solid.mesh.nodes + self.u
+        elements = self.solid.mesh.elements
+        coords = x[elements] - x[elements].mean(axis=1, keepdims=True)   # (m, 8, 3)
+        moves = du[elements] - du[elements].mean(axis=1, keepdims=True)  # (m, 8, 3)
+        gram = np.einsum("mai,maj->mij", coords, coords)
+        gradient = np.linalg.solve(gram, np.einsum("mai,maj->mij", coords, moves))
+        skew = 0.5 * (gradient - gradient.transpose(0, 2, 1))
+        axial = np.stack([skew[:, 1, 2], skew[:, 2, 0], skew[:, 0, 1]], axis=1)
+        return float(np.linalg.norm(axial, axis=1).max()) if len(axial) else 0.0
+
+    def _touch_factor(self, layout: _Layout, on: NDArray[np.bool_],
+                      moves: Mapping[str, NDArray[np.float64]], step: float,
+                      last_du: NDArray[np.float64] | None, limits: IncrementLimits) -> float:
+        """Fraction of the next increment at which the first free node reaches a tool: its
+        gap over the approach, the tool's motion against the node's (extrapolated from the
+        last increment) along the normal at its closest point."""
+        gap, normal = self._gap
+        tool_step = np.concatenate([np.tile(step * moves[t.name], (t.slaves.size, 1))
+                                    for t in self.tools])
+        node_step = 0.0 if last_du is None else step * last_du[layout.node]
+        approach = np.einsum("ij,ij->i", tool_step - node_step, normal)
+        free = on & (self.force @ np.ones(3) == 0.0) & np.isfinite(gap)
+        free &= gap > limits.touch_gap * self.size
+        hits = free & (approach > gap)
+        if not hits.any():
+            return 1.0
+        # Land just past the surface, so that the node is caught in contact.
+        return float(np.min(gap[hits] / approach[hits])) * (1.0 + 1e-3)
+
+    def _minor(self, layout: _Layout, share: float) -> NDArray[np.bool_]:
+        """Pairs whose normal force at the start of the increment is at most ``share`` of
+        their tool's: released inside an increment, they change the tool's force by less
+        than that (IncrementLimits.release_share)."""
+        pressure = np.einsum("ij,ij->i", self.force, self._gap[1])
+        pressure = np.where(self._status != INACTIVE, np.maximum(pressure, 0.0), 0.0)
+        total = np.add.reduceat(pressure, layout.first[:-1]) if pressure.size else pressure
+        return pressure <= share * total[layout.tool_of]
+
+    def _release_ahead(self, step: float, rate: NDArray[np.float64], margin: float,
+                       minor: NDArray[np.bool_]) -> float:
+        """Fraction of the next increment at which the first node in contact is released,
+        its pressure extrapolated at the rate of the last increment (``rate``, per unit
+        phase factor), plus ``margin / 2`` so that it is free at the end."""
+        pressure = np.einsum("ij,ij->i", self.force, self._gap[1])
+        falling = (self._status != INACTIVE) & (pressure > 0.0) & (rate < 0.0) & ~minor
+        ahead = np.full(pressure.size, np.inf)
+        ahead[falling] = pressure[falling] / (-rate[falling] * step)
+        first = float(ahead.min()) if ahead.size else np.inf
+        return first * (1.0 + margin / 2.0) if first * (1.0 + margin / 2.0) < 1.0 else 1.0
+
+    def _release_factor(self, force: NDArray[np.float64], state: NDArray[np.int32],
+                        gap: tuple[NDArray[np.float64], NDArray[np.float64]],
+                        change: NDArray[np.float64] | None, minor: NDArray[np.bool_]
+                        ) -> float:
+        """Fraction of a converged increment at which the first node in contact at its start
+        and open at its end was released; 1 when none was. The semi-smooth Newton opens a
+        pulled node in its first iteration, so a release is seen only after the increment.
+        A node whose pressure fell in the last increment (``change``: that rate times this
+        increment) is released where the extrapolated pressure reaches zero; otherwise (the
+        start of a phase, or when the extrapolation would not release it) where its
+        augmented pressure p_aug = p - r g, whose sign opens and closes the law, reaches
+        zero, interpolated between p at the start (g = 0) and -r g at the end (p = 0)."""
+        distance, normal = gap
+        pressure = np.einsum("ij,ij->i", self.force, normal)
+        after = np.einsum("ij,ij->i", force, normal) - self.r * distance
+        released = (self._status != INACTIVE) & (state == INACTIVE) & (pressure > 0.0)
+        released &= np.isfinite(distance) & (after < 0.0) & ~minor
+        if not released.any():
+            return 1.0
+        p = pressure[released]
+        fraction = p / (p - after[released])
+        # A small fraction says p << r g: r is then far from the node's own stiffness and
+        # the interpolation is biased towards zero (on the paper's bending blank, nodes at
+        # the die shoulder pressed by 1e-3 N gave 1e-3 again and again while their pressure
+        # rose); bisect instead.
+        fraction = np.where(fraction < BISECT_BELOW, 0.5, fraction)
+        if change is not None:
+            drop = -change[released]
+            trend = np.divide(p, drop, out=np.full(p.size, np.inf), where=drop > 0.0)
+            fraction = np.where(trend < 1.0, trend, fraction)
+        return float(fraction.min())
+
+    def _contact(self, layout: _Layout, x: NDArray[np.float64], x_n: NDArray[np.float64],
+                 positions: Mapping[str, NDArray[np.float64]], on: NDArray[np.bool_],
+                 force: NDArray[np.float64], touching: _Touching | None = None):
+        """Contact law of every pair at positions x: residual, derivatives, states. With
+        ``touching``, a pair the law leaves open (p_aug <= 0) whose gap is within its
+        distance takes the closed branch at p_aug = 0+ instead (the predictor of the first
+        iteration, docs/theory/contact.md): an unloaded node lying on a tool then holds the
+        blank against it, as the generalized Jacobian allows at the kink."""
+        npair = layout.node.size
+        gap = np.full(npair, np.inf)
+        normal = np.zeros((npair, 3))
+        c = force.copy()
+        d_lambda = np.broadcast_to(np.eye(3), (npair, 3, 3)).copy()
+        d_x = np.zeros((npair, 3, 3))
+        state = np.zeros(npair, dtype=np.int32)
+        searched = {}
+        for i, tool in enumerate(self.tools):
+            pairs = slice(layout.first[i], layout.first[i + 1])
+            if not on[pairs].any():
+                continue
+            normals = None if tool.facing is None else self._facing_normals(i, x)
+            searched[i] = tool.search.project(x[tool.slaves], positions[tool.name], normals,
+                                              reach=self._reach)
+        close = {} if touching is None else self._touching(layout, x, positions, force,
+                                                            searched, touching)
+        for i, found in searched.items():
+            tool = self.tools[i]
+            pairs = slice(layout.first[i], layout.first[i + 1])
+            nodes = tool.slaves
+            hit = found.status != NONE
+            patch = np.where(hit, found.patch, 0)
+            second = tool.surface.second_derivatives(patch, found.params)
+            v = (x[nodes] - x_n[nodes]) - (positions[tool.name] - self.position[tool.name])
+            lam = force[pairs]
+            shut, p_aug = close.get(i, (None, None))
+            if shut is not None and shut.any():
+                # A normal force that lifts p_aug just above zero: the law then gives its
+                # closed branch there (stick, C = r g n + r s, when nothing slides yet),
+                # which does not depend on the shift.
+                r = self.r[pairs]
+                lift = -p_aug[shut] + 1e-9 * r[shut] * self.size
+                lam = lam.copy()
+                lam[shut] += lift[:, None] * found.normal[shut]
+            law = contact_law(lam, found, second, v, self.mu[pairs], self.r[pairs])
+            # Slices are views: write the pairs that found a patch; the others stay free.
+            c[pairs][hit] = law.residual[hit]
+            d_lambda[pairs][hit] = law.d_lambda[hit]
+            d_x[pairs][hit] = law.d_x[hit]
+            state[pairs][hit] = law.state[hit]
+            gap[pairs][hit] = found.distance[hit]
+            normal[pairs][hit] = found.normal[hit]
+        # Components held by a support: lambda_k = 0.
+        held = layout.held
+        c[held] = force[held]
+        hp, hk = np.nonzero(held)
+        d_lambda[hp, hk, :] = 0.0
+        d_lambda[hp, hk, hk] = 1.0
+        d_x[hp, hk, :] = 0.0
+        return c, d_lambda, d_x, state, (gap, normal)
+
+    def _touching(self, layout: _Layout, x: NDArray[np.float64],
+                  positions: Mapping[str, NDArray[np.float64]], force: NDArray[np.float64],
+                  searched: Mapping[int, object], touching: _Touching
+                  ) -> dict[int, tuple[NDArray[np.bool_], NDArray[np.float64]]]:
+        """The pairs the first iteration's predictor closes, per tool, with the augmented
+        pressure p_aug of every pair: those the law leaves open (p_aug <= 0) within the
+        touching distance of their tool. Unless
+        ``touching.resting``, those of a tool at rest in the increment only when the blank
+        needs them: when the supports, the pairs the law closes and the touching pairs of
+        the moving tools leave a rigid motion free. A touching pair of a resting tool that
+        nothing pushes is otherwise held at g = 0, p = 0, where the law cannot tell its
+        state (docs/theory/contact.md)."""
+        out: dict[int, tuple[NDArray[np.bool_], NDArray[np.float64]]] = {}
+        resting = [i for i in searched
+                   if np.array_equal(positions[self.tools[i].name],
+                                     self.position[self.tools[i].name])]
+        for i, found in searched.items():
+            pairs = slice(layout.first[i], layout.first[i + 1])
+            hit = found.status != NONE
+            distance = np.where(hit, found.distance, 0.0)  # no patch: no finite gap
+            p_aug = np.einsum("ij,ij->i", force[pairs], found.normal) - self.r[pairs] * distance
+            out[i] = hit & (p_aug <= 0.0) & (np.abs(distance) <= touching.distance), p_aug
+        if touching.resting or not any(out[i][0].any() for i in resting):
+            return out
+        holding = [self._restrained_modes(self.fixed)]
+        for i, found in searched.items():
+            close, p_aug = out[i]
+            held = (found.status != NONE) & (p_aug > 0.0)
+            if i not in resting:
+                held |= close
+            if held.any():
+                holding.append(self._modes_along(x[self.tools[i].slaves[held]],
+                                                 found.normal[held]))
+        if np.linalg.matrix_rank(np.concatenate(holding), tol=1e-9) == 6:
+            for i in resting:
+                out[i][0][:] = False
+        return out
+
+    def _facing_normals(self, i: int, x: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Outward normals (k, 3) of the blank surface at the slaves of tool ``i``, in the
+        configuration x: the sum of the area vectors of the boundary faces around each
+        slave that faced the tool at the start (normal within 60 degrees of ``facing``).
+        The search keeps only patches opposing them. ``facing`` itself would turn the
+        filter wrong where the sheet has turned by 90 degrees or more, as over a die
+        shoulder onto its wall (a slave without such a face keeps ``facing``)."""
+        tool = self.tools[i]
+        if i not in self._faces:
+            mesh = self.solid.mesh
+            faces = boundary_faces(mesh.elements)
+            area = face_area_vectors(mesh.nodes, faces)
+            faces = faces[area @ tool.facing > 0.5 * np.linalg.norm(area, axis=1)]
+            # slave index of every face corner (-1: not a slave of this tool)
+            where = np.full(mesh.n_nodes, -1, dtype=np.int64)
+            where[tool.slaves] = np.arange(tool.slaves.size)
+            self._faces[i] = (faces, where[faces])
+        faces, corner = self._faces[i]
+        area = face_area_vectors(x, faces)
+        total = np.zeros((tool.slaves.size, 3))
+        ok = corner >= 0
+        np.add.at(total, corner[ok], np.repeat(area[:, None, :], 4, axis=1)[ok])
+        length = np.linalg.norm(total, axis=1, keepdims=True)
+        return np.where(length > 0.0, total / np.where(length > 0.0, length, 1.0),
+                        tool.facing[None, :])
+
+    def _evaluate(self, layout: _Layout, u: NDArray[np.float64], force: NDArray[np.float64],
+                  x_n: NDArray[np.float64], positions: Mapping[str, NDArray[np.float64]],
+                  on: NDArray[np.bool_], timings: dict[str, float],
+                  touching: _Touching | None = None, buffer: int = 0):
+        """Residual (free equilibrium rows, then the contact law) at (u, force), with the
+        Jacobian values in the layout's slots and the contact states; or a failure. The
+        values are the layout's buffer ``buffer`` (0 or 1): the next evaluation into the
+        same buffer overwrites them."""
+        tick = time.perf_counter()
+        c, d_lambda, d_x, state, gap = self._contact(layout, self.solid.mesh.nodes + u, x_n,
+                                                     positions, on, force, touching)
+        tock = time.perf_counter()
+        timings["contact"] += tock - tick
+        try:
+            out = self.solid.assemble(u, self.state, layout.pattern,
+                                      values=layout.values[buffer][:layout.k_slots])
+        except ElementError as error:
+            return str(error)
+        tick = time.perf_counter()
+        timings["assembly"] += tick - tock
+        # Equilibrium: internal forces minus the forces of the tools on the slaves.
+        r_node = out.fint - self.external
+        np.add.at(r_node, layout.node, -force)
+        residual = np.concatenate([r_node.ravel()[~self.fixed.ravel()], c.ravel()])
+        pi, ii, jj = layout.dx_index
+        k, m = layout.k_slots, layout.n_coupling
+        values = layout.values[buffer]  # [:k] assembled in place, [k:k + m] = -1 set once
+        values[k + m:k + m + pi.size] = d_x[pi, ii, jj]
+        values[k + m + pi.size:] = d_lambda.reshape(-1)
+        timings["rest"] += time.perf_counter() - tick
+        return residual, values, state, out, gap
+
+    def _increment(self, layout: _Layout, solver: MumpsSolver,
+                   positions: Mapping[str, NDArray[np.float64]], on: NDArray[np.bool_],
+                   tol_force: float, tol_disp: float, max_iterations: int,
+                   result: FormingResult, yield_tolerance: float | None = None,
+                   touching: _Touching | None = None,
+                   guess: NDArray[np.float64] | None = None):
+        """Newton iterations of one increment; the new state, or the reason of failure, or
+        (with ``yield_tolerance``) the fraction of the increment at which the first elastic
+        Gauss point reaches the yield surface, from the strains of the first (elastic
+        predictor) iteration, when that fraction is below 1. With ``touching``,
+        the first iteration takes pairs within that gap as closed (see ``_contact``). With
+        ``guess`` (displacements, the last increment's rate times this one's size) the
+        iterations start there instead of at the converged u_n, unless an element fails
+        there; the converged state does not depend on the start.
+
+        The semi-smooth Newton step is globalized by backtracking until Deuflhard's natural
+        monotonicity test holds (the simplified correction at the trial point, solved with
+        this iteration's factors, shorter than the step), else on the residual norm: a
+        node switching between stick and slip (or contact and release) at every iteration
+        would otherwise make it cycle. The norm alone is the wrong measure for a thin sheet
+        that bends: a step that bends it right leaves a large membrane residual of second
+        order (docs/theory/contact.md)."""
+        timings = result.timings
+        solid = self.solid
+        u_n = self.u
+        x_n = solid.mesh.nodes + u_n
+        u = u_n.copy()
+        force = np.where(on[:, None], self.force, 0.0)
+        free = ~self.fixed.ravel()
+        floor = 1e-8 * solid.props[0] * self.size**2
+        # Unknowns in mm: displacements, and contact forces over the augmentation.
+        weight = np.concatenate([np.ones(layout.nf), np.repeat(1.0 / self.r, 3)])
+        residuals: list[float] = []
+        relative: list[tuple[float, float]] = []
+        correction = np.inf
+        hint = None
+        current = None
+        if guess is not None:  # the extrapolated start, unless an element fails there
+            result.evaluations += 1
+            current = self._evaluate(layout, guess, force, x_n, positions, on, timings,
+                                     touching)
+            if isinstance(current, str):
+                current = None
+            else:
+                u = guess.copy()
+        if current is None:
+            result.evaluations += 1
+            current = self._evaluate(layout, u, force, x_n, positions, on, timings, touching)
+        if isinstance(current, str):
+            return current
+        def measures(u: NDArray[np.float64], force: NDArray[np.float64], evaluation: tuple,
+                     correction: float) -> tuple[float, float, float, bool]:
+            """Residual norm, force scale, relative correction, and whether converged."""
+            norm = float(np.linalg.norm(evaluation[0]))
+            scale = max(float(np.linalg.norm(force)), float(np.linalg.norm(
+                np.where(self.fixed.ravel(), evaluation[3].fint.ravel(), 0.0))), floor)
+            moved = max(float(np.linalg.norm(u - u_n)), 1e-9 * self.size)
+            return (norm, scale, correction / moved,
+                    norm <= tol_force * scale and correction <= tol_disp * moved)
+
+        previous = None  # contact states of the last iteration
+        for iteration in range(max_iterations + 1):
+            residual, values, state, out, gap = current
+            norm, scale, moved, converged = measures(u, force, current, correction)
+            residuals.append(norm)
+            if not np.isfinite(norm):
+                return "the residual is not finite"
+            relative.append((norm / scale, moved))
+            if _log.isEnabledFor(logging.DEBUG):
+                _log.debug("iteration %d: residual %.3e of the force scale, correction %.3e "
+                           "of the motion, %d pairs closed", iteration, norm / scale, moved,
+                           int((on & (state != INACTIVE)).sum()))
+            if converged:
+                return (u, out.state, force, residuals, np.where(on, state, INACTIVE), gap,
+                        relative)
+            if iteration == max_iterations:
+                return _stalled(max_iterations, norm / scale, moved, tol_force, tol_disp,
+                                on & (state != previous) if previous is not None else None)
+            # Inexact Newton (Eisenstat and Walker): the correction's relative error may be
+            # a tenth of the relative residual (the rate stays quadratic), or as large as
+            # leaves the next residual a tenth of the tolerance (the last iteration).
+            rel = norm / scale
+            forcing = min(KRYLOV_LOOSE, max(KRYLOV_TIGHT, 0.1 * rel,
+                                            0.1 * tol_force / max(rel, 1e-300)))
+            result.newton_iterations += 1
+            direction = self._direction(layout, solver, values, residual, weight, result,
+                                        forcing, hint)
+            if isinstance(direction, str):
+                return direction
+            delta, size = direction
+            du = delta[:layout.nf]
+            dforce = delta[layout.nf:].reshape(-1, 3)
+            # The factors hold `values` from here. The first trial stops short where the
+            # step would push a free node into a tool (see _penetration_step).
+            alpha = self._penetration_step(layout, du, state, gap, on)
+            fallback, buffer = None, 0
+            for _ in range(5):
+                trial_u = u.copy()
+                trial_u.ravel()[free] += alpha * du
+                trial_force = force + alpha * dforce
+                result.evaluations += 1
+                trial = self._evaluate(layout, trial_u, trial_force, x_n, positions, on,
+                                       timings, buffer=buffer)
+                if not isinstance(trial, str):
+                    if alpha == 1.0 and measures(trial_u, trial_force, trial,
+                                                 float(np.linalg.norm(du)))[3]:
+                        simplified = None  # converged: the next iteration returns it
+                        break
+                    # Natural monotonicity test (Deuflhard): the simplified Newton
+                    # correction at the trial, with this iteration's factors, must be
+                    # shorter than the step's.
+                    tock = time.perf_counter()
+                    simplified = solver.solve(-trial[0])
+                    timings["solve"] += time.perf_counter() - tock
+                    if np.linalg.norm(simplified * weight) <= (1.0 - alpha / 4.0) * size:
+                        break
+                    if fallback is None and (
+                            np.linalg.norm(trial[0]) <= (1.0 - 1e-4 * alpha) * norm):
+                        fallback = alpha, trial_u, trial_force, trial, simplified
+                        buffer = 1  # the fallback keeps its Jacobian values in buffer 0
+                alpha *= 0.5
+            else:
+                # The simplified correction sees the contact set of this iteration: where
+                # that set changes, the test can fail at every step length. Then the
+                # longest step that lowered the residual norm, if one did, else the last.
+                if fallback is not None:
+                    alpha, trial_u, trial_force, trial, simplified = fallback
+                else:
+                    alpha *= 2.0
+            if isinstance(trial, str):
+                return trial
+            previous = state
+            u, force, current = trial_u, trial_force, trial
+            _log.debug("step length %.4g", alpha)
+            hint = simplified  # M^-1 of the new residual, while the factors stay
+            correction = alpha * float(np.linalg.norm(du))
+            if yield_tolerance is not None and alpha == 1.0:
+                # The elastic predictor is the first full Newton step: a step shortened by
+                # the line search or the penetration limit starts from a poor iterate (a
+                # punch pushed into the extrapolated blank), whose strains say little of
+                # where the converged path yields.
+                landing = _yield_factor(solid.props, self.state, trial[3].state,
+                                        yield_tolerance)
+                yield_tolerance = None
+                if landing < 1.0:
+                    return landing
+        return "no convergence"
+
+    def _penetration_step(self, layout: _Layout, du: NDArray[np.float64],
+                          state: NDArray[np.int32], gap: tuple[NDArray[np.float64], ...],
+                          on: NDArray[np.bool_]) -> float:
+        """Longest fraction (at most 1) of the Newton step ``du`` (free dofs) that leaves no
+        free node more than PENETRATION times the element size inside a tool, the gaps
+        linearized at the current iterate. The tangent does not see a tool where a node is
+        free: on a sheet held by a line of contact nodes (the paper's unconstrained bending,
+        from 11 mm of stroke) the full step bends the span between the contact lines on
+        along its soft, plastic mode and pushed 1,133 free nodes up to 1 mm into the punch;
+        the line search then halved down to 1/32 and the contact states cycled for 15 to 25
+        iterations. Stopped at the surface, those nodes close in the next iteration."""
+        distance, normal = gap
+        move = np.zeros(self.u.size)
+        move[~self.fixed.ravel()] = du
+        closing = -np.einsum("ij,ij->i", move.reshape(-1, 3)[layout.node], normal)
+        room = np.maximum(distance, 0.0) + PENETRATION * self.size
+        free = on & (state == INACTIVE) & np.isfinite(distance) & (closing > room)
+        if not free.any():
+            return 1.0
+        return max(float(np.min(room[free] / closing[free])), MIN_STEP)
+
+    def _direction(self, layout: _Layout, solver: MumpsSolver, values: NDArray[np.float64],
+                   residual: NDArray[np.float64], weight: NDArray[np.float64],
+                   result: FormingResult, tolerance: float,
+                   hint: NDArray[np.float64] | None = None
+                   ) -> tuple[NDArray[np.float64], float] | str:
+        """Newton correction for the Jacobian ``values`` at ``residual``, and its size as the
+        line search measures it: ||W M^-1 r||, W the unknowns' weights and M the factored
+        matrix (= ||W delta|| when the factors are this Jacobian's).
+
+        With factors of an earlier Jacobian at hand, GMRES on W M^-1 J W^-1 (left
+        preconditioned: the norm it minimizes is that of the correction's error, in the
+        weighted unknowns) to ``tolerance``; each iteration costs a solve and a product, a
+        factorization about 14 of them on the paper's bending blank. It gives up after
+        KRYLOV_MAX iterations, and when it needed more than KRYLOV_KEEP the next iteration
+        factorizes at once (the Jacobian has moved too far). ``hint``: M^-1 (-residual)
+        when the line search has solved it already with the same factors."""
+        timings = result.timings
+        reuse = self.linear_solver == "reuse" or (
+            self.linear_solver == "auto" and layout.n >= REUSE_FROM)
+        if reuse and self._factored and self._reuse_next:
+            tick = time.perf_counter()
+            if layout.matrix is None:
+                layout.matrix = CoordinateMatrix(layout.n, layout.rows, layout.cols)
+            jacobian = layout.matrix.matrix(values)
+            preconditioned = weight * (solver.solve(-residual) if hint is None else hint)
+            z, count, converged = gmres(
+                lambda v: weight * solver.solve(jacobian @ (v / weight)), preconditioned,
+                tolerance, KRYLOV_MAX)
+            timings["solve"] += time.perf_counter() - tick
+            result.krylov_iterations += count
+            self._reuse_next = count <= KRYLOV_KEEP
+            if converged:
+                return z / weight, float(np.linalg.norm(preconditioned))
+        tick = time.perf_counter()
+        try:
+            solver.factorize(values)
+        except LinearSolverError as error:
+            self._factored = False
+            return str(error)
+        tock = time.perf_counter()
+        timings["factorization"] += tock - tick
+        result.factorizations += 1
+        self._factored, self._reuse_next = True, True
+        delta = solver.solve(-residual)
+        timings["solve"] += time.perf_counter() - tock
+        return delta, float(np.linalg.norm(delta * weight))
+
+    def close(self) -> None:
+        """Free the MUMPS instance."""
+        self._reset()
+
+
+def default_augmentation(solid: Solid) -> float:
+    """The augmentation parameter r (N/mm) of the contact law when a tool sets none:
+    E t^2 / h, the median over the elements of t, their thinnest mean edge length along
+    the three natural directions, and h, the geometric mean of the other two. For a cube
+    it is E h, the stiffness of a node pressed into a solid; for the flat elements of a
+    sheet it is lower by (t / h)^2, as a sheet is pressed by a tool mostly in bending.
+    r changes only how the Newton loop decides between open, stick and slip (p - r g,
+    lambda_T - r s): a value far above the blank's stiffness decides on gaps of 1e-3 mm
+    and flips contact states from iteration to iteration (docs/theory/contact.md)."""
+    return blank_stiffness(solid.mesh.nodes, solid.mesh.elements, float(solid.props[0]))
+
+
+def blank_stiffness(nodes: ArrayLike, elements: ArrayLike, young: float) -> float:
+    """E t^2 / h of default_augmentation, from the nodes (n, 3) and hexahedra (m, 8)."""
+    x = np.asarray(nodes, dtype=float)
+    edges = np.asarray(elements)[:, HEX_EDGES]  # (m, 3, 4, 2)
+    lengths = np.linalg.norm(x[edges[..., 1]] - x[edges[..., 0]], axis=-1).mean(axis=2)
+    lengths.sort(axis=1)
+    ratio = lengths[:, 0] ** 2 / np.sqrt(lengths[:, 1] * lengths[:, 2])
+    return float(young * np.median(ratio))
+
+
+def _next_step(step: float, nominal: float, reason: str, strain_ratio: float,
+               rotation_ratio: float) -> tuple[float, str]:
+    """The trial size of the next increment and what set it, after one of ``step`` that
+    ``reason`` limited, whose largest strain and rotation increments were these fractions
+    of their limits. As in DD3IMP's r_min, each increment tries the nominal size again:
+    the touch, release and yield limits are found before or in the first iteration and
+    cost little to apply once more. Two things are remembered: a strain or rotation limit
+    is found only after convergence, so the next size is predicted from this increment's
+    rates (strain and rotation grow about linearly with the size), to 90 % of the limit;
+    and after a cut (divergence) the size at most doubles per increment."""
+    grow = 0.9 / max(strain_ratio, rotation_ratio, 1e-12)
+    cap = 2.0 if reason in ("cut", "regrow") else np.inf
+    if min(grow, cap) * step >= nominal:
+        return nominal, "max"
+    if cap < grow:
+        return cap * step, "regrow"
+    return grow * step, "strain" if strain_ratio >= rotation_ratio else "rotation"
+
+
+def _yield_factor(props: NDArray[np.float64], before: SolidState, after: SolidState,
+                  tolerance: float) -> float:
+    """Fraction of the increment at which the first Gauss point that was elastic (below the
+    yield surface by more than ``tolerance``) reaches the yield surface, if its elastic trial
+    stress overshoots it by more than ``tolerance``; 1 otherwise. ``after`` is the state of
+    the elastic predictor. The Hill'48 form is quadratic, so along the elastic trial path
+    sigma_n + r C de the landing r solves a quadratic."""
+    young, nu = props[0], props[1]
+    f, g, h, l_, m, n = props[2:8]
+    lam = young * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))
+    mu = young / (2.0 * (1.0 + nu))
+    de = after.strain - before.strain
+    ds = np.empty_like(de)
+    ds[..., :3] = lam * de[..., :3].sum(axis=-1, keepdims=True) + 2.0 * mu * de[..., :3]
+    ds[..., 3:] = mu * de[..., 3:]
+
+    def form(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The symmetric bilinear form of 2 f(sigma) (Voigt 11 22 33 12 23 31)."""
+        return (f * (a[..., 1] - a[..., 2]) * (b[..., 1] - b[..., 2])
+                + g * (a[..., 2] - a[..., 0]) * (b[..., 2] - b[..., 0])
+                + h * (a[..., 0] - a[..., 1]) * (b[..., 0] - b[..., 1])
+                + 2.0 * (n * a[..., 3] * b[..., 3] + l_ * a[..., 4] * b[..., 4]
+                         + m * a[..., 5] * b[..., 5]))
+
+    ep = before.ep
+    law, k1, k2, k3 = props[8], props[9], props[10], props[11]
+    y = k1 * (k2 + ep) ** k3 if law == 1.0 else k1 + k2 * (1.0 - np.exp(-k3 * ep))
+    a, b = before.stress, ds
+    qa, qab, qb = form(a, a), form(a, b), form(b, b)
+    # A point within the tolerance below the surface is yielding already (it got there by
+    # unloading a little, or by a step that landed it): landing it again would cut the
+    # increment to almost nothing, over and over, while it crosses the last fraction.
+    elastic = qa < (y * (1.0 - tolerance)) ** 2
+    over = elastic & (qa + 2.0 * qab + qb > (y * (1.0 + tolerance)) ** 2) & (qb > 0.0)
+    if not over.any():
+        return 1.0
+    # q(a + r b) = y^2: r = (-qab + sqrt(qab^2 - qb (qa - y^2))) / qb, in (0, 1).
+    disc = np.maximum(qab[over] ** 2 - qb[over] * (qa[over] - y[over] ** 2), 0.0)
+    r = (-qab[over] + np.sqrt(disc)) / qb[over]
+    return float(np.clip(r.min() * (1.0 + tolerance / 2.0), 1e-6, 1.0))
+
+
+def _stalled(iterations: int, residual: float, correction: float, tol_force: float,
+             tol_disp: float, flipped: NDArray[np.bool_] | None) -> str:
+    """Why an increment did not converge: its last residual and correction against their
+    tolerances, and how many contact pairs changed state in its last iteration."""
+    text = (f"no convergence in {iterations} iterations: residual {residual:.2e} of the force "
+            f"scale (tolerance {tol_force:.0e}), correction {correction:.2e} of the motion "
+            f"(tolerance {tol_disp:.0e})")
+    if flipped is not None and flipped.any():
+        text += (f"; {int(flipped.sum())} contact pair(s) still changed state in the last "
+                 "iteration")
+    return text
+
+
+def _equivalent_strain_increment(delta: NDArray[np.float64]) -> float:
+    """Largest sqrt(2/3 de:de) over Gauss points of Voigt strain increments (engineering
+    shears)."""
+    if delta.size == 0:
+        return 0.0
+    normal = (delta[..., :3] ** 2).sum(axis=-1)
+    shear = (delta[..., 3:] ** 2).sum(axis=-1) / 2.0
+    return float(np.sqrt(2.0 / 3.0 * (normal + shear)).max())

@@ -3,14 +3,16 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
 from deckutil import EXAMPLES, copy_example, edit, install_toolfile
 
-from ddpy.io.case import HoldGap, Move, Newton, RminLimits, rigid_body_modes_free
+from ddpy.io.case import HoldGap, Move, rigid_body_modes_free
 from ddpy.io.decks import DeckError, parse_case, read_case
+from ddpy.model.control import IncrementLimits, NewtonSettings
 from ddpy.model.material import Hill48, Swift, Voce
 
 
@@ -38,8 +40,10 @@ def test_bending_example_model() -> None:
     assert forming.lead == "punch" and forming.travel == pytest.approx(28.5)
     assert forming.max_increment == 0.114 and forming.min_increment == pytest.approx(0.114e-3)
     assert forming.output_at == (7.0, 14.0, 21.0, 28.5) and forming.output_every == 25
-    assert forming.rmin == RminLimits(0.1, 0.02, 1.0, True)
-    assert forming.newton == Newton(1e-4, 1e-4, 25, 0.5)
+    # min_fraction is min_increment over max_increment, to rounding
+    assert forming.limits.min_fraction == pytest.approx(1e-3, rel=1e-12)
+    assert replace(forming.limits, min_fraction=1e-3) == IncrementLimits(0.02, 1.0, 0.1, True)
+    assert forming.newton == NewtonSettings(1e-4, 1e-4, 25, 0.5)
     np.testing.assert_array_equal(forming.displacement("die"), [0, 0, 0])
     assert springback.is_springback and springback.increments == 1 and springback.tools == ()
     mesh = case.mesh
@@ -79,7 +83,7 @@ def test_strip_draw_example_model() -> None:
     np.testing.assert_array_equal(draw.displacement("holder"), [0, 0, 0])  # follows the die
     assert draw.max_increment == 0.2 and draw.min_increment == pytest.approx(2e-4)
     assert free.tools == ("punch", "die") and free.max_increment == 0.1
-    assert free.rmin.strain == 0.01 and draw.rmin.strain == 0.02
+    assert free.limits.strain == 0.01 and draw.limits.strain == 0.02
     assert back.increments == 4
     assert case.tool("punch").description == "facets"
     assert case.tool("die").augmentation == 1e4 and case.tool("punch").augmentation is None
@@ -242,14 +246,15 @@ def test_control_defaults(tmp_path: Path) -> None:
     c = read_case(case)
     p = c.phases[0]
     assert p.max_increment == pytest.approx(0.2) and p.min_increment == pytest.approx(2e-4)
-    assert p.rmin == RminLimits() and p.newton == Newton() and p.output_every == 10
+    assert replace(p.limits, min_fraction=1e-3) == IncrementLimits()
+    assert p.newton == NewtonSettings() and p.output_every == 10
     assert p.lead == "punch" and c.title == "bending"
     # The release redo cap: a count, or off (no cap), at the top or in a phase.
     (case / "control.dat").write_text("rmin_release_redos off\nphase only\n tools punch die\n"
                                       " move punch 0 0 -20\n rmin_release_redos 3\nend\n"
                                       "phase springback\n type springback\nend\n")
     c = read_case(case)
-    assert c.phases[0].rmin.release_redos == 3 and c.phases[1].rmin.release_redos is None
+    assert c.phases[0].limits.release_redos == 3 and c.phases[1].limits.release_redos is None
 
 
 def test_warnings(tmp_path: Path) -> None:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from math import comb
 
 import numpy as np
@@ -9,7 +10,8 @@ import pytest
 
 from ddpy.geometry.surfaces import BezierSurface, NagataSurface
 from ddpy.model.contact import SLIP, STICK
-from ddpy.model.forming import FormingProblem, IncrementLimits, RigidTool, _yield_factor
+from ddpy.model.control import IncrementLimits, NewtonSettings
+from ddpy.model.forming import FormingProblem, RigidTool, _yield_factor
 from ddpy.model.material import Hill48, Material, Swift
 from ddpy.model.mesh import HexMesh
 from ddpy.model.solid import Solid, SolidState, StaticProblem, material_props
@@ -51,7 +53,7 @@ def test_block_sticks_below_and_slips_above_coulomb() -> None:
     assert (result.status["plane"][-1] == STICK).all()
     # A large one: every node slips and the friction force is mu N exactly.
     result = problem.run({"plane": (2e-3, 0, 0)}, max_increment=5e-4, result=result,
-                         tol_force=1e-11)
+                         newton=NewtonSettings(1e-11, 1e-6))
     force = result.tool_forces["plane"][-1]
     assert (result.status["plane"][-1] == SLIP).all()
     # Every node slips: its tangential force is mu times its normal force...
@@ -347,7 +349,7 @@ def test_quadratic_convergence_sliding_with_friction_over_a_curved_tool(kind: st
     problem.fix(mesh.select(z=0.5), "xyz")
     result = problem.run({"cylinder": (0, 0, 0.02)}, max_increment=0.02)
     result = problem.run({"cylinder": (0.2, 0, 0)}, max_increment=0.05, result=result,
-                         tol_force=1e-12)
+                         newton=NewtonSettings(1e-12, 1e-6))
     assert (result.status["cylinder"][-1] == SLIP).sum() >= 3
     rates = []
     for history in result.residuals[-3:]:
@@ -357,7 +359,12 @@ def test_quadratic_convergence_sliding_with_friction_over_a_curved_tool(kind: st
     assert rates and max(rates) > 1.7, (rates, result.residuals[-3:])
 
 
-def lift_off(max_increment: float, limits: IncrementLimits | None = None
+#: The release limit at its strictest: every node's release limits (no share exempts a
+#: node), and an increment is redone at a release as often as it takes.
+STRICT_RELEASE = IncrementLimits(release_share=0.0, release_redos=None)
+
+
+def lift_off(max_increment: float, limits: IncrementLimits = STRICT_RELEASE
              ) -> tuple[list[float], list[str], list[int], float]:
     """The clamped block pressed 1 mm / 1000 onto the plane, then the plane lowered by 2 um:
     the plane's height after each increment of the lift, what limited it, the nodes in
@@ -387,7 +394,8 @@ def test_release_of_the_nodes_ends_an_increment(max_increment: float) -> None:
     # The plane then goes on at the nominal increment.
     assert heights[-1] == pytest.approx(-1e-3)
     # Without the release limit the increment runs far past the release.
-    heights, limited_by, contacts, _ = lift_off(max_increment, IncrementLimits(release=None))
+    heights, limited_by, contacts, _ = lift_off(max_increment,
+                                                replace(STRICT_RELEASE, release=None))
     k = contacts.index(0)
     assert "release" not in limited_by
     assert heights[k + 1] < -0.1 * (heights[k] - heights[k + 1])
@@ -399,7 +407,7 @@ def test_release_redos_are_capped() -> None:
     # with the release inside it, as without the release limit.
     for redos, limited in ((1, True), (None, True), (0, False)):
         heights, limited_by, contacts, _ = lift_off(
-            1.5e-3, IncrementLimits(release_redos=redos))
+            1.5e-3, replace(STRICT_RELEASE, release_redos=redos))
         k = contacts.index(0)
         assert (limited_by[k] == "release") is limited, (redos, limited_by)
         before, after = heights[k], heights[k + 1]
@@ -420,7 +428,7 @@ def test_release_of_nodes_with_a_small_share_of_the_force_does_not_limit() -> No
     assert shares.min() > 0.0 and shares.max() < 0.2, shares
     for share, limited in ((1.0, False), (0.5 * shares.min(), True)):
         heights, limited_by, contacts, _ = lift_off(
-            7e-4, IncrementLimits(release_share=share))
+            7e-4, replace(STRICT_RELEASE, release_share=share))
         assert ("release" in limited_by) is limited, (share, limited_by)
         assert contacts[-1] == 0 and heights[-1] == pytest.approx(-1e-3)
 
@@ -498,7 +506,7 @@ def test_springback_of_a_bent_strip_converges_quadratically() -> None:
     static.fix(mesh.select(y=0.0), "y")
     static.fix(centre, "z")
     static.load(tip, np.tile([0.0, 0.0, 35.0 / tip.size], (tip.size, 1)))
-    bent = static.solve(increments=8, tol_force=1e-10)
+    bent = static.solve(increments=8, newton=NewtonSettings(1e-10, 1e-8))
     assert bent.state is not None and bent.state.ep.max() > 0.1
     far = NagataSurface([[-5, -5, -50], [50, -5, -50], [50, 5, -50], [-5, 5, -50]],
                         [[0, 0, 1]] * 4, [[0, 1, 2, 3]])
@@ -510,8 +518,7 @@ def test_springback_of_a_bent_strip_converges_quadratically() -> None:
         problem.fix(mesh.select(x=0.0), "x")
         problem.fix(mesh.select(y=0.0), "y")
         problem.fix(centre, "z")
-        result = problem.springback(increments, tol_force=1e-8, tol_disp=1e-8,
-                                    max_iterations=25)
+        result = problem.springback(increments, NewtonSettings(1e-8, 1e-8))
         assert problem.state.ep.max() == bent.state.ep.max()  # elastic unloading
         shapes[increments] = problem.u
         assert max(result.iterations) <= (8 if increments == 1 else 5), result.iterations

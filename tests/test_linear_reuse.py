@@ -8,6 +8,7 @@ import pytest
 
 from ddpy.core.linalg import CoordinateMatrix, gmres
 from ddpy.model.contact import SLIP
+from ddpy.model.control import NewtonSettings
 from ddpy.model.forming import FormingProblem, RigidTool
 from ddpy.model.mesh import HexMesh
 from ddpy.model.solid import Solid
@@ -57,7 +58,7 @@ def slide(linear_solver: str) -> tuple[FormingProblem, object]:
     problem.fix(mesh.select(z=0.5), "xyz")
     result = problem.run({"cylinder": (0, 0, 0.02)}, max_increment=0.02)
     result = problem.run({"cylinder": (0.2, 0, 0)}, max_increment=0.05, result=result,
-                         tol_force=1e-10)
+                         newton=NewtonSettings(1e-10, 1e-6))
     return problem, result
 
 

@@ -19,10 +19,13 @@ from solid_helpers import (
 )
 
 from ddpy.core.parallel import threads
+from ddpy.model.control import NewtonSettings
 from ddpy.model.mesh import HexMesh
 from ddpy.model.solid import ConvergenceError, ElementError, Solid, StaticProblem, material_props
 
 ELASTIC = props_vector()
+#: Newton to rounding: the tests compare with exact solutions.
+TIGHT = NewtonSettings(1e-10, 1e-10)
 
 
 def boundary_nodes(n: int) -> np.ndarray:
@@ -183,7 +186,7 @@ def test_rigid_rotation_along_a_path_in_the_newton_driver() -> None:
 
     problem = StaticProblem(Solid(mesh, ELASTIC, rolling_direction_deg=20.0))
     problem.fix(ends, "xyz", path)
-    result = problem.solve(increments=10, tol_force=1e-10, tol_disp=1e-10)
+    result = problem.solve(increments=10, newton=TIGHT)
     assert result.factors[4] == pytest.approx(0.5)
     before, after = result.pk2[4], result.pk2[-1]
     assert np.abs(before).max() > 1e3
@@ -226,7 +229,7 @@ def test_quadratic_convergence_large_rotation() -> None:
     tip = mesh.select(x=5.0)
     load = 3.0 * E * 1.0 / 12.0 / 5.0**2
     problem.load(tip, [0.0, 0.0, -load / tip.size])
-    result = problem.solve(increments=5, tol_force=1e-10, tol_disp=1e-10)
+    result = problem.solve(increments=5, newton=TIGHT)
     w = -result.displacements[-1][tip, 2].mean()
     assert 0.58 < w / 5.0 < 0.63
     for residuals in result.residuals:
@@ -243,7 +246,7 @@ def test_quadratic_convergence_plastic() -> None:
     over the last steps (r_k = 4e-6 .. 1.4e-7; a linear rate rho would give rho / r_k)."""
     mesh, problem = cantilever_problem(ddq_props(), length=4.0)
     problem.fix(mesh.select(x=4.0), "xz", [0.1, -1.0])
-    result = problem.solve(increments=5, tol_force=1e-10, tol_disp=1e-10)
+    result = problem.solve(increments=5, newton=TIGHT)
     assert result.cuts == 0 and result.ep[-1].max() > 0.2
     for residuals in result.residuals:
         assert len(residuals) <= 14
@@ -382,15 +385,15 @@ def test_increment_cutting_recovers_and_reports() -> None:
         p.load(mesh.select(x=10.0), [0.0, 0.0, -400.0 / 6])
         return p
 
-    reference = problem().solve(increments=16, tol_force=1e-10, tol_disp=1e-10)
-    cut = problem().solve(increments=1, max_iterations=7, tol_force=1e-10, tol_disp=1e-10)
+    reference = problem().solve(increments=16, newton=TIGHT)
+    cut = problem().solve(increments=1, newton=NewtonSettings(1e-10, 1e-10, 7))
     assert cut.cuts > 0 and cut.factors[-1] == 1.0 and max(cut.iterations) <= 7
     # The rotating-frame update is objective but, for increments that are not coaxial, not
     # path-independent: 1 cut increment against 16 differ by 4e-6 (measured).
     u_ref = reference.displacements[-1]
     assert np.abs(cut.displacements[-1] - u_ref).max() <= 1e-4 * np.abs(u_ref).max()
     with pytest.raises(ConvergenceError, match="failed after 0 cuts") as info:
-        problem().solve(increments=1, max_iterations=7, max_cuts=0)
+        problem().solve(increments=1, newton=NewtonSettings(max_iterations=7), max_cuts=0)
     assert info.value.result.factors == []
 
 
@@ -405,7 +408,7 @@ def test_predictors_reach_the_same_state_and_line_search_saves_cuts() -> None:
         problem = StaticProblem(Solid(mesh, ddq_props(), rolling_direction_deg=45.0))
         problem.fix(mesh.select(x=0.0), "xyz")
         problem.fix(mesh.select(x=4.0), "z", -0.4)
-        out.append(problem.solve(increments=4, tol_force=1e-10, tol_disp=1e-10,
+        out.append(problem.solve(increments=4, newton=TIGHT,
                                  predictor=predictor, line_search=line_search))
     assert out[0].ep[-1].max() > 0.005
     assert all(r.cuts == 0 for r in out[:3]) and out[3].cuts >= 1
@@ -504,8 +507,8 @@ def test_bad_constraints_and_loads_are_refused() -> None:
         problem.load([0], [1.0, 0.0, 0.0])
     with pytest.raises(ValueError, match="shape"):
         problem.load([1, 2], np.zeros((3, 3)))
-    with pytest.raises(ValueError, match="tol_force"):
-        problem.solve(tol_force=0.0)
+    with pytest.raises(ValueError, match="force_tolerance"):
+        problem.solve(newton=NewtonSettings(force_tolerance=0.0))
     with pytest.raises(ValueError, match="increments"):
         problem.solve(increments=0)
     with pytest.raises(ValueError, match="rolling_direction_deg"):

@@ -31,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from ddpy.io.case import RminLimits
+from ddpy.model.control import IncrementLimits
 from ddpy.studies.bending import contact_angle, force_oscillation, line_angle
 
 HERE = Path(__file__).resolve().parent
@@ -295,7 +295,7 @@ def run_case_folder(folder: Path, output: Path | None = None, verbose: bool = Fa
 
     case = read_case(folder)
     record_code(output, code_version(), restart,
-                release_redos=case.phases[0].rmin.release_redos)
+                release_redos=case.phases[0].limits.release_redos)
     outcome = run_case(case, output, overwrite=not restart, restart=restart,
                        progress=progress if verbose else None, max_increments=max_increments)
     run = from_results(outcome.results, case.phases[0].output_at)
@@ -768,7 +768,7 @@ def _release_effort(numbers: dict[str, dict[str, Any]]) -> list[str]:
         for m in MODELS if numbers.get(m, {}).get("contact_nodes"))
     contact = "nodes in contact, mean over the forming: " + contact if contact else \
         "the nodes in contact are counted in the results"
-    share = RminLimits().release_share  # the decks leave rmin_release at its default
+    share = IncrementLimits().release_share  # the decks leave rmin_release at its default
     caps = {numbers[m].get("release_redos") for m in MODELS if m in numbers}
     mixed = (" The runs differ in this setting (Table 3), and the increments and iterations "
              "compared between them include it." if len(caps) > 1 else "")
@@ -783,7 +783,7 @@ def _release_effort(numbers: dict[str, dict[str, Any]]) -> list[str]:
             "the tools' forces rest on few nodes (" + contact + "), so most of these "
             "releases carry more than the share. With no cap, one increment was often redone "
             "several times, each redo finding another node released earlier; with the "
-            f"default, {_redos(RminLimits().release_redos)}, a release seen only after the "
+            f"default, {_redos(IncrementLimits().release_redos)}, a release seen only after the "
             "increment is accepted inside it." + mixed]
 
 

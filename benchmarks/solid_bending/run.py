@@ -66,6 +66,7 @@ def worker(increments: int) -> dict:
     """One run in this process (threads come from the environment)."""
     from ddpy.core.linalg import MumpsSolver
     from ddpy.core.parallel import max_threads
+    from ddpy.model.control import NewtonSettings
     from ddpy.model.mesh import HexMesh
     from ddpy.model.solid import Solid, StaticProblem
 
@@ -83,7 +84,7 @@ def worker(increments: int) -> dict:
     solver: MumpsSolver = problem._solver  # type: ignore[assignment]
     busy, own = cpu_busy(), own_cpu()
     start = time.perf_counter()
-    result = problem.solve(increments=increments, tol_force=1e-6, tol_disp=1e-6)
+    result = problem.solve(increments=increments, newton=NewtonSettings(1e-6, 1e-6))
     total = time.perf_counter() - start
     others = max(cpu_busy() - busy - (own_cpu() - own), 0.0) / total
     stats = solver.statistics()

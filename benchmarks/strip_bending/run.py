@@ -35,7 +35,8 @@ from ddpy.cad.examples import write_cad
 from ddpy.cad.shape_error import shape_error
 from ddpy.core.parallel import threads
 from ddpy.io.toolfile import ToolModel, read_tool
-from ddpy.model.forming import FormingError, FormingProblem, IncrementLimits, RigidTool
+from ddpy.model.control import IncrementLimits
+from ddpy.model.forming import FormingError, FormingProblem, RigidTool
 from ddpy.model.material import Hill48, Material, Swift
 from ddpy.model.mesh import HexMesh
 from ddpy.model.solid import Solid

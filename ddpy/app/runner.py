@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import math
 import os
 import tempfile
 import time
@@ -42,7 +41,6 @@ from ddpy.model.forming import (
     FormingError,
     FormingProblem,
     FormingResult,
-    IncrementLimits,
     PhaseProgress,
     RigidTool,
 )
@@ -371,18 +369,10 @@ class _Run:
 
     def forming(self, phase: Phase) -> None:
         """The segments of a forming phase (split at output_at), from the resume point."""
-        p, newton = self.problem, phase.newton
+        p = self.problem
         leads = [m for m in phase.motions if isinstance(m, Move)]
         longest = max(m.travel for m in leads)
         ratio = longest / phase.travel if phase.travel > 0 else 1.0
-        limits = IncrementLimits(
-            strain=phase.rmin.strain, rotation_deg=phase.rmin.rotation,
-            yield_tolerance=max(phase.rmin.yield_tolerance, 1e-6),
-            first_touch=phase.rmin.contact, release=0.05 if phase.rmin.contact else None,
-            release_share=phase.rmin.release_share, release_redos=phase.rmin.release_redos,
-            min_fraction=min(1.0, phase.min_increment / phase.max_increment))
-        max_cuts = max(1, math.ceil(math.log(phase.max_increment / phase.min_increment)
-                                    / -math.log(newton.cutback)))
         ends = _segments(phase)
         while self.segment < len(ends):
             a = ends[self.segment - 1] if self.segment else 0.0
@@ -422,22 +412,17 @@ class _Run:
 
             resume, self.resume = self.resume, None
             p.run(motion, phase.max_increment * ratio, active=phase.tools,
-                  tol_force=newton.force_tolerance, tol_disp=newton.displacement_tolerance,
-                  max_iterations=newton.max_iterations, max_cuts=max_cuts, limits=limits,
-                  cutback=newton.cutback,
-                  gaps=gaps, result=result, on_increment=hook, resume=resume)
+                  newton=phase.newton, limits=phase.limits, gaps=gaps, result=result,
+                  on_increment=hook, resume=resume)
             if self.halt:
                 self.fields(result)
                 return
             self.segment += 1
 
     def springback(self, phase: Phase) -> None:
-        newton = phase.newton
         result = FormingResult()
         start = time.perf_counter()
-        self.problem.springback(phase.increments, tol_force=newton.force_tolerance,
-                                tol_disp=newton.displacement_tolerance,
-                                max_iterations=newton.max_iterations, result=result)
+        self.problem.springback(phase.increments, phase.newton, result=result)
         share = (time.perf_counter() - start) / phase.increments
         t = result.timings
         for k in range(len(result.residuals)):

@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ddpy.model.control import IncrementLimits, NewtonSettings
 from ddpy.model.material import Material
 from ddpy.model.mesh import HEX_EDGES, HEX_FACES, boundary_faces, face_area_vectors
 
@@ -29,7 +30,7 @@ if TYPE_CHECKING:
     from ddpy.io.toolfile import ToolModel
 
 __all__ = ["AXES", "BlankMaterial", "BoundaryConditions", "Case", "Constraint", "Control",
-           "DeckError", "HoldGap", "Mesh", "Move", "Newton", "NodeSet", "Phase", "RminLimits",
+           "DeckError", "HoldGap", "Mesh", "Move", "NodeSet", "Phase",
            "Tool", "HEX_FACES", "blank_thickness", "through_thickness_columns"]
 
 #: Axis names and their index.
@@ -393,44 +394,6 @@ class Tool:
 
 # ----------------------------------------------------------------------------------- control
 
-#: Default redos of one increment at a release (deck rmin_release_redos): none, the release
-#: limit acts ahead only. On faceted tools each redo tends to find another node released
-#: earlier, a cascade that took half of a run's time (docs/theory/contact.md).
-RELEASE_REDOS: int | None = 0
-
-
-@dataclass(frozen=True)
-class RminLimits:
-    """Limits of the r_min increment control (docs/theory/contact.md) for one phase.
-
-    ``yield_tolerance``: an elastic Gauss point may overshoot the yield surface by this
-    fraction of the yield stress before the increment is scaled back to the transition;
-    ``strain``: largest equivalent strain increment at a Gauss point; ``rotation``: largest
-    rotation increment at a Gauss point, degrees; ``contact``: limit the increment at the first
-    touch of a free node and the release of a node in contact; ``release_share``: a node
-    that carries at most this share of its tool's normal force is released inside an
-    increment instead; ``release_redos``: redos of one increment at a release, after which
-    it is accepted with the release inside it (None: no cap) (docs/theory/contact.md)."""
-
-    yield_tolerance: float = 0.1
-    strain: float = 0.02
-    rotation: float = 1.0
-    contact: bool = True
-    release_share: float = 0.1
-    release_redos: int | None = RELEASE_REDOS
-
-
-@dataclass(frozen=True)
-class Newton:
-    """Convergence of the Newton loop: relative residual force and relative displacement
-    correction, iterations allowed before the increment is cut by ``cutback``."""
-
-    force_tolerance: float = 1e-4
-    displacement_tolerance: float = 1e-4
-    max_iterations: int = 25
-    cutback: float = 0.5
-
-
 @dataclass(frozen=True)
 class Move:
     """``tool`` moves by ``displacement`` (mm) over the phase, in straight line."""
@@ -475,8 +438,8 @@ class Phase:
     lead: str | None = None
     max_increment: float = 0.0
     min_increment: float = 0.0
-    rmin: RminLimits = RminLimits()
-    newton: Newton = Newton()
+    limits: IncrementLimits = IncrementLimits()
+    newton: NewtonSettings = NewtonSettings()
     output_every: int = 10
     output_at: tuple[float, ...] = ()
     increments: int = 1

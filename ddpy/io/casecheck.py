@@ -108,7 +108,7 @@ def _start_errors(case: Case, searches: dict[str, ContactSearch]) -> list[DeckEr
     mesh, first = case.mesh, case.phases[0]
     # The run refuses a tool deeper than its first increment may push the blank out by.
     size = HexMesh(np.array(mesh.nodes), np.array(mesh.elements)).element_size()
-    allowed = start_depth_limit(first.rmin.strain, size)
+    allowed = start_depth_limit(first.limits.strain, size)
     for name in first.tools:
         if isinstance(first.motion(name), HoldGap):
             continue  # placed by its gap
@@ -139,7 +139,7 @@ def _start_errors(case: Case, searches: dict[str, ContactSearch]) -> list[DeckEr
                                  f"{mesh.node_ids[nodes[worst]]} at ({_xyz(x)}) is "
                                  f"{depth[worst]:.3g} mm behind its surface, more than the "
                                  f"first phase's rmin_strain times the element size "
-                                 f"({first.rmin.strain:g} x {size:.3g} = {allowed:.3g} mm); "
+                                 f"({first.limits.strain:g} x {size:.3g} = {allowed:.3g} mm); "
                                  f"expected the tool on the {tool.contact} of the blank, "
                                  "at most that deep in it"))
     return errors

@@ -1,2 +1,18 @@
 """The mechanical model: the blank's hexahedral mesh, its material, the solid, the contact
-law and the forming problem that solves them together with the rigid tools."""
+law and the forming problem that solves them together with the rigid tools, and the
+settings of the increment control and the Newton loop.
+
+Example::
+
+    from ddpy.model import FormingProblem, HexMesh, Material, RigidTool, Solid, Swift
+"""
+
+from ddpy.model.control import IncrementLimits, NewtonSettings
+from ddpy.model.forming import FormingError, FormingProblem, FormingResult, RigidTool
+from ddpy.model.material import Hill48, Material, Swift, Voce
+from ddpy.model.mesh import HexMesh
+from ddpy.model.solid import Solid, StaticProblem
+
+__all__ = ["FormingError", "FormingProblem", "FormingResult", "Hill48", "HexMesh",
+           "IncrementLimits", "Material", "NewtonSettings", "RigidTool", "Solid",
+           "StaticProblem", "Swift", "Voce"]

@@ -29,13 +29,14 @@ from ddpy.core.ordering import mesh_solver
 from ddpy.geometry.search import NONE, ContactSearch
 from ddpy.geometry.surfaces import BezierSurface, NagataSurface
 from ddpy.model.contact import INACTIVE, contact_law
+from ddpy.model.control import IncrementLimits, NewtonSettings
 from ddpy.model.mesh import HEX_EDGES, boundary_faces, face_area_vectors
 from ddpy.model.solid import ElementError, Solid, SolidState, _components
 
 _log = logging.getLogger(__name__)
 
-__all__ = ["RigidTool", "FormingProblem", "FormingResult", "FormingError", "IncrementLimits",
-           "PhaseProgress", "default_augmentation", "start_depth_limit"]
+__all__ = ["RigidTool", "FormingProblem", "FormingResult", "FormingError", "PhaseProgress",
+           "default_augmentation", "start_depth_limit"]
 
 #: Most increments a phase may take at its largest increment: a max_increment smaller than
 #: the travel over this would only keep the process busy (1e-300 mm ran for ever).
@@ -83,54 +84,6 @@ class _Touching:
 
     distance: float
     resting: bool = True
-
-
-@dataclass(frozen=True)
-class IncrementLimits:
-    """Limits of the r_min increment control (docs/theory/contact.md). An increment is
-    scaled by r_min = min(1, r_i) over: ``strain``, the largest equivalent strain increment
-    at a Gauss point; ``rotation_deg``, the largest rigid rotation of an element (from the
-    least-squares linear fit of its nodes' displacement increments); ``yield_tolerance``,
-    the elasto-plastic transition: a Gauss point
-    elastic at the start of the increment whose elastic trial stress would overshoot the
-    yield stress by more than this fraction makes the increment land it on the yield
-    surface (None: off); ``first_touch``, a free node that would pass through a tool (it
-    lands on it instead; gaps below ``touch_gap`` times the element size count as
-    touching); ``release``, a node in contact at the start of the increment and released at
-    its end, whose release (interpolated where its augmented pressure p - r g reaches zero)
-    falls before the last ``release`` fraction of the increment, makes the increment be
-    redone to end just past the release (None: off); a node that carries at most
-    ``release_share`` of its tool's normal force at the start of the increment is released
-    inside it instead (0: every release limits the increment); after ``release_redos``
-    redos at a release the increment is accepted with the release inside it (None: no
-    cap). No increment is made smaller than ``min_fraction`` of the nominal one."""
-
-    strain: float = 0.02
-    rotation_deg: float = 5.0
-    yield_tolerance: float | None = 0.05
-    first_touch: bool = True
-    touch_gap: float = 1e-3
-    release: float | None = 0.05
-    release_share: float = 0.0
-    release_redos: int | None = None
-    min_fraction: float = 1e-3
-
-    def __post_init__(self) -> None:
-        if not 0.0 < self.strain < 1.0:
-            raise ValueError(f"strain limit must lie in (0, 1), got {self.strain}")
-        if not 0.0 < self.rotation_deg <= 90.0:
-            raise ValueError(f"rotation limit must lie in (0, 90] degrees, got "
-                             f"{self.rotation_deg}")
-        if not 0.0 < self.min_fraction <= 1.0 or not self.touch_gap >= 0.0:
-            raise ValueError("min_fraction must lie in (0, 1] and touch_gap be >= 0")
-        if not 0.0 <= self.release_share <= 1.0:
-            raise ValueError(f"release_share must lie in [0, 1], got {self.release_share}")
-        if self.release_redos is not None and not self.release_redos >= 0:
-            raise ValueError(f"release_redos must be >= 0 or None, got {self.release_redos}")
-        for name in ("yield_tolerance", "release"):
-            value = getattr(self, name)
-            if value is not None and not 0.0 < value < 1.0:
-                raise ValueError(f"{name} must lie in (0, 1) or be None, got {value}")
 
 
 def start_depth_limit(strain: float, size: float) -> float:
@@ -388,12 +341,8 @@ class FormingProblem:
         motion: Mapping[str, ArrayLike],
         max_increment: float,
         active: Iterable[str] | None = None,
-        tol_force: float = 1e-6,
-        tol_disp: float = 1e-6,
-        max_iterations: int = 25,
-        max_cuts: int = 10,
+        newton: NewtonSettings | None = None,
         limits: IncrementLimits | None = None,
-        cutback: float = 0.5,
         gaps: Mapping[str, tuple[str, float, ArrayLike]] | None = None,
         result: FormingResult | None = None,
         on_increment: Callable[[PhaseProgress], bool | None] | None = None,
@@ -402,18 +351,24 @@ class FormingProblem:
         """Move each tool of ``motion`` by its displacement (3,) over the phase, linearly in
         the phase factor; tools not in ``active`` (default: all) are lifted off (their
         forces vanish). ``max_increment`` is the largest travel of the leading (longest
-        moving) tool per increment, in mm; an increment that fails is cut by ``cutback``
-        and retried, at most ``max_cuts`` times in a row. Converged when the free residual and
-        the contact law are below ``tol_force`` times the force scale and the correction
-        below ``tol_disp`` times the increment. ``limits``: the r_min control (default
-        IncrementLimits()). ``gaps``: tools held at a fixed gap from another, e.g.
-        ``{"holder": ("die", 1.13, (0, 0, 1))}``: the holder is set, along the direction,
-        at 1.13 mm from the die (the smallest distance between their surfaces) in the
-        first increment and then follows the die (a position-controlled blank-holder).
+        moving) tool per increment, in mm. ``newton``: convergence (default
+        NewtonSettings()): the free residual and the contact law below its force tolerance
+        times the force scale and the correction below its displacement tolerance times the
+        increment; an increment that fails is cut by its ``cutback`` and retried, until a
+        cut would go below ``limits.min_fraction``. ``limits``: the r_min control (default
+        IncrementLimits()). Both defaults are those of a deck that sets nothing. ``gaps``:
+        tools held at a fixed gap from another, e.g. ``{"holder": ("die", 1.13, (0, 0, 1))}``:
+        the holder is set, along the direction, at 1.13 mm from the die (the smallest
+        distance between their surfaces) in the first increment and then follows the die
+        (a position-controlled blank-holder).
         ``on_increment`` is called after every converged increment (the result holds its
         data); a true return stops the run there. ``resume`` continues a run from the
         progress such a call received."""
         limits = IncrementLimits() if limits is None else limits
+        newton = NewtonSettings() if newton is None else newton
+        tol_force, tol_disp = newton.force_tolerance, newton.displacement_tolerance
+        max_iterations, cutback = newton.max_iterations, newton.cutback
+        max_cuts = limits.max_cuts(cutback)
         unknown = set(motion) - {t.name for t in self.tools}
         if unknown:
             raise ValueError(f"motion names unknown tools: {sorted(unknown)}")
@@ -429,8 +384,6 @@ class FormingProblem:
         if travel / max_increment > MAX_INCREMENTS:
             raise ValueError(f"max_increment {max_increment:g} mm would take more than "
                              f"{MAX_INCREMENTS:,} increments over the travel {travel:g} mm")
-        if not 0.0 < cutback < 1.0:
-            raise ValueError(f"cutback must lie in (0, 1), got {cutback}")
         result = FormingResult() if result is None else result
         for t in self.tools:
             result.tool_displacements.setdefault(t.name, [])
@@ -481,8 +434,11 @@ class FormingProblem:
             positions = {n: start[n] + target * moves[n] for n in start}
             for name, (other, offset) in offsets.items():
                 positions[name] = positions[other] + offset
+            # A tolerance of 0 is taken as 1e-6: a point landed on the surface lies within
+            # rounding of it, and at 0 it would count as elastic and be landed again.
             landing = None if (limits.yield_tolerance is None or
-                               step <= limits.min_fraction * nominal) else limits.yield_tolerance
+                               step <= limits.min_fraction * nominal) else max(
+                                   limits.yield_tolerance, 1e-6)
             # Start from the last increment's displacement rate (docs/theory/contact.md).
             guess = None if last_du is None else self.u + (target - factor) * last_du
             touching = _Touching(TOUCHING * self.size)
@@ -652,8 +608,7 @@ class FormingProblem:
             self.fix([node], comp)
         return added
 
-    def springback(self, increments: int = 5, tol_force: float = 1e-6,
-                   tol_disp: float = 1e-6, max_iterations: int = 25,
+    def springback(self, increments: int = 5, newton: NewtonSettings | None = None,
                    result: FormingResult | None = None) -> FormingResult:
         """Remove the tools and let the blank unload. The forces that held it at the end of
         forming (contact forces, reactions of released clamps) become nodal loads, brought
@@ -661,7 +616,9 @@ class FormingProblem:
         with the tools lifted off. Keep
         only the constraints that stop rigid-body motion: ``release`` clamps first; if the
         remaining constraints leave rigid motions free, ``support_rigid_modes`` adds a
-        3-2-1 set of supports (docs/theory/contact.md)."""
+        3-2-1 set of supports (docs/theory/contact.md). ``newton``: convergence of each
+        step (default NewtonSettings(); a step that fails stops the springback)."""
+        newton = NewtonSettings() if newton is None else newton
         if int(increments) < 1:
             raise ValueError(f"increments must be at least 1, got {increments}")
         if self.free_rigid_modes():
@@ -678,8 +635,10 @@ class FormingProblem:
         try:
             for k in range(1, int(increments) + 1):
                 self.external = loads * (1.0 - k / increments)
-                outcome = self._increment(layout, solver, self.position, off, tol_force,
-                                          tol_disp, max_iterations, result)
+                outcome = self._increment(layout, solver, self.position, off,
+                                          newton.force_tolerance,
+                                          newton.displacement_tolerance,
+                                          newton.max_iterations, result)
                 if isinstance(outcome, str):
                     raise FormingError(f"springback step {k} failed: {outcome}", result)
                 self.u, self.state = outcome[0], outcome[1]

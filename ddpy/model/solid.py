@@ -30,6 +30,7 @@ from ddpy._validate import float_array, int_array
 from ddpy.core.linalg import LinearSolverError, MumpsSolver
 from ddpy.core.ordering import mesh_solver, nested_dissection, node_adjacency
 from ddpy.core.parallel import threads as thread_count
+from ddpy.model.control import NewtonSettings
 from ddpy.model.mesh import HexMesh
 
 __all__ = ["Assembly", "Solid", "SolidState", "StaticProblem", "SolidResult", "ConvergenceError",
@@ -483,9 +484,9 @@ class StaticProblem:
             self._pattern, self._solver = pattern, solver
         return self._pattern, self._solver
 
-    def solve(self, increments: int = 1, tol_force: float = 1e-8, tol_disp: float = 1e-8,
-              max_iterations: int = 25, max_cuts: int = 6, threads: int | None = None,
-              predictor: str = "tangent", line_search: bool = True) -> SolidResult:
+    def solve(self, increments: int = 1, newton: NewtonSettings | None = None,
+              max_cuts: int = 6, threads: int | None = None, predictor: str = "tangent",
+              line_search: bool = True) -> SolidResult:
         """Apply loads and prescribed displacements in ``increments`` equal steps.
 
         Each increment starts from a linearized predictor, the prescribed increment entering
@@ -494,39 +495,40 @@ class StaticProblem:
         iteration of the previous increment (plastic where the material was loading; the
         first increment and retries after a cut use "elastic"); "elastic" the tangent at the
         converged state; "extrapolate" starts from the previous displacement increment.
-        It has converged when ||r_free|| <= tol_force max(||f_ext||, ||reactions||, floor)
-        and ||correction|| <= tol_disp ||increment of u||. ``line_search``: energy line
-        search when a full Newton step overshoots. On divergence, an inverted element or a
-        failed return mapping the increment is cut in half and retried from the converged
-        state, at most ``max_cuts`` times in a row. ``threads``: OpenMP threads.
+        ``newton`` (default NewtonSettings(), as in a deck): it has converged when
+        ||r_free|| <= force_tolerance max(||f_ext||, ||reactions||, floor) and
+        ||correction|| <= displacement_tolerance ||increment of u||; on divergence, an
+        inverted element or a failed return mapping the increment is cut by ``cutback`` and
+        retried from the converged state, at most ``max_cuts`` times in a row.
+        ``line_search``: energy line search when a full Newton step overshoots.
+        ``threads``: OpenMP threads.
         """
+        newton = NewtonSettings() if newton is None else newton
         if int(increments) < 1:
             raise ValueError(f"increments must be at least 1, got {increments}")
-        for name, value in (("tol_force", tol_force), ("tol_disp", tol_disp)):
-            if not 0.0 < float(value) < 1.0:
-                raise ValueError(f"{name} must lie in (0, 1), got {value}")
-        if int(max_iterations) < 1 or int(max_cuts) < 0:
-            raise ValueError("max_iterations must be >= 1 and max_cuts >= 0")
+        if int(max_cuts) < 0:
+            raise ValueError(f"max_cuts must be >= 0, got {max_cuts}")
         if predictor not in ("tangent", "elastic", "extrapolate"):
             raise ValueError(f"predictor must be 'tangent', 'elastic' or 'extrapolate', got "
                              f"{predictor!r}")
         if threads is not None:
             with thread_count(int(threads)):
-                return self._run(int(increments), tol_force, tol_disp, int(max_iterations),
-                                 int(max_cuts), predictor, line_search)
-        return self._run(int(increments), tol_force, tol_disp, int(max_iterations),
-                         int(max_cuts), predictor, line_search)
+                return self._run(int(increments), newton, int(max_cuts), predictor,
+                                 line_search)
+        return self._run(int(increments), newton, int(max_cuts), predictor, line_search)
 
-    def _run(self, increments: int, tol_force: float, tol_disp: float, max_iterations: int,
-             max_cuts: int, predictor: str, line_search: bool) -> SolidResult:
+    def _run(self, increments: int, newton_settings: NewtonSettings, max_cuts: int,
+             predictor: str, line_search: bool) -> SolidResult:
         pattern, solver = self._prepare()
         solid = self.solid
         fixed = self.fixed.ravel()
         # Floor of the force scale: a microstrain over one element's face.
         mesh = solid.mesh
         face = (mesh.volume() / mesh.n_elements) ** (2.0 / 3.0)
-        newton = _Newton(solid, pattern, solver, fixed, tol_force, tol_disp, max_iterations,
-                         1e-6 * solid.props[0] * face, line_search)
+        newton = _Newton(solid, pattern, solver, fixed, newton_settings.force_tolerance,
+                         newton_settings.displacement_tolerance,
+                         newton_settings.max_iterations, 1e-6 * solid.props[0] * face,
+                         line_search)
         result = SolidResult()
         newton.timings = result.timings
         u = np.zeros(solid.n_dofs)
@@ -564,7 +566,7 @@ class StaticProblem:
                     raise ConvergenceError(
                         f"increment to load factor {target:.6g} failed after {max_cuts} cuts: "
                         f"{outcome}", result)
-                step = delta / 2.0
+                step = delta * newton_settings.cutback
                 continue
             new_u, new_state, reactions, residuals, corrections, carry = outcome
             if carry is not None:

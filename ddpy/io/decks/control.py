@@ -27,7 +27,7 @@ from ddpy.io.decks.lines import (
 _SETTINGS: dict[str, Callable[[str], Any]] = {
     "max_increment": lambda w: read_float(w, "max_increment", gt=0, le=MAX_LENGTH),
     "min_increment": lambda w: read_float(w, "min_increment", gt=0, le=MAX_LENGTH),
-    # The run's increment control (forming.IncrementLimits) takes fractions below 1 only.
+    # The run's increment control (IncrementLimits) takes fractions below 1 only.
     "rmin_yield": lambda w: read_float(w, "rmin_yield", ge=0, lt=1),
     "rmin_strain": lambda w: read_float(w, "rmin_strain", gt=0, lt=1),
     "rmin_rotation": lambda w: read_float(w, "rmin_rotation", gt=0, le=90),
@@ -44,8 +44,6 @@ _SETTINGS: dict[str, Callable[[str], Any]] = {
 _PHASE_KEYS = ("type", "tools", "move", "gap", "lead", "output_at", "increments")
 #: Default largest increment: this fraction of the lead tool's travel.
 DEFAULT_INCREMENT_FRACTION = 0.01
-#: Default smallest increment: this fraction of the largest.
-DEFAULT_MIN_FRACTION = 1e-3
 DEFAULT_OUTPUT_EVERY = 10
 
 

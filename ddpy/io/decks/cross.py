@@ -5,6 +5,7 @@ constraints of bc.dat on the mesh, springback constraints, augmentation against 
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -20,10 +21,8 @@ from ddpy.io.case import (
     HoldGap,
     Mesh,
     Move,
-    Newton,
     NodeSet,
     Phase,
-    RminLimits,
     Tool,
     blank_thickness,
     rigid_body_modes_free,
@@ -31,13 +30,13 @@ from ddpy.io.case import (
 from ddpy.io.decks.boundary import _BcDraft, _select
 from ddpy.io.decks.control import (
     DEFAULT_INCREMENT_FRACTION,
-    DEFAULT_MIN_FRACTION,
     DEFAULT_OUTPUT_EVERY,
     _ControlDraft,
     _PhaseDraft,
 )
 from ddpy.io.decks.lines import NAME_PATTERN, Deck, guard
 from ddpy.io.decks.tools import _ToolDraft
+from ddpy.model.control import IncrementLimits, NewtonSettings
 from ddpy.model.forming import MAX_INCREMENTS, blank_stiffness
 from ddpy.model.mesh import HEX_EDGES
 
@@ -138,15 +137,19 @@ class _Cross:
 
     def _common(self, p: _PhaseDraft, control: _ControlDraft) -> dict[str, Any]:
         s = lambda key, default: self._setting(p, control, key, default)  # noqa: E731
-        r, n = RminLimits(), Newton()
+        r, n = IncrementLimits(), NewtonSettings()
+        contact = s("rmin_contact", r.first_touch)
         return dict(
-            rmin=RminLimits(s("rmin_yield", r.yield_tolerance), s("rmin_strain", r.strain),
-                            s("rmin_rotation", r.rotation), s("rmin_contact", r.contact),
-                            s("rmin_release", r.release_share),
-                            s("rmin_release_redos", r.release_redos)),
-            newton=Newton(s("newton_force", n.force_tolerance),
-                          s("newton_displacement", n.displacement_tolerance),
-                          s("max_iterations", n.max_iterations), s("cutback", n.cutback)),
+            limits=IncrementLimits(
+                strain=s("rmin_strain", r.strain), rotation_deg=s("rmin_rotation", r.rotation_deg),
+                yield_tolerance=s("rmin_yield", r.yield_tolerance), first_touch=contact,
+                release=r.release if contact else None,
+                release_share=s("rmin_release", r.release_share),
+                release_redos=s("rmin_release_redos", r.release_redos)),
+            newton=NewtonSettings(s("newton_force", n.force_tolerance),
+                                  s("newton_displacement", n.displacement_tolerance),
+                                  s("max_iterations", n.max_iterations),
+                                  s("cutback", n.cutback)),
             output_every=s("output_every", DEFAULT_OUTPUT_EVERY),
             origin=self.control.where(p.line))
 
@@ -238,7 +241,8 @@ class _Cross:
         travel = next(m.travel for m in moving if m.tool == lead)
         max_inc = self._setting(p, control, "max_increment",
                                 travel * DEFAULT_INCREMENT_FRACTION)
-        min_inc = self._setting(p, control, "min_increment", max_inc * DEFAULT_MIN_FRACTION)
+        min_inc = self._setting(p, control, "min_increment",
+                                max_inc * IncrementLimits().min_fraction)
         line = self._line_of(p, control, "min_increment") or p.line
         if min_inc > max_inc:
             deck.error(line, f"phase '{p.name}': min_increment {min_inc:g} mm exceeds "
@@ -262,8 +266,10 @@ class _Cross:
                            f"travel {travel:g} mm of the lead tool '{lead}'")
                 return None
             output_at = tuple(values)
+        common = self._common(p, control)
+        common["limits"] = replace(common["limits"], min_fraction=min_inc / max_inc)
         return Phase(p.name, "forming", tuple(p.tools), tuple(motions), lead, max_inc, min_inc,
-                     output_at=output_at, **self._common(p, control))
+                     output_at=output_at, **common)
 
     def _motion_target(self, p: _PhaseDraft, tool: str, line: int, active: set[str],
                        tools: dict[str, Tool], moved: dict[str, int]) -> bool:

@@ -1,0 +1,101 @@
+"""The settings of an incremental solution, one class each, with the defaults that the decks,
+the Python API and the examples share: the r_min increment control (:class:`IncrementLimits`)
+and the Newton loop's convergence (:class:`NewtonSettings`). A deck that sets nothing runs
+with exactly these (docs/input-format.md lists them with their deck keywords)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+__all__ = ["IncrementLimits", "NewtonSettings"]
+
+
+@dataclass(frozen=True)
+class IncrementLimits:
+    """Limits of the r_min increment control (docs/theory/contact.md). An increment is
+    scaled by r_min = min(1, r_i) over:
+
+    - ``strain`` (deck ``rmin_strain``): the largest equivalent strain increment at a
+      Gauss point;
+    - ``rotation_deg`` (``rmin_rotation``): the largest rigid rotation of an element, in
+      degrees (from the least-squares linear fit of its nodes' displacement increments);
+    - ``yield_tolerance`` (``rmin_yield``): the elasto-plastic transition. A Gauss point
+      elastic at the start of the increment whose elastic trial stress would overshoot the
+      yield stress by more than this fraction makes the increment land it on the yield
+      surface (None: off). In a bend a point starts to yield in almost every increment:
+      0.01 landed them one by one (docs/input-format.md);
+    - ``first_touch`` (``rmin_contact``): a free node that would pass through a tool lands
+      on it instead; gaps below ``touch_gap`` times the element size count as touching;
+    - ``release`` (``rmin_contact``): a node in contact at the start of the increment and
+      released at its end, whose release (interpolated where its augmented pressure
+      p - r g reaches zero) falls before the last ``release`` fraction of the increment,
+      makes the increment be redone to end just past the release (None: off). A node that
+      carries at most ``release_share`` (``rmin_release``) of its tool's normal force at the
+      start of the increment is released inside it instead (0: every release limits the
+      increment); after ``release_redos`` (``rmin_release_redos``) redos at a release the
+      increment is accepted with the release inside it (None: no cap; 0: the limit acts
+      ahead only, from the pressure trend: on faceted tools each redo tends to find
+      another node released earlier, a cascade that took half of a run's time);
+    - ``min_fraction``: no increment is made smaller than this fraction of the nominal one
+      (a deck sets it as min_increment / max_increment). A cut that would go below it stops
+      the run.
+    """
+
+    strain: float = 0.02
+    rotation_deg: float = 1.0
+    yield_tolerance: float | None = 0.1
+    first_touch: bool = True
+    touch_gap: float = 1e-3
+    release: float | None = 0.05
+    release_share: float = 0.1
+    release_redos: int | None = 0
+    min_fraction: float = 1e-3
+
+    def __post_init__(self) -> None:
+        if not 0.0 < self.strain < 1.0:
+            raise ValueError(f"strain limit must lie in (0, 1), got {self.strain}")
+        if not 0.0 < self.rotation_deg <= 90.0:
+            raise ValueError(f"rotation limit must lie in (0, 90] degrees, got "
+                             f"{self.rotation_deg}")
+        if not 0.0 < self.min_fraction <= 1.0 or not self.touch_gap >= 0.0:
+            raise ValueError("min_fraction must lie in (0, 1] and touch_gap be >= 0")
+        if not 0.0 <= self.release_share <= 1.0:
+            raise ValueError(f"release_share must lie in [0, 1], got {self.release_share}")
+        if self.release_redos is not None and not self.release_redos >= 0:
+            raise ValueError(f"release_redos must be >= 0 or None, got {self.release_redos}")
+        if self.yield_tolerance is not None and not 0.0 <= self.yield_tolerance < 1.0:
+            raise ValueError(f"yield_tolerance must lie in [0, 1) or be None, got "
+                             f"{self.yield_tolerance}")
+        if self.release is not None and not 0.0 < self.release < 1.0:
+            raise ValueError(f"release must lie in (0, 1) or be None, got {self.release}")
+
+    def max_cuts(self, cutback: float) -> int:
+        """Cuts in a row (each by ``cutback``) that take the nominal increment down to
+        ``min_fraction`` of it: what a failing increment may try before the run stops."""
+        return max(1, math.ceil(math.log(1.0 / self.min_fraction) / -math.log(cutback)))
+
+
+@dataclass(frozen=True)
+class NewtonSettings:
+    """Convergence of the Newton loop (deck ``newton_force``, ``newton_displacement``,
+    ``max_iterations``, ``cutback``): converged when the residual is below
+    ``force_tolerance`` times the force scale and the correction below
+    ``displacement_tolerance`` times the increment's displacement; an increment that has not
+    converged in ``max_iterations`` is cut by ``cutback`` and tried again."""
+
+    force_tolerance: float = 1e-4
+    displacement_tolerance: float = 1e-4
+    max_iterations: int = 25
+    cutback: float = 0.5
+
+    def __post_init__(self) -> None:
+        for name in ("force_tolerance", "displacement_tolerance"):
+            value = getattr(self, name)
+            if not 0.0 < value < 1.0:
+                raise ValueError(f"{name} must lie in (0, 1), got {value}")
+        if not (isinstance(self.max_iterations, int) and self.max_iterations >= 1):
+            raise ValueError(f"max_iterations must be an integer >= 1, got "
+                             f"{self.max_iterations}")
+        if not 0.0 < self.cutback < 1.0:
+            raise ValueError(f"cutback must lie in (0, 1), got {self.cutback}")

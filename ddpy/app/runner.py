@@ -44,7 +44,6 @@ from ddpy.model.forming import (
     PhaseProgress,
     RigidTool,
 )
-from ddpy.model.mesh import HexMesh
 from ddpy.model.solid import Solid, SolidState
 
 __all__ = ["BUILT_IN_CASES", "CHECKPOINT", "DEFAULT_CASE", "RESULTS", "STATUS", "Progress",
@@ -159,8 +158,7 @@ def _rolling_angle(case: Case) -> float:
 
 def build_problem(case: Case) -> FormingProblem:
     """The Solid (material, rolling direction), the rigid tools and the FormingProblem."""
-    mesh = HexMesh(np.array(case.mesh.nodes), np.array(case.mesh.elements))
-    solid = Solid(mesh, case.material.material, _rolling_angle(case))
+    solid = Solid(case.mesh, case.material.material, _rolling_angle(case))
     tools = [RigidTool(t.name, t.model().surface, t.contact_nodes(case.mesh),
                        friction=t.friction, facing=t.facing, augmentation=t.augmentation)
              for t in case.tools]

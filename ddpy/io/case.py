@@ -2,7 +2,7 @@
 plain-text decks (docs/input-format.md). Units mm, N, MPa, s.
 
 Everything here has been checked by the parser: the solver may trust it. Arrays are read-only;
-node and element indices are 0-based (``Mesh.node_ids`` keeps the labels of the deck for
+node and element indices are 0-based (``HexMesh.node_ids`` keeps the labels of the deck for
 messages). ``origin`` fields say where a value was read (``control.dat:12``).
 
 >>> from ddpy.io.decks import read_case
@@ -24,23 +24,18 @@ from numpy.typing import ArrayLike, NDArray
 
 from ddpy.model.control import IncrementLimits, NewtonSettings
 from ddpy.model.material import Material
-from ddpy.model.mesh import HEX_EDGES, HEX_FACES, boundary_faces, face_area_vectors
+from ddpy.model.mesh import HEX_FACES, HexMesh
 
 if TYPE_CHECKING:
     from ddpy.io.toolfile import ToolModel
 
 __all__ = ["AXES", "BlankMaterial", "BoundaryConditions", "Case", "Constraint", "Control",
-           "DeckError", "HoldGap", "Mesh", "Move", "NodeSet", "Phase",
-           "Tool", "HEX_FACES", "blank_thickness", "through_thickness_columns"]
+           "DeckError", "HoldGap", "Move", "NodeSet", "Phase",
+           "Tool", "HEX_FACES", "blank_thickness"]
 
 #: Axis names and their index.
 AXES = {"x": 0, "y": 1, "z": 2}
 
-#: A boundary face belongs to a contact side when its outward normal makes less than
-#: about 45 degrees with the side's direction.
-SIDE_COSINE = 0.7
-#: Most element layers through the thickness that through_thickness_columns follows.
-MAX_LAYERS = 64
 
 
 def _frozen(array: ArrayLike, dtype: type) -> NDArray:
@@ -84,148 +79,10 @@ class DeckError(ValueError):
         return cls(first.message, first.path, first.line, tuple(errors))
 
 
-@dataclass(frozen=True, eq=False)
-class Mesh:
-    """The blank: nodes (n, 3) in mm, 8-node hexahedra (m, 8) of 0-based node indices, the
-    labels of the deck, and the sheet normal (a unit vector along a global axis: ``top`` is
-    the side it points to)."""
-
-    nodes: NDArray[np.float64]
-    elements: NDArray[np.int32]
-    node_ids: NDArray[np.int64]
-    element_ids: NDArray[np.int64]
-    normal: tuple[float, float, float] = (0.0, 0.0, 1.0)
-    source: str = ""
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "nodes", _frozen(self.nodes, np.float64).reshape(-1, 3))
-        object.__setattr__(self, "elements", _frozen(self.elements, np.int32).reshape(-1, 8))
-        object.__setattr__(self, "node_ids", _frozen(self.node_ids, np.int64))
-        object.__setattr__(self, "element_ids", _frozen(self.element_ids, np.int64))
-        object.__setattr__(self, "normal", tuple(float(c) for c in self.normal))
-
-    @property
-    def n_nodes(self) -> int:
-        return int(self.nodes.shape[0])
-
-    @property
-    def n_elements(self) -> int:
-        return int(self.elements.shape[0])
-
-    @property
-    def normal_axis(self) -> int:
-        """Index of the global axis of the sheet normal."""
-        return int(np.argmax(np.abs(self.normal)))
-
-    def bounds(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Lower and upper corners of the bounding box."""
-        return self.nodes.min(axis=0), self.nodes.max(axis=0)
-
-    def index(self, ids: ArrayLike) -> NDArray[np.int32]:
-        """0-based indices of node labels; -1 where a label is not in the mesh."""
-        ids = np.asarray(ids, dtype=np.int64).reshape(-1)
-        order = np.argsort(self.node_ids, kind="stable")
-        sorted_ids = self.node_ids[order]
-        pos = np.clip(np.searchsorted(sorted_ids, ids), 0, max(len(sorted_ids) - 1, 0))
-        found = (sorted_ids[pos] == ids) if len(sorted_ids) else np.zeros(len(ids), bool)
-        return np.where(found, order[pos], -1).astype(np.int32)
-
-    def boundary_faces(self) -> NDArray[np.int32]:
-        """Faces (f, 4) that belong to one element only, counter-clockwise seen from outside."""
-        return boundary_faces(self.elements)
-
-    def face_normals(self, faces: NDArray[np.int32],
-                     nodes: NDArray[np.float64] | None = None) -> NDArray[np.float64]:
-        """Unit outward normals (f, 3) of quadrilateral faces (cross product of diagonals)."""
-        n = face_area_vectors(self.nodes if nodes is None else nodes, faces)
-        length = np.linalg.norm(n, axis=1, keepdims=True)
-        return n / np.where(length > 0, length, 1.0)
-
-    def surface_nodes(self, direction: ArrayLike, cosine: float = SIDE_COSINE
-                      ) -> NDArray[np.int32]:
-        """Nodes of the boundary faces whose outward normal makes an angle of less than
-        arccos(cosine) with ``direction``: the nodes a tool on that side can touch."""
-        d = np.asarray(direction, dtype=float)
-        d = d / np.linalg.norm(d)
-        faces = self.boundary_faces()
-        facing = self.face_normals(faces) @ d > cosine
-        return np.unique(faces[facing]).astype(np.int32)
-
-    def columns(self) -> tuple[NDArray[np.int32], NDArray[np.int32]]:
-        """For each node, the bottom and top node of its through-thickness column; ValueError
-        when the mesh is not layered through the thickness (see through_thickness_columns)."""
-        return through_thickness_columns(self.nodes, self.elements, self.normal)
-
-    def thickness(self, displacement: ArrayLike | None = None) -> NDArray[np.float64]:
-        """Per node, the distance between the top and bottom node of its column, in the
-        current configuration (nodes + displacement)."""
-        bottom, top = self.columns()
-        x = self.nodes if displacement is None else self.nodes + np.reshape(displacement,
-                                                                            (-1, 3))
-        return np.linalg.norm(x[top] - x[bottom], axis=1)
-
-
-def through_thickness_columns(nodes: ArrayLike, elements: ArrayLike, normal: ArrayLike
-                              ) -> tuple[NDArray[np.int32], NDArray[np.int32]]:
-    """Bottom and top node of the through-thickness column of every node of a sheet meshed in
-    layers of hexahedra (one element per layer through the thickness at every point).
-
-    In each element, the four edges of the local direction closest to ``normal`` go through
-    the thickness; oriented along ``normal`` they link each node to the one above it. The
-    thickness at a node is then the distance between the top and bottom node of its column.
-    ValueError when a node would have two different nodes above or below it (the mesh is not
-    layered)."""
-    x = np.asarray(nodes, dtype=float).reshape(-1, 3)
-    e = np.asarray(elements, dtype=np.int64).reshape(-1, 8)
-    d = np.asarray(normal, dtype=float)
-    n = len(x)
-    if len(e) == 0:
-        idx = np.arange(n, dtype=np.int32)
-        return idx, idx.copy()
-    edges = e[:, HEX_EDGES]  # (m, 3, 4, 2)
-    vectors = x[edges[..., 1]] - x[edges[..., 0]]  # (m, 3, 4, 3)
-    lengths = np.linalg.norm(vectors, axis=-1)
-    alignment = np.abs((vectors @ d) / np.where(lengths > 0, lengths, 1.0)).mean(axis=2)
-    family = np.argmax(alignment, axis=1)  # (m,)
-    worst = int(np.argmin(alignment.max(axis=1)))
-    if alignment[worst].max() < 0.5:
-        raise ValueError(f"the mesh is not layered through the thickness: no edges of element "
-                         f"{worst} run along the sheet normal")
-    chosen = edges[np.arange(len(e)), family]  # (m, 4, 2)
-    up = (x[chosen[..., 1]] - x[chosen[..., 0]]) @ d >= 0
-    lower = np.where(up, chosen[..., 0], chosen[..., 1]).ravel()
-    upper = np.where(up, chosen[..., 1], chosen[..., 0]).ravel()
-    pairs = np.unique(np.column_stack([lower, upper]), axis=0)
-    above = np.full(n, -1, dtype=np.int64)
-    below = np.full(n, -1, dtype=np.int64)
-    for link, (src, dst) in ((above, (0, 1)), (below, (1, 0))):
-        keys, counts = np.unique(pairs[:, src], return_counts=True)
-        if np.any(counts > 1):
-            node = int(keys[np.argmax(counts > 1)])
-            raise ValueError(f"the mesh is not layered through the thickness: node {node} has "
-                             f"{int(counts.max())} different neighbours "
-                             f"{'above' if src == 0 else 'below'} it")
-        link[pairs[:, src]] = pairs[:, dst]
-    ends = []
-    for link in (below, above):
-        end = np.arange(n, dtype=np.int64)
-        for _ in range(MAX_LAYERS + 1):  # one pass per layer
-            step = link[end]
-            moved = step >= 0
-            if not moved.any():
-                break
-            end = np.where(moved, step, end)
-        else:
-            raise ValueError(f"the mesh is not layered through the thickness: a column of "
-                             f"nodes has more than {MAX_LAYERS} layers, or loops")
-        ends.append(end.astype(np.int32))
-    return ends[0], ends[1]
-
-
 # ------------------------------------------------------------------------- boundary conditions
 
 
-def blank_thickness(mesh: Mesh) -> float | None:
+def blank_thickness(mesh: HexMesh) -> float | None:
     """Smallest initial thickness of a layered blank (mm); its extent along the normal else."""
     try:
         bottom, top = mesh.columns()
@@ -387,7 +244,7 @@ class Tool:
             return model.facets()
         return model
 
-    def contact_nodes(self, mesh: Mesh) -> NDArray[np.int32]:
+    def contact_nodes(self, mesh: HexMesh) -> NDArray[np.int32]:
         """The blank nodes this tool can touch: nodes of the boundary faces facing it."""
         return mesh.surface_nodes(self.facing)
 
@@ -498,7 +355,7 @@ class Case:
 
     folder: Path
     control: Control
-    mesh: Mesh
+    mesh: HexMesh
     boundary: BoundaryConditions
     material: BlankMaterial
     tools: tuple[Tool, ...]

@@ -20,7 +20,6 @@ from ddpy.geometry.search import INSIDE, ContactSearch
 from ddpy.geometry.surfaces import NagataSurface
 from ddpy.io.case import Case, DeckError, HoldGap, Move, blank_thickness
 from ddpy.model.forming import start_depth_limit
-from ddpy.model.mesh import HexMesh
 
 __all__ = ["geometry_checks", "geometry_errors", "geometry_warnings"]
 
@@ -107,7 +106,7 @@ def _start_errors(case: Case, searches: dict[str, ContactSearch]) -> list[DeckEr
     errors = []
     mesh, first = case.mesh, case.phases[0]
     # The run refuses a tool deeper than its first increment may push the blank out by.
-    size = HexMesh(np.array(mesh.nodes), np.array(mesh.elements)).element_size()
+    size = mesh.element_size()
     allowed = start_depth_limit(first.limits.strain, size)
     for name in first.tools:
         if isinstance(first.motion(name), HoldGap):

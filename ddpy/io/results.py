@@ -38,7 +38,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ddpy import __version__
-from ddpy.io.case import through_thickness_columns
+from ddpy.model.mesh import through_thickness_columns
 
 __all__ = ["CONTACT_STATUS", "FORMAT", "LIMITS", "TENSOR6", "VOIGT", "Frame", "ResultsReader",
            "ResultsWriteError", "ResultsWriter", "Timings", "frame_bytes", "xdmf_text"]
@@ -145,7 +145,7 @@ _FIELDS: dict[str, tuple[str, int, str, str, str]] = {
 
 
 def _mesh_arrays(mesh: Any) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
-    """Nodes, elements, labels and the sheet normal of a ddpy.io.case.Mesh or (nodes, elements)."""
+    """Nodes, elements, labels and the sheet normal of a HexMesh or (nodes, elements)."""
     if isinstance(mesh, tuple):
         nodes, elements = mesh
         ids, eids, normal = None, None, (0.0, 0.0, 1.0)
@@ -185,7 +185,7 @@ class ResultsWriteError(OSError):
 class ResultsWriter:
     """Writes the results of one run to ``path`` (HDF5) and ``path`` with suffix .xdmf.
 
-    ``mesh`` is a :class:`ddpy.io.case.Mesh` (or a tuple nodes, elements); ``tools`` and
+    ``mesh`` is a :class:`ddpy.model.mesh.HexMesh` (or a tuple nodes, elements); ``tools`` and
     ``phases`` name the tools and phases, in the order of the per-tool arrays and phase
     indices. Frame 0, the initial state, is written at once. Use as a context manager or call
     :meth:`close`; a writer never closed still leaves a readable file.

@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from ddpy.io.case import AXES, Mesh
+from ddpy.io.case import AXES
 from ddpy.io.decks.lines import (
     NAME_PATTERN,
     BadValue,
@@ -22,6 +22,7 @@ from ddpy.io.decks.lines import (
     read_name,
     show,
 )
+from ddpy.model.mesh import HexMesh
 
 
 @dataclass
@@ -106,7 +107,7 @@ def _id_range(word: str) -> tuple[int, int]:
 
 
 
-def _select(kind: str, args: list[str], mesh: Mesh, tol: float) -> NDArray[np.int64]:
+def _select(kind: str, args: list[str], mesh: HexMesh, tol: float) -> NDArray[np.int64]:
     x = mesh.nodes
     if kind == "box":
         b = np.array([float(v) for v in args]).reshape(3, 2)

@@ -19,7 +19,6 @@ from ddpy.io.case import (
     Constraint,
     Control,
     HoldGap,
-    Mesh,
     Move,
     NodeSet,
     Phase,
@@ -38,7 +37,7 @@ from ddpy.io.decks.lines import NAME_PATTERN, Deck, guard
 from ddpy.io.decks.tools import _ToolDraft
 from ddpy.model.control import IncrementLimits, NewtonSettings
 from ddpy.model.forming import MAX_INCREMENTS, blank_stiffness
-from ddpy.model.mesh import HEX_EDGES
+from ddpy.model.mesh import HEX_EDGES, HexMesh
 
 
 class _Cross:
@@ -52,7 +51,7 @@ class _Cross:
         self.tools_deck = decks["tools.dat"]
         self.mesh_deck = decks["mesh.dat"]
 
-    def build(self, control: _ControlDraft, mesh: Mesh, mesh_sets: dict[str, NDArray[np.int64]],
+    def build(self, control: _ControlDraft, mesh: HexMesh, mesh_sets: dict[str, NDArray[np.int64]],
               bc: _BcDraft, material: BlankMaterial, tool_drafts: list[_ToolDraft]
               ) -> Case | None:
         tools = self._tools(tool_drafts, mesh)
@@ -82,7 +81,7 @@ class _Cross:
 
     # tools ----------------------------------------------------------------------------------
 
-    def _tools(self, drafts: list[_ToolDraft], mesh: Mesh) -> list[Tool]:
+    def _tools(self, drafts: list[_ToolDraft], mesh: HexMesh) -> list[Tool]:
         tools = []
         normal = np.array(mesh.normal)
         for d in drafts:
@@ -106,7 +105,7 @@ class _Cross:
 
     # phases ---------------------------------------------------------------------------------
 
-    def _phases(self, control: _ControlDraft, tools: dict[str, Tool], mesh: Mesh
+    def _phases(self, control: _ControlDraft, tools: dict[str, Tool], mesh: HexMesh
                 ) -> list[Phase]:
         deck = self.control
         names: dict[str, int] = {}
@@ -299,7 +298,7 @@ class _Cross:
 
     # boundary conditions --------------------------------------------------------------------
 
-    def _boundary(self, bc: _BcDraft, mesh: Mesh, mesh_sets: dict[str, NDArray[np.int64]],
+    def _boundary(self, bc: _BcDraft, mesh: HexMesh, mesh_sets: dict[str, NDArray[np.int64]],
                   phase_names: list[str]) -> BoundaryConditions | None:
         deck = self.bc
         tol = bc.tolerance[0] if bc.tolerance else 1e-4
@@ -373,7 +372,7 @@ class _Cross:
                       f"before it or in the mesh file (known: {known})")
 
     def _springback_constraints(self, phases: list[Phase], control: _ControlDraft,
-                                boundary: BoundaryConditions, mesh: Mesh) -> None:
+                                boundary: BoundaryConditions, mesh: HexMesh) -> None:
         for p in phases:
             if not p.is_springback:
                 continue

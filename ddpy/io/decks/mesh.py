@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ddpy.io.case import AXES, Mesh
+from ddpy.io.case import AXES
 from ddpy.io.decks.lines import (
     INT_PATTERN,
     MAX_LENGTH,
@@ -29,6 +29,7 @@ from ddpy.io.decks.lines import (
     read_vector,
     show,
 )
+from ddpy.model.mesh import HexMesh, MeshError
 
 #: Largest mesh a deck may generate or list (elements).
 MAX_ELEMENTS = 5_000_000
@@ -54,7 +55,7 @@ class _RawMesh:
     node_lines: NDArray[np.int64] | None = None  # deck line of each node (own format)
 
 
-def _parse_mesh(deck: Deck) -> tuple[Mesh, dict[str, NDArray[np.int64]]] | None:
+def _parse_mesh(deck: Deck) -> tuple[HexMesh, dict[str, NDArray[np.int64]]] | None:
     seen: dict[str, int] = {}
     normal: tuple[float, float, float] = (0.0, 0.0, 1.0)
     scale = 1.0
@@ -130,7 +131,13 @@ def _parse_mesh(deck: Deck) -> tuple[Mesh, dict[str, NDArray[np.int64]]] | None:
             return None
     if not _check_elements(deck, raw, nodes):
         return None
-    mesh = Mesh(nodes, raw.elements, raw.node_ids, raw.element_ids, normal, raw.source)
+    try:
+        mesh = HexMesh(nodes, raw.elements, raw.node_ids, raw.element_ids, normal, raw.source)
+    except MeshError as error:  # what the corner checks above do not see (Gauss points)
+        line = (int(raw.element_lines[error.element]) if raw.element_lines is not None
+                and error.element >= 0 else None)
+        deck.error(line, str(error) if line is not None else f"{raw.source}: {error}")
+        return None
     return mesh, raw.nodesets
 
 

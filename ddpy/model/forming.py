@@ -23,14 +23,16 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ddpy import _core
 from ddpy._validate import float_array, int_array
 from ddpy.core.linalg import CoordinateMatrix, LinearSolverError, MumpsSolver, gmres
 from ddpy.core.ordering import mesh_solver
 from ddpy.geometry.search import NONE, ContactSearch
 from ddpy.geometry.surfaces import BezierSurface, NagataSurface
-from ddpy.model.contact import INACTIVE, contact_law
+from ddpy.model.contact import INACTIVE
 from ddpy.model.control import IncrementLimits, NewtonSettings
-from ddpy.model.mesh import HEX_EDGES, boundary_faces, face_area_vectors
+from ddpy.model.material import yield_landing
+from ddpy.model.mesh import HEX_EDGES, HexMesh, boundary_faces, face_area_vectors
 from ddpy.model.solid import ElementError, Solid, SolidState, _components
 
 _log = logging.getLogger(__name__)
@@ -226,10 +228,16 @@ class _Layout:
         # Components of a slave whose displacement is fixed: its force there is a support
         # reaction, so that row of the law becomes lambda_k = 0.
         self.held = equ < 0
+        # The same for the core: 0-based pair nodes, each tool's first pair, held flags.
+        self.pair_node = self.node.astype(np.int32)
+        self.tool_first = self.first.astype(np.int32)
+        self.held_flags = self.held.astype(np.int32).ravel()
+        self.fixed_flags = fixed.astype(np.int32).ravel()
+        # The structure of the contact blocks, in the order the core writes their values:
+        # the coupling entries (-1), dC/dx at the free dofs of each pair's node (pair,
+        # row, column), dC/dlambda (pair, row, column).
         coupling = equ >= 0
-        self.coupling = coupling
         pi, ii, jj = np.nonzero(np.broadcast_to(coupling[:, None, :], (npair, 3, 3)))
-        self.dx_index = (pi, ii, jj)
         rows = [self.pattern.rows, equ[coupling], lam[pi, ii], np.repeat(lam, 3, axis=1).ravel()]
         cols = [self.pattern.cols, lam[coupling], equ[pi, jj], np.tile(lam, (1, 3)).ravel()]
         self.rows = np.concatenate(rows).astype(np.int32)
@@ -243,6 +251,59 @@ class _Layout:
         self.matrix: CoordinateMatrix | None = None  # for products, made when first needed
         for values in self.values:
             values[self.k_slots:self.k_slots + self.n_coupling] = -1.0
+
+
+class _ToolPack:
+    """Every tool's surface and search structures packed one after another in flat arrays,
+    with a table of their offsets, and the blank faces that face each tool: what the core's
+    forming_contact reads (fortran/mechanics/ddpy_forming.f90). Made once."""
+
+    def __init__(self, tools: list[RigidTool], mesh: HexMesh) -> None:
+        searches = [t.search for t in tools]
+        table = np.zeros((len(tools), 10), dtype=np.int32)
+        offsets = np.zeros(4, dtype=np.int64)  # coef, patch, tree, grid
+        for i, (tool, s) in enumerate(zip(tools, searches, strict=True)):
+            n = s.surface.n_patches
+            table[i] = (s.kind, s._stride, n, s.mode, s.max_iterations, *offsets,
+                        tool.facing is not None)
+            offsets += (s.surface.coefficients.size, n, 2 * n - 1, s.grid_params.shape[0])
+        self.table = table.ravel()
+        self.tol = np.array([s.tol for s in searches])
+        cat = np.concatenate
+        self.coef = cat([s.surface.coefficients.ravel() for s in searches])
+        self.degrees = cat([s._degrees for s in searches]).astype(np.int32)
+        self.triangle = cat([s._triangle for s in searches]).astype(np.int32)
+        self.tree_lower = cat([s._tree_lower for s in searches])
+        self.tree_upper = cat([s._tree_upper for s in searches])
+        self.tree_child = cat([s._tree_child for s in searches]).astype(np.int32)
+        self.frame = cat([s._frame for s in searches])
+        self.frame_lower = cat([s._frame_lower for s in searches])
+        self.frame_upper = cat([s._frame_upper for s in searches])
+        self.grid_start = cat([s._grid_start1 for s in searches]).astype(np.int32)
+        self.grid_params = cat([s.grid_params.ravel() for s in searches])
+        self.grid_normals = cat([s.grid_normals.ravel() for s in searches])
+        self.grid_points = cat([s.grid_points.ravel() for s in searches])
+        self.facing = cat([np.zeros(3) if t.facing is None else t.facing for t in tools])
+        # Per tool with a facing direction, the blank's boundary faces that face it (normal
+        # within 60 degrees) and the slave index of their corners (-1: not a slave): the
+        # search keeps only patches opposing the blank's normal at each slave.
+        faces, corners = [], []
+        boundary = boundary_faces(mesh.elements)
+        area = face_area_vectors(mesh.nodes, boundary)
+        for tool in tools:
+            if tool.facing is None:
+                faces.append(np.zeros((0, 4), dtype=np.int32))
+                corners.append(np.zeros((0, 4), dtype=np.int32))
+                continue
+            chosen = boundary[area @ tool.facing > 0.5 * np.linalg.norm(area, axis=1)]
+            where = np.full(mesh.n_nodes, -1, dtype=np.int32)
+            where[tool.slaves] = np.arange(tool.slaves.size)
+            faces.append(chosen.astype(np.int32))
+            corners.append(where[chosen])
+        self.face_first = np.concatenate([[0], np.cumsum([f.shape[0] for f in faces])]
+                                         ).astype(np.int32)
+        self.faces = cat(faces).ravel().astype(np.int32)
+        self.corner = cat(corners).ravel().astype(np.int32)
 
 
 class FormingProblem:
@@ -275,9 +336,7 @@ class FormingProblem:
         default_r = default_augmentation(solid)
         self.r = np.concatenate([np.full(t.slaves.size, t.augmentation or default_r)
                                  for t in self.tools])
-        # Per tool, the blank's boundary faces that face it and the slave index of their
-        # corners (see _facing_normals), made on first use.
-        self._faces: dict[int, tuple[NDArray[np.int32], NDArray[np.int64]]] = {}
+        self._pack = _ToolPack(self.tools, mesh)
         self.mu = np.concatenate([np.full(t.slaves.size, t.friction) for t in self.tools])
         # State carried between increments and phases.
         self.u = np.zeros((n, 3))
@@ -410,7 +469,8 @@ class FormingProblem:
         initial = dict(self.position)
         for name, (other, offset) in offsets.items():
             initial[name] = self.position[other] + offset
-        self._gap = self._contact(layout, x, x, initial, on, self.force)[4]
+        self._gap = self._contact(layout, x, x, initial, on, self.force, np.zeros(layout.n),
+                                  np.empty(layout.rows.size))[1]
         depth = np.where(on & np.isfinite(self._gap[0]), -self._gap[0], -np.inf)
         worst = int(np.argmax(depth)) if depth.size else 0
         if depth.size and depth[worst] > start_depth_limit(limits.strain, self.size):
@@ -740,127 +800,31 @@ class FormingProblem:
 
     def _contact(self, layout: _Layout, x: NDArray[np.float64], x_n: NDArray[np.float64],
                  positions: Mapping[str, NDArray[np.float64]], on: NDArray[np.bool_],
-                 force: NDArray[np.float64], touching: _Touching | None = None):
-        """Contact law of every pair at positions x: residual, derivatives, states. With
-        ``touching``, a pair the law leaves open (p_aug <= 0) whose gap is within its
-        distance takes the closed branch at p_aug = 0+ instead (the predictor of the first
-        iteration, docs/theory/contact.md): an unloaded node lying on a tool then holds the
-        blank against it, as the generalized Jacobian allows at the kink."""
-        npair = layout.node.size
-        gap = np.full(npair, np.inf)
-        normal = np.zeros((npair, 3))
-        c = force.copy()
-        d_lambda = np.broadcast_to(np.eye(3), (npair, 3, 3)).copy()
-        d_x = np.zeros((npair, 3, 3))
-        state = np.zeros(npair, dtype=np.int32)
-        searched = {}
-        for i, tool in enumerate(self.tools):
-            pairs = slice(layout.first[i], layout.first[i + 1])
-            if not on[pairs].any():
-                continue
-            normals = None if tool.facing is None else self._facing_normals(i, x)
-            searched[i] = tool.search.project(x[tool.slaves], positions[tool.name], normals,
-                                              reach=self._reach)
-        close = {} if touching is None else self._touching(layout, x, positions, force,
-                                                            searched, touching)
-        for i, found in searched.items():
-            tool = self.tools[i]
-            pairs = slice(layout.first[i], layout.first[i + 1])
-            nodes = tool.slaves
-            hit = found.status != NONE
-            patch = np.where(hit, found.patch, 0)
-            second = tool.surface.second_derivatives(patch, found.params)
-            v = (x[nodes] - x_n[nodes]) - (positions[tool.name] - self.position[tool.name])
-            lam = force[pairs]
-            shut, p_aug = close.get(i, (None, None))
-            if shut is not None and shut.any():
-                # A normal force that lifts p_aug just above zero: the law then gives its
-                # closed branch there (stick, C = r g n + r s, when nothing slides yet),
-                # which does not depend on the shift.
-                r = self.r[pairs]
-                lift = -p_aug[shut] + 1e-9 * r[shut] * self.size
-                lam = lam.copy()
-                lam[shut] += lift[:, None] * found.normal[shut]
-            law = contact_law(lam, found, second, v, self.mu[pairs], self.r[pairs])
-            # Slices are views: write the pairs that found a patch; the others stay free.
-            c[pairs][hit] = law.residual[hit]
-            d_lambda[pairs][hit] = law.d_lambda[hit]
-            d_x[pairs][hit] = law.d_x[hit]
-            state[pairs][hit] = law.state[hit]
-            gap[pairs][hit] = found.distance[hit]
-            normal[pairs][hit] = found.normal[hit]
-        # Components held by a support: lambda_k = 0.
-        held = layout.held
-        c[held] = force[held]
-        hp, hk = np.nonzero(held)
-        d_lambda[hp, hk, :] = 0.0
-        d_lambda[hp, hk, hk] = 1.0
-        d_x[hp, hk, :] = 0.0
-        return c, d_lambda, d_x, state, (gap, normal)
-
-    def _touching(self, layout: _Layout, x: NDArray[np.float64],
-                  positions: Mapping[str, NDArray[np.float64]], force: NDArray[np.float64],
-                  searched: Mapping[int, object], touching: _Touching
-                  ) -> dict[int, tuple[NDArray[np.bool_], NDArray[np.float64]]]:
-        """The pairs the first iteration's predictor closes, per tool, with the augmented
-        pressure p_aug of every pair: those the law leaves open (p_aug <= 0) within the
-        touching distance of their tool. Unless
-        ``touching.resting``, those of a tool at rest in the increment only when the blank
-        needs them: when the supports, the pairs the law closes and the touching pairs of
-        the moving tools leave a rigid motion free. A touching pair of a resting tool that
-        nothing pushes is otherwise held at g = 0, p = 0, where the law cannot tell its
-        state (docs/theory/contact.md)."""
-        out: dict[int, tuple[NDArray[np.bool_], NDArray[np.float64]]] = {}
-        resting = [i for i in searched
-                   if np.array_equal(positions[self.tools[i].name],
-                                     self.position[self.tools[i].name])]
-        for i, found in searched.items():
-            pairs = slice(layout.first[i], layout.first[i + 1])
-            hit = found.status != NONE
-            distance = np.where(hit, found.distance, 0.0)  # no patch: no finite gap
-            p_aug = np.einsum("ij,ij->i", force[pairs], found.normal) - self.r[pairs] * distance
-            out[i] = hit & (p_aug <= 0.0) & (np.abs(distance) <= touching.distance), p_aug
-        if touching.resting or not any(out[i][0].any() for i in resting):
-            return out
-        holding = [self._restrained_modes(self.fixed)]
-        for i, found in searched.items():
-            close, p_aug = out[i]
-            held = (found.status != NONE) & (p_aug > 0.0)
-            if i not in resting:
-                held |= close
-            if held.any():
-                holding.append(self._modes_along(x[self.tools[i].slaves[held]],
-                                                 found.normal[held]))
-        if np.linalg.matrix_rank(np.concatenate(holding), tol=1e-9) == 6:
-            for i in resting:
-                out[i][0][:] = False
-        return out
-
-    def _facing_normals(self, i: int, x: NDArray[np.float64]) -> NDArray[np.float64]:
-        """Outward normals (k, 3) of the blank surface at the slaves of tool ``i``, in the
-        configuration x: the sum of the area vectors of the boundary faces around each
-        slave that faced the tool at the start (normal within 60 degrees of ``facing``).
-        The search keeps only patches opposing them. ``facing`` itself would turn the
-        filter wrong where the sheet has turned by 90 degrees or more, as over a die
-        shoulder onto its wall (a slave without such a face keeps ``facing``)."""
-        tool = self.tools[i]
-        if i not in self._faces:
-            mesh = self.solid.mesh
-            faces = boundary_faces(mesh.elements)
-            area = face_area_vectors(mesh.nodes, faces)
-            faces = faces[area @ tool.facing > 0.5 * np.linalg.norm(area, axis=1)]
-            # slave index of every face corner (-1: not a slave of this tool)
-            where = np.full(mesh.n_nodes, -1, dtype=np.int64)
-            where[tool.slaves] = np.arange(tool.slaves.size)
-            self._faces[i] = (faces, where[faces])
-        faces, corner = self._faces[i]
-        area = face_area_vectors(x, faces)
-        total = np.zeros((tool.slaves.size, 3))
-        ok = corner >= 0
-        np.add.at(total, corner[ok], np.repeat(area[:, None, :], 4, axis=1)[ok])
-        length = np.linalg.norm(total, axis=1, keepdims=True)
-        return np.where(length > 0.0, total / np.where(length > 0.0, length, 1.0),
-                        tool.facing[None, :])
+                 force: NDArray[np.float64], residual: NDArray[np.float64],
+                 values: NDArray[np.float64], touching: _Touching | None = None
+                 ) -> tuple[NDArray[np.int32], tuple[NDArray[np.float64], NDArray[np.float64]]]:
+        """Contact of every pair at positions x, in one call to the core: the search of each
+        active tool (with the blank's normals at its slaves as the facing filter), the law
+        and the touching predictor of the first iteration (docs/theory/contact.md). It
+        writes the law's rows of ``residual`` and subtracts the pairs' forces from its
+        equilibrium rows (which hold fint - external), and writes the contact entries of
+        ``values``. Returns the pairs' states, and their gaps (inf: no patch) and
+        normals."""
+        pack = self._pack
+        names = [t.name for t in self.tools]
+        state, gap, normal = _core.forming_contact(
+            x.ravel(), x_n.ravel(), layout.fixed_flags, pack.table, pack.tol,
+            pack.coef, pack.degrees, pack.triangle, pack.tree_lower, pack.tree_upper,
+            pack.tree_child, pack.frame, pack.frame_lower, pack.frame_upper, pack.grid_start,
+            pack.grid_params, pack.grid_normals, pack.grid_points, pack.facing,
+            pack.face_first, pack.faces, pack.corner,
+            np.concatenate([positions[n] for n in names]),
+            np.concatenate([self.position[n] for n in names]), self._reach, self.size,
+            0.0 if touching is None else touching.distance,
+            1 if touching is None or touching.resting else 0, layout.tool_first,
+            layout.pair_node, on.astype(np.int32), force.ravel(), self.r, self.mu,
+            layout.held_flags, layout.eqn, layout.nf, layout.k_slots, residual, values)[2:]
+        return state, (gap, normal.reshape(-1, 3))
 
     def _evaluate(self, layout: _Layout, u: NDArray[np.float64], force: NDArray[np.float64],
                   x_n: NDArray[np.float64], positions: Mapping[str, NDArray[np.float64]],
@@ -871,27 +835,19 @@ class FormingProblem:
         values are the layout's buffer ``buffer`` (0 or 1): the next evaluation into the
         same buffer overwrites them."""
         tick = time.perf_counter()
-        c, d_lambda, d_x, state, gap = self._contact(layout, self.solid.mesh.nodes + u, x_n,
-                                                     positions, on, force, touching)
-        tock = time.perf_counter()
-        timings["contact"] += tock - tick
+        values = layout.values[buffer]  # [:k] assembled in place, [k:k + m] = -1 set once
         try:
             out = self.solid.assemble(u, self.state, layout.pattern,
-                                      values=layout.values[buffer][:layout.k_slots])
+                                      values=values[:layout.k_slots])
         except ElementError as error:
             return str(error)
-        tick = time.perf_counter()
-        timings["assembly"] += tick - tock
-        # Equilibrium: internal forces minus the forces of the tools on the slaves.
-        r_node = out.fint - self.external
-        np.add.at(r_node, layout.node, -force)
-        residual = np.concatenate([r_node.ravel()[~self.fixed.ravel()], c.ravel()])
-        pi, ii, jj = layout.dx_index
-        k, m = layout.k_slots, layout.n_coupling
-        values = layout.values[buffer]  # [:k] assembled in place, [k:k + m] = -1 set once
-        values[k + m:k + m + pi.size] = d_x[pi, ii, jj]
-        values[k + m + pi.size:] = d_lambda.reshape(-1)
-        timings["rest"] += time.perf_counter() - tick
+        tock = time.perf_counter()
+        timings["assembly"] += tock - tick
+        residual = np.empty(layout.n)
+        residual[:layout.nf] = (out.fint - self.external).ravel()[~self.fixed.ravel()]
+        state, gap = self._contact(layout, self.solid.mesh.nodes + u, x_n, positions, on,
+                                   force, residual, values, touching)
+        timings["contact"] += time.perf_counter() - tock
         return residual, values, state, out, gap
 
     def _increment(self, layout: _Layout, solver: MumpsSolver,
@@ -1035,7 +991,8 @@ class FormingProblem:
                 # the line search or the penetration limit starts from a poor iterate (a
                 # punch pushed into the extrapolated blank), whose strains say little of
                 # where the converged path yields.
-                landing = _yield_factor(solid.props, self.state, trial[3].state,
+                landing = yield_landing(solid.props, self.state.stress, self.state.ep,
+                                        trial[3].state.strain - self.state.strain,
                                         yield_tolerance)
                 yield_tolerance = None
                 if landing < 1.0:
@@ -1154,48 +1111,6 @@ def _next_step(step: float, nominal: float, reason: str, strain_ratio: float,
     if cap < grow:
         return cap * step, "regrow"
     return grow * step, "strain" if strain_ratio >= rotation_ratio else "rotation"
-
-
-def _yield_factor(props: NDArray[np.float64], before: SolidState, after: SolidState,
-                  tolerance: float) -> float:
-    """Fraction of the increment at which the first Gauss point that was elastic (below the
-    yield surface by more than ``tolerance``) reaches the yield surface, if its elastic trial
-    stress overshoots it by more than ``tolerance``; 1 otherwise. ``after`` is the state of
-    the elastic predictor. The Hill'48 form is quadratic, so along the elastic trial path
-    sigma_n + r C de the landing r solves a quadratic."""
-    young, nu = props[0], props[1]
-    f, g, h, l_, m, n = props[2:8]
-    lam = young * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))
-    mu = young / (2.0 * (1.0 + nu))
-    de = after.strain - before.strain
-    ds = np.empty_like(de)
-    ds[..., :3] = lam * de[..., :3].sum(axis=-1, keepdims=True) + 2.0 * mu * de[..., :3]
-    ds[..., 3:] = mu * de[..., 3:]
-
-    def form(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
-        """The symmetric bilinear form of 2 f(sigma) (Voigt 11 22 33 12 23 31)."""
-        return (f * (a[..., 1] - a[..., 2]) * (b[..., 1] - b[..., 2])
-                + g * (a[..., 2] - a[..., 0]) * (b[..., 2] - b[..., 0])
-                + h * (a[..., 0] - a[..., 1]) * (b[..., 0] - b[..., 1])
-                + 2.0 * (n * a[..., 3] * b[..., 3] + l_ * a[..., 4] * b[..., 4]
-                         + m * a[..., 5] * b[..., 5]))
-
-    ep = before.ep
-    law, k1, k2, k3 = props[8], props[9], props[10], props[11]
-    y = k1 * (k2 + ep) ** k3 if law == 1.0 else k1 + k2 * (1.0 - np.exp(-k3 * ep))
-    a, b = before.stress, ds
-    qa, qab, qb = form(a, a), form(a, b), form(b, b)
-    # A point within the tolerance below the surface is yielding already (it got there by
-    # unloading a little, or by a step that landed it): landing it again would cut the
-    # increment to almost nothing, over and over, while it crosses the last fraction.
-    elastic = qa < (y * (1.0 - tolerance)) ** 2
-    over = elastic & (qa + 2.0 * qab + qb > (y * (1.0 + tolerance)) ** 2) & (qb > 0.0)
-    if not over.any():
-        return 1.0
-    # q(a + r b) = y^2: r = (-qab + sqrt(qab^2 - qb (qa - y^2))) / qb, in (0, 1).
-    disc = np.maximum(qab[over] ** 2 - qb[over] * (qa[over] - y[over] ** 2), 0.0)
-    r = (-qab[over] + np.sqrt(disc)) / qb[over]
-    return float(np.clip(r.min() * (1.0 + tolerance / 2.0), 1e-6, 1.0))
 
 
 def _stalled(iterations: int, residual: float, correction: float, tol_force: float,

@@ -22,7 +22,8 @@ from numpy.typing import ArrayLike, NDArray
 from ddpy import _core
 from ddpy._validate import float_array
 
-__all__ = ["Hill48", "Material", "PROP_COUNT", "ReturnMappingError", "Swift", "Voce"]
+__all__ = ["Hill48", "Material", "PROP_COUNT", "ReturnMappingError", "Swift", "Voce",
+           "yield_landing"]
 
 #: Length of the property vector the core takes (``Material.props()``).
 PROP_COUNT = 16
@@ -296,3 +297,24 @@ class Material:
         if single:
             return stress[0], ep_new[0], tangent[0], plastic[0]
         return stress, ep_new, tangent, plastic
+
+
+def yield_landing(props: ArrayLike, stress_old: ArrayLike, ep_old: ArrayLike,
+                  strain_increment: ArrayLike, tolerance: float) -> float:
+    """The fraction of a strain increment at which the first of k material points that was
+    elastic reaches the yield surface, if its elastic trial stress would overshoot it by
+    more than ``tolerance`` (a fraction of the yield stress); 1 otherwise (the r_min
+    elasto-plastic transition, docs/theory/contact.md). ``props``: the 16 properties
+    (``Material.props()``); stress_old (k, 6), ep_old (k,): the converged state;
+    strain_increment (k, 6), engineering shears. A point within ``tolerance`` below the
+    surface counts as yielding already. The fraction is that of the first landing times
+    1 + tolerance / 2 (just past the surface), at least 1e-6."""
+    s = float_array(np.reshape(stress_old, (-1, 6)), "stress_old", (None, 6))
+    k = s.shape[0]
+    ep = float_array(np.reshape(ep_old, -1), "ep_old", (k,))
+    de = float_array(np.reshape(strain_increment, (-1, 6)), "strain_increment", (k, 6))
+    values = float_array(props, "props", (PROP_COUNT,))
+    if not 0.0 <= tolerance < 1.0:
+        raise ValueError(f"tolerance must lie in [0, 1), got {tolerance}")
+    return float(_core.yield_landing(values, s.ravel(), ep, de.ravel(), float(tolerance)))
+

@@ -4,11 +4,11 @@ module ddpy_api_material
   use, intrinsic :: iso_c_binding, only: c_int, c_double
   use ddpy_kinds, only: wp
   use ddpy_material, only: material_prop_count, material_update, material_hardening, &
-                           material_check, hill48_from_r_values
+                           material_check, hill48_from_r_values, yield_landing
   implicit none
   private
   public :: api_material_update, api_material_hardening, api_material_check, &
-            api_hill48_from_r_values
+            api_hill48_from_r_values, api_yield_landing
 
   integer, parameter :: np = material_prop_count
 
@@ -65,5 +65,17 @@ contains
     call hill48_from_r_values(r0, r45, r90, hill)
     coefficients = hill
   end subroutine api_hill48_from_r_values
+
+  !> Fraction of an increment at which the first elastic point of k lands on the yield
+  !> surface (see yield_landing).
+  subroutine api_yield_landing(props, k, stress_old, ep_old, strain_increment, tolerance, &
+                               fraction) bind(C, name="ddpy_yield_landing")
+    integer(c_int), value, intent(in) :: k
+    real(c_double), value, intent(in) :: tolerance
+    real(c_double), intent(in) :: props(np), stress_old(6, k), ep_old(k), &
+                                  strain_increment(6, k)
+    real(c_double), intent(out) :: fraction
+    fraction = yield_landing(props, k, stress_old, ep_old, strain_increment, tolerance)
+  end subroutine api_yield_landing
 
 end module ddpy_api_material

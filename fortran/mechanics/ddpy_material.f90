@@ -15,7 +15,7 @@ module ddpy_material
   private
   public :: material_update, material_update_checked, material_hardening, &
             material_yield_stress, material_check, hill48_from_r_values, hill48_is_convex, &
-            hill48_equivalent_stress
+            hill48_equivalent_stress, yield_landing
 
   !> Length of the property vector:
   !> (1) E, (2) nu, (3) F, (4) G, (5) H, (6) L, (7) M, (8) N, (9) hardening law
@@ -313,6 +313,56 @@ contains
                  + 2.0_wp*(coefficients(4)*stress(5)**2 + coefficients(5)*stress(6)**2 &
                            + coefficients(6)*stress(4)**2)))
   end function hill48_equivalent_stress
+
+  !> The fraction of a strain increment at which the first material point that was elastic
+  !> reaches the yield surface, if its elastic trial stress overshoots it by more than
+  !> tolerance (a fraction of the yield stress); 1 otherwise. A point within tolerance below
+  !> the surface counts as yielding already: landing it again would cut the increment to
+  !> almost nothing, over and over. The Hill form is quadratic, so along the elastic path
+  !> stress_old + s C de the landing s solves a quadratic; the fraction returned is the
+  !> smallest s times 1 + tolerance / 2 (just past the surface), within [1e-6, 1].
+  pure function yield_landing(props, k, stress_old, ep_old, strain_increment, tolerance) &
+    result(fraction)
+    real(wp), intent(in) :: props(material_prop_count), stress_old(6, k), ep_old(k), &
+                            strain_increment(6, k), tolerance
+    integer, intent(in) :: k
+    real(wp) :: fraction, lam, shear, ds(6), y, qa, qab, qb, disc, s, smallest
+    integer :: i
+    lam = props(1)*props(2)/((1.0_wp + props(2))*(1.0_wp - 2.0_wp*props(2)))
+    shear = props(1)/(2.0_wp*(1.0_wp + props(2)))
+    smallest = huge(1.0_wp)
+    do i = 1, k
+      associate (a => stress_old(:, i), de => strain_increment(:, i))
+        ds(1:3) = lam*(de(1) + de(2) + de(3)) + 2.0_wp*shear*de(1:3)
+        ds(4:6) = shear*de(4:6)
+        y = material_yield_stress(props, ep_old(i))
+        qa = hill48_form(props(3:8), a, a)
+        if (.not. qa < (y*(1.0_wp - tolerance))**2) cycle  ! yielding already
+        qab = hill48_form(props(3:8), a, ds)
+        qb = hill48_form(props(3:8), ds, ds)
+        if (.not. (qa + 2.0_wp*qab + qb > (y*(1.0_wp + tolerance))**2 .and. qb > 0.0_wp)) &
+          cycle
+        disc = max(qab**2 - qb*(qa - y**2), 0.0_wp)
+        s = (-qab + sqrt(disc))/qb
+        smallest = min(smallest, s)
+      end associate
+    end do
+    fraction = 1.0_wp
+    if (smallest < huge(1.0_wp)) &
+      fraction = min(max(smallest*(1.0_wp + tolerance/2.0_wp), 1.0e-6_wp), 1.0_wp)
+  end function yield_landing
+
+  !> The symmetric bilinear form of twice the Hill'48 function, 2 f(sigma), of two Voigt
+  !> vectors (11, 22, 33, 12, 23, 31): coefficients (F, G, H, L, M, N).
+  pure function hill48_form(coefficients, a, b) result(q)
+    real(wp), intent(in) :: coefficients(6), a(6), b(6)
+    real(wp) :: q
+    q = coefficients(1)*(a(2) - a(3))*(b(2) - b(3)) &
+        + coefficients(2)*(a(3) - a(1))*(b(3) - b(1)) &
+        + coefficients(3)*(a(1) - a(2))*(b(1) - b(2)) &
+        + 2.0_wp*(coefficients(6)*a(4)*b(4) + coefficients(4)*a(5)*b(5) &
+                  + coefficients(5)*a(6)*b(6))
+  end function hill48_form
 
   !> Shear and bulk moduli from E and nu.
   pure subroutine elastic_moduli(props, shear, bulk)

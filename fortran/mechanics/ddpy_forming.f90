@@ -1,0 +1,351 @@
+!> The contact of a forming problem in one call: for every (tool, slave node) pair of every
+!> active tool, the closest point on the tool, the Alart-Curnier residual with its
+!> derivatives, and their place in the combined residual and Jacobian (docs/theory/contact.md).
+!>
+!> The unknowns are ordered as the Python layout (ddpy.model.forming) numbers them: the free
+!> displacement dofs first (eqn), then 3 force components per pair. The Jacobian's contact
+!> blocks follow the layout's coordinate structure: the coupling entries (-1, set once by
+!> the caller), then dC/dx at the free dofs of each pair's node (pair-major, row, column),
+!> then dC/dlambda (pair-major, row, column). Tools are packed one after another in flat
+!> arrays (see forming_contact); a tool's own indices (tree children, grid starts) stay
+!> local to it, 1-based.
+module ddpy_forming
+  use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_positive_inf
+  use ddpy_kinds, only: wp
+  use ddpy_surface, only: patch_evaluate
+  use ddpy_global_search, only: contact_search, contact_none
+  use ddpy_contact, only: contact_residual, normal_derivative, contact_inactive
+  implicit none
+  private
+  public :: forming_contact, tool_fields, rank_of_rows
+
+  !> Columns of a tool's row in the tool table: surface kind, reals per patch, patches,
+  !> search mode, local search iterations, offsets (0-based) into the packed coefficient,
+  !> patch, tree and grid arrays, and 1 when it has a facing direction (its faces are
+  !> face_first(t) + 1 .. face_first(t + 1)).
+  integer, parameter :: tool_fields = 10
+  integer, parameter :: f_kind = 1, f_stride = 2, f_npatch = 3, f_mode = 4, f_iterations = 5, &
+                        f_coef = 6, f_patch = 7, f_tree = 8, f_grid = 9, f_facing = 10
+  !> A singular value of the rigid-mode rows above this counts (numpy's matrix_rank tol).
+  real(wp), parameter :: rank_tolerance = 1.0e-9_wp
+  !> A touching pair's force is lifted this far past p_aug = 0 (times r and the size).
+  real(wp), parameter :: lift_fraction = 1.0e-9_wp
+
+contains
+
+  !> Contact of npair pairs at positions x (3, nnode), from the converged x_n, with each
+  !> tool at positions(:, t) (at positions_n(:, t) when converged); writes the contact part
+  !> of the residual (the law's rows, and the pairs' forces in the equilibrium rows, which
+  !> the caller has filled with fint - external) and of the Jacobian values.
+  !>
+  !> touching > 0: the predictor of an increment's first iteration (see
+  !> ddpy.model.forming): a pair the law leaves open within that gap takes the closed
+  !> branch; with resting = 0 those of a tool at rest only when the blank needs them
+  !> (the supports, the pairs the law closes and the touching pairs of the moving tools
+  !> leave a rigid motion free). A pair that found no patch (or whose tool is off) keeps
+  !> C = lambda, state 0 and an infinite gap.
+  subroutine forming_contact(nnode, x, x_n, fixed, ntool, table, tol, coef, degrees, &
+                             triangle, tree_lower, tree_upper, tree_child, frame, &
+                             frame_lower, frame_upper, grid_start, grid_params, &
+                             grid_normals, grid_points, facing, face_first, nface, faces, &
+                             corner, &
+                             positions, positions_n, reach, size, touching, resting, &
+                             npair, tool_first, pair_node, on, force, r, mu, held, eqn, nf, &
+                             k_slots, nvalues, residual, values, state, gap, normal)
+    integer, intent(in) :: nnode, ntool, nface, npair, nf, k_slots, nvalues, resting
+    real(wp), intent(in) :: x(3, nnode), x_n(3, nnode), tol(ntool), coef(*), tree_lower(*), &
+                            tree_upper(*), frame(*), frame_lower(*), frame_upper(*), &
+                            grid_params(*), grid_normals(*), grid_points(*), facing(3, ntool), &
+                            positions(3, ntool), positions_n(3, ntool), reach, size, &
+                            touching, force(3, npair), r(npair), mu(npair)
+    integer, intent(in) :: fixed(3, nnode), table(tool_fields, ntool), degrees(*), &
+                           triangle(*), tree_child(*), grid_start(*), &
+                           face_first(ntool + 1), faces(4, nface), corner(4, nface), &
+                           tool_first(ntool + 1), pair_node(npair), &
+                           on(npair), held(3, npair), eqn(3, nnode)
+    real(wp), intent(inout) :: residual(nf + 3*npair), values(nvalues)
+    integer, intent(out) :: state(npair)
+    real(wp), intent(out) :: gap(npair), normal(3, npair)
+    real(wp), allocatable :: nodes(:, :), node_normals(:, :), params(:, :), points(:, :), &
+                             tangents(:, :, :), distance(:), second(:, :, :), p_aug(:), &
+                             c(:, :), dc_dlambda(:, :, :), dc_dx(:, :, :)
+    integer, allocatable :: patch(:), status(:), iterations(:), ncandidates(:)
+    logical, allocatable :: searched(:), shut(:)
+    integer :: t, p, a, b, k, i, j, pp, slot
+    real(wp) :: d2(3, 3), point(3), d1(3, 2), lam(3), v(3), dndx(3, 3), lift
+
+    allocate(searched(ntool), shut(npair), p_aug(npair), second(3, 3, npair), &
+             tangents(3, 2, npair), params(2, npair), patch(npair), status(npair))
+    allocate(c(3, npair), dc_dlambda(3, 3, npair), dc_dx(3, 3, npair))
+    gap = ieee_value(1.0_wp, ieee_positive_inf)
+    normal = 0.0_wp
+    state = 0
+    status = contact_none
+    patch = 0
+    shut = .false.
+    p_aug = 0.0_wp
+    ! Search each tool that has an active pair.
+    do t = 1, ntool
+      a = tool_first(t) + 1
+      b = tool_first(t + 1)
+      searched(t) = b >= a .and. any(on(a:b) /= 0)
+      if (.not. searched(t)) cycle
+      k = b - a + 1
+      allocate(nodes(3, k), node_normals(3, k), points(3, k), distance(k), iterations(k), &
+               ncandidates(k))
+      do i = 1, k
+        nodes(:, i) = x(:, pair_node(a + i - 1) + 1)
+      end do
+      node_normals = 0.0_wp
+      if (table(f_facing, t) /= 0) call facing_normals(t, k, node_normals)
+      call search_tool(t, k, nodes, node_normals, patch(a:b), params(:, a:b), points, &
+                       normal(:, a:b), tangents(:, :, a:b), distance, status(a:b), &
+                       iterations, ncandidates)
+      do i = 1, k
+        if (status(a + i - 1) /= contact_none) gap(a + i - 1) = distance(i)
+      end do
+      deallocate(nodes, node_normals, points, distance, iterations, ncandidates)
+    end do
+    if (touching > 0.0_wp) call touching_pairs()
+    ! The law at every pair that found a patch; the others keep C = lambda.
+    c = force
+    dc_dlambda = 0.0_wp
+    do i = 1, 3
+      dc_dlambda(i, i, :) = 1.0_wp
+    end do
+    dc_dx = 0.0_wp
+    do t = 1, ntool
+      if (.not. searched(t)) cycle
+      !$omp parallel do schedule(static) private(pp, point, d1, d2, lam, v, dndx, lift) &
+      !$omp   if(tool_first(t + 1) - tool_first(t) > 256)
+      do p = tool_first(t) + 1, tool_first(t + 1)
+        if (status(p) == contact_none) cycle
+        pp = table(f_patch, t) + patch(p)
+        call patch_evaluate(table(f_kind, t), table(f_stride, t), &
+                            coef(table(f_coef, t) + (patch(p) - 1)*table(f_stride, t) + 1), &
+                            degrees(2*pp - 1), params(1, p), params(2, p), point, d1, d2)
+        second(:, :, p) = d2
+        v = (x(:, pair_node(p) + 1) - x_n(:, pair_node(p) + 1)) - &
+            (positions(:, t) - positions_n(:, t))
+        lam = force(:, p)
+        if (shut(p)) then
+          ! A normal force that lifts p_aug just above zero: the law then gives its
+          ! closed branch (stick, C = r g n + r s, when nothing slides yet).
+          lift = -p_aug(p) + lift_fraction*r(p)*size
+          lam = lam + lift*normal(:, p)
+        end if
+        dndx = normal_derivative(tangents(:, :, p), d2, normal(:, p), gap(p))
+        call contact_residual(lam, normal(:, p), gap(p), dndx, v, mu(p), r(p), c(:, p), &
+                              dc_dlambda(:, :, p), dc_dx(:, :, p), state(p))
+      end do
+      !$omp end parallel do
+    end do
+    ! Components held by a support: lambda_k = 0.
+    do p = 1, npair
+      do i = 1, 3
+        if (held(i, p) == 0) cycle
+        c(i, p) = force(i, p)
+        dc_dlambda(i, :, p) = 0.0_wp
+        dc_dlambda(i, i, p) = 1.0_wp
+        dc_dx(i, :, p) = 0.0_wp
+      end do
+    end do
+    ! Equilibrium rows: minus the forces of the tools on their slave nodes, in pair order.
+    do p = 1, npair
+      do i = 1, 3
+        j = eqn(i, pair_node(p) + 1)
+        if (j >= 0) residual(j + 1) = residual(j + 1) - force(i, p)
+      end do
+    end do
+    residual(nf + 1:) = reshape(c, [3*npair])
+    ! Jacobian: dC/dx at the free dofs of each pair's node, then dC/dlambda.
+    slot = k_slots + count(eqn(:, pair_node + 1) >= 0)
+    do p = 1, npair
+      do i = 1, 3
+        do j = 1, 3
+          if (eqn(j, pair_node(p) + 1) < 0) cycle
+          slot = slot + 1
+          values(slot) = dc_dx(i, j, p)
+        end do
+      end do
+    end do
+    do p = 1, npair
+      do i = 1, 3
+        do j = 1, 3
+          slot = slot + 1
+          values(slot) = dc_dlambda(i, j, p)
+        end do
+      end do
+    end do
+
+  contains
+
+    !> Global and local search of the k slaves of tool t.
+    subroutine search_tool(t, k, nodes, node_normals, patch, params, points, normals, &
+                           tangents, distance, status, iterations, ncandidates)
+      integer, intent(in) :: t, k
+      real(wp), intent(in) :: nodes(3, k), node_normals(3, k)
+      integer, intent(out) :: patch(k), status(k), iterations(k), ncandidates(k)
+      real(wp), intent(out) :: params(2, k), points(3, k), normals(3, k), tangents(3, 2, k), &
+                               distance(k)
+      integer :: np_, po, to, go, ntree, ngrid
+      np_ = table(f_npatch, t)
+      po = table(f_patch, t)
+      to = table(f_tree, t)
+      go = table(f_grid, t)
+      ntree = 2*np_ - 1
+      ngrid = grid_start(po + t + np_) - 1
+      call contact_search(table(f_kind, t), np_, table(f_stride, t), &
+                          coef(table(f_coef, t) + 1), degrees(2*po + 1), triangle(po + 1), &
+                          table(f_mode, t), ntree, tree_lower(3*to + 1), &
+                          tree_upper(3*to + 1), tree_child(to + 1), frame(9*po + 1), &
+                          frame_lower(3*po + 1), frame_upper(3*po + 1), ngrid, &
+                          grid_start(po + t), grid_params(2*go + 1), grid_normals(3*go + 1), &
+                          grid_points(3*go + 1), k, nodes, node_normals, positions(:, t), &
+                          table(f_iterations, t), tol(t), reach, patch, params, points, &
+                          normals, tangents, distance, status, iterations, ncandidates)
+    end subroutine search_tool
+
+    !> Outward normals of the blank at the k slaves of tool t (pairs a..): the sum of the
+    !> area vectors, at x, of the boundary faces that faced the tool at the start; the
+    !> tool's facing direction where a slave has none. Normalized twice, as the search's
+    !> own normalization of its input would.
+    subroutine facing_normals(t, k, out)
+      integer, intent(in) :: t, k
+      real(wp), intent(out) :: out(3, k)
+      real(wp) :: area(3), e1(3), e2(3), length
+      integer :: f, q, s, pass
+      out = 0.0_wp
+      do f = face_first(t) + 1, face_first(t + 1)
+        e1 = x(:, faces(3, f) + 1) - x(:, faces(1, f) + 1)
+        e2 = x(:, faces(4, f) + 1) - x(:, faces(2, f) + 1)
+        area = 0.5_wp*[e1(2)*e2(3) - e1(3)*e2(2), e1(3)*e2(1) - e1(1)*e2(3), &
+                       e1(1)*e2(2) - e1(2)*e2(1)]
+        do q = 1, 4
+          s = corner(q, f)
+          if (s >= 0) out(:, s + 1) = out(:, s + 1) + area
+        end do
+      end do
+      do s = 1, k
+        do pass = 1, 2
+          length = sqrt(out(1, s)**2 + out(2, s)**2 + out(3, s)**2)
+          if (length > 0.0_wp) then
+            out(:, s) = out(:, s)/length
+          else
+            out(:, s) = facing(:, t)
+          end if
+        end do
+      end do
+    end subroutine facing_normals
+
+    !> The pairs the first iteration's predictor closes (shut), with p_aug of every pair.
+    subroutine touching_pairs()
+      real(wp), allocatable :: rows(:, :)
+      logical, allocatable :: at_rest(:)
+      real(wp) :: d, centre(3), scale
+      integer :: nrow, u, n
+      logical :: any_resting
+      allocate(at_rest(ntool))
+      any_resting = .false.
+      do u = 1, ntool
+        at_rest(u) = searched(u) .and. all(positions(:, u) == positions_n(:, u))
+        if (.not. searched(u)) cycle
+        do p = tool_first(u) + 1, tool_first(u + 1)
+          d = 0.0_wp
+          if (status(p) /= contact_none) d = gap(p)
+          p_aug(p) = force(1, p)*normal(1, p) + force(2, p)*normal(2, p) + &
+                     force(3, p)*normal(3, p) - r(p)*d
+          shut(p) = status(p) /= contact_none .and. p_aug(p) <= 0.0_wp .and. &
+                    abs(d) <= touching
+          if (at_rest(u) .and. shut(p)) any_resting = .true.
+        end do
+      end do
+      if (resting /= 0 .or. .not. any_resting) return
+      ! The rigid modes the supports and the holding pairs stop: if all six, the
+      ! touching pairs of the resting tools stay open.
+      n = nnode
+      centre = sum(x_n, dim=2)/real(n, wp)
+      scale = max(maxval(maxval(x_n, dim=2) - minval(x_n, dim=2)), 1.0e-300_wp)
+      nrow = count(fixed /= 0) + npair
+      allocate(rows(6, max(nrow, 1)))
+      nrow = 0
+      do i = 1, nnode
+        do j = 1, 3
+          if (fixed(j, i) == 0) cycle
+          nrow = nrow + 1
+          d2(:, 1) = 0.0_wp
+          d2(j, 1) = 1.0_wp
+          rows(:, nrow) = mode_row(x_n(:, i), d2(:, 1), centre, scale)
+        end do
+      end do
+      do u = 1, ntool
+        if (.not. searched(u)) cycle
+        do p = tool_first(u) + 1, tool_first(u + 1)
+          if (status(p) == contact_none) cycle
+          if (p_aug(p) > 0.0_wp .or. (.not. at_rest(u) .and. shut(p))) then
+            nrow = nrow + 1
+            rows(:, nrow) = mode_row(x(:, pair_node(p) + 1), normal(:, p), centre, scale)
+          end if
+        end do
+      end do
+      if (nrow == 0) then
+        nrow = 1
+        rows(:, 1) = 0.0_wp
+      end if
+      if (rank_of_rows(nrow, rows(:, 1:nrow)) == 6) then
+        do u = 1, ntool
+          if (at_rest(u)) shut(tool_first(u) + 1:tool_first(u + 1)) = .false.
+        end do
+      end if
+    end subroutine touching_pairs
+
+  end subroutine forming_contact
+
+  !> The six rigid modes of the blank (unit translations, rotations about its centre with
+  !> the arm over the blank's size) along direction d at point y.
+  pure function mode_row(y, d, centre, scale) result(row)
+    real(wp), intent(in) :: y(3), d(3), centre(3), scale
+    real(wp) :: row(6), arm(3)
+    arm = (y - centre)/scale
+    row(1:3) = d
+    row(4) = arm(2)*d(3) - arm(3)*d(2)
+    row(5) = arm(3)*d(1) - arm(1)*d(3)
+    row(6) = arm(1)*d(2) - arm(2)*d(1)
+  end function mode_row
+
+  !> Rank of the nrow x 6 matrix whose rows are rows(:, i): its singular values above
+  !> rank_tolerance, by one-sided Jacobi rotations of its six columns (accurate to the
+  !> rounding of the entries, where a 6 x 6 normal matrix would square it).
+  pure integer function rank_of_rows(nrow, rows) result(rank)
+    integer, intent(in) :: nrow
+    real(wp), intent(in) :: rows(6, nrow)
+    real(wp) :: a(nrow, 6), alpha, beta, gamma, zeta, tn, cs, sn, col(nrow), off
+    integer :: sweep, i, j
+    a = transpose(rows)
+    do sweep = 1, 60
+      off = 0.0_wp
+      do i = 1, 5
+        do j = i + 1, 6
+          alpha = sum(a(:, i)**2)
+          beta = sum(a(:, j)**2)
+          gamma = sum(a(:, i)*a(:, j))
+          if (gamma == 0.0_wp) cycle
+          off = max(off, abs(gamma)/sqrt(max(alpha*beta, tiny(1.0_wp))))
+          zeta = (beta - alpha)/(2.0_wp*gamma)
+          tn = sign(1.0_wp, zeta)/(abs(zeta) + sqrt(1.0_wp + zeta*zeta))
+          cs = 1.0_wp/sqrt(1.0_wp + tn*tn)
+          sn = cs*tn
+          col = a(:, i)
+          a(:, i) = cs*col - sn*a(:, j)
+          a(:, j) = sn*col + cs*a(:, j)
+        end do
+      end do
+      if (off < 1.0e-15_wp) exit
+    end do
+    rank = 0
+    do i = 1, 6
+      if (sqrt(sum(a(:, i)**2)) > rank_tolerance) rank = rank + 1
+    end do
+  end function rank_of_rows
+
+end module ddpy_forming

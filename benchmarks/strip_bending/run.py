@@ -317,9 +317,9 @@ def report(runs: list[dict], meta: dict, out: Path) -> None:
         *table,
         "",
         f"RMS oscillation of the facets over the larger of Bezier's and Nagata's: {verdict} "
-        "(above 1: the facets oscillate more). The kinks of the curves fall on increments "
-        "limited by a first touch and then a release: the die contact passing from one "
-        "column of nodes to the next. The increments so limited end at (stroke, mm): "
+        "(above 1: the facets oscillate more). The increments limited by a first touch or a "
+        "release (a node meeting or leaving a tool inside the increment) end at (stroke, "
+        "mm): "
         + "; ".join(f"{label} {text or 'none'}" for label, text in events.items()) + "."
         if verdict and np.isfinite(smooth) else "",
         "",

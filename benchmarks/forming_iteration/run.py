@@ -17,8 +17,10 @@ The parts are timed by wrapping, in the worker only, the functions that do them:
 - rest: the remainder of the run's wall time (the Newton loop's Python, residual and
   Jacobian blocks, increment control).
 
-Per iteration = over the factorizations (every Newton iteration factorizes once, rejected
-increments included). The numbers of every ``--label`` are kept in forming_iteration.json;
+Per iteration = over the Newton corrections of all trials, rejected increments included, as
+the results file counts them; a run without that count (before the solver solved some
+corrections with older factors) factorized once per correction, so its factorizations are
+that count. The numbers of every ``--label`` are kept in forming_iteration.json;
 the page shows them all (e.g. ``before`` from a checkout of the code before a change).
 
     python benchmarks/forming_iteration/run.py --label after [--threads 1 2]
@@ -164,13 +166,16 @@ def worker(mesh: str, increments: int) -> dict[str, Any]:
         other = max(cpu_busy() - busy - cpu, 0.0) / wall
         from ddpy.io.results import ResultsReader
         with ResultsReader(Path(output) / runner.RESULTS) as results:
-            iterations = int(results.history()["iterations"].sum())
+            history = results.history()
+            iterations = int(history["iterations"].sum())
+            corrections = {key: int(history[key].sum()) for key in
+                           ("newton_iterations", "krylov_iterations") if key in history}
     from ddpy.core.parallel import max_threads
     setup = first[0] - start + spent.pop("prepare")
     return {"mesh": mesh, "code": code_version(), "hexahedra": hexahedra,
             "threads": max_threads(), "increments": outcome.increments,
             "iterations": iterations, "wall": wall, "cpu": cpu, "setup": setup,
-            "other_cpus": other, "mumps": mumps, **count, **spent}
+            "other_cpus": other, "mumps": mumps, **corrections, **count, **spent}
 
 
 def measure(mesh: str, threads: int, increments: int) -> dict[str, Any]:
@@ -180,10 +185,17 @@ def measure(mesh: str, threads: int, increments: int) -> dict[str, Any]:
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
+def corrections(r: dict[str, Any]) -> int:
+    """The Newton corrections of a run, rejected trials included: as its results file
+    counted them, else its factorizations (one per correction before the solver reused
+    older factors)."""
+    return int(r.get("newton_iterations") or r["factorizations"])
+
+
 def split(r: dict[str, Any]) -> dict[str, float]:
-    """Seconds per iteration: assembly, contact (search within), factorization + solve,
-    writing, rest."""
-    n = max(r["factorizations"], 1)
+    """Seconds per iteration (Newton correction): assembly, contact (search within),
+    factorization + solve, writing, rest."""
+    n = max(corrections(r), 1)
     loop = r["wall"] - r["setup"]
     known = r["assembly"] + r["contact"] + r["factorization"] + r["solve"] + r["writing"]
     return {"assembly": r["assembly"] / n, "contact": r["contact"] / n,
@@ -193,9 +205,9 @@ def split(r: dict[str, Any]) -> dict[str, float]:
 
 
 HEADER = ("| code | mesh | threads | assembly | contact (search) | factorization | solve | "
-          "writing | rest | **per iteration** | non-MUMPS | iterations | increments | "
-          "set-up (s) | other CPUs |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|"
-          "---|---|")
+          "writing | rest | **per iteration** | non-MUMPS | iterations | factorizations | "
+          "increments | set-up (s) | other CPUs |\n|---|---|---|---|---|---|---|---|---|---|---|"
+          "---|---|---|---|---|")
 
 
 def report(numbers: dict[str, Any]) -> str:
@@ -208,7 +220,8 @@ def report(numbers: dict[str, Any]) -> str:
                 f"| {label} | {r['mesh']} | {r['threads']} | {s['assembly']:.4f} | "
                 f"{s['contact']:.4f} ({s['search']:.4f}) | {s['factorization']:.4f} | "
                 f"{s['solve']:.4f} | {s['writing']:.4f} | {s['rest']:.4f} | "
-                f"**{s['total']:.4f}** | {s['total'] - mumps:.4f} | {r['factorizations']} | "
+                f"**{s['total']:.4f}** | {s['total'] - mumps:.4f} | {corrections(r)} | "
+                f"{r['factorizations']} | "
                 f"{r['increments']} | {r['setup']:.1f} | {r['other_cpus']:.2f} |")
     note_text = "\n".join(f"- {line}" for line in findings(numbers))
     code = computed_at(code_version(), {label: runs[0].get("code", "") if runs else ""
@@ -225,7 +238,9 @@ The cylindrical bending case (Nagata tools) through `ddpy.app.runner.run_case`, 
 increments: **coarse** = the built-in case (`ddpy run`{size(numbers, "coarse", ", ")}),
 **paper** = the paper's blank from
 `benchmarks/cylindrical_bending/make_case.py`{size(numbers, "paper", " (", ")")}.
-Seconds per Newton iteration (= per factorization, rejected increments included):
+Seconds per Newton iteration (per Newton correction, rejected increments included; the
+runs that do not count their corrections factorized once per correction, so there it is per
+factorization; the others solve some corrections with older factors and GMRES, in "solve"):
 
 - assembly: `Solid.assemble` (Fortran solid_assemble: internal forces, consistent tangent,
   return mapping, written into the MUMPS values; and its Python wrapper);
@@ -301,7 +316,7 @@ def findings(numbers: dict[str, Any]) -> list[str]:
             if m:
                 text += (f"; the LU of {m['n']:,} unknowns and {m['nnz']:,} entries takes "
                          f"{m['flops']:.3g} flops and {m['factor_entries']:,} factor entries")
-            text += (f"; {r['factorizations'] / max(r['increments'], 1):.1f} iterations per "
+            text += (f"; {corrections(r) / max(r['increments'], 1):.1f} iterations per "
                      f"converged increment (rejected increments included)")
             lines.append(text + ".")
     if len(labels) >= 2:

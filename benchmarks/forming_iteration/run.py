@@ -70,10 +70,11 @@ every front{flops}). Its runs also
 carry the session's changes of the contact law's default augmentation and of the increment
 control, so their iteration counts differ; the time per iteration is the comparison.{later}
 
-What dominates on the paper mesh is still MUMPS's LU (one per iteration, see the findings):
-the {target:.2f} s per iteration of the target is out of reach while every iteration
-factorizes afresh, and the iterations per increment (in the findings below; the paper's
-DD3IMP needed 11.5) weigh as much: contact states of a band of nodes grazing the punch flip between
+What dominates on the paper mesh is still MUMPS: its LU, one per iteration until the solver
+solved some corrections with older factors (then also its solves, for GMRES; the share of
+each run in the findings). The {target:.2f} s per iteration of the target is out of reach
+with it, and the iterations per increment (in the findings below; the paper's DD3IMP needed
+11.5) weigh as much: contact states of a band of nodes grazing the punch flip between
 iterations (docs/benchmarks/cylindrical_bending.md). Outside MUMPS the assembly (Fortran
 element kernel) leads."""
 

@@ -48,6 +48,24 @@ def code_version() -> str:
     return described + ("-dirty" if changed else "")
 
 
+def computed_at(code: str, runs: dict[str, str] | None = None) -> str:
+    """The line near the top of a report that names the code it was computed at: ``code``
+    (code_version() of the run that wrote it), and, for a report built from kept runs, the
+    code each run recorded (``runs``: label -> its code, "" where none was recorded)."""
+    line = f"Computed at code `{code or 'unknown'}`"
+    if not runs:
+        return line + "."
+    stamps = {label: stamp or "not recorded" for label, stamp in runs.items()}
+    if set(stamps.values()) == {code}:
+        return line + " (this report and every run in it)."
+    by_code: dict[str, list[str]] = {}
+    for label, stamp in stamps.items():
+        by_code.setdefault(stamp, []).append(label)
+    return (line + " (this report); its runs: " + "; ".join(
+        f"at code `{stamp}` ({', '.join(labels)})" if stamp != "not recorded" else
+        f"code not recorded ({', '.join(labels)})" for stamp, labels in by_code.items()) + ".")
+
+
 def cores() -> int:
     """The cores this process may run on."""
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else \

@@ -24,6 +24,7 @@ from __future__ import annotations
 import argparse
 import datetime
 import json
+import platform
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -40,6 +41,7 @@ from bench_common import (  # noqa: E402
     CODE_FILE,
     DOCS,
     code_version,
+    computed_at,
     cores,
     load_module,
     recorded_code,
@@ -69,6 +71,9 @@ AXIS0 = np.array([0.0, 0.0, make_case.THICKNESS + make_case.PUNCH_RADIUS])
 WINDOW, START = 1.0, 1.0
 #: The free flange for beta: material initially beyond this x, past the die shoulder.
 FLANGE_X = 45.0
+#: Degrees of arc of one coarse facet (a Nagata patch made flat) and of one fine facet.
+COARSE_FACET = 90.0 / make_case.PATCHES_PER_ARC
+FINE_FACET = 90.0 / make_case.FACETS_PER_ARC
 
 
 @dataclass
@@ -475,12 +480,23 @@ def _alone(numbers: dict[str, Any]) -> str:
 
 def report(mesh: str, hexahedra: int, numbers: dict[str, dict[str, Any]],
            shape: dict[str, dict[str, dict[str, Any]]], figures: dict[str, Path],
-           threads: int) -> str:
-    """The markdown report."""
+           threads: int, code: str = "") -> str:
+    """The markdown report; ``code``: the code version that wrote it (its runs name
+    their own)."""
     models = [m for m in MODELS if m in numbers]
+    # On the coarse blank theta moves in steps of the node spacing over the punch.
+    spacing = make_case.COARSE_SPLIT / make_case.COARSE_X[0]
+    arc = np.degrees(spacing / (make_case.PUNCH_RADIUS + make_case.THICKNESS))
+    # A fine facet's chord off its arc, R (1 - cos(half its angle)), in um.
+    sag = 1e3 * (1.0 - np.cos(np.radians(FINE_FACET / 2)))
+    strokes = ", ".join(f"{s:g}" for s in make_case.OUTPUT_AT[:-1]) + \
+        f" and {make_case.OUTPUT_AT[-1]:g}"
+    n_cores = cores()
     head = _row(["", *[f"{LABELS[m]} ddpy" for m in models], *["paper" for _ in models]])
     lines = [
         "# Unconstrained cylindrical bending (paper Fig. 8-12, Tables 2-3)",
+        "",
+        computed_at(code, {LABELS[m]: numbers[m].get("code", "") for m in models}),
         "",
         "Written by `benchmarks/cylindrical_bending/run.py"
         + (" --mesh paper" if mesh == "paper" else "") + "`; the cases by `make_case.py` "
@@ -497,21 +513,23 @@ def report(mesh: str, hexahedra: int, numbers: dict[str, dict[str, Any]],
         f"{make_case.SHOULDER_RADIUS} mm centred {make_case.SHOULDER_X} mm from the symmetry "
         "plane, flat tops beyond, an inner wall below, no bottom. One STEP model "
         "(`ddpy.cad.examples.bending_tools`), four tool models built from it "
-        "(`ddpy.cad.build_tool_models`): Bezier patches; Nagata, 4 patches per 90 degrees of "
-        "arc; coarse facets, the Nagata mesh with flat patches (the paper's section *Bilinear "
-        "facets*: c = 0, same discretization); fine facets, 30 per arc. Straight edges: "
-        "elements of at most 5 mm.",
+        f"(`ddpy.cad.build_tool_models`): Bezier patches; Nagata, {make_case.PATCHES_PER_ARC} "
+        "patches per 90 degrees of arc; coarse facets, the Nagata mesh with flat patches (the "
+        "paper's section *Bilinear facets*: c = 0, same discretization); fine facets, "
+        f"{make_case.FACETS_PER_ARC} per arc. Straight edges: elements of at most 5 mm.",
         "",
-        f"Blank: **{mesh}** mesh, {hexahedra} hexahedra in 3 layers"
-        + (" (the paper: 19,950, unstructured)." if mesh == "paper" else
-           f" (structured, {make_case.COARSE_X[0]} elements over 0 <= x <= "
+        f"Blank: **{mesh}** mesh, {hexahedra} hexahedra in {make_case.LAYERS} layers"
+        + (f" (the paper: {make_case.PAPER_HEXAHEDRA:,}, unstructured)." if mesh == "paper"
+           else f" (structured, {make_case.COARSE_X[0]} elements over 0 <= x <= "
            f"{make_case.COARSE_SPLIT:g} mm, {make_case.COARSE_X[1]} beyond, "
-           f"{make_case.COARSE_Y} across; the paper: 19,950 unstructured). Contact angles "
-           "come from nodes: on this mesh they move in steps of the node spacing over the "
-           "punch, about 3.6 degrees of arc (7 degrees of theta)."),
+           f"{make_case.COARSE_Y} across; the paper: {make_case.PAPER_HEXAHEDRA:,} "
+           "unstructured). Contact angles come from nodes: on this mesh they move in steps "
+           f"of the node spacing over the punch, {arc:.1f} degrees of arc ({2 * arc:.1f} "
+           "degrees of theta)."),
         f"Report written on {threads} thread(s); each run's threads are in Table 3 (a run "
-        "alone on the 2 cores with 2 threads, or several at once with 1 thread each); wall "
-        "times are this machine's (x86_64, 2 cores). A run that shared the cores does not "
+        f"alone on the {n_cores} cores with {n_cores} threads, or several at once with 1 "
+        f"thread each); wall times are this machine's ({platform.machine()}, {n_cores} "
+        "cores). A run that shared the cores does not "
         "time its model: Table 3's *wall time alone* is that of a run alone with a thread "
         "per core, of this run or of an earlier one kept in the runs file that took the same "
         "path (the same increments and iterations; the path does not depend on the threads).",
@@ -520,8 +538,8 @@ def report(mesh: str, hexahedra: int, numbers: dict[str, dict[str, Any]],
         "",
         "theta: the angle, at the punch's axis, between the two contact points with the "
         "punch farthest from the centreline (twice the angle of the farthest node in contact "
-        "in the quarter model, `ddpy.studies.bending.contact_angle`), at 7, 14, 21 and "
-        "28.5 mm. beta: the paper's Fig. 11 is not in its text: here beta is the angle to the "
+        f"in the quarter model, `ddpy.studies.bending.contact_angle`), at {strokes} mm. "
+        "beta: the paper's Fig. 11 is not in its text: here beta is the angle to the "
         "vertical (the punch's direction) of the free flange (the material initially at "
         f"x >= {FLANGE_X:g} mm, beyond the die shoulder; a line fitted through its nodes, "
         "`ddpy.studies.bending.line_angle`), beta_1 at the end of forming, beta_2 after "
@@ -629,9 +647,13 @@ def report(mesh: str, hexahedra: int, numbers: dict[str, dict[str, Any]],
                                f"{row['mean_distance_um']:.3g}",
                                f"{row['max_angle_deg']:.3g}"]))
     lines += ["", "The paper (Fig. 8, die profile): 9 um and about 1.5 degrees for the fine "
-              "facets, below 0.1 degree for Nagata. A chord of 3 degrees (30 per 90) deviates "
-              "from an arc of radius R by R (1 - cos 1.5 deg): 1.4 um on the 4 mm shoulder, "
-              "8.1 um on the 23.5 mm punch; the paper's 9 um matches the punch's radius.", ""]
+              f"facets, below 0.1 degree for Nagata. A chord of {FINE_FACET:g} degrees "
+              f"({make_case.FACETS_PER_ARC} per 90) deviates from an arc of radius R by "
+              f"R (1 - cos {FINE_FACET / 2:g} deg): "
+              f"{sag * make_case.SHOULDER_RADIUS:.2g} um on the "
+              f"{make_case.SHOULDER_RADIUS:g} mm shoulder, {sag * make_case.PUNCH_RADIUS:.2g} "
+              f"um on the {make_case.PUNCH_RADIUS:g} mm punch; the paper's 9 um matches the "
+              "punch's radius.", ""]
     for m in ("nagata", "facets_fine"):
         if "png" in shape.get("die", {}).get(m, {}):
             lines += [f"![{LABELS[m]} die]({shape['die'][m]['png']})", ""]
@@ -677,12 +699,17 @@ def target(mesh: str, numbers: dict[str, dict[str, Any]]) -> list[str]:
     apart = (f": LU factorizations {100 * split['factorization'] / max(total, 1e-12):.0f} %, "
              f"solutions {100 * split['solve'] / max(total, 1e-12):.0f} %"
              if lead == "linear" and "solve" in split else "")
+    # The mean time of one LU: the factorizations' time over the run's iterations (forming
+    # and springback: the same path as this run's) over the factorizations.
+    lus = source.get("factorizations", n["factorizations"])
+    everything = n["iterations"] + n["springback_iterations"]
+    lu = (f"; one LU of this blank took {split['factorization'] * everything / lus:.2f} s on "
+          "average" if "factorization" in split and lus else "")
     dominates = (
         f"What dominates an iteration: {lead}, "
         f"{100 * per.get(lead, 0.0) / max(total, 1e-12):.0f} %{apart} "
         f"({n['factorizations']} LU factorizations and {n['krylov_iterations']} GMRES "
-        "iterations with older factors; one LU of this blank is 3.2e10 flops, 1.2-1.5 s, one "
-        "solve 0.07-0.1 s, memory-bound).")
+        f"iterations with older factors{lu}).")
     if timed is None:
         return [head + "not judged** (" + n["status"] + f"; this run took {n['threads']} "
                 "thread(s) and shared the cores with other runs, and no run alone with a "
@@ -705,11 +732,11 @@ def target(mesh: str, numbers: dict[str, dict[str, Any]]) -> list[str]:
             "shoulders passes from one node column to the next (pairs that flip between open "
             "and slip for several iterations; an augmentation r per node, docs/theory/"
             "contact.md), and cheaper GMRES iterations (each is one MUMPS solve, which reads "
-            "the factors at about a third of the memory bandwidth a dense product reaches on "
+            "the factors at a fraction of the memory bandwidth a dense product reaches on "
             "this machine, docs/theory/linear-solver.md). Measured there and short of it: "
-            "METIS's pivot order (7 % fewer factor entries, 12 % fewer flops), a symmetric "
-            "LDL^T preconditioner (the solve reads as much, GMRES needs about 4 more "
-            "iterations after each factorization), a low-rank update of the factors for the "
+            "METIS's pivot order (fewer factor entries and flops, not enough), a symmetric "
+            "LDL^T preconditioner (the solve reads as much, GMRES needs more iterations after "
+            "each factorization), a low-rank update of the factors for the "
             "contact rows (the solid's rows drift as much), block low-rank and single-"
             "precision factors.", ""])
 
@@ -778,8 +805,9 @@ def _release_effort(numbers: dict[str, dict[str, Any]]) -> list[str]:
             "pressure trend of the last one predicts it, and redone shorter when the release "
             "is seen only after it has converged, up to `rmin_release_redos` times; "
             "docs/theory/contact.md): " + "; ".join(parts) + ". A node leaves a facet where "
-            "the sheet passes its edge (the normal turns by 22.5 degrees there on the coarse "
-            "facets), and every node of the unstructured blank passes it at its own stroke; "
+            f"the sheet passes its edge (the normal turns by {COARSE_FACET:g} degrees there on "
+            "the coarse facets), and every node of the unstructured blank passes it at its own "
+            "stroke; "
             "the tools' forces rest on few nodes (" + contact + "), so most of these "
             "releases carry more than the share. With no cap, one increment was often redone "
             "several times, each redo finding another node released earlier; with the "
@@ -817,18 +845,21 @@ def findings(numbers: dict[str, dict[str, Any]], mesh: str = "coarse") -> list[s
                 f"{abs(n['beta1_deg'] - b['beta1_deg']):.2f} and "
                 f"{abs(n['beta2_deg'] - b['beta2_deg']):.2f} degrees.")
     if "nagata" in numbers and numbers["nagata"].get("end_xz_mm"):
-        n = numbers["nagata"]
+        n, paper = numbers["nagata"], PAPER["nagata"]
         x, z = n["end_xz_mm"]
         b1, b2 = n["beta1_deg"], n["beta2_deg"]
+        below = "below" if n["theta_deg"][-1] < paper["theta"][-1] else "not below"
+        smaller = "smaller" if b2 - b1 < paper["beta2"] - paper["beta1"] else "not smaller"
         out.append(
             f"- The blank's end (x = {make_case.LENGTH:g} mm at the start) ends forming at "
             f"x = {x:g} mm, z = {z:g} mm (Nagata): the flange has turned up about the die "
             f"shoulder to beta_1 = {b1:g} degrees from the vertical, {b2:g} after springback "
-            f"(the paper: 20.7 and 35.0). At full stroke the flange lies along the tangent "
-            "from the punch to the shoulder, so beta_1 is set by the tools; the tools here are "
-            "a reconstruction that matches the paper's rigid wrap angles only, and "
-            "theta_4 stays below the paper's 155 degrees. The springback, "
-            f"{b2 - b1:.1f} degrees against the paper's 14, is smaller: the reconstructed "
+            f"(the paper: {paper['beta1']:.1f} and {paper['beta2']:.1f}). At full stroke the "
+            "flange lies along the tangent from the punch to the shoulder, so beta_1 is set by "
+            "the tools; the tools here are a reconstruction that matches the paper's rigid wrap "
+            f"angles only, and theta_4 stays {below} the paper's {paper['theta'][-1]:g} "
+            f"degrees. The springback, {b2 - b1:.1f} degrees against the paper's "
+            f"{paper['beta2'] - paper['beta1']:.1f}, is {smaller}: the reconstructed "
             "tools" + (", " if mesh == "coarse" else " and ") + "the assumed elastic "
             "constants (E, nu are lost from the paper's text)" + (
                 f" and this mesh of {make_case.COARSE_X[0]} elements over the bend all bear "
@@ -851,9 +882,10 @@ def findings(numbers: dict[str, dict[str, Any]], mesh: str = "coarse") -> list[s
                 ": the difference is in the increments the r_min control shortens. Nodes "
                 "of the sheet that wraps the smooth "
                 "punch touch it and lift off again as the wrap proceeds; on a flat facet of "
-                "22.5 degrees the sheet touches at the facet's corners only (theta_1 = "
-                f"{f['theta_deg'][0]:g} degrees at 7 mm: the centre node alone), so fewer "
-                "nodes touch and release. The paper's runs (fine blank) had the opposite; on "
+                f"{COARSE_FACET:g} degrees the sheet touches at the facet's corners only "
+                f"(theta_1 = {f['theta_deg'][0]:g} degrees at {make_case.OUTPUT_AT[0]:g} mm"
+                + (": the centre node alone" if f["theta_deg"][0] < 1.0 else "") + "), so "
+                "fewer nodes touch and release. The paper's runs (fine blank) had the opposite; on "
                 "this coarse blank the events of the blank's own nodes dominate."))
     if mesh != "coarse":
         out += _polygon_angles(numbers)
@@ -864,10 +896,11 @@ def findings(numbers: dict[str, dict[str, Any]], mesh: str = "coarse") -> list[s
             out.append(
                 f"- Fine facets against the smooth models: oscillation {osc['facets_fine']:.3g} "
                 f"N against {osc['bezier']:.3g} (Bezier) and {osc['nagata']:.3g} N (Nagata). "
-                "On this blank the punch force jumps each time a node column (1.5 mm apart) "
-                "reaches the punch, with every description (Fig. 9 here); the deviation from "
-                "the smoothed curve measures these jumps first, and 3-degree facets add "
-                "little to them. The coarse facets (22.5 degrees) oscillate "
+                "On this blank the punch force jumps each time a node column ("
+                f"{make_case.COARSE_SPLIT / make_case.COARSE_X[0]:g} mm apart) reaches the "
+                "punch, with every description (Fig. 9 here); the deviation from the smoothed "
+                f"curve measures these jumps first, and {FINE_FACET:g}-degree facets add "
+                f"little to them. The coarse facets ({COARSE_FACET:g} degrees) oscillate "
                 f"{osc['facets_coarse'] / osc['nagata']:.1f} times as much as Nagata.")
     return out
 
@@ -941,7 +974,8 @@ def main(argv: list[str] | None = None) -> int:
     from ddpy.io.decks import read_case
 
     hexahedra = read_case(case_root / models[0], geometry=False).mesh.n_elements
-    text = report(args.mesh, hexahedra, numbers, shape, figures, max_threads())
+    text = report(args.mesh, hexahedra, numbers, shape, figures, max_threads(),
+                  code_version())
     out = DOCS / f"{stem}.md"
     out.write_text(text)
     print(f"wrote {out}", file=sys.stderr)

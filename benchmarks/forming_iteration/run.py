@@ -1,9 +1,9 @@
 """Benchmark: time per Newton iteration of a forming run, split by where it goes.
 
 Runs the first increments of the cylindrical bending case through ``ddpy.app.runner.run_case``
-(what ``ddpy run CASE --stop-after N`` does) on two meshes: the built-in coarse case (216
-hexahedra, Nagata tools) and the paper's blank (about 20,000 hexahedra, Nagata tools; its
-case is written by benchmarks/cylindrical_bending/make_case.py when missing). Each mesh and
+(what ``ddpy run CASE --stop-after N`` does) on two meshes: the built-in coarse case (Nagata
+tools) and the paper's blank (Nagata tools; its case is written by
+benchmarks/cylindrical_bending/make_case.py when missing). Each mesh and
 thread count runs in its own process with OMP_NUM_THREADS and OPENBLAS_NUM_THREADS set.
 The parts are timed by wrapping, in the worker only, the functions that do them:
 
@@ -17,8 +17,10 @@ The parts are timed by wrapping, in the worker only, the functions that do them:
 - rest: the remainder of the run's wall time (the Newton loop's Python, residual and
   Jacobian blocks, increment control).
 
-Per iteration = over the factorizations (every Newton iteration factorizes once, rejected
-increments included). The numbers of every ``--label`` are kept in forming_iteration.json;
+Per iteration = over the Newton corrections of all trials, rejected increments included, as
+the results file counts them; a run without that count (before the solver solved some
+corrections with older factors) factorized once per correction, so its factorizations are
+that count. The numbers of every ``--label`` are kept in forming_iteration.json;
 the page shows them all (e.g. ``before`` from a checkout of the code before a change).
 
     python benchmarks/forming_iteration/run.py --label after [--threads 1 2]
@@ -44,25 +46,34 @@ from typing import Any
 ROOT = Path(__file__).resolve().parents[2]
 DOCS = ROOT / "docs" / "benchmarks"
 BENDING = ROOT / "benchmarks" / "cylindrical_bending"
+sys.path.insert(0, str(ROOT / "benchmarks"))  # the benchmarks' shared module
+from bench_common import code_version, computed_at  # noqa: E402
+
 PARTS = ("assembly", "contact", "search", "factorization", "solve", "writing")
-#: What the labels of the present page compare (edit with the labels).
+#: The target: the paper's Newton iterations of the Nagata model (its Table 3) in this many
+#: minutes.
+PAPER_ITERATIONS, TARGET_MIN = 3918, 30.0
+#: What the labels of the present page compare (edit with the labels); {flops} is filled
+#: from the numbers (one factorization of the paper mesh, first label -> MULTIPLIERS).
+MULTIPLIERS = "multipliers first"
 CHANGES = """The labels: main at 13394ca; "after (prof)", the branch that (1) assembles the
 Jacobian values in place into two buffers kept by the forming layout (before: a new array of
-all the entries per evaluation, 94 MB on the paper mesh, and a copy of the tangent into it;
-page faults and the copy were the "rest"), (2) offers each candidate patch of the contact
+all the entries per evaluation, and a copy of the tangent into it; page faults and the copy
+were the "rest"), (2) offers each candidate patch of the contact
 search once, at its nearest grid point found by squared distances (before: every grid point
 was offered to the sorted candidate list, with gfortran's scaled norm2 each), same
 candidates, and (3) keeps the search's 1-based index arrays in ContactSearch instead of
 making them on every call (results bitwise the same); "multipliers first", main at 4dcfc4f:
 the element kernel reworked (docs/building.md) and the contact multipliers eliminated
 before the displacements in the nested-dissection pivot order (in a separator they widened
-every front: one factorization of the paper mesh 5.8e10 -> 4.4e10 flops). Its runs also
+every front{flops}). Its runs also
 carry the session's changes of the contact law's default augmentation and of the increment
-control, so their iteration counts differ; the time per iteration is the comparison.
+control, so their iteration counts differ; the time per iteration is the comparison.{later}
 
-What dominates on the paper mesh is still MUMPS's LU (one per iteration, see the findings):
-the 0.45 s per iteration of the target is out of reach while every iteration factorizes
-afresh, and the iterations per increment (in the findings below; the paper's DD3IMP needed
+What dominates on the paper mesh is still MUMPS: its LU, one per iteration until the solver
+solved some corrections with older factors (then also its solves, for GMRES; the share of
+each run in the findings). The {target:.2f} s per iteration of the target is out of reach
+with it, and the iterations per increment (in the findings below; the paper's DD3IMP needed
 11.5) weigh as much: contact states of a band of nodes grazing the punch flip between
 iterations (docs/benchmarks/cylindrical_bending.md). Outside MUMPS the assembly (Fortran
 element kernel) leads."""
@@ -148,6 +159,7 @@ def worker(mesh: str, increments: int) -> dict[str, Any]:
 
     busy, cpu0, start = cpu_busy(), time.process_time(), time.perf_counter()
     case = read_case(case_folder(mesh))
+    hexahedra = case.mesh.n_elements
     with tempfile.TemporaryDirectory() as output:
         outcome = runner.run_case(case, output, max_increments=increments, overwrite=True)
         wall = time.perf_counter() - start
@@ -155,12 +167,16 @@ def worker(mesh: str, increments: int) -> dict[str, Any]:
         other = max(cpu_busy() - busy - cpu, 0.0) / wall
         from ddpy.io.results import ResultsReader
         with ResultsReader(Path(output) / runner.RESULTS) as results:
-            iterations = int(results.history()["iterations"].sum())
+            history = results.history()
+            iterations = int(history["iterations"].sum())
+            corrections = {key: int(history[key].sum()) for key in
+                           ("newton_iterations", "krylov_iterations") if key in history}
     from ddpy.core.parallel import max_threads
     setup = first[0] - start + spent.pop("prepare")
-    return {"mesh": mesh, "threads": max_threads(), "increments": outcome.increments,
+    return {"mesh": mesh, "code": code_version(), "hexahedra": hexahedra,
+            "threads": max_threads(), "increments": outcome.increments,
             "iterations": iterations, "wall": wall, "cpu": cpu, "setup": setup,
-            "other_cpus": other, "mumps": mumps, **count, **spent}
+            "other_cpus": other, "mumps": mumps, **corrections, **count, **spent}
 
 
 def measure(mesh: str, threads: int, increments: int) -> dict[str, Any]:
@@ -170,10 +186,17 @@ def measure(mesh: str, threads: int, increments: int) -> dict[str, Any]:
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
+def corrections(r: dict[str, Any]) -> int:
+    """The Newton corrections of a run, rejected trials included: as its results file
+    counted them, else its factorizations (one per correction before the solver reused
+    older factors)."""
+    return int(r.get("newton_iterations") or r["factorizations"])
+
+
 def split(r: dict[str, Any]) -> dict[str, float]:
-    """Seconds per iteration: assembly, contact (search within), factorization + solve,
-    writing, rest."""
-    n = max(r["factorizations"], 1)
+    """Seconds per iteration (Newton correction): assembly, contact (search within),
+    factorization + solve, writing, rest."""
+    n = max(corrections(r), 1)
     loop = r["wall"] - r["setup"]
     known = r["assembly"] + r["contact"] + r["factorization"] + r["solve"] + r["writing"]
     return {"assembly": r["assembly"] / n, "contact": r["contact"] / n,
@@ -183,9 +206,9 @@ def split(r: dict[str, Any]) -> dict[str, float]:
 
 
 HEADER = ("| code | mesh | threads | assembly | contact (search) | factorization | solve | "
-          "writing | rest | **per iteration** | non-MUMPS | iterations | increments | "
-          "set-up (s) | other CPUs |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|"
-          "---|---|")
+          "writing | rest | **per iteration** | non-MUMPS | iterations | factorizations | "
+          "increments | set-up (s) | other CPUs |\n|---|---|---|---|---|---|---|---|---|---|---|"
+          "---|---|---|---|---|")
 
 
 def report(numbers: dict[str, Any]) -> str:
@@ -198,20 +221,27 @@ def report(numbers: dict[str, Any]) -> str:
                 f"| {label} | {r['mesh']} | {r['threads']} | {s['assembly']:.4f} | "
                 f"{s['contact']:.4f} ({s['search']:.4f}) | {s['factorization']:.4f} | "
                 f"{s['solve']:.4f} | {s['writing']:.4f} | {s['rest']:.4f} | "
-                f"**{s['total']:.4f}** | {s['total'] - mumps:.4f} | {r['factorizations']} | "
+                f"**{s['total']:.4f}** | {s['total'] - mumps:.4f} | {corrections(r)} | "
+                f"{r['factorizations']} | "
                 f"{r['increments']} | {r['setup']:.1f} | {r['other_cpus']:.2f} |")
     note_text = "\n".join(f"- {line}" for line in findings(numbers))
+    code = computed_at(code_version(), {label: runs[0].get("code", "") if runs else ""
+                                        for label, runs in numbers["labels"].items()})
     return f"""# Benchmark: time per Newton iteration of a forming run
+
+{code}
 
 `benchmarks/forming_iteration/run.py` (written by it; {numbers['machine']}, 2 cores shared
 with other work: single timings scatter by tens of percent, "other CPUs" says how many of
 the 2 cores other processes used on average during the run, from /proc/stat).
 
 The cylindrical bending case (Nagata tools) through `ddpy.app.runner.run_case`, its first
-increments: **coarse** = the built-in case (`ddpy run`, 216 hexahedra), **paper** = the
-paper's blank from `benchmarks/cylindrical_bending/make_case.py` (about 20,000 hexahedra,
-123,750 unknowns with the contact forces, 11.8 million Jacobian entries, LU). Seconds per
-Newton iteration (= per factorization, rejected increments included):
+increments: **coarse** = the built-in case (`ddpy run`{size(numbers, "coarse", ", ")}),
+**paper** = the paper's blank from
+`benchmarks/cylindrical_bending/make_case.py`{size(numbers, "paper", " (", ")")}.
+Seconds per Newton iteration (per Newton correction, rejected increments included; the
+runs that do not count their corrections factorized once per correction, so there it is per
+factorization; the others solve some corrections with older factors and GMRES, in "solve"):
 
 - assembly: `Solid.assemble` (Fortran solid_assemble: internal forces, consistent tangent,
   return mapping, written into the MUMPS values; and its Python wrapper);
@@ -227,12 +257,48 @@ Newton iteration (= per factorization, rejected increments included):
 {HEADER}
 {chr(10).join(rows)}
 
-{CHANGES}
+{changes(numbers)}
 
 Findings (computed from the table):
 
 {note_text}
 """
+
+
+def size(numbers: dict[str, Any], mesh: str, before: str, after: str = "") -> str:
+    """The size of a mesh's problem as its latest run recorded it, between ``before`` and
+    ``after`` ("" when no run of it recorded one): hexahedra, unknowns with the contact
+    forces, Jacobian entries."""
+    runs = [r for runs in numbers["labels"].values() for r in runs if r["mesh"] == mesh]
+    if not runs:
+        return ""
+    r = runs[-1]
+    parts = [f"{r['hexahedra']:,} hexahedra"] if "hexahedra" in r else []
+    if r.get("mumps"):
+        parts += [f"{r['mumps']['n']:,} unknowns with the contact forces",
+                  f"{r['mumps']['nnz']:,} Jacobian entries, LU"]
+    return f"{before}{', '.join(parts)}{after}" if parts else ""
+
+
+def changes(numbers: dict[str, Any]) -> str:
+    """CHANGES with its numbers from the runs: the flops of one factorization of the paper
+    mesh, first label -> MULTIPLIERS, and the labels measured after it."""
+    labels = numbers["labels"]
+
+    def flops(label: str) -> float | None:
+        return next((r["mumps"]["flops"] for r in labels.get(label, [])
+                     if r["mesh"] == "paper" and r.get("mumps")), None)
+
+    first = flops(next(iter(labels), ""))
+    then = flops(MULTIPLIERS)
+    later = list(labels)[list(labels).index(MULTIPLIERS) + 1:] if MULTIPLIERS in labels else []
+    return CHANGES.format(
+        flops=(f": one factorization of the paper mesh {first:.2g} -> {then:.2g} flops"
+               if first and then else ""),
+        later="".join(f' "{label}": the code named at the top, with '
+                      + ", ".join(sorted({f"{r['threads']} thread(s)" for r in labels[label]}))
+                      + "." for label in later),
+        target=60.0 * TARGET_MIN / PAPER_ITERATIONS)
 
 
 def findings(numbers: dict[str, Any]) -> list[str]:
@@ -251,7 +317,7 @@ def findings(numbers: dict[str, Any]) -> list[str]:
             if m:
                 text += (f"; the LU of {m['n']:,} unknowns and {m['nnz']:,} entries takes "
                          f"{m['flops']:.3g} flops and {m['factor_entries']:,} factor entries")
-            text += (f"; {r['factorizations'] / max(r['increments'], 1):.1f} iterations per "
+            text += (f"; {corrections(r) / max(r['increments'], 1):.1f} iterations per "
                      f"converged increment (rejected increments included)")
             lines.append(text + ".")
     if len(labels) >= 2:
@@ -274,10 +340,12 @@ def findings(numbers: dict[str, Any]) -> list[str]:
         if r["mesh"] == "paper":
             s = split(r)
             lines.append(
-                f"Target (about 3,900 iterations in 30 minutes: 0.45 s per iteration), "
-                f"{labels[-1]}, paper, {r['threads']} thread(s): {s['total']:.2f} s per "
-                f"iteration, {s['total'] * 3900 / 3600:.1f} h for 3,900; without MUMPS "
-                f"{s['total'] - s['factorization'] - s['solve']:.2f} s.")
+                f"Target (the paper's {PAPER_ITERATIONS:,} iterations, Nagata, in "
+                f"{TARGET_MIN:g} minutes: {60.0 * TARGET_MIN / PAPER_ITERATIONS:.2f} s per "
+                f"iteration), {labels[-1]}, paper, {r['threads']} thread(s): "
+                f"{s['total']:.2f} s per iteration, "
+                f"{s['total'] * PAPER_ITERATIONS / 3600:.1f} h for {PAPER_ITERATIONS:,}; "
+                f"without MUMPS {s['total'] - s['factorization'] - s['solve']:.2f} s.")
     return lines
 
 

@@ -49,6 +49,7 @@ from bench_common import (  # noqa: E402
     CODE_FILE,
     DOCS,
     code_version,
+    computed_at,
     cores,
     load_module,
     recorded_code,
@@ -813,9 +814,10 @@ def _end(n: dict[str, Any], stage: str) -> dict[str, Any] | None:
 
 def report(mesh: str, numbers: dict[str, dict[str, Any]],
            shape: dict[str, dict[str, dict[str, Any]]], maps: dict[str, str],
-           figures: dict[str, str], threads: int) -> str:
+           figures: dict[str, str], threads: int, code: str = "") -> str:
     """The markdown report: every number from ``numbers`` (the runs), ``shape`` (the tool
-    models), make_case and PAPER."""
+    models), make_case and PAPER; ``code``: the code version that wrote it (the runs name
+    their own)."""
     models = [m for m in MODELS if m in numbers]
     dims = make_case.DIMENSIONS
     hexahedra = next((numbers[m]["hexahedra"] for m in models), 0)
@@ -824,6 +826,8 @@ def report(mesh: str, numbers: dict[str, dict[str, Any]],
     suffix = "" if mesh == "coarse" else f" --mesh {mesh}"
     lines = [
         "# Reverse deep drawing of a cylindrical cup (paper Fig. 14-21, Tables 5-6)",
+        "",
+        computed_at(code, {LABELS[m]: numbers[m].get("code", "") for m in models}),
         "",
         f"Written by `benchmarks/reverse_deep_drawing/run.py{suffix}`; the cases by "
         "`make_case.py` next to it. Numisheet'99 benchmark C, quarter model: DDQ steel "
@@ -1253,7 +1257,7 @@ def main(argv: list[str] | None = None) -> int:
     # The tools are the same for every blank: one set of maps, the coarse report's.
     shape, maps = shape_errors(HERE / "tools", "reverse_deep_drawing")
     figures = make_figures(runs, stem)
-    text = report(args.mesh, numbers, shape, maps, figures, max_threads())
+    text = report(args.mesh, numbers, shape, maps, figures, max_threads(), code_version())
     out = DOCS / f"{stem}.md"
     out.write_text(text)
     print(f"wrote {out}", file=sys.stderr)

@@ -25,6 +25,9 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "benchmarks"))  # the benchmarks' shared module
+from bench_common import code_version, computed_at  # noqa: E402
+
 LENGTH, WIDTH, THICK = 120.0, 30.0, 1.0
 NX, NY, NZ = 164, 41, 3
 DEFLECTION = 30.0
@@ -92,7 +95,9 @@ def worker(increments: int) -> dict:
     return {
         "threads": max_threads(),
         "openblas_threads": os.environ.get("OPENBLAS_NUM_THREADS"),
+        "code": code_version(),
         "elements": mesh.n_elements, "nodes": mesh.n_nodes,
+        "gauss_points": int(result.ep[-1].size),
         "free_dofs": int((~problem.fixed).sum()), "nnz": int(problem._pattern.rows.size),
         "setup_s": setup, "analysis_s": analysis, "solve_total_s": total,
         "increments": len(result.factors), "cuts": result.cuts,
@@ -153,7 +158,13 @@ def write_report(runs: list[dict], out: Path) -> None:
     verdict = "meets" if all(summary(r)["ratio"] < 0.2 for r in runs) else "misses"
     mumps = first["mumps"]
     iterations = ", ".join(str(i) for i in first["iterations"])
-    text = f"""# Benchmark: plastic bending of a 20,000-hexahedron sheet
+    gauss = (f"at {first['gauss_points']:,} Gauss points" if "gauss_points" in first else
+             "at every Gauss point")
+    code = computed_at(first.get("code", ""), {f"{r['threads']} thread(s)": r.get("code", "")
+                                               for r in runs} if len(runs) > 1 else None)
+    text = f"""# Benchmark: plastic bending of a {first['elements']:,}-hexahedron sheet
+
+{code}
 
 `benchmarks/solid_bending/run.py` (written by it; numbers from one run on
 {platform.machine()} with {os.cpu_count()} cores, shared with other work, so single timings
@@ -162,7 +173,7 @@ scatter by tens of percent: medians are given).
 **Model.** A DDQ steel strip (paper Table 4: E = 210 GPa, nu = 0.3, Hill'48 F = 0.3137,
 G = 0.3663, H = 0.6337, L = M = 1.5, N = 1.1764, Swift K = 568.3 MPa, eps0 = 0.0059,
 n = 0.233) of 120 x 30 x 1 mm, {NX} x {NY} x {NZ} = {first['elements']:,} hexahedra
-(3 layers), {first['nodes']:,} nodes, {first['free_dofs']:,} free dofs; clamped at x = 0,
+({NZ} layers), {first['nodes']:,} nodes, {first['free_dofs']:,} free dofs; clamped at x = 0,
 the end x = 120 pushed down by {DEFLECTION:.0f} mm (prescribed u_z) in
 {first['increments']} increments. At the end {100 * first['plastic_fraction']:.0f} % of the
 Gauss points have yielded, the largest equivalent plastic strain is
@@ -174,7 +185,7 @@ flops and {mumps['factor_entries']:,} entries per factorization. Pattern and MUM
 once per run: {first['analysis_s']:.2f} s.
 
 **Time per Newton iteration** (median seconds, the minimum over the run in brackets;
-assembly = internal forces, consistent tangent and return mapping at 161,376 Gauss points,
+assembly = internal forces, consistent tangent and return mapping {gauss},
 written straight into the MUMPS coordinate values; line search = a force-only assembly,
 when a full step overshoots; "other CPUs": how many of the {os.cpu_count()} cores other
 processes used on average during the run, from /proc/stat):

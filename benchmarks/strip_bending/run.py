@@ -21,10 +21,10 @@ import argparse
 import json
 import os
 import platform
-import subprocess
 import sys
 import tempfile
 import time
+from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
@@ -35,14 +35,17 @@ from ddpy.cad.examples import write_cad
 from ddpy.cad.shape_error import shape_error
 from ddpy.core.parallel import threads
 from ddpy.io.toolfile import ToolModel, read_tool
-from ddpy.model.control import IncrementLimits
-from ddpy.model.forming import FormingError, FormingProblem, RigidTool
+from ddpy.model.control import IncrementLimits, NewtonSettings
+from ddpy.model.forming import FormingError, FormingProblem, RigidTool, blank_stiffness
 from ddpy.model.material import Hill48, Material, Swift
 from ddpy.model.mesh import HexMesh
 from ddpy.model.solid import Solid
 
 ROOT = Path(__file__).resolve().parents[2]
 DOCS = ROOT / "docs" / "benchmarks"
+sys.path.insert(0, str(ROOT / "benchmarks"))  # the benchmarks' shared module
+from bench_common import code_version, computed_at  # noqa: E402
+
 PUNCH_RADIUS, DIE_RADIUS, SHOULDER_X = 23.5, 4.0, 29.5    # mm
 HALF_LENGTH, THICK, WIDTH = 60.0, 1.0, 1.0                 # the half strip, one element wide
 FRICTION, MAX_INCREMENT, FULL_STROKE = 0.148, 0.114, 28.5  # the paper's
@@ -58,6 +61,8 @@ PAPER = {"bezier": (338, 3994, 94.6), "nagata": (342, 3918, 94.5),    # Table 3,
 #: starts to yield in almost every increment, and landing each on the yield surface cuts
 #: the increments to a few um of stroke (measured: 511 increments for the first mm).
 LIMITS = IncrementLimits(yield_tolerance=None)
+#: The Newton loop's convergence: the defaults of a deck that sets nothing.
+NEWTON = NewtonSettings()
 #: Augmentation r of the contact law (N/mm). The driver's default, E times the element size
 #: (1.2e5 N/mm here), makes this run cut increments again and again (measured over the
 #: first 1.5 mm with Nagata tools: 62 increments, 716 iterations, 44 cuts; with 100 N/mm:
@@ -117,9 +122,14 @@ def build_tools(folder: Path) -> dict[str, tuple[ToolModel, ToolModel]]:
 
 # -- the runs ----------------------------------------------------------------------------
 
+def strip_mesh() -> HexMesh:
+    """The half strip: 120 x 1 x 3 hexahedra."""
+    return HexMesh.box(HALF_LENGTH, WIDTH, THICK, 120, 1, 3)
+
+
 def run_description(kind: str, punch: ToolModel, die: ToolModel, stroke: float) -> dict:
     """Form the half strip with one description; the numbers of the run."""
-    mesh = HexMesh.box(HALF_LENGTH, WIDTH, THICK, 120, 1, 3)
+    mesh = strip_mesh()
     tools = [RigidTool("punch", punch.surface, mesh.select(z=THICK), FRICTION, (0, 0, 1),
                        AUGMENTATION),
              RigidTool("die", die.surface, mesh.select(z=0.0), FRICTION, (0, 0, -1),
@@ -130,7 +140,8 @@ def run_description(kind: str, punch: ToolModel, die: ToolModel, stroke: float) 
     error = ""
     wall, cpu = time.perf_counter(), time.process_time()
     try:
-        result = problem.run({"punch": (0.0, 0.0, -stroke)}, MAX_INCREMENT, limits=LIMITS)
+        result = problem.run({"punch": (0.0, 0.0, -stroke)}, MAX_INCREMENT, newton=NEWTON,
+                             limits=LIMITS)
     except FormingError as failure:
         result, error = failure.result, str(failure)
     wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
@@ -242,11 +253,28 @@ def report(runs: list[dict], meta: dict, out: Path) -> None:
     smooth = max(by.get("bezier", np.nan), by.get("nagata", np.nan))
     verdict = ", ".join(f"{KINDS[k]} {by[k] / smooth:.2f}" for k in
                         ("facets_coarse", "facets_fine") if k in by)
+    # The stroke at the end of each increment that a first touch or a release limited.
+    events = {r["label"]: ", ".join(f"{s:.2f} ({why})" for s, why in zip(
+        r["stroke"], r["limited_by"], strict=False) if why in ("touch", "release"))
+        for r in runs}
+    mesh = strip_mesh()
+    default_r = blank_stiffness(mesh.nodes, mesh.elements, HSS.E)
+    settings = (  # as the runs recorded them (older numbers files did not)
+        f"tolerances {meta['newton']['force_tolerance']:g} (force) and "
+        f"{meta['newton']['displacement_tolerance']:g} (correction); maximum increment "
+        f"{MAX_INCREMENT:g} mm of punch travel (the paper's); the r_min limits first touch, "
+        f"release, strain {meta['limits']['strain']:g} and rotation "
+        f"{meta['limits']['rotation_deg']:g} degrees" if "newton" in meta else
+        f"the tolerances of the code named above; maximum increment {MAX_INCREMENT:g} mm of "
+        "punch travel (the paper's); the r_min limits first touch, release, strain and "
+        "rotation")
     lines = [
         "# Strip bending: a cylindrical punch and an open die with each tool description",
         "",
+        computed_at(meta.get("code") or meta.get("commit", "")),
+        "",
         f"Written by `python benchmarks/strip_bending/run.py {meta['argv']}` in "
-        f"{meta['total_s']:.0f} s at commit {meta['commit']} on {meta['machine']}; load "
+        f"{meta['total_s']:.0f} s on {meta['machine']}; load "
         f"average {meta['load'][0]:.2f} at the start, {meta['load'][1]:.2f} at the end (a "
         "shared machine: wall times are upper bounds, CPU times are the process's). The "
         "numbers are in `strip_bending.json`; `--report-only` rewrites this page from it.",
@@ -266,14 +294,13 @@ def report(runs: list[dict], meta: dict, out: Path) -> None:
         "zero gap with no force at the start; nothing else holds it in z. The paper's drawing "
         "is not in its text: these are the dimensions of `examples/bending` (a reconstruction).",
         f"* Coulomb friction mu = {FRICTION:g}; augmentation r = {AUGMENTATION:g} N/mm (the "
-        "driver's default, E times the element size = 1.2e5 N/mm, cuts increment after "
-        "increment here: over the first 1.5 mm with Nagata tools 62 increments, 716 "
-        "iterations, 44 cuts against 20, 213 and 3); tolerances 1e-6; maximum increment "
-        f"{MAX_INCREMENT:g} mm of punch travel (the paper's); the r_min limits first touch, "
-        "release, strain 0.02 and rotation 5 degrees, not the elasto-plastic transition (a "
-        "Gauss point starts to yield in almost every increment of a bend, and landing each on "
-        "the yield surface took 511 increments for the first mm at commit 2aad867, before "
-        "the limit left out points within its tolerance of the surface).",
+        "driver's default when it was set, E times the element size, cut increment after "
+        "increment here; the driver's default now, E t^2 / h of the elements, would be "
+        f"{default_r:.2g} N/mm); {settings}, not the elasto-plastic transition (a Gauss "
+        "point starts to yield in almost every increment of a bend, and landing each on the "
+        "yield surface cut the increments short "
+        "at commit 2aad867, before the limit left out points within its tolerance of the "
+        "surface).",
         f"* Tool models from CAD by `build_tool_models` (size {LINE_PIECE:g} mm along straight "
         "edges and across): Bezier patches fitted to each CAD face within 1 um; Nagata "
         f"patches {PER_ARC['nagata']} per 90 degrees with exact CAD normals; facets "
@@ -290,9 +317,10 @@ def report(runs: list[dict], meta: dict, out: Path) -> None:
         *table,
         "",
         f"RMS oscillation of the facets over the larger of Bezier's and Nagata's: {verdict} "
-        "(above 1: the facets oscillate more). The kinks of the curves between 1.3 and 1.8 mm "
-        "fall on increments limited by a first touch and then a release: the die contact "
-        "passing from one column of nodes to the next."
+        "(above 1: the facets oscillate more). The increments limited by a first touch or a "
+        "release (a node meeting or leaving a tool inside the increment) end at (stroke, "
+        "mm): "
+        + "; ".join(f"{label} {text or 'none'}" for label, text in events.items()) + "."
         if verdict and np.isfinite(smooth) else "",
         "",
         "![punch force](strip_bending_force.png)",
@@ -313,14 +341,6 @@ def report(runs: list[dict], meta: dict, out: Path) -> None:
         *[f"\n{r['label']} stopped: `{r['error']}`." for r in runs if r["error"]],
     ]
     (out / "strip_bending.md").write_text("\n".join(lines) + "\n")
-
-
-def _git(*args: str) -> str:
-    try:
-        return subprocess.run(["git", "-C", str(ROOT), *args], capture_output=True, text=True,
-                              check=True).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -352,11 +372,9 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{r['label']}: {max(r['stroke'], default=0):.2f} mm, "
                   f"{len(r['iterations'])} increments, {sum(r['iterations'])} iterations, "
                   f"{r['wall_s']:.0f} s", file=sys.stderr)
-    dirty = _git("status", "--porcelain", "--", "ddpy", "fortran")
     meta = {"argv": " ".join(sys.argv[1:] if argv is None else argv), "stroke": args.stroke,
             "total_s": time.perf_counter() - start, "load": (load, os.getloadavg()[0]),
-            "commit": _git("rev-parse", "--short", "HEAD")
-            + (" (library files modified)" if dirty else ""),
+            "code": code_version(), "newton": asdict(NEWTON), "limits": asdict(LIMITS),
             "machine": f"{os.cpu_count()} CPUs ({platform.machine()}), {args.threads} core "
                        f"thread(s), Python {platform.python_version()}"}
     if args.json:

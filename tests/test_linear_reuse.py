@@ -1,51 +1,17 @@
-"""Newton corrections solved with older factors: GMRES, the coordinate matrix, and a
-forming run that reuses factorizations against one that factorizes every iteration."""
+"""Newton corrections solved with older factors (GMRES in the core's Newton loop): a forming
+run that reuses factorizations against one that factorizes every iteration."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from ddpy.core.linalg import CoordinateMatrix, gmres
 from ddpy.model.contact import SLIP
 from ddpy.model.control import NewtonSettings
 from ddpy.model.forming import FormingProblem, RigidTool
 from ddpy.model.mesh import HexMesh
 from ddpy.model.solid import Solid
 from tests.test_forming import ELASTIC, cylinder_crest
-
-
-def test_gmres_solves_an_unsymmetric_system_and_reports_failure() -> None:
-    rng = np.random.default_rng(3)
-    n = 120
-    a = 3.0 * np.eye(n) + rng.standard_normal((n, n)) / np.sqrt(n)
-    b = rng.standard_normal(n)
-    x, count, converged = gmres(lambda v: a @ v, b, 1e-12, n)
-    assert converged and count < 60
-    assert np.linalg.norm(a @ x - b) <= 1e-11 * np.linalg.norm(b)
-    # Too few iterations: not converged, and says so (the best iterate of the space).
-    x, count, converged = gmres(lambda v: a @ v, b, 1e-12, 3)
-    assert not converged and count == 3
-    assert np.linalg.norm(a @ x - b) < np.linalg.norm(b)
-    # An operator with 2 distinct eigenvalues: the space is invariant after 2 iterations.
-    d = np.where(np.arange(n) % 2, 2.0, 5.0)
-    x, count, converged = gmres(lambda v: d * v, b, 1e-14, 10)
-    assert converged and count == 2 and np.allclose(x, b / d, rtol=1e-12)
-    x, count, converged = gmres(lambda v: d * v, np.zeros(n), 1e-8, 10)
-    assert converged and count == 0 and not x.any()
-
-
-def test_coordinate_matrix_sums_duplicates_like_a_dense_assembly() -> None:
-    rng = np.random.default_rng(4)
-    rows, cols = rng.integers(0, 30, 500), rng.integers(0, 30, 500)
-    structure = CoordinateMatrix(30, rows, cols)
-    for _ in range(2):  # new values on the same structure
-        values = rng.standard_normal(500)
-        dense = np.zeros((30, 30))
-        np.add.at(dense, (rows, cols), values)
-        assert np.array_equal(structure.matrix(values).toarray(), dense)
-    with pytest.raises(ValueError):
-        structure.matrix(np.ones(499))
 
 
 def slide(linear_solver: str) -> tuple[FormingProblem, object]:

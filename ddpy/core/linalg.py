@@ -12,13 +12,12 @@ import operator
 from typing import Any
 
 import numpy as np
-import scipy.sparse
 from numpy.typing import ArrayLike, NDArray
 
 from ddpy import _core
 from ddpy._validate import float_array, int_array
 
-__all__ = ["MumpsSolver", "LinearSolverError", "spsolve", "gmres", "CoordinateMatrix"]
+__all__ = ["MumpsSolver", "LinearSolverError", "spsolve"]
 
 #: MUMPS's integers (sizes, indices, entry counts) are 32-bit here.
 INT32_MAX = 2**31 - 1
@@ -117,6 +116,11 @@ class MumpsSolver:
             raise LinearSolverError(int(status), "analysis")
         self.n, self.nnz = n, rows.shape[0]
 
+    @property
+    def handle(self) -> int:
+        """The core's handle of this instance, for the core's own calls (its Newton loop)."""
+        return self._live()
+
     def factorize(self, values: ArrayLike) -> None:
         """LU (or LDL^T) factorization with the values of the analysed entries."""
         values = float_array(values, "values", (self.nnz,))
@@ -180,81 +184,3 @@ def spsolve(matrix: Any, rhs: ArrayLike) -> NDArray[np.float64]:
         solver.analyse(n, rows, cols)
         solver.factorize(values)
         return solver.solve(rhs)
-
-
-class CoordinateMatrix:
-    """A fixed n x n coordinate structure (duplicates are summed, as MUMPS does) whose
-    values change: ``matrix(values)`` gives the compressed-row matrix of one set of values
-    for products, the structure's sort done once."""
-
-    def __init__(self, n: int, rows: ArrayLike, cols: ArrayLike) -> None:
-        rows = int_array(rows, "rows", (None,)).astype(np.int64)
-        cols = int_array(cols, "cols", (rows.size,)).astype(np.int64)
-        self.n = int(n)
-        key, slot = np.unique(rows * self.n + cols, return_inverse=True)
-        self._indices = (key % self.n).astype(np.int32)
-        self._indptr = np.searchsorted(key // self.n, np.arange(self.n + 1)).astype(np.int32)
-        self.size = rows.size
-        # Each entry's contributions, entry after entry: the core sums them in parallel.
-        self._sources = np.argsort(slot, kind="stable").astype(np.int32)
-        self._starts = np.zeros(key.size + 1, dtype=np.int32)
-        np.cumsum(np.bincount(slot, minlength=key.size), out=self._starts[1:])
-
-    def matrix(self, values: ArrayLike) -> scipy.sparse.csr_matrix:
-        """The matrix with these entries (in the order of the structure's rows, cols)."""
-        values = float_array(values, "values", (self.size,))
-        data = _core.sum_duplicates(values, self._sources, self._starts,
-                                    np.empty(self._indices.size))
-        return scipy.sparse.csr_matrix((data, self._indices, self._indptr),
-                                       shape=(self.n, self.n))
-
-
-def gmres(operator: Any, rhs: ArrayLike, tol: float, max_iterations: int
-          ) -> tuple[NDArray[np.float64], int, bool]:
-    """Solve ``operator(x) = rhs`` by GMRES from x = 0, without restart: the iterate, the
-    number of iterations and whether ||operator(x) - rhs|| <= tol ||rhs|| was reached.
-    ``operator`` is already preconditioned by the caller (e.g. M^-1 A with M^-1 an older
-    factorization), so that the norm minimized is the one that matters to it. Arnoldi with
-    modified Gram-Schmidt run twice (the basis stays orthogonal to rounding when the
-    operator is far from normal) and Givens rotations for the residual norm."""
-    b = float_array(rhs, "rhs", (None,))
-    beta = float(np.linalg.norm(b))
-    if beta == 0.0:
-        return np.zeros_like(b), 0, True
-    m = int(max_iterations)
-    basis = np.zeros((m + 1, b.size))
-    basis[0] = b / beta
-    hessenberg = np.zeros((m + 1, m))
-    cosines, sines = np.zeros(m), np.zeros(m)
-    residual = np.zeros(m + 1)
-    residual[0] = beta
-    k = 0
-    for k in range(1, m + 1):
-        j = k - 1
-        w = np.asarray(operator(basis[j]), dtype=np.float64)
-        for _ in range(2):
-            h = basis[:k] @ w
-            w -= h @ basis[:k]
-            hessenberg[:k, j] += h
-        hessenberg[k, j] = np.linalg.norm(w)
-        breakdown = not hessenberg[k, j] > 1e-14 * np.abs(hessenberg[:k, j]).max(initial=0.0)
-        if not breakdown:  # else the Krylov space is invariant: the solution is in it
-            basis[k] = w / hessenberg[k, j]
-        for i in range(j):  # the earlier rotations on the new column
-            a, c = hessenberg[i, j], hessenberg[i + 1, j]
-            hessenberg[i, j] = cosines[i] * a + sines[i] * c
-            hessenberg[i + 1, j] = -sines[i] * a + cosines[i] * c
-        a, c = hessenberg[j, j], hessenberg[k, j]
-        radius = float(np.hypot(a, c))
-        cosines[j], sines[j] = (a / radius, c / radius) if radius > 0.0 else (1.0, 0.0)
-        hessenberg[j, j], hessenberg[k, j] = radius, 0.0
-        residual[k] = -sines[j] * residual[j]
-        residual[j] = cosines[j] * residual[j]
-        if abs(residual[k]) <= tol * beta or breakdown or radius == 0.0:
-            break
-    r = np.triu(hessenberg[:k, :k])
-    if np.diag(r).min() == 0.0:  # a singular operator on the Krylov space
-        return np.zeros_like(b), k, False
-    y = np.linalg.solve(r, residual[:k])  # triangular and small
-    x = y @ basis[:k]
-    return x, k, bool(abs(residual[k]) <= tol * beta)

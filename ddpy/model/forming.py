@@ -25,15 +25,14 @@ from numpy.typing import ArrayLike, NDArray
 
 from ddpy import _core
 from ddpy._validate import float_array, int_array
-from ddpy.core.linalg import CoordinateMatrix, LinearSolverError, MumpsSolver, gmres
+from ddpy.core.linalg import LinearSolverError, MumpsSolver
 from ddpy.core.ordering import mesh_solver
 from ddpy.geometry.search import NONE, ContactSearch
 from ddpy.geometry.surfaces import BezierSurface, NagataSurface
 from ddpy.model.contact import INACTIVE
 from ddpy.model.control import IncrementLimits, NewtonSettings
-from ddpy.model.material import yield_landing
 from ddpy.model.mesh import HEX_EDGES, HexMesh, boundary_faces, face_area_vectors
-from ddpy.model.solid import ElementError, Solid, SolidState, _components
+from ddpy.model.solid import ElementError, Solid, SolidState, _components, _flat
 
 _log = logging.getLogger(__name__)
 
@@ -76,6 +75,8 @@ KRYLOV_KEEP = 8
 #: of its patch: it may be a deep penetration to the law), and that run stopped at 31.7 mm
 #: of its 40 mm first stage (docs/theory/contact.md, "Reach").
 REACH_SIZES, REACH_TRAVELS = 2.0, 4.0
+#: What the core's forming_increment returns (fortran/solver/ddpy_forming_newton.f90).
+_CONVERGED, _LANDING, _ELEMENT, _NOT_FINITE, _SOLVER, _STALLED = range(6)
 
 
 @dataclass(frozen=True)
@@ -244,13 +245,6 @@ class _Layout:
         self.cols = np.concatenate(cols).astype(np.int32)
         self.k_slots = self.pattern.rows.size
         self.n_coupling = int(coupling.sum())
-        # Two buffers of Jacobian values, reused by the evaluations (the assembly writes its
-        # slots in place): a fresh array of this size per evaluation cost more than the
-        # contact law. Two, so that a line search can keep one trial while it tries others.
-        self.values = (np.empty(self.rows.size), np.empty(self.rows.size))
-        self.matrix: CoordinateMatrix | None = None  # for products, made when first needed
-        for values in self.values:
-            values[self.k_slots:self.k_slots + self.n_coupling] = -1.0
 
 
 class _ToolPack:
@@ -829,13 +823,14 @@ class FormingProblem:
     def _evaluate(self, layout: _Layout, u: NDArray[np.float64], force: NDArray[np.float64],
                   x_n: NDArray[np.float64], positions: Mapping[str, NDArray[np.float64]],
                   on: NDArray[np.bool_], timings: dict[str, float],
-                  touching: _Touching | None = None, buffer: int = 0):
+                  touching: _Touching | None = None):
         """Residual (free equilibrium rows, then the contact law) at (u, force), with the
-        Jacobian values in the layout's slots and the contact states; or a failure. The
-        values are the layout's buffer ``buffer`` (0 or 1): the next evaluation into the
-        same buffer overwrites them."""
+        Jacobian values in the layout's structure and the contact states; or a failure.
+        The same two core calls as an evaluation of the core's Newton loop, for a look at
+        one Jacobian (orderings) from Python."""
         tick = time.perf_counter()
-        values = layout.values[buffer]  # [:k] assembled in place, [k:k + m] = -1 set once
+        values = np.empty(layout.rows.size)
+        values[layout.k_slots:layout.k_slots + layout.n_coupling] = -1.0
         try:
             out = self.solid.assemble(u, self.state, layout.pattern,
                                       values=values[:layout.k_slots])
@@ -872,200 +867,72 @@ class FormingProblem:
         would otherwise make it cycle. The norm alone is the wrong measure for a thin sheet
         that bends: a step that bends it right leaves a large membrane residual of second
         order (docs/theory/contact.md)."""
-        timings = result.timings
-        solid = self.solid
-        u_n = self.u
-        x_n = solid.mesh.nodes + u_n
-        u = u_n.copy()
-        force = np.where(on[:, None], self.force, 0.0)
-        free = ~self.fixed.ravel()
-        floor = 1e-8 * solid.props[0] * self.size**2
-        # Unknowns in mm: displacements, and contact forces over the augmentation.
-        weight = np.concatenate([np.ones(layout.nf), np.repeat(1.0 / self.r, 3)])
-        residuals: list[float] = []
-        relative: list[tuple[float, float]] = []
-        correction = np.inf
-        hint = None
-        current = None
-        if guess is not None:  # the extrapolated start, unless an element fails there
-            result.evaluations += 1
-            current = self._evaluate(layout, guess, force, x_n, positions, on, timings,
-                                     touching)
-            if isinstance(current, str):
-                current = None
-            else:
-                u = guess.copy()
-        if current is None:
-            result.evaluations += 1
-            current = self._evaluate(layout, u, force, x_n, positions, on, timings, touching)
-        if isinstance(current, str):
-            return current
-        def measures(u: NDArray[np.float64], force: NDArray[np.float64], evaluation: tuple,
-                     correction: float) -> tuple[float, float, float, bool]:
-            """Residual norm, force scale, relative correction, and whether converged."""
-            norm = float(np.linalg.norm(evaluation[0]))
-            scale = max(float(np.linalg.norm(force)), float(np.linalg.norm(
-                np.where(self.fixed.ravel(), evaluation[3].fint.ravel(), 0.0))), floor)
-            moved = max(float(np.linalg.norm(u - u_n)), 1e-9 * self.size)
-            return (norm, scale, correction / moved,
-                    norm <= tol_force * scale and correction <= tol_disp * moved)
-
-        previous = None  # contact states of the last iteration
-        for iteration in range(max_iterations + 1):
-            residual, values, state, out, gap = current
-            norm, scale, moved, converged = measures(u, force, current, correction)
-            residuals.append(norm)
-            if not np.isfinite(norm):
-                return "the residual is not finite"
-            relative.append((norm / scale, moved))
-            if _log.isEnabledFor(logging.DEBUG):
-                _log.debug("iteration %d: residual %.3e of the force scale, correction %.3e "
-                           "of the motion, %d pairs closed", iteration, norm / scale, moved,
-                           int((on & (state != INACTIVE)).sum()))
-            if converged:
-                return (u, out.state, force, residuals, np.where(on, state, INACTIVE), gap,
-                        relative)
-            if iteration == max_iterations:
-                return _stalled(max_iterations, norm / scale, moved, tol_force, tol_disp,
-                                on & (state != previous) if previous is not None else None)
-            # Inexact Newton (Eisenstat and Walker): the correction's relative error may be
-            # a tenth of the relative residual (the rate stays quadratic), or as large as
-            # leaves the next residual a tenth of the tolerance (the last iteration).
-            rel = norm / scale
-            forcing = min(KRYLOV_LOOSE, max(KRYLOV_TIGHT, 0.1 * rel,
-                                            0.1 * tol_force / max(rel, 1e-300)))
-            result.newton_iterations += 1
-            direction = self._direction(layout, solver, values, residual, weight, result,
-                                        forcing, hint)
-            if isinstance(direction, str):
-                return direction
-            delta, size = direction
-            du = delta[:layout.nf]
-            dforce = delta[layout.nf:].reshape(-1, 3)
-            # The factors hold `values` from here. The first trial stops short where the
-            # step would push a free node into a tool (see _penetration_step).
-            alpha = self._penetration_step(layout, du, state, gap, on)
-            fallback, buffer = None, 0
-            for _ in range(5):
-                trial_u = u.copy()
-                trial_u.ravel()[free] += alpha * du
-                trial_force = force + alpha * dforce
-                result.evaluations += 1
-                trial = self._evaluate(layout, trial_u, trial_force, x_n, positions, on,
-                                       timings, buffer=buffer)
-                if not isinstance(trial, str):
-                    if alpha == 1.0 and measures(trial_u, trial_force, trial,
-                                                 float(np.linalg.norm(du)))[3]:
-                        simplified = None  # converged: the next iteration returns it
-                        break
-                    # Natural monotonicity test (Deuflhard): the simplified Newton
-                    # correction at the trial, with this iteration's factors, must be
-                    # shorter than the step's.
-                    tock = time.perf_counter()
-                    simplified = solver.solve(-trial[0])
-                    timings["solve"] += time.perf_counter() - tock
-                    if np.linalg.norm(simplified * weight) <= (1.0 - alpha / 4.0) * size:
-                        break
-                    if fallback is None and (
-                            np.linalg.norm(trial[0]) <= (1.0 - 1e-4 * alpha) * norm):
-                        fallback = alpha, trial_u, trial_force, trial, simplified
-                        buffer = 1  # the fallback keeps its Jacobian values in buffer 0
-                alpha *= 0.5
-            else:
-                # The simplified correction sees the contact set of this iteration: where
-                # that set changes, the test can fail at every step length. Then the
-                # longest step that lowered the residual norm, if one did, else the last.
-                if fallback is not None:
-                    alpha, trial_u, trial_force, trial, simplified = fallback
-                else:
-                    alpha *= 2.0
-            if isinstance(trial, str):
-                return trial
-            previous = state
-            u, force, current = trial_u, trial_force, trial
-            _log.debug("step length %.4g", alpha)
-            hint = simplified  # M^-1 of the new residual, while the factors stay
-            correction = alpha * float(np.linalg.norm(du))
-            if yield_tolerance is not None and alpha == 1.0:
-                # The elastic predictor is the first full Newton step: a step shortened by
-                # the line search or the penetration limit starts from a poor iterate (a
-                # punch pushed into the extrapolated blank), whose strains say little of
-                # where the converged path yields.
-                landing = yield_landing(solid.props, self.state.stress, self.state.ep,
-                                        trial[3].state.strain - self.state.strain,
-                                        yield_tolerance)
-                yield_tolerance = None
-                if landing < 1.0:
-                    return landing
-        return "no convergence"
-
-    def _penetration_step(self, layout: _Layout, du: NDArray[np.float64],
-                          state: NDArray[np.int32], gap: tuple[NDArray[np.float64], ...],
-                          on: NDArray[np.bool_]) -> float:
-        """Longest fraction (at most 1) of the Newton step ``du`` (free dofs) that leaves no
-        free node more than PENETRATION times the element size inside a tool, the gaps
-        linearized at the current iterate. The tangent does not see a tool where a node is
-        free: on a sheet held by a line of contact nodes (the paper's unconstrained bending,
-        from 11 mm of stroke) the full step bends the span between the contact lines on
-        along its soft, plastic mode and pushed 1,133 free nodes up to 1 mm into the punch;
-        the line search then halved down to 1/32 and the contact states cycled for 15 to 25
-        iterations. Stopped at the surface, those nodes close in the next iteration."""
-        distance, normal = gap
-        move = np.zeros(self.u.size)
-        move[~self.fixed.ravel()] = du
-        closing = -np.einsum("ij,ij->i", move.reshape(-1, 3)[layout.node], normal)
-        room = np.maximum(distance, 0.0) + PENETRATION * self.size
-        free = on & (state == INACTIVE) & np.isfinite(distance) & (closing > room)
-        if not free.any():
-            return 1.0
-        return max(float(np.min(room[free] / closing[free])), MIN_STEP)
-
-    def _direction(self, layout: _Layout, solver: MumpsSolver, values: NDArray[np.float64],
-                   residual: NDArray[np.float64], weight: NDArray[np.float64],
-                   result: FormingResult, tolerance: float,
-                   hint: NDArray[np.float64] | None = None
-                   ) -> tuple[NDArray[np.float64], float] | str:
-        """Newton correction for the Jacobian ``values`` at ``residual``, and its size as the
-        line search measures it: ||W M^-1 r||, W the unknowns' weights and M the factored
-        matrix (= ||W delta|| when the factors are this Jacobian's).
-
-        With factors of an earlier Jacobian at hand, GMRES on W M^-1 J W^-1 (left
-        preconditioned: the norm it minimizes is that of the correction's error, in the
-        weighted unknowns) to ``tolerance``; each iteration costs a solve and a product, a
-        factorization about 14 of them on the paper's bending blank. It gives up after
-        KRYLOV_MAX iterations, and when it needed more than KRYLOV_KEEP the next iteration
-        factorizes at once (the Jacobian has moved too far). ``hint``: M^-1 (-residual)
-        when the line search has solved it already with the same factors."""
-        timings = result.timings
+        solid, state, pack = self.solid, self.state, self._pack
+        names = [t.name for t in self.tools]
         reuse = self.linear_solver == "reuse" or (
             self.linear_solver == "auto" and layout.n >= REUSE_FROM)
-        if reuse and self._factored and self._reuse_next:
-            tick = time.perf_counter()
-            if layout.matrix is None:
-                layout.matrix = CoordinateMatrix(layout.n, layout.rows, layout.cols)
-            jacobian = layout.matrix.matrix(values)
-            preconditioned = weight * (solver.solve(-residual) if hint is None else hint)
-            z, count, converged = gmres(
-                lambda v: weight * solver.solve(jacobian @ (v / weight)), preconditioned,
-                tolerance, KRYLOV_MAX)
-            timings["solve"] += time.perf_counter() - tick
-            result.krylov_iterations += count
-            self._reuse_next = count <= KRYLOV_KEEP
-            if converged:
-                return z / weight, float(np.linalg.norm(preconditioned))
-        tick = time.perf_counter()
-        try:
-            solver.factorize(values)
-        except LinearSolverError as error:
+        settings = np.array([tol_force, tol_disp,
+                             -1.0 if yield_tolerance is None else yield_tolerance,
+                             PENETRATION, MIN_STEP, KRYLOV_LOOSE, KRYLOV_TIGHT,
+                             1e-8 * solid.props[0] * self.size**2])
+        isettings = np.array([max_iterations, KRYLOV_MAX, KRYLOV_KEEP, reuse, solver.handle,
+                              guess is not None,
+                              1 if touching is None or touching.resting else 0],
+                             dtype=np.int32)
+        factored = np.array([self._factored], dtype=np.int32)
+        reuse_next = np.array([self._reuse_next], dtype=np.int32)
+        out = solid.state_buffer()
+        (factored, reuse_next, u, force, _, _, _, _, pair_state, gap, normal, niter, history,
+         counters, spent, outcome, info, detail) = _core.forming_increment(
+            solid._x, solid._conn, solid.props, _flat(state.displacement),
+            _flat(state.axes.transpose(0, 1, 3, 2)), _flat(state.stress), _flat(state.ep),
+            _flat(state.strain), layout.eqn, layout.pattern.offsets, layout.fixed_flags,
+            layout.nf, layout.k_slots, layout.n_coupling, layout.rows, layout.cols,
+            pack.table, pack.tol, pack.coef, pack.degrees, pack.triangle, pack.tree_lower,
+            pack.tree_upper, pack.tree_child, pack.frame, pack.frame_lower, pack.frame_upper,
+            pack.grid_start, pack.grid_params, pack.grid_normals, pack.grid_points,
+            pack.facing, pack.face_first, pack.faces, pack.corner,
+            np.concatenate([positions[n] for n in names]),
+            np.concatenate([self.position[n] for n in names]), self._reach, self.size,
+            0.0 if touching is None else touching.distance, layout.tool_first,
+            layout.pair_node, on.astype(np.int32), self.r, self.mu, layout.held_flags,
+            self.u.ravel(), np.where(on[:, None], self.force, 0.0).ravel(),
+            self.external.ravel(), (self.u if guess is None else guess).ravel(), settings,
+            isettings, factored, reuse_next, out.stress.ravel(), out.ep.ravel(),
+            out.strain.ravel(), out.axes.transpose(0, 1, 3, 2).ravel(), max_iterations + 1)
+        self._factored, self._reuse_next = bool(factored[0]), bool(reuse_next[0])
+        result.evaluations += int(counters[0])
+        result.newton_iterations += int(counters[1])
+        result.factorizations += int(counters[2])
+        result.krylov_iterations += int(counters[3])
+        for key, seconds in zip(("assembly", "contact", "factorization", "solve"), spent,
+                                strict=True):
+            result.timings[key] += float(seconds)
+        history = history.reshape(-1, 4)[:niter]
+        if _log.isEnabledFor(logging.DEBUG):
+            for k, (_, rel, moved, alpha) in enumerate(history):
+                _log.debug("iteration %d: residual %.3e of the force scale, correction %.3e "
+                           "of the motion%s", k, rel, moved,
+                           f", step length {alpha:.4g}" if k else "")
+        if outcome == _CONVERGED:
+            trial = SolidState(out.stress, out.ep, out.strain, out.axes, u.reshape(-1, 3))
+            return (u.reshape(-1, 3), trial, force.reshape(-1, 3), history[:, 0].tolist(),
+                    pair_state, (gap, normal.reshape(-1, 3)),
+                    [(float(a), float(b)) for a, b in history[:, 1:3]])
+        if outcome == _LANDING:
+            return float(detail[0])
+        if outcome == _ELEMENT:
+            return str(ElementError(int(info[0]), int(info[1]) - 1))
+        if outcome == _NOT_FINITE:
+            return "the residual is not finite"
+        if outcome == _SOLVER:
             self._factored = False
-            return str(error)
-        tock = time.perf_counter()
-        timings["factorization"] += tock - tick
-        result.factorizations += 1
-        self._factored, self._reuse_next = True, True
-        delta = solver.solve(-residual)
-        timings["solve"] += time.perf_counter() - tock
-        return delta, float(np.linalg.norm(delta * weight))
+            return str(LinearSolverError(int(info[2]), "factorization"))
+        if outcome == _STALLED:
+            flipped = None if info[3] < 0 else np.ones(int(info[3]), dtype=bool)
+            return _stalled(max_iterations, float(detail[0]), float(detail[1]), tol_force,
+                            tol_disp, flipped)
+        raise RuntimeError(f"forming_increment returned outcome {outcome}")
 
     def close(self) -> None:
         """Free the MUMPS instance."""

@@ -1,0 +1,548 @@
+!> The Newton loop of one increment of a forming problem: the blank's displacements and the
+!> contact forces of every (tool, slave) pair solved together, DD3IMP's single loop
+!> (docs/theory/contact.md). Each evaluation assembles the blank (ddpy_solid_assembly) and
+!> the contact of every tool (ddpy_forming); each correction is solved with MUMPS, or by
+!> GMRES on older factors while they serve; the step is limited where free nodes would
+!> enter a tool and globalized by Deuflhard's natural monotonicity test.
+!>
+!> Unknowns: the free displacement dofs (eqn), then 3 force components per pair. Weights
+!> make them all lengths: 1 for displacements, 1 / r for the forces.
+module ddpy_forming_newton
+  use, intrinsic :: ieee_arithmetic, only: ieee_is_finite, ieee_value, ieee_positive_inf
+  use ddpy_kinds, only: wp
+  use ddpy_material, only: material_prop_count, yield_landing
+  use ddpy_solid_assembly, only: solid_assemble
+  use ddpy_forming, only: forming_contact, tool_fields
+  use ddpy_contact, only: contact_inactive
+  use ddpy_linear_solver, only: solver_factorize, solver_solve
+  implicit none
+  private
+  public :: forming_increment, newton_settings, newton_integer_settings, outcome_converged, &
+            outcome_landing, outcome_element, outcome_not_finite, outcome_solver, &
+            outcome_stalled, penetration_step
+
+  !> Entries of the real settings: force and displacement tolerances, the yield landing
+  !> tolerance (< 0: off), the penetration limit (element sizes) and the shortest step it
+  !> may leave, the bounds of the Krylov tolerance, the force scale's floor.
+  integer, parameter :: newton_settings = 8
+  !> Entries of the integer settings: iterations, GMRES iterations at most, GMRES
+  !> iterations after which the next correction factorizes, reuse of older factors (0/1),
+  !> the MUMPS handle, a guess given (0/1), the touching predictor's resting flag.
+  integer, parameter :: newton_integer_settings = 7
+  !> What forming_increment returns.
+  integer, parameter :: outcome_converged = 0, outcome_landing = 1, outcome_element = 2, &
+                        outcome_not_finite = 3, outcome_solver = 4, outcome_stalled = 5
+
+contains
+
+  !> Newton iterations of one increment from the converged state (u_n, force_n, the solid
+  !> state *_old) to the tools at positions. See the arguments of forming_contact for the
+  !> tools and pairs. Returns outcome with, as it says: u, force, the solid state, the
+  !> contact states (inactive where off), gaps and normals when converged; the landing
+  !> fraction in detail(1); the element status and element in info(1:2); the MUMPS code in
+  !> info(3); the last relative residual and correction in detail(1:2) and the pairs that
+  !> changed state in the last iteration in info(4) when stalled. history(1:2, 1:niter):
+  !> every iteration's residual norm, (relative residual, relative correction) and the
+  !> length of the step that led to it (0 for the start). counters: evaluations, corrections, factorizations, Krylov iterations;
+  !> timings (s): assembly, contact, factorization, solve. factored, reuse_next: the
+  !> solver's factors are this layout's, the last GMRES converged fast.
+  subroutine forming_increment(nnode, x0, ne, conn, props, u_ref, axes_old, stress_old, &
+                               ep_old, strain_old, eqn, offsets, fixed, nf, k_slots, &
+                               n_coupling, nvalues, rows, cols, ntool, table, tol, coef, &
+                               degrees, triangle, tree_lower, tree_upper, tree_child, frame, &
+                               frame_lower, frame_upper, grid_start, grid_params, &
+                               grid_normals, grid_points, facing, face_first, nface, faces, &
+                               corner, positions, positions_n, reach, size, touching, npair, &
+                               tool_first, pair_node, on, r, mu, held, u_n, force_n, external, &
+                               guess, settings, isettings, factored, reuse_next, u, force, &
+                               stress, ep, strain, axes, state, gap, normal, niter, history, &
+                               counters, timings, outcome, info, detail)
+    integer, intent(in) :: nnode, ne, nf, k_slots, n_coupling, nvalues, ntool, nface, npair
+    integer, intent(in) :: conn(8, ne), eqn(3, nnode), offsets(ne + 1), fixed(3, nnode), &
+                           rows(nvalues), cols(nvalues), table(tool_fields, ntool), &
+                           degrees(*), triangle(*), tree_child(*), grid_start(*), &
+                           face_first(ntool + 1), faces(4, nface), corner(4, nface), &
+                           tool_first(ntool + 1), pair_node(npair), on(npair), &
+                           held(3, npair), isettings(newton_integer_settings)
+    real(wp), intent(in) :: x0(3, nnode), props(material_prop_count), u_ref(3, nnode), &
+                            axes_old(3, 3, 8, ne), stress_old(6, 8, ne), ep_old(8, ne), &
+                            strain_old(6, 8, ne), tol(ntool), coef(*), tree_lower(*), &
+                            tree_upper(*), frame(*), frame_lower(*), frame_upper(*), &
+                            grid_params(*), grid_normals(*), grid_points(*), &
+                            facing(3, ntool), positions(3, ntool), positions_n(3, ntool), &
+                            reach, size, touching, r(npair), mu(npair), u_n(3, nnode), &
+                            force_n(3, npair), external(3, nnode), guess(3, nnode), &
+                            settings(newton_settings)
+    integer, intent(inout) :: factored, reuse_next
+    real(wp), intent(out) :: u(3, nnode), force(3, npair), stress(6, 8, ne), ep(8, ne), &
+                             strain(6, 8, ne), axes(3, 3, 8, ne), gap(npair), &
+                             normal(3, npair), history(4, *), timings(4), detail(2)
+    integer, intent(out) :: state(npair), niter, counters(4), outcome, info(4)
+
+    !> One evaluation: the iterate and what was evaluated there.
+    type :: evaluation
+      real(wp), allocatable :: u(:, :), force(:, :), residual(:), values(:), fint(:, :), &
+                               stress(:, :, :), ep(:, :), strain(:, :, :), axes(:, :, :, :), &
+                               gap(:), normal(:, :), simplified(:)
+      integer, allocatable :: state(:)
+    end type evaluation
+    type(evaluation) :: slot(2)
+    real(wp), allocatable :: weight(:), delta(:), du(:, :), dforce(:, :), x_n(:, :), &
+                             kdu(:, :), dp(:, :), u_cur(:, :), force_cur(:, :)
+    integer, allocatable :: previous(:)
+    real(wp) :: tol_force, tol_disp, yield_tol, floor, norm, scale, moved, correction, rel, &
+                forcing, alpha, step_size, du_norm, landing, t_norm, t_scale, t_moved, &
+                alpha_fallback
+    integer :: max_iterations, cur, trial, fallback, buffer, iteration, ls, n, status, &
+               element, handle, last_status, last_element
+    logical :: converged, have_previous, have_hint, accepted, t_converged
+    integer(8) :: clock_rate
+
+    call system_clock(count_rate=clock_rate)
+    tol_force = settings(1)
+    tol_disp = settings(2)
+    yield_tol = settings(3)
+    floor = settings(8)
+    max_iterations = isettings(1)
+    handle = isettings(5)
+    n = nf + 3*npair
+    counters = 0
+    timings = 0.0_wp
+    info = 0
+    detail = 0.0_wp
+    niter = 0
+    outcome = outcome_stalled
+    allocate(weight(n), delta(n), du(3, nnode), dforce(3, npair), x_n(3, nnode), &
+             kdu(3, nnode), dp(3, nnode), previous(npair), u_cur(3, nnode), &
+             force_cur(3, npair))
+    dp = 0.0_wp
+    step_size = 0.0_wp
+    weight(1:nf) = 1.0_wp
+    weight(nf + 1:) = reshape(spread(1.0_wp/r, 1, 3), [3*npair])
+    x_n = x0 + u_n
+    do cur = 1, 2
+      allocate(slot(cur)%u(3, nnode), slot(cur)%force(3, npair), slot(cur)%residual(n), &
+               slot(cur)%values(nvalues), slot(cur)%fint(3, nnode), &
+               slot(cur)%stress(6, 8, ne), slot(cur)%ep(8, ne), slot(cur)%strain(6, 8, ne), &
+               slot(cur)%axes(3, 3, 8, ne), slot(cur)%gap(npair), slot(cur)%normal(3, npair), &
+               slot(cur)%simplified(n), slot(cur)%state(npair))
+      slot(cur)%values(k_slots + 1:k_slots + n_coupling) = -1.0_wp
+    end do
+    correction = ieee_value(1.0_wp, ieee_positive_inf)
+    alpha = 0.0_wp
+    have_hint = .false.
+    have_previous = .false.
+    ! The extrapolated start, unless an element fails there; else the converged state.
+    cur = 1
+    status = 1
+    if (isettings(6) /= 0) then
+      slot(cur)%u = guess
+      slot(cur)%force = force_n
+      call evaluate(slot(cur), touching, status, element)
+    end if
+    if (status /= 0) then
+      slot(cur)%u = u_n
+      slot(cur)%force = force_n
+      call evaluate(slot(cur), touching, status, element)
+      if (status /= 0) then
+        outcome = outcome_element
+        info(1:2) = [status, element]
+        return
+      end if
+    end if
+    do iteration = 0, max_iterations
+      call measure(slot(cur), correction, norm, scale, moved, converged)
+      niter = niter + 1
+      history(1, niter) = norm
+      if (.not. ieee_is_finite(norm)) then
+        outcome = outcome_not_finite
+        return
+      end if
+      history(2, niter) = norm/scale
+      history(3, niter) = correction/moved
+      history(4, niter) = alpha
+      if (converged) then
+        call finish(slot(cur))
+        return
+      end if
+      if (iteration == max_iterations) then
+        outcome = outcome_stalled
+        detail = [norm/scale, correction/moved]
+        info(4) = -1
+        if (have_previous) info(4) = count(on /= 0 .and. slot(cur)%state /= previous)
+        return
+      end if
+      ! Inexact Newton (Eisenstat and Walker): the correction's relative error may be a
+      ! tenth of the relative residual (the rate stays quadratic), or as large as leaves
+      ! the next residual a tenth of the tolerance (the last iteration).
+      rel = norm/scale
+      forcing = min(settings(6), max(settings(7), 0.1_wp*rel, &
+                                     0.1_wp*tol_force/max(rel, 1.0e-300_wp)))
+      counters(2) = counters(2) + 1
+      call direction(slot(cur), forcing, step_size, status)
+      if (status < 0) then
+        outcome = outcome_solver
+        info(3) = status
+        return
+      end if
+      du = 0.0_wp
+      call scatter(delta(1:nf), du)
+      dforce = reshape(delta(nf + 1:), [3, npair])
+      du_norm = sqrt(dot_product(delta(1:nf), delta(1:nf)))
+      ! The factors hold this iteration's Jacobian from here. The first trial stops short
+      ! where the step would push a free node into a tool.
+      alpha = penetration_step(nnode, npair, du, pair_node, on, slot(cur)%state, &
+                               slot(cur)%gap, slot(cur)%normal, settings(4)*size, &
+                               settings(5))
+      previous = slot(cur)%state
+      have_previous = .true.
+      u_cur = slot(cur)%u
+      force_cur = slot(cur)%force
+      fallback = 0
+      buffer = 1
+      accepted = .false.
+      have_hint = .false.
+      do ls = 1, 5
+        trial = buffer
+        slot(trial)%u = u_cur + alpha*du
+        slot(trial)%force = force_cur + alpha*dforce
+        call evaluate(slot(trial), 0.0_wp, last_status, last_element)
+        if (last_status == 0) then
+          if (alpha == 1.0_wp) then
+            call measure(slot(trial), du_norm, t_norm, t_scale, t_moved, t_converged)
+            if (t_converged) then  ! converged: the next iteration returns it
+              accepted = .true.
+              exit
+            end if
+          end if
+          ! Natural monotonicity test (Deuflhard): the simplified Newton correction at
+          ! the trial, with this iteration's factors, must be shorter than the step's.
+          call timed_solve(-slot(trial)%residual, slot(trial)%simplified, status)
+          if (status < 0) then
+            outcome = outcome_solver
+            info(3) = status
+            return
+          end if
+          if (weighted_norm(slot(trial)%simplified) <= &
+              (1.0_wp - alpha/4.0_wp)*step_size) then
+            accepted = .true.
+            have_hint = .true.
+            exit
+          end if
+          t_norm = sqrt(dot_product(slot(trial)%residual, slot(trial)%residual))
+          if (fallback == 0 .and. t_norm <= (1.0_wp - 1.0e-4_wp*alpha)*norm) then
+            fallback = trial
+            alpha_fallback = alpha
+            buffer = 2  ! the fallback keeps its evaluation in slot 1
+          end if
+        end if
+        alpha = 0.5_wp*alpha
+      end do
+      if (.not. accepted) then
+        ! The simplified correction sees the contact set of this iteration: where that set
+        ! changes, the test can fail at every step length. Then the longest step that
+        ! lowered the residual norm, if one did, else the last.
+        if (fallback /= 0) then
+          trial = fallback
+          alpha = alpha_fallback
+          last_status = 0
+        else
+          alpha = 2.0_wp*alpha
+        end if
+        have_hint = .true.
+      end if
+      if (last_status /= 0) then
+        outcome = outcome_element
+        info(1:2) = [last_status, last_element]
+        return
+      end if
+      cur = trial
+      correction = alpha*du_norm
+      if (yield_tol >= 0.0_wp .and. alpha == 1.0_wp) then
+        ! The elastic predictor is the first full Newton step: a step shortened by the
+        ! line search or the penetration limit starts from a poor iterate, whose strains
+        ! say little of where the converged path yields.
+        landing = yield_landing(props, 8*ne, stress_old, ep_old, slot(cur)%strain - strain_old, &
+                                yield_tol)
+        yield_tol = -1.0_wp
+        if (landing < 1.0_wp) then
+          outcome = outcome_landing
+          detail(1) = landing
+          return
+        end if
+      end if
+    end do
+
+  contains
+    !> Assembly and contact at s%u, s%force into slot s.
+    subroutine evaluate(s, touching_gap, status, element)
+      type(evaluation), intent(inout) :: s
+      real(wp), intent(in) :: touching_gap
+      integer, intent(out) :: status, element
+      integer(8) :: t0, t1, t2
+      integer :: a, c
+      counters(1) = counters(1) + 1
+      call system_clock(t0)
+      call solid_assemble(nnode, x0, ne, conn, u_ref, s%u, props, axes_old, stress_old, &
+                          ep_old, strain_old, eqn, .false., .true., offsets, k_slots, &
+                          s%values(1:k_slots), .false., dp, s%fint, kdu, s%stress, s%ep, &
+                          s%strain, s%axes, status, element)
+      call system_clock(t1)
+      timings(1) = timings(1) + real(t1 - t0, wp)/real(clock_rate, wp)
+      if (status /= 0) return
+      do a = 1, nnode
+        do c = 1, 3
+          if (eqn(c, a) >= 0) s%residual(eqn(c, a) + 1) = s%fint(c, a) - external(c, a)
+        end do
+      end do
+      call forming_contact(nnode, x0 + s%u, x_n, fixed, ntool, table, tol, coef, degrees, &
+                           triangle, tree_lower, tree_upper, tree_child, frame, frame_lower, &
+                           frame_upper, grid_start, grid_params, grid_normals, grid_points, &
+                           facing, face_first, nface, faces, corner, positions, positions_n, &
+                           reach, size, touching_gap, isettings(7), npair, tool_first, &
+                           pair_node, on, s%force, r, mu, held, eqn, nf, k_slots, nvalues, &
+                           s%residual, s%values, s%state, s%gap, s%normal)
+      call system_clock(t2)
+      timings(2) = timings(2) + real(t2 - t1, wp)/real(clock_rate, wp)
+    end subroutine evaluate
+
+    !> Residual norm, force scale, motion, and whether converged with this correction.
+    subroutine measure(s, correction, norm, scale, moved, converged)
+      type(evaluation), intent(in) :: s
+      real(wp), intent(in) :: correction
+      real(wp), intent(out) :: norm, scale, moved
+      logical, intent(out) :: converged
+      norm = sqrt(dot_product(s%residual, s%residual))
+      scale = max(sqrt(sum(s%force**2)), sqrt(sum(s%fint**2, mask=fixed /= 0)), floor)
+      moved = max(sqrt(sum((s%u - u_n)**2)), 1.0e-9_wp*size)
+      converged = norm <= tol_force*scale .and. correction <= tol_disp*moved
+    end subroutine measure
+
+    !> The free dofs of a vector of unknowns into a (3, nnode) field (fixed dofs untouched).
+    subroutine scatter(v, field)
+      real(wp), intent(in) :: v(nf)
+      real(wp), intent(inout) :: field(3, nnode)
+      integer :: a, c
+      do a = 1, nnode
+        do c = 1, 3
+          if (eqn(c, a) >= 0) field(c, a) = v(eqn(c, a) + 1)
+        end do
+      end do
+    end subroutine scatter
+
+    !> The Newton correction (into delta) for the Jacobian and residual of slot s, and its
+    !> size as the line search measures it: ||W M^-1 r||, W the weights and M the factored
+    !> matrix (= ||W delta|| when the factors are this Jacobian's). With factors of an
+    !> earlier Jacobian and the last GMRES fast, GMRES on W M^-1 J W^-1 to the relative
+    !> tolerance forcing; else (or when it does not converge) a factorization.
+    subroutine direction(s, forcing, step_size, status)
+      type(evaluation), intent(inout) :: s
+      real(wp), intent(in) :: forcing
+      real(wp), intent(out) :: step_size
+      integer, intent(out) :: status
+      real(wp), allocatable :: preconditioned(:), z(:)
+      integer(8) :: t0, t1
+      integer :: count
+      logical :: gmres_converged
+      status = 0
+      if (isettings(4) /= 0 .and. factored /= 0 .and. reuse_next /= 0) then
+        allocate(preconditioned(n), z(n))
+        call system_clock(t0)
+        if (have_hint) then
+          preconditioned = weight*s%simplified
+        else
+          call mumps_solve(-s%residual, preconditioned, status)
+          if (status < 0) return
+          preconditioned = weight*preconditioned
+        end if
+        call gmres(s%values, preconditioned, forcing, isettings(2), z, count, &
+                   gmres_converged, status)
+        call system_clock(t1)
+        timings(4) = timings(4) + real(t1 - t0, wp)/real(clock_rate, wp)
+        if (status < 0) return
+        counters(4) = counters(4) + count
+        reuse_next = merge(1, 0, count <= isettings(3))
+        if (gmres_converged) then
+          delta = z/weight
+          step_size = sqrt(dot_product(preconditioned, preconditioned))
+          return
+        end if
+      end if
+      call system_clock(t0)
+      call solver_factorize(handle, nvalues, s%values, status)
+      call system_clock(t1)
+      if (status < 0) then
+        factored = 0
+        return
+      end if
+      timings(3) = timings(3) + real(t1 - t0, wp)/real(clock_rate, wp)
+      counters(3) = counters(3) + 1
+      factored = 1
+      reuse_next = 1
+      call timed_solve(-s%residual, delta, status)
+      if (status < 0) return
+      step_size = weighted_norm(delta)
+    end subroutine direction
+
+    !> x = M^-1 b with the present factors.
+    subroutine mumps_solve(b, x, status)
+      real(wp), intent(in) :: b(n)
+      real(wp), intent(out) :: x(n)
+      integer, intent(out) :: status
+      call solver_solve(handle, n, b, x, status)
+    end subroutine mumps_solve
+
+    !> mumps_solve, its time counted as solves.
+    subroutine timed_solve(b, x, status)
+      real(wp), intent(in) :: b(n)
+      real(wp), intent(out) :: x(n)
+      integer, intent(out) :: status
+      integer(8) :: t0, t1
+      call system_clock(t0)
+      call mumps_solve(b, x, status)
+      call system_clock(t1)
+      timings(4) = timings(4) + real(t1 - t0, wp)/real(clock_rate, wp)
+    end subroutine timed_solve
+
+    !> ||W v||.
+    real(wp) function weighted_norm(v)
+      real(wp), intent(in) :: v(n)
+      weighted_norm = sqrt(sum((weight*v)**2))
+    end function weighted_norm
+
+    !> GMRES from 0, without restart, on the operator v -> W M^-1 J W^-1 v (J with the
+    !> given values in the layout's coordinate structure): the iterate z, the iterations
+    !> and whether ||op(z) - b|| <= tol ||b||. Arnoldi with modified Gram-Schmidt run twice
+    !> (the basis stays orthogonal to rounding when the operator is far from normal) and
+    !> Givens rotations for the residual norm.
+    subroutine gmres(values, b, tol, m, z, k, converged, status)
+      real(wp), intent(in) :: values(nvalues), b(n), tol
+      integer, intent(in) :: m
+      real(wp), intent(out) :: z(n)
+      integer, intent(out) :: k, status
+      logical, intent(out) :: converged
+      real(wp), allocatable :: basis(:, :), w(:), jv(:)
+      real(wp) :: hessenberg(m + 1, m), cosines(m), sines(m), res(m + 1), h(m + 1), beta, &
+                  a, c, radius, y(m)
+      integer :: i, j, pass, last
+      logical :: breakdown
+      status = 0
+      z = 0.0_wp
+      k = 0
+      converged = .true.
+      beta = sqrt(dot_product(b, b))
+      if (beta == 0.0_wp) return
+      allocate(basis(n, m + 1), w(n), jv(n))
+      basis(:, 1) = b/beta
+      hessenberg = 0.0_wp
+      cosines = 0.0_wp
+      sines = 0.0_wp
+      res = 0.0_wp
+      res(1) = beta
+      last = 0
+      do j = 1, m
+        last = j
+        ! w = W M^-1 J W^-1 basis_j
+        jv = 0.0_wp
+        w = basis(:, j)/weight
+        do i = 1, nvalues
+          jv(rows(i) + 1) = jv(rows(i) + 1) + values(i)*w(cols(i) + 1)
+        end do
+        call mumps_solve(jv, w, status)
+        if (status < 0) return
+        w = weight*w
+        do pass = 1, 2
+          do i = 1, j
+            h(i) = dot_product(basis(:, i), w)
+          end do
+          do i = 1, j
+            w = w - h(i)*basis(:, i)
+          end do
+          hessenberg(1:j, j) = hessenberg(1:j, j) + h(1:j)
+        end do
+        hessenberg(j + 1, j) = sqrt(dot_product(w, w))
+        breakdown = .not. hessenberg(j + 1, j) > 1.0e-14_wp*maxval(abs(hessenberg(1:j, j)))
+        if (.not. breakdown) basis(:, j + 1) = w/hessenberg(j + 1, j)
+        do i = 1, j - 1  ! the earlier rotations on the new column
+          a = hessenberg(i, j)
+          c = hessenberg(i + 1, j)
+          hessenberg(i, j) = cosines(i)*a + sines(i)*c
+          hessenberg(i + 1, j) = -sines(i)*a + cosines(i)*c
+        end do
+        a = hessenberg(j, j)
+        c = hessenberg(j + 1, j)
+        radius = hypot(a, c)
+        if (radius > 0.0_wp) then
+          cosines(j) = a/radius
+          sines(j) = c/radius
+        else
+          cosines(j) = 1.0_wp
+          sines(j) = 0.0_wp
+        end if
+        hessenberg(j, j) = radius
+        hessenberg(j + 1, j) = 0.0_wp
+        res(j + 1) = -sines(j)*res(j)
+        res(j) = cosines(j)*res(j)
+        if (abs(res(j + 1)) <= tol*beta .or. breakdown .or. radius == 0.0_wp) exit
+      end do
+      k = last
+      converged = abs(res(k + 1)) <= tol*beta
+      do i = 1, k
+        if (hessenberg(i, i) == 0.0_wp) then  ! singular on the Krylov space
+          converged = .false.
+          return
+        end if
+      end do
+      do i = k, 1, -1  ! back substitution on the triangular factor
+        y(i) = (res(i) - dot_product(hessenberg(i, i + 1:k), y(i + 1:k)))/hessenberg(i, i)
+      end do
+      do i = 1, k
+        z = z + y(i)*basis(:, i)
+      end do
+    end subroutine gmres
+
+    !> The converged iterate s as the answer.
+    subroutine finish(s)
+      type(evaluation), intent(in) :: s
+      outcome = outcome_converged
+      u = s%u
+      force = s%force
+      stress = s%stress
+      ep = s%ep
+      strain = s%strain
+      axes = s%axes
+      state = merge(s%state, contact_inactive, on /= 0)
+      gap = s%gap
+      normal = s%normal
+    end subroutine finish
+
+  end subroutine forming_increment
+
+  !> Longest fraction (at most 1) of the step du (3, nnode) that leaves no free pair's node
+  !> (on, open, with a gap) deeper than room_depth inside its tool, the gaps and normals
+  !> linearized at the present iterate; at least min_step. The tangent does not see a tool
+  !> where a node is free: on a sheet held by a line of contact nodes the full step bends
+  !> the span between them along its soft, plastic mode and pushes free nodes deep into the
+  !> punch (docs/theory/contact.md).
+  pure function penetration_step(nnode, npair, du, pair_node, on, state, gap, normal, &
+                                 room_depth, min_step) result(step)
+    integer, intent(in) :: nnode, npair, pair_node(npair), on(npair), state(npair)
+    real(wp), intent(in) :: du(3, nnode), gap(npair), normal(3, npair), room_depth, min_step
+    real(wp) :: step, closing, room
+    integer :: p
+    step = huge(1.0_wp)
+    do p = 1, npair
+      if (on(p) == 0 .or. state(p) /= contact_inactive) cycle
+      if (.not. ieee_is_finite(gap(p))) cycle
+      closing = -dot_product(du(:, pair_node(p) + 1), normal(:, p))
+      room = max(gap(p), 0.0_wp) + room_depth
+      if (closing > room) step = min(step, room/closing)
+    end do
+    if (step == huge(1.0_wp)) then
+      step = 1.0_wp
+    else
+      step = max(step, min_step)
+    end if
+  end function penetration_step
+
+end module ddpy_forming_newton

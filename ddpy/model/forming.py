@@ -98,6 +98,24 @@ def start_depth_limit(strain: float, size: float) -> float:
 
 
 @dataclass
+class _Trial:
+    """What one increment trial of the core's Newton loop gives: converged (``failure``
+    empty and ``landing`` 1) with the new state, its residual history and the contact
+    states, gaps and normals of the pairs; or the fraction of the increment at which the
+    first elastic point lands on the yield surface (``landing`` < 1); or why it failed."""
+
+    failure: str = ""
+    landing: float = 1.0
+    u: NDArray[np.float64] | None = None
+    state: SolidState | None = None
+    force: NDArray[np.float64] | None = None
+    residuals: list[float] = field(default_factory=list)
+    relative: list[tuple[float, float]] = field(default_factory=list)
+    in_contact: NDArray[np.int32] | None = None
+    gap: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
+
+
+@dataclass
 class PhaseProgress:
     """Where a ``FormingProblem.run`` stands after a converged increment: the tool positions
     at the start of the phase, the offsets of gap-held tools, the phase factor reached, the
@@ -498,28 +516,29 @@ class FormingProblem:
             touching = _Touching(TOUCHING * self.size)
             outcome = self._increment(layout, solver, positions, on, tol_force, tol_disp,
                                       max_iterations, result, landing, touching, guess)
-            if isinstance(outcome, str) and last_du is None:
+            if outcome.failure and last_du is None:
                 # The first increment of a phase starts with the blank lying on its tools:
                 # a second start keeps open the touching pairs of the tools at rest that
                 # the blank does not need (docs/theory/contact.md), before cutting.
                 _log.info("increment to phase factor %.6g (step %.3g) starts again with the "
-                          "resting tools' touching pairs open: %s", target, step, outcome)
+                          "resting tools' touching pairs open: %s", target, step,
+                          outcome.failure)
                 touching = _Touching(TOUCHING * self.size, resting=False)
                 outcome = self._increment(layout, solver, positions, on, tol_force,
                                           tol_disp, max_iterations, result, landing,
                                           touching, guess)
-            if isinstance(outcome, float):  # an elastic point would overshoot the yield stress
-                step = max(step * outcome, limits.min_fraction * nominal)
+            if outcome.landing < 1.0:  # an elastic point would overshoot the yield stress
+                step = max(step * outcome.landing, limits.min_fraction * nominal)
                 reason = "yield"
                 continue
-            if isinstance(outcome, str):
+            if outcome.failure:
                 _log.info("increment to phase factor %.6g (step %.3g) cut: %s", target, step,
-                          outcome)
+                          outcome.failure)
                 cuts_in_row += 1
                 result.cuts += 1
                 if cuts_in_row > max_cuts:
                     raise FormingError(f"increment to phase factor {target:.6g} failed after "
-                                       f"{max_cuts} cuts: {outcome}", result)
+                                       f"{max_cuts} cuts: {outcome.failure}", result)
                 if step * cutback < limits.min_fraction * nominal and \
                         1.0 - factor > limits.min_fraction * nominal:
                     # Below the smallest increment a run only crawls: cut after cut, each
@@ -527,10 +546,12 @@ class FormingProblem:
                     raise FormingError(
                         f"increment to phase factor {target:.6g} failed: a cut would make it "
                         f"smaller than the smallest increment ({limits.min_fraction:g} of the "
-                        f"largest): {outcome}", result)
+                        f"largest): {outcome.failure}", result)
                 step, reason = step * cutback, "cut"
                 continue
-            u, state, force, residuals, in_contact, gap, relative = outcome
+            u, state, force, in_contact, gap = (outcome.u, outcome.state, outcome.force,
+                                                outcome.in_contact, outcome.gap)
+            residuals, relative = outcome.residuals, outcome.relative
             strain = _equivalent_strain_increment(state.strain - self.state.strain)
             if strain > 1.05 * limits.strain and step > limits.min_fraction * nominal:
                 step = max(step * limits.strain / strain, limits.min_fraction * nominal)
@@ -693,14 +714,15 @@ class FormingProblem:
                                           newton.force_tolerance,
                                           newton.displacement_tolerance,
                                           newton.max_iterations, result)
-                if isinstance(outcome, str):
-                    raise FormingError(f"springback step {k} failed: {outcome}", result)
-                self.u, self.state = outcome[0], outcome[1]
+                if outcome.failure:
+                    raise FormingError(f"springback step {k} failed: {outcome.failure}",
+                                       result)
+                self.u, self.state = outcome.u, outcome.state
                 result.factors.append(k / increments)
                 result.sizes.append(1.0 / increments)
                 result.limited_by.append("springback")
-                result.residuals.append(outcome[3])
-                result.relative.append(outcome[6])
+                result.residuals.append(outcome.residuals)
+                result.relative.append(outcome.relative)
                 result.displacements.append(self.u.copy())
         finally:
             self.external = np.zeros_like(self.u)
@@ -850,15 +872,16 @@ class FormingProblem:
                    tol_force: float, tol_disp: float, max_iterations: int,
                    result: FormingResult, yield_tolerance: float | None = None,
                    touching: _Touching | None = None,
-                   guess: NDArray[np.float64] | None = None):
-        """Newton iterations of one increment; the new state, or the reason of failure, or
-        (with ``yield_tolerance``) the fraction of the increment at which the first elastic
-        Gauss point reaches the yield surface, from the strains of the first (elastic
-        predictor) iteration, when that fraction is below 1. With ``touching``,
-        the first iteration takes pairs within that gap as closed (see ``_contact``). With
-        ``guess`` (displacements, the last increment's rate times this one's size) the
-        iterations start there instead of at the converged u_n, unless an element fails
-        there; the converged state does not depend on the start.
+                   guess: NDArray[np.float64] | None = None) -> _Trial:
+        """One increment trial, the Newton iterations run by the core (forming_increment,
+        fortran/solver/ddpy_forming_newton.f90): the new state, or (with
+        ``yield_tolerance``) the fraction of the increment at which the first elastic Gauss
+        point reaches the yield surface, from the strains of the first full step (the
+        elastic predictor), when below 1; or why it failed. With ``touching``, the first
+        iteration takes pairs within that gap as closed (see ``_contact``). With ``guess``
+        (displacements, the last increment's rate times this one's size) the iterations
+        start there instead of at the converged u_n, unless an element fails there; the
+        converged state does not depend on the start.
 
         The semi-smooth Newton step is globalized by backtracking until Deuflhard's natural
         monotonicity test holds (the simplified correction at the trial point, solved with
@@ -916,22 +939,23 @@ class FormingProblem:
                            f", step length {alpha:.4g}" if k else "")
         if outcome == _CONVERGED:
             trial = SolidState(out.stress, out.ep, out.strain, out.axes, u.reshape(-1, 3))
-            return (u.reshape(-1, 3), trial, force.reshape(-1, 3), history[:, 0].tolist(),
-                    pair_state, (gap, normal.reshape(-1, 3)),
-                    [(float(a), float(b)) for a, b in history[:, 1:3]])
+            return _Trial(u=u.reshape(-1, 3), state=trial, force=force.reshape(-1, 3),
+                          residuals=history[:, 0].tolist(),
+                          relative=[(float(a), float(b)) for a, b in history[:, 1:3]],
+                          in_contact=pair_state, gap=(gap, normal.reshape(-1, 3)))
         if outcome == _LANDING:
-            return float(detail[0])
+            return _Trial(landing=float(detail[0]))
         if outcome == _ELEMENT:
-            return str(ElementError(int(info[0]), int(info[1]) - 1))
+            return _Trial(str(ElementError(int(info[0]), int(info[1]) - 1)))
         if outcome == _NOT_FINITE:
-            return "the residual is not finite"
+            return _Trial("the residual is not finite")
         if outcome == _SOLVER:
             self._factored = False
-            return str(LinearSolverError(int(info[2]), "factorization"))
+            return _Trial(str(LinearSolverError(int(info[2]), "factorization or solve")))
         if outcome == _STALLED:
             flipped = None if info[3] < 0 else np.ones(int(info[3]), dtype=bool)
-            return _stalled(max_iterations, float(detail[0]), float(detail[1]), tol_force,
-                            tol_disp, flipped)
+            return _Trial(_stalled(max_iterations, float(detail[0]), float(detail[1]),
+                                   tol_force, tol_disp, flipped))
         raise RuntimeError(f"forming_increment returned outcome {outcome}")
 
     def close(self) -> None:

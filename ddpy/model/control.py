@@ -10,6 +10,10 @@ from dataclasses import dataclass
 
 __all__ = ["IncrementLimits", "NewtonSettings"]
 
+#: Most Newton iterations of an increment, and most redos of one at a release: beyond, a
+#: run only spends time (a stalled increment is cut instead).
+MAX_ITERATIONS, MAX_REDOS = 1000, 10**6
+
 
 @dataclass(frozen=True)
 class IncrementLimits:
@@ -62,8 +66,9 @@ class IncrementLimits:
             raise ValueError("min_fraction must lie in (0, 1] and touch_gap be >= 0")
         if not 0.0 <= self.release_share <= 1.0:
             raise ValueError(f"release_share must lie in [0, 1], got {self.release_share}")
-        if self.release_redos is not None and not self.release_redos >= 0:
-            raise ValueError(f"release_redos must be >= 0 or None, got {self.release_redos}")
+        if self.release_redos is not None and not 0 <= self.release_redos <= MAX_REDOS:
+            raise ValueError(f"release_redos must lie in 0..{MAX_REDOS:,} or be None (no cap), "
+                             f"got {self.release_redos}")
         if self.yield_tolerance is not None and not 0.0 <= self.yield_tolerance < 1.0:
             raise ValueError(f"yield_tolerance must lie in [0, 1) or be None, got "
                              f"{self.yield_tolerance}")
@@ -94,8 +99,9 @@ class NewtonSettings:
             value = getattr(self, name)
             if not 0.0 < value < 1.0:
                 raise ValueError(f"{name} must lie in (0, 1), got {value}")
-        if not (isinstance(self.max_iterations, int) and self.max_iterations >= 1):
-            raise ValueError(f"max_iterations must be an integer >= 1, got "
+        if not (isinstance(self.max_iterations, int)
+                and 1 <= self.max_iterations <= MAX_ITERATIONS):
+            raise ValueError(f"max_iterations must be an integer in 1..{MAX_ITERATIONS}, got "
                              f"{self.max_iterations}")
         if not 0.0 < self.cutback < 1.0:
             raise ValueError(f"cutback must lie in (0, 1), got {self.cutback}")

@@ -22,23 +22,50 @@ from ddpy.io.decks.lines import (
     read_vector,
     show,
 )
+from ddpy.model.control import IncrementLimits, NewtonSettings
+
+
+def _model_setting(key: str, model: type, name: str,
+                   read: Callable[[str, str], Any]) -> Callable[[str], Any]:
+    """The reader of a deck setting that is a field of a model class (IncrementLimits,
+    NewtonSettings): the word is read as a number here, and its range is the class's own
+    check, the one place it is written (its message, prefixed with the key)."""
+
+    def parse(word: str) -> Any:
+        value = read(word, key)
+        try:
+            model(**{name: value})
+        except ValueError as error:
+            raise BadValue(f"{key}: {error}") from None
+        return value
+
+    return parse
+
+
+def _count_or_off(word: str, what: str) -> int | None:
+    return None if word == "off" else read_int(word, what)
+
 
 #: Settings allowed at the top of control.dat (defaults of every phase) and inside a phase.
 _SETTINGS: dict[str, Callable[[str], Any]] = {
     "max_increment": lambda w: read_float(w, "max_increment", gt=0, le=MAX_LENGTH),
     "min_increment": lambda w: read_float(w, "min_increment", gt=0, le=MAX_LENGTH),
-    # The run's increment control (IncrementLimits) takes fractions below 1 only.
-    "rmin_yield": lambda w: read_float(w, "rmin_yield", ge=0, lt=1),
-    "rmin_strain": lambda w: read_float(w, "rmin_strain", gt=0, lt=1),
-    "rmin_rotation": lambda w: read_float(w, "rmin_rotation", gt=0, le=90),
+    "rmin_yield": _model_setting("rmin_yield", IncrementLimits, "yield_tolerance", read_float),
+    "rmin_strain": _model_setting("rmin_strain", IncrementLimits, "strain", read_float),
+    "rmin_rotation": _model_setting("rmin_rotation", IncrementLimits, "rotation_deg",
+                                    read_float),
     "rmin_contact": lambda w: read_choice(w, "rmin_contact", ("on", "off")) == "on",
-    "rmin_release": lambda w: read_float(w, "rmin_release", ge=0, le=1),
-    "rmin_release_redos": lambda w: (None if w == "off"
-                                     else read_int(w, "rmin_release_redos", 0, 10**6)),
-    "newton_force": lambda w: read_float(w, "newton_force", gt=0, lt=1),
-    "newton_displacement": lambda w: read_float(w, "newton_displacement", gt=0, lt=1),
-    "max_iterations": lambda w: read_int(w, "max_iterations", 1, 1000),
-    "cutback": lambda w: read_float(w, "cutback", gt=0, lt=1),
+    "rmin_release": _model_setting("rmin_release", IncrementLimits, "release_share",
+                                   read_float),
+    "rmin_release_redos": _model_setting("rmin_release_redos", IncrementLimits,
+                                         "release_redos", _count_or_off),
+    "newton_force": _model_setting("newton_force", NewtonSettings, "force_tolerance",
+                                   read_float),
+    "newton_displacement": _model_setting("newton_displacement", NewtonSettings,
+                                          "displacement_tolerance", read_float),
+    "max_iterations": _model_setting("max_iterations", NewtonSettings, "max_iterations",
+                                     read_int),
+    "cutback": _model_setting("cutback", NewtonSettings, "cutback", read_float),
     "output_every": lambda w: read_int(w, "output_every", 0, 10**9),
 }
 _PHASE_KEYS = ("type", "tools", "move", "gap", "lead", "output_at", "increments")

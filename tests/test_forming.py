@@ -10,10 +10,10 @@ import pytest
 
 from ddpy.geometry.surfaces import BezierSurface, NagataSurface
 from ddpy.model.contact import SLIP, STICK
-from ddpy.model.control import IncrementLimits, NewtonSettings
+from ddpy.model.control import IncrementLimits, NewtonSettings, next_step
 from ddpy.model.forming import FormingProblem, RigidTool
 from ddpy.model.material import Hill48, Material, Swift, yield_landing
-from ddpy.model.mesh import HexMesh
+from ddpy.model.mesh import HexMesh, largest_rotation
 from ddpy.model.solid import Solid, StaticProblem, material_props
 
 #: Elastic in practice (yield stress 1e7 MPa), no Poisson effect: the analytic answers hold.
@@ -331,7 +331,8 @@ def test_rotation_increment_and_a_tool_inside_the_blank() -> None:
     rotated = x @ np.array([[np.cos(angle), np.sin(angle), 0], [-np.sin(angle), np.cos(angle), 0],
                             [0, 0, 1.0]])
     # A rigid rotation by a small angle: the increment's rotation is its tangent-ish angle.
-    assert problem._rotation_increment(rotated - x) == pytest.approx(np.sin(angle), rel=1e-9)
+    assert largest_rotation(x, mesh.elements, rotated - x) == pytest.approx(np.sin(angle),
+                                                                          rel=1e-9)
     # A phase that starts with the tool 0.3 mm inside the 0.5 mm block is refused.
     problem.position["plane"] = np.array([0.0, 0.0, 0.3])
     with pytest.raises(ValueError, match="starts inside the blank"):
@@ -412,7 +413,7 @@ def test_release_redos_are_capped() -> None:
         before, after = heights[k], heights[k + 1]
         assert (after > -0.05 * (before - after)) is limited, (redos, before, after)
         assert heights[-1] == pytest.approx(-1e-3)
-    with pytest.raises(ValueError, match="release_redos must be >= 0"):
+    with pytest.raises(ValueError, match="release_redos must lie in 0.."):
         IncrementLimits(release_redos=-1)
 
 
@@ -534,23 +535,22 @@ def test_springback_of_a_bent_strip_converges_quadratically() -> None:
 
 
 def test_next_increment_tries_the_nominal_size_again_after_a_limit() -> None:
-    from ddpy.model.forming import _next_step
 
     # Touch, release and yield are found before or in the first iteration: back to nominal
     # unless the rates predict a strain or rotation limit.
     for reason in ("touch", "release", "yield", "max"):
-        assert _next_step(0.01, 0.1, reason, 0.05, 0.01) == (0.1, "max")
-        assert _next_step(0.01, 0.1, reason, 0.2, 0.1) == (pytest.approx(0.045), "strain")
+        assert next_step(0.01, 0.1, reason, 0.05, 0.01) == (0.1, "max")
+        assert next_step(0.01, 0.1, reason, 0.2, 0.1) == (pytest.approx(0.045), "strain")
     # A strain or rotation limit is seen only after convergence: the next size is
     # predicted from this increment's rate, to 90 % of the limit.
-    step, reason = _next_step(0.05, 0.1, "strain", 1.0, 0.5)
+    step, reason = next_step(0.05, 0.1, "strain", 1.0, 0.5)
     assert step == pytest.approx(0.045) and reason == "strain"
-    step, reason = _next_step(0.05, 0.1, "max", 0.2, 1.5)
+    step, reason = next_step(0.05, 0.1, "max", 0.2, 1.5)
     assert step == pytest.approx(0.03) and reason == "rotation"
     # After a cut (divergence) the size at most doubles per increment.
-    assert _next_step(0.01, 0.1, "cut", 0.1, 0.1) == (0.02, "regrow")
-    assert _next_step(0.04, 0.1, "regrow", 0.1, 0.1) == (0.08, "regrow")
-    assert _next_step(0.08, 0.1, "regrow", 0.1, 0.1) == (0.1, "max")
+    assert next_step(0.01, 0.1, "cut", 0.1, 0.1) == (0.02, "regrow")
+    assert next_step(0.04, 0.1, "regrow", 0.1, 0.1) == (0.08, "regrow")
+    assert next_step(0.08, 0.1, "regrow", 0.1, 0.1) == (0.1, "max")
 
 
 def test_contact_filter_follows_the_blank_surface_as_it_turns() -> None:
@@ -562,12 +562,9 @@ def test_contact_filter_follows_the_blank_surface_as_it_turns() -> None:
     bottom = mesh.select(z=0.05)
     tool = RigidTool("plane", plane_tool(), bottom, facing=(0, 0, -1))
     problem = FormingProblem(Solid(mesh, ELASTIC), [tool])
-    layout, _ = problem._prepare()
-    on = np.ones(layout.node.size, dtype=bool)
 
     def gaps(x: np.ndarray) -> np.ndarray:
-        return problem._contact(layout, x, x, problem.position, on, problem.force,
-                                np.zeros(layout.n), np.empty(layout.rows.size))[1][0]
+        return problem.contact_state(u=x - mesh.nodes)[1]
 
     assert np.allclose(gaps(mesh.nodes), 0.05)
     turn = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])  # about y
@@ -588,18 +585,15 @@ def test_a_newton_step_stops_where_free_nodes_would_enter_a_tool() -> None:
     tool = RigidTool("plane", plane_tool(), mesh.select(z=0.1), facing=(0, 0, -1))
     problem = FormingProblem(Solid(mesh, ELASTIC), [tool])
     problem.fix(mesh.select(z=0.6), "xyz")
-    layout, _ = problem._prepare()
-    x = mesh.nodes.copy()
-    on = np.ones(layout.node.size, dtype=np.int32)
-    state, (gap, normal) = problem._contact(layout, x, x, problem.position, on.astype(bool),
-                                            problem.force, np.zeros(layout.n),
-                                            np.empty(layout.rows.size))
+    state, gap, normal = problem.contact_state()
     assert (state == INACTIVE).all() and np.allclose(gap, 0.1)
+    pair_node = np.concatenate([t.slaves for t in problem.tools]).astype(np.int32)
+    on = np.ones(pair_node.size, dtype=np.int32)
     down = np.zeros((mesh.n_nodes, 3))
     down[~problem.fixed[:, 2], 2] = -1.0
 
     def step(du: np.ndarray, states: np.ndarray) -> float:
-        return _core.penetration_step(du.ravel(), layout.pair_node, on, states, gap,
+        return _core.penetration_step(du.ravel(), pair_node, on, states, gap,
                                       normal.ravel(), PENETRATION * problem.size, MIN_STEP)
 
     assert step(down, state) == pytest.approx(0.1 + PENETRATION * problem.size)

@@ -8,7 +8,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-__all__ = ["IncrementLimits", "NewtonSettings"]
+__all__ = ["IncrementLimits", "NewtonSettings", "next_step"]
 
 #: Most Newton iterations of an increment, and most redos of one at a release: beyond, a
 #: run only spends time (a stalled increment is cut instead).
@@ -105,3 +105,22 @@ class NewtonSettings:
                              f"{self.max_iterations}")
         if not 0.0 < self.cutback < 1.0:
             raise ValueError(f"cutback must lie in (0, 1), got {self.cutback}")
+
+
+def next_step(step: float, nominal: float, reason: str, strain_ratio: float,
+              rotation_ratio: float) -> tuple[float, str]:
+    """The trial size of the next increment and what set it, after one of ``step`` that
+    ``reason`` limited, whose largest strain and rotation increments were these fractions
+    of their limits. As in DD3IMP's r_min, each increment tries the nominal size again:
+    the touch, release and yield limits are found before or in the first iteration and
+    cost little to apply once more. Two things are remembered: a strain or rotation limit
+    is found only after convergence, so the next size is predicted from this increment's
+    rates (strain and rotation grow about linearly with the size), to 90 % of the limit;
+    and after a cut (divergence) the size at most doubles per increment."""
+    grow = 0.9 / max(strain_ratio, rotation_ratio, 1e-12)
+    cap = 2.0 if reason in ("cut", "regrow") else math.inf
+    if min(grow, cap) * step >= nominal:
+        return nominal, "max"
+    if cap < grow:
+        return cap * step, "regrow"
+    return grow * step, "strain" if strain_ratio >= rotation_ratio else "rotation"

@@ -30,8 +30,14 @@ from ddpy.core.ordering import mesh_solver
 from ddpy.geometry.search import NONE, ContactSearch
 from ddpy.geometry.surfaces import BezierSurface, NagataSurface
 from ddpy.model.contact import INACTIVE
-from ddpy.model.control import IncrementLimits, NewtonSettings
-from ddpy.model.mesh import HEX_EDGES, HexMesh, boundary_faces, face_area_vectors
+from ddpy.model.control import IncrementLimits, NewtonSettings, next_step
+from ddpy.model.mesh import (
+    HEX_EDGES,
+    HexMesh,
+    boundary_faces,
+    face_area_vectors,
+    largest_rotation,
+)
 from ddpy.model.solid import ElementError, Solid, SolidState, _components, _flat
 
 _log = logging.getLogger(__name__)
@@ -557,7 +563,8 @@ class FormingProblem:
                 step = max(step * limits.strain / strain, limits.min_fraction * nominal)
                 reason = "strain"
                 continue
-            rotation = self._rotation_increment(u - self.u)
+            rotation = largest_rotation(self.solid.mesh.nodes + self.u, self.solid.mesh.elements,
+                                        u - self.u)
             limit = np.radians(limits.rotation_deg)
             if rotation > 1.05 * limit and step > limits.min_fraction * nominal:
                 step = max(step * limit / rotation, limits.min_fraction * nominal)
@@ -597,7 +604,7 @@ class FormingProblem:
                 result.contacts[t.name].append(int((in_contact[pairs] != INACTIVE).sum()))
                 result.status[t.name].append(in_contact[pairs].copy())
             cuts_in_row = redos = 0
-            step, reason = _next_step(step, nominal, reason, strain / limits.strain,
+            step, reason = next_step(step, nominal, reason, strain / limits.strain,
                                       rotation / limit)
             if on_increment is not None and on_increment(
                     PhaseProgress(start, offsets, factor, step, reason, last_du, last_dp)):
@@ -728,20 +735,6 @@ class FormingProblem:
             self.external = np.zeros_like(self.u)
         return result
 
-    def _rotation_increment(self, du: NDArray[np.float64]) -> float:
-        """Largest element rotation (radians) of a displacement increment: the axial vector
-        of the skew part of the gradient of the linear field that fits each element's nodal
-        increments in least squares."""
-        x = self.solid.mesh.nodes + self.u
-        elements = self.solid.mesh.elements
-        coords = x[elements] - x[elements].mean(axis=1, keepdims=True)   # (m, 8, 3)
-        moves = du[elements] - du[elements].mean(axis=1, keepdims=True)  # (m, 8, 3)
-        gram = np.einsum("mai,maj->mij", coords, coords)
-        gradient = np.linalg.solve(gram, np.einsum("mai,maj->mij", coords, moves))
-        skew = 0.5 * (gradient - gradient.transpose(0, 2, 1))
-        axial = np.stack([skew[:, 1, 2], skew[:, 2, 0], skew[:, 0, 1]], axis=1)
-        return float(np.linalg.norm(axial, axis=1).max()) if len(axial) else 0.0
-
     def _touch_factor(self, layout: _Layout, on: NDArray[np.bool_],
                       moves: Mapping[str, NDArray[np.float64]], step: float,
                       last_du: NDArray[np.float64] | None, limits: IncrementLimits) -> float:
@@ -813,6 +806,30 @@ class FormingProblem:
             trend = np.divide(p, drop, out=np.full(p.size, np.inf), where=drop > 0.0)
             fraction = np.where(trend < 1.0, trend, fraction)
         return float(fraction.min())
+
+    def contact_state(self, u: ArrayLike | None = None,
+                      positions: Mapping[str, ArrayLike] | None = None,
+                      ) -> tuple[NDArray[np.int32], NDArray[np.float64], NDArray[np.float64]]:
+        """The contact of every (tool, slave) pair, pairs in the order of the tools and their
+        slaves, at displacements ``u`` (n, 3) (default: the present ones) with the tools at
+        ``positions`` (default: where they are), for the present contact forces: the law's
+        states (0 open, 1 stick, 2 slip), the signed gaps (inf where no patch lies within
+        the search's reach or the facing filter leaves none) and the tools' unit normals at
+        the closest points (pairs, 3). The same core call as an evaluation of a run."""
+        layout, _ = self._prepare()
+        n = self.solid.mesh.n_nodes
+        u = self.u if u is None else float_array(u, "u", (n, 3))
+        where = dict(self.position)
+        for name, value in (positions or {}).items():
+            if name not in where:
+                raise ValueError(f"positions names an unknown tool: {name}")
+            where[name] = float_array(value, f"position of {name}", (3,))
+        x = self.solid.mesh.nodes + u
+        on = np.ones(layout.node.size, dtype=bool)
+        state, (gap, normal) = self._contact(layout, x, self.solid.mesh.nodes + self.u,
+                                             where, on, self.force, np.zeros(layout.n),
+                                             np.empty(layout.rows.size))
+        return state, gap, normal
 
     def _contact(self, layout: _Layout, x: NDArray[np.float64], x_n: NDArray[np.float64],
                  positions: Mapping[str, NDArray[np.float64]], on: NDArray[np.bool_],
@@ -983,25 +1000,6 @@ def blank_stiffness(nodes: ArrayLike, elements: ArrayLike, young: float) -> floa
     lengths.sort(axis=1)
     ratio = lengths[:, 0] ** 2 / np.sqrt(lengths[:, 1] * lengths[:, 2])
     return float(young * np.median(ratio))
-
-
-def _next_step(step: float, nominal: float, reason: str, strain_ratio: float,
-               rotation_ratio: float) -> tuple[float, str]:
-    """The trial size of the next increment and what set it, after one of ``step`` that
-    ``reason`` limited, whose largest strain and rotation increments were these fractions
-    of their limits. As in DD3IMP's r_min, each increment tries the nominal size again:
-    the touch, release and yield limits are found before or in the first iteration and
-    cost little to apply once more. Two things are remembered: a strain or rotation limit
-    is found only after convergence, so the next size is predicted from this increment's
-    rates (strain and rotation grow about linearly with the size), to 90 % of the limit;
-    and after a cut (divergence) the size at most doubles per increment."""
-    grow = 0.9 / max(strain_ratio, rotation_ratio, 1e-12)
-    cap = 2.0 if reason in ("cut", "regrow") else np.inf
-    if min(grow, cap) * step >= nominal:
-        return nominal, "max"
-    if cap < grow:
-        return cap * step, "regrow"
-    return grow * step, "strain" if strain_ratio >= rotation_ratio else "rotation"
 
 
 def _stalled(iterations: int, residual: float, correction: float, tol_force: float,

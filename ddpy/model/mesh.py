@@ -13,7 +13,7 @@ from ddpy import _core
 from ddpy._validate import float_array, int_array
 
 __all__ = ["HEX_EDGES", "HEX_FACES", "HexMesh", "MeshError", "boundary_faces",
-           "face_area_vectors", "through_thickness_columns"]
+           "face_area_vectors", "largest_rotation", "through_thickness_columns"]
 
 #: Relative size below which a Jacobian determinant counts as degenerate.
 DEGENERATE = 1e-10
@@ -290,3 +290,18 @@ class HexMesh:
 
     def __repr__(self) -> str:
         return f"HexMesh({self.n_nodes} nodes, {self.n_elements} hexahedra)"
+
+
+def largest_rotation(x: NDArray[np.float64], elements: NDArray[np.integer],
+                     du: NDArray[np.float64]) -> float:
+    """Largest element rotation (radians) of a displacement increment du (n, 3) of the mesh
+    at positions x (n, 3): the axial vector of the skew part of the gradient of the linear
+    field that fits each element's nodal increments in least squares (the r_min rotation
+    limit, docs/theory/contact.md)."""
+    coords = x[elements] - x[elements].mean(axis=1, keepdims=True)   # (m, 8, 3)
+    moves = du[elements] - du[elements].mean(axis=1, keepdims=True)  # (m, 8, 3)
+    gram = np.einsum("mai,maj->mij", coords, coords)
+    gradient = np.linalg.solve(gram, np.einsum("mai,maj->mij", coords, moves))
+    skew = 0.5 * (gradient - gradient.transpose(0, 2, 1))
+    axial = np.stack([skew[:, 1, 2], skew[:, 2, 0], skew[:, 0, 1]], axis=1)
+    return float(np.linalg.norm(axial, axis=1).max()) if len(axial) else 0.0

@@ -602,3 +602,28 @@ def test_a_newton_step_stops_where_free_nodes_would_enter_a_tool() -> None:
     assert step(down, closed) == 1.0
     # A step of 1 km still moves: the shortest fraction is MIN_STEP.
     assert step(1e6 * down, state) == MIN_STEP
+
+
+def test_a_line_search_that_no_step_passes_takes_the_longest_that_lowered_the_residual(
+) -> None:
+    # The first increment of the built-in bending case: the blank starts on the die and the
+    # contact set changes from iteration to iteration, so that the natural monotonicity test
+    # (which sees this iteration's contact set) fails at every step length of some Newton
+    # steps. Those steps take the longest trial that lowered the residual norm, and the
+    # increment still converges; without that fallback they would take the shortest trial.
+    from ddpy.app.runner import DEFAULT_CASE, build_problem
+    from ddpy.io.decks import read_case
+
+    case = read_case(DEFAULT_CASE)
+    phase = case.phases[0]
+    problem = build_problem(case)
+    for nodes, component in zip(*case.boundary.constrained(phase.name), strict=True):
+        problem.fix([nodes], int(component))
+    motion = {m.tool: phase.displacement(m.tool) for m in phase.motions}
+    result = problem.run(motion, phase.max_increment, active=phase.tools,
+                         newton=phase.newton, limits=phase.limits,
+                         on_increment=lambda progress: True)  # one increment
+    assert len(result.factors) == 1
+    assert result.fallbacks >= 1, result.fallbacks
+    last = result.relative[0][-1]
+    assert last[0] <= phase.newton.force_tolerance

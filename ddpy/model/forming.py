@@ -220,6 +220,9 @@ class FormingResult:
     #: by an increment limit) included: the work behind ``iterations``
     newton_iterations: int = 0
     evaluations: int = 0
+    #: Newton steps whose line search found no step length that passed the natural
+    #: monotonicity test and took the longest that lowered the residual norm instead
+    fallbacks: int = 0
     timings: dict[str, float] = field(default_factory=lambda: {
         "assembly": 0.0, "contact": 0.0, "factorization": 0.0, "solve": 0.0, "rest": 0.0})
 
@@ -945,6 +948,7 @@ class FormingProblem:
         result.newton_iterations += int(counters[1])
         result.factorizations += int(counters[2])
         result.krylov_iterations += int(counters[3])
+        result.fallbacks += int(counters[4])
         for key, seconds in zip(("assembly", "contact", "factorization", "solve"), spent,
                                 strict=True):
             result.timings[key] += float(seconds)

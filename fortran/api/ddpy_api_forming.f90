@@ -94,7 +94,7 @@ contains
                                    strain(6, 8, ne), axes(3, 3, 8, ne), gap(npair), &
                                    normal(3, npair), history(4, nhistory), timings(4), &
                                    detail(2)
-    integer(c_int), intent(out) :: state(npair), niter, counters(4), outcome, info(4)
+    integer(c_int), intent(out) :: state(npair), niter, counters(5), outcome, info(4)
     history = 0.0_wp
     if (nhistory < isettings(1) + 1) then
       outcome = -1

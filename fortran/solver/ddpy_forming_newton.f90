@@ -43,7 +43,9 @@ contains
   !> info(3); the last relative residual and correction in detail(1:2) and the pairs that
   !> changed state in the last iteration in info(4) when stalled. history(1:2, 1:niter):
   !> every iteration's residual norm, (relative residual, relative correction) and the
-  !> length of the step that led to it (0 for the start). counters: evaluations, corrections, factorizations, Krylov iterations;
+  !> length of the step that led to it (0 for the start). counters: evaluations,
+  !> corrections, factorizations, Krylov iterations, line searches that ended on the
+  !> residual-norm fallback;
   !> timings (s): assembly, contact, factorization, solve. factored, reuse_next: the
   !> solver's factors are this layout's, the last GMRES converged fast.
   subroutine forming_increment(nnode, x0, ne, conn, props, u_ref, axes_old, stress_old, &
@@ -77,7 +79,7 @@ contains
     real(wp), intent(out) :: u(3, nnode), force(3, npair), stress(6, 8, ne), ep(8, ne), &
                              strain(6, 8, ne), axes(3, 3, 8, ne), gap(npair), &
                              normal(3, npair), history(4, *), timings(4), detail(2)
-    integer, intent(out) :: state(npair), niter, counters(4), outcome, info(4)
+    integer, intent(out) :: state(npair), niter, counters(5), outcome, info(4)
 
     !> One evaluation: the iterate and what was evaluated there.
     type :: evaluation
@@ -246,6 +248,7 @@ contains
           trial = fallback
           alpha = alpha_fallback
           last_status = 0
+          counters(5) = counters(5) + 1
         else
           alpha = 2.0_wp*alpha
         end if

@@ -231,6 +231,8 @@ def per_correction(r: dict[str, Any]) -> dict[str, float]:
     s["share_outside"] = 1.0 - (t.get("factorization", 0.0) + t.get("solve", 0.0)) / t["total"]
     s["run_wall"] = r["run_wall"] / n
     s["gap"] = r["run_wall"] - t["total"]
+    s["cpu"] = r["cpu"] / n
+    s["waited"] = max(r["wall"] - r["cpu"], 0.0)
     return s
 
 
@@ -306,11 +308,17 @@ def table(entry: dict[str, Any]) -> str:
                 f"{a['time']['total']:.2f} | {ratio(b['time']['total'], a['time']['total'])} |")
     rows.append(f"| run wall time - increments' total (s) | {sb['gap']:.2f} | {sa['gap']:.2f} "
                 f"| |")
-    rows.append(f"| tries: increments' total (s) | "
-                f"{', '.join(f'{t:.2f}' for t in b['tries'])} | "
-                f"{', '.join(f'{t:.2f}' for t in a['tries'])} | |")
+    rows.append(f"| process CPU time per correction (s; start-up, set-up, writing included) | "
+                f"{sb['cpu']:.4f} | {sa['cpu']:.4f} | {ratio(sb['cpu'], sa['cpu'])} |")
+    rows.append(f"| process waited: wall - CPU time (s) | {sb['waited']:.2f} | "
+                f"{sa['waited']:.2f} | |")
     rows.append(f"| other processes' CPUs during the kept try | {b['other_cpus']:.2f} | "
                 f"{a['other_cpus']:.2f} | |")
+    for key, name in (("total", "increments' total (s)"), ("cpu", "process CPU time (s)"),
+                      ("other_cpus", "other processes' CPUs")):
+        rows.append(f"| tries in order: {name} | "
+                    f"{', '.join(f'{t[key]:.2f}' for t in b['tries'])} | "
+                    f"{', '.join(f'{t[key]:.2f}' for t in a['tries'])} | |")
     return "\n".join(rows)
 
 
@@ -342,7 +350,8 @@ def notes(numbers: dict[str, Any]) -> list[str]:
     for mesh, entry in numbers["meshes"].items():
         b, a = entry["before"], entry["after"]
         sb, sa = per_correction(b), per_correction(a)
-        scatter = max(spread(b["tries"]), spread(a["tries"]))
+        scatter = max(spread([t["total"] for t in b["tries"]]),
+                      spread([t["total"] for t in a["tries"]]))
         tries = (f"the tries of one side differ by up to {100 * scatter:.0f} %"
                  if scatter else "one try per side, so no scatter is known")
         changes = sorted(PARTS, key=lambda k: abs(sa[k] - sb[k]), reverse=True)
@@ -364,6 +373,22 @@ def notes(numbers: dict[str, Any]) -> list[str]:
             f"{corrections(a) / max(a['increments'], 1):.1f} corrections and "
             f"{a['counts'].get('factorizations', 0) / max(a['increments'], 1):.1f} "
             f"factorizations per increment.")
+        lines.append(
+            f"{mesh}: the process's CPU time per correction, which other work taking turns on "
+            f"the core does not lengthen, {sb['cpu']:.4g} -> {sa['cpu']:.4g} s (after / "
+            f"before {ratio(sb['cpu'], sa['cpu'])}, against {ratio(sb['total'], sa['total'])} "
+            f"for the wall time of the increments); the kept tries waited (wall - CPU time) "
+            f"{sb['waited']:.3g} s before and {sa['waited']:.3g} s after, with other processes "
+            f"on {b['other_cpus']:.2f} and {a['other_cpus']:.2f} cores.")
+        fb, fa = b["counts"].get("factorizations", 0), a["counts"].get("factorizations", 0)
+        if fb and fa:
+            ob = b["time"]["factorization"] / fb
+            oa = a["time"]["factorization"] / fa
+            lines.append(
+                f"{mesh}: one factorization {ob:.4g} s before, {oa:.4g} s after (after / before "
+                f"{oa / ob:.2f}): both factorize the same matrices (same path) with MUMPS, so "
+                f"its ratio shows the machine's drift between the kept tries and the way to "
+                f"MUMPS (before through its Python wrapper).")
         gap = sb["gap"] - sa["gap"]
         lines.append(
             f"{mesh}: run wall time minus the increments' total (set-up, writing; before also "
@@ -486,8 +511,9 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
             "case_same": len({folder_digest(c) for c in cases.values()}) == 1}
         for side in SIDES:
             kept = min(tries[side], key=lambda r: r["time"]["total"])
-            entry[side] = {**kept, "tries": [r["time"]["total"] for r in tries[side]],
-                           "try_walls": [r["wall"] for r in tries[side]]}
+            entry[side] = {**kept, "tries": [
+                {"total": r["time"]["total"], "wall": r["wall"], "cpu": r["cpu"],
+                 "other_cpus": r["other_cpus"]} for r in tries[side]]}
         numbers["repeats"][mesh] = repeats
         numbers["meshes"][mesh] = entry
         print(path_text(entry), flush=True)

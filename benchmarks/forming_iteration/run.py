@@ -135,6 +135,19 @@ def between(before: Path, after: Path) -> list[str]:
     return lines
 
 
+def code_commit(checkout: dict[str, Any]) -> str:
+    """", its code (ddpy, fortran, the build) as of commit X" for a checkout's recorded
+    stamp when its last code commit is an older one; "" when the same or unknown."""
+    stamp = checkout["code"].removesuffix("-dirty")
+    last = git(Path(checkout["path"]), "log", "-1", "--format=%h", stamp, "--",
+               *(p for p in CODE_PATHS if p != "benchmarks"))
+    commit = last.stdout.strip()
+    if last.returncode != 0 or not commit or commit.startswith(stamp) or \
+            stamp.startswith(commit):
+        return ""
+    return f"; its code (ddpy, fortran, the build) as of `{commit}`"
+
+
 def python_of(checkout: Path) -> Path:
     """The checkout's python, checked to import the checkout's own ddpy."""
     python = checkout / ".venv" / "bin" / "python"
@@ -291,7 +304,8 @@ def table(entry: dict[str, Any]) -> str:
     rows.append(f"| **share outside MUMPS** | {100 * sb['share_outside']:.1f} % | "
                 f"{100 * sa['share_outside']:.1f} % | "
                 f"{100 * (sa['share_outside'] - sb['share_outside']):+.1f} points |")
-    rows.append(f"| run wall time (s, set-up and writing included) | {sb['run_wall']:.4f} | "
+    rows.append(f"| run wall time (s; the runner's, set-up and writing included) | "
+                f"{sb['run_wall']:.4f} | "
                 f"{sa['run_wall']:.4f} | {ratio(sb['run_wall'], sa['run_wall'])} |")
     rows.append("| **run** | | | |")
     rows.append(f"| increments | {b['increments']} | {a['increments']} | "
@@ -413,7 +427,7 @@ def report(numbers: dict[str, Any]) -> str:
     stamps = computed_at(code_version(), {side: co[side]["code"] for side in SIDES})
     checkouts = "\n".join(
         f"- {side}: `{co[side]['code']}` (`git -C {co[side]['path']} describe --always`, "
-        f"committed {co[side]['date']})" for side in SIDES)
+        f"committed {co[side]['date']}{code_commit(co[side])})" for side in SIDES)
     if numbers.get("between"):
         checkouts += ("\n\nThe commits of after since before that change the code (ddpy, "
                       "fortran, the build), oldest first:\n\n"
@@ -440,9 +454,9 @@ def report(numbers: dict[str, Any]) -> str:
 {stamps}
 
 `benchmarks/forming_iteration/run.py` (written by it, measured in one run on
-{numbers['machine']}; {numbers['threads']} thread per run, the machine's other core busy with
-other work: the last row of each table says how many cores other processes used during
-the kept try, from /proc/stat). The code compared:
+{numbers['machine']}; {numbers['threads']} thread per run, the machine shared with other work:
+the rows "other processes' CPUs" of each table say how many cores other processes used
+during a try, from /proc/stat). The code compared:
 
 {checkouts}
 

@@ -422,11 +422,20 @@ def notes(numbers: dict[str, Any]) -> list[str]:
     return lines
 
 
+def in_repository(path: str) -> str:
+    """A path as the page shows it: from the repository root when it lies in a checkout of
+    it (the generated cases are git-ignored, so one is passed in from elsewhere)."""
+    parts = Path(path).parts
+    if "benchmarks" in parts:
+        return str(Path(*parts[parts.index("benchmarks"):]))
+    return Path(path).name
+
+
 def report(numbers: dict[str, Any]) -> str:
     co = numbers["checkouts"]
     stamps = computed_at(code_version(), {side: co[side]["code"] for side in SIDES})
     checkouts = "\n".join(
-        f"- {side}: `{co[side]['code']}` (`git -C {co[side]['path']} describe --always`, "
+        f"- {side}: `{co[side]['code']}` (the checkout's `git describe --always`, "
         f"committed {co[side]['date']}{code_commit(co[side])})" for side in SIDES)
     if numbers.get("between"):
         checkouts += ("\n\nThe commits of after since before that change the code (ddpy, "
@@ -443,7 +452,7 @@ def report(numbers: dict[str, Any]) -> str:
         case = ("each checkout's `ddpy/cases/cylindrical_bending`"
                 + (" (the same files in both)" if entry["case_same"] else
                    " (**the two checkouts' case files differ**)")
-                if mesh == "coarse" else f"`{entry['case']['after']}`")
+                if mesh == "coarse" else f"`{in_repository(entry['case']['after'])}`")
         sections.append(
             f"## {mesh}: {a['hexahedra']:,} hexahedra, {a['nodes']:,} nodes, first "
             f"{entry['increments_asked']} increments\n\n"

@@ -409,9 +409,9 @@ def test_what_check_accepts_run_starts(name: str, change: tuple[str, object, obj
 
 
 @pytest.mark.parametrize("change, where, message", [
-    ("rmin_strain 1.5", "control.dat:11", "rmin_strain: strain limit must lie in (0, 1), got 1.5"),
+    ("rmin_strain 1.5", "control.dat:11", "rmin_strain must lie in (0, 1), got 1.5"),
     ("rmin_yield 1.0", "control.dat:10",
-     "rmin_yield: yield_tolerance must lie in [0, 1) or be None, got 1.0"),
+     "rmin_yield must lie in [0, 1), got 1.0"),
     ("sink 0.05", "tools.dat:5", "tool 'punch' starts inside the blank: node 4 at (0, 0, 1) "
      "is 0.05 mm behind its surface, more than the first phase's rmin_strain times the "
      "element size (0.02 x 1.66 = 0.0331 mm)"),

@@ -58,9 +58,9 @@ class IncrementLimits:
 
     def __post_init__(self) -> None:
         if not 0.0 < self.strain < 1.0:
-            raise ValueError(f"strain limit must lie in (0, 1), got {self.strain}")
+            raise ValueError(f"strain must lie in (0, 1), got {self.strain}")
         if not 0.0 < self.rotation_deg <= 90.0:
-            raise ValueError(f"rotation limit must lie in (0, 90] degrees, got "
+            raise ValueError(f"rotation_deg must lie in (0, 90] (degrees), got "
                              f"{self.rotation_deg}")
         if not 0.0 < self.min_fraction <= 1.0 or not self.touch_gap >= 0.0:
             raise ValueError("min_fraction must lie in (0, 1] and touch_gap be >= 0")

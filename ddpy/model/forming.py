@@ -848,7 +848,7 @@ class FormingProblem:
         normals."""
         pack = self._pack
         names = [t.name for t in self.tools]
-        state, gap, normal = _core.forming_contact(
+        residual[:], values[:], state, gap, normal, status = _core.forming_contact(
             x.ravel(), x_n.ravel(), layout.fixed_flags, pack.table, pack.tol,
             pack.coef, pack.degrees, pack.triangle, pack.tree_lower, pack.tree_upper,
             pack.tree_child, pack.frame, pack.frame_lower, pack.frame_upper, pack.grid_start,
@@ -859,7 +859,10 @@ class FormingProblem:
             0.0 if touching is None else touching.distance,
             1 if touching is None or touching.resting else 0, layout.tool_first,
             layout.pair_node, on.astype(np.int32), force.ravel(), self.r, self.mu,
-            layout.held_flags, layout.eqn, layout.nf, layout.k_slots, residual, values)[2:]
+            layout.held_flags, layout.eqn, layout.nf, layout.k_slots, residual, values)
+        if status:
+            raise RuntimeError("forming_contact: the tools' packed arrays or the layout do not "
+                               "fit each other (a bug in the caller)")
         return state, (gap, normal.reshape(-1, 3))
 
     def _evaluate(self, layout: _Layout, u: NDArray[np.float64], force: NDArray[np.float64],
@@ -925,8 +928,8 @@ class FormingProblem:
         factored = np.array([self._factored], dtype=np.int32)
         reuse_next = np.array([self._reuse_next], dtype=np.int32)
         out = solid.state_buffer()
-        (factored, reuse_next, u, force, _, _, _, _, pair_state, gap, normal, niter, history,
-         counters, spent, outcome, info, detail) = _core.forming_increment(
+        (factored, reuse_next, u, force, stress, ep, strain, axes, pair_state, gap, normal,
+         niter, history, counters, spent, outcome, info, detail) = _core.forming_increment(
             solid._x, solid._conn, solid.props, _flat(state.displacement),
             _flat(state.axes.transpose(0, 1, 3, 2)), _flat(state.stress), _flat(state.ep),
             _flat(state.strain), layout.eqn, layout.pattern.offsets, layout.fixed_flags,
@@ -959,7 +962,11 @@ class FormingProblem:
                            "of the motion%s", k, rel, moved,
                            f", step length {alpha:.4g}" if k else "")
         if outcome == _CONVERGED:
-            trial = SolidState(out.stress, out.ep, out.strain, out.axes, u.reshape(-1, 3))
+            m = solid.mesh.n_elements
+            trial = SolidState(stress.reshape(m, 8, 6), ep.reshape(m, 8),
+                               strain.reshape(m, 8, 6),
+                               axes.reshape(m, 8, 3, 3).transpose(0, 1, 3, 2),
+                               u.reshape(-1, 3))
             return _Trial(u=u.reshape(-1, 3), state=trial, force=force.reshape(-1, 3),
                           residuals=history[:, 0].tolist(),
                           relative=[(float(a), float(b)) for a, b in history[:, 1:3]],
@@ -977,7 +984,8 @@ class FormingProblem:
             flipped = None if info[3] < 0 else np.ones(int(info[3]), dtype=bool)
             return _Trial(_stalled(max_iterations, float(detail[0]), float(detail[1]),
                                    tol_force, tol_disp, flipped))
-        raise RuntimeError(f"forming_increment returned outcome {outcome}")
+        raise RuntimeError(f"forming_increment refused its input (outcome {outcome}): the "
+                           "layout, the tools' packed arrays or the history do not fit")
 
     def close(self) -> None:
         """Free the MUMPS instance."""

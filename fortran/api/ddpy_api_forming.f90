@@ -13,6 +13,44 @@ module ddpy_api_forming
 
 contains
 
+  !> Whether the packed tools, the pairs and the Jacobian layout fit the arrays they index
+  !> (the core writes where they say): node indices in range, tool and face ranges
+  !> increasing, each tool's patches, tree and grid within the packed arrays, and nvalues
+  !> the solid's k_slots plus the contact blocks of the layout.
+  pure logical function layout_ok(nnode, ntool, table, ncoef, ndeg, ntri, ntree, nframe, &
+                                  nstart, ngrid, grid_start, face_first, nface, faces, &
+                                  corner, npair, tool_first, pair_node, eqn, k_slots, &
+                                  nvalues) result(ok)
+    integer(c_int), intent(in) :: nnode, ntool, ncoef, ndeg, ntri, ntree, nframe, nstart, &
+                                  ngrid, nface, npair, k_slots, nvalues
+    integer(c_int), intent(in) :: table(tool_fields, ntool), grid_start(nstart), &
+                                  face_first(ntool + 1), faces(4, nface), corner(4, nface), &
+                                  tool_first(ntool + 1), pair_node(npair), eqn(3, nnode)
+    integer :: t, np_, po, first, last, coupled
+    ok = .false.
+    if (any(pair_node < 0) .or. any(pair_node >= nnode)) return
+    if (any(faces < 0) .or. any(faces >= nnode) .or. any(corner < -1)) return
+    if (tool_first(1) /= 0 .or. tool_first(ntool + 1) /= npair) return
+    if (face_first(1) /= 0 .or. face_first(ntool + 1) /= nface) return
+    do t = 1, ntool
+      if (tool_first(t + 1) < tool_first(t) .or. face_first(t + 1) < face_first(t)) return
+      if (any(corner(:, face_first(t) + 1:face_first(t + 1)) >= &
+              tool_first(t + 1) - tool_first(t))) return
+      np_ = table(3, t)
+      po = table(7, t)
+      if (np_ < 1 .or. po < 0 .or. table(6, t) < 0 .or. table(8, t) < 0 .or. &
+          table(9, t) < 0) return
+      if (table(6, t) + table(2, t)*np_ > ncoef .or. po + np_ > ntri .or. &
+          2*(po + np_) > ndeg .or. po + np_ > nframe .or. &
+          table(8, t) + 2*np_ - 1 > ntree .or. po + t + np_ > nstart) return
+      first = grid_start(po + t)
+      last = grid_start(po + t + np_)
+      if (first /= 1 .or. last < first .or. table(9, t) + last - 1 > ngrid) return
+    end do
+    coupled = count(eqn(:, pair_node + 1) >= 0)
+    ok = k_slots >= 0 .and. nvalues == k_slots + 4*coupled + 9*npair
+  end function layout_ok
+
   !> Contact of every (tool, slave) pair: see forming_contact.
   subroutine api_forming_contact(nnode, x, x_n, fixed, ntool, table, tol, ncoef, coef, &
                                  ndeg, degrees, ntri, triangle, ntree, tree_lower, &
@@ -22,7 +60,7 @@ contains
                                  faces, corner, positions, positions_n, reach, size, &
                                  touching, resting, npair, tool_first, pair_node, on, force, &
                                  r, mu, held, eqn, nf, k_slots, nvalues, residual, values, &
-                                 state, gap, normal) bind(C, name="ddpy_forming_contact")
+                                 state, gap, normal, status) bind(C, name="ddpy_forming_contact")
     integer(c_int), value, intent(in) :: nnode, ntool, ncoef, ndeg, ntri, ntree, nframe, &
                                          nstart, ngrid, nface, resting, npair, nf, k_slots, &
                                          nvalues
@@ -40,8 +78,16 @@ contains
                                   tool_first(ntool + 1), pair_node(npair), on(npair), &
                                   held(3, npair), eqn(3, nnode)
     real(c_double), intent(inout) :: residual(nf + 3*npair), values(nvalues)
-    integer(c_int), intent(out) :: state(npair)
+    integer(c_int), intent(out) :: state(npair), status
     real(c_double), intent(out) :: gap(npair), normal(3, npair)
+    state = 0
+    gap = 0.0_wp
+    normal = 0.0_wp
+    status = 1
+    if (.not. layout_ok(nnode, ntool, table, ncoef, ndeg, ntri, ntree, nframe, nstart, ngrid, &
+                        grid_start, face_first, nface, faces, corner, npair, tool_first, &
+                        pair_node, eqn, k_slots, nvalues)) return
+    status = 0
     call forming_contact(nnode, x, x_n, fixed, ntool, table, tol, coef, degrees, triangle, &
                          tree_lower, tree_upper, tree_child, frame, frame_lower, frame_upper, &
                          grid_start, grid_params, grid_normals, grid_points, facing, &
@@ -96,10 +142,13 @@ contains
                                    detail(2)
     integer(c_int), intent(out) :: state(npair), niter, counters(5), outcome, info(4)
     history = 0.0_wp
-    if (nhistory < isettings(1) + 1) then
-      outcome = -1
-      return
-    end if
+    outcome = -1
+    if (nhistory < isettings(1) + 1 .or. offsets(ne + 1) /= k_slots) return
+    if (any(conn < 0) .or. any(conn >= nnode) .or. any(rows < 0) .or. any(cols < 0) .or. &
+        any(rows >= nf + 3*npair) .or. any(cols >= nf + 3*npair)) return
+    if (.not. layout_ok(nnode, ntool, table, ncoef, ndeg, ntri, ntree, nframe, nstart, ngrid, &
+                        grid_start, face_first, nface, faces, corner, npair, tool_first, &
+                        pair_node, eqn, k_slots, nvalues)) return
     call forming_increment(nnode, x0, ne, conn + 1, props, u_ref, axes_old, stress_old, &
                            ep_old, strain_old, eqn, offsets, fixed, nf, k_slots, n_coupling, &
                            nvalues, rows, cols, ntool, table, tol, coef, degrees, triangle, &
@@ -122,6 +171,8 @@ contains
     real(c_double), intent(in) :: du(3, nnode), gap(npair), normal(3, npair)
     integer(c_int), intent(in) :: pair_node(npair), on(npair), state(npair)
     real(c_double), intent(out) :: step
+    step = -1.0_wp  ! a pair's node out of range
+    if (any(pair_node < 0) .or. any(pair_node >= nnode)) return
     step = penetration_step(nnode, npair, du, pair_node, on, state, gap, normal, room_depth, &
                             min_step)
   end subroutine api_penetration_step

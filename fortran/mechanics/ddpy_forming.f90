@@ -67,15 +67,15 @@ contains
     integer, intent(out) :: state(npair)
     real(wp), intent(out) :: gap(npair), normal(3, npair)
     real(wp), allocatable :: nodes(:, :), node_normals(:, :), params(:, :), points(:, :), &
-                             tangents(:, :, :), distance(:), second(:, :, :), p_aug(:), &
-                             c(:, :), dc_dlambda(:, :, :), dc_dx(:, :, :)
+                             tangents(:, :, :), distance(:), p_aug(:), c(:, :), &
+                             dc_dlambda(:, :, :), dc_dx(:, :, :)
     integer, allocatable :: patch(:), status(:), iterations(:), ncandidates(:)
     logical, allocatable :: searched(:), shut(:)
     integer :: t, p, a, b, k, i, j, pp, slot
     real(wp) :: d2(3, 3), point(3), d1(3, 2), lam(3), v(3), dndx(3, 3), lift
 
-    allocate(searched(ntool), shut(npair), p_aug(npair), second(3, 3, npair), &
-             tangents(3, 2, npair), params(2, npair), patch(npair), status(npair))
+    allocate(searched(ntool), shut(npair), p_aug(npair), tangents(3, 2, npair), &
+             params(2, npair), patch(npair), status(npair))
     allocate(c(3, npair), dc_dlambda(3, 3, npair), dc_dx(3, 3, npair))
     gap = ieee_value(1.0_wp, ieee_positive_inf)
     normal = 0.0_wp
@@ -124,7 +124,6 @@ contains
         call patch_evaluate(table(f_kind, t), table(f_stride, t), &
                             coef(table(f_coef, t) + (patch(p) - 1)*table(f_stride, t) + 1), &
                             degrees(2*pp - 1), params(1, p), params(2, p), point, d1, d2)
-        second(:, :, p) = d2
         v = (x(:, pair_node(p) + 1) - x_n(:, pair_node(p) + 1)) - &
             (positions(:, t) - positions_n(:, t))
         lam = force(:, p)
@@ -242,8 +241,8 @@ contains
     subroutine touching_pairs()
       real(wp), allocatable :: rows(:, :)
       logical, allocatable :: at_rest(:)
-      real(wp) :: d, centre(3), scale
-      integer :: nrow, u, n
+      real(wp) :: d, centre(3), scale, axis(3)
+      integer :: nrow, u, n, p, i, j
       logical :: any_resting
       allocate(at_rest(ntool))
       any_resting = .false.
@@ -273,9 +272,9 @@ contains
         do j = 1, 3
           if (fixed(j, i) == 0) cycle
           nrow = nrow + 1
-          d2(:, 1) = 0.0_wp
-          d2(j, 1) = 1.0_wp
-          rows(:, nrow) = mode_row(x_n(:, i), d2(:, 1), centre, scale)
+          axis = 0.0_wp
+          axis(j) = 1.0_wp
+          rows(:, nrow) = mode_row(x_n(:, i), axis, centre, scale)
         end do
       end do
       do u = 1, ntool
@@ -319,8 +318,11 @@ contains
   pure integer function rank_of_rows(nrow, rows) result(rank)
     integer, intent(in) :: nrow
     real(wp), intent(in) :: rows(6, nrow)
-    real(wp) :: a(nrow, 6), alpha, beta, gamma, zeta, tn, cs, sn, col(nrow), off
+    real(wp), allocatable :: a(:, :), col(:)
+    real(wp) :: alpha, beta, gamma, zeta, tn, cs, sn, off
     integer :: sweep, i, j
+    ! Heap, not stack: the rows are every fixed dof and holding pair of the blank.
+    allocate(a(nrow, 6), col(nrow))
     a = transpose(rows)
     do sweep = 1, 60
       off = 0.0_wp

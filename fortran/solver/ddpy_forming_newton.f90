@@ -8,6 +8,7 @@
 !> Unknowns: the free displacement dofs (eqn), then 3 force components per pair. Weights
 !> make them all lengths: 1 for displacements, 1 / r for the forces.
 module ddpy_forming_newton
+  use, intrinsic :: iso_fortran_env, only: int64
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite, ieee_value, ieee_positive_inf
   use ddpy_kinds, only: wp
   use ddpy_material, only: material_prop_count, yield_landing
@@ -41,7 +42,7 @@ contains
   !> contact states (inactive where off), gaps and normals when converged; the landing
   !> fraction in detail(1); the element status and element in info(1:2); the MUMPS code in
   !> info(3); the last relative residual and correction in detail(1:2) and the pairs that
-  !> changed state in the last iteration in info(4) when stalled. history(1:2, 1:niter):
+  !> changed state in the last iteration in info(4) when stalled. history(1:4, 1:niter):
   !> every iteration's residual norm, (relative residual, relative correction) and the
   !> length of the step that led to it (0 for the start). counters: evaluations,
   !> corrections, factorizations, Krylov iterations, line searches that ended on the
@@ -98,7 +99,7 @@ contains
     integer :: max_iterations, cur, trial, fallback, buffer, iteration, ls, n, status, &
                element, handle, last_status, last_element
     logical :: converged, have_previous, have_hint, accepted, t_converged
-    integer(8) :: clock_rate
+    integer(int64) :: clock_rate
 
     call system_clock(count_rate=clock_rate)
     tol_force = settings(1)
@@ -156,13 +157,13 @@ contains
       call measure(slot(cur), correction, norm, scale, moved, converged)
       niter = niter + 1
       history(1, niter) = norm
+      history(2, niter) = norm/scale
+      history(3, niter) = correction/moved
+      history(4, niter) = alpha
       if (.not. ieee_is_finite(norm)) then
         outcome = outcome_not_finite
         return
       end if
-      history(2, niter) = norm/scale
-      history(3, niter) = correction/moved
-      history(4, niter) = alpha
       if (converged) then
         call finish(slot(cur))
         return
@@ -282,7 +283,7 @@ contains
       type(evaluation), intent(inout) :: s
       real(wp), intent(in) :: touching_gap
       integer, intent(out) :: status, element
-      integer(8) :: t0, t1, t2
+      integer(int64) :: t0, t1, t2
       integer :: a, c
       counters(1) = counters(1) + 1
       call system_clock(t0)
@@ -344,7 +345,7 @@ contains
       real(wp), intent(out) :: step_size
       integer, intent(out) :: status
       real(wp), allocatable :: preconditioned(:), z(:)
-      integer(8) :: t0, t1
+      integer(int64) :: t0, t1
       integer :: count
       logical :: gmres_converged
       status = 0
@@ -400,7 +401,7 @@ contains
       real(wp), intent(in) :: b(n)
       real(wp), intent(out) :: x(n)
       integer, intent(out) :: status
-      integer(8) :: t0, t1
+      integer(int64) :: t0, t1
       call system_clock(t0)
       call mumps_solve(b, x, status)
       call system_clock(t1)

@@ -29,14 +29,19 @@ def _model_setting(key: str, model: type, name: str,
                    read: Callable[[str, str], Any]) -> Callable[[str], Any]:
     """The reader of a deck setting that is a field of a model class (IncrementLimits,
     NewtonSettings): the word is read as a number here, and its range is the class's own
-    check, the one place it is written (its message, prefixed with the key)."""
+    check, the one place it is written (its message, with the deck's key for the field)."""
 
     def parse(word: str) -> Any:
         value = read(word, key)
         try:
             model(**{name: value})
         except ValueError as error:
-            raise BadValue(f"{key}: {error}") from None
+            # The class names its field and Python's None; the deck says the key and "off".
+            message = str(error)
+            if message.startswith(name):
+                message = key + message[len(name):]
+            message = message.replace(" or be None (no cap)", " or be off (no cap)")
+            raise BadValue(message.replace(" or be None", "")) from None
         return value
 
     return parse

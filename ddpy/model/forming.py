@@ -491,7 +491,7 @@ class FormingProblem:
         for name, (other, offset) in offsets.items():
             initial[name] = self.position[other] + offset
         self._gap = self._contact(layout, x, x, initial, on, self.force, np.zeros(layout.n),
-                                  np.empty(layout.rows.size))[1]
+                                  np.empty(0))[1]
         depth = np.where(on & np.isfinite(self._gap[0]), -self._gap[0], -np.inf)
         worst = int(np.argmax(depth)) if depth.size else 0
         if depth.size and depth[worst] > start_depth_limit(limits.strain, self.size):
@@ -819,7 +819,9 @@ class FormingProblem:
         states (0 open, 1 stick, 2 slip), the signed gaps (inf where no patch lies within
         the search's reach or the facing filter leaves none) and the tools' unit normals at
         the closest points (pairs, 3). The same core call as an evaluation of a run."""
-        layout, _ = self._prepare()
+        # The layout of the run if there is one; else one made for this look only (no MUMPS
+        # analysis: nothing is solved).
+        layout = self._layout or _Layout(self.solid, self.tools, self.fixed)
         n = self.solid.mesh.n_nodes
         u = self.u if u is None else float_array(u, "u", (n, 3))
         where = dict(self.position)
@@ -831,7 +833,7 @@ class FormingProblem:
         on = np.ones(layout.node.size, dtype=bool)
         state, (gap, normal) = self._contact(layout, x, self.solid.mesh.nodes + self.u,
                                              where, on, self.force, np.zeros(layout.n),
-                                             np.empty(layout.rows.size))
+                                             np.empty(0))
         return state, gap, normal
 
     def _contact(self, layout: _Layout, x: NDArray[np.float64], x_n: NDArray[np.float64],
@@ -844,8 +846,8 @@ class FormingProblem:
         and the touching predictor of the first iteration (docs/theory/contact.md). It
         writes the law's rows of ``residual`` and subtracts the pairs' forces from its
         equilibrium rows (which hold fint - external), and writes the contact entries of
-        ``values``. Returns the pairs' states, and their gaps (inf: no patch) and
-        normals."""
+        ``values`` (none when it is empty: a look at the gaps). Returns the pairs' states,
+        and their gaps (inf: no patch) and normals."""
         pack = self._pack
         names = [t.name for t in self.tools]
         residual[:], values[:], state, gap, normal, status = _core.forming_contact(

@@ -16,7 +16,7 @@ contains
   !> Whether the packed tools, the pairs and the Jacobian layout fit the arrays they index
   !> (the core writes where they say): node indices in range, tool and face ranges
   !> increasing, each tool's patches, tree and grid within the packed arrays, and nvalues
-  !> the solid's k_slots plus the contact blocks of the layout.
+  !> the solid's k_slots plus the contact blocks of the layout (or 0: no Jacobian).
   pure logical function layout_ok(nnode, ntool, table, ncoef, ndeg, ntri, ntree, nframe, &
                                   nstart, ngrid, grid_start, face_first, nface, faces, &
                                   corner, npair, tool_first, pair_node, eqn, k_slots, &
@@ -48,7 +48,7 @@ contains
       if (first /= 1 .or. last < first .or. table(9, t) + last - 1 > ngrid) return
     end do
     coupled = count(eqn(:, pair_node + 1) >= 0)
-    ok = k_slots >= 0 .and. nvalues == k_slots + 4*coupled + 9*npair
+    ok = k_slots >= 0 .and. (nvalues == k_slots + 4*coupled + 9*npair .or. nvalues == 0)
   end function layout_ok
 
   !> Contact of every (tool, slave) pair: see forming_contact.

@@ -36,7 +36,8 @@ contains
   !> Contact of npair pairs at positions x (3, nnode), from the converged x_n, with each
   !> tool at positions(:, t) (at positions_n(:, t) when converged); writes the contact part
   !> of the residual (the law's rows, and the pairs' forces in the equilibrium rows, which
-  !> the caller has filled with fint - external) and of the Jacobian values.
+  !> the caller has filled with fint - external) and of the Jacobian values (none when
+  !> nvalues is 0).
   !>
   !> touching > 0: the predictor of an increment's first iteration (see
   !> ddpy.model.forming): a pair the law leaves open within that gap takes the closed
@@ -157,6 +158,7 @@ contains
       end do
     end do
     residual(nf + 1:) = reshape(c, [3*npair])
+    if (nvalues == 0) return  ! a look at the gaps: no Jacobian wanted
     ! Jacobian: dC/dx at the free dofs of each pair's node, then dC/dlambda.
     slot = k_slots + count(eqn(:, pair_node + 1) >= 0)
     do p = 1, npair

@@ -192,7 +192,9 @@ class FormingResult:
     """Converged increments of a run, per increment: the phase factor and the increment
     size (as a fraction of the phase), each tool's displacement and the force the blank
     exerts on it, the nodes in contact per tool, Newton iterations with the residual norms,
-    and the blank displacements. ``timings`` splits the wall time of every iteration."""
+    and the blank displacements. ``timings``: the seconds the core's Newton loop spent in
+    assembly, contact, factorization and solves (the rest of a run's time is the caller's
+    to measure: ddpy.app.runner records it per increment)."""
 
     factors: list[float] = field(default_factory=list)
     sizes: list[float] = field(default_factory=list)
@@ -224,7 +226,7 @@ class FormingResult:
     #: monotonicity test and took the longest that lowered the residual norm instead
     fallbacks: int = 0
     timings: dict[str, float] = field(default_factory=lambda: {
-        "assembly": 0.0, "contact": 0.0, "factorization": 0.0, "solve": 0.0, "rest": 0.0})
+        "assembly": 0.0, "contact": 0.0, "factorization": 0.0, "solve": 0.0})
 
     @property
     def iterations(self) -> list[int]:

@@ -1,17 +1,57 @@
-"""Newton corrections solved with older factors (GMRES in the core's Newton loop): a forming
-run that reuses factorizations against one that factorizes every iteration."""
+"""Newton corrections solved with older factors: the core's GMRES (the one its Newton loop
+runs) on a small system, and a forming run that reuses factorizations against one that
+factorizes every iteration."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
+from ddpy import _core
+from ddpy.core.linalg import MumpsSolver
 from ddpy.model.contact import SLIP
 from ddpy.model.control import NewtonSettings
 from ddpy.model.forming import FormingProblem, RigidTool
 from ddpy.model.mesh import HexMesh
 from ddpy.model.solid import Solid
 from tests.test_forming import ELASTIC, cylinder_crest
+
+
+def test_gmres_on_older_factors_solves_and_reports_failure() -> None:
+    # J: an unsymmetric 30 x 30 matrix in coordinates with repeated entries (summed); M: the
+    # LU of a perturbed J, the "older factors". GMRES on W M^-1 J W^-1 (W the weights)
+    # solves W x = W J^-1 b to its tolerance in a few iterations; capped at 2 iterations it
+    # says it did not converge; a zero right-hand side gives zero at once.
+    rng = np.random.default_rng(3)
+    n = 30
+    dense = np.eye(n) * 4.0 + rng.normal(0.0, 0.3, (n, n))
+    rows, cols = np.nonzero(np.ones((n, n)))
+    values = dense[rows, cols]
+    rows = np.concatenate([rows, rows[:40]]).astype(np.int32)  # duplicates: halves that sum
+    cols = np.concatenate([cols, cols[:40]]).astype(np.int32)
+    values = np.concatenate([values, values[:40] * 0.5])
+    values[:40] *= 0.5
+    weight = rng.uniform(0.5, 2.0, n)
+    older = dense + rng.normal(0.0, 0.05, (n, n))
+    b = rng.normal(size=n)
+    with MumpsSolver("unsymmetric") as solver:
+        solver.analyse(n, *np.nonzero(np.ones((n, n))))
+        solver.factorize(older[np.nonzero(np.ones((n, n)))])
+        rhs = weight * solver.solve(b)  # the preconditioned, weighted right-hand side
+        z, k, converged, status = _core.krylov_solve(rows, cols, values, weight,
+                                                     solver.handle, rhs, 1e-12, n)
+        assert status == 0 and converged == 1 and k < 15, (k, converged)
+        np.testing.assert_allclose(z / weight, np.linalg.solve(dense, b), rtol=1e-9)
+        _, k, converged, status = _core.krylov_solve(rows, cols, values, weight,
+                                                     solver.handle, rhs, 1e-12, 2)
+        assert status == 0 and converged == 0 and k == 2
+        z, k, converged, status = _core.krylov_solve(rows, cols, values, weight,
+                                                     solver.handle, np.zeros(n), 1e-8, 10)
+        assert converged == 1 and k == 0 and not z.any()
+        bad = rows.copy()
+        bad[0] = n
+        assert _core.krylov_solve(bad, cols, values, weight, solver.handle, rhs, 1e-8,
+                                  10)[3] == 1
 
 
 def slide(linear_solver: str) -> tuple[FormingProblem, object]:

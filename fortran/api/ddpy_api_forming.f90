@@ -5,11 +5,11 @@ module ddpy_api_forming
   use ddpy_kinds, only: wp
   use ddpy_forming, only: forming_contact, tool_fields
   use ddpy_forming_newton, only: forming_increment, newton_settings, newton_integer_settings, &
-                                 penetration_step
+                                 penetration_step, gmres
   use ddpy_material, only: material_prop_count
   implicit none
   private
-  public :: api_forming_contact, api_forming_increment, api_penetration_step
+  public :: api_forming_contact, api_forming_increment, api_penetration_step, api_krylov_solve
 
 contains
 
@@ -176,5 +176,27 @@ contains
     step = penetration_step(nnode, npair, du, pair_node, on, state, gap, normal, room_depth, &
                             min_step)
   end subroutine api_penetration_step
+
+  !> GMRES of the Newton loop on W M^-1 J W^-1 (J the coordinate matrix rows, cols, values,
+  !> 0-based; M the factors held by the MUMPS instance handle): see gmres. converged is 1 or
+  !> 0; status < 0 a MUMPS solve failed, 1 an index out of range.
+  subroutine api_krylov_solve(n, nvalues, rows, cols, values, weight, handle, b, tol, m, z, &
+                              k, converged, status) bind(C, name="ddpy_krylov_solve")
+    integer(c_int), value, intent(in) :: n, nvalues, handle, m
+    real(c_double), value, intent(in) :: tol
+    integer(c_int), intent(in) :: rows(nvalues), cols(nvalues)
+    real(c_double), intent(in) :: values(nvalues), weight(n), b(n)
+    real(c_double), intent(out) :: z(n)
+    integer(c_int), intent(out) :: k, converged, status
+    logical :: done
+    z = 0.0_wp
+    k = 0
+    converged = 0
+    status = 1
+    if (any(rows < 0) .or. any(rows >= n) .or. any(cols < 0) .or. any(cols >= n) .or. &
+        m < 1 .or. any(weight <= 0.0_wp)) return
+    call gmres(n, nvalues, rows, cols, values, weight, handle, b, tol, m, z, k, done, status)
+    converged = merge(1, 0, done)
+  end subroutine api_krylov_solve
 
 end module ddpy_api_forming

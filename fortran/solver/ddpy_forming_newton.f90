@@ -20,7 +20,7 @@ module ddpy_forming_newton
   private
   public :: forming_increment, newton_settings, newton_integer_settings, outcome_converged, &
             outcome_landing, outcome_element, outcome_not_finite, outcome_solver, &
-            outcome_stalled, penetration_step
+            outcome_stalled, penetration_step, gmres
 
   !> Entries of the real settings: force and displacement tolerances, the yield landing
   !> tolerance (< 0: off), the penetration limit (element sizes) and the shortest step it
@@ -359,8 +359,8 @@ contains
           if (status < 0) return
           preconditioned = weight*preconditioned
         end if
-        call gmres(s%values, preconditioned, forcing, isettings(2), z, count, &
-                   gmres_converged, status)
+        call gmres(n, nvalues, rows, cols, s%values, weight, handle, preconditioned, &
+                   forcing, isettings(2), z, count, gmres_converged, status)
         call system_clock(t1)
         timings(4) = timings(4) + real(t1 - t0, wp)/real(clock_rate, wp)
         if (status < 0) return
@@ -414,97 +414,6 @@ contains
       weighted_norm = sqrt(sum((weight*v)**2))
     end function weighted_norm
 
-    !> GMRES from 0, without restart, on the operator v -> W M^-1 J W^-1 v (J with the
-    !> given values in the layout's coordinate structure): the iterate z, the iterations
-    !> and whether ||op(z) - b|| <= tol ||b||. Arnoldi with modified Gram-Schmidt run twice
-    !> (the basis stays orthogonal to rounding when the operator is far from normal) and
-    !> Givens rotations for the residual norm.
-    subroutine gmres(values, b, tol, m, z, k, converged, status)
-      real(wp), intent(in) :: values(nvalues), b(n), tol
-      integer, intent(in) :: m
-      real(wp), intent(out) :: z(n)
-      integer, intent(out) :: k, status
-      logical, intent(out) :: converged
-      real(wp), allocatable :: basis(:, :), w(:), jv(:)
-      real(wp) :: hessenberg(m + 1, m), cosines(m), sines(m), res(m + 1), h(m + 1), beta, &
-                  a, c, radius, y(m)
-      integer :: i, j, pass, last
-      logical :: breakdown
-      status = 0
-      z = 0.0_wp
-      k = 0
-      converged = .true.
-      beta = sqrt(dot_product(b, b))
-      if (beta == 0.0_wp) return
-      allocate(basis(n, m + 1), w(n), jv(n))
-      basis(:, 1) = b/beta
-      hessenberg = 0.0_wp
-      cosines = 0.0_wp
-      sines = 0.0_wp
-      res = 0.0_wp
-      res(1) = beta
-      last = 0
-      do j = 1, m
-        last = j
-        ! w = W M^-1 J W^-1 basis_j
-        jv = 0.0_wp
-        w = basis(:, j)/weight
-        do i = 1, nvalues
-          jv(rows(i) + 1) = jv(rows(i) + 1) + values(i)*w(cols(i) + 1)
-        end do
-        call mumps_solve(jv, w, status)
-        if (status < 0) return
-        w = weight*w
-        do pass = 1, 2
-          do i = 1, j
-            h(i) = dot_product(basis(:, i), w)
-          end do
-          do i = 1, j
-            w = w - h(i)*basis(:, i)
-          end do
-          hessenberg(1:j, j) = hessenberg(1:j, j) + h(1:j)
-        end do
-        hessenberg(j + 1, j) = sqrt(dot_product(w, w))
-        breakdown = .not. hessenberg(j + 1, j) > 1.0e-14_wp*maxval(abs(hessenberg(1:j, j)))
-        if (.not. breakdown) basis(:, j + 1) = w/hessenberg(j + 1, j)
-        do i = 1, j - 1  ! the earlier rotations on the new column
-          a = hessenberg(i, j)
-          c = hessenberg(i + 1, j)
-          hessenberg(i, j) = cosines(i)*a + sines(i)*c
-          hessenberg(i + 1, j) = -sines(i)*a + cosines(i)*c
-        end do
-        a = hessenberg(j, j)
-        c = hessenberg(j + 1, j)
-        radius = hypot(a, c)
-        if (radius > 0.0_wp) then
-          cosines(j) = a/radius
-          sines(j) = c/radius
-        else
-          cosines(j) = 1.0_wp
-          sines(j) = 0.0_wp
-        end if
-        hessenberg(j, j) = radius
-        hessenberg(j + 1, j) = 0.0_wp
-        res(j + 1) = -sines(j)*res(j)
-        res(j) = cosines(j)*res(j)
-        if (abs(res(j + 1)) <= tol*beta .or. breakdown .or. radius == 0.0_wp) exit
-      end do
-      k = last
-      converged = abs(res(k + 1)) <= tol*beta
-      do i = 1, k
-        if (hessenberg(i, i) == 0.0_wp) then  ! singular on the Krylov space
-          converged = .false.
-          return
-        end if
-      end do
-      do i = k, 1, -1  ! back substitution on the triangular factor
-        y(i) = (res(i) - dot_product(hessenberg(i, i + 1:k), y(i + 1:k)))/hessenberg(i, i)
-      end do
-      do i = 1, k
-        z = z + y(i)*basis(:, i)
-      end do
-    end subroutine gmres
-
     !> The converged iterate s as the answer.
     subroutine finish(s)
       type(evaluation), intent(in) :: s
@@ -548,5 +457,98 @@ contains
       step = max(step, min_step)
     end if
   end function penetration_step
+
+  !> GMRES from 0, without restart, on the operator v -> W M^-1 J W^-1 v (J with the
+  !> given values in the coordinate structure rows, cols, 0-based; M the factors MUMPS holds
+  !> behind handle; W the weights): the iterate z, the iterations and whether
+  !> ||op(z) - b|| <= tol ||b||; status < 0: a MUMPS solve failed. Arnoldi with modified Gram-Schmidt run twice
+  !> (the basis stays orthogonal to rounding when the operator is far from normal) and
+  !> Givens rotations for the residual norm.
+  subroutine gmres(n, nvalues, rows, cols, values, weight, handle, b, tol, m, z, k, &
+                   converged, status)
+    integer, intent(in) :: n, nvalues, rows(nvalues), cols(nvalues), handle, m
+    real(wp), intent(in) :: values(nvalues), weight(n), b(n), tol
+    real(wp), intent(out) :: z(n)
+    integer, intent(out) :: k, status
+    logical, intent(out) :: converged
+    real(wp), allocatable :: basis(:, :), w(:), jv(:)
+    real(wp) :: hessenberg(m + 1, m), cosines(m), sines(m), res(m + 1), h(m + 1), beta, &
+                a, c, radius, y(m)
+    integer :: i, j, pass, last
+    logical :: breakdown
+    status = 0
+    z = 0.0_wp
+    k = 0
+    converged = .true.
+    beta = sqrt(dot_product(b, b))
+    if (beta == 0.0_wp) return
+    allocate(basis(n, m + 1), w(n), jv(n))
+    basis(:, 1) = b/beta
+    hessenberg = 0.0_wp
+    cosines = 0.0_wp
+    sines = 0.0_wp
+    res = 0.0_wp
+    res(1) = beta
+    last = 0
+    do j = 1, m
+      last = j
+      ! w = W M^-1 J W^-1 basis_j
+      jv = 0.0_wp
+      w = basis(:, j)/weight
+      do i = 1, nvalues
+        jv(rows(i) + 1) = jv(rows(i) + 1) + values(i)*w(cols(i) + 1)
+      end do
+      call solver_solve(handle, n, jv, w, status)
+      if (status < 0) return
+      w = weight*w
+      do pass = 1, 2
+        do i = 1, j
+          h(i) = dot_product(basis(:, i), w)
+        end do
+        do i = 1, j
+          w = w - h(i)*basis(:, i)
+        end do
+        hessenberg(1:j, j) = hessenberg(1:j, j) + h(1:j)
+      end do
+      hessenberg(j + 1, j) = sqrt(dot_product(w, w))
+      breakdown = .not. hessenberg(j + 1, j) > 1.0e-14_wp*maxval(abs(hessenberg(1:j, j)))
+      if (.not. breakdown) basis(:, j + 1) = w/hessenberg(j + 1, j)
+      do i = 1, j - 1  ! the earlier rotations on the new column
+        a = hessenberg(i, j)
+        c = hessenberg(i + 1, j)
+        hessenberg(i, j) = cosines(i)*a + sines(i)*c
+        hessenberg(i + 1, j) = -sines(i)*a + cosines(i)*c
+      end do
+      a = hessenberg(j, j)
+      c = hessenberg(j + 1, j)
+      radius = hypot(a, c)
+      if (radius > 0.0_wp) then
+        cosines(j) = a/radius
+        sines(j) = c/radius
+      else
+        cosines(j) = 1.0_wp
+        sines(j) = 0.0_wp
+      end if
+      hessenberg(j, j) = radius
+      hessenberg(j + 1, j) = 0.0_wp
+      res(j + 1) = -sines(j)*res(j)
+      res(j) = cosines(j)*res(j)
+      if (abs(res(j + 1)) <= tol*beta .or. breakdown .or. radius == 0.0_wp) exit
+    end do
+    k = last
+    converged = abs(res(k + 1)) <= tol*beta
+    do i = 1, k
+      if (hessenberg(i, i) == 0.0_wp) then  ! singular on the Krylov space
+        converged = .false.
+        return
+      end if
+    end do
+    do i = k, 1, -1  ! back substitution on the triangular factor
+      y(i) = (res(i) - dot_product(hessenberg(i, i + 1:k), y(i + 1:k)))/hessenberg(i, i)
+    end do
+    do i = 1, k
+      z = z + y(i)*basis(:, i)
+    end do
+  end subroutine gmres
 
 end module ddpy_forming_newton

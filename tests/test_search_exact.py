@@ -352,7 +352,7 @@ def test_a_tree_that_leaves_out_a_patch_fails_the_comparison(left_out: int) -> N
     search = ContactSearch(surface)
     x = query_points(np.random.default_rng(3), surface, search)
     assert_same_as_brute_force(search, x)
-    child = search._tree_child  # private: the core's 1-based tree, leaves -(patch + 1)
+    child = search.arrays.tree_child  # the core's 1-based tree, leaves -(patch + 1)
     child[child == -(left_out + 1)] = -((left_out + 1) % surface.n_patches + 1)
     with pytest.raises(AssertionError, match="misses"):
         assert_same_as_brute_force(search, x)

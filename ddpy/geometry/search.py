@@ -14,6 +14,7 @@ projection on them (local), as in the paper's "Contact search algorithm".
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -22,12 +23,33 @@ from ddpy import _core
 from ddpy._validate import float_array
 from ddpy.geometry.surfaces import BezierSurface, NagataSurface
 
-__all__ = ["ContactSearch", "Projection", "NONE", "INSIDE", "EDGE"]
+__all__ = ["ContactSearch", "Projection", "SearchArrays", "NONE", "INSIDE", "EDGE"]
 
 #: Status of a node: no candidate patch; projection inside a patch; held on a patch boundary.
 NONE, INSIDE, EDGE = 0, 1, 2
 _KIND = {BezierSurface: 1, NagataSurface: 2}
 _MODE = {"tree": 1, "brute": 2}
+
+
+class SearchArrays(NamedTuple):
+    """The flat arrays of one tool that the core's search reads, in its argument order:
+    coefficients, degrees and triangle flags per patch; the box tree (children 1-based);
+    the patch frames and their boxes; each patch's first grid point (1-based) and the grid's
+    parameters, normals and points."""
+
+    coef: NDArray[np.float64]
+    degrees: NDArray[np.int32]
+    triangle: NDArray[np.int32]
+    tree_lower: NDArray[np.float64]
+    tree_upper: NDArray[np.float64]
+    tree_child: NDArray[np.int32]
+    frame: NDArray[np.float64]
+    frame_lower: NDArray[np.float64]
+    frame_upper: NDArray[np.float64]
+    grid_start: NDArray[np.int32]
+    grid_params: NDArray[np.float64]
+    grid_normals: NDArray[np.float64]
+    grid_points: NDArray[np.float64]
 
 
 @dataclass(frozen=True)
@@ -86,12 +108,12 @@ class ContactSearch:
         self.mode = _MODE["tree"]
         n = surface.n_patches
         if self.kind == 1:
-            self._stride = 147
+            self.stride = 147
             self._degrees = surface.degrees.ravel()
             self._triangle = np.zeros(n, dtype=np.int32)
             counts = surface.degrees + 2
         else:
-            self._stride = 24
+            self.stride = 24
             self._degrees = np.zeros(2 * n, dtype=np.int32)
             self._triangle = surface.is_triangle.astype(np.int32)
             counts = np.repeat(_nagata_grid_size(surface)[:, None], 2, axis=1)
@@ -99,12 +121,14 @@ class ContactSearch:
             counts, surface.is_triangle if self.kind == 2 else np.zeros(n, bool))
         self.grid_points, _, self.grid_normals = surface.evaluate(self.grid_patch,
                                                                   self.grid_params)
+        tree = _core.search_tree(self.kind, self.stride, self.surface.coefficients,
+                                 self._degrees, self._triangle)
         # The core takes grid_start and the tree's children 1-based: made once here.
-        self._grid_start1 = self.grid_start + 1
-        (self._tree_lower, self._tree_upper, self._tree_child, self._frame, self._frame_lower,
-         self._frame_upper) = _core.search_tree(self.kind, self._stride,
-                                                self.surface.coefficients, self._degrees,
-                                                self._triangle)
+        self.arrays = SearchArrays(
+            self.surface.coefficients, self._degrees.astype(np.int32),
+            self._triangle.astype(np.int32), *tree,
+            (self.grid_start + 1).astype(np.int32), self.grid_params.ravel(),
+            self.grid_normals.ravel(), self.grid_points.ravel())
 
     def project(
         self,
@@ -144,11 +168,11 @@ class ContactSearch:
             return Projection(empty, np.zeros((0, 2)), np.zeros((0, 3)), np.zeros((0, 3)),
                               np.zeros((0, 2, 3)), np.zeros(0), empty, empty, empty)
         mode = _MODE["brute"] if brute_force else self.mode
+        a = self.arrays
         out = _core.contact_search(
-            self.kind, self._stride, self.surface.coefficients, self._degrees, self._triangle,
-            mode, self._tree_lower, self._tree_upper, self._tree_child, self._frame,
-            self._frame_lower, self._frame_upper, self._grid_start1, self.grid_params.ravel(),
-            self.grid_normals.ravel(), self.grid_points.ravel(), x.ravel(), nn.ravel(), u,
+            self.kind, self.stride, a.coef, a.degrees, a.triangle, mode, a.tree_lower,
+            a.tree_upper, a.tree_child, a.frame, a.frame_lower, a.frame_upper, a.grid_start,
+            a.grid_params, a.grid_normals, a.grid_points, x.ravel(), nn.ravel(), u,
             self.max_iterations, self.tol, limit,
         )
         patch, params, point, normal, tangents, distance, status, iterations, ncand_out = out
@@ -159,10 +183,11 @@ class ContactSearch:
     def patch_boxes(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """(lower, upper), each (patches, 3): the axis-aligned box of every patch that the
         search bounds its distance by; every point of patch p lies in box p."""
-        leaf = np.flatnonzero(self._tree_child < 0)
-        order = np.argsort(-self._tree_child[leaf] - 1)
-        lower = self._tree_lower.reshape(-1, 3)[leaf[order]]
-        upper = self._tree_upper.reshape(-1, 3)[leaf[order]]
+        a = self.arrays
+        leaf = np.flatnonzero(a.tree_child < 0)
+        order = np.argsort(-a.tree_child[leaf] - 1)
+        lower = a.tree_lower.reshape(-1, 3)[leaf[order]]
+        upper = a.tree_upper.reshape(-1, 3)[leaf[order]]
         return lower, upper
 
     def patch_frame_boxes(self) -> tuple[NDArray[np.float64], ...]:
@@ -170,8 +195,9 @@ class ContactSearch:
         3) with axes[p, a] the unit axis a; every point y of patch p has
         lower[p] <= axes[p] @ y <= upper[p]."""
         n = self.surface.n_patches
-        return (self._frame.reshape(n, 3, 3), self._frame_lower.reshape(n, 3),
-                self._frame_upper.reshape(n, 3))
+        a = self.arrays
+        return (a.frame.reshape(n, 3, 3), a.frame_lower.reshape(n, 3),
+                a.frame_upper.reshape(n, 3))
 
 
 def _nagata_grid_size(surface: NagataSurface) -> NDArray[np.int64]:

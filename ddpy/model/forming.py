@@ -27,7 +27,7 @@ from ddpy import _core
 from ddpy._validate import float_array, int_array
 from ddpy.core.linalg import LinearSolverError, MumpsSolver
 from ddpy.core.ordering import mesh_solver
-from ddpy.geometry.search import NONE, ContactSearch
+from ddpy.geometry.search import NONE, ContactSearch, SearchArrays
 from ddpy.geometry.surfaces import BezierSurface, NagataSurface
 from ddpy.model.contact import INACTIVE
 from ddpy.model.control import IncrementLimits, NewtonSettings, next_step
@@ -64,7 +64,7 @@ REUSE_FROM = 20_000
 KRYLOV_LOOSE, KRYLOV_TIGHT = 1e-2, 1e-10
 KRYLOV_MAX = 12
 #: Deepest a free node may be pushed into a tool by one Newton step, in element sizes, and
-#: the shortest step that limit may leave (FormingProblem._penetration_step).
+#: the shortest step that limit may leave (penetration_step of the core's Newton loop).
 PENETRATION, MIN_STEP = 0.02, 1.0 / 64.0
 KRYLOV_KEEP = 8
 #: Reach of the contact search of a forming run: a slave node whose nearest admissible
@@ -246,22 +246,18 @@ class _Layout:
         eqn[free] = np.arange(self.nf, dtype=np.int32)
         self.eqn = eqn
         self.pattern = solid.pattern(eqn, symmetric=False)
-        self.node = np.concatenate([t.slaves for t in tools]).astype(np.int64)
+        #: each pair's node and tool, each tool's first pair (int32: as the core takes them)
+        self.node = np.concatenate([t.slaves for t in tools]).astype(np.int32)
         self.tool_of = np.concatenate([np.full(t.slaves.size, i) for i, t in enumerate(tools)])
-        self.first = np.concatenate([[0], np.cumsum([t.slaves.size for t in tools])])
+        self.first = np.concatenate([[0], np.cumsum([t.slaves.size for t in tools])]
+                                    ).astype(np.int32)
         npair = self.node.size
         self.n = self.nf + 3 * npair
         lam = self.nf + 3 * np.arange(npair)[:, None] + np.arange(3)  # (npair, 3)
-        self.lam = lam
         equ = eqn.reshape(n, 3)[self.node]                              # (npair, 3)
-        self.equ = equ
         # Components of a slave whose displacement is fixed: its force there is a support
         # reaction, so that row of the law becomes lambda_k = 0.
-        self.held = equ < 0
-        # The same for the core: 0-based pair nodes, each tool's first pair, held flags.
-        self.pair_node = self.node.astype(np.int32)
-        self.tool_first = self.first.astype(np.int32)
-        self.held_flags = self.held.astype(np.int32).ravel()
+        self.held_flags = (equ < 0).astype(np.int32).ravel()
         self.fixed_flags = fixed.astype(np.int32).ravel()
         # The structure of the contact blocks, in the order the core writes their values:
         # the coupling entries (-1), dC/dx at the free dofs of each pair's node (pair,
@@ -287,25 +283,15 @@ class _ToolPack:
         offsets = np.zeros(4, dtype=np.int64)  # coef, patch, tree, grid
         for i, (tool, s) in enumerate(zip(tools, searches, strict=True)):
             n = s.surface.n_patches
-            table[i] = (s.kind, s._stride, n, s.mode, s.max_iterations, *offsets,
+            table[i] = (s.kind, s.stride, n, s.mode, s.max_iterations, *offsets,
                         tool.facing is not None)
             offsets += (s.surface.coefficients.size, n, 2 * n - 1, s.grid_params.shape[0])
         self.table = table.ravel()
         self.tol = np.array([s.tol for s in searches])
         cat = np.concatenate
-        self.coef = cat([s.surface.coefficients.ravel() for s in searches])
-        self.degrees = cat([s._degrees for s in searches]).astype(np.int32)
-        self.triangle = cat([s._triangle for s in searches]).astype(np.int32)
-        self.tree_lower = cat([s._tree_lower for s in searches])
-        self.tree_upper = cat([s._tree_upper for s in searches])
-        self.tree_child = cat([s._tree_child for s in searches]).astype(np.int32)
-        self.frame = cat([s._frame for s in searches])
-        self.frame_lower = cat([s._frame_lower for s in searches])
-        self.frame_upper = cat([s._frame_upper for s in searches])
-        self.grid_start = cat([s._grid_start1 for s in searches]).astype(np.int32)
-        self.grid_params = cat([s.grid_params.ravel() for s in searches])
-        self.grid_normals = cat([s.grid_normals.ravel() for s in searches])
-        self.grid_points = cat([s.grid_points.ravel() for s in searches])
+        #: every tool's search arrays, one after another, in the core's argument order
+        self.arrays = SearchArrays(*(cat([getattr(s.arrays, name) for s in searches])
+                                     for name in SearchArrays._fields))
         self.facing = cat([np.zeros(3) if t.facing is None else t.facing for t in tools])
         # Per tool with a facing direction, the blank's boundary faces that face it (normal
         # within 60 degrees) and the slave index of their corners (-1: not a slave): the
@@ -838,6 +824,16 @@ class FormingProblem:
                                              np.empty(0))
         return state, gap, normal
 
+    def _tool_arguments(self, positions: Mapping[str, NDArray[np.float64]]) -> tuple:
+        """The tools as the core's forming_contact and forming_increment take them, one
+        argument list for both: the table and search arrays of every tool, their facing
+        directions and faces, where they are and where they were at the last converged
+        increment, the search's reach and the element size."""
+        pack, names = self._pack, [t.name for t in self.tools]
+        return (pack.table, pack.tol, *pack.arrays, pack.facing, pack.face_first,
+                pack.faces, pack.corner, np.concatenate([positions[n] for n in names]),
+                np.concatenate([self.position[n] for n in names]), self._reach, self.size)
+
     def _contact(self, layout: _Layout, x: NDArray[np.float64], x_n: NDArray[np.float64],
                  positions: Mapping[str, NDArray[np.float64]], on: NDArray[np.bool_],
                  force: NDArray[np.float64], residual: NDArray[np.float64],
@@ -850,20 +846,12 @@ class FormingProblem:
         equilibrium rows (which hold fint - external), and writes the contact entries of
         ``values`` (none when it is empty: a look at the gaps). Returns the pairs' states,
         and their gaps (inf: no patch) and normals."""
-        pack = self._pack
-        names = [t.name for t in self.tools]
         residual[:], values[:], state, gap, normal, status = _core.forming_contact(
-            x.ravel(), x_n.ravel(), layout.fixed_flags, pack.table, pack.tol,
-            pack.coef, pack.degrees, pack.triangle, pack.tree_lower, pack.tree_upper,
-            pack.tree_child, pack.frame, pack.frame_lower, pack.frame_upper, pack.grid_start,
-            pack.grid_params, pack.grid_normals, pack.grid_points, pack.facing,
-            pack.face_first, pack.faces, pack.corner,
-            np.concatenate([positions[n] for n in names]),
-            np.concatenate([self.position[n] for n in names]), self._reach, self.size,
+            x.ravel(), x_n.ravel(), layout.fixed_flags, *self._tool_arguments(positions),
             0.0 if touching is None else touching.distance,
-            1 if touching is None or touching.resting else 0, layout.tool_first,
-            layout.pair_node, on.astype(np.int32), force.ravel(), self.r, self.mu,
-            layout.held_flags, layout.eqn, layout.nf, layout.k_slots, residual, values)
+            1 if touching is None or touching.resting else 0, layout.first, layout.node,
+            on.astype(np.int32), force.ravel(), self.r, self.mu, layout.held_flags,
+            layout.eqn, layout.nf, layout.k_slots, residual, values)
         if status:
             raise RuntimeError("forming_contact: the tools' packed arrays or the layout do not "
                                "fit each other (a bug in the caller)")
@@ -917,8 +905,7 @@ class FormingProblem:
         would otherwise make it cycle. The norm alone is the wrong measure for a thin sheet
         that bends: a step that bends it right leaves a large membrane residual of second
         order (docs/theory/contact.md)."""
-        solid, state, pack = self.solid, self.state, self._pack
-        names = [t.name for t in self.tools]
+        solid, state = self.solid, self.state
         reuse = self.linear_solver == "reuse" or (
             self.linear_solver == "auto" and layout.n >= REUSE_FROM)
         settings = np.array([tol_force, tol_disp,
@@ -938,14 +925,9 @@ class FormingProblem:
             _flat(state.axes.transpose(0, 1, 3, 2)), _flat(state.stress), _flat(state.ep),
             _flat(state.strain), layout.eqn, layout.pattern.offsets, layout.fixed_flags,
             layout.nf, layout.k_slots, layout.n_coupling, layout.rows, layout.cols,
-            pack.table, pack.tol, pack.coef, pack.degrees, pack.triangle, pack.tree_lower,
-            pack.tree_upper, pack.tree_child, pack.frame, pack.frame_lower, pack.frame_upper,
-            pack.grid_start, pack.grid_params, pack.grid_normals, pack.grid_points,
-            pack.facing, pack.face_first, pack.faces, pack.corner,
-            np.concatenate([positions[n] for n in names]),
-            np.concatenate([self.position[n] for n in names]), self._reach, self.size,
-            0.0 if touching is None else touching.distance, layout.tool_first,
-            layout.pair_node, on.astype(np.int32), self.r, self.mu, layout.held_flags,
+            *self._tool_arguments(positions), 0.0 if touching is None else touching.distance,
+            layout.first, layout.node, on.astype(np.int32), self.r, self.mu,
+            layout.held_flags,
             self.u.ravel(), np.where(on[:, None], self.force, 0.0).ravel(),
             self.external.ravel(), (self.u if guess is None else guess).ravel(), settings,
             isettings, factored, reuse_next, out.stress.ravel(), out.ep.ravel(),
@@ -985,9 +967,8 @@ class FormingProblem:
             self._factored = False
             return _Trial(str(LinearSolverError(int(info[2]), "factorization or solve")))
         if outcome == _STALLED:
-            flipped = None if info[3] < 0 else np.ones(int(info[3]), dtype=bool)
             return _Trial(_stalled(max_iterations, float(detail[0]), float(detail[1]),
-                                   tol_force, tol_disp, flipped))
+                                   tol_force, tol_disp, int(info[3])))
         raise RuntimeError(f"forming_increment refused its input (outcome {outcome}): the "
                            "layout, the tools' packed arrays or the history do not fit")
 
@@ -1019,15 +1000,14 @@ def blank_stiffness(nodes: ArrayLike, elements: ArrayLike, young: float) -> floa
 
 
 def _stalled(iterations: int, residual: float, correction: float, tol_force: float,
-             tol_disp: float, flipped: NDArray[np.bool_] | None) -> str:
+             tol_disp: float, flipped: int) -> str:
     """Why an increment did not converge: its last residual and correction against their
     tolerances, and how many contact pairs changed state in its last iteration."""
     text = (f"no convergence in {iterations} iterations: residual {residual:.2e} of the force "
             f"scale (tolerance {tol_force:.0e}), correction {correction:.2e} of the motion "
             f"(tolerance {tol_disp:.0e})")
-    if flipped is not None and flipped.any():
-        text += (f"; {int(flipped.sum())} contact pair(s) still changed state in the last "
-                 "iteration")
+    if flipped > 0:
+        text += f"; {flipped} contact pair(s) still changed state in the last iteration"
     return text
 
 

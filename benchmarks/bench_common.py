@@ -35,14 +35,15 @@ def load_module(path: Path, name: str) -> ModuleType:
     return module
 
 
-def code_version() -> str:
-    """The checkout's ``git describe --always``, with "-dirty" when the code (CODE_PATHS)
-    differs from it; empty outside a git checkout."""
+def code_version(checkout: Path = ROOT) -> str:
+    """The checkout's ``git describe --always`` (this repository's, or another checkout's),
+    with "-dirty" when the code (CODE_PATHS) differs from it; empty outside a git
+    checkout."""
     try:
-        described = subprocess.run(["git", "describe", "--always"], cwd=ROOT,
+        described = subprocess.run(["git", "describe", "--always"], cwd=checkout,
                                    capture_output=True, text=True, check=True).stdout.strip()
         changed = subprocess.run(["git", "diff", "--quiet", "HEAD", "--", *CODE_PATHS],
-                                 cwd=ROOT).returncode != 0
+                                 cwd=checkout).returncode != 0
     except (OSError, subprocess.CalledProcessError):
         return ""
     return described + ("-dirty" if changed else "")

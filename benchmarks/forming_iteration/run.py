@@ -109,13 +109,11 @@ def git(checkout: Path, *args: str) -> subprocess.CompletedProcess[str]:
 
 
 def checkout_code(checkout: Path) -> str:
-    """``git -C checkout describe --always``, with "-dirty" when its code (CODE_PATHS)
-    differs from it (bench_common.code_version() of that checkout)."""
-    described = git(checkout, "describe", "--always")
-    if described.returncode != 0:
-        sys.exit(f"{checkout}: not a git checkout ({described.stderr.strip()})")
-    changed = git(checkout, "diff", "--quiet", "HEAD", "--", *CODE_PATHS).returncode != 0
-    return described.stdout.strip() + ("-dirty" if changed else "")
+    """bench_common.code_version() of another checkout; stops when it is none."""
+    code = code_version(checkout)
+    if not code:
+        sys.exit(f"{checkout}: not a git checkout")
+    return code
 
 
 def between(before: Path, after: Path) -> list[str]:

@@ -14,7 +14,8 @@ from ddpy.model.control import IncrementLimits, NewtonSettings, next_step
 from ddpy.model.forming import FormingProblem, RigidTool
 from ddpy.model.material import Hill48, Material, Swift, yield_landing
 from ddpy.model.mesh import HexMesh, largest_rotation
-from ddpy.model.solid import Solid, StaticProblem, material_props
+from ddpy.model.solid import Solid, material_props
+from ddpy.model.static import StaticProblem
 
 #: Elastic in practice (yield stress 1e7 MPa), no Poisson effect: the analytic answers hold.
 ELASTIC = Material(210e3, 0.0, Hill48.von_mises(), Swift(1e7, 0.01, 0.0))
@@ -627,3 +628,51 @@ def test_a_line_search_that_no_step_passes_takes_the_longest_that_lowered_the_re
     assert result.fallbacks >= 1, result.fallbacks
     last = result.relative[0][-1]
     assert last[0] <= phase.newton.force_tolerance
+
+
+def test_jacobian_of_the_combined_equations_matches_central_differences() -> None:
+    """The Jacobian the Newton loop factorizes, blank and contact together (material,
+    geometric, tool-curvature and friction terms), against central differences of the
+    residual over every unknown, at a point with stick, slip and open pairs on a curved
+    tool: every entry within 1e-7 of the largest entry of its rows' block, equilibrium or
+    contact law (h = 1e-5 of the unknown's scale; measured 5e-10 and 6e-9)."""
+    normals = [[-0.05, -0.05, 1], [0.05, -0.05, 1], [0.05, 0.05, 1], [-0.05, 0.05, 1]]
+    dome = NagataSurface([[-5, -5, 0], [5, -5, 0], [5, 5, 0], [-5, 5, 0]],
+                         np.array(normals) / np.linalg.norm(normals, axis=1)[:, None],
+                         [[0, 1, 2, 3]])
+    lift = float(dome.evaluate([0], [[0.5, 0.5]])[0][0, 2])  # the top of the dome
+    mesh = HexMesh.box(1.0, 1.0, 0.5, 3, 3, 2, origin=(-0.5, -0.5, lift))
+    tool = RigidTool("dome", dome, mesh.select(z=lift), friction=0.3, facing=(0, 0, -1))
+    problem = FormingProblem(Solid(mesh, ELASTIC), [tool])
+    problem.fix(mesh.select(z=lift + 0.5), "xyz")
+    problem.run({"dome": (2e-4, 0, 4e-3)}, max_increment=1e-3)
+    rng = np.random.default_rng(7)
+    u = problem.u + 1e-5 * rng.standard_normal(problem.u.shape) * ~problem.fixed
+    force = problem.force * (1.0 + 0.5 * rng.standard_normal(problem.force.shape))
+    force[::4] = 0.0  # some pairs without force, lifted off the dome: open
+    u[tool.slaves[::4], 2] += 5e-3
+    force[1::4, 0] = force[1::4, 2]  # beyond the friction cone (mu = 0.3): slip
+    moved = {"dome": problem.position["dome"] + (3e-5, 1e-5, 2e-5)}
+    eq = problem.linearization(u, force, moved)
+    assert {0, 1, 2} <= set(eq.state.tolist()), eq.state  # open, stick and slip pairs
+    jacobian = eq.matrix()
+    free = np.flatnonzero(~problem.fixed.ravel())
+    scale_u, scale_f = 1e-3, np.abs(problem.force).max()
+    errors = np.zeros_like(jacobian)
+    for j in range(eq.residual.size):
+        h = 1e-5 * (scale_u if j < eq.n_free else scale_f)
+        sides = []
+        for sign in (1.0, -1.0):
+            du, df = u.copy(), force.copy()
+            if j < eq.n_free:
+                du.ravel()[free[j]] += sign * h
+            else:
+                df.ravel()[j - eq.n_free] += sign * h
+            side = problem.linearization(du, df, moved)
+            assert np.array_equal(side.state, eq.state)  # no switch within the difference
+            sides.append(side.residual)
+        errors[:, j] = (sides[0] - sides[1]) / (2.0 * h) - jacobian[:, j]
+    # Equilibrium rows (N/mm, N) and contact-law rows (mm, N/r) each against their own size.
+    for rows in (slice(0, eq.n_free), slice(eq.n_free, None)):
+        worst = np.abs(errors[rows]).max()
+        assert worst <= 1e-7 * np.abs(jacobian[rows]).max(), worst

@@ -9,7 +9,8 @@ from solid_helpers import props_vector
 from ddpy.core.linalg import MumpsSolver
 from ddpy.core.ordering import equation_order, nested_dissection, node_adjacency
 from ddpy.model.mesh import HexMesh
-from ddpy.model.solid import Solid, StaticProblem
+from ddpy.model.solid import Solid
+from ddpy.model.static import StaticProblem
 
 
 def test_adjacency_and_separators() -> None:
@@ -98,30 +99,21 @@ def test_contact_multipliers_first_halve_the_factorization_flops() -> None:
     nodes, with fewer flops (a closed stick pair's zero pivot is delayed by MUMPS)."""
     from ddpy.app.runner import DEFAULT_CASE, build_problem
     from ddpy.io.decks import read_case
-    from ddpy.model.forming import _Layout, _Touching
 
     problem = build_problem(read_case(DEFAULT_CASE))
-    layout = _Layout(problem.solid, problem.tools, problem.fixed)
-    x = problem.solid.mesh.nodes
-    positions = {t.name: np.zeros(3) for t in problem.tools}
-    timings = dict.fromkeys(("contact", "assembly", "rest"), 0.0)
-    on = np.ones(layout.node.size, dtype=bool)
-    residual, values, state, _, _ = problem._evaluate(
-        layout, np.zeros_like(x), np.zeros((layout.node.size, 3)), x, positions, on, timings,
-        touching=_Touching(1e-6 * problem.size))
-    assert (state == 1).sum() >= 5 and (state == 0).sum() >= 100  # stick and open pairs
-    nodes = np.concatenate([np.flatnonzero(~problem.fixed.ravel()) // 3,
-                            np.repeat(layout.node, 3)])
+    eq = problem.linearization(touching=1e-6 * problem.size)
+    assert (eq.state == 1).sum() >= 5 and (eq.state == 0).sum() >= 100  # stick and open pairs
+    n = eq.residual.size
     answers, flops = {}, {}
-    for name, first in (("with node", None), ("first", np.arange(layout.n) >= layout.nf)):
-        order = equation_order(problem.solid.node_order(), nodes, first)
+    for name, first in (("with node", None), ("first", np.arange(n) >= eq.n_free)):
+        order = equation_order(problem.solid.node_order(), eq.nodes, first)
         if first is not None:
             assert order[first].max() < first.sum()  # the multipliers come first
         with MumpsSolver("unsymmetric", "amd") as solver:
             solver.set_ordering(order)
-            solver.analyse(layout.n, layout.rows, layout.cols)
-            solver.factorize(values)
-            answers[name] = solver.solve(-residual)
+            solver.analyse(n, eq.rows, eq.cols)
+            solver.factorize(eq.values)
+            answers[name] = solver.solve(-eq.residual)
             flops[name] = solver.statistics()["flops"]
     scale = np.abs(answers["with node"]).max()
     assert np.abs(answers["first"] - answers["with node"]).max() <= 1e-8 * scale

@@ -21,7 +21,8 @@ from solid_helpers import (
 from ddpy.core.parallel import threads
 from ddpy.model.control import NewtonSettings
 from ddpy.model.mesh import HexMesh
-from ddpy.model.solid import ConvergenceError, ElementError, Solid, StaticProblem, material_props
+from ddpy.model.solid import ElementError, Solid, material_props
+from ddpy.model.static import ConvergenceError, StaticProblem
 
 ELASTIC = props_vector()
 #: Newton to rounding: the tests compare with exact solutions.
@@ -308,7 +309,7 @@ def test_uniaxial_tension_r_values_yield_ratios_swift(angle: float, r_value: flo
     load = k * (eps0 + 0.1) ** n * ratio * np.exp(-0.1)  # true stress Y(0.1) on area e^-0.1
     problem.load(mesh.select(x=1.0), [load / 4, 0.0, 0.0])
     problem.load([2, 4, 6], [-load / 4, 0.0, 0.0])  # node 0's reaction is the fourth
-    result = problem.solve(increments=10)
+    result = problem.solve(increments=10, newton=TIGHT)  # uniaxial to rounding, not 1e-4
     lam, mu = E * NU / ((1 + NU) * (1 - 2 * NU)), E / (2 * (1 + NU))
     compliance = np.linalg.inv(lam * np.diag([1, 1, 1, 0, 0, 0]) @ np.ones((6, 6))
                                @ np.diag([1, 1, 1, 0, 0, 0])
@@ -398,23 +399,22 @@ def test_increment_cutting_recovers_and_reports() -> None:
 
 
 def test_predictors_reach_the_same_state_and_line_search_saves_cuts() -> None:
-    """Tangent, elastic and extrapolating predictors converge to the same plastic state
-    (backward Euler from the converged state: the iteration path does not matter; measured
-    4e-16). Without the line search the first increment cycles and has to be cut."""
+    """Elastic and extrapolating predictors converge to the same plastic state (backward
+    Euler from the converged state: the iteration path does not matter). Without the line
+    search the first increment cycles and has to be cut."""
     mesh = HexMesh.box(4.0, 1.0, 0.5, 8, 2, 2)
     out = []
-    for predictor, line_search in (("tangent", True), ("elastic", True),
-                                   ("extrapolate", True), ("tangent", False)):
+    for predictor, line_search in (("elastic", True), ("extrapolate", True),
+                                   ("elastic", False)):
         problem = StaticProblem(Solid(mesh, ddq_props(), rolling_direction_deg=45.0))
         problem.fix(mesh.select(x=0.0), "xyz")
         problem.fix(mesh.select(x=4.0), "z", -0.4)
         out.append(problem.solve(increments=4, newton=TIGHT,
                                  predictor=predictor, line_search=line_search))
     assert out[0].ep[-1].max() > 0.005
-    assert all(r.cuts == 0 for r in out[:3]) and out[3].cuts >= 1
-    for other in out[1:3]:
-        assert np.abs(other.displacements[-1] - out[0].displacements[-1]).max() <= 1e-12
-        assert np.abs(other.ep[-1] - out[0].ep[-1]).max() <= 1e-12
+    assert all(r.cuts == 0 for r in out[:2]) and out[2].cuts >= 1
+    assert np.abs(out[1].displacements[-1] - out[0].displacements[-1]).max() <= 1e-12
+    assert np.abs(out[1].ep[-1] - out[0].ep[-1]).max() <= 1e-12
     with pytest.raises(ValueError, match="predictor"):
         StaticProblem(Solid(mesh, ELASTIC)).solve(predictor="none")
 

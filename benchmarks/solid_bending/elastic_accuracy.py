@@ -12,7 +12,8 @@ from __future__ import annotations
 import numpy as np
 
 from ddpy.model.mesh import HexMesh
-from ddpy.model.solid import Solid, StaticProblem
+from ddpy.model.solid import Solid
+from ddpy.model.static import StaticProblem
 
 E, NU = 210e3, 0.3
 LENGTH, WIDTH, THICK, LOAD = 20.0, 2.0, 1.0, 1.0

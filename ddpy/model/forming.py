@@ -16,7 +16,6 @@ Example::
 from __future__ import annotations
 
 import logging
-import time
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 
@@ -25,25 +24,20 @@ from numpy.typing import ArrayLike, NDArray
 
 from ddpy import _core
 from ddpy._validate import float_array, int_array
-from ddpy.core.linalg import LinearSolverError, MumpsSolver
+from ddpy.core.linalg import MumpsSolver
 from ddpy.core.ordering import mesh_solver
-from ddpy.geometry.search import NONE, ContactSearch, SearchArrays
-from ddpy.geometry.surfaces import BezierSurface, NagataSurface
+from ddpy.geometry.search import NONE
 from ddpy.model.contact import INACTIVE
 from ddpy.model.control import IncrementLimits, NewtonSettings, next_step
-from ddpy.model.mesh import (
-    HEX_EDGES,
-    HexMesh,
-    boundary_faces,
-    face_area_vectors,
-    largest_rotation,
-)
-from ddpy.model.solid import ElementError, Solid, SolidState, _components, _flat
+from ddpy.model.mesh import HEX_EDGES, largest_rotation
+from ddpy.model.newton import Factors, Layout, Loop, Pairs, ToolPack, Trial, increment
+from ddpy.model.solid import Solid, SolidState, _components
+from ddpy.model.tool import RigidTool
 
 _log = logging.getLogger(__name__)
 
-__all__ = ["RigidTool", "FormingProblem", "FormingResult", "FormingError", "PhaseProgress",
-           "default_augmentation", "start_depth_limit"]
+__all__ = ["RigidTool", "FormingProblem", "FormingResult", "FormingError", "Linearization",
+           "PhaseProgress", "default_augmentation", "start_depth_limit"]
 
 #: Most increments a phase may take at its largest increment: a max_increment smaller than
 #: the travel over this would only keep the process busy (1e-300 mm ran for ever).
@@ -81,8 +75,6 @@ KRYLOV_KEEP = 8
 #: of its patch: it may be a deep penetration to the law), and that run stopped at 31.7 mm
 #: of its 40 mm first stage (docs/theory/contact.md, "Reach").
 REACH_SIZES, REACH_TRAVELS = 2.0, 4.0
-#: What the core's forming_increment returns (fortran/solver/ddpy_forming_newton.f90).
-_CONVERGED, _LANDING, _ELEMENT, _NOT_FINITE, _SOLVER, _STALLED = range(6)
 
 
 @dataclass(frozen=True)
@@ -103,22 +95,28 @@ def start_depth_limit(strain: float, size: float) -> float:
     return strain * size
 
 
-@dataclass
-class _Trial:
-    """What one increment trial of the core's Newton loop gives: converged (``failure``
-    empty and ``landing`` 1) with the new state, its residual history and the contact
-    states, gaps and normals of the pairs; or the fraction of the increment at which the
-    first elastic point lands on the yield surface (``landing`` < 1); or why it failed."""
+@dataclass(frozen=True)
+class Linearization:
+    """The forming problem's equations at one point (``FormingProblem.linearization``): the
+    residual, free equilibrium rows first (``n_free``), then the three contact-law rows of
+    each pair; its Jacobian in coordinate form (``rows``, ``cols``, ``values``; duplicates
+    add up), as MUMPS reads it; the contact states of the pairs (0 open, 1 stick, 2 slip);
+    and the node of each unknown."""
 
-    failure: str = ""
-    landing: float = 1.0
-    u: NDArray[np.float64] | None = None
-    state: SolidState | None = None
-    force: NDArray[np.float64] | None = None
-    residuals: list[float] = field(default_factory=list)
-    relative: list[tuple[float, float]] = field(default_factory=list)
-    in_contact: NDArray[np.int32] | None = None
-    gap: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
+    residual: NDArray[np.float64]
+    rows: NDArray[np.int32]
+    cols: NDArray[np.int32]
+    values: NDArray[np.float64]
+    state: NDArray[np.int32]
+    nodes: NDArray[np.int64]
+    n_free: int
+
+    def matrix(self) -> NDArray[np.float64]:
+        """The Jacobian as a dense array (small problems: tests and inspection)."""
+        n = self.residual.size
+        dense = np.zeros((n, n))
+        np.add.at(dense, (self.rows, self.cols), self.values)
+        return dense
 
 
 @dataclass
@@ -144,47 +142,6 @@ class FormingError(RuntimeError):
     def __init__(self, message: str, result: FormingResult) -> None:
         super().__init__(message)
         self.result = result
-
-
-@dataclass
-class RigidTool:
-    """A rigid tool: its surface, the blank nodes that may touch it (``slaves``), Coulomb
-    friction, and optionally the outward normal of the blank face that meets it
-    (``facing``: only patches facing the opposite way are contact candidates) and the
-    augmentation parameter r of the contact law (default: ``default_augmentation``)."""
-
-    name: str
-    surface: BezierSurface | NagataSurface
-    slaves: ArrayLike
-    friction: float = 0.0
-    facing: ArrayLike | None = None
-    augmentation: float | None = None
-    search: ContactSearch = field(init=False, repr=False)
-
-    def __post_init__(self) -> None:
-        if not self.name or not isinstance(self.name, str):
-            raise ValueError("a tool needs a name")
-        self.slaves = int_array(np.atleast_1d(self.slaves), f"slaves of tool {self.name}",
-                                (None,))
-        if self.slaves.size == 0:
-            raise ValueError(f"tool {self.name} has no slave nodes: nothing can touch it")
-        if np.unique(self.slaves).size != self.slaves.size:
-            raise ValueError(f"tool {self.name}: slave nodes are repeated")
-        if not (np.isfinite(self.friction) and self.friction >= 0.0):
-            raise ValueError(f"tool {self.name}: friction must be >= 0, got {self.friction}")
-        if self.augmentation is not None and not self.augmentation > 0.0:
-            raise ValueError(f"tool {self.name}: augmentation must be > 0, got "
-                             f"{self.augmentation}")
-        if self.facing is not None:
-            facing = float_array(self.facing, f"facing of tool {self.name}", (3,))
-            if np.linalg.norm(facing) == 0.0:
-                raise ValueError(f"tool {self.name}: facing must not be zero")
-            self.facing = facing / np.linalg.norm(facing)
-        self.search = ContactSearch(self.surface)
-        if self.facing is not None and not (self.search.grid_normals @ self.facing < 0.0).any():
-            raise ValueError(f"tool {self.name}: no patch faces its slave nodes (every normal "
-                             f"points along facing {self.facing.tolist()}, away from the "
-                             "blank): nothing can touch it; check the normals or facing")
 
 
 @dataclass
@@ -234,87 +191,6 @@ class FormingResult:
         return [len(r) - 1 for r in self.residuals]
 
 
-class _Layout:
-    """Unknowns and the fixed coordinate structure of the Jacobian for one constraint set:
-    free displacement dofs first, then 3 force components per (tool, slave) pair."""
-
-    def __init__(self, solid: Solid, tools: list[RigidTool], fixed: NDArray[np.bool_]) -> None:
-        n = solid.mesh.n_nodes
-        free = ~fixed.ravel()
-        self.nf = int(free.sum())
-        eqn = np.full(3 * n, -1, dtype=np.int32)
-        eqn[free] = np.arange(self.nf, dtype=np.int32)
-        self.eqn = eqn
-        self.pattern = solid.pattern(eqn, symmetric=False)
-        #: each pair's node and tool, each tool's first pair (int32: as the core takes them)
-        self.node = np.concatenate([t.slaves for t in tools]).astype(np.int32)
-        self.tool_of = np.concatenate([np.full(t.slaves.size, i) for i, t in enumerate(tools)])
-        self.first = np.concatenate([[0], np.cumsum([t.slaves.size for t in tools])]
-                                    ).astype(np.int32)
-        npair = self.node.size
-        self.n = self.nf + 3 * npair
-        lam = self.nf + 3 * np.arange(npair)[:, None] + np.arange(3)  # (npair, 3)
-        equ = eqn.reshape(n, 3)[self.node]                              # (npair, 3)
-        # Components of a slave whose displacement is fixed: its force there is a support
-        # reaction, so that row of the law becomes lambda_k = 0.
-        self.held_flags = (equ < 0).astype(np.int32).ravel()
-        self.fixed_flags = fixed.astype(np.int32).ravel()
-        # The structure of the contact blocks, in the order the core writes their values:
-        # the coupling entries (-1), dC/dx at the free dofs of each pair's node (pair,
-        # row, column), dC/dlambda (pair, row, column).
-        coupling = equ >= 0
-        pi, ii, jj = np.nonzero(np.broadcast_to(coupling[:, None, :], (npair, 3, 3)))
-        rows = [self.pattern.rows, equ[coupling], lam[pi, ii], np.repeat(lam, 3, axis=1).ravel()]
-        cols = [self.pattern.cols, lam[coupling], equ[pi, jj], np.tile(lam, (1, 3)).ravel()]
-        self.rows = np.concatenate(rows).astype(np.int32)
-        self.cols = np.concatenate(cols).astype(np.int32)
-        self.k_slots = self.pattern.rows.size
-        self.n_coupling = int(coupling.sum())
-
-
-class _ToolPack:
-    """Every tool's surface and search structures packed one after another in flat arrays,
-    with a table of their offsets, and the blank faces that face each tool: what the core's
-    forming_contact reads (fortran/mechanics/ddpy_forming.f90). Made once."""
-
-    def __init__(self, tools: list[RigidTool], mesh: HexMesh) -> None:
-        searches = [t.search for t in tools]
-        table = np.zeros((len(tools), 10), dtype=np.int32)
-        offsets = np.zeros(4, dtype=np.int64)  # coef, patch, tree, grid
-        for i, (tool, s) in enumerate(zip(tools, searches, strict=True)):
-            n = s.surface.n_patches
-            table[i] = (s.kind, s.stride, n, s.mode, s.max_iterations, *offsets,
-                        tool.facing is not None)
-            offsets += (s.surface.coefficients.size, n, 2 * n - 1, s.grid_params.shape[0])
-        self.table = table.ravel()
-        self.tol = np.array([s.tol for s in searches])
-        cat = np.concatenate
-        #: every tool's search arrays, one after another, in the core's argument order
-        self.arrays = SearchArrays(*(cat([getattr(s.arrays, name) for s in searches])
-                                     for name in SearchArrays._fields))
-        self.facing = cat([np.zeros(3) if t.facing is None else t.facing for t in tools])
-        # Per tool with a facing direction, the blank's boundary faces that face it (normal
-        # within 60 degrees) and the slave index of their corners (-1: not a slave): the
-        # search keeps only patches opposing the blank's normal at each slave.
-        faces, corners = [], []
-        boundary = boundary_faces(mesh.elements)
-        area = face_area_vectors(mesh.nodes, boundary)
-        for tool in tools:
-            if tool.facing is None:
-                faces.append(np.zeros((0, 4), dtype=np.int32))
-                corners.append(np.zeros((0, 4), dtype=np.int32))
-                continue
-            chosen = boundary[area @ tool.facing > 0.5 * np.linalg.norm(area, axis=1)]
-            where = np.full(mesh.n_nodes, -1, dtype=np.int32)
-            where[tool.slaves] = np.arange(tool.slaves.size)
-            faces.append(chosen.astype(np.int32))
-            corners.append(where[chosen])
-        self.face_first = np.concatenate([[0], np.cumsum([f.shape[0] for f in faces])]
-                                         ).astype(np.int32)
-        self.faces = cat(faces).ravel().astype(np.int32)
-        self.corner = cat(corners).ravel().astype(np.int32)
-
-
 class FormingProblem:
     """The blank (a Solid) and its rigid tools. ``fix`` holds displacement components of
     nodes at zero (symmetry planes, clamps); ``run`` moves tools through a phase, and
@@ -345,7 +221,7 @@ class FormingProblem:
         default_r = default_augmentation(solid)
         self.r = np.concatenate([np.full(t.slaves.size, t.augmentation or default_r)
                                  for t in self.tools])
-        self._pack = _ToolPack(self.tools, mesh)
+        self._pack = ToolPack(self.tools, mesh)
         self.mu = np.concatenate([np.full(t.slaves.size, t.friction) for t in self.tools])
         # State carried between increments and phases.
         self.u = np.zeros((n, 3))
@@ -358,10 +234,9 @@ class FormingProblem:
         self._reach = REACH_SIZES * self.size
         self._status = np.zeros(npair, dtype=np.int32)  # of the law, last increment
         self.external = np.zeros((n, 3))
-        self._layout: _Layout | None = None
+        self._layout: Layout | None = None
         self._solver: MumpsSolver | None = None
-        self._factored = False  # the solver holds factors of a Jacobian of this layout
-        self._reuse_next = True  # the last GMRES converged fast: try the factors again
+        self._factors = Factors(0)
 
     # -- set-up ------------------------------------------------------------------------
 
@@ -384,11 +259,11 @@ class FormingProblem:
     def _reset(self) -> None:
         if self._solver is not None:
             self._solver.close()
-        self._solver, self._layout, self._factored = None, None, False
+        self._solver, self._layout = None, None
 
-    def _prepare(self) -> tuple[_Layout, MumpsSolver]:
+    def _prepare(self) -> Layout:
         if self._layout is None or self._solver is None:
-            layout = _Layout(self.solid, self.tools, self.fixed)
+            layout = Layout(self.solid, self.tools, self.fixed)
             # The contact multipliers first: each couples to its own node only, and
             # eliminated with it they would widen every separator's front (the paper's
             # bending mesh: 5.8e10 flops per factorization with them, 4.4e10 first). A
@@ -400,7 +275,8 @@ class FormingProblem:
                                  first=np.arange(layout.n) >= layout.nf)
             solver.analyse(layout.n, layout.rows, layout.cols)
             self._layout, self._solver = layout, solver
-        return self._layout, self._solver
+            self._factors = Factors(solver.handle)
+        return self._layout
 
     # -- the run -----------------------------------------------------------------------
 
@@ -458,7 +334,7 @@ class FormingProblem:
             result.tool_forces.setdefault(t.name, [])
             result.contacts.setdefault(t.name, [])
             result.status.setdefault(t.name, [])
-        layout, solver = self._prepare()
+        layout = self._prepare()
         on = np.concatenate([np.full(t.slaves.size, t.name in active_set) for t in self.tools])
         start = {name: p.copy() for name, p in self.position.items()}
         nominal = min(1.0, max_increment / travel) if travel > 0.0 else 1.0
@@ -511,7 +387,7 @@ class FormingProblem:
             # Start from the last increment's displacement rate (docs/theory/contact.md).
             guess = None if last_du is None else self.u + (target - factor) * last_du
             touching = _Touching(TOUCHING * self.size)
-            outcome = self._increment(layout, solver, positions, on, tol_force, tol_disp,
+            outcome = self._increment(layout, positions, on, tol_force, tol_disp,
                                       max_iterations, result, landing, touching, guess)
             if outcome.failure and last_du is None:
                 # The first increment of a phase starts with the blank lying on its tools:
@@ -521,7 +397,7 @@ class FormingProblem:
                           "resting tools' touching pairs open: %s", target, step,
                           outcome.failure)
                 touching = _Touching(TOUCHING * self.size, resting=False)
-                outcome = self._increment(layout, solver, positions, on, tol_force,
+                outcome = self._increment(layout, positions, on, tol_force,
                                           tol_disp, max_iterations, result, landing,
                                           touching, guess)
             if outcome.landing < 1.0:  # an elastic point would overshoot the yield stress
@@ -697,7 +573,7 @@ class FormingProblem:
         if self.free_rigid_modes():
             self.support_rigid_modes()
         result = FormingResult() if result is None else result
-        layout, solver = self._prepare()
+        layout = self._prepare()
         # The blank is in equilibrium under the tools and the supports it had: its internal
         # forces are those loads. Every one on a dof that is free now (contact forces, and
         # reactions of released clamps) is brought to zero.
@@ -708,7 +584,7 @@ class FormingProblem:
         try:
             for k in range(1, int(increments) + 1):
                 self.external = loads * (1.0 - k / increments)
-                outcome = self._increment(layout, solver, self.position, off,
+                outcome = self._increment(layout, self.position, off,
                                           newton.force_tolerance,
                                           newton.displacement_tolerance,
                                           newton.max_iterations, result)
@@ -726,7 +602,7 @@ class FormingProblem:
             self.external = np.zeros_like(self.u)
         return result
 
-    def _touch_factor(self, layout: _Layout, on: NDArray[np.bool_],
+    def _touch_factor(self, layout: Layout, on: NDArray[np.bool_],
                       moves: Mapping[str, NDArray[np.float64]], step: float,
                       last_du: NDArray[np.float64] | None, limits: IncrementLimits) -> float:
         """Fraction of the next increment at which the first free node reaches a tool: its
@@ -745,7 +621,7 @@ class FormingProblem:
         # Land just past the surface, so that the node is caught in contact.
         return float(np.min(gap[hits] / approach[hits])) * (1.0 + 1e-3)
 
-    def _minor(self, layout: _Layout, share: float) -> NDArray[np.bool_]:
+    def _minor(self, layout: Layout, share: float) -> NDArray[np.bool_]:
         """Pairs whose normal force at the start of the increment is at most ``share`` of
         their tool's: released inside an increment, they change the tool's force by less
         than that (IncrementLimits.release_share)."""
@@ -809,7 +685,7 @@ class FormingProblem:
         the closest points (pairs, 3). The same core call as an evaluation of a run."""
         # The layout of the run if there is one; else one made for this look only (no MUMPS
         # analysis: nothing is solved).
-        layout = self._layout or _Layout(self.solid, self.tools, self.fixed)
+        layout = self._layout or Layout(self.solid, self.tools, self.fixed)
         n = self.solid.mesh.n_nodes
         u = self.u if u is None else float_array(u, "u", (n, 3))
         where = dict(self.position)
@@ -829,12 +705,9 @@ class FormingProblem:
         argument list for both: the table and search arrays of every tool, their facing
         directions and faces, where they are and where they were at the last converged
         increment, the search's reach and the element size."""
-        pack, names = self._pack, [t.name for t in self.tools]
-        return (pack.table, pack.tol, *pack.arrays, pack.facing, pack.face_first,
-                pack.faces, pack.corner, np.concatenate([positions[n] for n in names]),
-                np.concatenate([self.position[n] for n in names]), self._reach, self.size)
+        return self._pack.arguments(positions, self.position, self._reach, self.size)
 
-    def _contact(self, layout: _Layout, x: NDArray[np.float64], x_n: NDArray[np.float64],
+    def _contact(self, layout: Layout, x: NDArray[np.float64], x_n: NDArray[np.float64],
                  positions: Mapping[str, NDArray[np.float64]], on: NDArray[np.bool_],
                  force: NDArray[np.float64], residual: NDArray[np.float64],
                  values: NDArray[np.float64], touching: _Touching | None = None
@@ -857,37 +730,45 @@ class FormingProblem:
                                "fit each other (a bug in the caller)")
         return state, (gap, normal.reshape(-1, 3))
 
-    def _evaluate(self, layout: _Layout, u: NDArray[np.float64], force: NDArray[np.float64],
-                  x_n: NDArray[np.float64], positions: Mapping[str, NDArray[np.float64]],
-                  on: NDArray[np.bool_], timings: dict[str, float],
-                  touching: _Touching | None = None):
-        """Residual (free equilibrium rows, then the contact law) at (u, force), with the
-        Jacobian values in the layout's structure and the contact states; or a failure.
-        The same two core calls as an evaluation of the core's Newton loop, for a look at
-        one Jacobian (orderings) from Python."""
-        tick = time.perf_counter()
+    def linearization(self, u: ArrayLike | None = None, force: ArrayLike | None = None,
+                      positions: Mapping[str, ArrayLike] | None = None,
+                      touching: float = 0.0) -> Linearization:
+        """The equations the Newton loop solves, at displacements ``u`` (n, 3) and pair
+        forces ``force`` (pairs, 3) (default: the present ones) with the tools at
+        ``positions`` (default: where they are), in the increment from the present
+        converged state: the residual and its Jacobian (the same core calls as an
+        evaluation of the loop; every pair takes part). With ``touching`` > 0 the pairs
+        within that gap count as closed, as in an increment's first iteration. Raises
+        ElementError where an element is inverted."""
+        layout = self._layout or Layout(self.solid, self.tools, self.fixed)
+        n, npair = self.solid.mesh.n_nodes, layout.node.size
+        u = self.u if u is None else float_array(u, "u", (n, 3))
+        force = self.force if force is None else float_array(force, "force", (npair, 3))
+        where = dict(self.position)
+        for name, value in (positions or {}).items():
+            if name not in where:
+                raise ValueError(f"positions names an unknown tool: {name}")
+            where[name] = float_array(value, f"position of {name}", (3,))
         values = np.empty(layout.rows.size)
         values[layout.k_slots:layout.k_slots + layout.n_coupling] = -1.0
-        try:
-            out = self.solid.assemble(u, self.state, layout.pattern,
-                                      values=values[:layout.k_slots])
-        except ElementError as error:
-            return str(error)
-        tock = time.perf_counter()
-        timings["assembly"] += tock - tick
+        out = self.solid.assemble(u, self.state, layout.pattern, values=values[:layout.k_slots])
         residual = np.empty(layout.n)
         residual[:layout.nf] = (out.fint - self.external).ravel()[~self.fixed.ravel()]
-        state, gap = self._contact(layout, self.solid.mesh.nodes + u, x_n, positions, on,
-                                   force, residual, values, touching)
-        timings["contact"] += time.perf_counter() - tock
-        return residual, values, state, out, gap
+        on = np.ones(npair, dtype=bool)
+        state, _ = self._contact(layout, self.solid.mesh.nodes + u,
+                                 self.solid.mesh.nodes + self.u, where, on, force, residual,
+                                 values, _Touching(touching) if touching > 0.0 else None)
+        nodes = np.concatenate([np.flatnonzero(~self.fixed.ravel()) // 3,
+                                np.repeat(layout.node, 3)])
+        return Linearization(residual, layout.rows, layout.cols, values, state, nodes,
+                             layout.nf)
 
-    def _increment(self, layout: _Layout, solver: MumpsSolver,
+    def _increment(self, layout: Layout,
                    positions: Mapping[str, NDArray[np.float64]], on: NDArray[np.bool_],
                    tol_force: float, tol_disp: float, max_iterations: int,
                    result: FormingResult, yield_tolerance: float | None = None,
                    touching: _Touching | None = None,
-                   guess: NDArray[np.float64] | None = None) -> _Trial:
+                   guess: NDArray[np.float64] | None = None) -> Trial:
         """One increment trial, the Newton iterations run by the core (forming_increment,
         fortran/solver/ddpy_forming_newton.f90): the new state, or (with
         ``yield_tolerance``) the fraction of the increment at which the first elastic Gauss
@@ -905,72 +786,30 @@ class FormingProblem:
         would otherwise make it cycle. The norm alone is the wrong measure for a thin sheet
         that bends: a step that bends it right leaves a large membrane residual of second
         order (docs/theory/contact.md)."""
-        solid, state = self.solid, self.state
         reuse = self.linear_solver == "reuse" or (
             self.linear_solver == "auto" and layout.n >= REUSE_FROM)
-        settings = np.array([tol_force, tol_disp,
-                             -1.0 if yield_tolerance is None else yield_tolerance,
-                             PENETRATION, MIN_STEP, KRYLOV_LOOSE, KRYLOV_TIGHT,
-                             1e-8 * solid.props[0] * self.size**2])
-        isettings = np.array([max_iterations, KRYLOV_MAX, KRYLOV_KEEP, reuse, solver.handle,
-                              guess is not None,
-                              1 if touching is None or touching.resting else 0],
-                             dtype=np.int32)
-        factored = np.array([self._factored], dtype=np.int32)
-        reuse_next = np.array([self._reuse_next], dtype=np.int32)
-        out = solid.state_buffer()
-        (factored, reuse_next, u, force, stress, ep, strain, axes, pair_state, gap, normal,
-         niter, history, counters, spent, outcome, info, detail) = _core.forming_increment(
-            solid._x, solid._conn, solid.props, _flat(state.displacement),
-            _flat(state.axes.transpose(0, 1, 3, 2)), _flat(state.stress), _flat(state.ep),
-            _flat(state.strain), layout.eqn, layout.pattern.offsets, layout.fixed_flags,
-            layout.nf, layout.k_slots, layout.n_coupling, layout.rows, layout.cols,
-            *self._tool_arguments(positions), 0.0 if touching is None else touching.distance,
-            layout.first, layout.node, on.astype(np.int32), self.r, self.mu,
-            layout.held_flags,
-            self.u.ravel(), np.where(on[:, None], self.force, 0.0).ravel(),
-            self.external.ravel(), (self.u if guess is None else guess).ravel(), settings,
-            isettings, factored, reuse_next, out.stress.ravel(), out.ep.ravel(),
-            out.strain.ravel(), out.axes.transpose(0, 1, 3, 2).ravel(), max_iterations + 1)
-        self._factored, self._reuse_next = bool(factored[0]), bool(reuse_next[0])
-        result.evaluations += int(counters[0])
-        result.newton_iterations += int(counters[1])
-        result.factorizations += int(counters[2])
-        result.krylov_iterations += int(counters[3])
-        result.fallbacks += int(counters[4])
-        for key, seconds in zip(("assembly", "contact", "factorization", "solve"), spent,
-                                strict=True):
-            result.timings[key] += float(seconds)
-        history = history.reshape(-1, 4)[:niter]
+        loop = Loop(tol_force, tol_disp, max_iterations,
+                    1e-8 * self.solid.props[0] * self.size**2, yield_tolerance,
+                    PENETRATION, MIN_STEP, reuse, KRYLOV_LOOSE, KRYLOV_TIGHT, KRYLOV_MAX,
+                    KRYLOV_KEEP, touching=0.0 if touching is None else touching.distance,
+                    resting=touching is None or touching.resting)
+        pairs = Pairs(self._tool_arguments(positions), on, self.r, self.mu, self.force)
+        trial = increment(self.solid, layout, self._factors, self.state, self.u,
+                          self.external, self.u, guess, loop, pairs)
+        evaluations, corrections, factorizations, krylov, fallbacks = trial.counters
+        result.evaluations += evaluations
+        result.newton_iterations += corrections
+        result.factorizations += factorizations
+        result.krylov_iterations += krylov
+        result.fallbacks += fallbacks
+        for key, seconds in trial.timings.items():
+            result.timings[key] += seconds
         if _log.isEnabledFor(logging.DEBUG):
-            for k, (_, rel, moved, alpha) in enumerate(history):
+            for k, (rel, moved) in enumerate(trial.relative):
                 _log.debug("iteration %d: residual %.3e of the force scale, correction %.3e "
                            "of the motion%s", k, rel, moved,
-                           f", step length {alpha:.4g}" if k else "")
-        if outcome == _CONVERGED:
-            m = solid.mesh.n_elements
-            trial = SolidState(stress.reshape(m, 8, 6), ep.reshape(m, 8),
-                               strain.reshape(m, 8, 6),
-                               axes.reshape(m, 8, 3, 3).transpose(0, 1, 3, 2),
-                               u.reshape(-1, 3))
-            return _Trial(u=u.reshape(-1, 3), state=trial, force=force.reshape(-1, 3),
-                          residuals=history[:, 0].tolist(),
-                          relative=[(float(a), float(b)) for a, b in history[:, 1:3]],
-                          in_contact=pair_state, gap=(gap, normal.reshape(-1, 3)))
-        if outcome == _LANDING:
-            return _Trial(landing=float(detail[0]))
-        if outcome == _ELEMENT:
-            return _Trial(str(ElementError(int(info[0]), int(info[1]) - 1)))
-        if outcome == _NOT_FINITE:
-            return _Trial("the residual is not finite")
-        if outcome == _SOLVER:
-            self._factored = False
-            return _Trial(str(LinearSolverError(int(info[2]), "factorization or solve")))
-        if outcome == _STALLED:
-            return _Trial(_stalled(max_iterations, float(detail[0]), float(detail[1]),
-                                   tol_force, tol_disp, int(info[3])))
-        raise RuntimeError(f"forming_increment refused its input (outcome {outcome}): the "
-                           "layout, the tools' packed arrays or the history do not fit")
+                           f", step length {trial.steps[k - 1]:.4g}" if k else "")
+        return trial
 
     def close(self) -> None:
         """Free the MUMPS instance."""
@@ -997,18 +836,6 @@ def blank_stiffness(nodes: ArrayLike, elements: ArrayLike, young: float) -> floa
     lengths.sort(axis=1)
     ratio = lengths[:, 0] ** 2 / np.sqrt(lengths[:, 1] * lengths[:, 2])
     return float(young * np.median(ratio))
-
-
-def _stalled(iterations: int, residual: float, correction: float, tol_force: float,
-             tol_disp: float, flipped: int) -> str:
-    """Why an increment did not converge: its last residual and correction against their
-    tolerances, and how many contact pairs changed state in its last iteration."""
-    text = (f"no convergence in {iterations} iterations: residual {residual:.2e} of the force "
-            f"scale (tolerance {tol_force:.0e}), correction {correction:.2e} of the motion "
-            f"(tolerance {tol_disp:.0e})")
-    if flipped > 0:
-        text += f"; {flipped} contact pair(s) still changed state in the last iteration"
-    return text
 
 
 def _equivalent_strain_increment(delta: NDArray[np.float64]) -> float:

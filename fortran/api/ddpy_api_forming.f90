@@ -9,7 +9,8 @@ module ddpy_api_forming
   use ddpy_material, only: material_prop_count
   implicit none
   private
-  public :: api_forming_contact, api_forming_increment, api_penetration_step, api_krylov_solve
+  public :: api_forming_contact, api_forming_increment, api_static_increment, &
+            api_penetration_step, api_krylov_solve
 
 contains
 
@@ -107,10 +108,10 @@ contains
                                    grid_normals, grid_points, facing, face_first, nface, &
                                    faces, corner, positions, positions_n, reach, size, &
                                    touching, npair, tool_first, pair_node, on, r, mu, held, &
-                                   u_n, force_n, external, guess, settings, isettings, &
-                                   factored, reuse_next, u, force, stress, ep, strain, axes, &
-                                   state, gap, normal, nhistory, niter, history, counters, &
-                                   timings, outcome, info, detail) &
+                                   u_n, force_n, external, prescribed, guess, settings, &
+                                   isettings, factored, reuse_next, u, force, fint, stress, &
+                                   ep, strain, axes, state, gap, normal, nhistory, niter, &
+                                   history, counters, timings, outcome, info, detail) &
     bind(C, name="ddpy_forming_increment")
     integer(c_int), value, intent(in) :: nnode, ne, nf, k_slots, n_coupling, nvalues, ntool, &
                                          ncoef, ndeg, ntri, ntree, nframe, nstart, ngrid, &
@@ -133,10 +134,11 @@ contains
                                   grid_points(3*ngrid), facing(3, ntool), &
                                   positions(3, ntool), positions_n(3, ntool), r(npair), &
                                   mu(npair), u_n(3, nnode), force_n(3, npair), &
-                                  external(3, nnode), guess(3, nnode), &
-                                  settings(newton_settings)
+                                  external(3, nnode), prescribed(3, nnode), &
+                                  guess(3, nnode), settings(newton_settings)
     integer(c_int), intent(inout) :: factored, reuse_next
-    real(c_double), intent(out) :: u(3, nnode), force(3, npair), stress(6, 8, ne), ep(8, ne), &
+    real(c_double), intent(out) :: u(3, nnode), force(3, npair), fint(3, nnode), &
+                                   stress(6, 8, ne), ep(8, ne), &
                                    strain(6, 8, ne), axes(3, 3, 8, ne), gap(npair), &
                                    normal(3, npair), history(4, nhistory), timings(4), &
                                    detail(2)
@@ -156,11 +158,57 @@ contains
                            frame_upper, grid_start, grid_params, grid_normals, grid_points, &
                            facing, face_first, nface, faces, corner, positions, positions_n, &
                            reach, size, touching, npair, tool_first, pair_node, on, r, mu, &
-                           held, u_n, force_n, external, guess, settings, isettings, &
-                           factored, reuse_next, u, force, stress, ep, strain, axes, state, &
-                           gap, normal, niter, history, counters, timings, outcome, info, &
-                           detail)
+                           held, u_n, force_n, external, prescribed, guess, settings, &
+                           isettings, factored, reuse_next, u, force, fint, stress, ep, &
+                           strain, axes, state, gap, normal, niter, history, counters, &
+                           timings, outcome, info, detail)
   end subroutine api_forming_increment
+
+  !> Newton iterations of one increment of a solid without tools (the static problem): see
+  !> forming_increment, called with no tools and no pairs, whose empty arrays f2py cannot
+  !> pass (it takes a zero length for one). Connectivity arrives 0-based.
+  subroutine api_static_increment(nnode, x0, ne, conn, props, u_ref, axes_old, stress_old, &
+                                  ep_old, strain_old, eqn, offsets, fixed, nf, k_slots, &
+                                  nvalues, rows, cols, size, u_n, external, prescribed, guess, &
+                                  settings, isettings, factored, u, fint, stress, ep, strain, &
+                                  axes, nhistory, niter, history, counters, timings, outcome, &
+                                  info, detail) bind(C, name="ddpy_static_increment")
+    integer(c_int), value, intent(in) :: nnode, ne, nf, k_slots, nvalues, nhistory
+    real(c_double), value, intent(in) :: size
+    integer(c_int), intent(in) :: conn(8, ne), eqn(3, nnode), offsets(ne + 1), &
+                                  fixed(3, nnode), rows(nvalues), cols(nvalues), &
+                                  isettings(newton_integer_settings)
+    real(c_double), intent(in) :: x0(3, nnode), props(material_prop_count), &
+                                  u_ref(3, nnode), axes_old(3, 3, 8, ne), &
+                                  stress_old(6, 8, ne), ep_old(8, ne), strain_old(6, 8, ne), &
+                                  u_n(3, nnode), external(3, nnode), prescribed(3, nnode), &
+                                  guess(3, nnode), settings(newton_settings)
+    integer(c_int), intent(inout) :: factored
+    real(c_double), intent(out) :: u(3, nnode), fint(3, nnode), stress(6, 8, ne), ep(8, ne), &
+                                   strain(6, 8, ne), axes(3, 3, 8, ne), history(4, nhistory), &
+                                   timings(4), detail(2)
+    integer(c_int), intent(out) :: niter, counters(5), outcome, info(4)
+    integer :: table(tool_fields, 0), ints(0), faces(4, 0), first(1), pairs(0), held(3, 0), &
+               state(0), reuse_next
+    real(wp) :: reals(0), tools(3, 0), forces(3, 0), force(3, 0), normal(3, 0), gap(0)
+    history = 0.0_wp
+    outcome = -1
+    if (nhistory < isettings(1) + 1 .or. offsets(ne + 1) /= k_slots .or. nvalues /= k_slots) &
+      return
+    if (any(conn < 0) .or. any(conn >= nnode) .or. any(rows < 0) .or. any(cols < 0) .or. &
+        any(rows >= nf) .or. any(cols >= nf)) return
+    first = 0
+    reuse_next = 0
+    call forming_increment(nnode, x0, ne, conn + 1, props, u_ref, axes_old, stress_old, &
+                           ep_old, strain_old, eqn, offsets, fixed, nf, k_slots, 0, nvalues, &
+                           rows, cols, 0, table, reals, reals, ints, ints, reals, reals, ints, &
+                           reals, reals, reals, ints, reals, reals, reals, tools, first, 0, &
+                           faces, faces, tools, tools, 0.0_wp, size, 0.0_wp, 0, first, pairs, &
+                           pairs, reals, reals, held, u_n, forces, external, prescribed, &
+                           guess, settings, isettings, factored, reuse_next, u, force, fint, &
+                           stress, ep, strain, axes, state, gap, normal, niter, history, &
+                           counters, timings, outcome, info, detail)
+  end subroutine api_static_increment
 
   !> The step length the Newton loop's penetration limit allows (see penetration_step).
   subroutine api_penetration_step(nnode, npair, du, pair_node, on, state, gap, normal, &
@@ -178,11 +226,12 @@ contains
   end subroutine api_penetration_step
 
   !> GMRES of the Newton loop on W M^-1 J W^-1 (J the coordinate matrix rows, cols, values,
-  !> 0-based; M the factors held by the MUMPS instance handle): see gmres. converged is 1 or
-  !> 0; status < 0 a MUMPS solve failed, 1 an index out of range.
-  subroutine api_krylov_solve(n, nvalues, rows, cols, values, weight, handle, b, tol, m, z, &
-                              k, converged, status) bind(C, name="ddpy_krylov_solve")
-    integer(c_int), value, intent(in) :: n, nvalues, handle, m
+  !> 0-based, its lower triangle when symmetric is 1; M the factors held by the MUMPS
+  !> instance handle): see gmres. converged is 1 or 0; status < 0 a MUMPS solve failed, 1
+  !> an index out of range.
+  subroutine api_krylov_solve(n, nvalues, rows, cols, values, symmetric, weight, handle, b, &
+                              tol, m, z, k, converged, status) bind(C, name="ddpy_krylov_solve")
+    integer(c_int), value, intent(in) :: n, nvalues, symmetric, handle, m
     real(c_double), value, intent(in) :: tol
     integer(c_int), intent(in) :: rows(nvalues), cols(nvalues)
     real(c_double), intent(in) :: values(nvalues), weight(n), b(n)
@@ -195,7 +244,8 @@ contains
     status = 1
     if (any(rows < 0) .or. any(rows >= n) .or. any(cols < 0) .or. any(cols >= n) .or. &
         m < 1 .or. any(weight <= 0.0_wp)) return
-    call gmres(n, nvalues, rows, cols, values, weight, handle, b, tol, m, z, k, done, status)
+    call gmres(n, nvalues, rows, cols, values, symmetric /= 0, weight, handle, b, tol, m, z, &
+               k, done, status)
     converged = merge(1, 0, done)
   end subroutine api_krylov_solve
 

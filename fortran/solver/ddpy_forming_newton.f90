@@ -1,6 +1,6 @@
-!> The Newton loop of one increment of a forming problem: the blank's displacements and the
-!> contact forces of every (tool, slave) pair solved together, DD3IMP's single loop
-!> (docs/theory/contact.md). Each evaluation assembles the blank (ddpy_solid_assembly) and
+!> The Newton loop of one increment: the blank's displacements and the contact forces of
+!> every (tool, slave) pair solved together, DD3IMP's single loop (docs/theory/contact.md);
+!> with no tools, the static problem of a solid under prescribed displacements and loads. Each evaluation assembles the blank (ddpy_solid_assembly) and
 !> the contact of every tool (ddpy_forming); each correction is solved with MUMPS, or by
 !> GMRES on older factors while they serve; the step is limited where free nodes would
 !> enter a tool and globalized by Deuflhard's natural monotonicity test.
@@ -28,8 +28,15 @@ module ddpy_forming_newton
   integer, parameter :: newton_settings = 8
   !> Entries of the integer settings: iterations, GMRES iterations at most, GMRES
   !> iterations after which the next correction factorizes, reuse of older factors (0/1),
-  !> the MUMPS handle, a guess given (0/1), the touching predictor's resting flag.
-  integer, parameter :: newton_integer_settings = 7
+  !> the MUMPS handle, a guess given (0/1), the touching predictor's resting flag, the
+  !> Jacobian stored as its lower triangle (0/1: a symmetric MUMPS instance), the line
+  !> search (search_*).
+  integer, parameter :: newton_integer_settings = 9
+  !> Line searches: none (every step whole, halved only where an element fails);
+  !> Deuflhard's natural monotonicity test with the residual-norm fallback (the forming
+  !> problem's: the contact law has no potential); the energy line search, a secant on
+  !> s(alpha) = du . r(u + alpha du) (a problem with a potential and a symmetric tangent).
+  integer, parameter, public :: search_none = 0, search_monotonicity = 1, search_energy = 2
   !> What forming_increment returns.
   integer, parameter :: outcome_converged = 0, outcome_landing = 1, outcome_element = 2, &
                         outcome_not_finite = 3, outcome_solver = 4, outcome_stalled = 5
@@ -37,9 +44,14 @@ module ddpy_forming_newton
 contains
 
   !> Newton iterations of one increment from the converged state (u_n, force_n, the solid
-  !> state *_old) to the tools at positions. See the arguments of forming_contact for the
-  !> tools and pairs. Returns outcome with, as it says: u, force, the solid state, the
-  !> contact states (inactive where off), gaps and normals when converged; the landing
+  !> state *_old) to the tools at positions and the fixed dofs at prescribed (forming holds
+  !> them at u_n). A prescribed motion not yet reached enters each evaluation through the
+  !> tangent, K_fp dp added to the free rows, and each step takes it whole (scaled by the
+  !> step length like the rest): the linearized predictor, not a jump of the boundary
+  !> nodes, which would invert the elements next to them. See the arguments of
+  !> forming_contact for the tools and pairs. Returns outcome with, as it says: u, force,
+  !> the solid state, the internal forces fint, the contact states (inactive where off),
+  !> gaps and normals when converged; the landing
   !> fraction in detail(1); the element status and element in info(1:2); the MUMPS code in
   !> info(3); the last relative residual and correction in detail(1:2) and the pairs that
   !> changed state in the last iteration in info(4) when stalled. history(1:4, 1:niter):
@@ -57,9 +69,9 @@ contains
                                grid_normals, grid_points, facing, face_first, nface, faces, &
                                corner, positions, positions_n, reach, size, touching, npair, &
                                tool_first, pair_node, on, r, mu, held, u_n, force_n, external, &
-                               guess, settings, isettings, factored, reuse_next, u, force, &
-                               stress, ep, strain, axes, state, gap, normal, niter, history, &
-                               counters, timings, outcome, info, detail)
+                               prescribed, guess, settings, isettings, factored, reuse_next, &
+                               u, force, fint, stress, ep, strain, axes, state, gap, normal, &
+                               niter, history, counters, timings, outcome, info, detail)
     integer, intent(in) :: nnode, ne, nf, k_slots, n_coupling, nvalues, ntool, nface, npair
     integer, intent(in) :: conn(8, ne), eqn(3, nnode), offsets(ne + 1), fixed(3, nnode), &
                            rows(nvalues), cols(nvalues), table(tool_fields, ntool), &
@@ -74,10 +86,11 @@ contains
                             grid_params(*), grid_normals(*), grid_points(*), &
                             facing(3, ntool), positions(3, ntool), positions_n(3, ntool), &
                             reach, size, touching, r(npair), mu(npair), u_n(3, nnode), &
-                            force_n(3, npair), external(3, nnode), guess(3, nnode), &
-                            settings(newton_settings)
+                            force_n(3, npair), external(3, nnode), prescribed(3, nnode), &
+                            guess(3, nnode), settings(newton_settings)
     integer, intent(inout) :: factored, reuse_next
-    real(wp), intent(out) :: u(3, nnode), force(3, npair), stress(6, 8, ne), ep(8, ne), &
+    real(wp), intent(out) :: u(3, nnode), force(3, npair), fint(3, nnode), &
+                             stress(6, 8, ne), ep(8, ne), &
                              strain(6, 8, ne), axes(3, 3, 8, ne), gap(npair), &
                              normal(3, npair), history(4, *), timings(4), detail(2)
     integer, intent(out) :: state(npair), niter, counters(5), outcome, info(4)
@@ -88,6 +101,8 @@ contains
                                stress(:, :, :), ep(:, :), strain(:, :, :), axes(:, :, :, :), &
                                gap(:), normal(:, :), simplified(:)
       integer, allocatable :: state(:)
+      logical :: moving  ! some fixed dof short of its prescribed value
+      real(wp) :: rest   ! how far short: the norm over the fixed dofs
     end type evaluation
     type(evaluation) :: slot(2)
     real(wp), allocatable :: weight(:), delta(:), du(:, :), dforce(:, :), x_n(:, :), &
@@ -98,7 +113,8 @@ contains
                 alpha_fallback
     integer :: max_iterations, cur, trial, fallback, buffer, iteration, ls, n, status, &
                element, handle, last_status, last_element
-    logical :: converged, have_previous, have_hint, accepted, t_converged
+    logical :: converged, have_previous, have_hint, accepted, t_converged, symmetric, moving
+    integer :: search
     integer(int64) :: clock_rate
 
     call system_clock(count_rate=clock_rate)
@@ -108,6 +124,8 @@ contains
     floor = settings(8)
     max_iterations = isettings(1)
     handle = isettings(5)
+    symmetric = isettings(8) /= 0
+    search = isettings(9)
     n = nf + 3*npair
     counters = 0
     timings = 0.0_wp
@@ -190,6 +208,12 @@ contains
       end if
       du = 0.0_wp
       call scatter(delta(1:nf), du)
+      if (slot(cur)%moving) then
+        ! The prescribed rest is part of the step (its constraint rows are solved exactly),
+        ! and of the step's length that the line search compares against.
+        where (fixed /= 0) du = prescribed - slot(cur)%u
+        step_size = hypot(step_size, slot(cur)%rest)
+      end if
       dforce = reshape(delta(nf + 1:), [3, npair])
       du_norm = sqrt(dot_product(delta(1:nf), delta(1:nf)))
       ! The factors hold this iteration's Jacobian from here. The first trial stops short
@@ -199,18 +223,28 @@ contains
                                settings(5))
       previous = slot(cur)%state
       have_previous = .true.
+      moving = slot(cur)%moving
       u_cur = slot(cur)%u
       force_cur = slot(cur)%force
       fallback = 0
       buffer = 1
       accepted = .false.
       have_hint = .false.
+      if (search == search_energy) then
+        call energy_step(moving .or. iteration == 0, &
+                         dot_product(delta(1:nf), slot(cur)%residual(1:nf)), alpha, trial, &
+                         last_status, last_element)
+        accepted = .true.
+      end if
       do ls = 1, 5
+        if (accepted) exit
         trial = buffer
-        slot(trial)%u = u_cur + alpha*du
-        slot(trial)%force = force_cur + alpha*dforce
-        call evaluate(slot(trial), 0.0_wp, last_status, last_element)
+        call try_step(slot(trial), alpha, moving, last_status, last_element)
         if (last_status == 0) then
+          if (search == search_none) then
+            accepted = .true.
+            exit
+          end if
           if (alpha == 1.0_wp) then
             call measure(slot(trial), du_norm, t_norm, t_scale, t_moved, t_converged)
             if (t_converged) then  ! converged: the next iteration returns it
@@ -226,7 +260,7 @@ contains
             info(3) = status
             return
           end if
-          if (weighted_norm(slot(trial)%simplified) <= &
+          if (hypot(weighted_norm(slot(trial)%simplified), slot(trial)%rest) <= &
               (1.0_wp - alpha/4.0_wp)*step_size) then
             accepted = .true.
             have_hint = .true.
@@ -278,6 +312,71 @@ contains
     end do
 
   contains
+    !> u_cur + alpha (du, dforce) into slot s, evaluated; the prescribed values exactly at
+    !> a whole step.
+    subroutine try_step(s, alpha, moving, status, element)
+      type(evaluation), intent(inout) :: s
+      real(wp), intent(in) :: alpha
+      logical, intent(in) :: moving
+      integer, intent(out) :: status, element
+      s%u = u_cur + alpha*du
+      if (alpha == 1.0_wp .and. moving) then
+        where (fixed /= 0) s%u = prescribed
+      end if
+      s%force = force_cur + alpha*dforce
+      call evaluate(s, 0.0_wp, status, element)
+    end subroutine try_step
+
+    !> The energy line search from the iterate whose s(0) = du . r is s0: the step whole
+    !> (halved up to 3 times where an element fails) unless it overshoots, s(1) > 0 and
+    !> above half of |s(0)|; then secant steps on s, kept within the bracket, until |s| is
+    !> at most half of |s(0)| (at most 5). The predictor, the first correction of the
+    !> increment, is taken whole (``whole``): it is linearized at the converged state, its
+    !> overshoot what the next iterations correct (on a bending sheet, a membrane residual
+    !> of second order that the secant would cut to half the bending step); and so is a
+    !> step that carries prescribed motion, whose residual holds the linearized K dp, not
+    !> a gradient of the energy. The evaluation of the step taken is in slot 1 (trial).
+    subroutine energy_step(whole, s0, alpha, trial, status, element)
+      logical, intent(in) :: whole
+      real(wp), intent(in) :: s0
+      real(wp), intent(inout) :: alpha
+      integer, intent(out) :: trial, status, element
+      real(wp) :: lo, hi, s_lo, s_hi, s
+      integer :: k
+      trial = 1
+      do k = 1, 4
+        call try_step(slot(trial), alpha, moving, status, element)
+        if (status == 0) exit
+        alpha = 0.5_wp*alpha
+      end do
+      if (status /= 0 .or. whole) return
+      s = dot_product(delta(1:nf), slot(trial)%residual(1:nf))
+      if (.not. (s0 < 0.0_wp .and. s > 0.0_wp .and. s > -0.5_wp*s0)) return
+      lo = 0.0_wp
+      s_lo = s0
+      hi = alpha
+      s_hi = s
+      do k = 1, 5
+        alpha = hi - s_hi*(hi - lo)/(s_hi - s_lo)
+        alpha = min(max(alpha, lo + 0.1_wp*(hi - lo)), hi - 0.1_wp*(hi - lo))
+        call try_step(slot(trial), alpha, .false., status, element)
+        if (status /= 0) then
+          hi = alpha
+          s_hi = abs(s_hi)
+          cycle
+        end if
+        s = dot_product(delta(1:nf), slot(trial)%residual(1:nf))
+        if (abs(s) <= -0.5_wp*s0) exit
+        if (s > 0.0_wp) then
+          hi = alpha
+          s_hi = s
+        else
+          lo = alpha
+          s_lo = s
+        end if
+      end do
+    end subroutine energy_step
+
     !> Assembly and contact at s%u, s%force into slot s.
     subroutine evaluate(s, touching_gap, status, element)
       type(evaluation), intent(inout) :: s
@@ -287,9 +386,17 @@ contains
       integer :: a, c
       counters(1) = counters(1) + 1
       call system_clock(t0)
+      where (fixed /= 0)
+        dp = prescribed - s%u
+      elsewhere
+        dp = 0.0_wp
+      end where
+      s%moving = any(dp /= 0.0_wp)
+      s%rest = 0.0_wp
+      if (s%moving) s%rest = sqrt(sum(dp**2))
       call solid_assemble(nnode, x0, ne, conn, u_ref, s%u, props, axes_old, stress_old, &
-                          ep_old, strain_old, eqn, .false., .true., offsets, k_slots, &
-                          s%values(1:k_slots), .false., dp, s%fint, kdu, s%stress, s%ep, &
+                          ep_old, strain_old, eqn, symmetric, .true., offsets, k_slots, &
+                          s%values(1:k_slots), s%moving, dp, s%fint, kdu, s%stress, s%ep, &
                           s%strain, s%axes, status, element)
       call system_clock(t1)
       timings(1) = timings(1) + real(t1 - t0, wp)/real(clock_rate, wp)
@@ -299,6 +406,14 @@ contains
           if (eqn(c, a) >= 0) s%residual(eqn(c, a) + 1) = s%fint(c, a) - external(c, a)
         end do
       end do
+      if (s%moving) then  ! the linearized rest of the prescribed motion
+        do a = 1, nnode
+          do c = 1, 3
+            if (eqn(c, a) >= 0) s%residual(eqn(c, a) + 1) = s%residual(eqn(c, a) + 1) + &
+                                                            kdu(c, a)
+          end do
+        end do
+      end if
       call forming_contact(nnode, x0 + s%u, x_n, fixed, ntool, table, tol, coef, degrees, &
                            triangle, tree_lower, tree_upper, tree_child, frame, frame_lower, &
                            frame_upper, grid_start, grid_params, grid_normals, grid_points, &
@@ -319,7 +434,8 @@ contains
       norm = sqrt(dot_product(s%residual, s%residual))
       scale = max(sqrt(sum(s%force**2)), sqrt(sum(s%fint**2, mask=fixed /= 0)), floor)
       moved = max(sqrt(sum((s%u - u_n)**2)), 1.0e-9_wp*size)
-      converged = norm <= tol_force*scale .and. correction <= tol_disp*moved
+      converged = norm <= tol_force*scale .and. correction <= tol_disp*moved .and. &
+                  .not. s%moving
     end subroutine measure
 
     !> The free dofs of a vector of unknowns into a (3, nnode) field (fixed dofs untouched).
@@ -359,8 +475,8 @@ contains
           if (status < 0) return
           preconditioned = weight*preconditioned
         end if
-        call gmres(n, nvalues, rows, cols, s%values, weight, handle, preconditioned, &
-                   forcing, isettings(2), z, count, gmres_converged, status)
+        call gmres(n, nvalues, rows, cols, s%values, symmetric, weight, handle, &
+                   preconditioned, forcing, isettings(2), z, count, gmres_converged, status)
         call system_clock(t1)
         timings(4) = timings(4) + real(t1 - t0, wp)/real(clock_rate, wp)
         if (status < 0) return
@@ -420,6 +536,7 @@ contains
       outcome = outcome_converged
       u = s%u
       force = s%force
+      fint = s%fint
       stress = s%stress
       ep = s%ep
       strain = s%strain
@@ -459,14 +576,16 @@ contains
   end function penetration_step
 
   !> GMRES from 0, without restart, on the operator v -> W M^-1 J W^-1 v (J with the
-  !> given values in the coordinate structure rows, cols, 0-based; M the factors MUMPS holds
+  !> given values in the coordinate structure rows, cols, 0-based, or its lower triangle
+  !> when symmetric; M the factors MUMPS holds
   !> behind handle; W the weights): the iterate z, the iterations and whether
   !> ||op(z) - b|| <= tol ||b||; status < 0: a MUMPS solve failed. Arnoldi with modified Gram-Schmidt run twice
   !> (the basis stays orthogonal to rounding when the operator is far from normal) and
   !> Givens rotations for the residual norm.
-  subroutine gmres(n, nvalues, rows, cols, values, weight, handle, b, tol, m, z, k, &
-                   converged, status)
+  subroutine gmres(n, nvalues, rows, cols, values, symmetric, weight, handle, b, tol, m, z, &
+                   k, converged, status)
     integer, intent(in) :: n, nvalues, rows(nvalues), cols(nvalues), handle, m
+    logical, intent(in) :: symmetric
     real(wp), intent(in) :: values(nvalues), weight(n), b(n), tol
     real(wp), intent(out) :: z(n)
     integer, intent(out) :: k, status
@@ -498,6 +617,11 @@ contains
       do i = 1, nvalues
         jv(rows(i) + 1) = jv(rows(i) + 1) + values(i)*w(cols(i) + 1)
       end do
+      if (symmetric) then  ! the upper triangle, mirrored
+        do i = 1, nvalues
+          if (rows(i) /= cols(i)) jv(cols(i) + 1) = jv(cols(i) + 1) + values(i)*w(rows(i) + 1)
+        end do
+      end if
       call solver_solve(handle, n, jv, w, status)
       if (status < 0) return
       w = weight*w

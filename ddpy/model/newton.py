@@ -1,0 +1,309 @@
+"""The core's Newton loop of one increment trial, as the forming and the static problems
+call it (fortran/solver/ddpy_forming_newton.f90, ``forming_increment``).
+
+One loop serves both: the static problem is the forming problem without tools, whose fixed
+dofs move to prescribed values. ``Layout`` numbers the unknowns and fixes the Jacobian's
+coordinate structure, ``ToolPack`` packs the tools' surfaces and search structures,
+``Loop`` says how the loop runs, and ``increment`` makes the call and says what came of
+it (``Trial``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ddpy import _core
+from ddpy.core.linalg import LinearSolverError
+from ddpy.geometry.search import SearchArrays
+from ddpy.model.mesh import HexMesh, boundary_faces, face_area_vectors
+from ddpy.model.solid import ElementError, Solid, SolidState, _flat
+from ddpy.model.tool import RigidTool
+
+#: What the core's forming_increment returns.
+CONVERGED, LANDING, ELEMENT, NOT_FINITE, SOLVER, STALLED = range(6)
+#: Line searches of the core's loop: none (whole steps, halved only where an element
+#: fails); Deuflhard's natural monotonicity test with the residual-norm fallback (forming:
+#: the contact law has no potential); the energy line search (a problem with a potential).
+SEARCH_NONE, SEARCH_MONOTONICITY, SEARCH_ENERGY = range(3)
+#: The parts of a trial's time, as the core measures them.
+PARTS = ("assembly", "contact", "factorization", "solve")
+
+
+def _join(parts: Sequence[NDArray], dtype: type) -> NDArray:
+    """The arrays one after another (an empty array of dtype for none)."""
+    return np.concatenate(parts).astype(dtype) if parts else np.zeros(0, dtype=dtype)
+
+
+class Layout:
+    """Unknowns and the fixed coordinate structure of the Jacobian for one constraint set:
+    free displacement dofs first, then 3 force components per (tool, slave) pair.
+    ``symmetric``: the solid's block as its lower triangle (a symmetric MUMPS instance; only
+    without tools, whose contact blocks are not symmetric)."""
+
+    def __init__(self, solid: Solid, tools: Sequence[RigidTool], fixed: NDArray[np.bool_],
+                 symmetric: bool = False) -> None:
+        if symmetric and tools:
+            raise ValueError("a symmetric layout has no tools: the contact law's Jacobian "
+                             "is not symmetric")
+        n = solid.mesh.n_nodes
+        free = ~fixed.ravel()
+        self.symmetric = symmetric
+        self.nf = int(free.sum())
+        eqn = np.full(3 * n, -1, dtype=np.int32)
+        eqn[free] = np.arange(self.nf, dtype=np.int32)
+        self.eqn = eqn
+        self.pattern = solid.pattern(eqn, symmetric=symmetric)
+        #: each pair's node and tool, each tool's first pair (int32: as the core takes them)
+        self.node = _join([t.slaves for t in tools], np.int32)
+        self.tool_of = _join([np.full(t.slaves.size, i) for i, t in enumerate(tools)],
+                             np.int64)
+        self.first = np.concatenate([[0], np.cumsum([t.slaves.size for t in tools])]
+                                    ).astype(np.int32)
+        npair = self.node.size
+        self.n = self.nf + 3 * npair
+        lam = self.nf + 3 * np.arange(npair)[:, None] + np.arange(3)  # (npair, 3)
+        equ = eqn.reshape(n, 3)[self.node]                              # (npair, 3)
+        # Components of a slave whose displacement is fixed: its force there is a support
+        # reaction, so that row of the law becomes lambda_k = 0.
+        self.held_flags = (equ < 0).astype(np.int32).ravel()
+        self.fixed_flags = fixed.astype(np.int32).ravel()
+        # The structure of the contact blocks, in the order the core writes their values:
+        # the coupling entries (-1), dC/dx at the free dofs of each pair's node (pair,
+        # row, column), dC/dlambda (pair, row, column).
+        coupling = equ >= 0
+        pi, ii, jj = np.nonzero(np.broadcast_to(coupling[:, None, :], (npair, 3, 3)))
+        rows = [self.pattern.rows, equ[coupling], lam[pi, ii], np.repeat(lam, 3, axis=1).ravel()]
+        cols = [self.pattern.cols, lam[coupling], equ[pi, jj], np.tile(lam, (1, 3)).ravel()]
+        self.rows = np.concatenate(rows).astype(np.int32)
+        self.cols = np.concatenate(cols).astype(np.int32)
+        self.k_slots = self.pattern.rows.size
+        self.n_coupling = int(coupling.sum())
+
+
+class ToolPack:
+    """Every tool's surface and search structures packed one after another in flat arrays,
+    with a table of their offsets, and the blank faces that face each tool: what the core's
+    forming_contact reads (fortran/mechanics/ddpy_forming.f90). Made once; empty for none."""
+
+    def __init__(self, tools: Sequence[RigidTool], mesh: HexMesh) -> None:
+        searches = [t.search for t in tools]
+        table = np.zeros((len(tools), 10), dtype=np.int32)
+        offsets = np.zeros(4, dtype=np.int64)  # coef, patch, tree, grid
+        for i, (tool, s) in enumerate(zip(tools, searches, strict=True)):
+            n = s.surface.n_patches
+            table[i] = (s.kind, s.stride, n, s.mode, s.max_iterations, *offsets,
+                        tool.facing is not None)
+            offsets += (s.surface.coefficients.size, n, 2 * n - 1, s.grid_params.shape[0])
+        self.names = [t.name for t in tools]
+        self.table = table.ravel()
+        self.tol = np.array([s.tol for s in searches], dtype=float)
+        integers = {"degrees", "triangle", "tree_child", "grid_start"}
+        #: every tool's search arrays, one after another, in the core's argument order
+        self.arrays = SearchArrays(*(
+            _join([getattr(s.arrays, name) for s in searches],
+                  np.int32 if name in integers else np.float64)
+            for name in SearchArrays._fields))
+        self.facing = _join([np.zeros(3) if t.facing is None else t.facing for t in tools],
+                            np.float64)
+        # Per tool with a facing direction, the blank's boundary faces that face it (normal
+        # within 60 degrees) and the slave index of their corners (-1: not a slave): the
+        # search keeps only patches opposing the blank's normal at each slave.
+        faces, corners = [], []
+        boundary = boundary_faces(mesh.elements) if tools else np.zeros((0, 4), np.int64)
+        area = face_area_vectors(mesh.nodes, boundary) if tools else np.zeros((0, 3))
+        for tool in tools:
+            if tool.facing is None:
+                faces.append(np.zeros((0, 4), dtype=np.int32))
+                corners.append(np.zeros((0, 4), dtype=np.int32))
+                continue
+            chosen = boundary[area @ tool.facing > 0.5 * np.linalg.norm(area, axis=1)]
+            where = np.full(mesh.n_nodes, -1, dtype=np.int32)
+            where[tool.slaves] = np.arange(tool.slaves.size)
+            faces.append(chosen.astype(np.int32))
+            corners.append(where[chosen])
+        self.face_first = np.concatenate([[0], np.cumsum([f.shape[0] for f in faces])]
+                                         ).astype(np.int32)
+        self.faces = _join([f.ravel() for f in faces], np.int32)
+        self.corner = _join([c.ravel() for c in corners], np.int32)
+
+    def arguments(self, positions: dict[str, NDArray[np.float64]],
+                  positions_n: dict[str, NDArray[np.float64]], reach: float, size: float
+                  ) -> tuple:
+        """The tools as the core's forming_contact and forming_increment take them: the
+        table and search arrays of every tool, their facing directions and faces, where
+        they are and where they were at the last converged increment, the search's reach
+        and the element size."""
+        return (self.table, self.tol, *self.arrays, self.facing, self.face_first, self.faces,
+                self.corner, _join([positions[n] for n in self.names], np.float64),
+                _join([positions_n[n] for n in self.names], np.float64), reach, size)
+
+
+@dataclass(frozen=True)
+class Loop:
+    """How the core's loop runs an increment trial: the convergence tolerances and
+    iterations, the force scale's floor (N), the yield landing's tolerance (None: off),
+    the penetration limit (element sizes) and the shortest step it may leave, the linear
+    solver (reuse of older factors by GMRES: its tolerance bounds, iterations at most and
+    after which the next correction factorizes), the line search (SEARCH_*), and the
+    touching predictor's gap and resting flag."""
+
+    force_tolerance: float
+    displacement_tolerance: float
+    max_iterations: int
+    floor: float
+    yield_tolerance: float | None = None
+    penetration: float = 0.0
+    min_step: float = 1.0
+    reuse: bool = False
+    krylov_loose: float = 1e-2
+    krylov_tight: float = 1e-10
+    krylov_max: int = 12
+    krylov_keep: int = 8
+    search: int = SEARCH_MONOTONICITY
+    touching: float = 0.0
+    resting: bool = True
+
+
+@dataclass
+class Trial:
+    """What one increment trial gives: converged (``failure`` empty and ``landing`` 1) with
+    the new state, the internal forces, its residual history and the contact states, gaps
+    and normals of the pairs; or the fraction of the increment at which the first elastic
+    point lands on the yield surface (``landing`` < 1); or why it failed (``solver``: a
+    factorization or solve failed). Always: the work done (``counters``: evaluations,
+    corrections, factorizations, Krylov iterations, line-search fallbacks) and its time per
+    part (PARTS)."""
+
+    failure: str = ""
+    landing: float = 1.0
+    solver: bool = False
+    u: NDArray[np.float64] | None = None
+    state: SolidState | None = None
+    force: NDArray[np.float64] | None = None
+    fint: NDArray[np.float64] | None = None
+    residuals: list[float] = field(default_factory=list)
+    relative: list[tuple[float, float]] = field(default_factory=list)
+    #: per iteration after the first, the length of the step that led to it
+    steps: list[float] = field(default_factory=list)
+    in_contact: NDArray[np.int32] | None = None
+    gap: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
+    counters: tuple[int, ...] = (0, 0, 0, 0, 0)
+    timings: dict[str, float] = field(default_factory=dict)
+
+
+@dataclass
+class Factors:
+    """What the MUMPS instance holds between calls: factors of a Jacobian of this layout
+    (``factored``), and whether the last GMRES on them converged fast (``reuse_next``)."""
+
+    handle: int
+    factored: bool = False
+    reuse_next: bool = True
+
+
+@dataclass(frozen=True)
+class Pairs:
+    """The (tool, slave) pairs of an increment: the tools (``ToolPack.arguments``) where
+    the increment takes them, the pairs that take part (``on``), their augmentation ``r``,
+    friction ``mu`` and contact forces at the converged state."""
+
+    tools: tuple
+    on: NDArray[np.bool_]
+    r: NDArray[np.float64]
+    mu: NDArray[np.float64]
+    force_n: NDArray[np.float64]
+
+
+def increment(solid: Solid, layout: Layout, factors: Factors, state: SolidState,
+              u_n: NDArray[np.float64], external: NDArray[np.float64],
+              prescribed: NDArray[np.float64], guess: NDArray[np.float64] | None, loop: Loop,
+              pairs: Pairs | None = None) -> Trial:
+    """One increment trial by the core from the converged (u_n, state): nodal loads
+    ``external`` (n, 3), the fixed dofs to ``prescribed`` (n, 3; u_n there for supports
+    that hold), starting at ``guess`` (unless an element fails there) or at u_n, with the
+    contact ``pairs`` of the tools (none: the static problem). ``factors`` is updated."""
+    settings = np.array([loop.force_tolerance, loop.displacement_tolerance,
+                         -1.0 if loop.yield_tolerance is None else loop.yield_tolerance,
+                         loop.penetration, loop.min_step, loop.krylov_loose, loop.krylov_tight,
+                         loop.floor])
+    isettings = np.array([loop.max_iterations, loop.krylov_max, loop.krylov_keep, loop.reuse,
+                          factors.handle, guess is not None, loop.resting, layout.symmetric,
+                          loop.search], dtype=np.int32)
+    factored = np.array([factors.factored], dtype=np.int32)
+    reuse_next = np.array([factors.reuse_next], dtype=np.int32)
+    out = solid.state_buffer()
+    solid_state = (solid._x, solid._conn, solid.props, _flat(state.displacement),
+                   _flat(state.axes.transpose(0, 1, 3, 2)), _flat(state.stress),
+                   _flat(state.ep), _flat(state.strain), layout.eqn, layout.pattern.offsets,
+                   layout.fixed_flags, layout.nf, layout.k_slots)
+    start = (u_n if guess is None else guess).ravel()
+    buffers = (out.stress.ravel(), out.ep.ravel(), out.strain.ravel(),
+               out.axes.transpose(0, 1, 3, 2).ravel(), loop.max_iterations + 1)
+    if pairs is None:
+        if layout.node.size:
+            raise ValueError("a layout with contact pairs needs their Pairs")
+        (factored, u, fint, stress, ep, strain, axes, niter, history, counters, spent, outcome,
+         info, detail) = _core.static_increment(
+            *solid_state, layout.rows, layout.cols, solid.mesh.element_size(), u_n.ravel(),
+            external.ravel(), prescribed.ravel(), start, settings, isettings, factored,
+            *buffers)
+        force = pair_state = gap = normal = np.zeros(0)
+    else:
+        (factored, reuse_next, u, force, fint, stress, ep, strain, axes, pair_state, gap,
+         normal, niter, history, counters, spent, outcome, info, detail) = \
+            _core.forming_increment(
+                *solid_state, layout.n_coupling, layout.rows, layout.cols, *pairs.tools,
+                loop.touching, layout.first, layout.node, pairs.on.astype(np.int32), pairs.r,
+                pairs.mu, layout.held_flags, u_n.ravel(),
+                np.where(pairs.on[:, None], pairs.force_n, 0.0).ravel(), external.ravel(),
+                prescribed.ravel(), start, settings, isettings, factored, reuse_next,
+                *buffers)
+        factors.reuse_next = bool(reuse_next[0])
+    factors.factored = bool(factored[0])
+    history = history.reshape(-1, 4)[:niter]
+    work = {"counters": tuple(int(c) for c in counters),
+            "timings": {key: float(s) for key, s in zip(PARTS, spent, strict=True)},
+            "residuals": history[:, 0].tolist(),
+            "relative": [(float(a), float(b)) for a, b in history[:, 1:3]],
+            "steps": history[1:, 3].tolist()}
+    if outcome == CONVERGED:
+        m = solid.mesh.n_elements
+        converged = SolidState(stress.reshape(m, 8, 6), ep.reshape(m, 8),
+                               strain.reshape(m, 8, 6),
+                               axes.reshape(m, 8, 3, 3).transpose(0, 1, 3, 2),
+                               u.reshape(-1, 3))
+        return Trial(u=u.reshape(-1, 3), state=converged, force=force.reshape(-1, 3),
+                     fint=fint.reshape(-1, 3), in_contact=pair_state,
+                     gap=(gap, normal.reshape(-1, 3)), **work)
+    if outcome == LANDING:
+        return Trial(landing=float(detail[0]), **work)
+    if outcome == ELEMENT:
+        return Trial(str(ElementError(int(info[0]), int(info[1]) - 1)), **work)
+    if outcome == NOT_FINITE:
+        return Trial("the residual is not finite", **work)
+    if outcome == SOLVER:
+        factors.factored = False
+        return Trial(str(LinearSolverError(int(info[2]), "factorization or solve")),
+                     solver=True, **work)
+    if outcome == STALLED:
+        return Trial(stalled(loop.max_iterations, float(detail[0]), float(detail[1]),
+                             loop.force_tolerance, loop.displacement_tolerance,
+                             int(info[3])), **work)
+    raise RuntimeError(f"forming_increment refused its input (outcome {outcome}): the "
+                       "layout, the tools' packed arrays or the history do not fit")
+
+
+def stalled(iterations: int, residual: float, correction: float, tol_force: float,
+            tol_disp: float, flipped: int) -> str:
+    """Why an increment did not converge: its last residual and correction against their
+    tolerances, and how many contact pairs changed state in its last iteration."""
+    text = (f"no convergence in {iterations} iterations: residual {residual:.2e} of the force "
+            f"scale (tolerance {tol_force:.0e}), correction {correction:.2e} of the motion "
+            f"(tolerance {tol_disp:.0e})")
+    if flipped > 0:
+        text += f"; {flipped} contact pair(s) still changed state in the last iteration"
+    return text

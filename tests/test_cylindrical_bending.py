@@ -209,7 +209,7 @@ def test_the_release_effort_finding_counts_the_redone_work() -> None:
                           "effort_by_limit": {"contact_touch": [10, 60, 70, 20.0],
                                               "contact_release": [20, 100, 400, 180.0]},
                           "contact_nodes": {"punch": 14.0, "die": 12.0}}}
-    text = " ".join(bench._release_effort(numbers))
+    text = " ".join(bench.release_effort(numbers))
     assert "Bezier (no cap): 5 of 15 increments ended at a release, and took 60% of" in text
     assert "60 Newton corrections for 30 accepted (30 of the 30 corrections" in text
     assert "Faceted-coarse (1 redo): 20 of 30 increments ended at a release, and took 90%" \
@@ -218,7 +218,7 @@ def test_the_release_effort_finding_counts_the_redone_work() -> None:
     assert "Nagata:" not in text.split("(nodes in contact")[0]  # no counters: left out
     assert "Faceted-coarse: punch 14, die 12" in text
     assert "The runs differ in this setting" in text  # Bezier had no cap, the facets 1
-    assert bench._release_effort({"nagata": numbers["nagata"]}) == []
+    assert bench.release_effort({"nagata": numbers["nagata"]}) == []
 
 
 def test_the_target_is_timed_by_a_run_alone_on_the_machine() -> None:
@@ -249,8 +249,8 @@ def test_the_target_is_timed_by_a_run_alone_on_the_machine() -> None:
     untimed = " ".join(bench.target("paper", {"nagata": {**shared, "timed_alone": None}}))
     assert "not judged" in untimed and "What would remove it" not in untimed
     assert bench.target("coarse", {"nagata": alone}) == []
-    assert bench._alone({"timed_alone": timed}) == "68.4 min (2, abc1234)"
-    assert bench._alone({"timed_alone": None}) == "not measured"
+    assert bench.alone_time({"timed_alone": timed}) == "68.4 min (2, abc1234)"
+    assert bench.alone_time({"timed_alone": None}) == "not measured"
 
 
 if __name__ == "__main__":  # renew the reference

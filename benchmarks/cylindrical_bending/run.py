@@ -470,7 +470,7 @@ def _seconds(value: float | None) -> str:
     return "-" if value is None else f"{value:.3f}"
 
 
-def _alone(numbers: dict[str, Any]) -> str:
+def alone_time(numbers: dict[str, Any]) -> str:
     """Table 3's cell for the wall time of a run alone on the machine."""
     timed = numbers.get("timed_alone")
     if not timed:
@@ -580,7 +580,7 @@ def report(mesh: str, hexahedra: int, numbers: dict[str, dict[str, Any]],
               *[f"{PAPER[m]['cpu_min']} min" for m in models]]),
         _row(["threads", *[numbers[m]["threads"] or "?" for m in models],
               *["4 cores" for _ in models]]),
-        _row(["wall time alone (threads, code)", *[_alone(numbers[m]) for m in models],
+        _row(["wall time alone (threads, code)", *[alone_time(numbers[m]) for m in models],
               *["" for _ in models]]),
         _row(["code, date", *[f"{numbers[m].get('code') or '?'}, {numbers[m].get('date') or '?'}"
                               for m in models], *["" for _ in models]]),
@@ -768,7 +768,7 @@ def _redos(cap: int | None) -> str:
     return "no cap" if cap is None else str(cap)
 
 
-def _release_effort(numbers: dict[str, dict[str, Any]]) -> list[str]:
+def release_effort(numbers: dict[str, dict[str, Any]]) -> list[str]:
     """Where the forming's Newton work and time went, by the limit that ended the
     increments: the share of the increments redone at a release (docs/theory/contact.md)."""
     parts = []
@@ -889,7 +889,7 @@ def findings(numbers: dict[str, dict[str, Any]], mesh: str = "coarse") -> list[s
                 "this coarse blank the events of the blank's own nodes dominate."))
     if mesh != "coarse":
         out += _polygon_angles(numbers)
-        out += _release_effort(numbers)
+        out += release_effort(numbers)
     if {"bezier", "nagata", "facets_fine"} <= set(numbers):
         osc = {m: numbers[m]["oscillation_N"] for m in numbers}
         if osc["facets_fine"] <= max(osc["bezier"], osc["nagata"]) and mesh == "coarse":

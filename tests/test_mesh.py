@@ -14,8 +14,9 @@ from ddpy.model.mesh import (
     find_bad_elements,
 )
 
-#: A unit cube: nodes (8, 3) and its element [0, 1, 3, 2, 4, 5, 7, 6].
-CUBE = HexMesh.box(1.0, 1.0, 1.0, 1, 1, 1)
+#: A unit cube's nodes as HexMesh.box numbers them (x fastest), and its element.
+CUBE_NODES = np.array([[x, y, z] for z in (0.0, 1.0) for y in (0.0, 1.0) for x in (0.0, 1.0)])
+CUBE = np.array([[0, 1, 3, 2, 4, 5, 7, 6]])
 #: Top and bottom faces swapped, and both faces listed clockwise: two ways to invert.
 UPSIDE_DOWN = [4, 5, 6, 7, 0, 1, 2, 3]
 CLOCKWISE = [0, 3, 2, 1, 4, 7, 6, 5]
@@ -61,7 +62,7 @@ def test_two_bad_elements_are_both_named() -> None:
 
 
 def test_inverted_element() -> None:
-    error = mesh_error(CUBE.nodes, CUBE.elements[:, CLOCKWISE], element_ids=[7])
+    error = mesh_error(CUBE_NODES, CUBE[:, CLOCKWISE], element_ids=[7])
     (bad,) = error.bad_elements
     assert (bad.index, bad.label, bad.fault) == (0, 7, "inverted")
     assert str(error) == bad.message == (
@@ -93,9 +94,9 @@ def test_gauss_point_inverted_where_the_corners_are_not() -> None:
 
 
 def test_repeated_node() -> None:
-    elements = CUBE.elements.copy()
+    elements = CUBE.copy()
     elements[0, 5] = elements[0, 4]
-    error = mesh_error(CUBE.nodes, elements, node_ids=np.arange(8) + 1, element_ids=[3])
+    error = mesh_error(CUBE_NODES, elements, node_ids=np.arange(8) + 1, element_ids=[3])
     (bad,) = error.bad_elements  # reported once, not also as degenerate
     assert (bad.index, bad.label, bad.fault) == (0, 3, "repeated node")
     assert str(error) == "element 3 repeats a node: [1, 2, 4, 3, 5, 5, 8, 7]"
@@ -106,21 +107,21 @@ def test_nearly_flat_corner_is_degenerate() -> None:
     # det J is positive everywhere (0.047 at the Gauss points, 2.5e-8 at that corner); the
     # corner's shape is what is wrong, whatever the element's size.
     for scale in (1e-3, 1.0, 1e3):
-        nodes = CUBE.nodes.copy()
+        nodes = CUBE_NODES.copy()
         nodes[0] = [0.5 - 1e-7, 0.5 - 1e-7, 0.0]
-        error = mesh_error(scale * nodes, CUBE.elements)
+        error = mesh_error(scale * nodes, CUBE)
         assert error.bad_elements[0].fault == "degenerate"
         assert str(error).startswith("element 0 is degenerate at its corner 0, node 0 (scaled "
                                      "Jacobian 3.27e-07")
         assert str(error).endswith("the element is flat or collapsed there")
         nodes[0] = [0.5 - 1e-6, 0.5 - 1e-6, 0.0]  # scaled Jacobian 3.3e-6: accepted
-        HexMesh(scale * nodes, CUBE.elements)
+        HexMesh(scale * nodes, CUBE)
 
 
 def test_element_flattened_to_rounding_is_degenerate() -> None:
     # Its corners are right angles (scaled Jacobian 1); det J is 1e-12 of its size cubed.
-    flat = HexMesh.box(1.0, 1.0, 1.0, 1, 1, 1).nodes * [1.0, 1.0, 1e-12]
-    error = mesh_error(flat, CUBE.elements)
+    flat = CUBE_NODES * [1.0, 1.0, 1e-12]
+    error = mesh_error(flat, CUBE)
     assert str(error).startswith("element 0 is degenerate at its corner 0, node 0 (scaled "
                                  "Jacobian 1, det J 1.25e-13)")
 

@@ -67,3 +67,26 @@ def install_toolfile(monkeypatch) -> None:
         stub = types.ModuleType("ddpy.io.toolfile")
         stub.read_tool = _read_nagata  # type: ignore[attr-defined]
         monkeypatch.setitem(sys.modules, "ddpy.io.toolfile", stub)
+
+
+#: Node order that turns a hexahedron upside down (top and bottom faces swapped).
+UPSIDE_DOWN = [4, 5, 6, 7, 0, 1, 2, 3]
+
+
+def row_mesh_deck(count: int, upside_down: tuple[int, ...] = (),
+                  repeated: tuple[int, ...] = ()) -> tuple[str, list[int]]:
+    """mesh.dat of a row of ``count`` unit cubes along x in own 'nodes' and 'hexahedra'
+    blocks (node ids from 1, element ids from 11), with the elements at the given positions
+    turned upside down or given a repeated node; and the deck line of each element."""
+    from ddpy.model.mesh import HexMesh
+
+    row = HexMesh.box(float(count), 1.0, 1.0, count, 1, 1)
+    elements = row.elements + 1
+    elements[list(upside_down)] = elements[list(upside_down)][:, UPSIDE_DOWN]
+    elements[list(repeated), 7] = elements[list(repeated), 6]
+    lines = ["normal z", f"nodes {row.n_nodes}"]
+    lines += [f"{k + 1} {x:g} {y:g} {z:g}" for k, (x, y, z) in enumerate(row.nodes)]
+    lines.append(f"hexahedra {count}")
+    first = len(lines) + 1
+    lines += [f"{11 + k} " + " ".join(map(str, e)) for k, e in enumerate(elements)]
+    return "\n".join(lines) + "\n", list(range(first, first + count))

@@ -6,7 +6,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from deckutil import EXAMPLES, copy_example, edit
+from deckutil import EXAMPLES, copy_example, edit, row_mesh_deck
 
 
 def check(*args: str) -> subprocess.CompletedProcess[str]:
@@ -32,3 +32,17 @@ def test_check_errors(tmp_path: Path) -> None:
     assert lines[1] == f"{case / 'tools.dat'}:7: friction must be >= 0, got -0.1"
     assert lines[2] == f"{case}: 2 errors"
     assert "not a case folder" in check(str(tmp_path / "none")).stderr
+
+
+def test_check_reports_every_bad_element(tmp_path: Path) -> None:
+    text, lines = row_mesh_deck(4, upside_down=(0, 3), repeated=(1,))
+    case = copy_example("bending", tmp_path, mesh=text)
+    result = check(str(case), "--no-geometry")
+    assert result.returncode == 2 and result.stdout == ""
+    errors = result.stderr.splitlines()
+    mesh = case / "mesh.dat"
+    assert errors[0].startswith(f"{mesh}:{lines[0]}: element 11 is inverted at its corner 0")
+    assert errors[1] == f"{mesh}:{lines[1]}: element 12 repeats a node: [2, 3, 8, 7, 12, 13, " \
+                        "18, 18]"
+    assert errors[2].startswith(f"{mesh}:{lines[3]}: element 14 is inverted at its corner 0")
+    assert errors[3] == f"{case}: 3 errors"

@@ -8,7 +8,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from deckutil import EXAMPLES, copy_example, edit, install_toolfile
+from deckutil import (
+    EXAMPLES,
+    UPSIDE_DOWN,
+    copy_example,
+    edit,
+    install_toolfile,
+    row_mesh_deck,
+)
 
 from ddpy.io.case import HoldGap, Move, rigid_body_modes_free
 from ddpy.io.decks import DeckError, parse_case, read_case
@@ -327,6 +334,38 @@ def test_mesh_unused_node(tmp_path: Path) -> None:
     assert "mesh.dat:11: node 9 belongs to no element" in str(error)
 
 
+def test_mesh_bad_elements_each_at_its_line(tmp_path: Path) -> None:
+    text, lines = row_mesh_deck(5, upside_down=(1, 4), repeated=(2,))
+    error = error_of(copy_example("bending", tmp_path, mesh=text))
+    assert [(e.path.name, e.line) for e in error.errors] == [
+        ("mesh.dat", lines[1]), ("mesh.dat", lines[2]), ("mesh.dat", lines[4])]
+    assert error.errors[0].message.startswith("element 12 is inverted at its corner 0, node 14 "
+                                              "(scaled Jacobian -1, det J -0.125), nodes [14, "
+                                              "15, 21, 20, 2, 3, 9, 8]: expected the first four")
+    assert error.errors[1].message == "element 13 repeats a node: [3, 4, 10, 9, 15, 16, 22, 22]"
+    assert error.errors[2].message.startswith("element 15 is inverted at its corner 0")
+    assert str(error).splitlines()[1] == f"{tmp_path / 'bending' / 'mesh.dat'}:{lines[2]}: " \
+        "element 13 repeats a node: [3, 4, 10, 9, 15, 16, 22, 22]"
+
+
+def test_mesh_many_bad_elements_first_five_then_a_count(tmp_path: Path) -> None:
+    text, lines = row_mesh_deck(9, upside_down=tuple(range(1, 9)))
+    error = error_of(copy_example("bending", tmp_path, mesh=text))
+    assert [e.line for e in error.errors] == lines[1:7]
+    assert [e.message.split(" is ")[0] for e in error.errors[:5]] == [
+        f"element {label}" for label in range(12, 17)]
+    assert error.errors[5].message == "... and 3 more bad elements (8 in all)"
+
+
+def test_mesh_distorted_element_accepted(tmp_path: Path) -> None:
+    text = OWN_MESH.replace("7 1 1 1", "7 1.6 1.3 0.6").replace("2 1 0 0", "2 1.4 -0.3 0.2")
+    case = copy_example("bending", tmp_path, mesh=text)
+    edit(case, "bc.dat", "nodeset    centre  box 0 0  0 0  -inf inf", "nodeset centre ids 1-8")
+    edit(case, "control.dat", "output_at 7 14 21 28.5", "")
+    mesh = read_case(case, geometry=False).mesh  # the example's tools do not fit this blank
+    assert mesh.element_ids.tolist() == [10] and mesh.nodes[6].tolist() == [1.6, 1.3, 0.6]
+
+
 def test_own_mesh_and_normal(tmp_path: Path) -> None:
     text = OWN_MESH.replace("normal z", "normal -y\nscale 2")
     case = copy_example("bending", tmp_path, mesh=text)
@@ -380,6 +419,23 @@ def test_mesh_files(tmp_path: Path) -> None:
     (case / "mesh.dat").write_text("file bad.inp\n")
     assert "cannot read mesh file" in str(error_of(case)) or "no hexahedra" in str(
         error_of(case))
+
+
+def test_mesh_file_bad_elements_named_by_the_file(tmp_path: Path) -> None:
+    meshio = pytest.importorskip("meshio")
+    case = copy_example("bending", tmp_path)
+    box = read_case(EXAMPLES / "bending").mesh
+    elements = box.elements.copy()
+    elements[[2, 40]] = elements[[2, 40]][:, UPSIDE_DOWN]
+    elements[7, 7] = elements[7, 6]
+    meshio.write(case / "blank.inp", meshio.Mesh(box.nodes, [("hexahedron", elements)]))
+    (case / "mesh.dat").write_text("normal z\nfile blank.inp\n")
+    error = error_of(case)
+    assert [(e.line, e.message.split(" ")[:3]) for e in error.errors] == [
+        (None, ["blank.inp:", "element", "3"]), (None, ["blank.inp:", "element", "8"]),
+        (None, ["blank.inp:", "element", "41"])]
+    assert str(error).splitlines()[1].endswith("mesh.dat: blank.inp: element 8 repeats a node: "
+                                               "[8, 9, 34, 33, 108, 109, 134, 134]")
 
 
 # ----------------------------------------------------------------------------------- bc

@@ -6,17 +6,25 @@ Node order of an element: the bottom face 0-1-2-3 counter-clockwise seen from ab
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from dataclasses import dataclass
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ddpy import _core
 from ddpy._validate import float_array, int_array
 
-__all__ = ["HEX_EDGES", "HEX_FACES", "HexMesh", "MeshError", "boundary_faces",
-           "face_area_vectors", "largest_rotation", "through_thickness_columns"]
+__all__ = ["HEX_EDGES", "HEX_FACES", "BadElement", "HexMesh", "MeshError", "boundary_faces",
+           "corner_scaled_jacobians", "face_area_vectors", "find_bad_elements",
+           "largest_rotation", "through_thickness_columns"]
 
 #: Relative size below which a Jacobian determinant counts as degenerate.
 DEGENERATE = 1e-10
+#: A corner of a hexahedron whose scaled Jacobian is at most this is degenerate.
+MIN_SCALED_JACOBIAN = 1e-6
+#: Bad elements a MeshError's message names (it carries them all).
+NAMED_IN_MESSAGE = 3
 #: A boundary face belongs to a contact side when its outward normal makes less than
 #: about 45 degrees with the side's direction.
 SIDE_COSINE = 0.7
@@ -112,13 +120,163 @@ def face_area_vectors(nodes: NDArray[np.float64], faces: NDArray[np.integer]
                           nodes[faces[:, 3]] - nodes[faces[:, 1]])
 
 
-class MeshError(ValueError):
-    """A mesh that cannot be solved on: ``element`` is the 0-based index of the element at
-    fault (-1 when the fault is not one element's)."""
+@dataclass(frozen=True)
+class BadElement:
+    """An element a mesh cannot be solved on: its 0-based ``index``, its ``label`` (the
+    deck's id), what is wrong (``fault``: 'node out of range', 'repeated node', 'inverted'
+    or 'degenerate') and ``message``, a sentence naming it by its label."""
 
-    def __init__(self, message: str, element: int = -1) -> None:
+    index: int
+    label: int
+    fault: str
+    message: str
+
+
+class MeshError(ValueError):
+    """A mesh that cannot be solved on. ``bad_elements`` lists every element at fault, in
+    element order (empty when the fault is not an element's, e.g. a bad shape); ``element``
+    is the 0-based index of the first (-1 when there is none)."""
+
+    def __init__(self, message: str, bad_elements: Sequence[BadElement] = ()) -> None:
         super().__init__(message)
-        self.element = element
+        self.bad_elements: tuple[BadElement, ...] = tuple(bad_elements)
+
+    @property
+    def element(self) -> int:
+        return self.bad_elements[0].index if self.bad_elements else -1
+
+    @classmethod
+    def of_elements(cls, bad_elements: Sequence[BadElement]) -> MeshError:
+        """The error of one or more bad elements: its message names the first few and says
+        how many there are in all."""
+        if len(bad_elements) == 1:
+            return cls(bad_elements[0].message, bad_elements)
+        named = "; ".join(b.message for b in bad_elements[:NAMED_IN_MESSAGE])
+        first = ("" if len(bad_elements) <= NAMED_IN_MESSAGE else
+                 f", the first {NAMED_IN_MESSAGE}")
+        return cls(f"{len(bad_elements)} bad elements{first}: {named}", bad_elements)
+
+
+#: Corner, and its neighbours along xi, eta, zeta with the sign of each direction.
+_CORNERS = np.array([[0, 1, 3, 4], [1, 0, 2, 5], [2, 3, 1, 6], [3, 2, 0, 7],
+                     [4, 5, 7, 0], [5, 4, 6, 1], [6, 7, 5, 2], [7, 6, 4, 3]])
+_SIGNS = np.array([[1, 1, 1], [-1, 1, 1], [-1, -1, 1], [1, -1, 1],
+                   [1, 1, -1], [-1, 1, -1], [-1, -1, -1], [1, -1, -1]], dtype=float)
+
+
+def corner_scaled_jacobians(nodes: ArrayLike, elements: ArrayLike) -> NDArray[np.float64]:
+    """Scaled Jacobian at the 8 corners of each hexahedron, (m, 8): the determinant of the
+    three unit edge vectors leaving the corner along xi, eta, zeta. 1 at a corner of a cube,
+    whatever its size or aspect ratio; <= 0 at an inverted corner; 0 where an edge has no
+    length."""
+    return _corner_scaled(_element_coordinates(nodes, elements)).T
+
+
+def _element_coordinates(nodes: ArrayLike, elements: ArrayLike) -> NDArray[np.float64]:
+    """Node coordinates of each element as (3, 8, m): component, corner, element; each
+    component of a corner is then one contiguous array over the elements."""
+    x = np.ascontiguousarray(np.asarray(nodes, dtype=np.float64).reshape(-1, 3).T)
+    return x[:, np.asarray(elements).reshape(-1, 8).T]
+
+
+def _corner_scaled(coords: NDArray[np.float64]) -> NDArray[np.float64]:
+    """corner_scaled_jacobians of element coordinates (3, 8, m), as (8, m)."""
+    scaled = np.empty(coords.shape[1:])
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        for c, (corner, *neighbours) in enumerate(_CORNERS):
+            e1, e2, e3 = ((coords[:, b] - coords[:, corner]) * sign
+                          for b, sign in zip(neighbours, _SIGNS[c], strict=True))  # (3, m)
+            det = (e1[0] * (e2[1] * e3[2] - e2[2] * e3[1])
+                   + e1[1] * (e2[2] * e3[0] - e2[0] * e3[2])
+                   + e1[2] * (e2[0] * e3[1] - e2[1] * e3[0]))
+            lengths = np.sqrt((e1 * e1).sum(axis=0) * (e2 * e2).sum(axis=0)
+                              * (e3 * e3).sum(axis=0))
+            scaled[c] = det / lengths
+    return np.where(np.isfinite(scaled), scaled, 0.0)
+
+
+def find_bad_elements(nodes: ArrayLike, elements: ArrayLike,
+                      node_ids: ArrayLike | None = None,
+                      element_ids: ArrayLike | None = None) -> list[BadElement]:
+    """Every element of a hexahedral mesh that cannot be solved on, in element order, each
+    with the first of these faults it has; node and element ids name them in the messages
+    (default the 0-based indices). The checks, and why each is there:
+
+    - a node index outside the nodes: the element has no geometry;
+    - a node repeated within the element: a collapsed edge or face; exact in the indices,
+      and the plainest thing to tell (the corner checks would call it degenerate);
+    - at a corner, a scaled Jacobian <= MIN_SCALED_JACOBIAN (1e-6): an inverted corner, or
+      its three edges nearly in one plane. It measures the corner's shape alone, the same
+      for a small, thin or long element; det J > 0 at the Gauss points does not imply it
+      (a corner pushed through the element);
+    - det J <= DEGENERATE (1e-10) x the element's size cubed / 8 at a Gauss point or a
+      corner: the solver integrates at the Gauss points and needs det J > 0 there, which
+      the corners do not imply for a twisted element; the floor, relative to the size,
+      refuses an element flattened to rounding whatever the angles at its corners.
+
+    The point named is the worst corner when a corner fails, else the worst Gauss point;
+    'inverted' when the value there is negative, 'degenerate' else. An inverted element
+    usually has its top and bottom faces swapped, or a face listed clockwise."""
+    x = np.asarray(nodes, dtype=np.float64).reshape(-1, 3)
+    conn = np.asarray(elements).reshape(-1, 8)
+    n = len(x)
+    node_labels = np.arange(n) if node_ids is None else np.asarray(node_ids)
+    labels = (np.arange(len(conn)) if element_ids is None else np.asarray(element_ids)).tolist()
+    bad: dict[int, BadElement] = {}
+
+    outside = ((conn < 0) | (conn >= n)).any(axis=1)
+    for e in np.flatnonzero(outside).tolist():
+        bad[e] = BadElement(e, labels[e], "node out of range",
+                            f"element {labels[e]} has node indices {conn[e].tolist()} outside "
+                            f"0..{n - 1}")
+    inside = np.flatnonzero(~outside)
+    conn = np.ascontiguousarray(conn[inside], dtype=np.int32)  # only these have a geometry
+    if len(conn) == 0:
+        return [bad[e] for e in sorted(bad)]
+
+    ordered = np.sort(conn, axis=1)
+    repeats = (ordered[:, 1:] == ordered[:, :-1]).any(axis=1)
+    for k in np.flatnonzero(repeats).tolist():
+        e = int(inside[k])
+        bad[e] = BadElement(e, labels[e], "repeated node", f"element {labels[e]} repeats a "
+                            f"node: {node_labels[conn[k]].tolist()}")
+
+    detj, status, element = _core.solid_jacobians(x.ravel(), conn.ravel())
+    if status:  # the indices were checked above
+        raise ValueError(f"element {element - 1} has a node index out of range")
+    detj = detj.reshape(-1, 16)  # 8 Gauss points, then 8 corners
+    coords = _element_coordinates(x, conn)
+    scaled = _corner_scaled(coords).T  # (m, 8)
+    size = (coords.max(axis=1) - coords.min(axis=1)).max(axis=0)
+    with np.errstate(over="ignore"):
+        low = detj <= (DEGENERATE * size**3 / 8.0)[:, None]
+    bad_corner = (scaled <= MIN_SCALED_JACOBIAN) | low[:, 8:]
+    bad_gauss = low[:, :8]
+    rows = np.flatnonzero((bad_corner.any(axis=1) | bad_gauss.any(axis=1)) & ~repeats)
+    if rows.size == 0:
+        return [bad[e] for e in sorted(bad)]
+    # The worst failing point of each bad element, all at once (a mesh may have many).
+    at_corner = bad_corner[rows].any(axis=1)
+    corner = np.argmin(np.where(bad_corner[rows], scaled[rows], np.inf), axis=1)
+    gauss = np.argmin(np.where(bad_gauss[rows], detj[rows, :8], np.inf), axis=1)
+    value = np.where(at_corner, scaled[rows, corner], detj[rows, gauss])
+    corner_detj = detj[rows, 8 + corner]
+    corner_node = node_labels[conn[rows, corner]]
+    hints = {"inverted": "expected the first four counter-clockwise seen from the last four "
+                         "above them",
+             "degenerate": "the element is flat or collapsed there"}
+    for k, on_corner, c, g, v, dj, node, ids in zip(
+            rows.tolist(), at_corner.tolist(), corner.tolist(), gauss.tolist(), value.tolist(),
+            corner_detj.tolist(), corner_node.tolist(), node_labels[conn[rows]].tolist(),
+            strict=True):
+        e = int(inside[k])
+        fault = "inverted" if v < 0 else "degenerate"
+        where = (f"at its corner {c}, node {node} (scaled Jacobian {v:.3g}, det J {dj:.3g})"
+                 if on_corner else
+                 f"at its Gauss point {g}, next to corner {g} (det J {v:.3g})")
+        bad[e] = BadElement(e, labels[e], fault, f"element {labels[e]} is {fault} {where}, "
+                            f"nodes {ids}: {hints[fault]}")
+    return [bad[e] for e in sorted(bad)]
 
 
 class HexMesh:
@@ -128,9 +286,10 @@ class HexMesh:
     ``top`` is the side it points to) and where it came from (``source``, for messages).
     The arrays are read-only: the mesh is the reference configuration of a run.
 
-    Raises :class:`MeshError` for bad shapes, node indices out of range, repeated nodes in
-    an element, and inverted or degenerate elements (det J <= 0, or below 1e-10 of the
-    element's size cubed, at a Gauss point or a corner), naming the element by its label.
+    Raises :class:`MeshError` for bad shapes and for bad elements: it lists every element
+    :func:`find_bad_elements` finds (node indices out of range, a repeated node, inverted or
+    degenerate at a corner or a Gauss point) and its message names the first few by their
+    labels.
     """
 
     def __init__(self, nodes: ArrayLike, elements: ArrayLike,
@@ -152,31 +311,9 @@ class HexMesh:
         self.normal: tuple[float, float, float] = (float(axis[0]), float(axis[1]),
                                                    float(axis[2]))
         self.source = source
-        labels = self.element_ids
-        bad = np.flatnonzero((self.elements < 0).any(axis=1) | (self.elements >= n).any(axis=1))
-        if bad.size:
-            e = int(bad[0])
-            raise MeshError(f"element {labels[e]} has node indices {self.elements[e].tolist()} "
-                            f"outside 0..{n - 1}", e)
-        ordered = np.sort(self.elements, axis=1)
-        bad = np.flatnonzero((ordered[:, 1:] == ordered[:, :-1]).any(axis=1))
-        if bad.size:
-            e = int(bad[0])
-            raise MeshError(f"element {labels[e]} repeats a node: "
-                            f"{self.node_ids[self.elements[e]].tolist()}", e)
-        detj = self.jacobians()
-        size = np.ptp(self.nodes[self.elements], axis=1).max(axis=1)
-        floor = DEGENERATE * size**3 / 8.0
-        bad = np.flatnonzero((detj <= floor[:, None]).any(axis=1))
-        if bad.size:
-            e = int(bad[0])
-            where = int(np.argmin(detj[e]))
-            place = f"Gauss point {where}" if where < 8 else f"corner {where - 8}"
-            kind = "inverted" if detj[e, where] < 0 else "degenerate"
-            raise MeshError(
-                f"element {labels[e]} is {kind}: det J = {detj[e, where]:.3g} at {place} "
-                f"(nodes {self.node_ids[self.elements[e]].tolist()}; expected the bottom face "
-                "0-1-2-3 counter-clockwise seen from the top face 4-5-6-7)", e)
+        bad = find_bad_elements(self.nodes, self.elements, self.node_ids, self.element_ids)
+        if bad:
+            raise MeshError.of_elements(bad)
 
     @property
     def n_nodes(self) -> int:

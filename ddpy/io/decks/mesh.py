@@ -1,6 +1,7 @@
 """mesh.dat: the blank, as own 'nodes' and 'hexahedra' blocks, a generated 'box' or a mesh file
-(Abaqus input or Gmsh, through meshio), with its sheet normal, scale and origin; the elements
-are checked for repeated nodes, inverted or degenerate corners and free nodes.
+(Abaqus input or Gmsh, through meshio), with its sheet normal, scale and origin. The nodes
+are checked to belong to an element here, the elements by HexMesh (ddpy.model.mesh,
+find_bad_elements), whose findings are reported at the elements' lines.
 """
 
 from __future__ import annotations
@@ -35,11 +36,10 @@ from ddpy.model.mesh import HexMesh, MeshError
 MAX_ELEMENTS = 5_000_000
 #: Mesh files read through meshio.
 MESH_SUFFIXES = (".inp", ".msh")
-#: A corner of a hexahedron with a scaled Jacobian below this is degenerate.
-MIN_SCALED_JACOBIAN = 1e-6
 #: Largest node or element id.
 MAX_ID = 2**31 - 1
-#: Largest number of errors reported for one kind of defect in a block of data lines.
+#: Largest number of errors reported for one kind of defect in a block of data lines (or
+#: of bad elements).
 _MAX_REPORTED = 5
 
 
@@ -129,14 +129,12 @@ def _parse_mesh(deck: Deck) -> tuple[HexMesh, dict[str, NDArray[np.int64]]] | No
             deck.error(seen.get("scale", sources[0][1]), f"node coordinates beyond +-"
                        f"{MAX_LENGTH:g} mm (after scaling)")
             return None
-    if not _check_elements(deck, raw, nodes):
-        return None
     try:
         mesh = HexMesh(nodes, raw.elements, raw.node_ids, raw.element_ids, normal, raw.source)
-    except MeshError as error:  # what the corner checks above do not see (Gauss points)
-        line = (int(raw.element_lines[error.element]) if raw.element_lines is not None
-                and error.element >= 0 else None)
-        deck.error(line, str(error) if line is not None else f"{raw.source}: {error}")
+    except MeshError as error:
+        _report_bad_elements(deck, raw, error)
+        mesh = None
+    if not _no_free_nodes(deck, raw) or mesh is None:  # reported with the bad elements
         return None
     return mesh, raw.nodesets
 
@@ -402,54 +400,35 @@ def _file_nodesets(data: Any) -> dict[str, NDArray[np.int64]]:
     return sets
 
 
-#: Corner, and its neighbours along xi, eta, zeta with the sign of each direction.
-_CORNERS = np.array([[0, 1, 3, 4], [1, 0, 2, 5], [2, 3, 1, 6], [3, 2, 0, 7],
-                     [4, 5, 7, 0], [5, 4, 6, 1], [6, 7, 5, 2], [7, 6, 4, 3]])
-_SIGNS = np.array([[1, 1, 1], [-1, 1, 1], [-1, -1, 1], [1, -1, 1],
-                   [1, 1, -1], [-1, 1, -1], [-1, -1, -1], [1, -1, -1]], dtype=float)
+def _report_bad_elements(deck: Deck, raw: _RawMesh, error: MeshError) -> None:
+    """The bad elements HexMesh found, each at its line of the deck (the first few, then how
+    many more); a mesh file's at no line, named by the file."""
+    bad = error.bad_elements
+    if not bad:  # not an element's fault
+        deck.error(None, f"{raw.source}: {error}")
+        return
+
+    def report(k: int, message: str) -> None:
+        if raw.element_lines is not None:
+            deck.error(int(raw.element_lines[bad[k].index]), message)
+        else:
+            deck.error(None, f"{raw.source}: {message}")
+
+    for k in range(min(len(bad), _MAX_REPORTED)):
+        report(k, bad[k].message)
+    if len(bad) > _MAX_REPORTED:
+        report(_MAX_REPORTED, f"... and {len(bad) - _MAX_REPORTED} more bad elements "
+               f"({len(bad)} in all)")
 
 
-def scaled_jacobians(nodes: NDArray[np.float64], elements: NDArray[np.int64]
-                     ) -> NDArray[np.float64]:
-    """Scaled Jacobian (det of the three unit edge vectors) at the 8 corners, (m, 8):
-    1 for a cube, <= 0 for an inverted or degenerate corner."""
-    x = nodes[elements]  # (m, 8, 3)
-    corner = x[:, _CORNERS[:, 0]]
-    edges = (x[:, _CORNERS[:, 1:]] - corner[:, :, None, :]) * _SIGNS[None, :, :, None]
-    lengths = np.linalg.norm(edges, axis=-1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        unit = edges / lengths[..., None]
-        det = np.linalg.det(unit)
-    return np.where(np.isfinite(det), det, 0.0)
-
-
-def _check_elements(deck: Deck, raw: _RawMesh, nodes: NDArray[np.float64]) -> bool:
-    elements = raw.elements
-    ordered = np.sort(elements, axis=1)
-    repeats = np.flatnonzero((ordered[:, 1:] == ordered[:, :-1]).any(axis=1))
-    where = (lambda k: int(raw.element_lines[k])) if raw.element_lines is not None else (
-        lambda k: None)
-    label = f" of {raw.source}" if raw.element_lines is None else ""
-    for k in repeats[:_MAX_REPORTED]:
-        deck.error(where(k), f"element {raw.element_ids[k]}{label} repeats a node: "
-                   f"{raw.node_ids[elements[k]].tolist()}")
-    if repeats.size:
-        return False
-    jac = scaled_jacobians(nodes, elements)
-    bad = np.flatnonzero(jac.min(axis=1) <= MIN_SCALED_JACOBIAN)
-    for k in bad[:_MAX_REPORTED]:
-        c = int(np.argmin(jac[k]))
-        kind = "inverted" if jac[k].max() <= 0 else "inverted or degenerate"
-        deck.error(where(k), f"element {raw.element_ids[k]}{label} is {kind} at its corner "
-                   f"{c} (scaled Jacobian {jac[k, c]:.3g}): expected nodes 1-4 counter-"
-                   "clockwise seen from nodes 5-8 above them")
-    if bad.size > _MAX_REPORTED:
-        deck.error(where(int(bad[_MAX_REPORTED])), f"... and {bad.size - _MAX_REPORTED} more "
-                   "inverted or degenerate elements")
-    used = np.zeros(len(nodes), bool)
-    used[elements.ravel()] = True
-    if raw.node_lines is not None:  # mesh files: nodes outside the hexahedra were dropped
-        for k in np.flatnonzero(~used)[:_MAX_REPORTED]:
-            deck.error(int(raw.node_lines[k]), f"node {raw.node_ids[k]} belongs to no element: "
-                       "remove it (a free node makes the stiffness singular)")
-    return not bad.size and bool(used.all())
+def _no_free_nodes(deck: Deck, raw: _RawMesh) -> bool:
+    """Whether every node of the own 'nodes' block belongs to an element; else an error at
+    the line of each free one (the first few). Mesh files drop their free nodes."""
+    if raw.node_lines is None:
+        return True
+    used = np.zeros(len(raw.node_ids), bool)
+    used[raw.elements.ravel()] = True
+    for k in np.flatnonzero(~used)[:_MAX_REPORTED]:
+        deck.error(int(raw.node_lines[k]), f"node {raw.node_ids[k]} belongs to no element: "
+                   "remove it (a free node makes the stiffness singular)")
+    return bool(used.all())

@@ -54,6 +54,51 @@ def test_gmres_on_older_factors_solves_and_reports_failure() -> None:
                                   10)[3] == 1
 
 
+
+def test_gmres_stops_where_the_krylov_space_stops_growing() -> None:
+    # Older factors M of J(I + U V^T), U and V of rank 2: the operator W M^-1 J W^-1 is the
+    # identity plus a rank-2 term, so the Krylov space of any right-hand side is invariant
+    # from its third vector on (a breakdown). GMRES stops there with the solution, exact to
+    # rounding, even asked for 0 (which rounding cannot meet: not converged) and allowed
+    # all n iterations; a tolerance above rounding is met at the same iteration.
+    rng = np.random.default_rng(5)
+    n = 30
+    older = np.eye(n) * 4.0 + rng.normal(0.0, 0.3, (n, n))
+    u, v = rng.normal(size=(n, 2)), rng.normal(size=(n, 2))
+    dense = older @ (np.eye(n) + u @ v.T)
+    rows, cols = (index.astype(np.int32) for index in np.nonzero(np.ones((n, n))))
+    weight = rng.uniform(0.5, 2.0, n)
+    b = rng.normal(size=n)
+    with MumpsSolver("unsymmetric") as solver:
+        solver.analyse(n, rows, cols)
+        solver.factorize(older[rows, cols])
+        rhs = weight * solver.solve(b)
+        for tol, done in ((0.0, 0), (1e-12, 1)):
+            z, k, converged, status = _core.krylov_solve(rows, cols, dense[rows, cols], weight,
+                                                         solver.handle, rhs, tol, n)
+            assert status == 0 and k == 3 and converged == done, (tol, k, converged)
+            np.testing.assert_allclose(z / weight, np.linalg.solve(dense, b), rtol=1e-10)
+
+
+def test_gmres_on_an_operator_singular_on_its_krylov_space_does_not_converge() -> None:
+    # J with a zero first column and M = I: the right-hand side e_1 is in the operator's
+    # null space, the Krylov space stops at its first vector and the least-squares problem
+    # there is singular. GMRES stops at once, with nothing, and says it did not converge
+    # (the residual of its rotations is 0 there: the singular pivot is what tells).
+    n = 6
+    rows, cols = (index.astype(np.int32) for index in np.nonzero(np.ones((n, n))))
+    singular = np.eye(n)
+    singular[:, 0] = 0.0
+    e1 = np.eye(n)[0]
+    with MumpsSolver("unsymmetric") as solver:
+        solver.analyse(n, rows, cols)
+        solver.factorize(np.eye(n)[rows, cols])
+        z, k, converged, status = _core.krylov_solve(rows, cols, singular[rows, cols],
+                                                     np.ones(n), solver.handle, e1, 1e-8, n)
+    assert status == 0 and k == 1 and converged == 0
+    assert not z.any()
+
+
 def slide(linear_solver: str) -> tuple[FormingProblem, object]:
     """A block pressed onto a cylinder crest, then slid over it with friction (nodes
     between stick and slip, the contact set changing)."""

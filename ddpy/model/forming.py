@@ -29,7 +29,7 @@ from ddpy.core.ordering import mesh_solver
 from ddpy.geometry.search import NONE
 from ddpy.model.contact import INACTIVE
 from ddpy.model.control import IncrementLimits, NewtonSettings, next_step
-from ddpy.model.mesh import HEX_EDGES, largest_rotation
+from ddpy.model.mesh import HEX_EDGES, free_rigid_modes, largest_rotation
 from ddpy.model.newton import Factors, Layout, Loop, Pairs, ToolPack, Trial, increment
 from ddpy.model.solid import Solid, SolidState, _components
 from ddpy.model.tool import RigidTool
@@ -509,23 +509,7 @@ class FormingProblem:
 
     def free_rigid_modes(self) -> int:
         """How many rigid-body motions of the blank the fixed dofs leave free."""
-        return 6 - int(np.linalg.matrix_rank(self._restrained_modes(self.fixed), tol=1e-9))
-
-    def _restrained_modes(self, fixed: NDArray[np.bool_]) -> NDArray[np.float64]:
-        """Rows: the six rigid modes at every fixed dof (see ``_modes_along``)."""
-        node, axis = np.nonzero(fixed)
-        if not node.size:
-            return np.zeros((1, 6))
-        return self._modes_along((self.solid.mesh.nodes + self.u)[node], np.eye(3)[axis])
-
-    def _modes_along(self, points: NDArray[np.float64],
-                     directions: NDArray[np.float64]) -> NDArray[np.float64]:
-        """Rows: the six rigid modes of the blank (unit translations and rotations about
-        its centroid, scaled by its size) along a direction at each point: a fixed dof,
-        or the normal of a contact."""
-        x = self.solid.mesh.nodes + self.u
-        arm = (points - x.mean(axis=0)) / max(float(np.ptp(x, axis=0).max()), 1e-300)
-        return np.concatenate([directions, np.cross(arm, directions)], axis=1)
+        return len(free_rigid_modes(self.solid.mesh.nodes + self.u, self.fixed))
 
     def support_rigid_modes(self) -> list[tuple[int, int]]:
         """Fix the fewest dofs (a 3-2-1 set on three far apart nodes of the deformed blank)
@@ -539,19 +523,19 @@ class FormingProblem:
         third = int(np.argmax(np.linalg.norm(off, axis=1)))
         added: list[tuple[int, int]] = []
         fixed = self.fixed.copy()
-        rank = np.linalg.matrix_rank(self._restrained_modes(fixed), tol=1e-9)
+        free = len(free_rigid_modes(x, fixed))
         for node in (first, second, third):
             for comp in range(3):
-                if rank == 6 or fixed[node, comp]:
+                if free == 0 or fixed[node, comp]:
                     continue
                 fixed[node, comp] = True
-                new_rank = np.linalg.matrix_rank(self._restrained_modes(fixed), tol=1e-9)
-                if new_rank > rank:
-                    rank = new_rank
+                left = len(free_rigid_modes(x, fixed))
+                if left < free:
+                    free = left
                     added.append((node, comp))
                 else:
                     fixed[node, comp] = False
-        if rank < 6:
+        if free:
             raise ValueError("could not find supports that stop every rigid-body motion")
         for node, comp in added:
             self.fix([node], comp)

@@ -15,7 +15,8 @@ from numpy.typing import ArrayLike, NDArray
 from ddpy import _core
 from ddpy._validate import float_array, int_array
 
-__all__ = ["HEX_EDGES", "HEX_FACES", "BadElement", "HexMesh", "MeshError", "boundary_faces",
+__all__ = ["HEX_EDGES", "HEX_FACES", "RIGID_MODES", "BadElement", "HexMesh", "MeshError",
+           "boundary_faces", "free_rigid_modes",
            "corner_scaled_jacobians", "face_area_vectors", "find_bad_elements",
            "largest_rotation", "through_thickness_columns"]
 
@@ -442,3 +443,27 @@ def largest_rotation(x: NDArray[np.float64], elements: NDArray[np.integer],
     skew = 0.5 * (gradient - gradient.transpose(0, 2, 1))
     axial = np.stack([skew[:, 1, 2], skew[:, 2, 0], skew[:, 0, 1]], axis=1)
     return float(np.linalg.norm(axial, axis=1).max()) if len(axial) else 0.0
+
+
+#: The six rigid-body motions, in the order of free_rigid_modes' columns.
+RIGID_MODES = ("translation along x", "translation along y", "translation along z",
+               "rotation about x", "rotation about y", "rotation about z")
+
+
+def free_rigid_modes(x: ArrayLike, fixed: ArrayLike) -> NDArray[np.float64]:
+    """The rigid-body motions of a body with nodes at ``x`` (n, 3) that the fixed dofs
+    ``fixed`` (n, 3) leave free: an orthonormal basis (k, 6) of (translation, rotation about
+    the centroid) vectors, none when every motion is stopped. A motion is stopped where it
+    moves a fixed dof: its rows are the six motions along each fixed dof's direction, the
+    rotations' arms scaled by the body's size, so that the rank test (singular values above
+    1e-9) does not depend on units."""
+    x = float_array(x, "x", (None, 3))
+    node, axis = np.nonzero(np.asarray(fixed, dtype=bool))
+    if not node.size:
+        return np.eye(6)
+    arm = (x[node] - x.mean(axis=0)) / max(float(np.ptp(x, axis=0).max()), 1e-300)
+    direction = np.eye(3)[axis]
+    rows = np.concatenate([direction, np.cross(arm, direction)], axis=1)
+    _, sing, vt = np.linalg.svd(rows, full_matrices=True)
+    rank = int((sing > 1e-9).sum())
+    return vt[rank:]

@@ -25,6 +25,7 @@ from ddpy.core.linalg import MumpsSolver
 from ddpy.core.ordering import mesh_solver
 from ddpy.core.parallel import threads as thread_count
 from ddpy.model.control import NewtonSettings
+from ddpy.model.mesh import RIGID_MODES, free_rigid_modes
 from ddpy.model.newton import (
     PARTS,
     SEARCH_ENERGY,
@@ -188,25 +189,13 @@ class StaticProblem:
 
     def _check_supports(self) -> None:
         """Refuse constraints that leave a rigid-body motion of the whole mesh free."""
-        x = self.solid.mesh.nodes - self.solid.mesh.nodes.mean(axis=0)
-        modes = np.zeros((x.shape[0], 3, 6))
-        for axis in range(3):
-            modes[:, axis, axis] = 1.0
-            modes[:, :, 3 + axis] = np.cross(np.eye(3)[axis], x)
-        restrained = modes.reshape(-1, 6)[self.fixed.ravel()]
-        if restrained.shape[0] >= 6:
-            _, sing, vt = np.linalg.svd(restrained, full_matrices=False)
-            if sing[-1] > 1e-10 * sing[0] * max(1.0, np.abs(x).max()):
-                return
-            mode = vt[-1]
-        else:
-            mode = np.linalg.svd(np.vstack([restrained, np.zeros((6, 6))]))[2][-1]
-        names = ["translation along x", "translation along y", "translation along z",
-                 "rotation about x", "rotation about y", "rotation about z"]
-        main = int(np.argmax(np.abs(mode)))
-        raise ValueError(f"the fixed dofs leave a rigid-body motion free ({names[main]}"
-                         f"{' and others' if np.sum(np.abs(mode) > 1e-6) > 1 else ''}): "
-                         "fix more dofs, e.g. symmetry planes or a clamp")
+        free = free_rigid_modes(self.solid.mesh.nodes, self.fixed)
+        if not len(free):
+            return
+        main = int(np.argmax(np.abs(free[0])))
+        others = " and others" if len(free) > 1 or np.sum(np.abs(free[0]) > 1e-6) > 1 else ""
+        raise ValueError(f"the fixed dofs leave a rigid-body motion free ({RIGID_MODES[main]}"
+                         f"{others}): fix more dofs, e.g. symmetry planes or a clamp")
 
     def _prepare(self) -> Layout:
         if self._layout is None or self._solver is None:

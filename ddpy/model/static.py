@@ -212,15 +212,17 @@ class StaticProblem:
         return self._layout
 
     def solve(self, increments: int = 1, newton: NewtonSettings | None = None,
-              max_cuts: int = 6, threads: int | None = None, predictor: str = "elastic",
+              max_cuts: int = 6, threads: int | None = None,
+              predictor: str = "extrapolate",
               line_search: bool = True) -> SolidResult:
         """Apply loads and prescribed displacements in ``increments`` equal steps.
 
         The prescribed increment enters through the tangent (K_ff du_f = -(r_f + K_fp dp)),
-        not as a jump of the boundary nodes. ``predictor``: "elastic" starts from the
-        converged state, the first correction with its tangent (elastic: no strain
-        increment yet); "extrapolate" from the previous displacement increment, scaled to
-        this one (the first increment and retries after a cut start as "elastic").
+        not as a jump of the boundary nodes. ``predictor``: "extrapolate" starts from the
+        previous displacement increment, scaled to this one, as a forming increment does
+        (the first increment and retries after a cut start as "elastic"); "elastic" from
+        the converged state, the first correction with its tangent (elastic: no strain
+        increment yet).
         ``newton`` (default NewtonSettings(), as in a deck): it has converged when
         ||r_free|| <= force_tolerance max(||f_ext||, ||reactions||, floor) and
         ||correction|| <= displacement_tolerance ||increment of u||; on divergence, an

@@ -672,17 +672,23 @@ class FormingProblem:
         layout = self._layout or Layout(self.solid, self.tools, self.fixed)
         n = self.solid.mesh.n_nodes
         u = self.u if u is None else float_array(u, "u", (n, 3))
-        where = dict(self.position)
-        for name, value in (positions or {}).items():
-            if name not in where:
-                raise ValueError(f"positions names an unknown tool: {name}")
-            where[name] = float_array(value, f"position of {name}", (3,))
+        where = self._positions(positions)
         x = self.solid.mesh.nodes + u
         on = np.ones(layout.node.size, dtype=bool)
         state, (gap, normal) = self._contact(layout, x, self.solid.mesh.nodes + self.u,
                                              where, on, self.force, np.zeros(layout.n),
                                              np.empty(0))
         return state, gap, normal
+
+    def _positions(self, positions: Mapping[str, ArrayLike] | None
+                   ) -> dict[str, NDArray[np.float64]]:
+        """Where the tools are, with those named in ``positions`` moved there."""
+        where = dict(self.position)
+        for name, value in (positions or {}).items():
+            if name not in where:
+                raise ValueError(f"positions names an unknown tool: {name}")
+            where[name] = float_array(value, f"position of {name}", (3,))
+        return where
 
     def _tool_arguments(self, positions: Mapping[str, NDArray[np.float64]]) -> tuple:
         """The tools as the core's forming_contact and forming_increment take them, one
@@ -728,11 +734,7 @@ class FormingProblem:
         n, npair = self.solid.mesh.n_nodes, layout.node.size
         u = self.u if u is None else float_array(u, "u", (n, 3))
         force = self.force if force is None else float_array(force, "force", (npair, 3))
-        where = dict(self.position)
-        for name, value in (positions or {}).items():
-            if name not in where:
-                raise ValueError(f"positions names an unknown tool: {name}")
-            where[name] = float_array(value, f"position of {name}", (3,))
+        where = self._positions(positions)
         values = np.empty(layout.rows.size)
         values[layout.k_slots:layout.k_slots + layout.n_coupling] = -1.0
         out = self.solid.assemble(u, self.state, layout.pattern, values=values[:layout.k_slots])

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from ddpy import _core
-from ddpy.core.linalg import MumpsSolver
+from ddpy.core.linalg import MumpsSolver, row_structure
 from ddpy.model.contact import SLIP
 from ddpy.model.control import NewtonSettings
 from ddpy.model.forming import FormingProblem, RigidTool
@@ -38,20 +38,32 @@ def test_gmres_on_older_factors_solves_and_reports_failure() -> None:
         solver.analyse(n, *np.nonzero(np.ones((n, n))))
         solver.factorize(older[np.nonzero(np.ones((n, n)))])
         rhs = weight * solver.solve(b)  # the preconditioned, weighted right-hand side
-        z, k, converged, status = _core.krylov_solve(rows, cols, values, weight,
+        structure = row_structure(n, rows, cols)
+        z, k, converged, status = _core.krylov_solve(values, *structure, weight,
                                                      solver.handle, rhs, 1e-12, n)
         assert status == 0 and converged == 1 and k < 15, (k, converged)
         np.testing.assert_allclose(z / weight, np.linalg.solve(dense, b), rtol=1e-9)
-        _, k, converged, status = _core.krylov_solve(rows, cols, values, weight,
+        _, k, converged, status = _core.krylov_solve(values, *structure, weight,
                                                      solver.handle, rhs, 1e-12, 2)
         assert status == 0 and converged == 0 and k == 2
-        z, k, converged, status = _core.krylov_solve(rows, cols, values, weight,
+        z, k, converged, status = _core.krylov_solve(values, *structure, weight,
                                                      solver.handle, np.zeros(n), 1e-8, 10)
         assert converged == 1 and k == 0 and not z.any()
-        bad = rows.copy()
+        bad = structure.col.copy()
         bad[0] = n
-        assert _core.krylov_solve(bad, cols, values, weight, solver.handle, rhs, 1e-8,
-                                  10)[3] == 1
+        assert _core.krylov_solve(values, *structure._replace(col=bad), weight, solver.handle,
+                                  rhs, 1e-8, 10)[3] == 1
+        # The lower triangle of a symmetric matrix stands for the whole of it.
+        symmetric = dense + dense.T
+        lower_rows, lower_cols = np.tril_indices(n)
+        full = row_structure(n, *np.nonzero(np.ones((n, n))))
+        lower = row_structure(n, lower_rows, lower_cols, symmetric=True)
+        z_full = _core.krylov_solve(symmetric.ravel(), *full, weight, solver.handle, rhs,
+                                    1e-12, n)[0]
+        z_lower = _core.krylov_solve(symmetric[lower_rows, lower_cols], *lower, weight,
+                                     solver.handle, rhs, 1e-12, n)[0]
+        np.testing.assert_allclose(z_lower, z_full, rtol=1e-12)
+        np.testing.assert_allclose(z_full / weight, np.linalg.solve(symmetric, b), rtol=1e-9)
 
 
 
@@ -74,8 +86,9 @@ def test_gmres_stops_where_the_krylov_space_stops_growing() -> None:
         solver.factorize(older[rows, cols])
         rhs = weight * solver.solve(b)
         for tol, done in ((0.0, 0), (1e-12, 1)):
-            z, k, converged, status = _core.krylov_solve(rows, cols, dense[rows, cols], weight,
-                                                         solver.handle, rhs, tol, n)
+            z, k, converged, status = _core.krylov_solve(
+                dense[rows, cols], *row_structure(n, rows, cols), weight, solver.handle, rhs,
+                tol, n)
             assert status == 0 and k == 3 and converged == done, (tol, k, converged)
             np.testing.assert_allclose(z / weight, np.linalg.solve(dense, b), rtol=1e-10)
 
@@ -93,8 +106,9 @@ def test_gmres_on_an_operator_singular_on_its_krylov_space_does_not_converge() -
     with MumpsSolver("unsymmetric") as solver:
         solver.analyse(n, rows, cols)
         solver.factorize(np.eye(n)[rows, cols])
-        z, k, converged, status = _core.krylov_solve(rows, cols, singular[rows, cols],
-                                                     np.ones(n), solver.handle, e1, 1e-8, n)
+        z, k, converged, status = _core.krylov_solve(
+            singular[rows, cols], *row_structure(n, rows, cols), np.ones(n), solver.handle,
+            e1, 1e-8, n)
     assert status == 0 and k == 1 and converged == 0
     assert not z.any()
 

@@ -9,7 +9,7 @@ the preconditioner instead of factorizing again (docs/theory/linear-solver.md).
 from __future__ import annotations
 
 import operator
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -17,7 +17,7 @@ from numpy.typing import ArrayLike, NDArray
 from ddpy import _core
 from ddpy._validate import float_array, int_array
 
-__all__ = ["MumpsSolver", "LinearSolverError", "spsolve"]
+__all__ = ["MumpsSolver", "LinearSolverError", "RowStructure", "row_structure", "spsolve"]
 
 #: MUMPS's integers (sizes, indices, entry counts) are 32-bit here.
 INT32_MAX = 2**31 - 1
@@ -34,6 +34,40 @@ _MESSAGES = {
     -1003: "the size differs from the analysed structure",
     -1004: "too many solvers open at once; close some",
 }
+
+
+class RowStructure(NamedTuple):
+    """A coordinate structure (duplicates summed, as MUMPS does) by rows, for products with
+    the matrix in the core: row i's entries are ``row_start[i] .. row_start[i + 1] - 1``
+    (0-based), each with its column ``col`` and the positions in the coordinate values
+    that add up to it, ``sources[source_start[k] .. source_start[k + 1] - 1]``."""
+
+    row_start: NDArray[np.int32]
+    col: NDArray[np.int32]
+    sources: NDArray[np.int32]
+    source_start: NDArray[np.int32]
+
+
+def row_structure(n: int, rows: ArrayLike, cols: ArrayLike, symmetric: bool = False
+                  ) -> RowStructure:
+    """The rows of the n x n matrix with entries at 0-based (rows, cols); ``symmetric``: they
+    are one triangle, each off-diagonal entry standing for its mirror too. Sorted once per
+    structure, so that each product with new values sums the duplicates in parallel and
+    runs over the rows in parallel (docs/theory/linear-solver.md)."""
+    rows = int_array(rows, "rows", (None,)).astype(np.int64)
+    cols = int_array(cols, "cols", (rows.size,)).astype(np.int64)
+    origin = np.arange(rows.size, dtype=np.int64)
+    if symmetric:
+        off = np.flatnonzero(rows != cols)
+        rows, cols = np.concatenate([rows, cols[off]]), np.concatenate([cols, rows[off]])
+        origin = np.concatenate([origin, off])
+    key, slot = np.unique(rows * n + cols, return_inverse=True)
+    order = np.argsort(slot, kind="stable")
+    source_start = np.zeros(key.size + 1, dtype=np.int32)
+    np.cumsum(np.bincount(slot, minlength=key.size), out=source_start[1:])
+    return RowStructure(np.searchsorted(key // n, np.arange(n + 1)).astype(np.int32),
+                        (key % n).astype(np.int32), origin[order].astype(np.int32),
+                        source_start)
 
 
 class LinearSolverError(RuntimeError):

@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ddpy import _core
-from ddpy.core.linalg import LinearSolverError
+from ddpy.core.linalg import LinearSolverError, row_structure
 from ddpy.geometry.search import SearchArrays
 from ddpy.model.mesh import HexMesh, boundary_faces, face_area_vectors
 from ddpy.model.solid import ElementError, Solid, SolidState, _flat
@@ -82,6 +82,8 @@ class Layout:
         self.cols = np.concatenate(cols).astype(np.int32)
         self.k_slots = self.pattern.rows.size
         self.n_coupling = int(coupling.sum())
+        #: the Jacobian by rows, for the products of GMRES in the core
+        self.by_rows = row_structure(self.n, self.rows, self.cols, symmetric)
 
 
 class ToolPack:
@@ -248,7 +250,9 @@ def increment(solid: Solid, layout: Layout, factors: Factors, state: SolidState,
             raise ValueError("a layout with contact pairs needs their Pairs")
         (factored, u, fint, stress, ep, strain, axes, niter, history, counters, spent, outcome,
          info, detail) = _core.static_increment(
-            *solid_state, layout.rows, layout.cols, solid.mesh.element_size(), u_n.ravel(),
+            *solid_state, layout.rows.size, layout.by_rows.row_start, layout.by_rows.col,
+            layout.by_rows.sources, layout.by_rows.source_start, solid.mesh.element_size(),
+            u_n.ravel(),
             external.ravel(), prescribed.ravel(), start, settings, isettings, factored,
             *buffers)
         force = pair_state = gap = normal = np.zeros(0)
@@ -256,7 +260,8 @@ def increment(solid: Solid, layout: Layout, factors: Factors, state: SolidState,
         (factored, reuse_next, u, force, fint, stress, ep, strain, axes, pair_state, gap,
          normal, niter, history, counters, spent, outcome, info, detail) = \
             _core.forming_increment(
-                *solid_state, layout.n_coupling, layout.rows, layout.cols, *pairs.tools,
+                *solid_state, layout.n_coupling, layout.rows.size, *layout.by_rows,
+                *pairs.tools,
                 loop.touching, layout.first, layout.node, pairs.on.astype(np.int32), pairs.r,
                 pairs.mu, layout.held_flags, u_n.ravel(),
                 np.where(pairs.on[:, None], pairs.force_n, 0.0).ravel(), external.ravel(),

@@ -12,7 +12,6 @@ module ddpy_api
                                 solver_solve, solver_destroy, solver_info, &
                                 solver_set_control, solver_set_real_control, &
                                 solver_set_ordering
-  use ddpy_sparse, only: sum_duplicates
   !$ use omp_lib, only: omp_get_max_threads, omp_set_num_threads
   implicit none
   private
@@ -21,7 +20,7 @@ module ddpy_api
             api_nagata_evaluate, api_nagata_edge_coefficient, api_solver_create, &
             api_solver_analyse, api_solver_factorize, api_solver_solve, api_solver_info, &
             api_solver_destroy, api_solver_set_control, api_solver_set_real_control, &
-            api_solver_set_ordering, api_sum_duplicates
+            api_solver_set_ordering
 
   integer, parameter :: nb = max_bezier_degree
   integer, parameter :: nc = nagata_coefficient_count
@@ -233,16 +232,5 @@ contains
     integer(c_int), intent(out) :: status
     call solver_destroy(handle, status)
   end subroutine api_solver_destroy
-
-  !> Sum the duplicates of a coordinate matrix's values into its compressed entries
-  !> (sources, starts: 0-based, see ddpy_sparse).
-  subroutine api_sum_duplicates(n_values, n_data, values, sources, starts, data) &
-    bind(C, name="ddpy_sum_duplicates")
-    integer(c_int), value, intent(in) :: n_values, n_data
-    real(c_double), intent(in) :: values(n_values)
-    integer(c_int), intent(in) :: sources(n_values), starts(n_data + 1)
-    real(c_double), intent(inout) :: data(n_data)
-    call sum_duplicates(n_values, n_data, values, sources, starts, data)
-  end subroutine api_sum_duplicates
 
 end module ddpy_api

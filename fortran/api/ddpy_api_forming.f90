@@ -52,6 +52,18 @@ contains
     ok = k_slots >= 0 .and. (nvalues == k_slots + 4*coupled + 9*npair .or. nvalues == 0)
   end function layout_ok
 
+  !> Whether a row structure (ddpy.core.linalg.row_structure) fits: rows and sources in
+  !> order from 0 to their counts, columns in 0..n-1, sources in 0..nvalues-1.
+  pure logical function rows_ok(n, ncsr, nsrc, nvalues, row_start, col, sources, &
+                                source_start) result(ok)
+    integer(c_int), intent(in) :: n, ncsr, nsrc, nvalues, row_start(n + 1), col(ncsr), &
+                                  sources(nsrc), source_start(ncsr + 1)
+    ok = row_start(1) == 0 .and. row_start(n + 1) == ncsr .and. &
+         all(row_start(2:) >= row_start(:n)) .and. source_start(1) == 0 .and. &
+         source_start(ncsr + 1) == nsrc .and. all(source_start(2:) >= source_start(:ncsr)) &
+         .and. all(col >= 0 .and. col < n) .and. all(sources >= 0 .and. sources < nvalues)
+  end function rows_ok
+
   !> Contact of every (tool, slave) pair: see forming_contact.
   subroutine api_forming_contact(nnode, x, x_n, fixed, ntool, table, tol, ncoef, coef, &
                                  ndeg, degrees, ntri, triangle, ntree, tree_lower, &
@@ -101,7 +113,8 @@ contains
   !> Newton iterations of one increment: see forming_increment. Connectivity arrives 0-based.
   subroutine api_forming_increment(nnode, x0, ne, conn, props, u_ref, axes_old, stress_old, &
                                    ep_old, strain_old, eqn, offsets, fixed, nf, k_slots, &
-                                   n_coupling, nvalues, rows, cols, ntool, table, tol, ncoef, &
+                                   n_coupling, nvalues, nrow, row_start, ncsr, col, nsrc, &
+                                   sources, source_start, ntool, table, tol, ncoef, &
                                    coef, ndeg, degrees, ntri, triangle, ntree, tree_lower, &
                                    tree_upper, tree_child, nframe, frame, frame_lower, &
                                    frame_upper, nstart, grid_start, ngrid, grid_params, &
@@ -113,12 +126,13 @@ contains
                                    ep, strain, axes, state, gap, normal, nhistory, niter, &
                                    history, counters, timings, outcome, info, detail) &
     bind(C, name="ddpy_forming_increment")
-    integer(c_int), value, intent(in) :: nnode, ne, nf, k_slots, n_coupling, nvalues, ntool, &
-                                         ncoef, ndeg, ntri, ntree, nframe, nstart, ngrid, &
-                                         nface, npair, nhistory
+    integer(c_int), value, intent(in) :: nnode, ne, nf, k_slots, n_coupling, nvalues, nrow, &
+                                         ncsr, nsrc, ntool, ncoef, ndeg, ntri, ntree, &
+                                         nframe, nstart, ngrid, nface, npair, nhistory
     real(c_double), value, intent(in) :: reach, size, touching
     integer(c_int), intent(in) :: conn(8, ne), eqn(3, nnode), offsets(ne + 1), &
-                                  fixed(3, nnode), rows(nvalues), cols(nvalues), &
+                                  fixed(3, nnode), row_start(nrow + 1), col(ncsr), &
+                                  sources(nsrc), source_start(ncsr + 1), &
                                   table(tool_fields, ntool), degrees(ndeg), triangle(ntri), &
                                   tree_child(ntree), grid_start(nstart), &
                                   face_first(ntool + 1), faces(4, nface), corner(4, nface), &
@@ -146,14 +160,15 @@ contains
     history = 0.0_wp
     outcome = -1
     if (nhistory < isettings(1) + 1 .or. offsets(ne + 1) /= k_slots) return
-    if (any(conn < 0) .or. any(conn >= nnode) .or. any(rows < 0) .or. any(cols < 0) .or. &
-        any(rows >= nf + 3*npair) .or. any(cols >= nf + 3*npair)) return
+    if (any(conn < 0) .or. any(conn >= nnode) .or. nrow /= nf + 3*npair) return
+    if (.not. rows_ok(nrow, ncsr, nsrc, nvalues, row_start, col, sources, source_start)) return
     if (.not. layout_ok(nnode, ntool, table, ncoef, ndeg, ntri, ntree, nframe, nstart, ngrid, &
                         grid_start, face_first, nface, faces, corner, npair, tool_first, &
                         pair_node, eqn, k_slots, nvalues)) return
     call forming_increment(nnode, x0, ne, conn + 1, props, u_ref, axes_old, stress_old, &
                            ep_old, strain_old, eqn, offsets, fixed, nf, k_slots, n_coupling, &
-                           nvalues, rows, cols, ntool, table, tol, coef, degrees, triangle, &
+                           nvalues, row_start, ncsr, col, sources, source_start, ntool, &
+                           table, tol, coef, degrees, triangle, &
                            tree_lower, tree_upper, tree_child, frame, frame_lower, &
                            frame_upper, grid_start, grid_params, grid_normals, grid_points, &
                            facing, face_first, nface, faces, corner, positions, positions_n, &
@@ -169,14 +184,16 @@ contains
   !> pass (it takes a zero length for one). Connectivity arrives 0-based.
   subroutine api_static_increment(nnode, x0, ne, conn, props, u_ref, axes_old, stress_old, &
                                   ep_old, strain_old, eqn, offsets, fixed, nf, k_slots, &
-                                  nvalues, rows, cols, size, u_n, external, prescribed, guess, &
+                                  nvalues, ncsr, row_start, col, nsrc, sources, source_start, &
+                                  size, u_n, external, prescribed, guess, &
                                   settings, isettings, factored, u, fint, stress, ep, strain, &
                                   axes, nhistory, niter, history, counters, timings, outcome, &
                                   info, detail) bind(C, name="ddpy_static_increment")
-    integer(c_int), value, intent(in) :: nnode, ne, nf, k_slots, nvalues, nhistory
+    integer(c_int), value, intent(in) :: nnode, ne, nf, k_slots, nvalues, ncsr, nsrc, nhistory
     real(c_double), value, intent(in) :: size
     integer(c_int), intent(in) :: conn(8, ne), eqn(3, nnode), offsets(ne + 1), &
-                                  fixed(3, nnode), rows(nvalues), cols(nvalues), &
+                                  fixed(3, nnode), row_start(nf + 1), col(ncsr), &
+                                  sources(nsrc), source_start(ncsr + 1), &
                                   isettings(newton_integer_settings)
     real(c_double), intent(in) :: x0(3, nnode), props(material_prop_count), &
                                   u_ref(3, nnode), axes_old(3, 3, 8, ne), &
@@ -195,13 +212,14 @@ contains
     outcome = -1
     if (nhistory < isettings(1) + 1 .or. offsets(ne + 1) /= k_slots .or. nvalues /= k_slots) &
       return
-    if (any(conn < 0) .or. any(conn >= nnode) .or. any(rows < 0) .or. any(cols < 0) .or. &
-        any(rows >= nf) .or. any(cols >= nf)) return
+    if (any(conn < 0) .or. any(conn >= nnode)) return
+    if (.not. rows_ok(nf, ncsr, nsrc, nvalues, row_start, col, sources, source_start)) return
     first = 0
     reuse_next = 0
     call forming_increment(nnode, x0, ne, conn + 1, props, u_ref, axes_old, stress_old, &
                            ep_old, strain_old, eqn, offsets, fixed, nf, k_slots, 0, nvalues, &
-                           rows, cols, 0, table, reals, reals, ints, ints, reals, reals, ints, &
+                           row_start, ncsr, col, sources, source_start, 0, table, reals, &
+                           reals, ints, ints, reals, reals, ints, &
                            reals, reals, reals, ints, reals, reals, reals, tools, first, 0, &
                            faces, faces, tools, tools, 0.0_wp, size, 0.0_wp, 0, first, pairs, &
                            pairs, reals, reals, held, u_n, forces, external, prescribed, &
@@ -225,15 +243,17 @@ contains
                             min_step)
   end subroutine api_penetration_step
 
-  !> GMRES of the Newton loop on W M^-1 J W^-1 (J the coordinate matrix rows, cols, values,
-  !> 0-based, its lower triangle when symmetric is 1; M the factors held by the MUMPS
-  !> instance handle): see gmres. converged is 1 or 0; status < 0 a MUMPS solve failed, 1
-  !> an index out of range.
-  subroutine api_krylov_solve(n, nvalues, rows, cols, values, symmetric, weight, handle, b, &
-                              tol, m, z, k, converged, status) bind(C, name="ddpy_krylov_solve")
-    integer(c_int), value, intent(in) :: n, nvalues, symmetric, handle, m
+  !> GMRES of the Newton loop on W M^-1 J W^-1 (J the coordinate values summed into the rows
+  !> row_start, col, sources, source_start, 0-based: ddpy.core.linalg.row_structure; M the
+  !> factors held by the MUMPS instance handle): see gmres. converged is 1 or 0; status < 0
+  !> a MUMPS solve failed, 1 an index out of range.
+  subroutine api_krylov_solve(n, nvalues, values, ncsr, row_start, col, nsrc, sources, &
+                              source_start, weight, handle, b, tol, m, z, k, converged, &
+                              status) bind(C, name="ddpy_krylov_solve")
+    integer(c_int), value, intent(in) :: n, nvalues, ncsr, nsrc, handle, m
     real(c_double), value, intent(in) :: tol
-    integer(c_int), intent(in) :: rows(nvalues), cols(nvalues)
+    integer(c_int), intent(in) :: row_start(n + 1), col(ncsr), sources(nsrc), &
+                                  source_start(ncsr + 1)
     real(c_double), intent(in) :: values(nvalues), weight(n), b(n)
     real(c_double), intent(out) :: z(n)
     integer(c_int), intent(out) :: k, converged, status
@@ -242,10 +262,10 @@ contains
     k = 0
     converged = 0
     status = 1
-    if (any(rows < 0) .or. any(rows >= n) .or. any(cols < 0) .or. any(cols >= n) .or. &
+    if (.not. rows_ok(n, ncsr, nsrc, nvalues, row_start, col, sources, source_start) .or. &
         m < 1 .or. any(weight <= 0.0_wp)) return
-    call gmres(n, nvalues, rows, cols, values, symmetric /= 0, weight, handle, b, tol, m, z, &
-               k, done, status)
+    call gmres(n, nvalues, values, row_start, ncsr, col, sources, source_start, weight, &
+               handle, b, tol, m, z, k, done, status)
     converged = merge(1, 0, done)
   end subroutine api_krylov_solve
 

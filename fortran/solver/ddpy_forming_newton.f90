@@ -16,6 +16,7 @@ module ddpy_forming_newton
   use ddpy_forming, only: forming_contact, tool_fields
   use ddpy_contact, only: contact_inactive
   use ddpy_linear_solver, only: solver_factorize, solver_solve
+  use ddpy_sparse, only: sum_duplicates
   implicit none
   private
   public :: forming_increment, newton_settings, newton_integer_settings, outcome_converged, &
@@ -63,7 +64,8 @@ contains
   !> solver's factors are this layout's, the last GMRES converged fast.
   subroutine forming_increment(nnode, x0, ne, conn, props, u_ref, axes_old, stress_old, &
                                ep_old, strain_old, eqn, offsets, fixed, nf, k_slots, &
-                               n_coupling, nvalues, rows, cols, ntool, table, tol, coef, &
+                               n_coupling, nvalues, row_start, ncsr, col, sources, &
+                               source_start, ntool, table, tol, coef, &
                                degrees, triangle, tree_lower, tree_upper, tree_child, frame, &
                                frame_lower, frame_upper, grid_start, grid_params, &
                                grid_normals, grid_points, facing, face_first, nface, faces, &
@@ -72,9 +74,11 @@ contains
                                prescribed, guess, settings, isettings, factored, reuse_next, &
                                u, force, fint, stress, ep, strain, axes, state, gap, normal, &
                                niter, history, counters, timings, outcome, info, detail)
-    integer, intent(in) :: nnode, ne, nf, k_slots, n_coupling, nvalues, ntool, nface, npair
+    integer, intent(in) :: nnode, ne, nf, k_slots, n_coupling, nvalues, ncsr, ntool, nface, &
+                           npair
     integer, intent(in) :: conn(8, ne), eqn(3, nnode), offsets(ne + 1), fixed(3, nnode), &
-                           rows(nvalues), cols(nvalues), table(tool_fields, ntool), &
+                           row_start(nf + 3*npair + 1), col(ncsr), sources(*), &
+                           source_start(ncsr + 1), table(tool_fields, ntool), &
                            degrees(*), triangle(*), tree_child(*), grid_start(*), &
                            face_first(ntool + 1), faces(4, nface), corner(4, nface), &
                            tool_first(ntool + 1), pair_node(npair), on(npair), &
@@ -475,8 +479,9 @@ contains
           if (status < 0) return
           preconditioned = weight*preconditioned
         end if
-        call gmres(n, nvalues, rows, cols, s%values, symmetric, weight, handle, &
-                   preconditioned, forcing, isettings(2), z, count, gmres_converged, status)
+        call gmres(n, nvalues, s%values, row_start, ncsr, col, sources, source_start, &
+                   weight, handle, preconditioned, forcing, isettings(2), z, count, &
+                   gmres_converged, status)
         call system_clock(t1)
         timings(4) = timings(4) + real(t1 - t0, wp)/real(clock_rate, wp)
         if (status < 0) return
@@ -575,22 +580,23 @@ contains
     end if
   end function penetration_step
 
-  !> GMRES from 0, without restart, on the operator v -> W M^-1 J W^-1 v (J with the
-  !> given values in the coordinate structure rows, cols, 0-based, or its lower triangle
-  !> when symmetric; M the factors MUMPS holds
+  !> GMRES from 0, without restart, on the operator v -> W M^-1 J W^-1 v (J: the
+  !> coordinate values summed into the rows of the structure row_start, col, sources,
+  !> source_start (0-based, see ddpy.core.linalg.row_structure), once, in parallel; each
+  !> product runs over the rows in parallel; M the factors MUMPS holds
   !> behind handle; W the weights): the iterate z, the iterations and whether
   !> ||op(z) - b|| <= tol ||b||; status < 0: a MUMPS solve failed. Arnoldi with modified Gram-Schmidt run twice
   !> (the basis stays orthogonal to rounding when the operator is far from normal) and
   !> Givens rotations for the residual norm.
-  subroutine gmres(n, nvalues, rows, cols, values, symmetric, weight, handle, b, tol, m, z, &
-                   k, converged, status)
-    integer, intent(in) :: n, nvalues, rows(nvalues), cols(nvalues), handle, m
-    logical, intent(in) :: symmetric
+  subroutine gmres(n, nvalues, values, row_start, ncsr, col, sources, source_start, weight, &
+                   handle, b, tol, m, z, k, converged, status)
+    integer, intent(in) :: n, nvalues, ncsr, row_start(n + 1), col(ncsr), sources(*), &
+                           source_start(ncsr + 1), handle, m
     real(wp), intent(in) :: values(nvalues), weight(n), b(n), tol
     real(wp), intent(out) :: z(n)
     integer, intent(out) :: k, status
     logical, intent(out) :: converged
-    real(wp), allocatable :: basis(:, :), w(:), jv(:)
+    real(wp), allocatable :: basis(:, :), w(:), jv(:), entry(:)
     real(wp) :: hessenberg(m + 1, m), cosines(m), sines(m), res(m + 1), h(m + 1), beta, &
                 a, c, radius, y(m)
     integer :: i, j, pass, last
@@ -601,7 +607,8 @@ contains
     converged = .true.
     beta = sqrt(dot_product(b, b))
     if (beta == 0.0_wp) return
-    allocate(basis(n, m + 1), w(n), jv(n))
+    allocate(basis(n, m + 1), w(n), jv(n), entry(ncsr))
+    call sum_duplicates(nvalues, ncsr, values, sources, source_start, entry)
     basis(:, 1) = b/beta
     hessenberg = 0.0_wp
     cosines = 0.0_wp
@@ -612,16 +619,8 @@ contains
     do j = 1, m
       last = j
       ! w = W M^-1 J W^-1 basis_j
-      jv = 0.0_wp
       w = basis(:, j)/weight
-      do i = 1, nvalues
-        jv(rows(i) + 1) = jv(rows(i) + 1) + values(i)*w(cols(i) + 1)
-      end do
-      if (symmetric) then  ! the upper triangle, mirrored
-        do i = 1, nvalues
-          if (rows(i) /= cols(i)) jv(cols(i) + 1) = jv(cols(i) + 1) + values(i)*w(rows(i) + 1)
-        end do
-      end if
+      call row_product(n, ncsr, row_start, col, entry, w, jv)
       call solver_solve(handle, n, jv, w, status)
       if (status < 0) return
       w = weight*w
@@ -674,5 +673,23 @@ contains
       z = z + y(i)*basis(:, i)
     end do
   end subroutine gmres
+
+  !> y = A x for the matrix of rows row_start, columns col (0-based) and entries entry.
+  subroutine row_product(n, ncsr, row_start, col, entry, x, y)
+    integer, intent(in) :: n, ncsr, row_start(n + 1), col(ncsr)
+    real(wp), intent(in) :: entry(ncsr), x(n)
+    real(wp), intent(out) :: y(n)
+    integer :: i, k
+    real(wp) :: total
+    !$omp parallel do schedule(static) private(k, total) if(n > 4096)
+    do i = 1, n
+      total = 0.0_wp
+      do k = row_start(i) + 1, row_start(i + 1)
+        total = total + entry(k)*x(col(k) + 1)
+      end do
+      y(i) = total
+    end do
+    !$omp end parallel do
+  end subroutine row_product
 
 end module ddpy_forming_newton

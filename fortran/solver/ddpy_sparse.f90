@@ -2,9 +2,10 @@
 !>
 !> The assembly writes the Jacobian as coordinates with duplicates (one entry per element
 !> contribution, so that threads never write to the same place). The products of the Krylov
-!> solver need it with the duplicates summed, once per Newton iteration: on the paper's
-!> bending blank 11.7 million coordinates into 5.7 million entries. NumPy's bincount does it
-!> by a scatter on one thread; here every entry gathers its own contributions, in parallel.
+!> solver need it with the duplicates summed, once per GMRES call: on the paper's bending
+!> blank 11.7 million coordinates into 5.7 million entries. Every entry gathers its own
+!> contributions (ddpy.core.linalg.row_structure lists them), in parallel; a scatter over
+!> the coordinates would run on one thread.
 module ddpy_sparse
   use ddpy_kinds, only: wp
   implicit none

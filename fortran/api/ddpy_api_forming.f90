@@ -7,6 +7,7 @@ module ddpy_api_forming
   use ddpy_forming_newton, only: forming_increment, newton_settings, newton_integer_settings, &
                                  penetration_step, gmres
   use ddpy_material, only: material_prop_count
+  use ddpy_solid_assembly, only: kind_hexahedron, kind_solid_shell
   implicit none
   private
   public :: api_forming_contact, api_forming_increment, api_static_increment, &
@@ -99,8 +100,9 @@ contains
   end subroutine api_forming_contact
 
   !> Newton iterations of one increment: see forming_increment. Connectivity arrives 0-based.
-  subroutine api_forming_increment(nnode, x0, ne, conn, props, u_ref, axes_old, stress_old, &
-                                   ep_old, strain_old, eqn, offsets, fixed, nf, k_slots, &
+  subroutine api_forming_increment(nnode, x0, ne, conn, kind, props, u_ref, axes_old, &
+                                   stress_old, ep_old, strain_old, eqn, offsets, fixed, nf, &
+                                   k_slots, &
                                    n_coupling, nvalues, rows, cols, ntool, table, tol, ncoef, &
                                    coef, ndeg, degrees, ntri, triangle, ntree, tree_lower, &
                                    tree_upper, tree_child, nframe, frame, frame_lower, &
@@ -113,9 +115,9 @@ contains
                                    ep, strain, axes, state, gap, normal, nhistory, niter, &
                                    history, counters, timings, outcome, info, detail) &
     bind(C, name="ddpy_forming_increment")
-    integer(c_int), value, intent(in) :: nnode, ne, nf, k_slots, n_coupling, nvalues, ntool, &
-                                         ncoef, ndeg, ntri, ntree, nframe, nstart, ngrid, &
-                                         nface, npair, nhistory
+    integer(c_int), value, intent(in) :: nnode, ne, kind, nf, k_slots, n_coupling, nvalues, &
+                                         ntool, ncoef, ndeg, ntri, ntree, nframe, nstart, &
+                                         ngrid, nface, npair, nhistory
     real(c_double), value, intent(in) :: reach, size, touching
     integer(c_int), intent(in) :: conn(8, ne), eqn(3, nnode), offsets(ne + 1), &
                                   fixed(3, nnode), rows(nvalues), cols(nvalues), &
@@ -146,14 +148,15 @@ contains
     history = 0.0_wp
     outcome = -1
     if (nhistory < isettings(1) + 1 .or. offsets(ne + 1) /= k_slots) return
+    if (kind /= kind_hexahedron .and. kind /= kind_solid_shell) return
     if (any(conn < 0) .or. any(conn >= nnode) .or. any(rows < 0) .or. any(cols < 0) .or. &
         any(rows >= nf + 3*npair) .or. any(cols >= nf + 3*npair)) return
     if (.not. layout_ok(nnode, ntool, table, ncoef, ndeg, ntri, ntree, nframe, nstart, ngrid, &
                         grid_start, face_first, nface, faces, corner, npair, tool_first, &
                         pair_node, eqn, k_slots, nvalues)) return
-    call forming_increment(nnode, x0, ne, conn + 1, props, u_ref, axes_old, stress_old, &
-                           ep_old, strain_old, eqn, offsets, fixed, nf, k_slots, n_coupling, &
-                           nvalues, rows, cols, ntool, table, tol, coef, degrees, triangle, &
+    call forming_increment(nnode, x0, ne, conn + 1, kind, props, u_ref, axes_old, &
+                           stress_old, ep_old, strain_old, eqn, offsets, fixed, nf, k_slots, &
+                           n_coupling, nvalues, rows, cols, ntool, table, tol, coef, degrees, triangle, &
                            tree_lower, tree_upper, tree_child, frame, frame_lower, &
                            frame_upper, grid_start, grid_params, grid_normals, grid_points, &
                            facing, face_first, nface, faces, corner, positions, positions_n, &
@@ -167,13 +170,13 @@ contains
   !> Newton iterations of one increment of a solid without tools (the static problem): see
   !> forming_increment, called with no tools and no pairs, whose empty arrays f2py cannot
   !> pass (it takes a zero length for one). Connectivity arrives 0-based.
-  subroutine api_static_increment(nnode, x0, ne, conn, props, u_ref, axes_old, stress_old, &
-                                  ep_old, strain_old, eqn, offsets, fixed, nf, k_slots, &
-                                  nvalues, rows, cols, size, u_n, external, prescribed, guess, &
+  subroutine api_static_increment(nnode, x0, ne, conn, kind, props, u_ref, axes_old, &
+                                  stress_old, ep_old, strain_old, eqn, offsets, fixed, nf, &
+                                  k_slots, nvalues, rows, cols, size, u_n, external, prescribed, guess, &
                                   settings, isettings, factored, u, fint, stress, ep, strain, &
                                   axes, nhistory, niter, history, counters, timings, outcome, &
                                   info, detail) bind(C, name="ddpy_static_increment")
-    integer(c_int), value, intent(in) :: nnode, ne, nf, k_slots, nvalues, nhistory
+    integer(c_int), value, intent(in) :: nnode, ne, kind, nf, k_slots, nvalues, nhistory
     real(c_double), value, intent(in) :: size
     integer(c_int), intent(in) :: conn(8, ne), eqn(3, nnode), offsets(ne + 1), &
                                   fixed(3, nnode), rows(nvalues), cols(nvalues), &
@@ -195,13 +198,14 @@ contains
     outcome = -1
     if (nhistory < isettings(1) + 1 .or. offsets(ne + 1) /= k_slots .or. nvalues /= k_slots) &
       return
+    if (kind /= kind_hexahedron .and. kind /= kind_solid_shell) return
     if (any(conn < 0) .or. any(conn >= nnode) .or. any(rows < 0) .or. any(cols < 0) .or. &
         any(rows >= nf) .or. any(cols >= nf)) return
     first = 0
     reuse_next = 0
-    call forming_increment(nnode, x0, ne, conn + 1, props, u_ref, axes_old, stress_old, &
-                           ep_old, strain_old, eqn, offsets, fixed, nf, k_slots, 0, nvalues, &
-                           rows, cols, 0, table, reals, reals, ints, ints, reals, reals, ints, &
+    call forming_increment(nnode, x0, ne, conn + 1, kind, props, u_ref, axes_old, &
+                           stress_old, ep_old, strain_old, eqn, offsets, fixed, nf, k_slots, &
+                           0, nvalues, rows, cols, 0, table, reals, reals, ints, ints, reals, reals, ints, &
                            reals, reals, reals, ints, reals, reals, reals, tools, first, 0, &
                            faces, faces, tools, tools, 0.0_wp, size, 0.0_wp, 0, first, pairs, &
                            pairs, reals, reals, held, u_n, forces, external, prescribed, &

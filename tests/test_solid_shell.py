@@ -170,8 +170,10 @@ def test_patch_test_on_a_sheet_distorted_in_its_plane(large: bool) -> None:
     """A linear displacement field on the boundary of a 3 x 3 sheet patch in 3 layers,
     distorted in its plane with parallel normals, gives the same field inside and the
     exact constant stress, small and large strain (30 % stretch, shears, a 40 degree
-    rotation). The assumed strains fail it where the normals are not parallel (measured
-    on the randomly distorted cube below: 3e-3 of the stress; docs/theory/solid_shell.md)."""
+    rotation). The assumed strains fail it where the normals are not parallel: on the
+    3 x 3 x 3 cube with every node moved at random (tests/test_solid.py's patch, which the
+    hexahedron passes) the stress is wrong by 1.2 and 1.3 times itself (measured), as the
+    element study found on MacNeal and Harder's cube (docs/theory/element_choice.md)."""
     if large:
         q = rotation("x", 40.0) @ rotation("z", 25.0)
         f = q @ np.array([[1.3, 0.1, 0.0], [0.05, 0.9, 0.1], [0.0, 0.1, 1.1]])
@@ -192,7 +194,7 @@ def test_patch_test_on_a_sheet_distorted_in_its_plane(large: bool) -> None:
             assert np.abs(u - exact).max() <= 1e-10 * np.abs(exact).max()
             assert error <= 1e-9
         else:
-            assert error > 1e-4
+            assert error > 0.5
 
 
 def cantilever_ratio(element: str, aspect: float, layers: int, nu: float = NU,

@@ -26,7 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 from ddpy import _core
 from ddpy._validate import float_array, int_array
 from ddpy.core.ordering import nested_dissection, node_adjacency
-from ddpy.model.mesh import HEX_EDGES, HexMesh
+from ddpy.model.mesh import HexMesh, zeta_off_normal
 
 __all__ = ["Assembly", "ELEMENTS", "Solid", "SolidState", "ElementError", "material_props"]
 
@@ -318,11 +318,7 @@ class Solid:
 def _check_thickness_direction(mesh: HexMesh) -> None:
     """Refuse a mesh for the solid-shell where some element's zeta edges (0-4, 1-5, 2-6,
     3-7) are not, of its three edge directions, the one closest to the sheet normal."""
-    edges = mesh.elements[:, HEX_EDGES]  # (m, 3, 4, 2)
-    vectors = mesh.nodes[edges[..., 1]] - mesh.nodes[edges[..., 0]]
-    lengths = np.linalg.norm(vectors, axis=-1)
-    alignment = np.abs(vectors @ np.asarray(mesh.normal)) / lengths
-    bad = np.flatnonzero(np.argmax(alignment.mean(axis=2), axis=1) != 2)
+    bad = zeta_off_normal(mesh.nodes, mesh.elements, mesh.normal)
     if bad.size:
         labels = ", ".join(str(int(mesh.element_ids[e])) for e in bad[:3])
         more = f" and {bad.size - 3} more" if bad.size > 3 else ""

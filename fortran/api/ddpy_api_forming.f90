@@ -154,28 +154,27 @@ contains
     if (.not. layout_ok(nnode, ntool, table, ncoef, ndeg, ntri, ntree, nframe, nstart, ngrid, &
                         grid_start, face_first, nface, faces, corner, npair, tool_first, &
                         pair_node, eqn, k_slots, nvalues)) return
-    call forming_increment(nnode, x0, ne, conn + 1, kind, props, u_ref, axes_old, &
-                           stress_old, ep_old, strain_old, eqn, offsets, fixed, nf, k_slots, &
-                           n_coupling, nvalues, rows, cols, ntool, table, tol, coef, degrees, triangle, &
-                           tree_lower, tree_upper, tree_child, frame, frame_lower, &
-                           frame_upper, grid_start, grid_params, grid_normals, grid_points, &
-                           facing, face_first, nface, faces, corner, positions, positions_n, &
-                           reach, size, touching, npair, tool_first, pair_node, on, r, mu, &
-                           held, u_n, force_n, external, prescribed, guess, settings, &
-                           isettings, factored, reuse_next, u, force, fint, stress, ep, &
-                           strain, axes, state, gap, normal, niter, history, counters, &
-                           timings, outcome, info, detail)
+    call forming_increment(nnode, x0, ne, conn + 1, kind, props, u_ref, axes_old, stress_old, &
+                           ep_old, strain_old, eqn, offsets, fixed, nf, k_slots, n_coupling, &
+                           nvalues, rows, cols, ntool, table, tol, coef, degrees, triangle, &
+                           tree_lower, tree_upper, tree_child, frame, frame_lower, frame_upper, &
+                           grid_start, grid_params, grid_normals, grid_points, facing, &
+                           face_first, nface, faces, corner, positions, positions_n, reach, size, &
+                           touching, npair, tool_first, pair_node, on, r, mu, held, u_n, force_n, &
+                           external, prescribed, guess, settings, isettings, factored, &
+                           reuse_next, u, force, fint, stress, ep, strain, axes, state, gap, &
+                           normal, niter, history, counters, timings, outcome, info, detail)
   end subroutine api_forming_increment
 
   !> Newton iterations of one increment of a solid without tools (the static problem): see
   !> forming_increment, called with no tools and no pairs, whose empty arrays f2py cannot
   !> pass (it takes a zero length for one). Connectivity arrives 0-based.
-  subroutine api_static_increment(nnode, x0, ne, conn, kind, props, u_ref, axes_old, &
-                                  stress_old, ep_old, strain_old, eqn, offsets, fixed, nf, &
-                                  k_slots, nvalues, rows, cols, size, u_n, external, prescribed, guess, &
-                                  settings, isettings, factored, u, fint, stress, ep, strain, &
-                                  axes, nhistory, niter, history, counters, timings, outcome, &
-                                  info, detail) bind(C, name="ddpy_static_increment")
+  subroutine api_static_increment(nnode, x0, ne, conn, kind, props, u_ref, axes_old, stress_old, &
+                                  ep_old, strain_old, eqn, offsets, fixed, nf, k_slots, nvalues, &
+                                  rows, cols, size, u_n, external, prescribed, guess, settings, &
+                                  isettings, factored, u, fint, stress, ep, strain, axes, &
+                                  nhistory, niter, history, counters, timings, outcome, info, &
+                                  detail) bind(C, name="ddpy_static_increment")
     integer(c_int), value, intent(in) :: nnode, ne, kind, nf, k_slots, nvalues, nhistory
     real(c_double), value, intent(in) :: size
     integer(c_int), intent(in) :: conn(8, ne), eqn(3, nnode), offsets(ne + 1), &
@@ -203,15 +202,15 @@ contains
         any(rows >= nf) .or. any(cols >= nf)) return
     first = 0
     reuse_next = 0
-    call forming_increment(nnode, x0, ne, conn + 1, kind, props, u_ref, axes_old, &
-                           stress_old, ep_old, strain_old, eqn, offsets, fixed, nf, k_slots, &
-                           0, nvalues, rows, cols, 0, table, reals, reals, ints, ints, reals, reals, ints, &
+    call forming_increment(nnode, x0, ne, conn + 1, kind, props, u_ref, axes_old, stress_old, &
+                           ep_old, strain_old, eqn, offsets, fixed, nf, k_slots, 0, nvalues, &
+                           rows, cols, 0, table, reals, reals, ints, ints, reals, reals, ints, &
                            reals, reals, reals, ints, reals, reals, reals, tools, first, 0, &
                            faces, faces, tools, tools, 0.0_wp, size, 0.0_wp, 0, first, pairs, &
-                           pairs, reals, reals, held, u_n, forces, external, prescribed, &
-                           guess, settings, isettings, factored, reuse_next, u, force, fint, &
-                           stress, ep, strain, axes, state, gap, normal, niter, history, &
-                           counters, timings, outcome, info, detail)
+                           pairs, reals, reals, held, u_n, forces, external, prescribed, guess, &
+                           settings, isettings, factored, reuse_next, u, force, fint, stress, ep, &
+                           strain, axes, state, gap, normal, niter, history, counters, timings, &
+                           outcome, info, detail)
   end subroutine api_static_increment
 
   !> The step length the Newton loop's penetration limit allows (see penetration_step).

@@ -315,6 +315,11 @@ MESH_ERRORS = [
     ("normal z", "normal z\norigin 1 2 3", "'origin' applies to a generated 'box' only", 2),
     ("normal z", "normal z\nscale 1e308\nscale 2", "'scale' given twice", 3),
     ("normal z", "normal z\nsize 3", "unknown keyword 'size': expected normal", 2),
+    ("normal z", "normal z\nelement shell", "expected the element among hexahedron, "
+     "solid-shell, got 'shell'", 2),
+    ("normal z", "normal z\nelement", "expected 'element hexahedron | solid-shell'", 2),
+    ("normal z", "element solid-shell\nnormal z\nelement hexahedron", "'element' given twice "
+     "(first at line 1)", 3),
 ]
 
 
@@ -326,6 +331,30 @@ def test_mesh_errors(tmp_path: Path, old: str, new: str, expected: str, line: in
     assert expected in str(error), str(error)
     if line is not None:
         assert (error.path.name, error.line) == ("mesh.dat", line)
+
+
+def test_mesh_element(tmp_path: Path) -> None:
+    """The blank's element: the hexahedron by default, the solid-shell when asked for, and
+    the runner's Solid takes it; the hexahedron takes any node order, the solid-shell's
+    check names every element ordered across the sheet, at the element line."""
+    from ddpy.app.runner import build_problem
+
+    assert read_case(EXAMPLES / "bending", geometry=False).element == "hexahedron"
+    case = copy_example("bending", tmp_path)
+    edit(case, "mesh.dat", "normal  z ", "element solid-shell\nnormal  z ")
+    read = read_case(case, geometry=False)
+    assert read.element == "solid-shell"
+    assert build_problem(read).solid.element == "solid-shell"
+    sideways = OWN_MESH.replace("10 1 2 3 4 5 6 7 8", "10 1 4 8 5 2 3 7 6")  # zeta along x
+    case = copy_example("bending", tmp_path / "b", mesh=sideways)
+    edit(case, "bc.dat", "nodeset    centre  box 0 0  0 0  -inf inf", "nodeset centre ids 1-8")
+    edit(case, "control.dat", "output_at 7 14 21 28.5", "")
+    assert read_case(case, geometry=False).element == "hexahedron"
+    edit(case, "mesh.dat", "normal z", "normal z\nelement solid-shell")
+    error = error_of(case)
+    assert (error.path.name, error.line) == ("mesh.dat", 2)
+    assert "element 10 is ordered across it; reorder them, or use 'element hexahedron'" in \
+        str(error)
 
 
 def test_mesh_unused_node(tmp_path: Path) -> None:

@@ -157,8 +157,9 @@ def _rolling_angle(case: Case) -> float:
 
 
 def build_problem(case: Case) -> FormingProblem:
-    """The Solid (material, rolling direction), the rigid tools and the FormingProblem."""
-    solid = Solid(case.mesh, case.material.material, _rolling_angle(case))
+    """The Solid (material, rolling direction, element), the rigid tools and the
+    FormingProblem."""
+    solid = Solid(case.mesh, case.material.material, _rolling_angle(case), element=case.element)
     tools = [RigidTool(t.name, t.model().surface, t.contact_nodes(case.mesh),
                        friction=t.friction, facing=t.facing, augmentation=t.augmentation)
              for t in case.tools]

@@ -351,7 +351,8 @@ class Control:
 @dataclass(frozen=True, eq=False)
 class Case:
     """A validated case: control and phases, blank mesh, boundary conditions, material and
-    tools. ``warnings`` lists what is legal but suspicious."""
+    tools. ``warnings`` lists what is legal but suspicious; ``element`` is the blank's
+    element (ddpy.model.solid.ELEMENTS)."""
 
     folder: Path
     control: Control
@@ -360,6 +361,7 @@ class Case:
     material: BlankMaterial
     tools: tuple[Tool, ...]
     warnings: tuple[str, ...] = ()
+    element: str = "hexahedron"
 
     @property
     def title(self) -> str:

@@ -18,7 +18,7 @@ from ddpy._validate import float_array, int_array
 __all__ = ["HEX_EDGES", "HEX_FACES", "RIGID_MODES", "BadElement", "HexMesh", "MeshError",
            "boundary_faces", "free_rigid_modes",
            "corner_scaled_jacobians", "face_area_vectors", "find_bad_elements",
-           "largest_rotation", "through_thickness_columns"]
+           "largest_rotation", "through_thickness_columns", "zeta_off_normal"]
 
 #: Relative size below which a Jacobian determinant counts as degenerate.
 DEGENERATE = 1e-10
@@ -105,6 +105,20 @@ def through_thickness_columns(nodes: ArrayLike, elements: ArrayLike, normal: Arr
                              f"nodes has more than {MAX_LAYERS} layers, or loops")
         ends.append(end.astype(np.int32))
     return ends[0], ends[1]
+
+
+def zeta_off_normal(nodes: ArrayLike, elements: ArrayLike, normal: ArrayLike
+                    ) -> NDArray[np.int64]:
+    """0-based indices of the elements whose zeta edges (nodes 0-4, 1-5, 2-6, 3-7) are not,
+    of their three edge directions, the one closest to ``normal``: the elements the
+    solid-shell cannot take as they are (it needs zeta through the thickness)."""
+    x = np.asarray(nodes, dtype=float).reshape(-1, 3)
+    e = np.asarray(elements, dtype=np.int64).reshape(-1, 8)
+    vectors = x[e[:, HEX_EDGES][..., 1]] - x[e[:, HEX_EDGES][..., 0]]  # (m, 3, 4, 3)
+    lengths = np.linalg.norm(vectors, axis=-1)
+    alignment = np.abs(vectors @ np.asarray(normal, dtype=float)) / np.where(lengths > 0,
+                                                                              lengths, 1.0)
+    return np.flatnonzero(np.argmax(alignment.mean(axis=2), axis=1) != 2)
 
 
 def _frozen(array: NDArray) -> NDArray:

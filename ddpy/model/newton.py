@@ -238,7 +238,7 @@ def increment(solid: Solid, layout: Layout, factors: Factors, state: SolidState,
     factored = np.array([factors.factored], dtype=np.int32)
     reuse_next = np.array([factors.reuse_next], dtype=np.int32)
     out = solid.state_buffer()
-    solid_state = (solid._x, solid._conn, solid.props, _flat(state.displacement),
+    solid_state = (solid._x, solid._conn, solid._kind, solid.props, _flat(state.displacement),
                    _flat(state.axes.transpose(0, 1, 3, 2)), _flat(state.stress),
                    _flat(state.ep), _flat(state.strain), layout.eqn, layout.pattern.offsets,
                    layout.fixed_flags, layout.nf, layout.k_slots)

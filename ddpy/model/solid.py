@@ -1,8 +1,10 @@
 """The deformable blank: large-strain hexahedra and their assembly.
 
-The Fortran core does the element work (``fortran/mechanics/ddpy_hex8.f90``) and assembles internal
-forces and the tangent straight into MUMPS coordinate storage, in parallel
-(``fortran/solver/ddpy_solid_assembly.f90``); see ``docs/theory/solid.md`` for the formulation.
+The Fortran core does the element work (``fortran/mechanics/ddpy_hex8.f90``, the default
+hexahedron, or ``fortran/mechanics/ddpy_solid_shell.f90``, the solid-shell for sheets) and
+assembles internal forces and the tangent straight into MUMPS coordinate storage, in parallel
+(``fortran/solver/ddpy_solid_assembly.f90``); see ``docs/theory/solid.md`` and
+``docs/theory/solid_shell.md`` for the formulations.
 Displacements are total, in global axes; stresses are per Gauss point, Voigt order
 11, 22, 33, 12, 23, 31.
 
@@ -24,14 +26,22 @@ from numpy.typing import ArrayLike, NDArray
 from ddpy import _core
 from ddpy._validate import float_array, int_array
 from ddpy.core.ordering import nested_dissection, node_adjacency
-from ddpy.model.mesh import HexMesh
+from ddpy.model.mesh import HexMesh, zeta_off_normal
 
-__all__ = ["Assembly", "Solid", "SolidState", "ElementError", "material_props"]
+__all__ = ["Assembly", "ELEMENTS", "Solid", "SolidState", "ElementError", "material_props"]
 
 PROP_COUNT = 16
+#: The element kinds and their codes in the core: the mean-dilatation hexahedron
+#: (docs/theory/solid.md) and the solid-shell with assumed natural and 13 enhanced strains
+#: (docs/theory/solid_shell.md), whose third natural direction (nodes 0-3 on one face,
+#: 4-7 on the other) must be the sheet's normal.
+ELEMENTS = {"hexahedron": 0, "solid-shell": 1}
+#: Enhanced parameters per solid-shell element.
+SHELL_MODES = 13
 _STATUS = {1: "is inverted (det F <= 0 or det J0 <= 0 at a Gauss point)",
            2: "failed in the material update (return mapping)",
-           3: "has a node index out of range", 4: "has inconsistent tangent slots"}
+           3: "has a node index out of range", 4: "has inconsistent tangent slots",
+           5: "did not converge in its enhanced strains (the solid-shell's local iteration)"}
 _COMPONENTS = {"x": 0, "y": 1, "z": 2}
 
 
@@ -116,12 +126,14 @@ def _flat(a: NDArray[np.float64]) -> NDArray[np.float64]:
 
 class Assembly(NamedTuple):
     """What one assembly returns: internal forces (n, 3), tangent values in the slots of the
-    pattern, the trial state, and K dp when asked for (else None)."""
+    pattern, the trial state, K dp when asked for (else None) and, for the solid-shell,
+    the enhanced parameters (m, 13) solved in its elements (else None)."""
 
     fint: NDArray[np.float64]
     values: NDArray[np.float64]
     state: SolidState
     kdu: NDArray[np.float64] | None
+    alpha: NDArray[np.float64] | None = None
 
 
 @dataclass
@@ -140,13 +152,24 @@ class Solid:
 
     ``material``: a ``ddpy.model.material.Material`` or its 16-vector of properties (see
     ``material_props``). ``rolling_direction_deg``: angle of the rolling direction from the
-    global x axis about z, one value or one per element.
+    global x axis about z, one value or one per element. ``element``: "hexahedron" (the
+    mean-dilatation hexahedron, the default) or "solid-shell" (for sheets: free of shear,
+    thickness and volumetric locking; every element's nodes 0-3 on one face of the sheet
+    and 4-7 on the other, as ``HexMesh.box`` makes them for a sheet normal to z).
     """
 
     def __init__(self, mesh: HexMesh, material: Any,
-                 rolling_direction_deg: float | ArrayLike = 0.0) -> None:
+                 rolling_direction_deg: float | ArrayLike = 0.0,
+                 element: str = "hexahedron") -> None:
         if not isinstance(mesh, HexMesh):
             raise TypeError(f"mesh must be a HexMesh, got {type(mesh).__name__}")
+        if element not in ELEMENTS:
+            raise ValueError(f"element must be one of {', '.join(map(repr, ELEMENTS))}, got "
+                             f"{element!r}")
+        if element == "solid-shell":
+            _check_thickness_direction(mesh)
+        self.element = element
+        self._kind = ELEMENTS[element]
         self.mesh = mesh
         self.props = material_props(material)
         angle = np.asarray(rolling_direction_deg, dtype=float)
@@ -208,7 +231,8 @@ class Solid:
     def assemble(self, u: ArrayLike, state: SolidState | None = None,
                  pattern: _Pattern | None = None, tangent: bool = True,
                  values: NDArray[np.float64] | None = None,
-                 dp: ArrayLike | None = None, out: SolidState | None = None) -> Assembly:
+                 dp: ArrayLike | None = None, out: SolidState | None = None,
+                 alpha: ArrayLike | None = None) -> Assembly:
         """Internal forces (n, 3), tangent values in the slots of ``pattern`` (empty when
         ``tangent`` is False) and the trial state at total displacements ``u`` (n, 3),
         over the increment from the converged ``state`` (its displacements are the
@@ -216,6 +240,9 @@ class Solid:
         the tangent over all dofs with dp. ``values`` may be given as the output buffer,
         and ``out`` (from ``state_buffer`` or an earlier assembly) as the arrays of the
         trial state: it must not share memory with ``state``, and is overwritten.
+        ``alpha`` (m, 13): where the solid-shell's local iteration on its enhanced
+        parameters starts (default zero, the start of an increment); the solution is
+        returned in ``Assembly.alpha``.
         Raises ElementError when an element is inverted or its material update fails."""
         n = self.mesh.n_nodes
         u = float_array(u, "u", (n, 3))
@@ -242,18 +269,23 @@ class Solid:
                 if any(np.may_share_memory(array, held) for held in (
                         state.stress, state.ep, state.strain, state.axes)):
                     raise ValueError("out shares memory with state")
-        values, fint, kdu, stress, ep, strain, axes, status, element = _core.solid_assemble(
-            self._x, self._conn, _flat(state.displacement), u.ravel(), self.props,
-            _flat(state.axes.transpose(0, 1, 3, 2)), _flat(state.stress), _flat(state.ep),
-            _flat(state.strain), pattern.eqn, int(pattern.symmetric), int(tangent),
-            pattern.offsets, values, int(product), dp, out.stress.ravel(), out.ep.ravel(),
-            out.strain.ravel(), out.axes.transpose(0, 1, 3, 2).ravel())
+        start = np.zeros(SHELL_MODES * m) if alpha is None else \
+            float_array(alpha, "alpha", (m, SHELL_MODES)).ravel()
+        values, fint, kdu, stress, ep, strain, axes, alpha_out, status, element = \
+            _core.solid_assemble(
+                self._x, self._conn, self._kind, _flat(state.displacement), u.ravel(),
+                self.props, _flat(state.axes.transpose(0, 1, 3, 2)), _flat(state.stress),
+                _flat(state.ep), _flat(state.strain), start, pattern.eqn,
+                int(pattern.symmetric), int(tangent), pattern.offsets, values, int(product),
+                dp, out.stress.ravel(), out.ep.ravel(), out.strain.ravel(),
+                out.axes.transpose(0, 1, 3, 2).ravel())
         if status:
             raise ElementError(int(status), int(element) - 1)
         trial = SolidState(stress.reshape(m, 8, 6), ep.reshape(m, 8), strain.reshape(m, 8, 6),
                            axes.reshape(m, 8, 3, 3).transpose(0, 1, 3, 2), u.copy())
         return Assembly(fint.reshape(-1, 3), values, trial,
-                        kdu.reshape(-1, 3) if product else None)
+                        kdu.reshape(-1, 3) if product else None,
+                        alpha_out.reshape(m, SHELL_MODES) if self._kind else None)
 
     def internal_force(self, u: ArrayLike, state: SolidState | None = None,
                        ) -> tuple[NDArray[np.float64], SolidState]:
@@ -281,6 +313,20 @@ class Solid:
             raise ElementError(int(status), int(element) - 1)
         m = self.mesh.n_elements
         return pk2.reshape(m, 8, 6), cauchy.reshape(m, 8, 6), points.reshape(m, 8, 3)
+
+
+def _check_thickness_direction(mesh: HexMesh) -> None:
+    """Refuse a mesh for the solid-shell where some element's zeta edges (0-4, 1-5, 2-6,
+    3-7) are not, of its three edge directions, the one closest to the sheet normal."""
+    bad = zeta_off_normal(mesh.nodes, mesh.elements, mesh.normal)
+    if bad.size:
+        labels = ", ".join(str(int(mesh.element_ids[e])) for e in bad[:3])
+        more = f" and {bad.size - 3} more" if bad.size > 3 else ""
+        raise ValueError(
+            f"the solid-shell needs every element's nodes 0-3 on one face of the sheet and "
+            f"4-7 on the other (edges 0-4, 1-5, 2-6, 3-7 along the sheet normal "
+            f"{list(mesh.normal)}); element {labels}{more} "
+            f"{'is' if bad.size == 1 else 'are'} not so ordered")
 
 
 def _components(components: int | str | Iterable[int | str]) -> list[int]:

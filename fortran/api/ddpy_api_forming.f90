@@ -7,6 +7,7 @@ module ddpy_api_forming
   use ddpy_forming_newton, only: forming_increment, newton_settings, newton_integer_settings, &
                                  penetration_step, gmres
   use ddpy_material, only: material_prop_count
+  use ddpy_solid_assembly, only: kind_hexahedron, kind_solid_shell
   implicit none
   private
   public :: api_forming_contact, api_forming_increment, api_static_increment, &
@@ -111,10 +112,10 @@ contains
   end subroutine api_forming_contact
 
   !> Newton iterations of one increment: see forming_increment. Connectivity arrives 0-based.
-  subroutine api_forming_increment(nnode, x0, ne, conn, props, u_ref, axes_old, stress_old, &
-                                   ep_old, strain_old, eqn, offsets, fixed, nf, k_slots, &
-                                   n_coupling, nvalues, nrow, row_start, ncsr, col, nsrc, &
-                                   sources, source_start, ntool, table, tol, ncoef, &
+  subroutine api_forming_increment(nnode, x0, ne, conn, kind, props, u_ref, axes_old, &
+                                   stress_old, ep_old, strain_old, eqn, offsets, fixed, nf, &
+                                   k_slots, n_coupling, nvalues, nrow, row_start, ncsr, col, &
+                                   nsrc, sources, source_start, ntool, table, tol, ncoef, &
                                    coef, ndeg, degrees, ntri, triangle, ntree, tree_lower, &
                                    tree_upper, tree_child, nframe, frame, frame_lower, &
                                    frame_upper, nstart, grid_start, ngrid, grid_params, &
@@ -126,8 +127,8 @@ contains
                                    ep, strain, axes, state, gap, normal, nhistory, niter, &
                                    history, counters, timings, outcome, info, detail) &
     bind(C, name="ddpy_forming_increment")
-    integer(c_int), value, intent(in) :: nnode, ne, nf, k_slots, n_coupling, nvalues, nrow, &
-                                         ncsr, nsrc, ntool, ncoef, ndeg, ntri, ntree, &
+    integer(c_int), value, intent(in) :: nnode, ne, kind, nf, k_slots, n_coupling, nvalues, &
+                                         nrow, ncsr, nsrc, ntool, ncoef, ndeg, ntri, ntree, &
                                          nframe, nstart, ngrid, nface, npair, nhistory
     real(c_double), value, intent(in) :: reach, size, touching
     integer(c_int), intent(in) :: conn(8, ne), eqn(3, nnode), offsets(ne + 1), &
@@ -160,12 +161,13 @@ contains
     history = 0.0_wp
     outcome = -1
     if (nhistory < isettings(1) + 1 .or. offsets(ne + 1) /= k_slots) return
+    if (kind /= kind_hexahedron .and. kind /= kind_solid_shell) return
     if (any(conn < 0) .or. any(conn >= nnode) .or. nrow /= nf + 3*npair) return
     if (.not. rows_ok(nrow, ncsr, nsrc, nvalues, row_start, col, sources, source_start)) return
     if (.not. layout_ok(nnode, ntool, table, ncoef, ndeg, ntri, ntree, nframe, nstart, ngrid, &
                         grid_start, face_first, nface, faces, corner, npair, tool_first, &
                         pair_node, eqn, k_slots, nvalues)) return
-    call forming_increment(nnode, x0, ne, conn + 1, props, u_ref, axes_old, stress_old, &
+    call forming_increment(nnode, x0, ne, conn + 1, kind, props, u_ref, axes_old, stress_old, &
                            ep_old, strain_old, eqn, offsets, fixed, nf, k_slots, n_coupling, &
                            nvalues, row_start, ncsr, col, sources, source_start, ntool, &
                            table, tol, coef, degrees, triangle, &
@@ -182,14 +184,15 @@ contains
   !> Newton iterations of one increment of a solid without tools (the static problem): see
   !> forming_increment, called with no tools and no pairs, whose empty arrays f2py cannot
   !> pass (it takes a zero length for one). Connectivity arrives 0-based.
-  subroutine api_static_increment(nnode, x0, ne, conn, props, u_ref, axes_old, stress_old, &
-                                  ep_old, strain_old, eqn, offsets, fixed, nf, k_slots, &
-                                  nvalues, ncsr, row_start, col, nsrc, sources, source_start, &
-                                  size, u_n, external, prescribed, guess, &
+  subroutine api_static_increment(nnode, x0, ne, conn, kind, props, u_ref, axes_old, &
+                                  stress_old, ep_old, strain_old, eqn, offsets, fixed, nf, &
+                                  k_slots, nvalues, ncsr, row_start, col, nsrc, sources, &
+                                  source_start, size, u_n, external, prescribed, guess, &
                                   settings, isettings, factored, u, fint, stress, ep, strain, &
                                   axes, nhistory, niter, history, counters, timings, outcome, &
                                   info, detail) bind(C, name="ddpy_static_increment")
-    integer(c_int), value, intent(in) :: nnode, ne, nf, k_slots, nvalues, ncsr, nsrc, nhistory
+    integer(c_int), value, intent(in) :: nnode, ne, kind, nf, k_slots, nvalues, ncsr, nsrc, &
+                                         nhistory
     real(c_double), value, intent(in) :: size
     integer(c_int), intent(in) :: conn(8, ne), eqn(3, nnode), offsets(ne + 1), &
                                   fixed(3, nnode), row_start(nf + 1), col(ncsr), &
@@ -212,20 +215,21 @@ contains
     outcome = -1
     if (nhistory < isettings(1) + 1 .or. offsets(ne + 1) /= k_slots .or. nvalues /= k_slots) &
       return
+    if (kind /= kind_hexahedron .and. kind /= kind_solid_shell) return
     if (any(conn < 0) .or. any(conn >= nnode)) return
     if (.not. rows_ok(nf, ncsr, nsrc, nvalues, row_start, col, sources, source_start)) return
     first = 0
     reuse_next = 0
-    call forming_increment(nnode, x0, ne, conn + 1, props, u_ref, axes_old, stress_old, &
+    call forming_increment(nnode, x0, ne, conn + 1, kind, props, u_ref, axes_old, stress_old, &
                            ep_old, strain_old, eqn, offsets, fixed, nf, k_slots, 0, nvalues, &
                            row_start, ncsr, col, sources, source_start, 0, table, reals, &
                            reals, ints, ints, reals, reals, ints, &
                            reals, reals, reals, ints, reals, reals, reals, tools, first, 0, &
                            faces, faces, tools, tools, 0.0_wp, size, 0.0_wp, 0, first, pairs, &
-                           pairs, reals, reals, held, u_n, forces, external, prescribed, &
-                           guess, settings, isettings, factored, reuse_next, u, force, fint, &
-                           stress, ep, strain, axes, state, gap, normal, niter, history, &
-                           counters, timings, outcome, info, detail)
+                           pairs, reals, reals, held, u_n, forces, external, prescribed, guess, &
+                           settings, isettings, factored, reuse_next, u, force, fint, stress, ep, &
+                           strain, axes, state, gap, normal, niter, history, counters, timings, &
+                           outcome, info, detail)
   end subroutine api_static_increment
 
   !> The step length the Newton loop's penetration limit allows (see penetration_step).

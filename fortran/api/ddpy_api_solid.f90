@@ -1,21 +1,24 @@
 !> The doorway of the hexahedral solid: flat arrays and C-bound procedures that f2py wraps
 !> (fortran/ddpy_core.pyf). Scalars in by value; node indices arrive 0-based and are checked
 !> and converted here. Status values: 0 ok, 1 inverted element (det J0 or det F <= 0),
-!> 2 material update failed, 3 node index out of range, 4 offsets inconsistent with nz;
-!> element is the 1-based index of the first offending element (0 when none).
+!> 2 material update failed, 3 node index out of range, 4 offsets inconsistent with nz,
+!> 5 the solid-shell's local iteration on its enhanced parameters did not converge, 6 an
+!> unknown element kind; element is the 1-based index of the first offending element (0
+!> when none).
 module ddpy_api_solid
   use, intrinsic :: iso_c_binding, only: c_int, c_double
   use ddpy_kinds, only: wp
   use ddpy_material, only: material_prop_count
   use ddpy_solid_assembly, only: solid_jacobians, solid_coo_count, solid_coo_pattern, &
-                                 solid_assemble, solid_stresses
+                                 solid_assemble, solid_stresses, shell_modes, &
+                                 kind_hexahedron, kind_solid_shell
   implicit none
   private
   public :: api_material_prop_count, api_solid_jacobians, api_solid_coo_count, &
             api_solid_coo_pattern, api_solid_assemble, api_solid_stresses
 
   integer, parameter :: np = material_prop_count
-  integer, parameter :: status_bad_node = 3, status_bad_offsets = 4
+  integer, parameter :: status_bad_node = 3, status_bad_offsets = 4, status_bad_kind = 6
 
 contains
 
@@ -96,24 +99,35 @@ contains
 
   !> Internal forces, tangent values in the slots of solid_coo_pattern (when tangent /= 0)
   !> and the trial material state at total displacements u, over the increment from the
-  !> converged state at displacements u_ref; with product /= 0 also kdu = K dp (K over all
-  !> dofs, dp the increment of prescribed displacements).
-  subroutine api_solid_assemble(nn, x, ne, conn, u_ref, u, props, axes_old, stress_old, &
-                                ep_old, strain_old, eqn, symmetric, tangent, offsets, nz, &
-                                values, product, dp, fint, kdu, stress, ep, strain, axes, &
-                                status, element) bind(C, name="ddpy_solid_assemble")
-    integer(c_int), value, intent(in) :: nn, ne, symmetric, tangent, nz, product
+  !> converged state at displacements u_ref, for elements of the given kind (0
+  !> hexahedron, 1 solid-shell, whose enhanced parameters start at alpha_in and end at
+  !> alpha); with product /= 0 also kdu = K dp (K over all dofs, dp the increment of
+  !> prescribed displacements).
+  subroutine api_solid_assemble(nn, x, ne, conn, kind, u_ref, u, props, axes_old, &
+                                stress_old, ep_old, strain_old, alpha_in, eqn, symmetric, &
+                                tangent, offsets, nz, values, product, dp, fint, kdu, stress, &
+                                ep, strain, axes, alpha, status, element) &
+    bind(C, name="ddpy_solid_assemble")
+    integer(c_int), value, intent(in) :: nn, ne, kind, symmetric, tangent, nz, product
     real(c_double), intent(in) :: x(3, nn), u_ref(3, nn), u(3, nn), props(np), dp(3, nn)
     integer(c_int), intent(in) :: conn(8, ne), eqn(3, nn), offsets(ne + 1)
     real(c_double), intent(in) :: axes_old(3, 3, 8, ne), stress_old(6, 8, ne), &
-                                  ep_old(8, ne), strain_old(6, 8, ne)
+                                  ep_old(8, ne), strain_old(6, 8, ne), &
+                                  alpha_in(shell_modes, ne)
     real(c_double), intent(inout) :: values(nz)
     real(c_double), intent(out) :: fint(3, nn), kdu(3, nn), stress(6, 8, ne), ep(8, ne), &
-                                   strain(6, 8, ne), axes(3, 3, 8, ne)
+                                   strain(6, 8, ne), axes(3, 3, 8, ne), &
+                                   alpha(shell_modes, ne)
     integer(c_int), intent(out) :: status, element
     fint = 0.0_wp
     kdu = 0.0_wp
+    alpha = alpha_in
     status = 0
+    if (kind /= kind_hexahedron .and. kind /= kind_solid_shell) then
+      status = status_bad_kind
+      element = 0
+      return
+    end if
     element = first_bad_element(nn, ne, conn)
     if (element > 0) then
       status = status_bad_node
@@ -123,9 +137,10 @@ contains
       status = status_bad_offsets
       return
     end if
-    call solid_assemble(nn, x, ne, conn + 1, u_ref, u, props, axes_old, stress_old, ep_old, &
-                        strain_old, eqn, symmetric /= 0, tangent /= 0, offsets, nz, values, &
-                        product /= 0, dp, fint, kdu, stress, ep, strain, axes, status, element)
+    call solid_assemble(nn, x, ne, conn + 1, kind, u_ref, u, props, axes_old, stress_old, &
+                        ep_old, strain_old, alpha_in, eqn, symmetric /= 0, tangent /= 0, &
+                        offsets, nz, values, product /= 0, dp, fint, kdu, stress, ep, strain, &
+                        axes, alpha, status, element)
   end subroutine api_solid_assemble
 
   !> Second Piola-Kirchhoff (global axes), Cauchy stresses and current Gauss point positions

@@ -12,7 +12,7 @@ module ddpy_forming_newton
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite, ieee_value, ieee_positive_inf
   use ddpy_kinds, only: wp
   use ddpy_material, only: material_prop_count, yield_landing
-  use ddpy_solid_assembly, only: solid_assemble
+  use ddpy_solid_assembly, only: solid_assemble, shell_modes
   use ddpy_forming, only: forming_contact, tool_fields
   use ddpy_contact, only: contact_inactive
   use ddpy_linear_solver, only: solver_factorize, solver_solve
@@ -45,7 +45,7 @@ module ddpy_forming_newton
 contains
 
   !> Newton iterations of one increment from the converged state (u_n, force_n, the solid
-  !> state *_old) to the tools at positions and the fixed dofs at prescribed (forming holds
+  !> state *_old of a mesh of elements of the given kind, see solid_assemble) to the tools at positions and the fixed dofs at prescribed (forming holds
   !> them at u_n). A prescribed motion not yet reached enters each evaluation through the
   !> tangent, K_fp dp added to the free rows, and each step takes it whole (scaled by the
   !> step length like the rest): the linearized predictor, not a jump of the boundary
@@ -62,7 +62,11 @@ contains
   !> residual-norm fallback;
   !> timings (s): assembly, contact, factorization, solve. factored, reuse_next: the
   !> solver's factors are this layout's, the last GMRES converged fast.
-  subroutine forming_increment(nnode, x0, ne, conn, props, u_ref, axes_old, stress_old, &
+  !> The solid-shell's enhanced parameters live in the evaluations like the trial state:
+  !> each evaluation starts its local iteration from those of the iterate the step leaves
+  !> (zero at the start of the increment), so an evaluation is a function of the iterate
+  !> and its start, not of the line search's earlier trials.
+  subroutine forming_increment(nnode, x0, ne, conn, kind, props, u_ref, axes_old, stress_old, &
                                ep_old, strain_old, eqn, offsets, fixed, nf, k_slots, &
                                n_coupling, nvalues, row_start, ncsr, col, sources, &
                                source_start, ntool, table, tol, coef, &
@@ -74,8 +78,8 @@ contains
                                prescribed, guess, settings, isettings, factored, reuse_next, &
                                u, force, fint, stress, ep, strain, axes, state, gap, normal, &
                                niter, history, counters, timings, outcome, info, detail)
-    integer, intent(in) :: nnode, ne, nf, k_slots, n_coupling, nvalues, ncsr, ntool, nface, &
-                           npair
+    integer, intent(in) :: nnode, ne, kind, nf, k_slots, n_coupling, nvalues, ncsr, ntool, &
+                           nface, npair
     integer, intent(in) :: conn(8, ne), eqn(3, nnode), offsets(ne + 1), fixed(3, nnode), &
                            row_start(nf + 3*npair + 1), col(ncsr), sources(*), &
                            source_start(ncsr + 1), table(tool_fields, ntool), &
@@ -103,14 +107,15 @@ contains
     type :: evaluation
       real(wp), allocatable :: u(:, :), force(:, :), residual(:), values(:), fint(:, :), &
                                stress(:, :, :), ep(:, :), strain(:, :, :), axes(:, :, :, :), &
-                               gap(:), normal(:, :), simplified(:)
+                               alpha(:, :), gap(:), normal(:, :), simplified(:)
       integer, allocatable :: state(:)
       logical :: moving  ! some fixed dof short of its prescribed value
       real(wp) :: rest   ! how far short: the norm over the fixed dofs
     end type evaluation
     type(evaluation) :: slot(2)
     real(wp), allocatable :: weight(:), delta(:), du(:, :), dforce(:, :), x_n(:, :), &
-                             kdu(:, :), dp(:, :), u_cur(:, :), force_cur(:, :)
+                             kdu(:, :), dp(:, :), u_cur(:, :), force_cur(:, :), &
+                             alpha_cur(:, :)
     integer, allocatable :: previous(:)
     real(wp) :: tol_force, tol_disp, yield_tol, floor, norm, scale, moved, correction, rel, &
                 forcing, alpha, step_size, du_norm, landing, t_norm, t_scale, t_moved, &
@@ -139,7 +144,8 @@ contains
     outcome = outcome_stalled
     allocate(weight(n), delta(n), du(3, nnode), dforce(3, npair), x_n(3, nnode), &
              kdu(3, nnode), dp(3, nnode), previous(npair), u_cur(3, nnode), &
-             force_cur(3, npair))
+             force_cur(3, npair), alpha_cur(shell_modes, ne))
+    alpha_cur = 0.0_wp
     dp = 0.0_wp
     step_size = 0.0_wp
     weight(1:nf) = 1.0_wp
@@ -149,7 +155,8 @@ contains
       allocate(slot(cur)%u(3, nnode), slot(cur)%force(3, npair), slot(cur)%residual(n), &
                slot(cur)%values(nvalues), slot(cur)%fint(3, nnode), &
                slot(cur)%stress(6, 8, ne), slot(cur)%ep(8, ne), slot(cur)%strain(6, 8, ne), &
-               slot(cur)%axes(3, 3, 8, ne), slot(cur)%gap(npair), slot(cur)%normal(3, npair), &
+               slot(cur)%axes(3, 3, 8, ne), slot(cur)%alpha(shell_modes, ne), &
+               slot(cur)%gap(npair), slot(cur)%normal(3, npair), &
                slot(cur)%simplified(n), slot(cur)%state(npair))
       slot(cur)%values(k_slots + 1:k_slots + n_coupling) = -1.0_wp
     end do
@@ -230,6 +237,7 @@ contains
       moving = slot(cur)%moving
       u_cur = slot(cur)%u
       force_cur = slot(cur)%force
+      alpha_cur = slot(cur)%alpha
       fallback = 0
       buffer = 1
       accepted = .false.
@@ -381,7 +389,8 @@ contains
       end do
     end subroutine energy_step
 
-    !> Assembly and contact at s%u, s%force into slot s.
+    !> Assembly and contact at s%u, s%force into slot s; the enhanced parameters start at
+    !> alpha_cur.
     subroutine evaluate(s, touching_gap, status, element)
       type(evaluation), intent(inout) :: s
       real(wp), intent(in) :: touching_gap
@@ -398,10 +407,10 @@ contains
       s%moving = any(dp /= 0.0_wp)
       s%rest = 0.0_wp
       if (s%moving) s%rest = sqrt(sum(dp**2))
-      call solid_assemble(nnode, x0, ne, conn, u_ref, s%u, props, axes_old, stress_old, &
-                          ep_old, strain_old, eqn, symmetric, .true., offsets, k_slots, &
-                          s%values(1:k_slots), s%moving, dp, s%fint, kdu, s%stress, s%ep, &
-                          s%strain, s%axes, status, element)
+      call solid_assemble(nnode, x0, ne, conn, kind, u_ref, s%u, props, axes_old, &
+                          stress_old, ep_old, strain_old, alpha_cur, eqn, symmetric, .true., &
+                          offsets, k_slots, s%values(1:k_slots), s%moving, dp, s%fint, kdu, &
+                          s%stress, s%ep, s%strain, s%axes, s%alpha, status, element)
       call system_clock(t1)
       timings(1) = timings(1) + real(t1 - t0, wp)/real(clock_rate, wp)
       if (status /= 0) return

@@ -12,10 +12,16 @@ module ddpy_solid_assembly
   use ddpy_kinds, only: wp
   use ddpy_material, only: material_prop_count
   use ddpy_hex8, only: hex8_element, hex8_jacobians, hex8_stresses, hex8_ok
+  use ddpy_solid_shell, only: solid_shell_element, shell_modes
   implicit none
   private
   public :: solid_jacobians, solid_coo_count, solid_coo_pattern, solid_assemble, &
-            solid_stresses
+            solid_stresses, shell_modes
+
+  !> Element kinds of a mesh: the mean-dilatation hexahedron (ddpy_hex8) and the
+  !> solid-shell (ddpy_solid_shell), which carries shell_modes enhanced parameters per
+  !> element through the iterations of an increment.
+  integer, parameter, public :: kind_hexahedron = 0, kind_solid_shell = 1
 
 contains
 
@@ -90,26 +96,29 @@ contains
   end subroutine solid_coo_pattern
 
   !> Internal forces, tangent values (when want_tangent) and trial material state of the
-  !> whole mesh at total displacements u, over the increment from the converged state at
-  !> displacements u_ref (the reference configuration x + u_ref of the updated Lagrangian
-  !> element). props: one material; state per Gauss point as in hex8_element. With
+  !> whole mesh of elements of the given kind at total displacements u, over the increment
+  !> from the converged state at displacements u_ref (the reference configuration x + u_ref
+  !> of the updated Lagrangian element). props: one material; state per Gauss point as in
+  !> hex8_element. alpha_in: the start of the solid-shell's enhanced parameters (the
+  !> previous iterate's, zero at the start of an increment), alpha their solution (alpha =
+  !> alpha_in for the hexahedron). With
   !> want_product (and want_tangent), kdu = K dp, the tangent times the vector dp (the
   !> increment of the prescribed displacements: the linearized predictor of an increment),
   !> otherwise kdu = 0. status = hex8_ok, or the status of the first failing element, whose
   !> index is returned in element (0 when none).
-  subroutine solid_assemble(nn, x, ne, conn, u_ref, u, props, axes_old, stress_old, ep_old, &
-                            strain_old, eqn, symmetric, want_tangent, offsets, nz, values, &
-                            want_product, dp, fint, kdu, stress, ep, strain, axes, status, &
-                            element)
-    integer, intent(in) :: nn, ne, nz, conn(8, ne), eqn(3, nn), offsets(ne + 1)
+  subroutine solid_assemble(nn, x, ne, conn, kind, u_ref, u, props, axes_old, stress_old, &
+                            ep_old, strain_old, alpha_in, eqn, symmetric, want_tangent, &
+                            offsets, nz, values, want_product, dp, fint, kdu, stress, ep, &
+                            strain, axes, alpha, status, element)
+    integer, intent(in) :: nn, ne, nz, conn(8, ne), kind, eqn(3, nn), offsets(ne + 1)
     real(wp), intent(in) :: x(3, nn), u_ref(3, nn), u(3, nn), props(material_prop_count)
     real(wp), intent(in) :: axes_old(3, 3, 8, ne), stress_old(6, 8, ne), ep_old(8, ne), &
-                            strain_old(6, 8, ne)
+                            strain_old(6, 8, ne), alpha_in(shell_modes, ne)
     real(wp), intent(in) :: dp(3, nn)
     logical, intent(in) :: symmetric, want_tangent, want_product
     real(wp), intent(inout) :: values(nz)
     real(wp), intent(out) :: fint(3, nn), kdu(3, nn), stress(6, 8, ne), ep(8, ne), &
-                             strain(6, 8, ne), axes(3, 3, 8, ne)
+                             strain(6, 8, ne), axes(3, 3, 8, ne), alpha(shell_modes, ne)
     integer, intent(out) :: status, element
     real(wp), allocatable :: fe(:, :), ke_dp(:, :)
     integer, allocatable :: estatus(:)
@@ -125,11 +134,11 @@ contains
     end if
     !$omp parallel do schedule(dynamic, 16) if(ne > 256)
     do e = 1, ne
-      call assemble_element(e, nn, x, ne, conn, u_ref, u, props, axes_old, stress_old, &
-                            ep_old, strain_old, eqn, symmetric, want_tangent, offsets, nz, &
-                            values, product, dp, fe(:, e), ke_dp(:, min(e, size(ke_dp, 2))), &
-                            stress(:, :, e), ep(:, e), strain(:, :, e), axes(:, :, :, e), &
-                            estatus(e))
+      call assemble_element(e, nn, x, ne, conn, kind, u_ref, u, props, axes_old, &
+                            stress_old, ep_old, strain_old, alpha_in(:, e), eqn, symmetric, &
+                            want_tangent, offsets, nz, values, product, dp, fe(:, e), &
+                            ke_dp(:, min(e, size(ke_dp, 2))), stress(:, :, e), ep(:, e), &
+                            strain(:, :, e), axes(:, :, :, e), alpha(:, e), estatus(e))
     end do
     !$omp end parallel do
 
@@ -158,18 +167,19 @@ contains
   end subroutine solid_assemble
 
   !> One element of solid_assemble: writes only its own slots and state columns.
-  subroutine assemble_element(e, nn, x, ne, conn, u_ref, u, props, axes_old, stress_old, &
-                              ep_old, strain_old, eqn, symmetric, want_tangent, offsets, nz, &
-                              values, product, dp, fe, ke_dp, stress, ep, strain, axes, status)
-    integer, intent(in) :: e, nn, ne, nz, conn(8, ne), eqn(3, nn), offsets(ne + 1)
+  subroutine assemble_element(e, nn, x, ne, conn, kind, u_ref, u, props, axes_old, &
+                              stress_old, ep_old, strain_old, alpha_in, eqn, symmetric, &
+                              want_tangent, offsets, nz, values, product, dp, fe, ke_dp, &
+                              stress, ep, strain, axes, alpha, status)
+    integer, intent(in) :: e, nn, ne, nz, conn(8, ne), kind, eqn(3, nn), offsets(ne + 1)
     real(wp), intent(in) :: x(3, nn), u_ref(3, nn), u(3, nn), props(material_prop_count)
     real(wp), intent(in) :: axes_old(3, 3, 8, ne), stress_old(6, 8, ne), ep_old(8, ne), &
-                            strain_old(6, 8, ne)
+                            strain_old(6, 8, ne), alpha_in(shell_modes)
     real(wp), intent(in) :: dp(3, nn)
     logical, intent(in) :: symmetric, want_tangent, product
     real(wp), intent(inout) :: values(nz)
     real(wp), intent(out) :: fe(24), ke_dp(24), stress(6, 8), ep(8), strain(6, 8), &
-                             axes(3, 3, 8)
+                             axes(3, 3, 8), alpha(shell_modes)
     integer, intent(out) :: status
     real(wp) :: ke(24, 24), x0(3, 8), xn(3, 8), du(3, 8), de(24)
     integer :: eq(24), i, j, pos, a
@@ -179,9 +189,16 @@ contains
       xn(:, a) = x0(:, a) + u_ref(:, conn(a, e))
       du(:, a) = u(:, conn(a, e)) - u_ref(:, conn(a, e))
     end do
-    call hex8_element(x0, xn, du, props, axes_old(:, :, :, e), stress_old(:, :, e), &
-                      ep_old(:, e), strain_old(:, :, e), want_tangent, fe, ke, stress, ep, &
-                      strain, axes, status)
+    if (kind == kind_solid_shell) then
+      call solid_shell_element(x0, xn, du, props, axes_old(:, :, :, e), stress_old(:, :, e), &
+                               ep_old(:, e), strain_old(:, :, e), alpha_in, want_tangent, fe, &
+                               ke, stress, ep, strain, axes, alpha, status)
+    else
+      alpha = alpha_in
+      call hex8_element(x0, xn, du, props, axes_old(:, :, :, e), stress_old(:, :, e), &
+                        ep_old(:, e), strain_old(:, :, e), want_tangent, fe, ke, stress, ep, &
+                        strain, axes, status)
+    end if
     if (.not. want_tangent .or. status /= hex8_ok) return
     if (product) then
       do a = 1, 8

@@ -87,9 +87,11 @@ def parse_case(texts: Mapping[str, str], folder: str | Path = ".",
     if errors:
         raise DeckError.collect(errors)
     assert parsed_mesh is not None and material is not None
-    mesh, mesh_sets = parsed_mesh
+    mesh, mesh_sets, element = parsed_mesh
     cross = _Cross(decks, folder)
     case = cross.build(control, mesh, mesh_sets, bc, material, tools)
+    if case is not None:
+        case = dataclasses.replace(case, element=element)
     errors = [e for d in decks.values() for e in d.errors]
     if errors or case is None:
         raise DeckError.collect(errors or [DeckError("invalid case", folder)])

@@ -1,7 +1,8 @@
 """mesh.dat: the blank, as own 'nodes' and 'hexahedra' blocks, a generated 'box' or a mesh file
-(Abaqus input or Gmsh, through meshio), with its sheet normal, scale and origin. The nodes
-are checked to belong to an element here, the elements by HexMesh (ddpy.model.mesh,
-find_bad_elements), whose findings are reported at the elements' lines.
+(Abaqus input or Gmsh, through meshio), with its sheet normal, scale and origin, and the
+element it is discretized with. The nodes are checked to belong to an element here, the
+elements by HexMesh (ddpy.model.mesh, find_bad_elements), whose findings are reported at the
+elements' lines.
 """
 
 from __future__ import annotations
@@ -30,7 +31,8 @@ from ddpy.io.decks.lines import (
     read_vector,
     show,
 )
-from ddpy.model.mesh import HexMesh, MeshError
+from ddpy.model.mesh import HexMesh, MeshError, zeta_off_normal
+from ddpy.model.solid import ELEMENTS
 
 #: Largest mesh a deck may generate or list (elements).
 MAX_ELEMENTS = 5_000_000
@@ -55,8 +57,11 @@ class _RawMesh:
     node_lines: NDArray[np.int64] | None = None  # deck line of each node (own format)
 
 
-def _parse_mesh(deck: Deck) -> tuple[HexMesh, dict[str, NDArray[np.int64]]] | None:
+def _parse_mesh(deck: Deck) -> tuple[HexMesh, dict[str, NDArray[np.int64]], str] | None:
+    """The mesh, its node sets and the element (ddpy.model.solid.ELEMENTS), or None after
+    reporting what is wrong."""
     seen: dict[str, int] = {}
+    element = "hexahedron"
     normal: tuple[float, float, float] = (0.0, 0.0, 1.0)
     scale = 1.0
     origin = np.zeros(3)
@@ -77,6 +82,10 @@ def _parse_mesh(deck: Deck) -> tuple[HexMesh, dict[str, NDArray[np.int64]]] | No
                     vector = [0.0, 0.0, 0.0]
                     vector[AXES[word[-1]]] = -1.0 if word.startswith("-") else 1.0
                     normal = (vector[0], vector[1], vector[2])
+            elif key == "element":
+                check_arity(line, "element " + " | ".join(ELEMENTS), 1)
+                if first_time(deck, seen, line):
+                    element = read_choice(line.words[1], "the element", tuple(ELEMENTS))
             elif key == "scale":
                 check_arity(line, "scale FACTOR", 1)
                 if first_time(deck, seen, line):
@@ -109,8 +118,8 @@ def _parse_mesh(deck: Deck) -> tuple[HexMesh, dict[str, NDArray[np.int64]]] | No
                 else:
                     raise BadValue("'hexahedra' must follow the 'nodes' block")
             else:
-                raise BadValue(f"unknown keyword {show(key)}: expected normal, scale, origin, "
-                           "nodes, hexahedra, box or file")
+                raise BadValue(f"unknown keyword {show(key)}: expected normal, element, scale, "
+                           "origin, nodes, hexahedra, box or file")
         except BadValue as bad:
             deck.error(line.number, str(bad))
     if deck.errors:
@@ -136,7 +145,18 @@ def _parse_mesh(deck: Deck) -> tuple[HexMesh, dict[str, NDArray[np.int64]]] | No
         mesh = None
     if not _no_free_nodes(deck, raw) or mesh is None:  # reported with the bad elements
         return None
-    return mesh, raw.nodesets
+    if element == "solid-shell":
+        off = zeta_off_normal(mesh.nodes, mesh.elements, mesh.normal)
+        if off.size:
+            labels = ", ".join(str(int(mesh.element_ids[e])) for e in off[:_MAX_REPORTED])
+            more = f" and {off.size - _MAX_REPORTED} more" if off.size > _MAX_REPORTED else ""
+            deck.error(seen["element"], f"the solid-shell needs the sheet normal through every "
+                       f"element's faces N1-N4 and N5-N8 (edges N1-N5, N2-N6, N3-N7, N4-N8 "
+                       f"through the thickness): element {labels}{more} "
+                       f"{'is' if off.size == 1 else 'are'} ordered across it; reorder them, "
+                       f"or use 'element hexahedron'")
+            return None
+    return mesh, raw.nodesets, element
 
 
 def _box(line: Line) -> _RawMesh:

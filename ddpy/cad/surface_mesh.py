@@ -75,7 +75,8 @@ class SurfaceMesh:
     def where(self, face: int) -> str:
         """'file:line' of a face, or 'file' with the face's centre."""
         line = int(self.lines[face]) if len(self.lines) else 0
-        centre = point_text(self.vertices[_corners(self.faces[face:face + 1])[0]].mean(axis=0))
+        corners = self.faces[face][self.faces[face] >= 0]
+        centre = point_text(self.vertices[corners].mean(axis=0))
         return f"{self.path}:{line}: face at {centre}" if line else \
             f"{self.path}: face {face + 1} at {centre}"
 
@@ -173,12 +174,13 @@ def _stl_ascii(path: Path, data: bytes) -> SurfaceMesh:
     groups: list[int] = []
     names: dict[int, str] = {}
     state, solid, facet_line, count = "outside", 0, 0, 0
-    number = 0
+    last = 0
     for number, raw in enumerate(text.replace("\r\n", "\n").replace("\r", "\n").split("\n"),
                                  start=1):
         words = raw.split()
         if not words:
             continue
+        last = number
         key = words[0].lower()
 
         def expect(what: str, number: int = number, raw: str = raw) -> MeshFileError:
@@ -230,7 +232,7 @@ def _stl_ascii(path: Path, data: bytes) -> SurfaceMesh:
                 raise expect("'endfacet'")
             state = "solid"
     if state != "outside":
-        raise MeshFileError(f"{path}:{number}: the file ends inside a "
+        raise MeshFileError(f"{path}:{last}: the file ends inside a "
                             f"{'solid' if state == 'solid' else 'facet'}: expected "
                             f"'{'endsolid' if state == 'solid' else 'endfacet'}'")
     n = len(lines)
@@ -696,8 +698,10 @@ def _orient(mesh: SurfaceMesh, blank_side: ArrayLike, blank_point: ArrayLike | N
     for p in range(n_parts):
         seed = int(np.flatnonzero(part == p)[0])
         order, predecessor = breadth_first_order(graph, seed, directed=False)
-        step = np.asarray(signs[order[1:], predecessor[order[1:]]]).ravel().astype(np.int64)
         parity[seed] = 1
+        if len(order) < 2:
+            continue
+        step = np.asarray(signs[order[1:], predecessor[order[1:]]]).ravel().astype(np.int64)
         for i, s in zip(order[1:].tolist(), step.tolist(), strict=True):
             parity[i] = parity[predecessor[i]] * s
     conflict = parity[f] * parity[g] * sign < 0

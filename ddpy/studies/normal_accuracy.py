@@ -219,10 +219,13 @@ def _gmsh_rectangle(bounds: tuple[tuple[float, float], tuple[float, float]], h: 
     """gmsh's Frontal-Delaunay mesh of a rectangle (recombined into quadrilaterals)."""
     import gmsh
 
-    from ddpy.cad.read import gmsh_session
-
     (u0, u1), (v0, v1) = bounds
-    with gmsh_session():
+    own = not gmsh.isInitialized()   # (ddpy.cad.gmsh_session is a layer apart)
+    if own:
+        gmsh.initialize(["", "-nopopup"], readConfigFiles=False, interruptible=False)
+    terminal = gmsh.option.getNumber("General.Terminal")
+    gmsh.option.setNumber("General.Terminal", 0)
+    try:
         gmsh.model.add("rectangle")
         try:
             gmsh.model.occ.addRectangle(u0, v0, 0.0, u1 - u0, v1 - v0)
@@ -240,6 +243,10 @@ def _gmsh_rectangle(bounds: tuple[tuple[float, float], tuple[float, float]], h: 
         finally:
             gmsh.model.remove()
             gmsh.option.setNumber("Mesh.RecombineAll", 0)
+    finally:
+        gmsh.option.setNumber("General.Terminal", terminal)
+        if own:
+            gmsh.finalize()
     coord = np.asarray(coord).reshape(-1, 3)
     index = np.full(int(np.max(tags)) + 1, -1, dtype=np.int64)
     index[np.asarray(tags, dtype=np.int64)] = np.arange(len(tags))

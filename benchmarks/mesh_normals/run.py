@@ -217,6 +217,7 @@ def dihedral_table(surfaces: dict[str, Any], kinds: list[str]) -> str:
 
 def plot(result: dict[str, Any], folder: Path) -> list[Path]:
     from matplotlib.figure import Figure
+    from matplotlib.ticker import NullFormatter
 
     colours = dict(zip(ESTIMATORS, ("tab:red", "tab:orange", "tab:green", "tab:purple",
                                     "tab:blue"), strict=True))
@@ -233,6 +234,7 @@ def plot(result: dict[str, Any], folder: Path) -> list[Path]:
                 ax.loglog(h, row["normal_max"][estimator], "o-", color=colours[estimator],
                           label=f"{estimator} ({order:.1f})")
             ax.set_title(f"{name}, {kind}", fontsize=10)
+            ax.xaxis.set_minor_formatter(NullFormatter())
             ax.set_xlabel("mean edge / radius")
             ax.legend(fontsize=7)
         axes[0, col].set_ylabel("max normal error [deg]") if col == 0 else None
@@ -261,6 +263,7 @@ def plot(result: dict[str, Any], folder: Path) -> list[Path]:
             ax.loglog(h, row["shape_max"][model], style, color=colour,
                       label=f"{label} ({order:.1f})")
         ax.set_title(title, fontsize=10)
+        ax.xaxis.set_minor_formatter(NullFormatter())
         ax.set_xlabel("mean edge / radius")
         ax.legend(fontsize=7)
     axes[0, 0].set_ylabel("max distance [mm]")

@@ -9,6 +9,8 @@ from pathlib import Path
 
 from ddpy import __version__
 from ddpy.app.cli_run import add_post, add_run
+from ddpy.cad.surface_mesh import DEFAULT_MERGE_TOL
+from ddpy.geometry.mesh_normals import DEFAULT_CREASE_ANGLE, DEFAULT_ESTIMATOR, ESTIMATORS
 
 
 def _accuracy(args: argparse.Namespace) -> int:
@@ -80,20 +82,57 @@ def _fail(command: str, error: Exception, code: int = 1) -> int:
     return code
 
 
+#: `tools build` options that only a CAD file takes, with their defaults, and those that
+#: only a mesh takes (None: not given).
+_CAD_OPTIONS = {"patches_per_arc": 4, "facets_per_arc": 30, "element": "quad",
+                "bezier_tol": 1.0e-3, "bezier_angle_tol": 0.01}
+_MESH_OPTIONS = ("normals", "crease_angle", "merge_tol", "groups", "cad")
+
+
+def _option(name: str) -> str:
+    return "--" + name.replace("_", "-")
+
+
 def _tools_build(args: argparse.Namespace) -> int:
     from ddpy.cad import CadError, build_tool_models
+    from ddpy.cad.mesh_tools import build_mesh_tool_models, is_cad_file
 
-    models = [m.strip() for m in args.models.split(",") if m.strip()]
+    models = None if args.models is None else \
+        [m.strip() for m in args.models.split(",") if m.strip()]
+    name = args.name or Path(args.file).stem
     try:
-        paths = build_tool_models(
-            args.cad, args.out, args.name or Path(args.cad).stem,
-            patches_per_arc=args.patches_per_arc, facets_per_arc=args.facets_per_arc,
-            element=args.element, size=args.size, arc_size=args.arc_size,
-            blank_side=args.blank_side,
-            blank_point=args.blank_point, bezier_tol=args.bezier_tol,
-            bezier_angle_tol=args.bezier_angle_tol, faces=args.faces, models=models)
+        if is_cad_file(args.file):
+            given = [o for o in _MESH_OPTIONS if getattr(args, o) is not None]
+            if given:
+                raise ValueError(f"{_option(given[0])} applies to a mesh file (STL, .inp, "
+                                 f".msh, ...), not to the CAD file {args.file}")
+            options = {k: v if getattr(args, k) is None else getattr(args, k)
+                       for k, v in _CAD_OPTIONS.items()}
+            paths = build_tool_models(
+                args.file, args.out, name, size=args.size, arc_size=args.arc_size,
+                blank_side=args.blank_side, blank_point=args.blank_point, faces=args.faces,
+                models=models or ["nagata", "facets", "bezier"], **options)
+        else:
+            given = [o for o in (*_CAD_OPTIONS, "size", "arc_size")
+                     if getattr(args, o) is not None]
+            if given:
+                raise ValueError(f"{_option(given[0])} sets how a CAD file is meshed: a mesh "
+                                 f"file ({args.file}) is used as it is")
+            if args.faces is not None and args.cad is None:
+                raise ValueError("--faces selects faces of the CAD given by --cad")
+            if args.cad is not None and (args.normals or args.crease_angle):
+                raise ValueError(f"{'--normals' if args.normals else '--crease-angle'} sets "
+                                 "the normals estimated from the mesh: with --cad they come "
+                                 "from the CAD")
+            extra = {k: v for k, v in (("estimator", args.normals),
+                                       ("crease_angle", args.crease_angle),
+                                       ("merge_tol", args.merge_tol)) if v is not None}
+            paths = build_mesh_tool_models(
+                args.file, args.out, name, models=models or ["nagata", "facets"],
+                blank_side=args.blank_side, blank_point=args.blank_point,
+                groups=args.groups, cad=args.cad, cad_faces=args.faces, **extra)
     except (CadError, ValueError) as error:
-        return _fail("tools build", error, 2)  # the CAD file or an option
+        return _fail("tools build", error, 2)  # the CAD or mesh file, or an option
     except OSError as error:  # the output folder: permissions, space
         where = error.filename or args.out
         print(f"ddpy tools build: error: {where}: {error.strerror or error}", file=sys.stderr)
@@ -101,6 +140,13 @@ def _tools_build(args: argparse.Namespace) -> int:
     for path in paths.values():
         print(path)
     return 0
+
+
+def _name_list(text: str) -> list[str]:
+    names = [v.strip() for v in text.split(",") if v.strip()]
+    if not names:
+        raise argparse.ArgumentTypeError(f"expected names separated by commas, got '{text}'")
+    return names
 
 
 def _tools_error(args: argparse.Namespace) -> int:
@@ -131,39 +177,62 @@ def _tools_error(args: argparse.Namespace) -> int:
 
 
 def _add_tools(commands: argparse._SubParsersAction) -> None:
-    tools = commands.add_parser("tools", help="tool models from CAD (Bezier, Nagata, facets) "
-                                "and their shape error")
+    tools = commands.add_parser("tools", help="tool models from CAD or meshes (Bezier, Nagata,"
+                                " facets) and their shape error")
     group = tools.add_subparsers(dest="tools_command", metavar="TOOLS_COMMAND", required=True)
     build = group.add_parser(
-        "build", help="write <name>.nagata.tool, <name>.facets.tool and <name>.bezier.tool",
+        "build", help="write <name>.nagata.tool, <name>.facets.tool (and <name>.bezier.tool "
+        "from CAD)",
         description="Read a CAD file (STEP, IGES, BREP) and write Nagata, facet and Bezier tool "
-        "files (docs/tool-files.md). Densities count patches per 90 degrees of arc. Give "
-        "negative vectors with '=', e.g. --blank-side=0,0,-1.")
-    build.add_argument("cad", metavar="CAD", help="STEP, IGES or BREP file")
-    build.add_argument("--name", help="tool name (default: the CAD file's stem)")
+        "files, or a tool surface mesh (STL, Abaqus/CalculiX .inp, Gmsh .msh, or what meshio "
+        "reads) and write Nagata and facet tool files with normals estimated from the mesh "
+        "or taken from --cad (docs/tool-files.md, docs/mesh-tools.md). Densities count "
+        "patches per 90 degrees of arc. Give negative vectors with '=', e.g. "
+        "--blank-side=0,0,-1.")
+    build.add_argument("file", metavar="FILE", help="CAD file (STEP, IGES, BREP) or tool mesh "
+                       "(STL, .inp, .msh, ...)")
+    build.add_argument("--name", help="tool name (default: the file's stem)")
     build.add_argument("--out", default=".", metavar="DIR", help="output folder (default: .)")
-    build.add_argument("--patches-per-arc", type=int, default=4, metavar="N",
-                       help="Nagata patches per 90 degrees along curved edges (default 4)")
-    build.add_argument("--facets-per-arc", type=int, default=30, metavar="N",
-                       help="facets per 90 degrees along curved edges (default 30)")
-    build.add_argument("--element", choices=("quad", "tri"), default="quad")
-    build.add_argument("--size", type=float, metavar="MM",
-                       help="largest element along straight edges (default: one element)")
-    build.add_argument("--arc-size", type=float, metavar="MM",
-                       help="largest element along curved edges too, e.g. around a large "
-                       "surface of revolution (default: by the angle only)")
     build.add_argument("--blank-side", type=_triple, default=(0.0, 0.0, 1.0), metavar="X,Y,Z",
                        help="direction towards the blank (default 0,0,1)")
     build.add_argument("--blank-point", type=_triple, metavar="X,Y,Z",
                        help="a point on the blank side (instead of --blank-side)")
-    build.add_argument("--bezier-tol", type=float, default=1.0e-3, metavar="MM",
-                       help="largest Bezier deviation from the CAD (default 0.001 mm)")
-    build.add_argument("--bezier-angle-tol", type=float, default=0.01, metavar="DEG",
-                       help="largest Bezier normal error (default 0.01 degrees)")
     build.add_argument("--faces", type=_int_list, metavar="TAGS",
                        help="CAD faces to use, e.g. 1,2,5 (default: all)")
-    build.add_argument("--models", default="nagata,facets,bezier", metavar="LIST",
-                       help="models to write (default nagata,facets,bezier)")
+    build.add_argument("--models", metavar="LIST",
+                       help="models to write (default nagata,facets,bezier from CAD, "
+                       "nagata,facets from a mesh)")
+    cad = build.add_argument_group("CAD files")
+    cad.add_argument("--patches-per-arc", type=int, metavar="N",
+                     help="Nagata patches per 90 degrees along curved edges (default 4)")
+    cad.add_argument("--facets-per-arc", type=int, metavar="N",
+                     help="facets per 90 degrees along curved edges (default 30)")
+    cad.add_argument("--element", choices=("quad", "tri"), help="default quad")
+    cad.add_argument("--size", type=float, metavar="MM",
+                     help="largest element along straight edges (default: one element)")
+    cad.add_argument("--arc-size", type=float, metavar="MM",
+                     help="largest element along curved edges too, e.g. around a large "
+                     "surface of revolution (default: by the angle only)")
+    cad.add_argument("--bezier-tol", type=float, metavar="MM",
+                     help="largest Bezier deviation from the CAD (default 0.001 mm)")
+    cad.add_argument("--bezier-angle-tol", type=float, metavar="DEG",
+                     help="largest Bezier normal error (default 0.01 degrees)")
+    mesh = build.add_argument_group("mesh files")
+    mesh.add_argument("--normals", choices=ESTIMATORS, metavar="ESTIMATOR",
+                      help=f"vertex normal estimator: {', '.join(ESTIMATORS)} (default "
+                      f"{DEFAULT_ESTIMATOR}, docs/mesh-tools.md)")
+    mesh.add_argument("--crease-angle", type=float, metavar="DEG",
+                      help="edges whose faces meet at more than this angle are creases "
+                      f"(default {DEFAULT_CREASE_ANGLE:g})")
+    mesh.add_argument("--merge-tol", type=float, metavar="REL",
+                      help="vertices closer than this fraction of the median edge length are "
+                      f"one (default {DEFAULT_MERGE_TOL:g})")
+    mesh.add_argument("--groups", type=_name_list, metavar="NAMES",
+                      help="keep only these groups: STL solids, Abaqus *SURFACE or element set "
+                      "names, Gmsh physical names (default: every face)")
+    mesh.add_argument("--cad", metavar="CAD",
+                      help="the CAD file the mesh was made from: normals from its exact "
+                      "surfaces instead of estimated (--faces selects its faces)")
     build.set_defaults(handler=_tools_build)
 
     error = group.add_parser("error", help="shape error of tool files against their CAD",

@@ -338,6 +338,7 @@ def test_mesh_element(tmp_path: Path) -> None:
     the runner's Solid takes it; the hexahedron takes any node order, the solid-shell's
     check names every element ordered across the sheet, at the element line."""
     from ddpy.app.runner import build_problem
+    from ddpy.io.results import ResultsReader, ResultsWriter
 
     assert read_case(EXAMPLES / "bending", geometry=False).element == "hexahedron"
     case = copy_example("bending", tmp_path)
@@ -345,6 +346,9 @@ def test_mesh_element(tmp_path: Path) -> None:
     read = read_case(case, geometry=False)
     assert read.element == "solid-shell"
     assert build_problem(read).solid.element == "solid-shell"
+    ResultsWriter.for_case(tmp_path / "run.h5", read).close()  # the results say so
+    with ResultsReader(tmp_path / "run.h5") as results:
+        assert results.element == "solid-shell"
     sideways = OWN_MESH.replace("10 1 2 3 4 5 6 7 8", "10 1 4 8 5 2 3 7 6")  # zeta along x
     case = copy_example("bending", tmp_path / "b", mesh=sideways)
     edit(case, "bc.dat", "nodeset    centre  box 0 0  0 0  -inf inf", "nodeset centre ids 1-8")

@@ -65,6 +65,7 @@ def test_write_and_read_back(tmp_path: Path, mesh) -> None:
     with ResultsReader(path) as r:
         assert (r.title, r.tools, r.phases, r.units) == ("synthetic", TOOLS,
                                                          ("forming", "springback"), "mm N MPa s")
+        assert r.element == "hexahedron"  # the writer's default
         assert r.n_increments == 6
         np.testing.assert_array_equal(r.curve("increment"), np.arange(1, 7))
         np.testing.assert_allclose(r.tool_force("punch")[:, 2], 10.0 * np.arange(1, 7))

@@ -193,7 +193,7 @@ class ResultsWriter:
 
     def __init__(self, path: str | os.PathLike[str], mesh: Any, tools: Sequence[str],
                  phases: Sequence[str] = (), *, title: str = "", case: str = "",
-                 overwrite: bool = False) -> None:
+                 element: str = "hexahedron", overwrite: bool = False) -> None:
         import h5py
 
         self.path = Path(path)
@@ -212,13 +212,14 @@ class ResultsWriter:
         self._file = h5py.File(self.path, "w" if overwrite else "w-")
         self.failed = ""  # why a write failed; the file is closed then
         with self._writing():
-            self._create(nodes, elements, ids, eids, normal, title, case)
+            self._create(nodes, elements, ids, eids, normal, title, case, element)
 
     def _create(self, nodes: NDArray, elements: NDArray, ids: NDArray, eids: NDArray,
-                normal: NDArray, title: str, case: str) -> None:
+                normal: NDArray, title: str, case: str, element: str) -> None:
         """The groups and columns of a new file, and frame 0."""
         f = self._file
         f.attrs.update({"format": FORMAT, "version": VERSION, "title": title, "case": case,
+                        "element": element,
                         "units": "mm N MPa s", "tools": list(self.tools),
                         "phases": list(self.phases), "ddpy": __version__,
                         "created": datetime.datetime.now().isoformat(timespec="seconds")})
@@ -331,7 +332,8 @@ class ResultsWriter:
                  ) -> ResultsWriter:
         """A writer for a :class:`ddpy.io.case.Case`: its mesh, tools, phases and title."""
         return cls(path, case.mesh, case.tool_names, [p.name for p in case.phases],
-                   title=case.title, case=str(case.folder), overwrite=overwrite)
+                   title=case.title, case=str(case.folder), element=case.element,
+                   overwrite=overwrite)
 
     @classmethod
     def reopen(cls, path: str | os.PathLike[str], increments: int, iterations: int,
@@ -687,6 +689,9 @@ class ResultsReader:
         self.tools = tuple(str(t) for t in f.attrs["tools"])
         self.phases = tuple(str(p) for p in f.attrs["phases"])
         self.units = str(f.attrs["units"])
+        #: the blank's element (Solid's element): files written before it was recorded
+        #: had the hexahedron, the only one then
+        self.element = str(f.attrs.get("element", "hexahedron"))
         #: OpenMP threads of the run (``ddpy run``; 0 when not recorded)
         self.threads = int(f.attrs.get("threads", 0))
 

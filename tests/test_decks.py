@@ -639,6 +639,11 @@ TOOL_ERRORS = [
     ("contact      top", "contact top\n  speed 3", "unknown keyword 'speed' in a tool"),
     ("contact      top", "contact top\n  contact bottom", "'contact' given twice"),
     ("contact      top", "contact top\n  augmentation 0", "augmentation parameter must be > 0"),
+    ("contact      top", "contact top\n  discretization mortar",
+     "expected the contact discretization among node, surface"),
+    ("contact      top", "contact top\n  discretization", "expected 'discretization node|surface'"),
+    ("contact      top", "contact top\n  discretization node\n  discretization surface",
+     "'discretization' given twice"),
 ]
 
 
@@ -648,6 +653,25 @@ def test_tool_errors(tmp_path: Path, old: str, new: str, expected: str) -> None:
     error = error_of(case)
     assert expected in str(error), str(error)
     assert error.path.name == "tools.dat" and error.line is not None
+
+
+def test_contact_discretization(tmp_path: Path) -> None:
+    """discretization surface selects surface-to-surface contact for that tool; node, the
+    default, node-to-surface; a bad value is reported at its line of tools.dat."""
+    from ddpy.app.runner import build_problem
+
+    case = edit(copy_example("bending", tmp_path), "tools.dat", "contact      bottom",
+                "contact      bottom\n  discretization surface")
+    read = read_case(case)
+    assert (read.tool("punch").discretization, read.tool("die").discretization) == (
+        "node", "surface")
+    assert "die: nagata, die.tool, friction 0.148, contacts the bottom of the blank, " \
+        "surface-to-surface" in read.summary()
+    problem = build_problem(read)
+    assert [t.contact for t in problem.tools] == ["node", "surface"]
+    edit(case, "tools.dat", "discretization surface", "discretization edges")
+    number = line_of(case, "tools.dat", "discretization edges")
+    assert str(error_of(case)).startswith(f"{case / 'tools.dat'}:{number}: ")
 
 
 def test_tool_friction_message(tmp_path: Path) -> None:

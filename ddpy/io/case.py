@@ -220,8 +220,10 @@ class BlankMaterial:
 class Tool:
     """A rigid tool: its description (bezier, nagata or facets), its tool file, the Coulomb
     friction coefficient, the side of the blank it touches (``facing``: the outward normal
-    of that blank surface; ``contact`` is top, bottom or facing) and the augmentation
-    parameter r of its contact law, N/mm (None: the solver chooses it)."""
+    of that blank surface; ``contact`` is top, bottom or facing), the augmentation
+    parameter r of its contact law, N/mm (None: the solver chooses it), and its contact
+    discretization (``discretization``: "node", node-to-surface, or "surface",
+    surface-to-surface)."""
 
     name: str
     description: Literal["bezier", "nagata", "facets"]
@@ -231,6 +233,7 @@ class Tool:
     facing: tuple[float, float, float]
     augmentation: float | None = None
     origin: str = ""
+    discretization: str = "node"
 
     def model(self) -> ToolModel:
         """The tool model read from the file (ddpy.io.toolfile); a Nagata file used with
@@ -399,7 +402,8 @@ class Case:
         ]
         for t in self.tools:
             lines.append(f"  tool {t.name}: {t.description}, {t.file.name}, friction "
-                         f"{t.friction:g}, contacts the {t.contact} of the blank")
+                         f"{t.friction:g}, contacts the {t.contact} of the blank"
+                         + (", surface-to-surface" if t.discretization == "surface" else ""))
         for p in self.phases:
             if p.is_springback:
                 lines.append(f"  phase {p.name}: springback in {p.increments} step(s)")

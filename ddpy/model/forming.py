@@ -713,7 +713,8 @@ class FormingProblem:
             x.ravel(), x_n.ravel(), layout.fixed_flags, *self._tool_arguments(positions),
             0.0 if touching is None else touching.distance,
             1 if touching is None or touching.resting else 0, layout.first, layout.node,
-            on.astype(np.int32), force.ravel(), self.r, self.mu, layout.held_flags,
+            layout.patch_first, layout.patch_node, on.astype(np.int32), force.ravel(), self.r,
+            self.mu, layout.held_flags,
             layout.eqn, layout.nf, layout.k_slots, residual, values)
         if status:
             raise RuntimeError("forming_contact: the tools' packed arrays or the layout do not "

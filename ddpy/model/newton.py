@@ -38,11 +38,45 @@ def _join(parts: Sequence[NDArray], dtype: type) -> NDArray:
     return np.concatenate(parts).astype(dtype) if parts else np.zeros(0, dtype=dtype)
 
 
+def contact_faces(tools: Sequence[RigidTool], mesh: HexMesh) -> list[NDArray[np.int32]]:
+    """Per tool, the blank's boundary faces (f, 4) that face it: outward normal within 60
+    degrees of its ``facing`` direction (none for a tool without one). Their nodes give a
+    node-to-surface tool's slaves their normals for the facing filter, and a
+    surface-to-surface tool its contact surface (Gauss points and patches)."""
+    if not tools:
+        return []
+    boundary = boundary_faces(mesh.elements)
+    area = face_area_vectors(mesh.nodes, boundary)
+    return [np.zeros((0, 4), dtype=np.int32) if tool.facing is None else
+            boundary[area @ tool.facing > 0.5 * np.linalg.norm(area, axis=1)].astype(np.int32)
+            for tool in tools]
+
+
+def gauss_face_weights(nodes: NDArray[np.float64], faces: NDArray[np.integer]
+                       ) -> NDArray[np.float64]:
+    """The area each 2 x 2 Gauss point of quadrilateral faces (f, 4) stands for (f, 4):
+    the Gauss weight 1 times |dX/dxi x dX/deta| at the point, in the order of the core's
+    points (xi, eta) = (-1, -1), (1, -1), (1, 1), (-1, 1) / sqrt(3), the corners in the
+    same order. They sum to each face's area."""
+    corner = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
+    x = nodes[faces]                                              # (f, 4, 3)
+    weights = np.empty(faces.shape, dtype=float)
+    for g, (xi, eta) in enumerate(corner / np.sqrt(3.0)):
+        dxi = 0.25 * corner[:, 0] * (1.0 + corner[:, 1] * eta)    # dN_q/dxi
+        deta = 0.25 * corner[:, 1] * (1.0 + corner[:, 0] * xi)
+        weights[:, g] = np.linalg.norm(np.cross(np.einsum("q,fqk->fk", dxi, x),
+                                                np.einsum("q,fqk->fk", deta, x)), axis=1)
+    return weights
+
+
 class Layout:
     """Unknowns and the fixed coordinate structure of the Jacobian for one constraint set:
     free displacement dofs first, then 3 force components per (tool, slave) pair.
     ``symmetric``: the solid's block as its lower triangle (a symmetric MUMPS instance; only
-    without tools, whose contact blocks are not symmetric)."""
+    without tools, whose contact blocks are not symmetric). Each pair's law depends on the
+    positions of its patch of nodes (``patch_first``, ``patch_node``): its own node for a
+    node-to-surface tool, every node of the tool's contact faces at its node for a
+    surface-to-surface one (its own node alone where it is on none)."""
 
     def __init__(self, solid: Solid, tools: Sequence[RigidTool], fixed: NDArray[np.bool_],
                  symmetric: bool = False) -> None:
@@ -64,6 +98,20 @@ class Layout:
         self.first = np.concatenate([[0], np.cumsum([t.slaves.size for t in tools])]
                                     ).astype(np.int32)
         npair = self.node.size
+        patches = []
+        for tool, faces in zip(tools, contact_faces(tools, solid.mesh), strict=True):
+            if tool.contact != "surface":
+                patches.extend([s] for s in tool.slaves)
+                continue
+            around: dict[int, set[int]] = {int(s): {int(s)} for s in tool.slaves}
+            for face in faces.tolist():
+                for node in face:
+                    if node in around:
+                        around[node].update(face)
+            patches.extend(sorted(around[int(s)]) for s in tool.slaves)
+        self.patch_first = np.concatenate([[0], np.cumsum([len(p) for p in patches])]
+                                          ).astype(np.int32)
+        self.patch_node = _join([np.asarray(p) for p in patches], np.int32)
         self.n = self.nf + 3 * npair
         lam = self.nf + 3 * np.arange(npair)[:, None] + np.arange(3)  # (npair, 3)
         equ = eqn.reshape(n, 3)[self.node]                              # (npair, 3)
@@ -72,12 +120,20 @@ class Layout:
         self.held_flags = (equ < 0).astype(np.int32).ravel()
         self.fixed_flags = fixed.astype(np.int32).ravel()
         # The structure of the contact blocks, in the order the core writes their values:
-        # the coupling entries (-1), dC/dx at the free dofs of each pair's node (pair,
-        # row, column), dC/dlambda (pair, row, column).
+        # the coupling entries (-1), dC/dx at the free dofs of each pair's patch (pair, row,
+        # patch node, column), dC/dlambda (pair, row, column).
         coupling = equ >= 0
-        pi, ii, jj = np.nonzero(np.broadcast_to(coupling[:, None, :], (npair, 3, 3)))
+        size = np.diff(self.patch_first)
+        width = int(size.max()) if npair else 1
+        entry = self.patch_first[:-1, None] + np.arange(width)          # (npair, width)
+        inside = np.arange(width) < size[:, None]
+        patch = eqn.reshape(n, 3)[self.patch_node[np.where(inside, entry, 0)]]
+        free_patch = inside[:, :, None] & (patch >= 0)                  # (npair, width, 3)
+        pi, ii, ei, jj = np.nonzero(np.broadcast_to(free_patch[:, None],
+                                                    (npair, 3, width, 3)))
         rows = [self.pattern.rows, equ[coupling], lam[pi, ii], np.repeat(lam, 3, axis=1).ravel()]
-        cols = [self.pattern.cols, lam[coupling], equ[pi, jj], np.tile(lam, (1, 3)).ravel()]
+        cols = [self.pattern.cols, lam[coupling], patch[pi, ei, jj],
+                np.tile(lam, (1, 3)).ravel()]
         self.rows = np.concatenate(rows).astype(np.int32)
         self.cols = np.concatenate(cols).astype(np.int32)
         self.k_slots = self.pattern.rows.size
@@ -93,12 +149,12 @@ class ToolPack:
 
     def __init__(self, tools: Sequence[RigidTool], mesh: HexMesh) -> None:
         searches = [t.search for t in tools]
-        table = np.zeros((len(tools), 10), dtype=np.int32)
+        table = np.zeros((len(tools), 11), dtype=np.int32)
         offsets = np.zeros(4, dtype=np.int64)  # coef, patch, tree, grid
         for i, (tool, s) in enumerate(zip(tools, searches, strict=True)):
             n = s.surface.n_patches
             table[i] = (s.kind, s.stride, n, s.mode, s.max_iterations, *offsets,
-                        tool.facing is not None)
+                        tool.facing is not None, tool.contact == "surface")
             offsets += (s.surface.coefficients.size, n, 2 * n - 1, s.grid_params.shape[0])
         self.names = [t.name for t in tools]
         self.table = table.ravel()
@@ -113,24 +169,22 @@ class ToolPack:
                             np.float64)
         # Per tool with a facing direction, the blank's boundary faces that face it (normal
         # within 60 degrees) and the slave index of their corners (-1: not a slave): the
-        # search keeps only patches opposing the blank's normal at each slave.
-        faces, corners = [], []
-        boundary = boundary_faces(mesh.elements) if tools else np.zeros((0, 4), np.int64)
-        area = face_area_vectors(mesh.nodes, boundary) if tools else np.zeros((0, 3))
-        for tool in tools:
-            if tool.facing is None:
-                faces.append(np.zeros((0, 4), dtype=np.int32))
-                corners.append(np.zeros((0, 4), dtype=np.int32))
-                continue
-            chosen = boundary[area @ tool.facing > 0.5 * np.linalg.norm(area, axis=1)]
+        # search keeps only patches opposing the blank's normal at each slave; a
+        # surface-to-surface tool projects their Gauss points, which stand for the areas
+        # face_weight of the undeformed blank.
+        faces = contact_faces(tools, mesh)
+        corners, weights = [], []
+        for tool, chosen in zip(tools, faces, strict=True):
             where = np.full(mesh.n_nodes, -1, dtype=np.int32)
             where[tool.slaves] = np.arange(tool.slaves.size)
-            faces.append(chosen.astype(np.int32))
             corners.append(where[chosen])
+            weights.append(gauss_face_weights(mesh.nodes, chosen) if tool.contact == "surface"
+                           else np.zeros(chosen.shape))
         self.face_first = np.concatenate([[0], np.cumsum([f.shape[0] for f in faces])]
                                          ).astype(np.int32)
         self.faces = _join([f.ravel() for f in faces], np.int32)
         self.corner = _join([c.ravel() for c in corners], np.int32)
+        self.face_weight = _join([w.ravel() for w in weights], np.float64)
 
     def arguments(self, positions: dict[str, NDArray[np.float64]],
                   positions_n: dict[str, NDArray[np.float64]], reach: float, size: float
@@ -140,7 +194,8 @@ class ToolPack:
         they are and where they were at the last converged increment, the search's reach
         and the element size."""
         return (self.table, self.tol, *self.arrays, self.facing, self.face_first, self.faces,
-                self.corner, _join([positions[n] for n in self.names], np.float64),
+                self.corner, self.face_weight,
+                _join([positions[n] for n in self.names], np.float64),
                 _join([positions_n[n] for n in self.names], np.float64), reach, size)
 
 
@@ -261,8 +316,8 @@ def increment(solid: Solid, layout: Layout, factors: Factors, state: SolidState,
          normal, niter, history, counters, spent, outcome, info, detail) = \
             _core.forming_increment(
                 *solid_state, layout.n_coupling, layout.rows.size, *layout.by_rows,
-                *pairs.tools,
-                loop.touching, layout.first, layout.node, pairs.on.astype(np.int32), pairs.r,
+                *pairs.tools, loop.touching, layout.first, layout.node, layout.patch_first,
+                layout.patch_node, pairs.on.astype(np.int32), pairs.r,
                 pairs.mu, layout.held_flags, u_n.ravel(),
                 np.where(pairs.on[:, None], pairs.force_n, 0.0).ravel(), external.ravel(),
                 prescribed.ravel(), start, settings, isettings, factored, reuse_next,

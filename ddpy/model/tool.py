@@ -11,15 +11,23 @@ from ddpy._validate import float_array, int_array
 from ddpy.geometry.search import ContactSearch
 from ddpy.geometry.surfaces import BezierSurface, NagataSurface
 
-__all__ = ["RigidTool"]
+__all__ = ["RigidTool", "CONTACT_DISCRETIZATIONS"]
+
+#: How a tool's contact is discretized on the blank: "node" (node-to-surface, DD3IMP's: each
+#: slave node's own gap, normal and slip) or "surface" (surface-to-surface: each slave's
+#: gap, normal and slip averaged over the Gauss points of the blank faces around it,
+#: docs/theory/contact.md).
+CONTACT_DISCRETIZATIONS = ("node", "surface")
 
 
 @dataclass
 class RigidTool:
     """A rigid tool: its surface, the blank nodes that may touch it (``slaves``), Coulomb
     friction, and optionally the outward normal of the blank face that meets it
-    (``facing``: only patches facing the opposite way are contact candidates) and the
-    augmentation parameter r of the contact law (default: ``default_augmentation``)."""
+    (``facing``: only patches facing the opposite way are contact candidates), the
+    augmentation parameter r of the contact law (default: ``default_augmentation``) and the
+    contact discretization (``contact``, CONTACT_DISCRETIZATIONS: "surface" needs
+    ``facing``, which picks the blank faces that meet the tool)."""
 
     name: str
     surface: BezierSurface | NagataSurface
@@ -27,6 +35,7 @@ class RigidTool:
     friction: float = 0.0
     facing: ArrayLike | None = None
     augmentation: float | None = None
+    contact: str = "node"
     search: ContactSearch = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -43,6 +52,12 @@ class RigidTool:
         if self.augmentation is not None and not self.augmentation > 0.0:
             raise ValueError(f"tool {self.name}: augmentation must be > 0, got "
                              f"{self.augmentation}")
+        if self.contact not in CONTACT_DISCRETIZATIONS:
+            raise ValueError(f"tool {self.name}: contact must be one of "
+                             f"{', '.join(CONTACT_DISCRETIZATIONS)}, got {self.contact!r}")
+        if self.contact == "surface" and self.facing is None:
+            raise ValueError(f"tool {self.name}: surface-to-surface contact needs facing (the "
+                             "outward normal of the blank faces that meet the tool)")
         if self.facing is not None:
             facing = float_array(self.facing, f"facing of tool {self.name}", (3,))
             if np.linalg.norm(facing) == 0.0:

@@ -17,20 +17,27 @@ contains
 
   !> Whether the packed tools, the pairs and the Jacobian layout fit the arrays they index
   !> (the core writes where they say): node indices in range, tool and face ranges
-  !> increasing, each tool's patches, tree and grid within the packed arrays, and nvalues
-  !> the solid's k_slots plus the contact blocks of the layout (or 0: no Jacobian).
+  !> increasing, each tool's patches, tree and grid within the packed arrays, each pair's
+  !> patch its own node (node-to-surface) or holding every node of the tool's faces at
+  !> its node (surface-to-surface), and nvalues the solid's k_slots plus the contact
+  !> blocks of the layout (or 0: no Jacobian).
   pure logical function layout_ok(nnode, ntool, table, ncoef, ndeg, ntri, ntree, nframe, &
                                   nstart, ngrid, grid_start, face_first, nface, faces, &
-                                  corner, npair, tool_first, pair_node, eqn, k_slots, &
-                                  nvalues) result(ok)
+                                  corner, npair, tool_first, pair_node, npatch, patch_first, &
+                                  patch_node, eqn, k_slots, nvalues) result(ok)
     integer(c_int), intent(in) :: nnode, ntool, ncoef, ndeg, ntri, ntree, nframe, nstart, &
-                                  ngrid, nface, npair, k_slots, nvalues
+                                  ngrid, nface, npair, npatch, k_slots, nvalues
     integer(c_int), intent(in) :: table(tool_fields, ntool), grid_start(nstart), &
                                   face_first(ntool + 1), faces(4, nface), corner(4, nface), &
-                                  tool_first(ntool + 1), pair_node(npair), eqn(3, nnode)
-    integer :: t, np_, po, first, last, coupled
+                                  tool_first(ntool + 1), pair_node(npair), &
+                                  patch_first(npair + 1), patch_node(npatch), eqn(3, nnode)
+    integer :: t, np_, po, first, last, coupled, p, f, q, qq, e, entries
+    logical :: found
     ok = .false.
     if (any(pair_node < 0) .or. any(pair_node >= nnode)) return
+    if (any(patch_node < 0) .or. any(patch_node >= nnode)) return
+    if (patch_first(1) /= 0 .or. patch_first(npair + 1) /= npatch) return
+    if (any(patch_first(2:) <= patch_first(:npair))) return
     if (any(faces < 0) .or. any(faces >= nnode) .or. any(corner < -1)) return
     if (tool_first(1) /= 0 .or. tool_first(ntool + 1) /= npair) return
     if (face_first(1) /= 0 .or. face_first(ntool + 1) /= nface) return
@@ -48,9 +55,33 @@ contains
       first = grid_start(po + t)
       last = grid_start(po + t + np_)
       if (first /= 1 .or. last < first .or. table(9, t) + last - 1 > ngrid) return
+      if (table(11, t) /= 0 .and. table(11, t) /= 1) return
+      if (table(11, t) == 0) then
+        do p = tool_first(t) + 1, tool_first(t + 1)
+          if (patch_first(p + 1) - patch_first(p) /= 1) return
+          if (patch_node(patch_first(p + 1)) /= pair_node(p)) return
+        end do
+        cycle
+      end if
+      do f = face_first(t) + 1, face_first(t + 1)
+        do q = 1, 4
+          if (corner(q, f) < 0) cycle
+          p = tool_first(t) + corner(q, f) + 1
+          if (faces(q, f) /= pair_node(p)) return
+          do qq = 1, 4
+            found = .false.
+            do e = patch_first(p) + 1, patch_first(p + 1)
+              if (patch_node(e) == faces(qq, f)) found = .true.
+            end do
+            if (.not. found) return
+          end do
+        end do
+      end do
     end do
     coupled = count(eqn(:, pair_node + 1) >= 0)
-    ok = k_slots >= 0 .and. (nvalues == k_slots + 4*coupled + 9*npair .or. nvalues == 0)
+    entries = count(eqn(:, patch_node + 1) >= 0)
+    ok = k_slots >= 0 .and. &
+         (nvalues == k_slots + coupled + 3*entries + 9*npair .or. nvalues == 0)
   end function layout_ok
 
   !> Whether a row structure (ddpy.core.linalg.row_structure) fits: rows and sources in
@@ -71,13 +102,14 @@ contains
                                  tree_upper, tree_child, nframe, frame, frame_lower, &
                                  frame_upper, nstart, grid_start, ngrid, grid_params, &
                                  grid_normals, grid_points, facing, face_first, nface, &
-                                 faces, corner, positions, positions_n, reach, size, &
-                                 touching, resting, npair, tool_first, pair_node, on, force, &
-                                 r, mu, held, eqn, nf, k_slots, nvalues, residual, values, &
-                                 state, gap, normal, status) bind(C, name="ddpy_forming_contact")
+                                 faces, corner, face_weight, positions, positions_n, reach, &
+                                 size, touching, resting, npair, tool_first, pair_node, &
+                                 npatch, patch_first, patch_node, on, force, r, mu, held, eqn, &
+                                 nf, k_slots, nvalues, residual, values, state, gap, normal, &
+                                 status) bind(C, name="ddpy_forming_contact")
     integer(c_int), value, intent(in) :: nnode, ntool, ncoef, ndeg, ntri, ntree, nframe, &
-                                         nstart, ngrid, nface, resting, npair, nf, k_slots, &
-                                         nvalues
+                                         nstart, ngrid, nface, resting, npair, npatch, nf, &
+                                         k_slots, nvalues
     real(c_double), value, intent(in) :: reach, size, touching
     real(c_double), intent(in) :: x(3, nnode), x_n(3, nnode), tol(ntool), coef(ncoef), &
                                   tree_lower(3*ntree), tree_upper(3*ntree), frame(9*nframe), &
@@ -85,11 +117,12 @@ contains
                                   grid_params(2*ngrid), grid_normals(3*ngrid), &
                                   grid_points(3*ngrid), facing(3, ntool), &
                                   positions(3, ntool), positions_n(3, ntool), &
-                                  force(3, npair), r(npair), mu(npair)
+                                  force(3, npair), r(npair), mu(npair), face_weight(4, nface)
     integer(c_int), intent(in) :: fixed(3, nnode), table(tool_fields, ntool), degrees(ndeg), &
                                   triangle(ntri), tree_child(ntree), grid_start(nstart), &
                                   face_first(ntool + 1), faces(4, nface), corner(4, nface), &
                                   tool_first(ntool + 1), pair_node(npair), on(npair), &
+                                  patch_first(npair + 1), patch_node(npatch), &
                                   held(3, npair), eqn(3, nnode)
     real(c_double), intent(inout) :: residual(nf + 3*npair), values(nvalues)
     integer(c_int), intent(out) :: state(npair), status
@@ -100,15 +133,16 @@ contains
     status = 1
     if (.not. layout_ok(nnode, ntool, table, ncoef, ndeg, ntri, ntree, nframe, nstart, ngrid, &
                         grid_start, face_first, nface, faces, corner, npair, tool_first, &
-                        pair_node, eqn, k_slots, nvalues)) return
+                        pair_node, npatch, patch_first, patch_node, eqn, k_slots, &
+                        nvalues)) return
     status = 0
     call forming_contact(nnode, x, x_n, fixed, ntool, table, tol, coef, degrees, triangle, &
                          tree_lower, tree_upper, tree_child, frame, frame_lower, frame_upper, &
                          grid_start, grid_params, grid_normals, grid_points, facing, &
-                         face_first, nface, faces, corner, positions, positions_n, reach, &
-                         size, touching, resting, npair, tool_first, pair_node, on, force, r, &
-                         mu, held, eqn, nf, k_slots, nvalues, residual, values, state, gap, &
-                         normal)
+                         face_first, nface, faces, corner, face_weight, positions, &
+                         positions_n, reach, size, touching, resting, npair, tool_first, &
+                         pair_node, npatch, patch_first, patch_node, on, force, r, mu, held, &
+                         eqn, nf, k_slots, nvalues, residual, values, state, gap, normal)
   end subroutine api_forming_contact
 
   !> Newton iterations of one increment: see forming_increment. Connectivity arrives 0-based.
@@ -120,8 +154,9 @@ contains
                                    tree_upper, tree_child, nframe, frame, frame_lower, &
                                    frame_upper, nstart, grid_start, ngrid, grid_params, &
                                    grid_normals, grid_points, facing, face_first, nface, &
-                                   faces, corner, positions, positions_n, reach, size, &
-                                   touching, npair, tool_first, pair_node, on, r, mu, held, &
+                                   faces, corner, face_weight, positions, positions_n, reach, &
+                                   size, touching, npair, tool_first, pair_node, npatch, &
+                                   patch_first, patch_node, on, r, mu, held, &
                                    u_n, force_n, external, prescribed, guess, settings, &
                                    isettings, factored, reuse_next, u, force, fint, stress, &
                                    ep, strain, axes, state, gap, normal, nhistory, niter, &
@@ -129,7 +164,7 @@ contains
     bind(C, name="ddpy_forming_increment")
     integer(c_int), value, intent(in) :: nnode, ne, kind, nf, k_slots, n_coupling, nvalues, &
                                          nrow, ncsr, nsrc, ntool, ncoef, ndeg, ntri, ntree, &
-                                         nframe, nstart, ngrid, nface, npair, nhistory
+                                         nframe, nstart, ngrid, nface, npair, npatch, nhistory
     real(c_double), value, intent(in) :: reach, size, touching
     integer(c_int), intent(in) :: conn(8, ne), eqn(3, nnode), offsets(ne + 1), &
                                   fixed(3, nnode), row_start(nrow + 1), col(ncsr), &
@@ -138,6 +173,7 @@ contains
                                   tree_child(ntree), grid_start(nstart), &
                                   face_first(ntool + 1), faces(4, nface), corner(4, nface), &
                                   tool_first(ntool + 1), pair_node(npair), on(npair), &
+                                  patch_first(npair + 1), patch_node(npatch), &
                                   held(3, npair), isettings(newton_integer_settings)
     real(c_double), intent(in) :: x0(3, nnode), props(material_prop_count), &
                                   u_ref(3, nnode), axes_old(3, 3, 8, ne), &
@@ -147,6 +183,7 @@ contains
                                   frame_lower(3*nframe), frame_upper(3*nframe), &
                                   grid_params(2*ngrid), grid_normals(3*ngrid), &
                                   grid_points(3*ngrid), facing(3, ntool), &
+                                  face_weight(4, nface), &
                                   positions(3, ntool), positions_n(3, ntool), r(npair), &
                                   mu(npair), u_n(3, nnode), force_n(3, npair), &
                                   external(3, nnode), prescribed(3, nnode), &
@@ -166,15 +203,17 @@ contains
     if (.not. rows_ok(nrow, ncsr, nsrc, nvalues, row_start, col, sources, source_start)) return
     if (.not. layout_ok(nnode, ntool, table, ncoef, ndeg, ntri, ntree, nframe, nstart, ngrid, &
                         grid_start, face_first, nface, faces, corner, npair, tool_first, &
-                        pair_node, eqn, k_slots, nvalues)) return
+                        pair_node, npatch, patch_first, patch_node, eqn, k_slots, &
+                        nvalues)) return
     call forming_increment(nnode, x0, ne, conn + 1, kind, props, u_ref, axes_old, stress_old, &
                            ep_old, strain_old, eqn, offsets, fixed, nf, k_slots, n_coupling, &
                            nvalues, row_start, ncsr, col, sources, source_start, ntool, &
                            table, tol, coef, degrees, triangle, &
                            tree_lower, tree_upper, tree_child, frame, frame_lower, &
                            frame_upper, grid_start, grid_params, grid_normals, grid_points, &
-                           facing, face_first, nface, faces, corner, positions, positions_n, &
-                           reach, size, touching, npair, tool_first, pair_node, on, r, mu, &
+                           facing, face_first, nface, faces, corner, face_weight, positions, &
+                           positions_n, reach, size, touching, npair, tool_first, pair_node, &
+                           npatch, patch_first, patch_node, on, r, mu, &
                            held, u_n, force_n, external, prescribed, guess, settings, &
                            isettings, factored, reuse_next, u, force, fint, stress, ep, &
                            strain, axes, state, gap, normal, niter, history, counters, &
@@ -210,7 +249,8 @@ contains
     integer(c_int), intent(out) :: niter, counters(5), outcome, info(4)
     integer :: table(tool_fields, 0), ints(0), faces(4, 0), first(1), pairs(0), held(3, 0), &
                state(0), reuse_next
-    real(wp) :: reals(0), tools(3, 0), forces(3, 0), force(3, 0), normal(3, 0), gap(0)
+    real(wp) :: reals(0), tools(3, 0), forces(3, 0), force(3, 0), normal(3, 0), gap(0), &
+                weights(4, 0)
     history = 0.0_wp
     outcome = -1
     if (nhistory < isettings(1) + 1 .or. offsets(ne + 1) /= k_slots .or. nvalues /= k_slots) &
@@ -225,11 +265,12 @@ contains
                            row_start, ncsr, col, sources, source_start, 0, table, reals, &
                            reals, ints, ints, reals, reals, ints, &
                            reals, reals, reals, ints, reals, reals, reals, tools, first, 0, &
-                           faces, faces, tools, tools, 0.0_wp, size, 0.0_wp, 0, first, pairs, &
-                           pairs, reals, reals, held, u_n, forces, external, prescribed, guess, &
-                           settings, isettings, factored, reuse_next, u, force, fint, stress, ep, &
-                           strain, axes, state, gap, normal, niter, history, counters, timings, &
-                           outcome, info, detail)
+                           faces, faces, weights, tools, tools, 0.0_wp, size, 0.0_wp, 0, &
+                           first, pairs, 0, first, pairs, pairs, reals, reals, held, u_n, &
+                           forces, external, prescribed, &
+                           guess, settings, isettings, factored, reuse_next, u, force, fint, &
+                           stress, ep, strain, axes, state, gap, normal, niter, history, &
+                           counters, timings, outcome, info, detail)
   end subroutine api_static_increment
 
   !> The step length the Newton loop's penetration limit allows (see penetration_step).

@@ -13,11 +13,14 @@
 !> Kuhn-Tucker conditions. The derivative of n along x carries the curvature of the tool:
 !> dn/dx = -T a^-1 b A^-1 T^T with T = [S_,1 S_,2], a = T^T T, b_ab = n . S_,ab and
 !> A = a - g b (the derivative of the closest-point parameters is A^-1 T^T).
+!> contact_law gives the same law with its derivatives along g, n and v themselves, which
+!> surface-to-surface contact chains through its weighted gap, normal and slip.
 module ddpy_contact
   use ddpy_kinds, only: wp
   implicit none
   private
-  public :: contact_residual, normal_derivative, contact_inactive, contact_stick, contact_slip
+  public :: contact_residual, contact_law, normal_derivative, contact_inactive, contact_stick, &
+            contact_slip
 
   !> State of a node after the residual: no force; sticking; slipping.
   integer, parameter :: contact_inactive = 0, contact_stick = 1, contact_slip = 2
@@ -108,6 +111,65 @@ contains
     dc_dlambda = proj - mu*outer(e, n) - rho*matmul(de, proj)
     dc_dx = dc_dx + dt_dx - mu*outer(e, dp_dx - r*n) - rho*matmul(de, dtrial_dx)
   end subroutine contact_residual
+
+  !> The law of contact_residual with its partial derivatives along its inputs rather than
+  !> along one node's position: dC/dlambda, dC/dg (3), dC/dn (3 x 3, n taken as a free
+  !> vector: the caller chains the derivative of its unit normal) and dC/dv (3 x 3). The
+  !> surface-to-surface contact chains them through its weighted gap, normal and slip,
+  !> which depend on every node of the faces around a node (docs/theory/contact.md).
+  pure subroutine contact_law(lambda, n, g, v, mu, r, c, dc_dlambda, dc_dg, dc_dn, dc_dv, &
+                              state)
+    real(wp), intent(in) :: lambda(3), n(3), g, v(3), mu, r
+    real(wp), intent(out) :: c(3), dc_dlambda(3, 3), dc_dg(3), dc_dn(3, 3), dc_dv(3, 3)
+    integer, intent(out) :: state
+    real(wp) :: p, t(3), s(3), p_aug, trial(3), norm_trial, e(3), rho, eye(3, 3), &
+                proj(3, 3), ds_dn(3, 3), dt_dn(3, 3), de(3, 3)
+    integer :: i
+    eye = 0.0_wp
+    do i = 1, 3
+      eye(i, i) = 1.0_wp
+    end do
+    dc_dg = 0.0_wp
+    dc_dn = 0.0_wp
+    dc_dv = 0.0_wp
+    p = dot_product(lambda, n)
+    p_aug = p - r*g
+    if (p_aug <= 0.0_wp) then
+      state = contact_inactive
+      c = lambda
+      dc_dlambda = eye
+      return
+    end if
+    proj = eye - outer(n, n)
+    t = matmul(proj, lambda)
+    s = matmul(proj, v)
+    ! s = v - (v . n) n: ds/dn = -((v . n) I + n v^T), ds/dv = I - n n.
+    ds_dn = -(dot_product(n, v)*eye + outer(n, v))
+    c = r*g*n
+    dc_dg = r*n
+    dc_dn = r*g*eye
+    dc_dlambda = 0.0_wp
+    trial = t - r*s
+    norm_trial = norm2(trial)
+    rho = mu*p_aug
+    if (norm_trial <= rho) then
+      state = contact_stick
+      c = c + r*s
+      dc_dn = dc_dn + r*ds_dn
+      dc_dv = r*proj
+      return
+    end if
+    state = contact_slip
+    e = trial/norm_trial
+    c = c + t - rho*e
+    ! t = lambda - p n: dt/dn = -(p I + n lambda^T); rho = mu (lambda . n - r g).
+    dt_dn = -(p*eye + outer(n, lambda))
+    de = (eye - outer(e, e))/norm_trial
+    dc_dlambda = proj - mu*outer(e, n) - rho*matmul(de, proj)
+    dc_dg = dc_dg + mu*r*e
+    dc_dn = dc_dn + dt_dn - mu*outer(e, lambda) - rho*matmul(de, dt_dn - r*ds_dn)
+    dc_dv = r*rho*matmul(de, proj)
+  end subroutine contact_law
 
   pure function outer(a, b) result(m)
     real(wp), intent(in) :: a(3), b(3)

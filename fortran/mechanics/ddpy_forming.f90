@@ -6,26 +6,36 @@
 !> displacement dofs first (eqn), then 3 force components per pair. The Jacobian's contact
 !> blocks follow the layout's coordinate structure: the coupling entries (-1, set once by
 !> the caller), then dC/dx at the free dofs of each pair's node (pair-major, row, column),
-!> then dC/dlambda (pair-major, row, column). Tools are packed one after another in flat
-!> arrays (see forming_contact); a tool's own indices (tree children, grid starts) stay
-!> local to it, 1-based.
+!> then dC/dlambda (pair-major, row, column). A pair's dC/dx runs over the nodes of its
+!> patch (patch_first, patch_node): its own node for node-to-surface contact, every node of
+!> the blank faces around it for surface-to-surface contact (row, patch node, column).
+!> Tools are packed one after another in flat arrays (see forming_contact); a tool's own
+!> indices (tree children, grid starts) stay local to it, 1-based.
 module ddpy_forming
   use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_positive_inf
   use ddpy_kinds, only: wp
   use ddpy_surface, only: patch_evaluate
-  use ddpy_global_search, only: contact_search, contact_none
-  use ddpy_contact, only: contact_residual, normal_derivative, contact_inactive
+  use ddpy_global_search, only: contact_search, contact_none, contact_inside
+  use ddpy_contact, only: contact_residual, contact_law, normal_derivative, contact_inactive
   implicit none
   private
   public :: forming_contact, tool_fields, rank_of_rows
 
   !> Columns of a tool's row in the tool table: surface kind, reals per patch, patches,
   !> search mode, local search iterations, offsets (0-based) into the packed coefficient,
-  !> patch, tree and grid arrays, and 1 when it has a facing direction (its faces are
-  !> face_first(t) + 1 .. face_first(t + 1)).
-  integer, parameter :: tool_fields = 10
+  !> patch, tree and grid arrays, 1 when it has a facing direction (its faces are
+  !> face_first(t) + 1 .. face_first(t + 1)), and 1 for surface-to-surface contact (0:
+  !> node-to-surface).
+  integer, parameter :: tool_fields = 11
   integer, parameter :: f_kind = 1, f_stride = 2, f_npatch = 3, f_mode = 4, f_iterations = 5, &
-                        f_coef = 6, f_patch = 7, f_tree = 8, f_grid = 9, f_facing = 10
+                        f_coef = 6, f_patch = 7, f_tree = 8, f_grid = 9, f_facing = 10, &
+                        f_surface = 11
+  !> The 2 x 2 Gauss points of a blank face, in the order of its corners: the parameter of
+  !> the corners (-1, -1), (1, -1), (1, 1), (-1, 1) times 1/sqrt(3).
+  real(wp), parameter :: gauss_xi(4) = [-1.0_wp, 1.0_wp, 1.0_wp, -1.0_wp]/sqrt(3.0_wp), &
+                         gauss_eta(4) = [-1.0_wp, -1.0_wp, 1.0_wp, 1.0_wp]/sqrt(3.0_wp), &
+                         corner_xi(4) = [-1.0_wp, 1.0_wp, 1.0_wp, -1.0_wp], &
+                         corner_eta(4) = [-1.0_wp, -1.0_wp, 1.0_wp, 1.0_wp]
   !> A singular value of the rigid-mode rows above this counts (numpy's matrix_rank tol).
   real(wp), parameter :: rank_tolerance = 1.0e-9_wp
   !> A touching pair's force is lifted this far past p_aug = 0 (times r and the size).
@@ -45,39 +55,58 @@ contains
   !> (the supports, the pairs the law closes and the touching pairs of the moving tools
   !> leave a rigid motion free). A pair that found no patch (or whose tool is off) keeps
   !> C = lambda, state 0 and an infinite gap.
+  !>
+  !> A surface-to-surface tool (table f_surface) projects the 2 x 2 Gauss points of its
+  !> faces instead of its slaves: each slave's gap, normal and slip are the averages over
+  !> the faces around it weighted by its shape function and face_weight (the Gauss weight
+  !> times the face's area element in the undeformed blank), and its law's derivatives
+  !> along x run over the nodes of those faces (docs/theory/contact.md).
   subroutine forming_contact(nnode, x, x_n, fixed, ntool, table, tol, coef, degrees, &
                              triangle, tree_lower, tree_upper, tree_child, frame, &
                              frame_lower, frame_upper, grid_start, grid_params, &
                              grid_normals, grid_points, facing, face_first, nface, faces, &
-                             corner, &
+                             corner, face_weight, &
                              positions, positions_n, reach, size, touching, resting, &
-                             npair, tool_first, pair_node, on, force, r, mu, held, eqn, nf, &
+                             npair, tool_first, pair_node, npatch, patch_first, patch_node, &
+                             on, force, r, mu, held, eqn, nf, &
                              k_slots, nvalues, residual, values, state, gap, normal)
-    integer, intent(in) :: nnode, ntool, nface, npair, nf, k_slots, nvalues, resting
+    integer, intent(in) :: nnode, ntool, nface, npair, npatch, nf, k_slots, nvalues, resting
     real(wp), intent(in) :: x(3, nnode), x_n(3, nnode), tol(ntool), coef(*), tree_lower(*), &
                             tree_upper(*), frame(*), frame_lower(*), frame_upper(*), &
                             grid_params(*), grid_normals(*), grid_points(*), facing(3, ntool), &
                             positions(3, ntool), positions_n(3, ntool), reach, size, &
-                            touching, force(3, npair), r(npair), mu(npair)
+                            touching, force(3, npair), r(npair), mu(npair), &
+                            face_weight(4, nface)
     integer, intent(in) :: fixed(3, nnode), table(tool_fields, ntool), degrees(*), &
                            triangle(*), tree_child(*), grid_start(*), &
                            face_first(ntool + 1), faces(4, nface), corner(4, nface), &
                            tool_first(ntool + 1), pair_node(npair), &
+                           patch_first(npair + 1), patch_node(npatch), &
                            on(npair), held(3, npair), eqn(3, nnode)
     real(wp), intent(inout) :: residual(nf + 3*npair), values(nvalues)
     integer, intent(out) :: state(npair)
     real(wp), intent(out) :: gap(npair), normal(3, npair)
     real(wp), allocatable :: nodes(:, :), node_normals(:, :), params(:, :), points(:, :), &
                              tangents(:, :, :), distance(:), p_aug(:), c(:, :), &
-                             dc_dlambda(:, :, :), dc_dx(:, :, :)
+                             dc_dlambda(:, :, :), dc_dx(:, :, :), slip(:, :), &
+                             patch_gap(:, :), patch_normal(:, :, :), patch_weight(:), &
+                             patch_dc(:, :, :)
     integer, allocatable :: patch(:), status(:), iterations(:), ncandidates(:)
-    logical, allocatable :: searched(:), shut(:)
-    integer :: t, p, a, b, k, i, j, pp, slot
+    logical, allocatable :: searched(:), shut(:), surface(:)
+    integer :: t, p, a, b, k, i, j, e, pp, slot
     real(wp) :: d2(3, 3), point(3), d1(3, 2), lam(3), v(3), dndx(3, 3), lift
 
     allocate(searched(ntool), shut(npair), p_aug(npair), tangents(3, 2, npair), &
-             params(2, npair), patch(npair), status(npair))
+             params(2, npair), patch(npair), status(npair), surface(npair))
     allocate(c(3, npair), dc_dlambda(3, 3, npair), dc_dx(3, 3, npair))
+    ! Surface-to-surface pairs: the weighted slip, and per patch entry the derivatives of
+    ! the weighted gap and normal, the weight of the node in the slip, and dC/dx.
+    allocate(slip(3, npair), patch_gap(3, npatch), patch_normal(3, 3, npatch), &
+             patch_weight(npatch), patch_dc(3, 3, npatch))
+    do t = 1, ntool
+      surface(tool_first(t) + 1:tool_first(t + 1)) = table(f_surface, t) /= 0
+    end do
+    patch_dc = 0.0_wp
     gap = ieee_value(1.0_wp, ieee_positive_inf)
     normal = 0.0_wp
     state = 0
@@ -91,6 +120,10 @@ contains
       b = tool_first(t + 1)
       searched(t) = b >= a .and. any(on(a:b) /= 0)
       if (.not. searched(t)) cycle
+      if (table(f_surface, t) /= 0) then
+        call surface_search(t)
+        cycle
+      end if
       k = b - a + 1
       allocate(nodes(3, k), node_normals(3, k), points(3, k), distance(k), iterations(k), &
                ncandidates(k))
@@ -117,6 +150,10 @@ contains
     dc_dx = 0.0_wp
     do t = 1, ntool
       if (.not. searched(t)) cycle
+      if (table(f_surface, t) /= 0) then
+        call surface_law(t)
+        cycle
+      end if
       !$omp parallel do schedule(static) private(pp, point, d1, d2, lam, v, dndx, lift) &
       !$omp   if(tool_first(t + 1) - tool_first(t) > 256)
       do p = tool_first(t) + 1, tool_first(t + 1)
@@ -148,6 +185,7 @@ contains
         dc_dlambda(i, :, p) = 0.0_wp
         dc_dlambda(i, i, p) = 1.0_wp
         dc_dx(i, :, p) = 0.0_wp
+        if (surface(p)) patch_dc(i, :, patch_first(p) + 1:patch_first(p + 1)) = 0.0_wp
       end do
     end do
     ! Equilibrium rows: minus the forces of the tools on their slave nodes, in pair order.
@@ -162,6 +200,18 @@ contains
     ! Jacobian: dC/dx at the free dofs of each pair's node, then dC/dlambda.
     slot = k_slots + count(eqn(:, pair_node + 1) >= 0)
     do p = 1, npair
+      if (surface(p)) then
+        do i = 1, 3
+          do e = patch_first(p) + 1, patch_first(p + 1)
+            do j = 1, 3
+              if (eqn(j, patch_node(e) + 1) < 0) cycle
+              slot = slot + 1
+              values(slot) = patch_dc(i, j, e)
+            end do
+          end do
+        end do
+        cycle
+      end if
       do i = 1, 3
         do j = 1, 3
           if (eqn(j, pair_node(p) + 1) < 0) cycle
@@ -180,6 +230,178 @@ contains
     end do
 
   contains
+
+    !> The weighted gaps, normals and slips of the pairs of surface-to-surface tool t, with
+    !> their derivatives along every node of their patches: the Gauss points of the tool's
+    !> faces projected on it (the facing filter from each face's normal at x), and their
+    !> gaps, normals and slips averaged around each slave with the weights N_a w J. A
+    !> held component of a slave (a symmetry plane through it) is left out of its normal
+    !> and slip, as the mirror image of its faces would cancel it. A pair none of whose
+    !> points finds the tool has no partner (status none).
+    subroutine surface_search(t)
+      integer, intent(in) :: t
+      real(wp), allocatable :: gx(:, :), gn(:, :), gparams(:, :), gpoints(:, :), &
+                               gnormal(:, :), gtangents(:, :, :), gdistance(:), gdn(:, :, :), &
+                               wsum(:), gsum(:), msum(:, :)
+      integer, allocatable :: gpatch(:), gstatus(:), gits(:), gcand(:)
+      real(wp) :: basis(4, 4), area(3), e1(3), e2(3), vg(3), w, wn, len_m, keep(3), &
+                  m(3), eye(3, 3), proj(3, 3), gpt(3), gd1(3, 2), gd2(3, 3)
+      integer :: f, first, nfc, kg, g, q, qq, s, p, e, i, pp, lo, hi
+      first = face_first(t)
+      nfc = face_first(t + 1) - first
+      kg = 4*nfc
+      do p = tool_first(t) + 1, tool_first(t + 1)
+        patch_gap(:, patch_first(p) + 1:patch_first(p + 1)) = 0.0_wp
+        patch_normal(:, :, patch_first(p) + 1:patch_first(p + 1)) = 0.0_wp
+        patch_weight(patch_first(p) + 1:patch_first(p + 1)) = 0.0_wp
+        slip(:, p) = 0.0_wp
+      end do
+      if (kg == 0) return
+      ! Shape functions of the corners (rows) at the Gauss points (columns).
+      do g = 1, 4
+        do q = 1, 4
+          basis(q, g) = 0.25_wp*(1.0_wp + corner_xi(q)*gauss_xi(g))* &
+                        (1.0_wp + corner_eta(q)*gauss_eta(g))
+        end do
+      end do
+      allocate(gx(3, kg), gn(3, kg), gparams(2, kg), gpoints(3, kg), gnormal(3, kg), &
+               gtangents(3, 2, kg), gdistance(kg), gdn(3, 3, kg), gpatch(kg), gstatus(kg), &
+               gits(kg), gcand(kg))
+      do f = 1, nfc
+        e1 = x(:, faces(3, first + f) + 1) - x(:, faces(1, first + f) + 1)
+        e2 = x(:, faces(4, first + f) + 1) - x(:, faces(2, first + f) + 1)
+        area = [e1(2)*e2(3) - e1(3)*e2(2), e1(3)*e2(1) - e1(1)*e2(3), &
+                e1(1)*e2(2) - e1(2)*e2(1)]
+        if (norm2(area) > 0.0_wp) area = area/norm2(area)
+        do g = 1, 4
+          i = 4*(f - 1) + g
+          gx(:, i) = 0.0_wp
+          do q = 1, 4
+            gx(:, i) = gx(:, i) + basis(q, g)*x(:, faces(q, first + f) + 1)
+          end do
+          gn(:, i) = area
+        end do
+      end do
+      call search_tool(t, kg, gx, gn, gpatch, gparams, gpoints, gnormal, gtangents, &
+                       gdistance, gstatus, gits, gcand)
+      ! The derivative of the tool's normal along each point (its curvature).
+      gdn = 0.0_wp
+      !$omp parallel do schedule(static) private(pp, gpt, gd1, gd2) if(kg > 256)
+      do i = 1, kg
+        if (gstatus(i) == contact_none) cycle
+        pp = table(f_patch, t) + gpatch(i)
+        call patch_evaluate(table(f_kind, t), table(f_stride, t), &
+                            coef(table(f_coef, t) + (gpatch(i) - 1)*table(f_stride, t) + 1), &
+                            degrees(2*pp - 1), gparams(1, i), gparams(2, i), gpt, gd1, gd2)
+        gdn(:, :, i) = normal_derivative(gtangents(:, :, i), gd2, gnormal(:, i), gdistance(i))
+      end do
+      !$omp end parallel do
+      ! The sums over the points around each slave.
+      lo = tool_first(t) + 1
+      hi = tool_first(t + 1)
+      allocate(wsum(lo:hi), gsum(lo:hi), msum(3, lo:hi))
+      wsum = 0.0_wp
+      gsum = 0.0_wp
+      msum = 0.0_wp
+      do f = 1, nfc
+        do g = 1, 4
+          i = 4*(f - 1) + g
+          if (gstatus(i) == contact_none) cycle
+          vg = -(positions(:, t) - positions_n(:, t))
+          do q = 1, 4
+            s = faces(q, first + f) + 1
+            vg = vg + basis(q, g)*(x(:, s) - x_n(:, s))
+          end do
+          do q = 1, 4
+            s = corner(q, first + f)
+            if (s < 0) cycle
+            p = tool_first(t) + s + 1
+            w = basis(q, g)*face_weight(g, first + f)
+            wsum(p) = wsum(p) + w
+            gsum(p) = gsum(p) + w*gdistance(i)
+            msum(:, p) = msum(:, p) + w*gnormal(:, i)
+            slip(:, p) = slip(:, p) + w*vg
+            do qq = 1, 4
+              e = patch_entry(p, faces(qq, first + f))
+              if (e == 0) cycle
+              wn = w*basis(qq, g)
+              patch_gap(:, e) = patch_gap(:, e) + wn*gnormal(:, i)
+              patch_normal(:, :, e) = patch_normal(:, :, e) + wn*gdn(:, :, i)
+              patch_weight(e) = patch_weight(e) + wn
+            end do
+          end do
+        end do
+      end do
+      eye = 0.0_wp
+      do i = 1, 3
+        eye(i, i) = 1.0_wp
+      end do
+      do p = tool_first(t) + 1, tool_first(t + 1)
+        if (.not. wsum(p) > 0.0_wp) cycle
+        keep = merge(0.0_wp, 1.0_wp, held(:, p) /= 0)
+        m = keep*msum(:, p)/wsum(p)
+        len_m = norm2(m)
+        if (.not. len_m > 0.0_wp) cycle
+        status(p) = contact_inside
+        gap(p) = gsum(p)/wsum(p)
+        normal(:, p) = m/len_m
+        slip(:, p) = keep*slip(:, p)/wsum(p)
+        ! d(m / |m|) = (I - n n) dm / |m|.
+        proj = (eye - spread(normal(:, p), 2, 3)*spread(normal(:, p), 1, 3))/len_m
+        do e = patch_first(p) + 1, patch_first(p + 1)
+          patch_gap(:, e) = patch_gap(:, e)/wsum(p)
+          do i = 1, 3
+            patch_normal(i, :, e) = keep(i)*patch_normal(i, :, e)/wsum(p)
+          end do
+          patch_normal(:, :, e) = matmul(proj, patch_normal(:, :, e))
+          patch_weight(e) = patch_weight(e)/wsum(p)
+        end do
+      end do
+    end subroutine surface_search
+
+    !> Entry of node (0-based) in the patch of pair p; 0 when it is not there.
+    pure integer function patch_entry(p, node) result(entry)
+      integer, intent(in) :: p, node
+      integer :: e
+      entry = 0
+      do e = patch_first(p) + 1, patch_first(p + 1)
+        if (patch_node(e) == node) then
+          entry = e
+          return
+        end if
+      end do
+    end function patch_entry
+
+    !> The law at every pair of surface-to-surface tool t that has a partner, its
+    !> derivatives along the weighted gap, normal and slip chained to the nodes of its
+    !> patch: dC/dx_b = dC/dg dg/dx_b + dC/dn dn/dx_b + dC/dv w_b (held components of the
+    !> slip left out, as in surface_search).
+    subroutine surface_law(t)
+      integer, intent(in) :: t
+      real(wp) :: lam(3), lift, dc_dg(3), dc_dn(3, 3), dc_dv(3, 3), keep(3)
+      integer :: p, e, j
+      !$omp parallel do schedule(static) private(lam, lift, dc_dg, dc_dn, dc_dv, keep, e, j) &
+      !$omp   if(tool_first(t + 1) - tool_first(t) > 256)
+      do p = tool_first(t) + 1, tool_first(t + 1)
+        if (status(p) == contact_none) cycle
+        lam = force(:, p)
+        if (shut(p)) then
+          lift = -p_aug(p) + lift_fraction*r(p)*size
+          lam = lam + lift*normal(:, p)
+        end if
+        call contact_law(lam, normal(:, p), gap(p), slip(:, p), mu(p), r(p), c(:, p), &
+                         dc_dlambda(:, :, p), dc_dg, dc_dn, dc_dv, state(p))
+        keep = merge(0.0_wp, 1.0_wp, held(:, p) /= 0)
+        do e = patch_first(p) + 1, patch_first(p + 1)
+          patch_dc(:, :, e) = matmul(dc_dn, patch_normal(:, :, e))
+          do j = 1, 3
+            patch_dc(:, j, e) = patch_dc(:, j, e) + dc_dg*patch_gap(j, e) + &
+                                dc_dv(:, j)*keep(j)*patch_weight(e)
+          end do
+        end do
+      end do
+      !$omp end parallel do
+    end subroutine surface_law
 
     !> Global and local search of the k slaves of tool t.
     subroutine search_tool(t, k, nodes, node_normals, patch, params, points, normals, &

@@ -73,19 +73,21 @@ contains
                                degrees, triangle, tree_lower, tree_upper, tree_child, frame, &
                                frame_lower, frame_upper, grid_start, grid_params, &
                                grid_normals, grid_points, facing, face_first, nface, faces, &
-                               corner, positions, positions_n, reach, size, touching, npair, &
-                               tool_first, pair_node, on, r, mu, held, u_n, force_n, external, &
+                               corner, face_weight, positions, positions_n, reach, size, &
+                               touching, npair, tool_first, pair_node, npatch, patch_first, &
+                               patch_node, on, r, mu, held, u_n, force_n, external, &
                                prescribed, guess, settings, isettings, factored, reuse_next, &
                                u, force, fint, stress, ep, strain, axes, state, gap, normal, &
                                niter, history, counters, timings, outcome, info, detail)
     integer, intent(in) :: nnode, ne, kind, nf, k_slots, n_coupling, nvalues, ncsr, ntool, &
-                           nface, npair
+                           nface, npair, npatch
     integer, intent(in) :: conn(8, ne), eqn(3, nnode), offsets(ne + 1), fixed(3, nnode), &
                            row_start(nf + 3*npair + 1), col(ncsr), sources(*), &
                            source_start(ncsr + 1), table(tool_fields, ntool), &
                            degrees(*), triangle(*), tree_child(*), grid_start(*), &
                            face_first(ntool + 1), faces(4, nface), corner(4, nface), &
                            tool_first(ntool + 1), pair_node(npair), on(npair), &
+                           patch_first(npair + 1), patch_node(npatch), &
                            held(3, npair), isettings(newton_integer_settings)
     real(wp), intent(in) :: x0(3, nnode), props(material_prop_count), u_ref(3, nnode), &
                             axes_old(3, 3, 8, ne), stress_old(6, 8, ne), ep_old(8, ne), &
@@ -93,6 +95,7 @@ contains
                             tree_upper(*), frame(*), frame_lower(*), frame_upper(*), &
                             grid_params(*), grid_normals(*), grid_points(*), &
                             facing(3, ntool), positions(3, ntool), positions_n(3, ntool), &
+                            face_weight(4, nface), &
                             reach, size, touching, r(npair), mu(npair), u_n(3, nnode), &
                             force_n(3, npair), external(3, nnode), prescribed(3, nnode), &
                             guess(3, nnode), settings(newton_settings)
@@ -430,10 +433,11 @@ contains
       call forming_contact(nnode, x0 + s%u, x_n, fixed, ntool, table, tol, coef, degrees, &
                            triangle, tree_lower, tree_upper, tree_child, frame, frame_lower, &
                            frame_upper, grid_start, grid_params, grid_normals, grid_points, &
-                           facing, face_first, nface, faces, corner, positions, positions_n, &
-                           reach, size, touching_gap, isettings(7), npair, tool_first, &
-                           pair_node, on, s%force, r, mu, held, eqn, nf, k_slots, nvalues, &
-                           s%residual, s%values, s%state, s%gap, s%normal)
+                           facing, face_first, nface, faces, corner, face_weight, positions, &
+                           positions_n, reach, size, touching_gap, isettings(7), npair, &
+                           tool_first, pair_node, npatch, patch_first, patch_node, on, &
+                           s%force, r, mu, held, eqn, nf, k_slots, nvalues, s%residual, &
+                           s%values, s%state, s%gap, s%normal)
       call system_clock(t2)
       timings(2) = timings(2) + real(t2 - t1, wp)/real(clock_rate, wp)
     end subroutine evaluate

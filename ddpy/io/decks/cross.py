@@ -93,7 +93,8 @@ class _Cross:
             tool = Tool(d.name, d.values["description"], d.values["file"],
                         d.values["friction"], side if side != "facing" else
                         "surface facing (" + ", ".join(f"{c:.3g}" for c in facing) + ")",
-                        facing, d.values.get("augmentation"), self.tools_deck.where(d.line))
+                        facing, d.values.get("augmentation"), self.tools_deck.where(d.line),
+                        d.values.get("discretization", "node"))
             if d.model is not None:
                 object.__setattr__(tool, "_model", d.model)
             if tool.contact_nodes(mesh).size == 0:

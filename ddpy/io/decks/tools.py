@@ -1,5 +1,6 @@
 """tools.dat: per tool its description, tool file (read and checked against the description when
-ddpy.io.toolfile is available), friction, contact side and augmentation.
+ddpy.io.toolfile is available), friction, contact side, augmentation and contact
+discretization.
 """
 
 from __future__ import annotations
@@ -30,9 +31,11 @@ class _ToolDraft:
     model: Any = None
 
 
-_TOOL_KEYS = ("description", "file", "friction", "contact", "augmentation")
+_TOOL_KEYS = ("description", "file", "friction", "contact", "augmentation", "discretization")
 _TOOL_REQUIRED = ("description", "file", "friction", "contact")
 _DESCRIPTIONS = ("bezier", "nagata", "facets")
+#: ddpy.model.tool.CONTACT_DISCRETIZATIONS (node-to-surface, surface-to-surface)
+_DISCRETIZATIONS = ("node", "surface")
 
 
 def _parse_tools(deck: Deck) -> list[_ToolDraft]:
@@ -73,6 +76,10 @@ def _parse_tools(deck: Deck) -> list[_ToolDraft]:
                     check_arity(line, "file PATH", 1)
                     path = Path(w[1])
                     tool.values[key] = path if path.is_absolute() else deck.path.parent / path
+                elif key == "discretization":
+                    check_arity(line, "discretization node|surface", 1)
+                    tool.values[key] = read_choice(w[1], "the contact discretization",
+                                                   _DISCRETIZATIONS)
                 elif key == "augmentation":
                     check_arity(line, "augmentation R", 1)
                     tool.values[key] = read_float(w[1], "the augmentation parameter", gt=0)
@@ -94,7 +101,8 @@ def _parse_tools(deck: Deck) -> list[_ToolDraft]:
             else:
                 where = "in a tool" if tool is not None else "at the top of tools.dat"
                 raise BadValue(f"unknown keyword {show(key)} {where}: expected "
-                           + ("description, file, friction, contact, augmentation or end" if tool
+                           + ("description, file, friction, contact, augmentation, "
+                              "discretization or end" if tool
                    else "tool"))
         except BadValue as bad:
             deck.error(line.number, str(bad))

@@ -7,6 +7,7 @@ from math import comb
 
 import numpy as np
 import pytest
+from jacobian_check import central_difference_errors
 
 from ddpy.geometry.surfaces import BezierSurface, NagataSurface
 from ddpy.model.contact import SLIP, STICK
@@ -653,26 +654,7 @@ def test_jacobian_of_the_combined_equations_matches_central_differences() -> Non
     u[tool.slaves[::4], 2] += 5e-3
     force[1::4, 0] = force[1::4, 2]  # beyond the friction cone (mu = 0.3): slip
     moved = {"dome": problem.position["dome"] + (3e-5, 1e-5, 2e-5)}
-    eq = problem.linearization(u, force, moved)
-    assert {0, 1, 2} <= set(eq.state.tolist()), eq.state  # open, stick and slip pairs
-    jacobian = eq.matrix()
-    free = np.flatnonzero(~problem.fixed.ravel())
-    scale_u, scale_f = 1e-3, np.abs(problem.force).max()
-    errors = np.zeros_like(jacobian)
-    for j in range(eq.residual.size):
-        h = 1e-5 * (scale_u if j < eq.n_free else scale_f)
-        sides = []
-        for sign in (1.0, -1.0):
-            du, df = u.copy(), force.copy()
-            if j < eq.n_free:
-                du.ravel()[free[j]] += sign * h
-            else:
-                df.ravel()[j - eq.n_free] += sign * h
-            side = problem.linearization(du, df, moved)
-            assert np.array_equal(side.state, eq.state)  # no switch within the difference
-            sides.append(side.residual)
-        errors[:, j] = (sides[0] - sides[1]) / (2.0 * h) - jacobian[:, j]
     # Equilibrium rows (N/mm, N) and contact-law rows (mm, N/r) each against their own size.
-    for rows in (slice(0, eq.n_free), slice(eq.n_free, None)):
-        worst = np.abs(errors[rows]).max()
-        assert worst <= 1e-7 * np.abs(jacobian[rows]).max(), worst
+    equilibrium, law, state = central_difference_errors(problem, u, force, moved, 1e-5)
+    assert {0, 1, 2} <= set(state.tolist()), state  # open, stick and slip pairs
+    assert equilibrium <= 1e-7 and law <= 1e-7, (equilibrium, law)

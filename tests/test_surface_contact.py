@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from jacobian_check import central_difference_errors
 
 from ddpy.geometry.surfaces import NagataSurface
 from ddpy.model.contact import INACTIVE, SLIP, STICK
@@ -43,35 +44,6 @@ def block_on_dome(friction: float) -> tuple[FormingProblem, HexMesh, RigidTool]:
     return problem, mesh, tool
 
 
-def central_difference_errors(problem: FormingProblem, u: np.ndarray, force: np.ndarray,
-                              positions: dict) -> tuple[float, float, np.ndarray]:
-    """The largest error of the Jacobian against central differences of the residual over
-    every unknown, in the equilibrium and the contact-law rows, each relative to the largest
-    entry of its rows; and the pairs' states. h = 3e-5 of each unknown's scale: the errors
-    are rounding there (they grow at 1e-5 and 3e-6, and fall from 1e-5 to 3e-5)."""
-    eq = problem.linearization(u, force, positions)
-    jacobian = eq.matrix()
-    free = np.flatnonzero(~problem.fixed.ravel())
-    scale_u, scale_f = 1e-3, np.abs(problem.force).max()
-    errors = np.zeros_like(jacobian)
-    for j in range(eq.residual.size):
-        h = 3e-5 * (scale_u if j < eq.n_free else scale_f)
-        sides = []
-        for sign in (1.0, -1.0):
-            du, df = u.copy(), force.copy()
-            if j < eq.n_free:
-                du.ravel()[free[j]] += sign * h
-            else:
-                df.ravel()[j - eq.n_free] += sign * h
-            side = problem.linearization(du, df, positions)
-            assert np.array_equal(side.state, eq.state)  # no switch within the difference
-            sides.append(side.residual)
-        errors[:, j] = (sides[0] - sides[1]) / (2.0 * h) - jacobian[:, j]
-    worst = [np.abs(errors[rows]).max() / np.abs(jacobian[rows]).max()
-             for rows in (slice(0, eq.n_free), slice(eq.n_free, None))]
-    return worst[0], worst[1], eq.state
-
-
 def test_the_patch_of_a_pair_is_the_nodes_of_its_faces() -> None:
     mesh = HexMesh.box(2.0, 1.0, 0.5, 2, 1, 1)
     bottom = mesh.select(z=0.0)
@@ -99,7 +71,7 @@ def test_jacobian_of_frictionless_surface_contact_matches_central_differences() 
     force[::4] = 0.0  # some pairs without force, lifted off the dome: open
     u[tool.slaves[::4], 2] += 5e-3
     moved = {"dome": problem.position["dome"] + (3e-5, 1e-5, 2e-5)}
-    equilibrium, law, state = central_difference_errors(problem, u, force, moved)
+    equilibrium, law, state = central_difference_errors(problem, u, force, moved, 3e-5)
     assert {INACTIVE, SLIP} <= set(state.tolist()), state  # frictionless closed: "slip"
     assert equilibrium <= 1e-7 and law <= 1e-7, (equilibrium, law)
 
@@ -115,7 +87,7 @@ def test_jacobian_with_friction_stick_and_slip_matches_central_differences() -> 
     u[tool.slaves[::4], 2] += 5e-3
     force[1::4, 0] = force[1::4, 2]  # beyond the friction cone (mu = 0.3): slip
     moved = {"dome": problem.position["dome"] + (3e-5, 1e-5, 2e-5)}
-    equilibrium, law, state = central_difference_errors(problem, u, force, moved)
+    equilibrium, law, state = central_difference_errors(problem, u, force, moved, 3e-5)
     assert {INACTIVE, STICK, SLIP} <= set(state.tolist()), state
     assert equilibrium <= 1e-7 and law <= 1e-7, (equilibrium, law)
 

@@ -68,6 +68,8 @@ def test_run_writes_every_phase_and_the_outputs(reference: tuple[Path, Path]) ->
     status = read_status(out)
     assert status["status"] == "completed"
     with ResultsReader(out / RESULTS) as r:
+        # this process's peak: at least what Python with numpy and the core occupies
+        assert r.peak_memory_mb is not None and r.peak_memory_mb > 20.0
         phase = r.curve("phase")
         assert set(phase) == {0, 1, 2} and np.all(np.diff(phase) >= 0)
         assert r.curve("increment").tolist() == list(range(1, r.n_increments + 1))
@@ -146,16 +148,20 @@ def test_restart_after_every_increment_ends_as_the_uninterrupted_run(
 
 def test_a_continued_run_records_the_fewest_threads_of_its_parts(
         reference: tuple[Path, Path], tmp_path: Path, monkeypatch) -> None:
+    import ddpy.app.runner
     import ddpy.core.parallel
 
     case, _ = reference
     loaded = read_case(case)
     monkeypatch.setattr(ddpy.core.parallel, "max_threads", lambda: 1)
+    monkeypatch.setattr(ddpy.app.runner, "peak_memory_mb", lambda: 5000.0)
     run_case(loaded, tmp_path, max_increments=3)
     monkeypatch.setattr(ddpy.core.parallel, "max_threads", lambda: 2)
+    monkeypatch.setattr(ddpy.app.runner, "peak_memory_mb", lambda: 400.0)
     run_case(loaded, tmp_path, restart=True, max_increments=6)
     with ResultsReader(tmp_path / "results.h5") as r:
         assert r.threads == 1  # the first part shared the cores: not a run alone
+        assert r.peak_memory_mb == 5000.0  # and the peak memory is the largest part's
     run_case(loaded, tmp_path, overwrite=True, max_increments=3)
     with ResultsReader(tmp_path / "results.h5") as r:
         assert r.threads == 2

@@ -109,6 +109,7 @@ class Run:
     newton_iterations: int = 0
     evaluations: int = 0
     threads: int = 0              # OpenMP threads of the run (0: not recorded)
+    peak_memory_mb: float | None = None  # the run's peak resident memory (None: not recorded)
     #: code version (git describe) and date of the run; numbers of a run kept in the runs
     #: file (no shapes): summary() returns them as they are
     code: str = ""
@@ -166,7 +167,8 @@ def from_results(path: Path, output_at: tuple[float, ...] = make_case.OUTPUT_AT)
                    all_iterations=int(history["iterations"].sum()),
                    newton_iterations=_forming_sum(history, "newton_iterations", forming),
                    evaluations=_forming_sum(history, "evaluations", forming),
-                   threads=r.threads, **recorded_code(path.parent))
+                   threads=r.threads, peak_memory_mb=r.peak_memory_mb,
+                   **recorded_code(path.parent))
 
 
 def _effort_by_limit(history: dict[str, np.ndarray], forming: np.ndarray
@@ -218,7 +220,7 @@ def _per_iteration(numbers: dict[str, Any]) -> tuple[dict[str, float], float]:
 
 #: What a run says about time (Table 3, the target), kept from a run alone on the machine.
 TIMING = ("wall_s", "threads", "code", "date", "increments", "iterations", "per_iteration_s",
-          "factorizations", "krylov_iterations")
+          "factorizations", "krylov_iterations", "lu_s", "peak_memory_mb")
 
 
 def timed_alone(numbers: dict[str, Any], earlier: dict[str, Any] | None,
@@ -352,6 +354,12 @@ def summary(model: str, run: Run) -> dict[str, Any]:
         "full_size_increments": int(np.sum(run.sizes >= 0.999 * make_case.MAX_INCREMENT)),
         "factorizations": run.factorizations,
         "krylov_iterations": run.krylov_iterations,
+        # one LU of this run's Jacobians, the mean over the run, s; the peak memory, MB
+        "lu_s": (round(run.times["factorization"] / run.factorizations, 4)
+                 if run.times and "factorization" in run.times and run.factorizations
+                 else None),
+        "peak_memory_mb": (round(run.peak_memory_mb, 1) if run.peak_memory_mb is not None
+                           else None),
         "newton_iterations_all": run.newton_iterations,
         "evaluations": run.evaluations,
         # seconds per Newton iteration of the whole run (springback included), by part
@@ -611,6 +619,14 @@ def report(mesh: str, hexahedra: int, numbers: dict[str, dict[str, Any]],
                               ("solve", "- solutions"), ("rest", "rest"))],
         _row(["**per iteration**", *[f"**{_per_iteration(numbers[m])[1]:.3f}**"
                                      for m in models]]),
+        _row(["one LU factorization (mean over the run)",
+              *[_seconds(numbers[m].get("lu_s")) for m in models]]),
+        _row(["per iteration / one LU",
+              *[f"{_per_iteration(numbers[m])[1] / numbers[m]['lu_s']:.2f}"
+                if numbers[m].get("lu_s") else "not recorded" for m in models]]),
+        _row(["peak memory of the run (MB)",
+              *[f"{numbers[m]['peak_memory_mb']:.0f}" if numbers[m].get("peak_memory_mb")
+                else "not recorded" for m in models]]),
         "",
         *target(mesh, numbers),
         f"![increment size]({figures['increments'].name})",

@@ -18,6 +18,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import resource
 import tempfile
 import time
 from collections.abc import Callable
@@ -564,7 +565,8 @@ def run_case(case: Case, output: str | os.PathLike[str], restart: bool = False,
         failure: ResultsWriteError | None = None
         if not run.writer.failed:  # after a failed write the file is closed as it was
             try:
-                run.writer.annotate(status=status, message=message, wall_time=wall)
+                run.writer.annotate(status=status, message=message, wall_time=wall,
+                                    peak_memory_mb=run.writer.peak_memory_mb(peak_memory_mb()))
                 run.writer.close()
             except ResultsWriteError as error:
                 failure = error
@@ -580,3 +582,8 @@ def run_case(case: Case, output: str | os.PathLike[str], restart: bool = False,
         if failure is not None:
             raise failure
     return RunOutcome(status, message, increments, frames, wall, output)
+
+
+def peak_memory_mb() -> float:
+    """The largest resident memory this process has had so far, MB (Linux reports KiB)."""
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0

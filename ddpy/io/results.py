@@ -395,6 +395,11 @@ class ResultsWriter:
         """A root attribute set before (e.g. by an earlier part of a continued run)."""
         return self._file.attrs.get(name, default)
 
+    def peak_memory_mb(self, this_part: float) -> float:
+        """The run's peak memory with ``this_part``'s: the largest of its parts (a run
+        continued with --restart is several processes)."""
+        return max(float(self._file.attrs.get("peak_memory_mb", 0.0)), float(this_part))
+
     def annotate(self, **attrs: Any) -> None:
         """Set root attributes (e.g. the run's status) and flush."""
         with self._writing(frame=False):
@@ -694,6 +699,9 @@ class ResultsReader:
         self.element = str(f.attrs.get("element", "hexahedron"))
         #: OpenMP threads of the run (``ddpy run``; 0 when not recorded)
         self.threads = int(f.attrs.get("threads", 0))
+        #: the run's peak resident memory, MB (None: not recorded, files written before)
+        peak = f.attrs.get("peak_memory_mb")
+        self.peak_memory_mb = None if peak is None else float(peak)
 
     @property
     def nodes(self) -> NDArray[np.float64]:

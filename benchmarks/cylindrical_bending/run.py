@@ -220,7 +220,7 @@ def _per_iteration(numbers: dict[str, Any]) -> tuple[dict[str, float], float]:
 
 #: What a run says about time (Table 3, the target), kept from a run alone on the machine.
 TIMING = ("wall_s", "threads", "code", "date", "increments", "iterations", "per_iteration_s",
-          "factorizations", "krylov_iterations", "lu_s", "peak_memory_mb")
+          "factorizations", "krylov_iterations")
 
 
 def timed_alone(numbers: dict[str, Any], earlier: dict[str, Any] | None,

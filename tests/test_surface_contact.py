@@ -59,6 +59,19 @@ def test_the_patch_of_a_pair_is_the_nodes_of_its_faces() -> None:
             assert np.abs(mesh.nodes[patch] - mesh.nodes[a]).max() <= 1.0 + 1e-12
 
 
+def test_the_core_refuses_a_patch_that_misses_a_face_node() -> None:
+    problem, _, _ = block_on_dome(0.0)
+    problem.linearization()  # the layout as built fits
+    layout = problem._layout
+    first = layout.patch_first[1]
+    # the first pair's patch loses one of its face nodes to another node of the blank
+    stranger = int(np.setdiff1d(np.arange(problem.solid.mesh.n_nodes),
+                                layout.patch_node[:first])[0])
+    layout.patch_node[first - 1] = stranger
+    with pytest.raises(RuntimeError, match="do not fit"):
+        problem.linearization()
+
+
 def test_jacobian_of_frictionless_surface_contact_matches_central_differences() -> None:
     """The Jacobian with surface-to-surface contact (weighted gaps and normals, the tool's
     curvature at every Gauss point, held components on a symmetry plane) against central

@@ -301,6 +301,9 @@ def from_results(path: Path, case_folder: Path) -> Run:
                              "travel": round(last.travel, 4), "x": _rounded(cx, 3),
                              "y": _rounded(cy, 3), "plastic_strain": _rounded(ep, 4)}
         threads = r.threads
+        peak_mb = r.peak_memory_mb
+        lus = int(h["factorizations"].sum()) if "factorizations" in h else 0
+        krylov = int(h["krylov_iterations"].sum()) if "krylov_iterations" in h else 0
     done = [s for s in STAGES if stages.get(s, {}).get("increments")]
     complete = all(stages[s]["complete"] for s in STAGES)
     reached = done[-1] if done else STAGES[0]
@@ -322,6 +325,12 @@ def from_results(path: Path, case_folder: Path) -> Run:
         "wall_s": round(sum(s["wall_s"] for s in stages.values()), 1),
         "per_iteration_s": {part: float(f"{t / max(iterations, 1):.4g}")
                             for part, t in totals.items()},
+        # LU factorizations and GMRES iterations of the run, one LU (the mean over the run,
+        # s) and the run's peak memory (MB); None where the results file does not say
+        "factorizations": lus,
+        "krylov_iterations": krylov,
+        "lu_s": float(f"{totals['factorization'] / lus:.4g}") if lus else None,
+        "peak_memory_mb": None if peak_mb is None else round(peak_mb, 1),
         "hexahedra": int(case.mesh.n_elements),
         "last_increments": ending,
         "stages": stages,
@@ -1069,6 +1078,17 @@ def effort_section(numbers: dict[str, dict[str, Any]], models: list[str],
                         for m in models]]) for part in PARTS],
         _row(["**per iteration**",
               *[f"**{sum(numbers[m]['per_iteration_s'].values()):.4f}**" for m in models]]),
+        _row(["LU factorizations", *[numbers[m].get("factorizations", "?") for m in models]]),
+        _row(["GMRES iterations (older factors)",
+              *[numbers[m].get("krylov_iterations", "?") for m in models]]),
+        _row(["one LU factorization (mean over the run, s)",
+              *[_num(numbers[m].get("lu_s"), ".4f") for m in models]]),
+        _row(["per iteration / one LU",
+              *[f"{sum(numbers[m]['per_iteration_s'].values()) / numbers[m]['lu_s']:.2f}"
+                if numbers[m].get("lu_s") else "not recorded" for m in models]]),
+        _row(["peak memory of the run (MB)",
+              *[f"{numbers[m]['peak_memory_mb']:.0f}" if numbers[m].get("peak_memory_mb")
+                else "not recorded" for m in models]]),
         "",
         f"![increment size]({figures['increments']})",
         "",

@@ -169,6 +169,8 @@ class FormingResult:
     #: before the first correction)
     relative: list[list[tuple[float, float]]] = field(default_factory=list)
     displacements: list[NDArray[np.float64]] = field(default_factory=list)
+    #: increment trials that failed: each was cut and tried again, but for the last one of a
+    #: run that stopped on it, which counts too
     cuts: int = 0
     #: LU factorizations, and the GMRES iterations of the Newton corrections solved with an
     #: older factorization instead (``FormingProblem.linear_solver``)

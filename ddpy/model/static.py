@@ -63,6 +63,7 @@ class SolidResult:
     ep: list[NDArray[np.float64]] = field(default_factory=list)
     residuals: list[list[float]] = field(default_factory=list)
     relative: list[list[tuple[float, float]]] = field(default_factory=list)
+    #: increment trials that failed (as FormingResult.cuts: the last of a stopped run counts)
     cuts: int = 0
     state: SolidState | None = None
     evaluations: int = 0

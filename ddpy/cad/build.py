@@ -21,7 +21,7 @@ from __future__ import annotations
 import contextlib
 import os
 import re
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -434,7 +434,42 @@ def build_tool_models(
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise ValueError(f"{out}: a file is there; the output must be a folder")
-    created: list[Path] = []  # folders made for the output, removed again if left empty
+    with output_folder(out) as target, gmsh_session(), \
+            _cad_model(cad) as (available, label, source):
+        selected = list(available) if faces is None else [int(f) for f in faces]
+        missing = sorted(set(selected) - set(available))
+        if missing:
+            raise CadError(f"{label}: face {missing[0]} is not in the model (faces: "
+                           f"{_ranges(available)})")
+        builder = ToolBuilder(selected, label, blank_side, blank_point)
+        paths: dict[str, Path] = {}
+        nagata = None
+        if "nagata" in models or ("facets" in models and facets_per_arc == patches_per_arc):
+            nagata = builder.mesh_model(name, patches_per_arc, element, size, True, source,
+                                        arc_size)
+            if "nagata" in models:
+                paths["nagata"] = write_tool(target(f"{name}.nagata.tool"), nagata)
+        if "facets" in models:
+            if nagata is not None and facets_per_arc == patches_per_arc:
+                facets = nagata.facets()
+            else:
+                if builder.flips is None:  # orientation comes from the coarser mesh
+                    builder.mesh(min(patches_per_arc, facets_per_arc), element, size, arc_size)
+                facets = builder.mesh_model(name, facets_per_arc, element, size, False, source,
+                                            arc_size)
+            paths["facets"] = write_tool(target(f"{name}.facets.tool"), facets)
+        if "bezier" in models:
+            bezier = builder.bezier_model(name, bezier_tol, bezier_angle_tol, source)
+            paths["bezier"] = write_tool(target(f"{name}.bezier.tool"), bezier)
+    return paths
+
+
+@contextlib.contextmanager
+def output_folder(out: Path) -> Iterator[Callable[[str], Path]]:
+    """Paths for files in the folder ``out``, made (with its missing parents) when the first
+    is asked for; if the block then fails, the folders made are removed again, innermost
+    first, as far as they are empty."""
+    created: list[Path] = []
 
     def target(file: str) -> Path:
         if not out.is_dir():
@@ -443,40 +478,14 @@ def build_tool_models(
         return out / file
 
     try:
-        with gmsh_session(), _cad_model(cad) as (available, label, source):
-            selected = list(available) if faces is None else [int(f) for f in faces]
-            missing = sorted(set(selected) - set(available))
-            if missing:
-                raise CadError(f"{label}: face {missing[0]} is not in the model (faces: "
-                               f"{_ranges(available)})")
-            builder = ToolBuilder(selected, label, blank_side, blank_point)
-            paths: dict[str, Path] = {}
-            nagata = None
-            if "nagata" in models or ("facets" in models and facets_per_arc == patches_per_arc):
-                nagata = builder.mesh_model(name, patches_per_arc, element, size, True, source,
-                                            arc_size)
-                if "nagata" in models:
-                    paths["nagata"] = write_tool(target(f"{name}.nagata.tool"), nagata)
-            if "facets" in models:
-                if nagata is not None and facets_per_arc == patches_per_arc:
-                    facets = nagata.facets()
-                else:
-                    if builder.flips is None:  # orientation comes from the coarser mesh
-                        builder.mesh(min(patches_per_arc, facets_per_arc), element, size, arc_size)
-                    facets = builder.mesh_model(name, facets_per_arc, element, size, False, source,
-                                                arc_size)
-                paths["facets"] = write_tool(target(f"{name}.facets.tool"), facets)
-            if "bezier" in models:
-                bezier = builder.bezier_model(name, bezier_tol, bezier_angle_tol, source)
-                paths["bezier"] = write_tool(target(f"{name}.bezier.tool"), bezier)
+        yield target
     except BaseException:
-        for folder in reversed(created):  # innermost first; stop at one that is not empty
+        for folder in reversed(created):
             try:
                 folder.rmdir()
             except OSError:
                 break
         raise
-    return paths
 
 
 def _missing_folders(path: Path) -> list[Path]:

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ddpy.cad.build import _PLAIN_NAME, TANGENT_ANGLE, _missing_folders, _ranges, _vector
+from ddpy.cad.build import _PLAIN_NAME, TANGENT_ANGLE, _ranges, _vector, output_folder
 from ddpy.cad.mesh import point_text
 from ddpy.cad.read import CAD_SUFFIXES, CadError, gmsh_session, load_cad
 from ddpy.cad.surface_mesh import (
@@ -236,21 +236,10 @@ def build_mesh_tool_models(
         raise MeshFileError(f"{surface_mesh.path}: {error}") from None
     nagata = ToolModel(name, "nagata", surface, tags, source)
 
-    created: list[Path] = []
-    try:
-        if not out.is_dir():
-            created.extend(_missing_folders(out))
-            out.mkdir(parents=True, exist_ok=True)
-        paths: dict[str, Path] = {}
+    paths: dict[str, Path] = {}
+    with output_folder(out) as target:
         if "nagata" in models:
-            paths["nagata"] = write_tool(out / f"{name}.nagata.tool", nagata)
+            paths["nagata"] = write_tool(target(f"{name}.nagata.tool"), nagata)
         if "facets" in models:
-            paths["facets"] = write_tool(out / f"{name}.facets.tool", nagata.facets())
-    except BaseException:
-        for folder in reversed(created):
-            try:
-                folder.rmdir()
-            except OSError:
-                break
-        raise
+            paths["facets"] = write_tool(target(f"{name}.facets.tool"), nagata.facets())
     return paths

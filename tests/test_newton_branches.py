@@ -129,13 +129,20 @@ def test_a_fallback_step_keeps_its_evaluation_while_shorter_steps_are_tried(capl
     assert result.relative[0][-1][0] <= 1e-10
     # The strip ends off the die (its free bottom nodes lifted, no contact force): the
     # same answer as without the die.
-    lifted = problem.tools[0].slaves[~problem.fixed[problem.tools[0].slaves, 2]]
-    assert lifted.size == 4 and (problem.u[lifted, 2] > 0.0).all()
+    assert_ends_off_the_die(problem, lifted_strip(contact=False), 4)
+
+
+def assert_ends_off_the_die(problem: FormingProblem, without_die: FormingProblem,
+                            lifted_nodes: int) -> None:
+    """The run ended with ``lifted_nodes`` free slaves lifted off the die and no contact
+    force: the answer of the same problem run without the die."""
+    slaves = problem.tools[0].slaves
+    lifted = slaves[~problem.fixed[slaves, 2]]
+    assert lifted.size == lifted_nodes and (problem.u[lifted, 2] > 0.0).all()
     assert not problem.force.any()
-    reference = lifted_strip(contact=False)
-    reference.run({"die": (0, 0, 0)}, max_increment=1.0, limits=UNLIMITED, newton=TIGHT)
-    np.testing.assert_allclose(problem.u, reference.u, rtol=0,
-                               atol=1e-7 * np.abs(reference.u).max())
+    without_die.run({"die": (0, 0, 0)}, max_increment=1.0, limits=UNLIMITED, newton=TIGHT)
+    np.testing.assert_allclose(problem.u, without_die.u, rtol=0,
+                               atol=1e-7 * np.abs(without_die.u).max())
 
 
 def test_a_step_that_no_trial_improves_is_the_last_one_tried(caplog) -> None:
@@ -153,13 +160,7 @@ def test_a_step_that_no_trial_improves_is_the_last_one_tried(caplog) -> None:
     residuals = result.residuals[0]
     assert residuals[1] > residuals[0]
     assert result.relative[0][1][1] == pytest.approx(1.0, rel=1e-9)
-    lifted = problem.tools[0].slaves[~problem.fixed[problem.tools[0].slaves, 2]]
-    assert lifted.size == 2 and (problem.u[lifted, 2] > 0.0).all()
-    assert not problem.force.any()
-    reference = tilted_column(contact=False)
-    reference.run({"die": (0, 0, 0)}, max_increment=1.0, limits=UNLIMITED, newton=TIGHT)
-    np.testing.assert_allclose(problem.u, reference.u, rtol=0,
-                               atol=1e-7 * np.abs(reference.u).max())
+    assert_ends_off_the_die(problem, tilted_column(contact=False), 2)
 
 
 def test_a_stalled_increment_says_how_many_pairs_changed_state(caplog) -> None:

@@ -12,12 +12,13 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ddpy import _core
-from ddpy.core.linalg import LinearSolverError, row_structure
+from ddpy.core.linalg import LinearSolverError, RowStructure, row_structure
 from ddpy.geometry.search import SearchArrays
 from ddpy.model.mesh import HexMesh, boundary_faces, face_area_vectors
 from ddpy.model.solid import ElementError, Solid, SolidState, _flat
@@ -138,8 +139,12 @@ class Layout:
         self.cols = np.concatenate(cols).astype(np.int32)
         self.k_slots = self.pattern.rows.size
         self.n_coupling = int(coupling.sum())
-        #: the Jacobian by rows, for the products of GMRES in the core
-        self.by_rows = row_structure(self.n, self.rows, self.cols, symmetric)
+
+    @cached_property
+    def by_rows(self) -> RowStructure:
+        """The Jacobian's structure by rows, for the products of GMRES in the core: sorted
+        once, at the first increment (a layout made for a look at the contact needs none)."""
+        return row_structure(self.n, self.rows, self.cols, self.symmetric)
 
 
 class ToolPack:

@@ -354,10 +354,7 @@ def summary(model: str, run: Run) -> dict[str, Any]:
         "full_size_increments": int(np.sum(run.sizes >= 0.999 * make_case.MAX_INCREMENT)),
         "factorizations": run.factorizations,
         "krylov_iterations": run.krylov_iterations,
-        # one LU of this run's Jacobians, the mean over the run, s; the peak memory, MB
-        "lu_s": (round(run.times["factorization"] / run.factorizations, 4)
-                 if run.times and "factorization" in run.times and run.factorizations
-                 else None),
+        # the run's peak memory, MB
         "peak_memory_mb": (round(run.peak_memory_mb, 1) if run.peak_memory_mb is not None
                            else None),
         "newton_iterations_all": run.newton_iterations,
@@ -472,6 +469,22 @@ def plot_increments(runs: dict[str, Run], path: Path) -> Path:
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return path
+
+
+def one_lu_s(per_iteration: dict[str, float], factorizations: int, iterations: int
+             ) -> float | None:
+    """The mean time of one LU of a run: the factorizations' time per iteration times the
+    run's iterations (forming and springback) over its factorizations; None where the run
+    did not record them apart."""
+    if "factorization" not in per_iteration or not factorizations:
+        return None
+    return per_iteration["factorization"] * iterations / factorizations
+
+
+def _one_lu(n: dict[str, Any]) -> float | None:
+    """one_lu_s of a run's numbers."""
+    return one_lu_s(n["per_iteration_s"], n["factorizations"],
+                    n["iterations"] + n["springback_iterations"])
 
 
 def _seconds(value: float | None) -> str:
@@ -620,10 +633,10 @@ def report(mesh: str, hexahedra: int, numbers: dict[str, dict[str, Any]],
         _row(["**per iteration**", *[f"**{_per_iteration(numbers[m])[1]:.3f}**"
                                      for m in models]]),
         _row(["one LU factorization (mean over the run)",
-              *[_seconds(numbers[m].get("lu_s")) for m in models]]),
+              *[_seconds(_one_lu(numbers[m])) for m in models]]),
         _row(["per iteration / one LU",
-              *[f"{_per_iteration(numbers[m])[1] / numbers[m]['lu_s']:.2f}"
-                if numbers[m].get("lu_s") else "not recorded" for m in models]]),
+              *[f"{_per_iteration(numbers[m])[1] / _one_lu(numbers[m]):.2f}"
+                if _one_lu(numbers[m]) else "not recorded" for m in models]]),
         _row(["peak memory of the run (MB)",
               *[f"{numbers[m]['peak_memory_mb']:.0f}" if numbers[m].get("peak_memory_mb")
                 else "not recorded" for m in models]]),
@@ -717,10 +730,9 @@ def target(mesh: str, numbers: dict[str, dict[str, Any]]) -> list[str]:
              if lead == "linear" and "solve" in split else "")
     # The mean time of one LU: the factorizations' time over the run's iterations (forming
     # and springback: the same path as this run's) over the factorizations.
-    lus = source.get("factorizations", n["factorizations"])
-    everything = n["iterations"] + n["springback_iterations"]
-    lu = (f"; one LU of this blank took {split['factorization'] * everything / lus:.2f} s on "
-          "average" if "factorization" in split and lus else "")
+    one = one_lu_s(split, source.get("factorizations", n["factorizations"]),
+                   n["iterations"] + n["springback_iterations"])
+    lu = f"; one LU of this blank took {one:.2f} s on average" if one is not None else ""
     dominates = (
         f"What dominates an iteration: {lead}, "
         f"{100 * per.get(lead, 0.0) / max(total, 1e-12):.0f} %{apart} "

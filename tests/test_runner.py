@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import json
+import logging
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -301,7 +303,8 @@ def test_a_fine_blank_lying_on_the_die_converges_in_its_first_increment(tmp_path
     # with 868 bottom nodes on the die at zero gap; its first increment (ended by the first
     # touch of the next punch row) failed at every cut down to the smallest increment. The
     # second start of a phase's first increment, with the touching pairs of the die (at
-    # rest) left open, converges at the first size (docs/theory/contact.md).
+    # rest) left open, exact solves and full steps, converges at the first size, shortened
+    # only by the landing of the first yielding point (docs/theory/contact.md).
     case = tmp_path / "case"
     shutil.copytree(DEFAULT_CASE, case)
     (case / "mesh.dat").write_text("normal z\nbox 60 15 1 240 6 2\n")
@@ -309,8 +312,36 @@ def test_a_fine_blank_lying_on_the_die_converges_in_its_first_increment(tmp_path
     outcome = run_case(read_case(case), tmp_path / "out", max_increments=1, threads=1,
                        progress=seen.append)
     assert outcome.status == "stopped"
-    assert [p.limit for p in seen] == ["contact_touch"]   # no cut
+    assert [p.limit for p in seen] == ["yield"]   # no cut
     assert seen[0].iterations < 25
+
+
+def test_a_first_increment_whose_default_start_fails_converges_on_the_careful_start(
+        tmp_path, caplog) -> None:
+    # The built-in case's tools with a von Mises blank of 30 x 6 x 2 solid-shells: the
+    # default start of the first increment cycles between contact states for 25
+    # iterations at every cut, down to the smallest increment (found by
+    # benchmarks/mesh_convergence). The careful start (the die's touching pairs open, exact
+    # solves, full steps: docs/theory/contact.md) converges at the first size, and the
+    # increment is not cut.
+    caplog.set_level(logging.INFO, logger="ddpy.model.forming")
+    case = tmp_path / "case"
+    shutil.copytree(DEFAULT_CASE, case)
+    (case / "mesh.dat").write_text("normal z\nelement solid-shell\nbox 60 15 1 30 6 2\n")
+    (case / "material.dat").write_text(
+        "elastic E 210000 nu 0.3\nyield vonmises\n"
+        "hardening swift K 645.3 eps0 0.0102 n 0.252\n")
+    control = case / "control.dat"
+    control.write_text(re.sub(r"(?m)^max_increment\s+\S+", "max_increment 0.1",
+                              control.read_text()))
+    seen = []
+    outcome = run_case(read_case(case), tmp_path / "out", max_increments=1, threads=1,
+                       progress=seen.append)
+    assert outcome.status == "stopped" and len(seen) == 1
+    assert seen[0].limit != "cutback" and seen[0].iterations <= 25
+    logged = [r.getMessage() for r in caplog.records]
+    assert any("starts again" in m for m in logged)      # the default start failed
+    assert not any(" cut: " in m for m in logged)
 
 
 def test_restart_at_a_phase_boundary_is_the_same_run_with_reused_factors(

@@ -30,7 +30,17 @@ from ddpy.geometry.search import NONE
 from ddpy.model.contact import INACTIVE
 from ddpy.model.control import IncrementLimits, NewtonSettings, next_step
 from ddpy.model.mesh import HEX_EDGES, free_rigid_modes, largest_rotation
-from ddpy.model.newton import Factors, Layout, Loop, Pairs, ToolPack, Trial, increment
+from ddpy.model.newton import (
+    SEARCH_MONOTONICITY,
+    SEARCH_NONE,
+    Factors,
+    Layout,
+    Loop,
+    Pairs,
+    ToolPack,
+    Trial,
+    increment,
+)
 from ddpy.model.solid import Solid, SolidState, _components
 from ddpy.model.tool import RigidTool
 
@@ -346,6 +356,7 @@ class FormingProblem:
         redos = 0  # redos at a release of the present increment
         last_du: NDArray[np.float64] | None = None
         last_dp: NDArray[np.float64] | None = None  # pressure rate of the last increment
+        careful = False  # the first increment's default start failed: careful starts only
         if resume is not None:
             start, factor, step = resume.start, resume.factor, resume.step
             reason, last_du, last_dp = resume.reason, resume.last_du, resume.last_dp
@@ -388,20 +399,25 @@ class FormingProblem:
                                    limits.yield_tolerance, 1e-6)
             # Start from the last increment's displacement rate (docs/theory/contact.md).
             guess = None if last_du is None else self.u + (target - factor) * last_du
-            touching = _Touching(TOUCHING * self.size)
+            careful = careful and last_du is None
+            touching = _Touching(TOUCHING * self.size, resting=not careful)
             outcome = self._increment(layout, positions, on, tol_force, tol_disp,
-                                      max_iterations, result, landing, touching, guess)
-            if outcome.failure and last_du is None:
+                                      max_iterations, result, landing, touching, guess,
+                                      careful=careful)
+            if outcome.failure and last_du is None and not careful:
                 # The first increment of a phase starts with the blank lying on its tools:
                 # a second start keeps open the touching pairs of the tools at rest that
-                # the blank does not need (docs/theory/contact.md), before cutting.
+                # the blank does not need, with exact solves and full steps (a careful
+                # start, docs/theory/contact.md), before cutting; so do the retries of
+                # this increment.
                 _log.info("increment to phase factor %.6g (step %.3g) starts again with the "
                           "resting tools' touching pairs open: %s", target, step,
                           outcome.failure)
+                careful = True
                 touching = _Touching(TOUCHING * self.size, resting=False)
                 outcome = self._increment(layout, positions, on, tol_force,
                                           tol_disp, max_iterations, result, landing,
-                                          touching, guess)
+                                          touching, guess, careful=True)
             if outcome.landing < 1.0:  # an elastic point would overshoot the yield stress
                 step = max(step * outcome.landing, limits.min_fraction * nominal)
                 reason = "yield"
@@ -757,7 +773,8 @@ class FormingProblem:
                    tol_force: float, tol_disp: float, max_iterations: int,
                    result: FormingResult, yield_tolerance: float | None = None,
                    touching: _Touching | None = None,
-                   guess: NDArray[np.float64] | None = None) -> Trial:
+                   guess: NDArray[np.float64] | None = None,
+                   careful: bool = False) -> Trial:
         """One increment trial, the Newton iterations run by the core (forming_increment,
         fortran/solver/ddpy_forming_newton.f90): the new state, or (with
         ``yield_tolerance``) the fraction of the increment at which the first elastic Gauss
@@ -766,7 +783,11 @@ class FormingProblem:
         iteration takes pairs within that gap as closed (see ``_contact``). With ``guess``
         (displacements, the last increment's rate times this one's size) the iterations
         start there instead of at the converged u_n, unless an element fails there; the
-        converged state does not depend on the start.
+        converged state does not depend on the start. ``careful``: exact solves (a
+        factorization at every iteration, never GMRES on older factors) and full steps (no
+        line search), for the first increment of a phase whose default start failed: a
+        semi-smooth Newton on a degenerate contact set (pairs at g = 0, p = 0) needs exact
+        active-set steps (docs/theory/contact.md).
 
         The semi-smooth Newton step is globalized by backtracking until Deuflhard's natural
         monotonicity test holds (the simplified correction at the trial point, solved with
@@ -775,13 +796,14 @@ class FormingProblem:
         would otherwise make it cycle. The norm alone is the wrong measure for a thin sheet
         that bends: a step that bends it right leaves a large membrane residual of second
         order (docs/theory/contact.md)."""
-        reuse = self.linear_solver == "reuse" or (
-            self.linear_solver == "auto" and layout.n >= REUSE_FROM)
+        reuse = not careful and (self.linear_solver == "reuse" or (
+            self.linear_solver == "auto" and layout.n >= REUSE_FROM))
         loop = Loop(tol_force, tol_disp, max_iterations,
                     1e-8 * self.solid.props[0] * self.size**2, yield_tolerance,
                     PENETRATION, MIN_STEP, reuse, KRYLOV_LOOSE, KRYLOV_TIGHT, KRYLOV_MAX,
                     KRYLOV_KEEP, touching=0.0 if touching is None else touching.distance,
-                    resting=touching is None or touching.resting)
+                    resting=touching is None or touching.resting,
+                    search=SEARCH_NONE if careful else SEARCH_MONOTONICITY)
         pairs = Pairs(self._tool_arguments(positions), on, self.r, self.mu, self.force)
         trial = increment(self.solid, layout, self._factors, self.state, self.u,
                           self.external, self.u, guess, loop, pairs)

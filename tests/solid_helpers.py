@@ -17,7 +17,7 @@ DDQ = dict(E=E, nu=NU, hill=(0.3137, 0.3663, 0.6337, 1.5, 1.5, 1.1764),
 def props_vector(e: float = E, nu: float = NU,
                  hill: tuple[float, ...] = (0.5, 0.5, 0.5, 1.5, 1.5, 1.5),
                  swift: tuple[float, float, float] = (1e9, 1.0, 0.0)) -> np.ndarray:
-    """The core's material properties (216): Hill'48 (von Mises by default) with Swift hardening; the
+    """The core's 216 material properties: Hill'48 (von Mises by default), Swift hardening; the
     default yield stress of 1e9 MPa keeps the material elastic."""
     props = np.zeros(216)
     props[:12] = [e, nu, *hill, 1.0, *swift]

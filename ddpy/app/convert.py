@@ -11,6 +11,7 @@ Nagata patches smoothed over them.
 from __future__ import annotations
 
 import os
+import sys
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -22,7 +23,7 @@ from ddpy.cad.surface_mesh import SurfaceMesh
 from ddpy.io.decks import DECKS
 from ddpy.io.inp_model import InpModel, InpTool, read_inp
 
-__all__ = ["TOOL_MODELS", "Conversion", "convert_inp", "deck_texts"]
+__all__ = ["TOOL_MODELS", "Conversion", "convert_command", "convert_inp", "deck_texts"]
 
 #: What tools.dat may name: the faces as given, or Nagata patches over them.
 TOOL_MODELS = ("facets", "nagata")
@@ -89,8 +90,10 @@ def deck_texts(model: InpModel, tools: str = "facets", element: str | None = Non
         contact = t.contact if t.facing is None else \
             "facing " + " ".join(_number(v) for v in t.facing)
         tool_lines += [f"tool {t.name}                      # {t.where}",
-                       f"  description     {tools}", f"  file            tools/{t.name}.{tools}.tool",
-                       f"  friction        {_number(t.friction)}", f"  contact         {contact}",
+                       f"  description     {tools}",
+                       f"  file            tools/{t.name}.{tools}.tool",
+                       f"  friction        {_number(t.friction)}",
+                       f"  contact         {contact}",
                        f"  discretization  {t.discretization}", "end", ""]
 
     control = [head.format("control"), f"title  {model.title}", ""]
@@ -161,3 +164,31 @@ def convert_inp(inp: str | os.PathLike[str], folder: str | os.PathLike[str],
     for name in DECKS:
         (out / name).write_text(texts[name])
     return Conversion(out, model, list(model.ignored))
+
+
+def convert_command(inp: str, folder: str | None, tools: str, element: str | None,
+                    overwrite: bool, command: str = "convert") -> Path | None:
+    """The conversion of the ``convert`` and ``run`` commands: the case folder written and
+    checked (default: MODEL_case beside the file), or None after printing every error."""
+    from ddpy.cad.read import CadError
+    from ddpy.io.decks import DeckError, read_case
+
+    out = Path(folder) if folder else Path(inp).with_name(Path(inp).stem + "_case")
+    try:
+        done = convert_inp(inp, out, tools, element, overwrite)
+        case = read_case(out)
+    except DeckError as error:
+        for e in error.errors:
+            print(e, file=sys.stderr)
+        count = len(error.errors)
+        print(f"ddpy {command}: {inp}: {count} error{'s' if count > 1 else ''}; nothing run",
+              file=sys.stderr)
+        return None
+    except (CadError, ValueError) as error:
+        print(f"ddpy {command}: error: {error}", file=sys.stderr)
+        return None
+    for note in done.notes:
+        print(f"  ignored: {note}")
+    print(case.summary())
+    print(f"ddpy {command}: {inp} -> {out}: ok")
+    return out

@@ -43,7 +43,7 @@ SUPPORTED: dict[str, dict[str, tuple[str, ...] | None]] = {
     "SURFACE INTERACTION": {"NAME": None},
     "SURFACE BEHAVIOR": {"PRESSURE-OVERCLOSURE": ("HARD", "LINEAR")},
     "FRICTION": {},
-    "BOUNDARY": {"OP": ("MOD",), "TYPE": ("DISPLACEMENT",)},
+    "BOUNDARY": {"OP": ("MOD",), "TYPE": ("DISPLACEMENT",), "FIXED": ("", "YES")},
     "STEP": {"NAME": None, "NLGEOM": ("", "YES"), "INC": None},
     "STATIC": {},
     "MODEL CHANGE": {"TYPE": ("CONTACT PAIR",), "REMOVE": ("",), "ADD": ("",)},
@@ -139,6 +139,7 @@ class _Bc:
     value: float
     step: int | None
     line: DataLine
+    fixed: bool = False
 
 
 class _Reader:
@@ -418,11 +419,12 @@ class _Reader:
                                 "friction sticks exactly)")
 
     def _boundary(self, card: Card, material: str, interaction: str, step: int | None) -> None:
+        fixed = "FIXED" in card.params
         for line in card.data:
             target = line.words[0].upper() if line.words else ""
             if len(line.words) == 2 and line.words[1].upper() in BOUNDARY_TYPES:
                 self.bcs.append(_Bc(target, BOUNDARY_TYPES[line.words[1].upper()], 0.0, step,
-                                    line))
+                                    line, fixed))
                 continue
             if not 2 <= len(line.words) <= 4:
                 raise DeckError("expected '<node or node set>, <first dof>[, <last dof>[, "
@@ -435,7 +437,11 @@ class _Reader:
                 raise DeckError(f"degrees of freedom {first} to {last}: expected 1 <= first "
                                 "<= last <= 6", line.path, line.number)
             value = number(line, 3, "the displacement") if len(line.words) == 4 else 0.0
-            self.bcs.append(_Bc(target, tuple(range(first, last + 1)), value, step, line))
+            if fixed and len(line.words) == 4:
+                raise DeckError("*BOUNDARY, FIXED holds the nodes where they are: expected no "
+                                "value", line.path, line.number)
+            self.bcs.append(_Bc(target, tuple(range(first, last + 1)), value, step, line,
+                                fixed))
 
     def _static(self, card: Card, material: str, interaction: str, step: int | None) -> None:
         assert step is not None
@@ -765,7 +771,10 @@ class _Mapper:
                                                  "): ddpy's tools translate only", bc.line.path,
                                                  bc.line.number))
                             continue
-                        position[tool.name][dof - 1] = bc.value
+                        if bc.fixed:
+                            position[tool.name][dof - 1] = before[tool.name][dof - 1] or 0.0
+                        else:
+                            position[tool.name][dof - 1] = bc.value
             if card is None:
                 continue
             name = ddpy_name(card.params.get("NAME", f"step{step}").strip('"'), "step")
@@ -840,6 +849,13 @@ class _Mapper:
                 r.fail(DeckError(f"a displacement of {bc.value:g} on blank nodes: ddpy's "
                                  "constraints on the blank are zero displacements (the tools "
                                  "drive the forming)", bc.line.path, bc.line.number))
+                continue
+            if bc.step is not None and bc.step > 0 and not bc.fixed:
+                r.fail(DeckError("a zero displacement of blank nodes given after the first "
+                                 "step: Abaqus and CalculiX take it as a total displacement "
+                                 "(moving the nodes back to where they started), ddpy holds "
+                                 "nodes where they are: expected *BOUNDARY, FIXED", bc.line.path,
+                                 bc.line.number))
                 continue
             label = ddpy_name(bc.node_or_set, "node")
             nodesets[label] = sorted(set(ids))

@@ -187,8 +187,8 @@ class _Reader:
                                      + " (or, ignored, " + ", ".join(f"*{k}" for k in IGNORED)
                                      + "); see docs/abaqus-import.md"))
                 continue
-            if not self._params(card):
-                continue
+            if not self._params(card) and key not in ("STEP", "END STEP"):
+                continue                # a step is still opened: no errors follow from it
             try:
                 if key == "STEP":
                     if step is not None:

@@ -174,6 +174,14 @@ def convert_command(inp: str, folder: str | None, tools: str, element: str | Non
     from ddpy.io.decks import DeckError, read_case
 
     out = Path(folder) if folder else Path(inp).with_name(Path(inp).stem + "_case")
+    control = out / "control.dat"
+    if overwrite and command == "run" and out.is_dir() and any(out.iterdir()) and not (
+            control.is_file() and control.read_text(errors="replace").startswith(
+                "# ddpy control deck, converted from")):
+        print(f"ddpy {command}: error: {out} holds something else than a case converted by "
+              "ddpy: move it away, or convert into another folder with 'ddpy convert'",
+              file=sys.stderr)
+        return None
     try:
         done = convert_inp(inp, out, tools, element, overwrite)
         case = read_case(out)
@@ -181,7 +189,8 @@ def convert_command(inp: str, folder: str | None, tools: str, element: str | Non
         for e in error.errors:
             print(e, file=sys.stderr)
         count = len(error.errors)
-        print(f"ddpy {command}: {inp}: {count} error{'s' if count > 1 else ''}; nothing run",
+        nothing = "nothing run" if command == "run" else "no case written"
+        print(f"ddpy {command}: {inp}: {count} error{'s' if count > 1 else ''}; {nothing}",
               file=sys.stderr)
         return None
     except (CadError, ValueError) as error:

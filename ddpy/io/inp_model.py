@@ -183,7 +183,7 @@ class _Reader:
                 continue
             if key not in SUPPORTED:
                 self.fail(card.error(f"keyword *{key} is not supported: expected one of "
-                                     + ", ".join(f"*{k}" for k in SUPPORTED)
+                                     + ", ".join(f"*{k}" for k in (*SUPPORTED, "INCLUDE"))
                                      + " (or, ignored, " + ", ".join(f"*{k}" for k in IGNORED)
                                      + "); see docs/abaqus-import.md"))
                 continue

@@ -345,3 +345,14 @@ def test_material_deck_hardening_table(tmp_path: Path, old: str, new: str, line:
     assert _parse_material(deck) is None
     assert message in deck.errors[0].message
     assert deck.errors[0].line == line
+
+
+def test_rigid_body_by_node_set(tmp_path: Path) -> None:
+    """CalculiX's form: *RIGID BODY, NSET= names the tool's nodes."""
+    path = tmp_path / "flat.inp"
+    path.write_text(ABAQUS.replace("*RIGID BODY, ELSET=PUNCH, REF NODE=900",
+                                   "*NSET, NSET=PUNCH_N\n101, 102, 103, 104\n"
+                                   "*RIGID BODY, NSET=PUNCH_N, REF NODE=900"))
+    model = read_inp(path)
+    assert [t.name for t in model.tools] == ["punch_n", "die"]
+    assert model.phases[0].moves == {"punch_n": (0.0, 0.0, -0.1)}

@@ -206,6 +206,9 @@ class _Mapper:
                 else:
                     name = card.params["NSET"].upper()
                     nodes[index] = set(self.node_set(name, line))
+                    # The elements on the set's nodes are the tool's.
+                    elements.update(e for e, (kind, ns, _) in r.elements.items()
+                                    if kind in TOOL_TYPES + ("C3D8",) and set(ns) <= nodes[index])
                 ref = self._node_param(card, "REF NODE")
                 rot = self._node_param(card, "ROT NODE") if "ROT NODE" in card.params else 0
                 refs[index] = (ref, rot, ddpy_name(name, "tool"), card)

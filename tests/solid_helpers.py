@@ -17,9 +17,9 @@ DDQ = dict(E=E, nu=NU, hill=(0.3137, 0.3663, 0.6337, 1.5, 1.5, 1.1764),
 def props_vector(e: float = E, nu: float = NU,
                  hill: tuple[float, ...] = (0.5, 0.5, 0.5, 1.5, 1.5, 1.5),
                  swift: tuple[float, float, float] = (1e9, 1.0, 0.0)) -> np.ndarray:
-    """16 material properties: Hill'48 (von Mises by default) with Swift hardening; the
+    """The core's 216 material properties: Hill'48 (von Mises by default), Swift hardening; the
     default yield stress of 1e9 MPa keeps the material elastic."""
-    props = np.zeros(16)
+    props = np.zeros(216)
     props[:12] = [e, nu, *hill, 1.0, *swift]
     return props
 
@@ -98,7 +98,7 @@ def rotation(axis: str, degrees: float) -> np.ndarray:
     return q
 
 
-assert _core.material_prop_count() == 16
+assert _core.material_prop_count() == 216
 
 
 def assert_rotations_objective(solid: Solid, u: np.ndarray, plastic: bool,

@@ -15,7 +15,14 @@ from scipy.optimize import brentq
 
 from ddpy import _core
 from ddpy.core.parallel import threads
-from ddpy.model.material import Hill48, Material, ReturnMappingError, Swift, Voce
+from ddpy.model.material import (
+    HardeningTable,
+    Hill48,
+    Material,
+    ReturnMappingError,
+    Swift,
+    Voce,
+)
 
 E, NU = 210e3, 0.3
 # Reverse deep drawing, DDQ steel (paper Table 4) and cylindrical bending, HSS (Table 1).
@@ -427,7 +434,7 @@ def test_yield_stress_and_props() -> None:
     np.testing.assert_allclose(slope, 0.233 * 568.3 * (0.0059 + ep) ** -0.767, rtol=1e-13)
     assert SWIFT.initial_yield_stress == pytest.approx(171.9, abs=0.05)
     props = material.props()
-    assert props.shape == (16,)
+    assert props.shape == (216,)
     np.testing.assert_array_equal(props[:12], [E, NU, 0.3137, 0.3663, 0.6337, 1.5, 1.5, 1.1764,
                                                1, 568.3, 0.0059, 0.233])
     assert not props[12:].any()
@@ -464,7 +471,7 @@ def test_bad_input_raises_value_error(build, message: str) -> None:
 def test_bad_types_raise_type_error() -> None:
     with pytest.raises(TypeError, match="yield_criterion must be a Hill48"):
         Material(E, NU, "hill", SWIFT)
-    with pytest.raises(TypeError, match="hardening must be Swift or Voce"):
+    with pytest.raises(TypeError, match="hardening must be Swift, Voce or HardeningTable"):
         Material(E, NU, DDQ, (568.3, 0.0059, 0.233))
     with pytest.raises(TypeError, match="Hill48 F must be a real number"):
         Hill48(F="a", G=0.4, H=0.6, N=1.2)
@@ -475,7 +482,7 @@ def test_core_check_agrees() -> None:
     good = MATERIALS["ddq-swift"].props()
     assert _core.material_check(good) == 0
     assert _core.material_check(MATERIALS["hss-voce"].props()) == 0
-    for index, value in ((0, 0.0), (1, 0.5), (2, -0.5), (7, 0.0), (8, 3.0), (9, -1.0),
+    for index, value in ((0, 0.0), (1, 0.5), (2, -0.5), (7, 0.0), (8, 4.0), (9, -1.0),
                          (10, 0.0), (11, 2.0), (4, np.nan)):
         props = good.copy()
         props[index] = value
@@ -486,3 +493,63 @@ def test_core_check_agrees() -> None:
     assert _core.hill48_from_r_values(-1.0, 1.0, 1.0).tolist() == [0.0] * 6
     error = ReturnMappingError(np.array([4, 9]), np.array([1, 1], dtype=np.int32))
     assert "2 point(s), first at point 4" in str(error)
+
+
+def test_hardening_table_interpolates_linearly() -> None:
+    """Y(ep) and dY/dep of a table against values computed by hand: on the points, inside
+    the segments (the slope of the segment, the right one at a point), beyond the last point
+    (constant, slope 0); below 0 the first point."""
+    table = HardeningTable((0.0, 0.1, 0.3, 0.5), (200.0, 250.0, 280.0, 290.0))
+    material = Material(E, NU, Hill48.von_mises(), table)
+    ep = np.array([0.0, 0.05, 0.1, 0.2, 0.3, 0.4, 0.5, 0.9, -0.1])
+    y, slope = material.hardening_curve(ep)
+    # 200 + 500 * 0.05; 250 + 150 * 0.1; 280 + 50 * 0.1
+    np.testing.assert_allclose(y, [200, 225, 250, 265, 280, 285, 290, 290, 200], rtol=1e-14)
+    np.testing.assert_allclose(slope, [500, 500, 150, 150, 50, 50, 0, 0, 500], rtol=1e-12)
+    assert table.initial_yield_stress == 200.0
+    props = material.props()
+    assert props[8:12].tolist() == [3, 4, 0, 0]
+    assert props[16:24].tolist() == [0.0, 200.0, 0.1, 250.0, 0.3, 280.0, 0.5, 290.0]
+    assert not props[24:].any()
+    # A one-point table: perfectly plastic.
+    flat = Material(E, NU, Hill48.von_mises(), HardeningTable((0.0,), (150.0,)))
+    np.testing.assert_allclose(flat.hardening_curve([0.0, 1.0]), [[150, 150], [0, 0]])
+
+
+def test_hardening_table_return_mapping_lands_on_the_curve() -> None:
+    """Uniaxial stress along x with a large plastic strain step: the return mapping's stress
+    is the table's Y at its ep, and ep is what the table and the elastic strain give."""
+    table = HardeningTable((0.0, 0.02, 0.1), (200.0, 300.0, 340.0))
+    material = Material(E, NU, Hill48.von_mises(), table)
+    stress, ep, _, plastic = material.update(np.zeros(6), 0.0, [0.05, -0.025, -0.025, 0, 0, 0])
+    assert plastic
+    assert ep > 0.02
+    y = 300.0 + 500.0 * (ep - 0.02)
+    seq = math.sqrt(0.5 * ((stress[0] - stress[1]) ** 2 + (stress[1] - stress[2]) ** 2
+                           + (stress[2] - stress[0]) ** 2) + 3 * (stress[3:] ** 2).sum())
+    assert seq == pytest.approx(y, rel=1e-10)
+
+
+@pytest.mark.parametrize(("strains", "stresses", "message"), [
+    ((0.1, 0.2), (200.0, 250.0), "first plastic strain must be 0"),
+    ((0.0, 0.2, 0.2), (200.0, 250.0, 260.0), "must be above the one before"),
+    ((0.0, 0.2), (200.0, 150.0), "softening is not supported"),
+    ((0.0, 0.2), (-1.0, 150.0), "must be positive"),
+    ((0.0,), (200.0, 250.0), "1 strains and 2 stresses"),
+    (tuple(np.linspace(0, 1, 101)), tuple(np.linspace(100, 200, 101)), "1 to 100 points"),
+])
+def test_bad_hardening_table_is_refused(strains: tuple[float, ...], stresses: tuple[float, ...],
+                                        message: str) -> None:
+    with pytest.raises(ValueError, match=message):
+        HardeningTable(strains, stresses)
+
+
+def test_core_refuses_bad_tables() -> None:
+    good = Material(E, NU, Hill48.von_mises(),
+                    HardeningTable((0.0, 0.1, 0.3), (200.0, 250.0, 280.0))).props()
+    assert _core.material_check(good) == 0
+    for index, value, expected in ((9, 0.0, 10), (9, 101.0, 10), (9, 2.5, 10), (16, 0.01, 17),
+                                   (18, 0.0, 19), (19, 190.0, 20), (17, 0.0, 18)):
+        props = good.copy()
+        props[index] = value
+        assert _core.material_check(props) == expected, index

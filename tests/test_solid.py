@@ -458,7 +458,7 @@ def test_bad_mesh_is_refused() -> None:
     (1, 0.5, "Poisson's ratio"),
     (2, -2.0, "convex yield surface"),
     (7, 0.0, "convex yield surface"),
-    (8, 3.0, "hardening must be 1"),
+    (8, 4.0, "hardening must be 1"),
     (9, 0.0, "Swift K, eps0 must be positive"),
 ])
 def test_bad_material_is_refused(index: int, value: float, message: str) -> None:

@@ -50,6 +50,13 @@ def _check(args: argparse.Namespace) -> int:
     return 0
 
 
+def _convert(args: argparse.Namespace) -> int:
+    from ddpy.app.convert import convert_command
+
+    out = convert_command(args.model, args.case, args.tools, args.element, args.force)
+    return 0 if out is not None else 2
+
+
 def _info(args: argparse.Namespace) -> int:
     from ddpy.core.parallel import max_threads
 
@@ -275,6 +282,25 @@ def build_parser() -> argparse.ArgumentParser:
     check.add_argument("--no-geometry", action="store_true",
                        help="skip the checks of the tool positions against the blank")
     check.set_defaults(handler=_check)
+
+    convert = commands.add_parser(
+        "convert", help="an Abaqus / CalculiX forming model (.inp) to a case folder",
+        description="Read an Abaqus or CalculiX input file (the supported subset: "
+        "docs/abaqus-import.md), write a ddpy case folder and check it. What cannot be mapped "
+        "is refused with its file:line (exit code 2); what is ignored is listed.")
+    convert.add_argument("model", metavar="MODEL.inp", help="the input file")
+    convert.add_argument("case", nargs="?", metavar="CASE",
+                         help="the case folder to write (default: MODEL_case beside the file)")
+    convert.add_argument("--tools", choices=("facets", "nagata"), default="facets",
+                         help="the tools of tools.dat: the faces as given (facets, the "
+                         "default) or Nagata patches smoothed over them (both files are "
+                         "written)")
+    convert.add_argument("--element", choices=("hexahedron", "solid-shell"),
+                         help="the blank's element (default: solid-shell for C3D8I, "
+                         "hexahedron for C3D8 and C3D8R)")
+    convert.add_argument("--force", action="store_true",
+                         help="write into a folder that is not empty")
+    convert.set_defaults(handler=_convert)
 
     _add_tools(commands)
     add_run(commands)

@@ -119,6 +119,18 @@ def _run(args: argparse.Namespace) -> int:
     from ddpy.io.results import ResultsWriteError
 
     folder = case_folder(args.case)
+    if args.case and str(args.case).lower().endswith(".inp"):
+        from ddpy.app.convert import convert_command
+
+        converted = convert_command(str(args.case), None, args.tools or "facets", args.element,
+                                    True, "run")
+        if converted is None:
+            return 2
+        folder = converted
+    elif args.tools or args.element:
+        print("ddpy run: --tools and --element are for an input file (MODEL.inp); a case "
+              "folder names its tools in tools.dat", file=sys.stderr)
+        return 2
     try:
         case = read_case(folder)
     except DeckError as error:
@@ -201,8 +213,9 @@ def add_run(commands: argparse._SubParsersAction) -> None:
         "and status.json to the output folder. Ctrl-C stops after the current increment and "
         "keeps the results; --restart continues from the last checkpoint.")
     run.add_argument("case", nargs="?", metavar="CASE",
-                     help="case folder, or a built-in case: cylindrical-bending (the "
-                     "default) or deep-drawing")
+                     help="case folder, a built-in case: cylindrical-bending (the "
+                     "default) or deep-drawing, or an Abaqus / CalculiX input file "
+                     "MODEL.inp, converted first into MODEL_case beside it (ddpy convert)")
     run.add_argument("--output", metavar="DIR",
                      help="output folder (default: results/<case folder name>)")
     run.add_argument("--restart", action="store_true",
@@ -216,6 +229,11 @@ def add_run(commands: argparse._SubParsersAction) -> None:
                      "end of every phase)")
     run.add_argument("--stop-after", type=_at_least_one, metavar="N",
                      help="stop after N increments of the whole run (restartable)")
+    run.add_argument("--tools", choices=("facets", "nagata"),
+                     help="with MODEL.inp: the tools as given (facets, the default) or Nagata "
+                     "patches over them")
+    run.add_argument("--element", choices=("hexahedron", "solid-shell"),
+                     help="with MODEL.inp: the blank's element (default by its type)")
     run.add_argument("-v", "--verbose", action="count", default=0,
                      help="report every Newton iteration's residual and step length on "
                      "standard error, besides the cut increments and why (always)")

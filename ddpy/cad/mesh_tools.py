@@ -43,7 +43,8 @@ from ddpy.geometry.mesh_normals import (
 from ddpy.geometry.surfaces import NagataSurface
 from ddpy.io.toolfile import ToolModel, write_tool
 
-__all__ = ["MESH_MODELS", "build_mesh_tool_models", "is_cad_file", "mesh_corner_normals"]
+__all__ = ["MESH_MODELS", "build_mesh_tool_models", "build_surface_tool_models", "is_cad_file",
+           "mesh_corner_normals"]
 
 MESH_MODELS = ("nagata", "facets")
 #: A mesh vertex farther than this many median edge lengths from its CAD face does not lie
@@ -212,6 +213,32 @@ def build_mesh_tool_models(
         raise ValueError(f"{out}: a file is there; the output must be a folder")
 
     surface_mesh = prepare_surface_mesh(read_surface_mesh(mesh, groups), merge_tol, side, point)
+    return _write_models(surface_mesh, out, name, models, side, point, estimator, crease_angle,
+                         cad, cad_faces)
+
+
+def build_surface_tool_models(
+    surface_mesh: SurfaceMesh,
+    out_dir: str | os.PathLike[str],
+    name: str,
+    models: Sequence[str] = MESH_MODELS,
+    blank_side: ArrayLike = (0.0, 0.0, 1.0),
+    estimator: str = DEFAULT_ESTIMATOR,
+    crease_angle: float = DEFAULT_CREASE_ANGLE,
+    merge_tol: float = DEFAULT_MERGE_TOL,
+) -> dict[str, Path]:
+    """Write ``<name>.nagata.tool`` and ``<name>.facets.tool`` from a surface mesh already
+    read (an importer's tool faces), as :func:`build_mesh_tool_models` does from a file."""
+    side = _vector(blank_side, "blank_side")
+    prepared = prepare_surface_mesh(surface_mesh, merge_tol, side, None)
+    return _write_models(prepared, Path(out_dir), name, models, side, None, estimator,
+                         crease_angle, None, None)
+
+
+def _write_models(surface_mesh: SurfaceMesh, out: Path, name: str, models: Sequence[str],
+                  side: NDArray[np.float64], point: NDArray[np.float64] | None, estimator: str,
+                  crease_angle: float, cad: str | os.PathLike[str] | None,
+                  cad_faces: Sequence[int] | None) -> dict[str, Path]:
     if cad is None:
         corner = mesh_corner_normals(surface_mesh, estimator, crease_angle, side, point)
         tags, source = surface_mesh.groups, None

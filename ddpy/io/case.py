@@ -390,6 +390,8 @@ class Case:
         lo, hi = m.bounds()
         size = " x ".join(f"{v:.4g}" for v in hi - lo)
         hard = type(mat.hardening).__name__
+        if hasattr(mat.hardening, "strains"):
+            hard = f"tabulated ({len(mat.hardening.strains)} points)"
         lines = [
             f"case {self.folder}: {self.title}",
             f"  blank: {m.n_nodes} nodes, {m.n_elements} hexahedra, {size} mm, normal "

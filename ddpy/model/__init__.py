@@ -9,11 +9,11 @@ Example::
 
 from ddpy.model.control import IncrementLimits, NewtonSettings
 from ddpy.model.forming import FormingError, FormingProblem, FormingResult, RigidTool
-from ddpy.model.material import Hill48, Material, Swift, Voce
+from ddpy.model.material import HardeningTable, Hill48, Material, Swift, Voce
 from ddpy.model.mesh import HexMesh
 from ddpy.model.solid import Solid
 from ddpy.model.static import StaticProblem
 
-__all__ = ["FormingError", "FormingProblem", "FormingResult", "Hill48", "HexMesh",
+__all__ = ["FormingError", "FormingProblem", "FormingResult", "HardeningTable", "Hill48", "HexMesh",
            "IncrementLimits", "Material", "NewtonSettings", "RigidTool", "Solid",
            "StaticProblem", "Swift", "Voce"]

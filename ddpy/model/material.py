@@ -22,11 +22,13 @@ from numpy.typing import ArrayLike, NDArray
 from ddpy import _core
 from ddpy._validate import float_array
 
-__all__ = ["Hill48", "Material", "PROP_COUNT", "ReturnMappingError", "Swift", "Voce",
-           "yield_landing"]
+__all__ = ["HardeningTable", "Hill48", "Material", "PROP_COUNT", "ReturnMappingError", "Swift",
+           "TABLE_MAX_POINTS", "Voce", "yield_landing"]
 
+#: Points a hardening table may hold, and where they start in the property vector.
+TABLE_MAX_POINTS, _TABLE_START = 100, 16
 #: Length of the property vector the core takes (``Material.props()``).
-PROP_COUNT = 16
+PROP_COUNT = _TABLE_START + 2 * TABLE_MAX_POINTS
 
 _STATUS = {1: "the return mapping did not converge", 2: "invalid material properties",
            3: "non-finite or negative input"}
@@ -71,6 +73,9 @@ class Swift:
         """Y at ep = 0."""
         return self.K * self.eps0**self.n
 
+    def parameters(self) -> tuple[float, ...]:
+        return (self.K, self.eps0, self.n)
+
 
 @dataclass(frozen=True)
 class Voce:
@@ -95,6 +100,52 @@ class Voce:
     def initial_yield_stress(self) -> float:
         """Y at ep = 0."""
         return self.Y0
+
+    def parameters(self) -> tuple[float, ...]:
+        return (self.Y0, self.Q, self.b)
+
+
+@dataclass(frozen=True)
+class HardeningTable:
+    """Tabulated hardening: the yield stress Y at equivalent plastic strains ep, interpolated
+    linearly between the points and constant beyond the last (Abaqus' *PLASTIC). ep starts at
+    0 and increases, Y > 0 does not decrease (no softening); 1 to TABLE_MAX_POINTS points."""
+
+    strains: tuple[float, ...]
+    stresses: tuple[float, ...]
+    law: ClassVar[int] = 3
+
+    def __post_init__(self) -> None:
+        ep = tuple(_real(v, "tabulated plastic strain") for v in self.strains)
+        y = tuple(_real(v, "tabulated yield stress") for v in self.stresses)
+        object.__setattr__(self, "strains", ep)
+        object.__setattr__(self, "stresses", y)
+        if len(ep) != len(y):
+            raise ValueError(f"the table has {len(ep)} strains and {len(y)} stresses")
+        if not 1 <= len(ep) <= TABLE_MAX_POINTS:
+            raise ValueError(f"a hardening table holds 1 to {TABLE_MAX_POINTS} points, got "
+                             f"{len(ep)}")
+        if ep[0] != 0.0:
+            raise ValueError(f"the table's first plastic strain must be 0 (the initial yield "
+                             f"stress), got {ep[0]:g}")
+        for i in range(len(ep)):
+            if y[i] <= 0:
+                raise ValueError(f"yield stress {i + 1} of the table must be positive, got "
+                                 f"{y[i]:g}")
+            if i and ep[i] <= ep[i - 1]:
+                raise ValueError(f"plastic strain {i + 1} of the table ({ep[i]:g}) must be "
+                                 f"above the one before ({ep[i - 1]:g})")
+            if i and y[i] < y[i - 1]:
+                raise ValueError(f"yield stress {i + 1} of the table ({y[i]:g}) is below the "
+                                 f"one before ({y[i - 1]:g}): softening is not supported")
+
+    @property
+    def initial_yield_stress(self) -> float:
+        """Y at ep = 0."""
+        return self.stresses[0]
+
+    def parameters(self) -> tuple[float, ...]:
+        return (float(len(self.strains)), 0.0, 0.0)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -207,12 +258,12 @@ class ReturnMappingError(RuntimeError):
 @dataclass(frozen=True)
 class Material:
     """Isotropic elasticity (E > 0, -1 < nu < 1/2), a Hill48 yield criterion in the material
-    axes and Swift or Voce hardening of the equivalent plastic strain."""
+    axes and Swift, Voce or tabulated hardening of the equivalent plastic strain."""
 
     E: float
     nu: float
     yield_criterion: Hill48
-    hardening: Swift | Voce
+    hardening: Swift | Voce | HardeningTable
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "E", _real(self.E, "Young's modulus E"))
@@ -224,9 +275,9 @@ class Material:
         if not isinstance(self.yield_criterion, Hill48):
             raise TypeError(
                 f"yield_criterion must be a Hill48, got {type(self.yield_criterion).__name__}")
-        if not isinstance(self.hardening, Swift | Voce):
-            raise TypeError(
-                f"hardening must be Swift or Voce, got {type(self.hardening).__name__}")
+        if not isinstance(self.hardening, Swift | Voce | HardeningTable):
+            raise TypeError(f"hardening must be Swift, Voce or HardeningTable, got "
+                            f"{type(self.hardening).__name__}")
         info = int(_core.material_check(self.props()))
         if info != 0:  # the Python checks above should have caught it
             raise ValueError(f"material property {info} (1-based) rejected by the core")
@@ -240,13 +291,18 @@ class Material:
         return self.E / (3 * (1 - 2 * self.nu))
 
     def props(self) -> NDArray[np.float64]:
-        """The core's property vector: E, nu, F, G, H, L, M, N, law (1 Swift, 2 Voce), the three
-        hardening parameters (K, eps0, n or Y0, Q, b), then 4 reserved zeros."""
+        """The core's property vector: E, nu, F, G, H, L, M, N, law (1 Swift, 2 Voce, 3 table),
+        the three hardening parameters (K, eps0, n or Y0, Q, b, or the table's point count, 0,
+        0), 4 reserved zeros, then the table's points as pairs (ep, Y), zero-padded."""
         props = np.zeros(PROP_COUNT)
         props[0:2] = self.E, self.nu
         props[2:8] = self.yield_criterion.coefficients
         props[8] = self.hardening.law
-        props[9:12] = astuple(self.hardening)
+        props[9:12] = self.hardening.parameters()
+        if isinstance(self.hardening, HardeningTable):
+            n = len(self.hardening.strains)
+            props[_TABLE_START:_TABLE_START + 2 * n:2] = self.hardening.strains
+            props[_TABLE_START + 1:_TABLE_START + 2 * n:2] = self.hardening.stresses
         return props
 
     def elastic_tangent(self) -> NDArray[np.float64]:
@@ -304,7 +360,7 @@ def yield_landing(props: ArrayLike, stress_old: ArrayLike, ep_old: ArrayLike,
     """The fraction of a strain increment at which the first of k material points that was
     elastic reaches the yield surface, if its elastic trial stress would overshoot it by
     more than ``tolerance`` (a fraction of the yield stress); 1 otherwise (the r_min
-    elasto-plastic transition, docs/theory/contact.md). ``props``: the 16 properties
+    elasto-plastic transition, docs/theory/contact.md). ``props``: the PROP_COUNT properties
     (``Material.props()``); stress_old (k, 6), ep_old (k,): the converged state;
     strain_increment (k, 6), engineering shears. A point within ``tolerance`` below the
     surface counts as yielding already. The fraction is that of the first landing times

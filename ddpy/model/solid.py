@@ -26,11 +26,11 @@ from numpy.typing import ArrayLike, NDArray
 from ddpy import _core
 from ddpy._validate import float_array, int_array
 from ddpy.core.ordering import nested_dissection, node_adjacency
+from ddpy.model.material import PROP_COUNT
 from ddpy.model.mesh import HexMesh, zeta_off_normal
 
 __all__ = ["Assembly", "ELEMENTS", "Solid", "SolidState", "ElementError", "material_props"]
 
-PROP_COUNT = 16
 #: The element kinds and their codes in the core: the mean-dilatation hexahedron
 #: (docs/theory/solid.md) and the solid-shell with assumed natural and 13 enhanced strains
 #: (docs/theory/solid_shell.md), whose third natural direction (nodes 0-3 on one face,
@@ -54,12 +54,13 @@ class ElementError(RuntimeError):
 
 
 def material_props(material: Any) -> NDArray[np.float64]:
-    """The 16 material properties of ``material`` (anything with ``props()``, or the vector
+    """The PROP_COUNT material properties of ``material`` (anything with ``props()``, or the vector
     itself), checked: E > 0, -1 < nu < 0.5, a convex Hill'48 surface, a known hardening law
     with positive parameters.
 
-    Layout: (0) E, (1) nu, (2:8) Hill F, G, H, L, M, N, (8) hardening (1 Swift, 2 Voce),
-    (9:12) Swift K, eps0, n or Voce Y0, Q, b; the rest is reserved (zero).
+    Layout: (0) E, (1) nu, (2:8) Hill F, G, H, L, M, N, (8) hardening (1 Swift, 2 Voce,
+    3 table), (9:12) Swift K, eps0, n or Voce Y0, Q, b or the table's point count; (16:)
+    the table's (ep, Y) pairs; the rest is reserved (zero).
     """
     props = material.props() if hasattr(material, "props") else material
     props = float_array(props, "material properties", (PROP_COUNT,))
@@ -82,8 +83,8 @@ def material_props(material: Any) -> NDArray[np.float64]:
         y0, q, b = props[9:12]
         if not (y0 > 0.0 and q >= 0.0 and b >= 0.0):
             raise ValueError(f"Voce Y0 must be positive and Q, b >= 0, got {y0}, {q}, {b}")
-    else:
-        raise ValueError(f"hardening must be 1 (Swift) or 2 (Voce), got {law}")
+    elif law != 3.0:
+        raise ValueError(f"hardening must be 1 (Swift), 2 (Voce) or 3 (table), got {law}")
     info = int(_core.material_check(props))
     if info:
         raise ValueError(f"material property {info - 1} (0-based) is out of range "

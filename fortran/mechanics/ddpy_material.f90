@@ -19,11 +19,15 @@ module ddpy_material
 
   !> Length of the property vector:
   !> (1) E, (2) nu, (3) F, (4) G, (5) H, (6) L, (7) M, (8) N, (9) hardening law
-  !> (1 = Swift, 2 = Voce); Swift: (10) K, (11) eps0, (12) n; Voce: (10) Y0, (11) Q, (12) b;
-  !> (13:16) reserved, zero.
-  integer, parameter, public :: material_prop_count = 16
+  !> (1 = Swift, 2 = Voce, 3 = table); Swift: (10) K, (11) eps0, (12) n; Voce: (10) Y0,
+  !> (11) Q, (12) b; table: (10) the number of points n, then from (17) the points as pairs
+  !> (ep_i, Y_i), i = 1..n, ep_1 = 0, ep increasing, Y non-decreasing, interpolated linearly,
+  !> Y constant beyond the last point; (13:16) and the unused rest reserved, zero.
+  integer, parameter, public :: table_max_points = 100
+  integer, parameter, public :: table_start = 16
+  integer, parameter, public :: material_prop_count = table_start + 2*table_max_points
   !> Hardening laws, props(9).
-  integer, parameter, public :: hardening_swift = 1, hardening_voce = 2
+  integer, parameter, public :: hardening_swift = 1, hardening_voce = 2, hardening_table = 3
   !> Status of material_update: converged; return mapping failed (the caller cuts the
   !> increment); properties invalid (see material_check); non-finite input.
   integer, parameter, public :: material_ok = 0, material_not_converged = 1, &
@@ -215,11 +219,38 @@ contains
       decay = exp(-props(12)*max(ep, 0.0_wp))
       y = props(10) + props(11)*(1.0_wp - decay)
       slope = props(11)*props(12)*decay
+    case (hardening_table)
+      call table_hardening(props, ep, y, slope)
     case default
       y = 0.0_wp
       slope = 0.0_wp
     end select
   end subroutine material_hardening
+
+  !> Piecewise-linear hardening of the table in props: Y(ep) interpolated between the points,
+  !> the slope of the segment holding ep (the one to the right at a point), Y constant with a
+  !> zero slope beyond the last point.
+  pure subroutine table_hardening(props, ep, y, slope)
+    real(wp), intent(in) :: props(material_prop_count), ep
+    real(wp), intent(out) :: y, slope
+    integer :: n, i
+    real(wp) :: e, e0, e1, y0, y1
+    n = nint(props(10))
+    e = max(ep, 0.0_wp)
+    y = props(table_start + 2*n)
+    slope = 0.0_wp
+    do i = 1, n - 1
+      e1 = props(table_start + 2*i + 1)
+      if (e < e1) then
+        e0 = props(table_start + 2*i - 1)
+        y0 = props(table_start + 2*i)
+        y1 = props(table_start + 2*i + 2)
+        slope = (y1 - y0)/(e1 - e0)
+        y = y0 + slope*(e - e0)
+        return
+      end if
+    end do
+  end subroutine table_hardening
 
   !> Yield stress Y(ep) (the RD uniaxial yield stress, since G + H = 1).
   pure function material_yield_stress(props, ep) result(y)
@@ -271,11 +302,50 @@ contains
         else if (props(12) < 0.0_wp) then
           info = 12
         end if
+      case (hardening_table)
+        info = table_check(props)
       case default
         info = 9
       end select
     end if
   end function material_check
+
+  !> 0 for a valid hardening table in props, else the 1-based index of the first bad entry:
+  !> 10 a count outside 1..table_max_points, the first strain when not 0, a strain not above
+  !> the one before, a yield stress not positive or below the one before.
+  pure function table_check(props) result(info)
+    real(wp), intent(in) :: props(material_prop_count)
+    integer :: info
+    integer :: n, i, at
+    info = 0
+    if (props(10) < 1.0_wp .or. props(10) > real(table_max_points, wp) .or. &
+        props(10) /= real(nint(props(10)), wp)) then
+      info = 10
+      return
+    end if
+    n = nint(props(10))
+    if (props(table_start + 1) /= 0.0_wp) then
+      info = table_start + 1
+      return
+    end if
+    do i = 1, n
+      at = table_start + 2*i
+      if (props(at) <= 0.0_wp) then
+        info = at
+        return
+      end if
+      if (i > 1) then
+        if (props(at - 1) <= props(at - 3)) then
+          info = at - 1
+          return
+        end if
+        if (props(at) < props(at - 2)) then
+          info = at
+          return
+        end if
+      end if
+    end do
+  end function table_check
 
   !> Hill'48 coefficients (F, G, H, L, M, N) from the r-values at 0, 45 and 90 degrees to the
   !> rolling direction, normalised to G + H = 1, with L = M = 1.5 (isotropic through the

@@ -1,5 +1,5 @@
 """material.dat: elasticity, the yield criterion (von Mises, Hill'48 from coefficients or
-Lankford coefficients), hardening (Swift, Voce) and the rolling direction.
+Lankford coefficients), hardening (Swift, Voce, a table) and the rolling direction.
 """
 
 from __future__ import annotations
@@ -13,10 +13,11 @@ from ddpy.io.decks.lines import (
     first_time,
     read_choice,
     read_float,
+    read_int,
     read_pairs,
     show,
 )
-from ddpy.model.material import Hill48, Material, Swift, Voce
+from ddpy.model.material import TABLE_MAX_POINTS, HardeningTable, Hill48, Material, Swift, Voce
 
 #: Plausibility bounds of the material (docs/input-format.md): stresses, including the
 #: initial yield stress, at most 1e5 MPa (a hundred times the strongest steels); Swift's
@@ -37,9 +38,10 @@ def _parse_material(deck: Deck) -> BlankMaterial | None:
     seen: dict[str, int] = {}
     elastic: tuple[float, float] | None = None
     criterion: tuple[Hill48, str] | None = None
-    hardening: Swift | Voce | None = None
+    hardening: Swift | Voce | HardeningTable | None = None
     angle = 0.0
-    for line in deck.lines:
+    lines = iter(deck.lines)
+    for line in lines:
         key, w = line.key, line.words
         try:
             if key == "elastic":
@@ -55,8 +57,14 @@ def _parse_material(deck: Deck) -> BlankMaterial | None:
                 check_arity(line, "yield vonmises|hill48 ...", 1, -1)
                 if first_time(deck, seen, line):
                     criterion = _yield(line, deck)
+            elif key == "hardening" and len(w) > 1 and w[1] == "table":
+                check_arity(line, "hardening table COUNT", 2)
+                count = read_int(w[2], "the number of points of the table", 1, TABLE_MAX_POINTS)
+                rows = [next(lines, None) for _ in range(count)]
+                if first_time(deck, seen, line):
+                    hardening = _table(deck, line, rows)
             elif key == "hardening":
-                check_arity(line, "hardening swift|voce ...", 1, -1)
+                check_arity(line, "hardening swift|voce|table ...", 1, -1)
                 if first_time(deck, seen, line):
                     hardening = _hardening(line)
             elif key == "rolling_direction":
@@ -70,7 +78,7 @@ def _parse_material(deck: Deck) -> BlankMaterial | None:
             deck.error(line.number, str(bad))
     for key, form in (("elastic", "elastic E VALUE nu VALUE"),
                       ("yield", "yield vonmises | yield hill48 ..."),
-                      ("hardening", "hardening swift ... | hardening voce ...")):
+                      ("hardening", "hardening swift ... | voce ... | table COUNT")):
         if key not in seen:
             deck.error(None, f"no '{key}' line: expected '{form}'")
     if deck.errors or elastic is None or criterion is None or hardening is None:
@@ -120,8 +128,38 @@ def _yield(line: Line, deck: Deck) -> tuple[Hill48, str]:
     return hill, text
 
 
+def _table(deck: Deck, line: Line, rows: list[Line | None]) -> HardeningTable | None:
+    """The COUNT lines ``EP Y`` after ``hardening table COUNT``; None after an error."""
+    strains: list[float] = []
+    stresses: list[float] = []
+    for row in rows:
+        if row is None:
+            deck.error(None, f"the deck ends inside the hardening table of line {line.number}: "
+                       f"expected {len(rows)} lines 'EP Y'")
+            return None
+        try:
+            check_arity(row, "EP Y (a point of the hardening table)", 1)
+            ep = read_float(row.words[0], "the plastic strain EP", ge=0, le=MAX_EPS0)
+            y = read_float(row.words[1], "the yield stress Y", gt=0, le=MAX_STRESS)
+            if strains and ep <= strains[-1]:
+                raise BadValue(f"the plastic strain {row.words[0]} must be above the one "
+                               f"before ({strains[-1]:g})")
+            if strains and y < stresses[-1]:
+                raise BadValue(f"the yield stress {row.words[1]} is below the one before "
+                               f"({stresses[-1]:g}): softening is not supported")
+            if not strains and ep != 0.0:
+                raise BadValue(f"the table's first plastic strain must be 0 (the initial yield "
+                               f"stress), got {row.words[0]}")
+        except BadValue as bad:
+            deck.error(row.number, str(bad))
+            return None
+        strains.append(ep)
+        stresses.append(y)
+    return HardeningTable(tuple(strains), tuple(stresses))
+
+
 def _hardening(line: Line) -> Swift | Voce:
-    kind = read_choice(line.words[1], "the hardening law", ("swift", "voce"))
+    kind = read_choice(line.words[1], "the hardening law", ("swift", "voce", "table"))
     try:
         if kind == "swift":
             v = read_pairs(line, 2, ("K", "eps0", "n"), ("K", "eps0", "n"),

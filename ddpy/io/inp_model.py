@@ -1,0 +1,491 @@
+"""A forming model read from an Abaqus / CalculiX input file (docs/abaqus-import.md): the
+blank's hexahedra, its material, rigid tools with their surfaces, contact and friction,
+symmetry and fixed nodes, and one phase per *STEP.
+
+:func:`read_inp` reads and checks the file before anything is written or computed. What it
+cannot map (a keyword, an element type, a parameter, a form of a data line) is refused with
+its file and line and what is supported; keywords without mechanics (output requests, the
+preprint) are accepted and listed in ``InpModel.ignored``. Every defect found is reported in
+one :class:`ddpy.io.case.DeckError` (``.errors`` lists them all).
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ddpy.io.case import DeckError
+from ddpy.io.inp_cards import Card, DataLine, integer, read_cards
+from ddpy.io.inp_read import BLANK_TYPES, TOOL_TYPES, Reader
+
+__all__ = ["InpModel", "InpPhase", "InpTool", "ddpy_name", "read_inp"]
+
+#: Faces S1..S6 of a hexahedron (corner nodes, from 1); by the right-hand rule their
+#: normals point into the element.
+HEX_FACES = ((1, 2, 3, 4), (5, 8, 7, 6), (1, 5, 6, 2), (2, 6, 7, 3), (3, 7, 8, 4), (4, 8, 5, 1))
+_NAME = re.compile(r"[^A-Za-z0-9_.\-]")
+
+def ddpy_name(name: str, prefix: str = "s") -> str:
+    """An Abaqus name as a ddpy name (lower case, other characters '_', a letter first)."""
+    text = _NAME.sub("_", name).lower()[:64]
+    return text if text[:1].isalpha() else f"{prefix}_{text}"[:64]
+
+
+@dataclass
+class InpTool:
+    """A rigid tool: its faces (k, 4) node ids (-1 last for a triangle), the blank side it
+    touches (the slave surface: 'top', 'bottom' or a facing direction), friction,
+    discretization, its reference node and where it was defined."""
+
+    name: str
+    faces: list[list[int]]
+    contact: str
+    facing: tuple[float, float, float] | None
+    friction: float
+    discretization: str
+    ref_node: int
+    where: str
+    points: dict[int, tuple[float, float, float]] = field(default_factory=dict)
+    lines: list[int] = field(default_factory=list)
+    source: Path | None = None
+
+
+@dataclass
+class InpPhase:
+    """One *STEP: forming (tools, moves) or springback, its increment settings and the
+    zero displacements it adds on the blank (node set name -> components)."""
+
+    name: str
+    kind: str
+    tools: list[str]
+    moves: dict[str, tuple[float, float, float]]
+    max_fraction: float | None
+    min_fraction: float | None
+    increments: int
+    where: str
+
+
+@dataclass
+class InpModel:
+    """What :func:`read_inp` found, mapped to ddpy's terms (node and element ids kept)."""
+
+    path: Path
+    title: str
+    nodes: dict[int, tuple[float, float, float]]
+    elements: dict[int, list[int]]
+    element_type: str
+    normal: str
+    elastic: tuple[float, float]
+    hardening: list[tuple[float, float]]
+    nodesets: dict[str, list[int]]
+    #: (node set, components 'xyz' subset, phases: () for all) of the blank.
+    constraints: list[tuple[str, str, tuple[str, ...]]]
+    tools: list[InpTool]
+    phases: list[InpPhase]
+    ignored: list[str] = field(default_factory=list)
+
+class _Mapper:
+    """Turns the definitions of a Reader into an InpModel, collecting errors."""
+
+    def __init__(self, r: Reader) -> None:
+        self.r = r
+
+    def node_set(self, name: str, line: DataLine, seen: tuple[str, ...] = ()) -> list[int]:
+        r = self.r
+        if name.isdigit():
+            return [int(name)]
+        if name not in r.nsets or name in seen:
+            raise DeckError(f"no node set named {name}", line.path, line.number)
+        ids: list[int] = []
+        for item, at in r.nsets[name]:
+            ids += self.node_set(item, at, (*seen, name))
+        return ids
+
+    def element_set(self, name: str, line: DataLine, seen: tuple[str, ...] = ()) -> list[int]:
+        r = self.r
+        if name.isdigit():
+            return [int(name)]
+        if name not in r.elsets or name in seen:
+            raise DeckError(f"no element set named {name}", line.path, line.number)
+        ids: list[int] = []
+        for item, at in r.elsets[name]:
+            ids += self.element_set(item, at, (*seen, name))
+        return ids
+
+    def faces(self, name: str, line: DataLine) -> list[tuple[list[int], DataLine]]:
+        """The faces of a *SURFACE as node id lists (as HEX_FACES for solids, SPOS for R3D)."""
+        r = self.r
+        if name not in r.surfaces:
+            raise DeckError(f"no *SURFACE named {name}", line.path, line.number)
+        found = []
+        for item, face, at in r.surfaces[name][0]:
+            for ident in self.element_set(item, at):
+                if ident not in r.elements:
+                    raise DeckError(f"element {ident} is not defined", at.path, at.number)
+                kind, nodes, _ = r.elements[ident]
+                if kind in TOOL_TYPES:
+                    if face not in ("", "SPOS", "SNEG"):
+                        raise DeckError(f"expected SPOS or SNEG for the {kind} element, got "
+                                        f"'{face}'", at.path, at.number)
+                    found.append((nodes[::-1] if face == "SNEG" else list(nodes), at))
+                else:
+                    match = re.fullmatch(r"S([1-6])", face)
+                    if match is None:
+                        raise DeckError(f"expected a face S1..S6 of the {kind} element, got "
+                                        f"'{face}'", at.path, at.number)
+                    found.append(([nodes[i - 1] for i in HEX_FACES[int(match[1]) - 1]], at))
+        return found
+
+    def model(self, path: Path) -> InpModel | None:
+        r = self.r
+        for ident, (_, nodes, line) in r.elements.items():
+            for n in nodes:
+                if n not in r.nodes:
+                    r.fail(DeckError(f"node {n} of element {ident} is not defined", line.path,
+                                     line.number))
+                    break
+        tool_elements, tool_nodes, refs = self.rigid_bodies()
+        blank, material = self.blank(tool_elements)
+        if r.errors or material is None:
+            return None
+        kinds = {r.elements[e][0] for e in blank}
+        if len(kinds) > 1:
+            first = r.sections[0][2]
+            r.fail(first.error(f"the blank mixes element types {', '.join(sorted(kinds))}: "
+                               "expected one of them"))
+            return None
+        coords = np.array([r.nodes[n][0] for e in blank for n in r.elements[e][1]])
+        extent = coords.max(axis=0) - coords.min(axis=0)
+        normal = "xyz"[int(np.argmin(extent))]
+        blank_nodes = {n for e in blank for n in r.elements[e][1]}
+        tools = self.tools(refs, tool_nodes, blank, normal)
+        nodesets: dict[str, list[int]] = {}
+        phases = self.phases(tools, refs, blank_nodes, nodesets)
+        constraints = self.constraints(blank_nodes, nodesets, phases, refs)
+        if r.errors or tools is None or phases is None:
+            return None
+        mat_name, mat_card = material
+        if mat_name not in r.elastic:
+            r.fail(mat_card.error(f"material {mat_name} has no *ELASTIC"))
+        if mat_name not in r.plastic:
+            r.fail(mat_card.error(f"material {mat_name} has no *PLASTIC: ddpy's blank is "
+                                  "elastoplastic (give at least '<yield stress>, 0')"))
+        if r.errors:
+            return None
+        return InpModel(path, r.title or path.stem, {n: r.nodes[n][0] for n in sorted(
+            blank_nodes)}, {e: r.elements[e][1] for e in sorted(blank)}, kinds.pop(), normal,
+            r.elastic[mat_name], r.plastic[mat_name], nodesets, constraints, tools, phases,
+            r.ignored)
+
+    def rigid_bodies(self) -> tuple[set[int], dict[int, set[int]], dict[int, tuple[int, int,
+                                                                                   str, Card]]]:
+        """Elements of the tools, each tool's nodes, and per tool (by its index) the
+        reference node, the rotation node (0: none) and its name."""
+        r = self.r
+        elements: set[int] = set()
+        nodes: dict[int, set[int]] = {}
+        refs: dict[int, tuple[int, int, str, Card]] = {}
+        for index, card in enumerate(r.rigid):
+            line = DataLine(card.path, card.number, [])
+            try:
+                if "ELSET" in card.params:
+                    name = card.params["ELSET"].upper()
+                    members = self.element_set(name, line)
+                    for e in members:
+                        if e not in r.elements:
+                            raise card.error(f"element {e} of {name} is not defined")
+                        kind = r.elements[e][0]
+                        if kind not in TOOL_TYPES + ("C3D8",):
+                            raise card.error(f"element {e} of the rigid body is a {kind}: "
+                                             "expected R3D4, R3D3 or C3D8")
+                    elements.update(members)
+                    nodes[index] = {n for e in members for n in r.elements[e][1]}
+                else:
+                    name = card.params["NSET"].upper()
+                    nodes[index] = set(self.node_set(name, line))
+                    # The elements on the set's nodes are the tool's.
+                    elements.update(e for e, (kind, ns, _) in r.elements.items()
+                                    if kind in TOOL_TYPES + ("C3D8",) and set(ns) <= nodes[index])
+                ref = self._node_param(card, "REF NODE")
+                rot = self._node_param(card, "ROT NODE") if "ROT NODE" in card.params else 0
+                refs[index] = (ref, rot, ddpy_name(name, "tool"), card)
+            except DeckError as error:
+                r.fail(error)
+        return elements, nodes, refs
+
+    def _node_param(self, card: Card, key: str) -> int:
+        value = card.params[key].upper()
+        line = DataLine(card.path, card.number, [value])
+        ids = self.node_set(value, line) if not value.isdigit() else [integer(line, 0, key)]
+        if len(ids) != 1 or ids[0] not in self.r.nodes:
+            raise card.error(f"{key}={value}: expected one defined node")
+        return ids[0]
+
+    def blank(self, tool_elements: set[int]) -> tuple[set[int], tuple[str, Card] | None]:
+        r = self.r
+        blank: set[int] = set()
+        material: tuple[str, Card] | None = None
+        for elset, name, card in r.sections:
+            line = DataLine(card.path, card.number, [])
+            try:
+                members = set(self.element_set(elset, line))
+            except DeckError as error:
+                r.fail(error)
+                continue
+            if members <= tool_elements:
+                r.ignored.append(f"{card.where}: *SOLID SECTION of rigid body elements")
+                continue
+            if members & tool_elements:
+                r.fail(card.error(f"element set {elset} holds elements of a rigid body and of "
+                                  "the blank: expected one or the other"))
+                continue
+            for e in sorted(members):
+                if e not in r.elements:
+                    r.fail(card.error(f"element {e} of {elset} is not defined"))
+                    break
+                if r.elements[e][0] not in BLANK_TYPES:
+                    r.fail(card.error(f"element {e} of {elset} is a {r.elements[e][0]}: the "
+                                      f"blank is made of {', '.join(BLANK_TYPES)}"))
+                    break
+            if name not in r.materials:
+                r.fail(card.error(f"no *MATERIAL named {name}"))
+            elif material is not None and material[0] != name:
+                r.fail(card.error(f"a second material {name} for the blank (the first: "
+                                  f"{material[0]}): ddpy's blank has one material"))
+            else:
+                material = (name, r.materials[name])
+            blank |= members
+        missing = [e for e, (kind, _, _) in r.elements.items()
+                   if e not in blank and e not in tool_elements]
+        if missing:
+            kind, _, line = r.elements[missing[0]]
+            r.fail(DeckError(f"element {missing[0]} ({kind}) belongs to no *SOLID SECTION and "
+                             f"no *RIGID BODY ({len(missing)} such elements): expected the "
+                             "blank's in a solid section, the tools' in a rigid body",
+                             line.path, line.number))
+        if not blank and not r.errors:
+            r.fail(DeckError("no *SOLID SECTION: expected the blank's hexahedra in one",
+                             r.path))
+        return blank, material
+
+    def tools(self, refs: dict[int, tuple[int, int, str, Card]],
+              tool_nodes: dict[int, set[int]], blank: set[int], normal: str
+              ) -> list[InpTool] | None:
+        r = self.r
+        axis = "xyz".index(normal)
+        blank_nodes = {n for e in blank for n in r.elements[e][1]}
+        found: dict[int, InpTool] = {}
+        for pair in r.pairs:
+            line = DataLine(pair.card.path, pair.card.number, [])
+            try:
+                slave = self.faces(pair.slave, line)
+                master = self.faces(pair.master, line)
+            except DeckError as error:
+                r.fail(error)
+                continue
+            if not slave or not master:
+                r.fail(pair.card.error(f"surface {pair.slave if not slave else pair.master} "
+                                       "has no faces"))
+                continue
+            if any(not set(f) <= blank_nodes for f, _ in slave):
+                r.fail(pair.card.error(f"the slave surface {pair.slave} is not on the blank: "
+                                       "expected '<blank surface>, <tool surface>'"))
+                continue
+            master_nodes = {n for f, _ in master for n in f}
+            owner = [i for i, ns in tool_nodes.items() if master_nodes <= ns]
+            if not owner:
+                r.fail(pair.card.error(f"the master surface {pair.master} is not on a *RIGID "
+                                       "BODY: ddpy's tools are rigid bodies"))
+                continue
+            index = owner[0]
+            if index in found:
+                r.fail(pair.card.error(f"a second contact pair on the tool of "
+                                       f"{refs[index][3].where}: expected one pair per tool"))
+                continue
+            if pair.interaction not in r.interactions:
+                r.fail(pair.card.error(f"no *SURFACE INTERACTION named {pair.interaction}"))
+                continue
+            normals = []
+            for f, _ in slave:
+                x = np.array([r.nodes[n][0] for n in f])
+                normals.append(np.cross(x[3] - x[1], x[2] - x[0]))  # S1..S6 turn inwards
+            mean = np.sum(normals, axis=0)
+            mean = mean / max(float(np.linalg.norm(mean)), 1e-300)
+            if mean[axis] > 0.9:
+                contact, facing = "top", None
+            elif mean[axis] < -0.9:
+                contact, facing = "bottom", None
+            else:
+                contact, facing = "facing", tuple(float(round(v, 6)) for v in mean)
+            ref, _, name, card = refs[index]
+            found[index] = InpTool(
+                name, [f + [-1] * (4 - len(f)) for f, _ in master], contact, facing,
+                r.friction.get(pair.interaction, 0.0),
+                "surface" if pair.kind == "SURFACE TO SURFACE" else "node", ref, card.where,
+                {n: r.nodes[n][0] for f, _ in master for n in f}, [at.number for _, at in master],
+                master[0][1].path)
+        for index, (_, _, name, card) in refs.items():
+            if index not in found:
+                r.fail(card.error(f"the rigid body {name} is in no *CONTACT PAIR (as its "
+                                  "master surface): a tool must touch the blank"))
+        return [found[i] for i in sorted(found)]
+
+    def phases(self, tools: list[InpTool] | None, refs: dict[int, tuple[int, int, str, Card]],
+               blank_nodes: set[int], nodesets: dict[str, list[int]]) -> list[InpPhase] | None:
+        r = self.r
+        if not r.steps:
+            r.fail(DeckError("no *STEP: expected at least one step moving a tool", r.path))
+            return None
+        if tools is None:
+            return None
+        by_ref = {t.ref_node: t for t in tools}
+        rot_of = {rot: refs[i][0] for i, (_, rot, _, _) in refs.items() if rot}
+        pair_tool = {}
+        # Which tool a contact pair drives: the one whose faces its master names.
+        for pair in r.pairs:
+            try:
+                master = {n for f, _ in self.faces(pair.master, DataLine(
+                    pair.card.path, pair.card.number, [])) for n in f}
+            except DeckError:
+                continue
+            for t in tools:
+                if master <= {n for f in t.faces for n in f if n >= 0}:
+                    pair_tool[(pair.slave, pair.master)] = t.name
+        position = {t.name: [None, None, None] for t in tools}   # prescribed totals
+        active = {t.name for t in tools}
+        phases = []
+        names: set[str] = set()
+        if r.steps[0].params.get("NLGEOM", None) not in ("", "YES"):
+            r.fail(r.steps[0].error("the first *STEP without NLGEOM: ddpy's forming is "
+                                    "geometrically nonlinear, expected *STEP, NLGEOM"))
+        for step, card in enumerate([None, *r.steps]):
+            index = step - 1
+            before = {k: list(v) for k, v in position.items()}
+            for bc in [b for b in r.bcs if b.step == (None if card is None else index)]:
+                try:
+                    ids = self.node_set(bc.node_or_set, bc.line)
+                except DeckError as error:
+                    r.fail(error)
+                    continue
+                for node in ids:
+                    tool = by_ref.get(node) or by_ref.get(rot_of.get(node, -1))
+                    rotation = node in rot_of
+                    if tool is None:
+                        if node not in blank_nodes:
+                            r.fail(DeckError(f"node {node} of the *BOUNDARY is neither a node "
+                                             "of the blank nor a tool's REF NODE or ROT NODE",
+                                             bc.line.path, bc.line.number))
+                            break
+                        continue
+                    for dof in bc.dofs:
+                        if rotation or dof > 3:
+                            if bc.value != 0.0:
+                                r.fail(DeckError(f"a rotation of tool {tool.name} ({bc.value:g}"
+                                                 "): ddpy's tools translate only", bc.line.path,
+                                                 bc.line.number))
+                            continue
+                        if bc.fixed:
+                            position[tool.name][dof - 1] = before[tool.name][dof - 1] or 0.0
+                        else:
+                            position[tool.name][dof - 1] = bc.value
+            if card is None:
+                continue
+            name = ddpy_name(card.params.get("NAME", f"step{step}").strip('"'), "step")
+            if name in names:
+                name = f"{name}_{step}"
+            names.add(name)
+            removed, added = r.removed.get(index, (set(), set()))
+            for pair in removed:
+                active.discard(pair_tool.get(pair, ""))
+            for pair in added:
+                active.add(pair_tool.get(pair, ""))
+            active.discard("")
+            moves = {}
+            for t in tools:
+                now, old = position[t.name], before[t.name]
+                if t.name in active and None in now:
+                    free = ", ".join(str(i + 1) for i, v in enumerate(now) if v is None)
+                    r.fail(card.error(f"tool {t.name} (REF NODE {t.ref_node}) has no *BOUNDARY "
+                                      f"on dof {free} in this step: ddpy's tools move as "
+                                      "prescribed, give all three translations"))
+                    continue
+                delta = tuple((a or 0.0) - (b or 0.0) for a, b in zip(now, old, strict=True))
+                if any(delta):
+                    if t.name not in active:
+                        r.fail(card.error(f"tool {t.name} moves in a step where its contact "
+                                          "pair is removed: ddpy moves active tools only"))
+                    moves[t.name] = delta
+            static = r.static.get(index, ())
+            if not active:
+                period = static[1] if len(static) > 1 else 1.0
+                increments = max(1, min(1000, round(period / static[0]))) if static else 1
+                phases.append(InpPhase(name, "springback", [], {}, None, None, increments,
+                                       card.where))
+                continue
+            if not moves:
+                r.fail(card.error("the step moves no tool: a forming step must move one (the "
+                                  "tools drive ddpy's phases), or remove every contact pair "
+                                  "(*MODEL CHANGE, TYPE=CONTACT PAIR, REMOVE: springback)"))
+                continue
+            period = static[1] if len(static) > 1 else 1.0
+            max_fraction = static[3] / period if len(static) > 3 else None
+            min_fraction = static[2] / period if len(static) > 2 else None
+            phases.append(InpPhase(name, "forming", [t.name for t in tools if t.name in active],
+                                   moves, max_fraction, min_fraction, 1, card.where))
+        if phases and phases[0].kind == "springback":
+            r.fail(r.steps[0].error("the first step removes every contact pair: the first "
+                                    "phase must form"))
+        return phases
+
+    def constraints(self, blank_nodes: set[int], nodesets: dict[str, list[int]],
+                    phases: list[InpPhase] | None, refs: dict[int, tuple[int, int, str, Card]]
+                    ) -> list[tuple[str, str, tuple[str, ...]]]:
+        """Zero displacements of blank nodes: model-level ones in every phase, a step's from
+        its phase on (as Abaqus keeps them)."""
+        r = self.r
+        result = []
+        names = [p.name for p in phases or []]
+        for bc in r.bcs:
+            try:
+                ids = [n for n in self.node_set(bc.node_or_set, bc.line) if n in blank_nodes]
+            except DeckError:
+                continue
+            if not ids:
+                continue
+            components = "".join("xyz"[d - 1] for d in bc.dofs if d <= 3)
+            if any(d > 3 for d in bc.dofs):
+                r.ignored.append(f"{bc.line.where}: rotations of blank nodes (solid elements "
+                                 "have none)")
+            if not components:
+                continue
+            if bc.value != 0.0:
+                r.fail(DeckError(f"a displacement of {bc.value:g} on blank nodes: ddpy's "
+                                 "constraints on the blank are zero displacements (the tools "
+                                 "drive the forming)", bc.line.path, bc.line.number))
+                continue
+            if bc.step is not None and bc.step > 0 and not bc.fixed:
+                r.fail(DeckError("a zero displacement of blank nodes given after the first "
+                                 "step: Abaqus and CalculiX take it as a total displacement "
+                                 "(moving the nodes back to where they started), ddpy holds "
+                                 "nodes where they are: expected *BOUNDARY, FIXED", bc.line.path,
+                                 bc.line.number))
+                continue
+            label = ddpy_name(bc.node_or_set, "node")
+            nodesets[label] = sorted(set(ids))
+            steps = () if bc.step is None else tuple(names[bc.step:])
+            result.append((label, components, steps))
+        return result
+
+
+def read_inp(path: str | Path) -> InpModel:
+    """Read and check an Abaqus / CalculiX forming model; DeckError lists every defect."""
+    path = Path(path)
+    reader = Reader(path)
+    reader.read(read_cards(path))
+    model = _Mapper(reader).model(path)
+    if reader.errors or model is None:
+        raise DeckError.collect(reader.errors or [DeckError("invalid model", path)])
+    return model

@@ -1,0 +1,403 @@
+"""The cards of an Abaqus / CalculiX forming model read into definitions (nodes, elements,
+sets, material, sections, rigid bodies, surfaces, contact, boundary conditions, steps): each
+keyword and parameter checked against what ddpy maps (:data:`SUPPORTED`), those without
+mechanics (:data:`IGNORED`) noted, every defect recorded with its file:line.
+:mod:`ddpy.io.inp_model` maps the definitions to ddpy's terms.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from ddpy.io.case import DeckError
+from ddpy.io.inp_cards import Card, DataLine, integer, number
+
+__all__ = ["BLANK_TYPES", "BOUNDARY_TYPES", "IGNORED", "SUPPORTED", "TOOL_TYPES", "Boundary",
+           "Pair", "Reader"]
+
+#: Element types of the blank, and of rigid tools (besides bricks of a *RIGID BODY).
+BLANK_TYPES = ("C3D8", "C3D8R", "C3D8I")
+TOOL_TYPES = ("R3D4", "R3D3")
+#: Keywords read, and their parameters (a value of None: any value, else the values allowed).
+SUPPORTED: dict[str, dict[str, tuple[str, ...] | None]] = {
+    "HEADING": {},
+    "NODE": {"NSET": None},
+    "ELEMENT": {"TYPE": None, "ELSET": None},
+    "NSET": {"NSET": None, "GENERATE": ("",)},
+    "ELSET": {"ELSET": None, "GENERATE": ("",)},
+    "MATERIAL": {"NAME": None},
+    "ELASTIC": {"TYPE": ("ISOTROPIC",)},
+    "PLASTIC": {"HARDENING": ("ISOTROPIC",)},
+    "SOLID SECTION": {"ELSET": None, "MATERIAL": None},
+    "RIGID BODY": {"ELSET": None, "NSET": None, "REF NODE": None, "ROT NODE": None},
+    "SURFACE": {"NAME": None, "TYPE": ("ELEMENT",)},
+    "CONTACT PAIR": {"INTERACTION": None, "TYPE": ("SURFACE TO SURFACE", "NODE TO SURFACE")},
+    "SURFACE INTERACTION": {"NAME": None},
+    "SURFACE BEHAVIOR": {"PRESSURE-OVERCLOSURE": ("HARD", "LINEAR")},
+    "FRICTION": {},
+    "BOUNDARY": {"OP": ("MOD",), "TYPE": ("DISPLACEMENT",), "FIXED": ("", "YES")},
+    "STEP": {"NAME": None, "NLGEOM": ("", "YES"), "INC": None},
+    "STATIC": {},
+    "MODEL CHANGE": {"TYPE": ("CONTACT PAIR",), "REMOVE": ("",), "ADD": ("",)},
+    "END STEP": {},
+}
+#: Keywords accepted and ignored: they request output or change no mechanics (density:
+#: ddpy's forming is quasi-static, without inertia).
+IGNORED = ("PREPRINT", "NODE PRINT", "EL PRINT", "NODE FILE", "EL FILE", "OUTPUT",
+           "NODE OUTPUT", "ELEMENT OUTPUT", "CONTACT OUTPUT", "CONTACT PRINT", "CONTACT FILE",
+           "RESTART", "MONITOR", "DENSITY")
+#: Degrees of freedom of the *BOUNDARY types.
+BOUNDARY_TYPES = {"XSYMM": (1, 5, 6), "YSYMM": (2, 4, 6), "ZSYMM": (3, 4, 5),
+                  "ENCASTRE": (1, 2, 3, 4, 5, 6), "PINNED": (1, 2, 3)}
+
+@dataclass
+class Pair:
+    slave: str
+    master: str
+    interaction: str
+    kind: str
+    card: Card
+
+
+@dataclass
+class Boundary:
+    node_or_set: str
+    dofs: tuple[int, ...]
+    value: float
+    step: int | None
+    line: DataLine
+    fixed: bool = False
+
+class Reader:
+    """Walks the cards once, recording definitions; then maps them, collecting errors."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self.errors: list[DeckError] = []
+        self.ignored: list[str] = []
+        self.title = ""
+        self.nodes: dict[int, tuple[tuple[float, float, float], DataLine]] = {}
+        self.elements: dict[int, tuple[str, list[int], DataLine]] = {}
+        self.nsets: dict[str, list[tuple[str, DataLine]]] = {}
+        self.elsets: dict[str, list[tuple[str, DataLine]]] = {}
+        self.materials: dict[str, Card] = {}
+        self.elastic: dict[str, tuple[float, float]] = {}
+        self.plastic: dict[str, list[tuple[float, float]]] = {}
+        self.sections: list[tuple[str, str, Card]] = []
+        self.rigid: list[Card] = []
+        self.surfaces: dict[str, tuple[list[tuple[str, str, DataLine]], Card]] = {}
+        self.pairs: list[Pair] = []
+        self.interactions: dict[str, Card] = {}
+        self.friction: dict[str, float] = {}
+        self.bcs: list[Boundary] = []
+        self.steps: list[Card] = []
+        self.static: dict[int, tuple[float, ...]] = {}
+        self.removed: dict[int, tuple[set[tuple[str, str]], set[tuple[str, str]]]] = {}
+
+    # ----------------------------------------------------------------------- reading cards
+
+    def fail(self, error: DeckError) -> None:
+        self.errors.append(error)
+
+    def read(self, cards: list[Card]) -> None:
+        material = interaction = ""
+        step: int | None = None
+        for card in cards:
+            key = card.keyword
+            if key in IGNORED:
+                self.ignored.append(f"{card.where}: *{key}")
+                continue
+            if key not in SUPPORTED:
+                self.fail(card.error(f"keyword *{key} is not supported: expected one of "
+                                     + ", ".join(f"*{k}" for k in (*SUPPORTED, "INCLUDE"))
+                                     + " (or, ignored, " + ", ".join(f"*{k}" for k in IGNORED)
+                                     + "); see docs/abaqus-import.md"))
+                continue
+            if not self._params(card) and key not in ("STEP", "END STEP"):
+                continue                # a step is still opened: no errors follow from it
+            try:
+                if key == "STEP":
+                    if step is not None:
+                        raise card.error("*STEP inside a step: expected *END STEP first")
+                    self.steps.append(card)
+                    step = len(self.steps) - 1
+                    self._no_data(card)
+                elif key == "END STEP":
+                    if step is None:
+                        raise card.error("*END STEP outside a step")
+                    step = None
+                elif key in ("STATIC", "MODEL CHANGE") and step is None:
+                    raise card.error(f"*{key} outside a step: expected it after *STEP")
+                elif step is not None and key not in ("STATIC", "MODEL CHANGE", "BOUNDARY"):
+                    raise card.error(f"*{key} inside a step: in a step ddpy reads *STATIC, "
+                                     "*BOUNDARY and *MODEL CHANGE; define the model before "
+                                     "the first *STEP")
+                elif key == "MATERIAL":
+                    material = self._name(card, "NAME")
+                    self.materials[material] = card
+                    self._no_data(card)
+                elif key in ("ELASTIC", "PLASTIC") and not material:
+                    raise card.error(f"*{key} outside a *MATERIAL")
+                elif key in ("FRICTION", "SURFACE BEHAVIOR") and not interaction:
+                    raise card.error(f"*{key} outside a *SURFACE INTERACTION")
+                elif key == "SURFACE INTERACTION":
+                    interaction = self._name(card, "NAME")
+                    self.interactions[interaction] = card
+                    self._no_data(card)
+                else:
+                    getattr(self, "_" + key.lower().replace(" ", "_"))(card, material,
+                                                                       interaction, step)
+            except DeckError as error:
+                self.fail(error)
+            if key not in ("ELASTIC", "PLASTIC", "MATERIAL"):
+                material = ""
+            if key not in ("FRICTION", "SURFACE BEHAVIOR", "SURFACE INTERACTION"):
+                interaction = ""
+        if step is not None:
+            self.fail(self.steps[step].error("the step has no *END STEP"))
+
+    def _params(self, card: Card) -> bool:
+        allowed = SUPPORTED[card.keyword]
+        for key, value in card.params.items():
+            if key not in allowed:
+                known = ", ".join(allowed) or "none"
+                self.fail(card.error(f"parameter {key} of *{card.keyword} is not supported "
+                                     f"(supported: {known})"))
+                return False
+            choices = allowed[key]
+            if choices is not None and value.upper() not in choices:
+                shown = ", ".join(f"{key}={c}" if c else key for c in choices)
+                self.fail(card.error(f"{key}={value} of *{card.keyword} is not supported "
+                                     f"(supported: {shown})"))
+                return False
+        return True
+
+    @staticmethod
+    def _name(card: Card, key: str) -> str:
+        name = card.params.get(key, "").strip('"').upper()
+        if not name:
+            raise card.error(f"*{card.keyword} without {key}=<name>")
+        return name
+
+    @staticmethod
+    def _no_data(card: Card) -> None:
+        if card.data:
+            raise card.error(f"*{card.keyword} takes no data lines, got "
+                             f"'{', '.join(card.data[0].words)[:60]}'", card.data[0])
+
+    def _heading(self, card: Card, *_: object) -> None:
+        self.title = " ".join(", ".join(d.words) for d in card.data[:1])
+
+    def _node(self, card: Card, *_: object) -> None:
+        nset = card.params.get("NSET", "").upper()
+        for line in card.data:
+            try:
+                ident = integer(line, 0, "the node id")
+                if not 3 <= len(line.words) <= 4:
+                    raise DeckError(f"expected '<node id>, <x>, <y>, <z>', got "
+                                    f"'{', '.join(line.words)[:60]}'", line.path, line.number)
+                xyz = tuple(number(line, i, "a coordinate") if i < len(line.words) else 0.0
+                            for i in (1, 2, 3))
+                if ident in self.nodes:
+                    raise DeckError(f"node {ident} is defined again (first at "
+                                    f"{self.nodes[ident][1].where})", line.path, line.number)
+                self.nodes[ident] = (xyz, line)  # type: ignore[assignment]
+                if nset:
+                    self.nsets.setdefault(nset, []).append((str(ident), line))
+            except DeckError as error:
+                self.fail(error)
+
+    def _element(self, card: Card, *_: object) -> None:
+        kind = card.params.get("TYPE", "").upper()
+        if kind not in BLANK_TYPES + TOOL_TYPES + ("C3D8",):
+            raise card.error(f"element type {kind or '(none)'} is not supported: expected "
+                             f"TYPE= {', '.join(BLANK_TYPES)} (the blank, and bricks of a "
+                             f"*RIGID BODY) or {', '.join(TOOL_TYPES)} (rigid tools)")
+        count = {"R3D4": 4, "R3D3": 3}.get(kind, 8)
+        elset = card.params.get("ELSET", "").upper()
+        for line in card.data:
+            try:
+                ident = integer(line, 0, "the element id")
+                if len(line.words) != count + 1:
+                    raise DeckError(f"expected '<element id>, <{count} node ids>' for a {kind} "
+                                    f"element, got {len(line.words) - 1} nodes", line.path,
+                                    line.number)
+                nodes = [integer(line, i, "a node id") for i in range(1, count + 1)]
+                if ident in self.elements:
+                    raise DeckError(f"element {ident} is defined again (first at "
+                                    f"{self.elements[ident][2].where})", line.path, line.number)
+                self.elements[ident] = (kind, nodes, line)
+                if elset:
+                    self.elsets.setdefault(elset, []).append((str(ident), line))
+            except DeckError as error:
+                self.fail(error)
+
+    def _set(self, card: Card, sets: dict[str, list[tuple[str, DataLine]]], key: str) -> None:
+        name = self._name(card, key)
+        items = sets.setdefault(name, [])
+        for line in card.data:
+            if "GENERATE" in card.params:
+                if not 2 <= len(line.words) <= 3:
+                    raise DeckError("expected '<first>, <last>[, <step>]' (GENERATE)",
+                                    line.path, line.number)
+                first, last = integer(line, 0, "the first id"), integer(line, 1, "the last id")
+                inc = integer(line, 2, "the step") if len(line.words) == 3 else 1
+                if last < first:
+                    raise DeckError(f"GENERATE from {first} to {last}: the last id is below "
+                                    "the first", line.path, line.number)
+                items += [(str(i), line) for i in range(first, last + 1, inc)]
+            else:
+                items += [(w.upper(), line) for w in line.words if w]
+
+    def _nset(self, card: Card, *_: object) -> None:
+        self._set(card, self.nsets, "NSET")
+
+    def _elset(self, card: Card, *_: object) -> None:
+        self._set(card, self.elsets, "ELSET")
+
+    def _elastic(self, card: Card, material: str, *_: object) -> None:
+        if len(card.data) != 1 or len(card.data[0].words) != 2:
+            raise card.error("expected one data line 'E, nu' (no temperature dependence)",
+                             card.data[0] if card.data else None)
+        line = card.data[0]
+        self.elastic[material] = (number(line, 0, "Young's modulus E"),
+                                  number(line, 1, "Poisson's ratio nu"))
+
+    def _plastic(self, card: Card, material: str, *_: object) -> None:
+        if not card.data:
+            raise card.error("expected data lines 'yield stress, plastic strain'")
+        table = []
+        for line in card.data:
+            if len(line.words) != 2:
+                raise DeckError("expected 'yield stress, plastic strain' (no temperature "
+                                f"dependence), got '{', '.join(line.words)[:60]}'", line.path,
+                                line.number)
+            y, ep = number(line, 0, "the yield stress"), number(line, 1, "the plastic strain")
+            if table and ep <= table[-1][0]:
+                raise DeckError(f"plastic strain {line.words[1]} is not above the one before "
+                                f"({table[-1][0]:g}): expected increasing strains", line.path,
+                                line.number)
+            if not table and ep != 0.0:
+                raise DeckError(f"the first plastic strain must be 0 (the initial yield "
+                                f"stress), got {line.words[1]}", line.path, line.number)
+            if table and y < table[-1][1]:
+                raise DeckError(f"yield stress {line.words[0]} is below the one before "
+                                f"({table[-1][1]:g}): softening is not supported", line.path,
+                                line.number)
+            if y <= 0:
+                raise DeckError(f"the yield stress must be positive, got {line.words[0]}",
+                                line.path, line.number)
+            table.append((ep, y))
+        self.plastic[material] = table
+
+    def _solid_section(self, card: Card, *_: object) -> None:
+        self._no_data(card)
+        self.sections.append((self._name(card, "ELSET"), self._name(card, "MATERIAL"), card))
+
+    def _rigid_body(self, card: Card, *_: object) -> None:
+        self._no_data(card)
+        if ("ELSET" in card.params) == ("NSET" in card.params):
+            raise card.error("expected one of ELSET=<tool elements> or NSET=<tool nodes>")
+        if not card.params.get("REF NODE"):
+            raise card.error("expected REF NODE=<node id>: the tool's motion is that of its "
+                             "reference node")
+        self.rigid.append(card)
+
+    def _surface(self, card: Card, *_: object) -> None:
+        name = self._name(card, "NAME")
+        items = []
+        for line in card.data:
+            if not 1 <= len(line.words) <= 2:
+                raise DeckError("expected '<element or element set>[, <face>]'", line.path,
+                                line.number)
+            face = line.words[1].upper() if len(line.words) == 2 else ""
+            items.append((line.words[0].upper(), face, line))
+        self.surfaces[name] = (items, card)
+
+    def _contact_pair(self, card: Card, *_: object) -> None:
+        interaction = self._name(card, "INTERACTION")
+        kind = card.params.get("TYPE", "NODE TO SURFACE").upper()
+        for line in card.data:
+            if len(line.words) != 2:
+                raise DeckError("expected '<slave surface>, <master surface>'", line.path,
+                                line.number)
+            self.pairs.append(Pair(line.words[0].upper(), line.words[1].upper(), interaction,
+                                    kind, card))
+
+    def _surface_behavior(self, card: Card, *_: object) -> None:
+        if card.data:
+            self.ignored.append(f"{card.data[0].where}: *SURFACE BEHAVIOR values (ddpy "
+                                "enforces contact exactly, by an augmented Lagrangian: the "
+                                "penalty stiffness is not used)")
+
+    def _friction(self, card: Card, material: str, interaction: str, *_: object) -> None:
+        if len(card.data) != 1 or not 1 <= len(card.data[0].words) <= 2:
+            raise card.error("expected one data line 'mu[, stick slope]'",
+                             card.data[0] if card.data else None)
+        line = card.data[0]
+        mu = number(line, 0, "the friction coefficient")
+        if mu < 0:
+            raise DeckError(f"the friction coefficient must be >= 0, got {line.words[0]}",
+                            line.path, line.number)
+        self.friction[interaction] = mu
+        if len(line.words) == 2:
+            self.ignored.append(f"{line.where}: the stick slope of *FRICTION (ddpy's Coulomb "
+                                "friction sticks exactly)")
+
+    def _boundary(self, card: Card, material: str, interaction: str, step: int | None) -> None:
+        fixed = "FIXED" in card.params
+        for line in card.data:
+            target = line.words[0].upper() if line.words else ""
+            if len(line.words) == 2 and line.words[1].upper() in BOUNDARY_TYPES:
+                self.bcs.append(Boundary(target, BOUNDARY_TYPES[line.words[1].upper()], 0.0, step,
+                                    line, fixed))
+                continue
+            if not 2 <= len(line.words) <= 4:
+                raise DeckError("expected '<node or node set>, <first dof>[, <last dof>[, "
+                                "<value>]]' or '<node or node set>, XSYMM|YSYMM|ZSYMM|"
+                                "ENCASTRE|PINNED'", line.path, line.number)
+            first = integer(line, 1, "the first degree of freedom")
+            last = integer(line, 2, "the last degree of freedom") if len(line.words) > 2 \
+                and line.words[2] else first
+            if not 1 <= first <= last <= 6:
+                raise DeckError(f"degrees of freedom {first} to {last}: expected 1 <= first "
+                                "<= last <= 6", line.path, line.number)
+            value = number(line, 3, "the displacement") if len(line.words) == 4 else 0.0
+            if fixed and len(line.words) == 4:
+                raise DeckError("*BOUNDARY, FIXED holds the nodes where they are: expected no "
+                                "value", line.path, line.number)
+            self.bcs.append(Boundary(target, tuple(range(first, last + 1)), value, step, line,
+                                fixed))
+
+    def _static(self, card: Card, material: str, interaction: str, step: int | None) -> None:
+        assert step is not None
+        if len(card.data) > 1 or (card.data and len(card.data[0].words) > 4):
+            raise card.error("expected at most one data line 'initial, period[, min[, max]]'")
+        values = tuple(number(card.data[0], i, "a time increment")
+                       for i in range(len(card.data[0].words))) if card.data else ()
+        if any(v <= 0 for v in values):
+            raise card.error("*STATIC's time increments and period must be positive",
+                             card.data[0])
+        self.static[step] = values
+
+    def _model_change(self, card: Card, material: str, interaction: str,
+                      step: int | None) -> None:
+        assert step is not None
+        if ("REMOVE" in card.params) == ("ADD" in card.params):
+            raise card.error("expected one of REMOVE or ADD")
+        if card.params.get("TYPE", "").upper() != "CONTACT PAIR":
+            raise card.error("expected TYPE=CONTACT PAIR (ddpy switches tools on and off)")
+        removed, added = self.removed.setdefault(step, (set(), set()))
+        for line in card.data:
+            if len(line.words) != 2:
+                raise DeckError("expected '<slave surface>, <master surface>'", line.path,
+                                line.number)
+            pair = (line.words[0].upper(), line.words[1].upper())
+            (removed if "REMOVE" in card.params else added).add(pair)
+            known = {(p.slave, p.master) for p in self.pairs}
+            if pair not in known:
+                raise DeckError(f"no *CONTACT PAIR {pair[0]}, {pair[1]}", line.path,
+                                line.number)
+
+

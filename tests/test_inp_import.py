@@ -1,0 +1,358 @@
+"""ddpy convert: Abaqus / CalculiX forming models to case folders (docs/abaqus-import.md).
+
+The example deck's round trip (mesh, material, tools, phases against the deck's numbers),
+malformed variants refused at their file:line, *INCLUDE, an Abaqus deck with R3D4 tools and
+symmetry by type, and the command line."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from ddpy.app.cli import main
+from ddpy.app.convert import convert_inp
+from ddpy.io.case import DeckError
+from ddpy.io.decks import read_case
+from ddpy.io.inp_model import read_inp
+from ddpy.io.toolfile import read_tool
+from ddpy.model.material import HardeningTable
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "calculix_bending"
+FILES = ("bending.inp", "blank.inp", "punch.inp", "die.inp")
+
+
+@pytest.fixture
+def deck(tmp_path: Path) -> Path:
+    """A copy of the example deck and its included meshes."""
+    for name in FILES:
+        shutil.copy(EXAMPLE / name, tmp_path / name)
+    return tmp_path / "bending.inp"
+
+
+def _nodes(path: Path) -> dict[int, tuple[float, ...]]:
+    """The *NODE lines of a file, read independently of the importer."""
+    nodes, inside = {}, False
+    for line in path.read_text().splitlines():
+        if line.startswith("*"):
+            inside = line.upper().startswith("*NODE") and "PRINT" not in line.upper()
+        elif inside and line.strip() and not line.startswith("**"):
+            words = line.split(",")
+            nodes[int(words[0])] = tuple(float(w) for w in words[1:4])
+    return nodes
+
+
+def _edit(path: Path, old: str, new: str) -> int:
+    """Replace the first ``old`` in the file; return the (1-based) line it was on."""
+    text = path.read_text()
+    at = text.index(old)
+    path.write_text(text[:at] + new + text[at + len(old):])
+    return text[:at].count("\n") + 1
+
+
+def test_example_round_trip(deck: Path, tmp_path: Path) -> None:
+    case_dir = tmp_path / "case"
+    done = convert_inp(deck, case_dir)
+    assert main(["check", str(case_dir)]) == 0
+    case = read_case(case_dir)
+    # Mesh: the blank's 186 nodes at the deck's coordinates, its 60 C3D8I as solid-shells.
+    nodes = _nodes(EXAMPLE / "blank.inp")
+    mesh = case.mesh
+    assert mesh.n_nodes == 186 and mesh.n_elements == 60
+    np.testing.assert_array_equal(mesh.node_ids, sorted(nodes))
+    np.testing.assert_allclose(mesh.nodes, [nodes[i] for i in sorted(nodes)])
+    assert case.element == "solid-shell"
+    assert tuple(mesh.normal) == (0.0, 0.0, 1.0)
+    assert mesh.elements[0].tolist() == [mesh.index([n])[0] for n in (1, 2, 33, 32, 63, 64,
+                                                                         95, 94)]
+    # Material: E, nu and the *PLASTIC table (stress, strain) as (strain, stress).
+    material = case.material.material
+    assert (material.E, material.nu) == (210000.0, 0.3)
+    assert material.hardening == HardeningTable((0.0, 0.02, 0.05, 0.1, 0.2, 0.5),
+                                                (200.0, 260.0, 300.0, 340.0, 380.0, 440.0))
+    np.testing.assert_allclose(material.yield_stress([0.01, 0.35, 1.0]), [230.0, 410.0, 440.0])
+    # Tools: the S2 faces of the tool bricks, friction, the blank side from the slave surface.
+    punch, die = case.tool("punch"), case.tool("die")
+    assert (punch.friction, punch.contact, punch.discretization) == (0.1, "top", "surface")
+    assert (die.friction, die.contact, die.discretization) == (0.1, "bottom", "surface")
+    assert punch.description == "facets" and punch.file.name == "punch.facets.tool"
+    model = read_tool(case_dir / "tools" / "punch.facets.tool")
+    assert model.surface.n_patches == 8                     # 6 on the radius, 2 on the flank
+    assert read_tool(case_dir / "tools" / "die.nagata.tool").surface.n_patches == 12
+    punch_nodes = _nodes(EXAMPLE / "punch.inp")
+    front = {xyz for n, xyz in punch_nodes.items() if n % 2 == 0}    # the working face
+    vertices = {tuple(v) for v in np.round(model.surface.vertices, 9)}
+    assert vertices == {tuple(np.round(v, 9)) for v in front}
+    # Phases: the forming step moves the punch 6 mm down, largest increment 0.02 of it; the
+    # release step is a springback in 0.25 steps of the period.
+    forming, springback = case.phases
+    assert (forming.name, forming.kind, forming.tools) == ("step1", "forming", ("punch", "die"))
+    np.testing.assert_allclose(forming.displacement("punch"), [0.0, 0.0, -6.0])
+    assert forming.max_increment == pytest.approx(0.12)
+    assert forming.min_increment == pytest.approx(6e-5)
+    assert (springback.kind, springback.increments) == ("springback", 4)
+    # Boundary: x symmetry, plane strain, the centre held in the release step only.
+    bc = case.boundary
+    assert sorted(bc.nodesets) == ["centre", "xsym", "ysym"]
+    xsym = mesh.node_ids[bc.nodesets["xsym"].nodes]
+    assert sorted(xsym.tolist()) == [n for n, xyz in nodes.items() if xyz[0] == 0.0]
+    held = {(c.label, c.components, c.phases) for c in bc.constraints}
+    assert held == {("fix xsym x", (0,), ()), ("fix ysym y", (1,), ()),
+                    ("fix centre z", (2,), ("step2",))}
+    assert any(f.endswith("*NODE PRINT") for f in done.notes)
+
+
+def test_nagata_tools_name_the_nagata_files(deck: Path, tmp_path: Path) -> None:
+    convert_inp(deck, tmp_path / "case", tools="nagata")
+    case = read_case(tmp_path / "case")
+    assert [t.description for t in case.tools] == ["nagata", "nagata"]
+    assert case.tool("die").file.name == "die.nagata.tool"
+
+
+@pytest.mark.parametrize(("file", "old", "new", "message", "below"), [
+    ("bending.inp", "*MATERIAL, NAME=STEEL", "*AMPLITUDE, NAME=A\n0., 0.\n*MATERIAL, NAME=STEEL",
+     "keyword *AMPLITUDE is not supported: expected one of *HEADING", 0),
+    ("blank.inp", "*ELEMENT, TYPE=C3D8I", "*ELEMENT, TYPE=C3D20R",
+     "element type C3D20R is not supported: expected TYPE= C3D8, C3D8R, C3D8I", 0),
+    ("blank.inp", "1, 1, 2, 33, 32, 63, 64, 95, 94", "1, 1, 2, 33, 32, 63, 64, 95, 9999",
+     "node 9999 of element 1 is not defined", 0),
+    ("blank.inp", "2, 1, 0, 0", "2, 1.0.0, 0, 0", "expected a number for a coordinate, got "
+     "'1.0.0'", 0),
+    ("bending.inp", "*STEP, NLGEOM, INC=1000", "*STEP, NLGEOM, INC=1000, PERTURBATION",
+     "parameter PERTURBATION of *STEP is not supported", 0),
+    ("bending.inp", "*PLASTIC\n200., 0.0", "*PLASTIC\n200., 0.01",
+     "the first plastic strain must be 0", 1),
+    ("bending.inp", "*BOUNDARY, FIXED\nCENTRE, 3, 3", "*BOUNDARY\nCENTRE, 3, 3",
+     "expected *BOUNDARY, FIXED", 1),
+    ("bending.inp", "0.1, 5000.", "-0.1, 5000.", "the friction coefficient must be >= 0", 0),
+])
+def test_malformed_decks_are_refused_at_their_line(deck: Path, file: str, old: str, new: str,
+                                                   message: str, below: int) -> None:
+    """Each refused at the line it is on (``below``: lines below the start of ``old``)."""
+    line = _edit(deck.parent / file, old, new) + below
+    with pytest.raises(DeckError) as caught:
+        read_inp(deck)
+    error = caught.value.errors[0]
+    assert message in error.message, str(caught.value)
+    assert error.path == deck.parent / file
+    assert error.line == line, str(caught.value)
+
+
+def test_every_defect_is_reported(deck: Path) -> None:
+    _edit(deck, "*MATERIAL, NAME=STEEL", "*AMPLITUDE, NAME=A\n*MATERIAL, NAME=STEEL")
+    _edit(deck, "*STEP, NLGEOM, INC=1000", "*STEP, NLGEOM, INC=1000, PERTURBATION")
+    with pytest.raises(DeckError) as caught:
+        read_inp(deck)
+    assert len(caught.value.errors) == 2
+    assert "*AMPLITUDE" in str(caught.value) and "PERTURBATION" in str(caught.value)
+
+
+def test_include(deck: Path, tmp_path: Path) -> None:
+    # A missing file: refused at the *INCLUDE line.
+    line = _edit(deck, "*INCLUDE, INPUT=die.inp", "*INCLUDE, INPUT=nowhere/die.inp")
+    with pytest.raises(DeckError) as caught:
+        read_inp(deck)
+    assert (caught.value.path, caught.value.line) == (deck, line)
+    assert "no such file" in caught.value.message
+    # Nested and in a subfolder, relative to the including file.
+    (tmp_path / "nowhere").mkdir()
+    (tmp_path / "nowhere" / "die.inp").write_text("*INCLUDE, INPUT=../die.inp\n")
+    model = read_inp(deck)
+    assert [t.name for t in model.tools] == ["punch", "die"]
+    # A file including itself.
+    (tmp_path / "die.inp").write_text("*INCLUDE, INPUT=nowhere/die.inp\n")
+    with pytest.raises(DeckError, match="include itself"):
+        read_inp(deck)
+
+
+ABAQUS = """*HEADING
+Flat punch on a flat die, R3D4 tools
+*NODE
+1, 0, 0, 0
+2, 2, 0, 0
+3, 2, 2, 0
+4, 0, 2, 0
+5, 0, 0, 1
+6, 2, 0, 1
+7, 2, 2, 1
+8, 0, 2, 1
+*ELEMENT, TYPE=C3D8R, ELSET=BLANK
+1, 1, 2, 3, 4, 5, 6, 7, 8
+*NSET, NSET=SYM_X, GENERATE
+1, 5, 4
+*NSET, NSET=SYM_X
+8, 4
+*NSET, NSET=SYM_Y
+1, 2, 5, 6
+*NODE
+101, -1, -1, 1.001
+102, 3, -1, 1.001
+103, 3, 3, 1.001
+104, -1, 3, 1.001
+201, -1, -1, -0.001
+202, 3, -1, -0.001
+203, 3, 3, -0.001
+204, -1, 3, -0.001
+900, 0, 0, 2
+901, 0, 0, -1
+*ELEMENT, TYPE=R3D4, ELSET=PUNCH
+11, 101, 102, 103, 104
+*ELEMENT, TYPE=R3D4, ELSET=DIE
+21, 201, 202, 203, 204
+*MATERIAL, NAME=AL
+*ELASTIC
+70000., 0.33
+*PLASTIC
+100., 0.
+150., 0.1
+*DENSITY
+2.7e-9
+*SOLID SECTION, ELSET=BLANK, MATERIAL=AL
+*RIGID BODY, ELSET=PUNCH, REF NODE=900
+*RIGID BODY, ELSET=DIE, REF NODE=901
+*SURFACE, NAME=TOP
+BLANK, S2
+*SURFACE, NAME=BOTTOM
+BLANK, S1
+*SURFACE, NAME=PUNCH_S
+PUNCH, SNEG
+*SURFACE, NAME=DIE_S
+DIE
+*CONTACT PAIR, INTERACTION=FRIC
+TOP, PUNCH_S
+BOTTOM, DIE_S
+*SURFACE INTERACTION, NAME=FRIC
+*FRICTION
+0.15
+*BOUNDARY
+SYM_X, XSYMM
+SYM_Y, YSYMM
+901, ENCASTRE
+900, 4, 6
+*STEP, NAME=Press, NLGEOM=YES
+*STATIC
+0.1, 1.
+*BOUNDARY
+900, 1, 2
+900, 3, 3, -0.1
+*OUTPUT, FIELD
+*NODE OUTPUT
+U, RF
+*END STEP
+"""
+
+
+def test_abaqus_r3d4_deck(tmp_path: Path) -> None:
+    path = tmp_path / "flat.inp"
+    path.write_text(ABAQUS)
+    model = read_inp(path)
+    assert model.title == "Flat punch on a flat die, R3D4 tools"
+    assert model.element_type == "C3D8R" and model.normal == "z"
+    assert model.hardening == [(0.0, 100.0), (0.1, 150.0)]
+    punch, die = model.tools
+    assert (punch.name, punch.contact, punch.friction, punch.discretization) == \
+        ("punch", "top", 0.15, "node")
+    assert punch.faces == [[104, 103, 102, 101]]           # SNEG: turned over
+    assert die.faces == [[201, 202, 203, 204]] and die.contact == "bottom"
+    assert model.nodesets == {"sym_x": [1, 4, 5, 8], "sym_y": [1, 2, 5, 6]}
+    assert model.constraints == [("sym_x", "x", ()), ("sym_y", "y", ())]
+    (phase,) = model.phases
+    assert (phase.name, phase.kind, phase.moves) == ("press", "forming",
+                                                     {"punch": (0.0, 0.0, -0.1)})
+    assert any("*DENSITY" in n for n in model.ignored)
+    assert any("*NODE OUTPUT" in n for n in model.ignored)
+    assert any("rotations of blank nodes" in n for n in model.ignored)
+    convert_inp(path, tmp_path / "case")
+    case = read_case(tmp_path / "case")
+    assert case.element == "hexahedron"
+    assert case.material.material.hardening.stresses == (100.0, 150.0)
+
+
+@pytest.mark.parametrize(("old", "new", "message"), [
+    ("900, 3, 3, -0.1\n", "", "tool punch (REF NODE 900) has no *BOUNDARY on dof 3"),
+    ("900, 4, 6\n", "900, 4, 4, 0.1\n", "a rotation of tool punch"),
+    ("*STEP, NAME=Press, NLGEOM=YES", "*STEP, NAME=Press", "the first *STEP without NLGEOM"),
+    ("SYM_Y, YSYMM", "SYM_Y, 2, 2, 0.5", "a displacement of 0.5 on blank nodes"),
+    ("*ELASTIC\n70000., 0.33", "*ELASTIC\n70000., 0.33, 20.", "expected one data line 'E, nu'"),
+    ("TOP, PUNCH_S\n", "PUNCH_S, TOP\n", "the slave surface PUNCH_S is not on the blank"),
+    ("DIE\n*CONTACT", "DIE, S3\n*CONTACT", "expected SPOS or SNEG for the R3D4 element"),
+])
+def test_abaqus_refusals(tmp_path: Path, old: str, new: str, message: str) -> None:
+    path = tmp_path / "flat.inp"
+    assert old in ABAQUS
+    path.write_text(ABAQUS.replace(old, new, 1))
+    with pytest.raises(DeckError) as caught:
+        read_inp(path)
+    assert message in str(caught.value)
+    assert caught.value.path == path and caught.value.line is not None
+
+
+def test_convert_command(deck: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["convert", str(deck), str(tmp_path / "case")]) == 0
+    out = capsys.readouterr().out
+    assert "ignored: " in out and "*NODE PRINT" in out and ": ok" in out
+    # An occupied folder needs --force.
+    assert main(["convert", str(deck), str(tmp_path / "case")]) == 2
+    assert "not empty" in capsys.readouterr().err
+    assert main(["convert", str(deck), str(tmp_path / "case"), "--force", "--tools",
+                 "nagata"]) == 0
+    _edit(deck, "*MATERIAL, NAME=STEEL", "*AMPLITUDE, NAME=A\n*MATERIAL, NAME=STEEL")
+    assert main(["convert", str(deck), str(tmp_path / "other")]) == 2
+    err = capsys.readouterr().err
+    assert f"{deck}:26: keyword *AMPLITUDE is not supported" in err
+    assert not (tmp_path / "other").exists()
+
+
+def test_run_converts_beside_the_file(deck: Path, tmp_path: Path, monkeypatch:
+                                      pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(tmp_path)
+    assert main(["run", str(deck), "--threads", "1", "--stop-after", "2"]) == 0
+    assert (tmp_path / "bending_case" / "tools.dat").is_file()
+    assert (tmp_path / "results" / "bending_case" / "results.h5").is_file()
+
+
+MATERIAL = """elastic E 210000 nu 0.3
+yield vonmises
+hardening table 3   # plastic strain, yield stress
+  0 200
+  0.1 250
+  0.3 280
+"""
+
+
+@pytest.mark.parametrize(("old", "new", "line", "message"), [
+    ("0.3 280", "0.3 x", 6, "expected a number for the yield stress Y"),
+    ("0.1 250", "0.1 150", 5, "softening is not supported"),
+    ("0 200", "0.01 200", 4, "the table's first plastic strain must be 0"),
+    ("0.3 280", "0.05 280", 6, "must be above the one before"),
+    ("table 3", "table 0", 3, "the number of points of the table must be >= 1"),
+    ("  0.3 280\n", "", None, "the deck ends inside the hardening table of line 3"),
+])
+def test_material_deck_hardening_table(tmp_path: Path, old: str, new: str, line: int | None,
+                                       message: str) -> None:
+    """material.dat's 'hardening table COUNT' and its COUNT lines 'EP Y': the values by hand,
+    and each defect at its line."""
+    from ddpy.io.decks.lines import Deck
+    from ddpy.io.decks.material import _parse_material
+
+    good = _parse_material(Deck(tmp_path / "material.dat", MATERIAL))
+    assert good is not None
+    np.testing.assert_allclose(good.material.yield_stress([0.0, 0.05, 0.2, 0.3, 2.0]),
+                               [200.0, 225.0, 265.0, 280.0, 280.0])
+    deck = Deck(tmp_path / "material.dat", MATERIAL.replace(old, new))
+    assert _parse_material(deck) is None
+    assert message in deck.errors[0].message
+    assert deck.errors[0].line == line
+
+
+def test_rigid_body_by_node_set(tmp_path: Path) -> None:
+    """CalculiX's form: *RIGID BODY, NSET= names the tool's nodes."""
+    path = tmp_path / "flat.inp"
+    path.write_text(ABAQUS.replace("*RIGID BODY, ELSET=PUNCH, REF NODE=900",
+                                   "*NSET, NSET=PUNCH_N\n101, 102, 103, 104\n"
+                                   "*RIGID BODY, NSET=PUNCH_N, REF NODE=900"))
+    model = read_inp(path)
+    assert [t.name for t in model.tools] == ["punch_n", "die"]
+    assert model.phases[0].moves == {"punch_n": (0.0, 0.0, -0.1)}

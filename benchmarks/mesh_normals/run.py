@@ -89,48 +89,100 @@ def study_surfaces() -> dict[str, Any]:
 def study_die() -> dict[str, Any]:
     """The plane-fillet-cylinder die meshed from its CAD (quadrilaterals, structured on its
     faces): estimated against CAD normals, and the shape errors against the CAD."""
-    from ddpy.cad import ToolBuilder, gmsh_session
     from ddpy.cad.examples import die_profile
+
+    return study_cad(lambda: {"die": die_profile()}, {"die": (0.0, 0.0, 1.0)},
+                     {"die": 4.0}, LEVELS, ESTIMATORS)["die"]
+
+
+#: The forming benchmarks' tools (their CAD models, ddpy.cad.examples): the side the blank
+#: lies on, and the smallest radius of each (mm), which sets its mesh.
+BENCHMARK_TOOLS = {
+    "bending punch": ("bending", "punch", (0.0, 0.0, -1.0), 23.5),
+    "bending die": ("bending", "die", (0.0, 0.0, 1.0), 4.0),
+    "drawing die 1": ("drawing", "die1", (0.0, 0.0, 1.0), 8.0),
+    "drawing punch 1": ("drawing", "punch1", (0.0, 0.0, -1.0), 4.0),
+    "drawing punch 2": ("drawing", "punch2", (0.0, 0.0, 1.0), 5.0),
+}
+#: Levels of the benchmark tools (the deep drawing tools at 32 per 90 degrees of their
+#: smallest radius have hundreds of thousands of elements).
+TOOL_LEVELS = (4, 8, 16)
+
+
+def study_tools() -> dict[str, Any]:
+    """The bending and deep drawing tools meshed from their CAD: the default estimator's
+    normal errors and the shape errors, {tool: row}."""
+    from ddpy.cad.examples import bending_tools, reverse_drawing_tools
+
+    makers = {"bending": bending_tools, "drawing": reverse_drawing_tools}
+    out: dict[str, Any] = {}
+    for model, make in makers.items():
+        tools = {name: spec for name, spec in BENCHMARK_TOOLS.items() if spec[0] == model}
+        def faces(make=make, tools=tools) -> dict[str, list[int]]:
+            made = make()
+            return {name: made[spec[1]] for name, spec in tools.items()}
+
+        rows = study_cad(faces,
+            {name: spec[2] for name, spec in tools.items()},
+            {name: spec[3] for name, spec in tools.items()}, TOOL_LEVELS,
+            (DEFAULT_ESTIMATOR,))
+        out.update(rows)
+    return out
+
+
+def study_cad(make, sides: dict[str, tuple[float, float, float]],
+              radii: dict[str, float], levels: tuple[int, ...],
+              estimators: tuple[str, ...]) -> dict[str, Any]:
+    """Tools of one CAD model (``make`` builds it in the gmsh session and returns the faces
+    of each tool) meshed at ``levels`` elements per 90 degrees of their smallest radius
+    (structured quadrilaterals, edges of at most that length on the straight faces):
+    ``estimators``' normals against the CAD's, and the shape errors against the CAD."""
+    from ddpy.cad import ToolBuilder, gmsh_session
     from ddpy.cad.shape_error import shape_error
     from ddpy.geometry.surfaces import NagataSurface
     from ddpy.io.toolfile import ToolModel
 
-    row: dict[str, Any] = {"h": [], "vertices": [], "normal_max": {e: [] for e in ESTIMATORS},
-                           "normal_rms": {e: [] for e in ESTIMATORS},
-                           "shape_max": {m: [] for m in MODELS}, "creases": []}
+    out: dict[str, Any] = {}
     with gmsh_session():
         import gmsh
 
-        gmsh.model.add("die")
-        faces = die_profile()
-        builder = ToolBuilder(faces, "die")
-        for n in LEVELS:
-            mesh = builder.mesh(n, "quad", size=np.pi / 2 * 4.0 / n)
-            c = np.where(mesh.elements < 0, mesh.elements[:, :1], mesh.elements)
-            edge = np.linalg.norm(mesh.vertices[c] - mesh.vertices[np.roll(c, -1, axis=1)],
-                                  axis=2)
-            row["h"].append(float(edge.mean()))
-            row["vertices"].append(len(mesh.vertices))
-            exact = mesh.corner_normals
-            valid = np.ones(c.shape, dtype=bool)
-            valid[:, 3] = mesh.elements[:, 3] >= 0
-            for estimator in ESTIMATORS:
-                found = estimate_normals(mesh.vertices, mesh.elements, estimator)
-                error = angle_between(found.corner_normals, exact)[valid]
-                row["normal_max"][estimator].append(float(error.max()))
-                row["normal_rms"][estimator].append(float(np.sqrt((error ** 2).mean())))
-                if estimator == DEFAULT_ESTIMATOR:
-                    estimated = found.corner_normals
-                    row["creases"].append(int(found.crease.sum()))
-            for model in MODELS:
-                normals = estimated if model == "nagata_estimated" else exact
-                surface = NagataSurface(mesh.vertices, normals, mesh.elements,
-                                        smooth=model != "facets")
-                tool = ToolModel("die", "nagata" if model != "facets" else "facets", surface,
-                                 mesh.element_face)
-                row["shape_max"][model].append(shape_error(tool, samples=5).max_distance)
+        gmsh.model.add("tools")
+        faces = make()
+        for name, tool_faces in faces.items():
+            row: dict[str, Any] = {"h": [], "vertices": [],
+                                   "normal_max": {e: [] for e in estimators},
+                                   "normal_rms": {e: [] for e in estimators},
+                                   "shape_max": {m: [] for m in MODELS}, "creases": []}
+            builder = ToolBuilder(tool_faces, name, blank_side=sides[name])
+            for n in levels:
+                mesh = builder.mesh(n, "quad", size=np.pi / 2 * radii[name] / n)
+                c = np.where(mesh.elements < 0, mesh.elements[:, :1], mesh.elements)
+                edge = np.linalg.norm(mesh.vertices[c] - mesh.vertices[np.roll(c, -1, axis=1)],
+                                      axis=2)
+                row["h"].append(float(edge.mean()))
+                row["vertices"].append(len(mesh.vertices))
+                exact = mesh.corner_normals
+                valid = np.ones(c.shape, dtype=bool)
+                valid[:, 3] = mesh.elements[:, 3] >= 0
+                for estimator in estimators:
+                    found = estimate_normals(mesh.vertices, mesh.elements, estimator)
+                    error = angle_between(found.corner_normals, exact)[valid]
+                    row["normal_max"][estimator].append(float(error.max()))
+                    row["normal_rms"][estimator].append(float(np.sqrt((error ** 2).mean())))
+                    if estimator == DEFAULT_ESTIMATOR:
+                        estimated = found.corner_normals
+                        row["creases"].append(int(found.crease.sum()))
+                for model in MODELS:
+                    normals = estimated if model == "nagata_estimated" else exact
+                    surface = NagataSurface(mesh.vertices, normals, mesh.elements,
+                                            smooth=model != "facets")
+                    tool = ToolModel(name.replace(" ", "_"),
+                                     "nagata" if model != "facets" else "facets",
+                                     surface, mesh.element_face)
+                    row["shape_max"][model].append(shape_error(tool, samples=5).max_distance)
+            out[name] = row
         gmsh.model.remove()
-    return row
+    return out
 
 
 def _orders(row: dict[str, Any], key: str) -> dict[str, float]:
@@ -158,7 +210,30 @@ def summary(result: dict[str, Any]) -> dict[str, Any]:
                   "normal_max_order": _orders(die, "normal_max"),
                   "shape_max_mm": {m: v[-1] for m, v in die["shape_max"].items()},
                   "shape_max_order": _orders(die, "shape_max")}
+    out["tools"] = {name: {"normal_max_deg": row["normal_max"][DEFAULT_ESTIMATOR][-1],
+                           "normal_max_order": _orders(row, "normal_max")[DEFAULT_ESTIMATOR],
+                           "shape_max_mm": {m: v[-1] for m, v in row["shape_max"].items()},
+                           "shape_max_order": _orders(row, "shape_max")}
+                    for name, row in result["tools"].items()}
     return out
+
+
+def tools_table(tools: dict[str, Any]) -> str:
+    """The benchmark tools at their finest level: normal and shape errors with orders."""
+    lines = [table_row(["tool", "smallest radius [mm]", "vertices",
+                        f"{DEFAULT_ESTIMATOR} max normal error [deg]", "RMS [deg]",
+                        *[f"{label} max [mm]" for label in MODELS.values()]]),
+             table_row(["---"] + ["---:"] * (4 + len(MODELS)))]
+    for name, row in tools.items():
+        normal = _orders(row, "normal_max")[DEFAULT_ESTIMATOR]
+        rms = _orders(row, "normal_rms")[DEFAULT_ESTIMATOR]
+        shape = _orders(row, "shape_max")
+        lines.append(table_row(
+            [name, f"{BENCHMARK_TOOLS[name][3]:g}", row["vertices"][-1],
+             _cell(row["normal_max"][DEFAULT_ESTIMATOR][-1], normal),
+             _cell(row["normal_rms"][DEFAULT_ESTIMATOR][-1], rms),
+             *[_cell(row["shape_max"][m][-1], shape[m]) for m in MODELS]]))
+    return "\n".join(lines)
 
 
 # ------------------------------------------------------------------------------- report
@@ -331,6 +406,11 @@ Max distance to the surface [mm] (order):
                            for rows in surfaces.values())
     creases = {k: sum(sum(rows[k]["creases"]) for rows in surfaces.values()) for k in MESH_KINDS}
     die_orders = _orders(die, "normal_max")
+    tools = result["tools"]
+    ratios = [row["shape_max"]["facets"][-1] / row["shape_max"]["nagata_estimated"][-1]
+              for row in tools.values()]
+    exact_ratios = [row["shape_max"]["facets"][-1] / row["shape_max"]["nagata_exact"][-1]
+                    for row in tools.values()]
     fig1, fig2 = (p.name for p in figures)
     return f"""# Vertex normals of tool meshes
 
@@ -355,6 +435,9 @@ Generated by `benchmarks/mesh_normals/run.py` in {seconds:.0f} s. {computed_at(c
   fillet of radius 4 mm, concave cylinder of 23.5 mm, tangent to one another), meshed from its
   CAD by `ToolBuilder.mesh` (structured quadrilaterals) with n elements per 90 degrees
   and edges of at most (pi/2) 4 mm / n on the straight ones; exact normals from the CAD.
+  The same for the tools of the forming benchmarks (`ddpy.cad.examples.bending_tools` and
+  `reverse_drawing_tools`: {', '.join(tools)}), at n = {', '.join(str(n) for n in TOOL_LEVELS)}
+  per 90 degrees of each tool's smallest radius, with the default estimator.
 * **Normal error**: the angle between the estimated and the exact normal at every vertex
   (every sheet of a vertex, and every face corner on the die), max and RMS.
 * **Shape error**: the largest distance from the patches to the exact surface, over 5 x 5
@@ -440,6 +523,22 @@ Orders over the three finest meshes: normals
 shape {', '.join(f"{MODELS[m]} {o:.2f}" for m, o in _orders(die, 'shape_max').items())}.
 The largest errors of the estimated normals are at the tangent joints (above).
 
+### The bending and deep drawing tools (CAD meshes)
+
+{tools_table(tools)}
+
+At {TOOL_LEVELS[-1]} elements per 90 degrees of each tool's smallest radius (orders over
+{', '.join(str(n) for n in TOOL_LEVELS)}, which include the coarsest meshes' large errors at
+the faces' ends, so they overstate the rate). Their faces meet tangentially (flats,
+shoulders, noses, walls): the largest normal errors,
+{min(r["normal_max"][DEFAULT_ESTIMATOR][-1] for r in tools.values()):.2f} to
+{max(r["normal_max"][DEFAULT_ESTIMATOR][-1] for r in tools.values()):.2f} degrees at the
+finest level, are those of the joints, as on the die above, where the order is first. The
+Nagata patches on the estimated normals lie {min(ratios):.1f} to {max(ratios):.1f} times
+closer to the CAD than the facets of the same mesh (with the CAD's normals,
+{min(exact_ratios):.0f} to {max(exact_ratios):.0f} times): where a tool's CAD exists, give it
+(`--cad`).
+
 ## Figures
 
 ![normal error]({fig1})
@@ -455,7 +554,7 @@ def main(argv: list[str] | None = None) -> int:
                         help=f"folder for the report and figures (default {DOCS})")
     args = parser.parse_args(argv)
     start = time.perf_counter()
-    result = {"surfaces": study_surfaces(), "die": study_die()}
+    result = {"surfaces": study_surfaces(), "die": study_die(), "tools": study_tools()}
     seconds = time.perf_counter() - start
     if args.json:
         print(json.dumps(summary(result), indent=1))

@@ -380,13 +380,28 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--again", action="store_true",
                         help="run again the blanks already kept")
     parser.add_argument("--reuse", action="store_true", help="no run: report the kept runs")
+    parser.add_argument("--collect", action="store_true",
+                        help="no run: keep the results found in results/ of the blanks "
+                        "asked for that have none kept (runs stopped before they ended)")
     parser.add_argument("--json", action="store_true", help="print the numbers only")
     args = parser.parse_args(argv)
     blanks = [Blank(h, n, e, c) for e in listed(args.elements, str, ELEMENTS)
               for c in listed(args.contacts, str, CONTACTS)
               for h in listed(args.lengths, float) for n in listed(args.layers, int)]
     runs = kept()
-    if not args.reuse:
+    if args.collect:
+        for blank in blanks:
+            results = HERE / "results" / blank.label / "results.h5"
+            if blank.label in runs or not results.exists():
+                continue
+            from ddpy.io.results import ResultsReader
+            with ResultsReader(results) as r:
+                wall = float(r.history()["time_total"].sum())
+            runs[blank.label] = numbers_of(blank, results, wall,
+                                           "stopped before it ended (--collect)")
+            print(f"{blank.label}: collected, {runs[blank.label]['status']}", file=sys.stderr)
+        runs_file(STEM).write_text(json.dumps(runs, indent=1) + "\n")
+    elif not args.reuse:
         todo = [b for b in blanks if args.again or b.label not in runs]
         tools = HERE / "tools"
         if todo and not (tools / "die.nagata.tool").exists():

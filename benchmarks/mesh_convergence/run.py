@@ -223,17 +223,30 @@ def reference(runs: dict[str, dict[str, Any]]) -> dict[str, Any] | None:
     same = [r for r in done if r["blank"]["length"] == finest["blank"]["length"]
             and r["blank"]["layers"] == finest["blank"]["layers"]]
     spread_f = max(abs(a - b) / abs(b) for r in same
-                   for a, b in zip(r["force_N"], finest["force_N"], strict=True))
+                   for a, b in zip(mean_forces(r), mean_forces(finest), strict=True))
     spread_b = max(max(abs(r["beta1_deg"] - finest["beta1_deg"]),
                        abs(r["beta2_deg"] - finest["beta2_deg"])) for r in same)
     return {**finest, "label": Blank(**finest["blank"]).label, "others": len(same) - 1,
             "spread_force": spread_f, "spread_angle": spread_b}
 
 
+def mean_forces(run: dict[str, Any]) -> list[float]:
+    """The run's punch force at STROKES on its moving mean over WINDOW mm (the chatter
+    taken out; where it did not get there, nan)."""
+    curve = run.get("curve") or {}
+    s, f = np.asarray(curve.get("stroke", [])), np.asarray(curve.get("force", []))
+    if s.size < 4:
+        return [float("nan")] * len(STROKES)
+    from ddpy.studies.bending import smooth_curve
+    mean = smooth_curve(s, f, WINDOW, order=0)
+    return [float(np.interp(a, s, mean)) if s[-1] >= a - 1e-9 else float("nan")
+            for a in STROKES]
+
+
 def errors(run: dict[str, Any], ref: dict[str, Any]) -> dict[str, float]:
-    """A run's largest relative force error over STROKES (where it got there) and its
-    angle errors, against the reference."""
-    f = [abs(a - b) / abs(b) for a, b in zip(run["force_N"], ref["force_N"], strict=True)
+    """A run's largest relative error of the mean force over STROKES (where it got there)
+    and its angle errors, against the reference."""
+    f = [abs(a - b) / abs(b) for a, b in zip(mean_forces(run), mean_forces(ref), strict=True)
          if np.isfinite(a)]
     return {"force": max(f) if f else float("nan"),
             "beta1": abs(run["beta1_deg"] - ref["beta1_deg"]),
@@ -298,8 +311,9 @@ def report(runs: dict[str, dict[str, Any]], code: str) -> str:
         "thread (two runs at a time on the machine's two cores, so times carry the other "
         "run's load). Chatter: the RMS of the punch force about its moving mean over "
         f"{WINDOW:g} mm of stroke, from {CHATTER_FROM:g} mm to the end of forming, over the "
-        "mean force there. beta_1, beta_2: the free flange's angle to the punch's direction "
-        "after forming and after springback.",
+        "mean force there. Forces F(s) are read on that moving mean (the chatter, "
+        "reported apart, taken out), and so are the force errors. beta_1, beta_2: the free "
+        "flange's angle to the punch's direction after forming and after springback.",
         "",
     ]
     if ref is None:
@@ -309,7 +323,7 @@ def report(runs: dict[str, dict[str, Any]], code: str) -> str:
         "",
         f"The reference is the finest blank that completed, `{ref['label']}` "
         f"({Blank(**ref['blank']).size} hexahedra): force "
-        + ", ".join(f"{v:.2f} N at {s:g} mm" for v, s in zip(ref["force_N"], STROKES,
+        + ", ".join(f"{v:.2f} N at {s:g} mm" for v, s in zip(mean_forces(ref), STROKES,
                                                               strict=True))
         + f"; beta_1 {ref['beta1_deg']:.2f} and beta_2 {ref['beta2_deg']:.2f} degrees. "
         + (f"The {ref['others']} other run(s) on the same blank differ from it by at most "
@@ -337,6 +351,25 @@ def report(runs: dict[str, dict[str, Any]], code: str) -> str:
                                _deg(e["beta1"]), _deg(e["beta2"]), _pct(r["chatter"]),
                                "yes" if holds else "no"]))
         lines.append("")
+    findings = []
+    for element in ELEMENTS:
+        for h in LENGTHS:
+            done = [r for r in runs.values() if r["status"] == "completed" and
+                    r["blank"]["element"] == element and r["blank"]["length"] == h and
+                    r["blank"]["contact"] == "node" and
+                    Blank(**r["blank"]).label != ref["label"]]
+            if not done:
+                continue
+            by_layers = sorted(done, key=lambda r: r["blank"]["layers"])
+            findings.append(
+                f"- {element}, h = {h:g} mm, node-to-surface contact: largest force error "
+                + ", ".join(f"{_pct(errors(r, ref)['force'])} with {r['blank']['layers']} "
+                            f"layer(s)" for r in by_layers)
+                + "; chatter " + ", ".join(_pct(r["chatter"]) for r in by_layers) + ".")
+    if findings:
+        lines += ["## What it shows", "",
+                  "Against the reference (forces on the moving mean, the largest error over "
+                  "the strokes of the table):", "", *findings, ""]
     lines += ["## Every run", "",
               _row(["element", "contact", "h (mm)", "hexahedra"]
                    + [f"F({s:g}) N" for s in STROKES]
@@ -352,11 +385,17 @@ def report(runs: dict[str, dict[str, Any]], code: str) -> str:
                                                       "beta2": np.nan}
         lines.append(_row(
             [b.element, b.contact, f"{b.length:g}", b.size]
-            + [("-" if not np.isfinite(v) else f"{v:.2f}") for v in r.get("force_N", [])]
+            + [("-" if not np.isfinite(v) else f"{v:.2f}") for v in mean_forces(r)]
             + [_deg(r.get("beta1_deg", np.nan)), _deg(r.get("beta2_deg", np.nan)),
                _pct(e["force"]), _deg(max(e["beta1"], e["beta2"])),
                _pct(r.get("chatter", np.nan)), r.get("increments", 0),
-               r.get("iterations", 0), r.get("cuts", 0), r["wall_s"], r["status"]]))
+               r.get("iterations", 0), r.get("cuts", 0), r["wall_s"],
+               r["status"].split(":")[0]]))
+    stopped = [r for r in order if r["status"] != "completed"]
+    if stopped:
+        lines += ["", "Runs that did not complete, and why (their last cut's message):", ""]
+        lines += [f"- {Blank(**r['blank']).label}: {r['status'].split('   ')[-1].strip()}"
+                  for r in stopped]
     lines += ["", f"![punch force, 2 layers]({STEM}_force.png)", ""]
     return "\n".join(lines)
 
@@ -380,13 +419,28 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--again", action="store_true",
                         help="run again the blanks already kept")
     parser.add_argument("--reuse", action="store_true", help="no run: report the kept runs")
+    parser.add_argument("--collect", action="store_true",
+                        help="no run: keep the results found in results/ of the blanks "
+                        "asked for that have none kept (runs stopped before they ended)")
     parser.add_argument("--json", action="store_true", help="print the numbers only")
     args = parser.parse_args(argv)
     blanks = [Blank(h, n, e, c) for e in listed(args.elements, str, ELEMENTS)
               for c in listed(args.contacts, str, CONTACTS)
               for h in listed(args.lengths, float) for n in listed(args.layers, int)]
     runs = kept()
-    if not args.reuse:
+    if args.collect:
+        for blank in blanks:
+            results = HERE / "results" / blank.label / "results.h5"
+            if blank.label in runs or not results.exists():
+                continue
+            from ddpy.io.results import ResultsReader
+            with ResultsReader(results) as r:
+                wall = float(r.history()["time_total"].sum())
+            runs[blank.label] = numbers_of(blank, results, wall,
+                                           "stopped before it ended (--collect)")
+            print(f"{blank.label}: collected, {runs[blank.label]['status']}", file=sys.stderr)
+        runs_file(STEM).write_text(json.dumps(runs, indent=1) + "\n")
+    elif not args.reuse:
         todo = [b for b in blanks if args.again or b.label not in runs]
         tools = HERE / "tools"
         if todo and not (tools / "die.nagata.tool").exists():

@@ -155,6 +155,26 @@ class MumpsSolver:
             raise LinearSolverError(int(status), "analysis")
         self.n, self.nnz = n, rows.shape[0]
 
+    def analyse_elements(self, n: int, element_variables: ArrayLike) -> None:
+        """Symbolic analysis only, of the n x n matrix assembled from elements:
+        ``element_variables[e]`` are the 0-based unknowns element e couples (MUMPS's
+        elemental input). For MUMPS's estimates of a large structure (``statistics()``:
+        flops, factor entries, memory per process) without its coordinates in memory; the
+        instance cannot factorize after it (analyse coordinates for that)."""
+        variables = int_array(element_variables, "element_variables", (None, None))
+        n = operator.index(n)
+        if not 1 <= n <= INT32_MAX:
+            raise ValueError(f"matrix size must lie in 1..{INT32_MAX} (32-bit MUMPS), got {n}")
+        if variables.size == 0 or variables.size > INT32_MAX:
+            raise ValueError(f"between 1 and {INT32_MAX} element variables, got {variables.size}")
+        if variables.min() < 0 or variables.max() >= n:
+            raise ValueError(f"element variables must lie in 0..{n - 1}")
+        status = _core.solver_analyse_elements(self._live(), n, variables.shape[1],
+                                               np.ascontiguousarray(variables).ravel())
+        if status < 0:
+            raise LinearSolverError(int(status), "analysis")
+        self.n, self.nnz = 0, 0
+
     @property
     def handle(self) -> int:
         """The core's handle of this instance, for the core's own calls (its Newton loop)."""

@@ -12,7 +12,7 @@ module ddpy_api
                                 solver_solve, solver_destroy, solver_info, &
                                 solver_set_control, solver_set_real_control, &
                                 solver_set_ordering, solver_world, solver_serve, &
-                                solver_finish
+                                solver_finish, solver_analyse_elements
   !$ use omp_lib, only: omp_get_max_threads, omp_set_num_threads
   implicit none
   private
@@ -21,7 +21,8 @@ module ddpy_api
             api_nagata_evaluate, api_nagata_edge_coefficient, api_solver_create, &
             api_solver_analyse, api_solver_factorize, api_solver_solve, api_solver_info, &
             api_solver_destroy, api_solver_set_control, api_solver_set_real_control, &
-            api_solver_set_ordering, api_solver_world, api_solver_serve, api_solver_finish
+            api_solver_set_ordering, api_solver_world, api_solver_serve, api_solver_finish, &
+            api_solver_analyse_elements
 
   integer, parameter :: nb = max_bezier_degree
   integer, parameter :: nc = nagata_coefficient_count
@@ -180,6 +181,17 @@ contains
     integer(c_int), intent(out) :: status
     call solver_analyse(handle, n, nz, irn + 1, jcn + 1, status)
   end subroutine api_solver_analyse
+
+  !> Analyse the structure of nelt elements of k variables each, 0-based (MUMPS's estimates).
+  subroutine api_solver_analyse_elements(handle, n, k, nelt, vars, status) &
+    bind(C, name="ddpy_solver_analyse_elements")
+    integer(c_int), value, intent(in) :: handle, n, k, nelt
+    integer(c_int), intent(in) :: vars(k, nelt)
+    integer(c_int), intent(out) :: status
+    integer :: e
+    call solver_analyse_elements(handle, n, nelt, k*nelt, [(1 + k*e, e = 0, nelt)], &
+                                 reshape(vars + 1, [k*nelt]), status)
+  end subroutine api_solver_analyse_elements
 
   subroutine api_solver_factorize(handle, nz, a, status) bind(C, name="ddpy_solver_factorize")
     integer(c_int), value, intent(in) :: handle, nz

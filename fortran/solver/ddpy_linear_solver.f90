@@ -20,7 +20,8 @@ module ddpy_linear_solver
   private
   public :: max_solvers, solver_create, solver_analyse, solver_factorize, solver_solve, &
             solver_destroy, solver_info, solver_set_control, solver_set_real_control, &
-            solver_set_ordering, solver_world, solver_serve, solver_finish
+            solver_set_ordering, solver_world, solver_serve, solver_finish, &
+            solver_analyse_elements
 
   include 'dmumps_struc.h'
   include 'mpif.h'
@@ -201,7 +202,7 @@ contains
       id%icntl(7) = ordering
       ! Extra workspace: FE matrices with many equal pivots can outgrow the estimate.
       id%icntl(14) = 40
-      nullify (id%irn, id%jcn, id%a, id%rhs, id%perm_in)
+      nullify (id%irn, id%jcn, id%a, id%rhs, id%perm_in, id%eltptr, id%eltvar)
     end associate
     in_use(handle) = .true.
     analysed(handle) = .false.
@@ -253,6 +254,7 @@ contains
       end if
       call release_arrays(handle)
       allocate (id%irn(nz), id%jcn(nz), id%a(nz), id%rhs(n))
+      id%icntl(5) = 0
       id%irn = irn
       id%jcn = jcn
       id%a = 0.0_wp
@@ -264,6 +266,44 @@ contains
     analysed(handle) = status >= 0
     factorized(handle) = .false.
   end subroutine solver_analyse
+
+  !> Symbolic analysis of an n x n matrix given by its nelt elements (MUMPS's elemental
+  !> input, ICNTL(5) = 1): element e couples the variables eltvar(eltptr(e):eltptr(e+1)-1)
+  !> (1-based). For MUMPS's estimates of large structures (flops, factor entries, memory
+  !> per process) at a fraction of the coordinates' memory: the handle is left unanalysed,
+  !> so it cannot factorize; solver_info gives the estimates.
+  subroutine solver_analyse_elements(handle, n, nelt, nvar, eltptr, eltvar, status)
+    integer, intent(in) :: handle, n, nelt, nvar
+    integer, intent(in) :: eltptr(nelt + 1), eltvar(nvar)
+    integer, intent(out) :: status
+    if (.not. valid_handle(handle)) then
+      status = status_bad_handle
+      return
+    end if
+    associate (id => instance(handle))
+      if (id%icntl(7) == 1) then
+        if (.not. associated(id%perm_in)) then
+          status = status_size_mismatch
+          return
+        else if (size(id%perm_in) /= n) then
+          status = status_size_mismatch
+          return
+        end if
+      end if
+      call release_arrays(handle)
+      allocate (id%eltptr(nelt + 1), id%eltvar(nvar))
+      id%eltptr = eltptr
+      id%eltvar = eltvar
+      id%n = n
+      id%nelt = nelt
+      id%icntl(5) = 1
+    end associate
+    call send_command(command_analyse, handle, 0, 0)
+    call run_job(handle, 1, status)
+    call release_arrays(handle)
+    analysed(handle) = .false.
+    factorized(handle) = .false.
+  end subroutine solver_analyse_elements
 
   !> Numerical factorization with new values on the analysed structure. On a workspace
   !> shortage (INFO -8, -9) the relaxation is raised and the factorization retried.
@@ -427,6 +467,8 @@ contains
       if (associated(id%jcn)) deallocate (id%jcn)
       if (associated(id%a)) deallocate (id%a)
       if (associated(id%rhs)) deallocate (id%rhs)
+      if (associated(id%eltptr)) deallocate (id%eltptr)
+      if (associated(id%eltvar)) deallocate (id%eltvar)
     end associate
   end subroutine release_arrays
 

@@ -135,3 +135,37 @@ def test_built_in_case_on_two_processes_gives_the_sequential_answers(tmp_path: P
     assert np.abs(a["tool_force"] - b["tool_force"]).max() <= 1e-7 * scale
     for name in fa:
         assert np.abs(fa[name] - fb[name]).max() <= 1e-8 * np.abs(fa[name]).max(), name
+
+
+def test_elemental_analysis_gives_estimates_near_the_assembled_ones() -> None:
+    """MumpsSolver.analyse_elements (MUMPS's estimates of large blanks, docs/mpi.md): the
+    same structure as coordinates, the same pivot order; then no factorization."""
+    from ddpy.core.linalg import LinearSolverError, MumpsSolver
+    from ddpy.core.ordering import equation_order, nested_dissection, node_adjacency
+    from ddpy.model.mesh import HexMesh
+
+    mesh = HexMesh.box(30.0, 15.0, 1.0, 30, 15, 3)
+    elements = np.asarray(mesh.elements)
+    unknowns = (3 * elements[:, :, None] + np.arange(3)).reshape(len(elements), 24)
+    n = 3 * len(mesh.nodes)
+    nodes = nested_dissection(node_adjacency(elements, len(mesh.nodes)), mesh.nodes)
+    position = equation_order(nodes, np.repeat(np.arange(len(mesh.nodes)), 3))
+    estimates = []
+    for elemental in (True, False):
+        with MumpsSolver() as solver:
+            solver.set_ordering(position)
+            if elemental:
+                solver.analyse_elements(n, unknowns)
+                with pytest.raises(LinearSolverError):
+                    solver.factorize(np.zeros(0))
+            else:
+                solver.analyse(n, np.repeat(unknowns, 24, axis=1).ravel(),
+                               np.tile(unknowns, (1, 24)).ravel())
+            estimates.append(solver.statistics())
+    elemental, assembled = estimates
+    assert elemental["processes"] == assembled["processes"] == 1
+    for key in ("estimated_flops", "estimated_factor_entries", "estimated_memory_mb_total"):
+        assert assembled[key] > 0
+        assert 0.9 <= elemental[key] / assembled[key] <= 1.3, (key, elemental, assembled)
+    with pytest.raises(ValueError):
+        MumpsSolver().analyse_elements(n, unknowns + n)

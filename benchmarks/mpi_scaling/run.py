@@ -281,9 +281,10 @@ def part_estimates() -> dict[str, Any]:
             print(f"estimates {label} on {n}: {entry['processes'][str(n)]}", file=sys.stderr)
         if label == BLANKS[0][0]:  # the elemental input's estimates against the assembled's
             result = WORK / "estimates" / f"{label}-1-assembled.json"
-            result.exists() or subprocess.run([str(MPI_PYTHON), str(Path(__file__).resolve()), "--analyse",
-                            str(structure), str(result), "assembled"], check=True,
-                           stdin=subprocess.DEVNULL)
+            if not result.exists():
+                subprocess.run([str(MPI_PYTHON), str(Path(__file__).resolve()), "--analyse",
+                                str(structure), str(result), "assembled"], check=True,
+                               stdin=subprocess.DEVNULL)
             entry["assembled_1"] = json.loads(result.read_text())
         out[label] = entry
     return out

@@ -446,8 +446,11 @@ def main(argv: list[str] | None = None) -> int:
         WORK.mkdir(parents=True, exist_ok=True)
         parts = args.part or ["answers", "paper", "estimates"]
         for part in parts:
-            data[part] = {"answers": part_answers, "paper": part_paper,
-                          "estimates": part_estimates}[part]()
+            result = {"answers": part_answers, "paper": part_paper,
+                      "estimates": part_estimates}[part]()
+            # read again: another part may have been written meanwhile
+            data = json.loads(JSON_FILE.read_text()) if JSON_FILE.exists() else {}
+            data[part] = result
             data["code"] = bench_common.code_version()
             data["cores"] = bench_common.cores()
             JSON_FILE.write_text(json.dumps(data, indent=1) + "\n")

@@ -91,9 +91,14 @@ def rank_main(argv: list[str]) -> int:
 def ddpy_run(build: str, processes: int, threads: int, case: Path | None, output: Path,
              extra: list[str] = ()) -> dict[str, Any]:
     """One `ddpy run` (build "seq" or "mpi"; processes > 1 only for "mpi") into output;
-    its wall time and each process's peak memory."""
+    its wall time, each process's peak memory and the machine's load. Kept in
+    <output>/run.json: a run done before is not run again (delete its folder for that)."""
+    kept = output / "run.json"
+    if kept.exists():
+        return json.loads(kept.read_text())
     if output.exists():
         shutil.rmtree(output)
+    load_before = os.getloadavg()[0]
     python = SEQ_PYTHON if build == "seq" else MPI_PYTHON
     command = [str(python), str(Path(__file__).resolve()), "--rank-main", "run"]
     command += ([str(case)] if case else []) + ["--output", str(output),
@@ -109,7 +114,10 @@ def ddpy_run(build: str, processes: int, threads: int, case: Path | None, output
         raise RuntimeError(f"{' '.join(command)} failed ({done.returncode}):\n{done.stderr}")
     memory = sorted((json.loads(p.read_text()) for p in output.glob("memory-*.json")),
                     key=lambda m: m["rank"])
-    return {"wall_s": wall, "peak_mb": [round(m["peak_mb"], 1) for m in memory]}
+    run = {"wall_s": wall, "peak_mb": [round(m["peak_mb"], 1) for m in memory],
+           "load": [round(load_before, 1), round(os.getloadavg()[0], 1)]}
+    kept.write_text(json.dumps(run))
+    return run
 
 
 def read_run(folder: Path) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
@@ -175,7 +183,7 @@ def part_answers() -> dict[str, Any]:
     out: dict[str, Any] = {"built_in": {}, "coarse": {}}
     reference = WORK / "answers" / "seq"
     out["built_in"]["seq"] = ddpy_run("seq", 1, 1, None, reference)
-    for n in (1, 2, 3):
+    for n in (2, 1, 3):
         folder = WORK / "answers" / f"mpi{n}"
         run = ddpy_run("mpi", n, 1, None, folder)
         out["built_in"][f"mpi{n}"] = {**run, **compare(reference, folder)}
@@ -301,13 +309,20 @@ def _e(x: float) -> str:
     return f"{x:.1e}"
 
 
+def _load(run: dict[str, Any]) -> str:
+    """The machine's 1-minute load average before and after a run."""
+    return "{} / {}".format(*run["load"]) if "load" in run else "?"
+
+
 def report(data: dict[str, Any]) -> str:
     row = bench_common.table_row
     lines = ["# MPI processes and the parallel MUMPS", "",
              bench_common.computed_at(data.get("code", "")) + " Written by "
              "`benchmarks/mpi_scaling/run.py` (every number below is computed by it) on "
-             f"this machine: {data.get('cores', '?')} cores; how to run with MPI: "
-             "[docs/mpi.md](../mpi.md).", ""]
+             f"this machine: {data.get('cores', '?')} cores, shared with other work: the "
+             "load column gives the machine's 1-minute load average before and after each "
+             "run (2 is both cores busy), so the times are as noisy as that says; how to run "
+             "with MPI: [docs/mpi.md](../mpi.md).", ""]
     answers = data.get("answers")
     if answers:
         lines += ["## The same answers", "",
@@ -318,8 +333,8 @@ def report(data: dict[str, Any]) -> str:
                   row(["case", "processes", "increments (seq / MPI)",
                        "Newton iterations (seq / MPI)", "increments with other iterations",
                        "step", "tool force", "displacement", "stress", "plastic strain",
-                       "wall s"]),
-                  row(["---"] * 11)]
+                       "wall s", "load"]),
+                  row(["---"] * 12)]
 
         def add(case: str, n: str, r: dict[str, Any]) -> None:
             other = r.get("increments_with_other_iterations", [])
@@ -331,7 +346,7 @@ def report(data: dict[str, Any]) -> str:
                               _e(r.get("displacement", float("nan"))),
                               _e(r.get("stress", float("nan"))),
                               _e(r.get("plastic_strain", float("nan"))),
-                              _g(r["wall_s"])]))
+                              _g(r["wall_s"]), _load(r)]))
 
         for key, r in answers["built_in"].items():
             if key != "seq":
@@ -350,14 +365,14 @@ def report(data: dict[str, Any]) -> str:
                   "process's largest resident size (rank 0 first).", "",
                   row(["build", "processes x threads", "factorizations", "s per factorization",
                        "Newton iterations", "s per iteration", "solves s", "peak MB per process",
-                       "wall s"]),
-                  row(["---"] * 9)]
+                       "wall s", "load"]),
+                  row(["---"] * 10)]
         for r in paper["runs"].values():
             lines.append(row([r["build"], f"{r['processes']} x {r['threads']}",
                               r["factorizations"], _g(r["s_per_factorization"]),
                               r["iterations"], _g(r["s_per_iteration"]), _g(r["solve_s"]),
                               " + ".join(f"{m:.0f}" for m in r["peak_mb"]),
-                              _g(r["wall_s"])]))
+                              _g(r["wall_s"]), _load(r)]))
         lines.append("")
     estimates = data.get("estimates")
     if estimates:

@@ -60,7 +60,7 @@ def test_solution_across_processes(tmp_path: Path, n: int) -> None:
         return float(np.abs(np.bincount(rows, values * x[cols], minlength=size) - 1.0).max())
 
     # measured: residuals 9e-11 (1 process) and 6e-11 (sequential), solutions 1e-10 apart
-    # relative (the parallel MUMPS orders and pivots its own way)
+    # relative (the parallel MUMPS pivots and sums in its own order)
     assert residual(result["x"]) <= 10 * residual(expected) + 1e-12
     assert np.abs(result["x"] - expected).max() <= 1e-8 * np.abs(expected).max()
 

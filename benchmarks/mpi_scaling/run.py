@@ -434,6 +434,11 @@ def plan(data: dict[str, Any]) -> list[str]:
     one = paper.get("mpi 1p 1t")
     if one and twelve:
         rate = twelve["estimated_flops"] / one["s_per_factorization"]
+    two = paper.get("mpi 2p 1t")
+    # rank 0's own share beyond MUMPS's: the driver (mesh, state, assembly, contact, output)
+    # of the paper's 20,010-hexahedron blank, as rank 0's peak over rank 1's on 2 processes
+    driver_mb = (two["peak_mb"][0] - two["peak_mb"][1]) if two and len(two["peak_mb"]) > 1 \
+        else None
     lines = ["### An estimate of what each blank needs", "",
              f"Stated as an estimate: with {MEMORY_PER_PROCESS_MB // 1000} GB per process "
              "(this machine's 24 GB over its 2 cores), the fewest processes of those analysed "
@@ -443,19 +448,27 @@ def plan(data: dict[str, Any]) -> list[str]:
                  "blank's measured time per factorization, 1 process, 1 thread; the two blanks "
                  "are about the same size), divided by the processes as if MUMPS scaled "
                  "perfectly, which it does not" if rate else "") + ".", "",
-             row(["blank", "processes", "MB, largest process", "MB, all",
-                  "s per factorization (ideal)"]), row(["---"] * 5)]
+             row(["blank", "processes", "machines of 24 GB (2 processes each)",
+                  "MB, largest process", "MB, all", "rank 0's driver besides, MB",
+                  "s per factorization (ideal)"]), row(["---"] * 7)]
     for label, e in estimates.items():
         fits = [(int(n), s) for n, s in e["processes"].items()
                 if s["estimated_memory_mb_max"] <= MEMORY_PER_PROCESS_MB]
         if not fits:
             most = max(map(int, e["processes"]))
-            lines.append(row([label, f"more than {most}", "", "", ""]))
+            lines.append(row([label, f"more than {most}", "", "", "", "", ""]))
             continue
         n, s = min(fits, key=lambda f: f[0])
-        lines.append(row([label, n, s["estimated_memory_mb_max"],
-                          s["estimated_memory_mb_total"],
+        driver = f"{driver_mb * e['hexahedra'] / 20010:.0f}" if driver_mb is not None else "?"
+        lines.append(row([label, n, (n + 1) // 2, s["estimated_memory_mb_max"],
+                          s["estimated_memory_mb_total"], driver,
                           _g(s["estimated_flops"] / rate / n) if rate else "?"]))
+    lines += ["", "Rank 0's driver column scales the paper blank's measured share (rank 0's "
+              "peak memory over rank 1's on 2 processes) with the hexahedra: it holds the "
+              "mesh, the state, the assembled coordinates and the results, beside its part of "
+              "the factors. The time column assumes perfect scaling: MUMPS's factorization "
+              "of a sheet's tree scales well below that on many processes, and the "
+              "centralized matrix is sent from rank 0 at every factorization."]
     return lines
 
 

@@ -452,14 +452,15 @@ def plan(data: dict[str, Any]) -> list[str]:
                   "MB, largest process", "MB, all", "rank 0's driver besides, MB",
                   "s per factorization (ideal)"]), row(["---"] * 7)]
     for label, e in estimates.items():
+        driver_here = driver_mb * e["hexahedra"] / 20010 if driver_mb is not None else 0.0
         fits = [(int(n), s) for n, s in e["processes"].items()
-                if s["estimated_memory_mb_max"] <= MEMORY_PER_PROCESS_MB]
+                if s["estimated_memory_mb_max"] + driver_here <= MEMORY_PER_PROCESS_MB]
         if not fits:
             most = max(map(int, e["processes"]))
             lines.append(row([label, f"more than {most}", "", "", "", "", ""]))
             continue
         n, s = min(fits, key=lambda f: f[0])
-        driver = f"{driver_mb * e['hexahedra'] / 20010:.0f}" if driver_mb is not None else "?"
+        driver = f"{driver_here:.0f}" if driver_mb is not None else "?"
         lines.append(row([label, n, (n + 1) // 2, s["estimated_memory_mb_max"],
                           s["estimated_memory_mb_total"], driver,
                           _g(s["estimated_flops"] / rate / n) if rate else "?"]))

@@ -442,7 +442,7 @@ def plan(data: dict[str, Any]) -> list[str]:
     lines = ["### An estimate of what each blank needs", "",
              f"Stated as an estimate: with {MEMORY_PER_PROCESS_MB // 1000} GB per process "
              "(this machine's 24 GB over its 2 cores), the fewest processes of those analysed "
-             "whose largest share fits" + (
+             "whose largest share, with rank 0's driver beside it, fits" + (
                  f"; the time per factorization at the flop rate of one process measured "
                  f"here ({_e(rate)} flop/s: the 20k blank's estimated flops over the paper "
                  "blank's measured time per factorization, 1 process, 1 thread; the two blanks "

@@ -412,9 +412,9 @@ def report(data: dict[str, Any]) -> str:
         first = next(iter(estimates.values()))
         if "assembled_1" in first:
             e, a = first["processes"]["1"], first["assembled_1"]
-            lines += ["", "The elemental input overstates a little: on the "
+            lines += ["", "The elemental input against the coordinates a run gives: on the "
                       f"{next(iter(estimates))} blank, 1 process, the same structure given as "
-                      "coordinates (as a run gives it) and the same order estimate "
+                      "coordinates and the same order estimate "
                       f"{_e(a['estimated_flops'])} flops, {_e(a['estimated_factor_entries'])} "
                       f"factor entries and {a['estimated_memory_mb_max']} MB, against "
                       f"{_e(e['estimated_flops'])}, {_e(e['estimated_factor_entries'])} and "

@@ -442,34 +442,42 @@ def plan(data: dict[str, Any]) -> list[str]:
     lines = ["### An estimate of what each blank needs", "",
              f"Stated as an estimate: with {MEMORY_PER_PROCESS_MB // 1000} GB per process "
              "(this machine's 24 GB over its 2 cores), the fewest processes of those analysed "
-             "whose largest share, with rank 0's driver beside it, fits" + (
+             "whose largest MUMPS share fits" + (
                  f"; the time per factorization at the flop rate of one process measured "
                  f"here ({_e(rate)} flop/s: the 20k blank's estimated flops over the paper "
                  "blank's measured time per factorization, 1 process, 1 thread; the two blanks "
                  "are about the same size), divided by the processes as if MUMPS scaled "
                  "perfectly, which it does not" if rate else "") + ".", "",
              row(["blank", "processes", "machines of 24 GB (2 processes each)",
-                  "MB, largest process", "MB, all", "rank 0's driver besides, MB",
+                  "MB, largest MUMPS share", "MB, all MUMPS shares",
+                  "MB, rank 0 (its share and the driver)",
                   "s per factorization (ideal)"]), row(["---"] * 7)]
     for label, e in estimates.items():
         driver_here = driver_mb * e["hexahedra"] / 20010 if driver_mb is not None else 0.0
         fits = [(int(n), s) for n, s in e["processes"].items()
-                if s["estimated_memory_mb_max"] + driver_here <= MEMORY_PER_PROCESS_MB]
+                if s["estimated_memory_mb_max"] <= MEMORY_PER_PROCESS_MB]
         if not fits:
             most = max(map(int, e["processes"]))
             lines.append(row([label, f"more than {most}", "", "", "", "", ""]))
             continue
         n, s = min(fits, key=lambda f: f[0])
-        driver = f"{driver_here:.0f}" if driver_mb is not None else "?"
+        rank0 = (f"{s['estimated_memory_mb_max'] + driver_here:.0f}" if driver_mb is not None
+                 else "?")
         lines.append(row([label, n, (n + 1) // 2, s["estimated_memory_mb_max"],
-                          s["estimated_memory_mb_total"], driver,
+                          s["estimated_memory_mb_total"], rank0,
                           _g(s["estimated_flops"] / rate / n) if rate else "?"]))
-    lines += ["", "Rank 0's driver column scales the paper blank's measured share (rank 0's "
-              "peak memory over rank 1's on 2 processes) with the hexahedra: it holds the "
-              "mesh, the state, the assembled coordinates and the results, beside its part of "
-              "the factors. The time column assumes perfect scaling: MUMPS's factorization "
-              "of a sheet's tree scales well below that on many processes, and the "
-              "centralized matrix is sent from rank 0 at every factorization."]
+    lines += ["", "Rank 0 holds the driver besides its MUMPS share: the mesh, the state, the "
+              "assembled coordinates, the contact search and the results. Its column adds "
+              "the paper blank's measured driver memory (rank 0's peak over rank 1's on 2 "
+              "processes"
+              + (f", {driver_mb:.0f} MB for 20,010 hexahedra" if driver_mb is not None else "")
+              + ") scaled with the hexahedra: an estimate. Beyond about 200 thousand "
+              "hexahedra rank 0 outgrows a machine of this size while the MUMPS shares "
+              "still fit: the centralized driver, not the factorization, sets the limit there, "
+              "and a run needs a large-memory machine for rank 0 (or the assembly and input "
+              "distributed, docs/mpi.md). The time column assumes perfect scaling: MUMPS's "
+              "factorization of a sheet's tree scales well below that on many processes, and "
+              "the centralized matrix is sent from rank 0 at every factorization."]
     return lines
 
 

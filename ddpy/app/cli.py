@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -58,11 +59,15 @@ def _convert(args: argparse.Namespace) -> int:
 
 
 def _info(args: argparse.Namespace) -> int:
+    from ddpy.core import mpi
     from ddpy.core.parallel import max_threads
 
     print(f"ddpy {__version__}")
     print(f"core threads (OpenMP): {max_threads()}")
-    print("sparse solver: MUMPS (sequential)")
+    if mpi.parallel_build():
+        print(f"sparse solver: MUMPS (parallel, MPI: {mpi.world()[1]} process(es))")
+    else:
+        print("sparse solver: MUMPS (sequential)")
     return 0
 
 
@@ -311,8 +316,30 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _mpi_rank() -> int:
+    """Under an MPI launcher with several processes: start MPI and return this process's
+    rank (docs/mpi.md); 0 otherwise. Ranks > 0 serve rank 0's solver calls in ``main``."""
+    from ddpy.core import mpi
+
+    if mpi.launched_size() < 2:
+        return 0
+    return mpi.start()
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of the ``ddpy`` console command."""
+    """Entry point of the ``ddpy`` console command. Under ``mpirun -n N`` rank 0 runs the
+    command and ranks > 0 take their part in its MUMPS calls (docs/mpi.md)."""
+    from ddpy.core import mpi
+
+    try:
+        rank = _mpi_rank()
+    except mpi.MpiError as error:
+        if os.environ.get("OMPI_COMM_WORLD_RANK", os.environ.get("PMI_RANK", "0")) == "0":
+            print(f"ddpy: error: {error}", file=sys.stderr)
+        return 2
+    if rank > 0:
+        mpi.serve()
+        return 0
     parser = build_parser()
     args = parser.parse_args(argv)
     if args.command is None:

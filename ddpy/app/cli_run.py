@@ -13,6 +13,8 @@ from pathlib import Path
 from types import FrameType
 from typing import TYPE_CHECKING, TextIO
 
+from ddpy.core import mpi
+
 if TYPE_CHECKING:
     from ddpy.app.runner import Progress
 
@@ -24,11 +26,12 @@ EXIT = {"completed": 0, "stopped": 0, "failed": 1, "interrupted": 130}
 
 class ProgressDisplay:
     """A progress bar rewritten in place on a terminal, one plain line per increment
-    otherwise (a log file, a pipe)."""
+    otherwise (a log file, a pipe, and under mpirun, which hands rank 0 a terminal of its
+    own whatever mpirun's output is)."""
 
     def __init__(self, stream: TextIO, width: int = 24) -> None:
         self.stream, self.width = stream, width
-        self.tty = stream.isatty()
+        self.tty = stream.isatty() and mpi.launched_size() == 1
         self.start = time.perf_counter()
         self._open = False
 

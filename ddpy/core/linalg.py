@@ -1,4 +1,5 @@
-"""Sparse direct solution through the core's MUMPS (sequential) solver.
+"""Sparse direct solution through the core's MUMPS (sequential, or parallel under MPI:
+docs/mpi.md).
 
 The structure is analysed once (``analyse``), then factorized (``factorize``) and solved
 (``solve``) as often as the values change, as the Newton loop of a forming run does.
@@ -16,6 +17,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ddpy import _core
 from ddpy._validate import float_array, int_array
+from ddpy.core import mpi
 
 __all__ = ["MumpsSolver", "LinearSolverError", "RowStructure", "row_structure", "spsolve"]
 
@@ -33,6 +35,8 @@ _MESSAGES = {
     -1002: "analyse and factorize before solving",
     -1003: "the size differs from the analysed structure",
     -1004: "too many solvers open at once; close some",
+    -1005: "the processes were finished (ddpy.core.mpi.finish)",
+    -1006: "only rank 0 drives the solver; ranks > 0 serve it (ddpy.core.mpi.serve)",
 }
 
 
@@ -98,6 +102,7 @@ class MumpsSolver:
             raise ValueError(f"symmetry must be one of {sorted(_SYMMETRY)}, got {symmetry!r}")
         if ordering not in _ORDERING:
             raise ValueError(f"ordering must be one of {sorted(_ORDERING)}, got {ordering!r}")
+        mpi.start()
         handle, status = _core.solver_create(_SYMMETRY[symmetry], _ORDERING[ordering])
         if status < 0:
             raise LinearSolverError(int(status), "initialization")
@@ -150,6 +155,26 @@ class MumpsSolver:
             raise LinearSolverError(int(status), "analysis")
         self.n, self.nnz = n, rows.shape[0]
 
+    def analyse_elements(self, n: int, element_variables: ArrayLike) -> None:
+        """Symbolic analysis only, of the n x n matrix assembled from elements:
+        ``element_variables[e]`` are the 0-based unknowns element e couples (MUMPS's
+        elemental input). For MUMPS's estimates of a large structure (``statistics()``:
+        flops, factor entries, memory per process) without its coordinates in memory; the
+        instance cannot factorize after it (analyse coordinates for that)."""
+        variables = int_array(element_variables, "element_variables", (None, None))
+        n = operator.index(n)
+        if not 1 <= n <= INT32_MAX:
+            raise ValueError(f"matrix size must lie in 1..{INT32_MAX} (32-bit MUMPS), got {n}")
+        if variables.size == 0 or variables.size > INT32_MAX:
+            raise ValueError(f"between 1 and {INT32_MAX} element variables, got {variables.size}")
+        if variables.min() < 0 or variables.max() >= n:
+            raise ValueError(f"element variables must lie in 0..{n - 1}")
+        status = _core.solver_analyse_elements(self._live(), n, variables.shape[1],
+                                               np.ascontiguousarray(variables).ravel())
+        if status < 0:
+            raise LinearSolverError(int(status), "analysis")
+        self.n, self.nnz = 0, 0
+
     @property
     def handle(self) -> int:
         """The core's handle of this instance, for the core's own calls (its Newton loop)."""
@@ -171,14 +196,30 @@ class MumpsSolver:
         return x
 
     def statistics(self) -> dict[str, float]:
-        """MUMPS figures of the last call: ordering used, entries in factors, flops."""
+        """MUMPS figures of the last calls: ordering used, entries in factors, flops of the
+        last factorization; the analysis's estimates (``estimated_flops`` RINFOG(1),
+        ``estimated_factor_entries`` INFOG(3), ``estimated_memory_mb_max``/``_total``
+        INFOG(16)/(17): in-core memory of the factorization on the largest process / all
+        processes); after a factorization the memory it allocated (``memory_mb_max``/
+        ``_total``, INFOG(18)/(19)) and used (``memory_used_mb_max``/``_total``,
+        INFOG(21)/(22)); ``processes``, the MPI processes sharing the work."""
         values, flops, status = _core.solver_info(self._live())
         if status < 0:
             raise LinearSolverError(int(status), "statistics")
-        entries = int(values[3])
+
+        def entries(value: int) -> int:
+            return int(value) if value >= 0 else -int(value) * 1_000_000
+
         return {"infog1": int(values[0]), "ordering": int(values[2]),
-                "factor_entries": entries if entries >= 0 else -entries * 1_000_000,
-                "flops": float(flops)}
+                "factor_entries": entries(values[3]),
+                "flops": float(flops[0]),
+                "estimated_flops": float(flops[1]),
+                "estimated_factor_entries": entries(values[4]),
+                "estimated_memory_mb_max": int(values[5]),
+                "estimated_memory_mb_total": int(values[6]),
+                "memory_mb_max": int(values[7]), "memory_mb_total": int(values[8]),
+                "memory_used_mb_max": int(values[9]), "memory_used_mb_total": int(values[10]),
+                "processes": int(values[11])}
 
     def close(self) -> None:
         """Free the MUMPS instance (also done when the object is collected)."""

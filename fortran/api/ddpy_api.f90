@@ -11,7 +11,8 @@ module ddpy_api
   use ddpy_linear_solver, only: solver_create, solver_analyse, solver_factorize, &
                                 solver_solve, solver_destroy, solver_info, &
                                 solver_set_control, solver_set_real_control, &
-                                solver_set_ordering
+                                solver_set_ordering, solver_world, solver_serve, &
+                                solver_finish, solver_analyse_elements
   !$ use omp_lib, only: omp_get_max_threads, omp_set_num_threads
   implicit none
   private
@@ -20,7 +21,8 @@ module ddpy_api
             api_nagata_evaluate, api_nagata_edge_coefficient, api_solver_create, &
             api_solver_analyse, api_solver_factorize, api_solver_solve, api_solver_info, &
             api_solver_destroy, api_solver_set_control, api_solver_set_real_control, &
-            api_solver_set_ordering
+            api_solver_set_ordering, api_solver_world, api_solver_serve, api_solver_finish, &
+            api_solver_analyse_elements
 
   integer, parameter :: nb = max_bezier_degree
   integer, parameter :: nc = nagata_coefficient_count
@@ -180,6 +182,17 @@ contains
     call solver_analyse(handle, n, nz, irn + 1, jcn + 1, status)
   end subroutine api_solver_analyse
 
+  !> Analyse the structure of nelt elements of k variables each, 0-based (MUMPS's estimates).
+  subroutine api_solver_analyse_elements(handle, n, k, nelt, vars, status) &
+    bind(C, name="ddpy_solver_analyse_elements")
+    integer(c_int), value, intent(in) :: handle, n, k, nelt
+    integer(c_int), intent(in) :: vars(k, nelt)
+    integer(c_int), intent(out) :: status
+    integer :: e
+    call solver_analyse_elements(handle, n, nelt, k*nelt, [(1 + k*e, e = 0, nelt)], &
+                                 reshape(vars + 1, [k*nelt]), status)
+  end subroutine api_solver_analyse_elements
+
   subroutine api_solver_factorize(handle, nz, a, status) bind(C, name="ddpy_solver_factorize")
     integer(c_int), value, intent(in) :: handle, nz
     real(c_double), intent(in) :: a(nz)
@@ -197,8 +210,8 @@ contains
 
   subroutine api_solver_info(handle, values, flops, status) bind(C, name="ddpy_solver_info")
     integer(c_int), value, intent(in) :: handle
-    integer(c_int), intent(out) :: values(4)
-    real(c_double), intent(out) :: flops
+    integer(c_int), intent(out) :: values(12)
+    real(c_double), intent(out) :: flops(2)
     integer(c_int), intent(out) :: status
     call solver_info(handle, values, flops, status)
   end subroutine api_solver_info
@@ -232,5 +245,24 @@ contains
     integer(c_int), intent(out) :: status
     call solver_destroy(handle, status)
   end subroutine api_solver_destroy
+
+  !> This process's MPI rank, the number of processes (starts MPI when needed) and whether
+  !> the build has the parallel MUMPS (1) or the sequential one (0).
+  subroutine api_solver_world(rank, size, parallel, status) bind(C, name="ddpy_solver_world")
+    integer(c_int), intent(out) :: rank, size, parallel, status
+    call solver_world(rank, size, parallel, status)
+  end subroutine api_solver_world
+
+  !> Ranks > 0: serve rank 0's solver commands until it finishes.
+  subroutine api_solver_serve(status) bind(C, name="ddpy_solver_serve")
+    integer(c_int), intent(out) :: status
+    call solver_serve(status)
+  end subroutine api_solver_serve
+
+  !> Rank 0: free every solver, stop the ranks > 0, end MPI.
+  subroutine api_solver_finish(status) bind(C, name="ddpy_solver_finish")
+    integer(c_int), intent(out) :: status
+    call solver_finish(status)
+  end subroutine api_solver_finish
 
 end module ddpy_api

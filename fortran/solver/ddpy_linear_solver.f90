@@ -1,30 +1,58 @@
-!> Sparse direct solver: sequential MUMPS behind integer handles.
+!> Sparse direct solver: MUMPS behind integer handles, sequential or across MPI processes.
 !>
 !> A handle keeps one MUMPS instance with its sparsity structure, so the symbolic analysis
 !> (job 1) is done once per structure and reused by every factorization (job 2) and solve
 !> (job 3) of the Newton loop. MUMPS never prints: all its output units are switched off and
 !> its error codes are returned as status values.
+!>
+!> Processes (docs/mpi.md): MUMPS's host-and-workers pattern (PAR = 1, the assembled matrix
+!> centralized on the host). Rank 0 runs the driver and calls the solver_* procedures; each
+!> of them that reaches MUMPS first broadcasts a command (what, handle, two values) to the
+!> ranks > 0, which wait in solver_serve and make the same collective MUMPS call on their own
+!> instance of the same handle. Rank 0 checks its arguments before it broadcasts, so every
+!> command sent is a MUMPS call on every rank, and MUMPS's INFOG(1), the same on all ranks,
+!> drives the retries alike. The sequential build runs the same code with one process (the
+!> stub MPI of libmumps-seq: its broadcast does nothing).
 module ddpy_linear_solver
   use ddpy_kinds, only: wp
+  use ddpy_build, only: parallel_mumps
   implicit none
   private
   public :: max_solvers, solver_create, solver_analyse, solver_factorize, solver_solve, &
             solver_destroy, solver_info, solver_set_control, solver_set_real_control, &
-            solver_set_ordering
+            solver_set_ordering, solver_world, solver_serve, solver_finish, &
+            solver_analyse_elements
 
   include 'dmumps_struc.h'
+  include 'mpif.h'
 
   !> Number of solver instances that may live at the same time.
   integer, parameter :: max_solvers = 16
 
   !> Status values besides MUMPS's own (negative INFOG(1) values are passed through).
   integer, parameter, public :: status_bad_handle = -1001, status_not_analysed = -1002, &
-                                status_size_mismatch = -1003, status_no_free_handle = -1004
+                                status_size_mismatch = -1003, status_no_free_handle = -1004, &
+                                status_finished = -1005, status_not_host = -1006
 
+  !> Commands rank 0 broadcasts to the ranks > 0: one integer message (command, handle,
+  !> value, value, and a real value's bits in the last two: one type for every broadcast,
+  !> which gfortran's argument checks ask of the implicit MPI interface).
+  integer, parameter :: message_size = 6
+  integer, parameter :: command_stop = 0, command_create = 1, command_analyse = 2, &
+                        command_factorize = 3, command_solve = 4, command_destroy = 5, &
+                        command_control = 6, command_real_control = 7
+
+  !> State of MPI in this process: not started, running, finished (stopped for good).
+  integer, parameter :: mpi_not_started = 0, mpi_running = 1, mpi_finished = 2
+
+  !> The handle table: MUMPS instances and what was done with each (the module's only state,
+  !> with the process's place in MPI_COMM_WORLD).
   type(dmumps_struc), target, save :: instance(max_solvers)
   logical, save :: in_use(max_solvers) = .false.
   logical, save :: analysed(max_solvers) = .false.
   logical, save :: factorized(max_solvers) = .false.
+  integer, save :: mpi_state = mpi_not_started
+  integer, save :: world_rank = 0, world_size = 1
 
 contains
 
@@ -35,15 +63,112 @@ contains
     valid_handle = in_use(handle)
   end function valid_handle
 
+  !> Start MPI once (MPI_Init) and learn this process's rank and the number of processes.
+  subroutine start_mpi()
+    integer :: ierr
+    if (mpi_state /= mpi_not_started) return
+    call mpi_init(ierr)
+    call mpi_comm_rank(mpi_comm_world, world_rank, ierr)
+    call mpi_comm_size(mpi_comm_world, world_size, ierr)
+    mpi_state = mpi_running
+  end subroutine start_mpi
+
+  !> This process's rank and the number of processes (MPI started here when it was not),
+  !> parallel 1 for the parallel MUMPS build, 0 for the sequential one; status: 0, or
+  !> status_finished after solver_finish.
+  subroutine solver_world(rank, size, parallel, status)
+    integer, intent(out) :: rank, size, parallel, status
+    call start_mpi()
+    rank = world_rank
+    size = world_size
+    parallel = merge(1, 0, parallel_mumps)
+    status = 0
+    if (mpi_state == mpi_finished) status = status_finished
+  end subroutine solver_world
+
+  !> Rank 0: send a command to the ranks > 0 (nothing to send with one process).
+  subroutine send_command(command, handle, value1, value2, real_value)
+    integer, intent(in) :: command, handle, value1, value2
+    real(wp), intent(in), optional :: real_value
+    integer :: message(message_size), ierr
+    if (world_size < 2) return
+    message = 0
+    message(1:4) = [command, handle, value1, value2]
+    if (present(real_value)) message(5:6) = transfer(real_value, message(5:6))
+    call mpi_bcast(message, message_size, mpi_integer, 0, mpi_comm_world, ierr)
+  end subroutine send_command
+
+  !> Ranks > 0: run rank 0's solver commands until it sends stop (solver_finish), then end
+  !> MPI. status: 0, or status_not_host on rank 0, which has nothing to serve.
+  subroutine solver_serve(status)
+    integer, intent(out) :: status
+    integer :: message(message_size), ierr, handle, ignored
+    call start_mpi()
+    status = status_not_host
+    if (world_rank == 0 .or. mpi_state /= mpi_running) return
+    status = 0
+    do
+      call mpi_bcast(message, message_size, mpi_integer, 0, mpi_comm_world, ierr)
+      handle = message(2)
+      select case (message(1))
+      case (command_create)
+        call init_instance(handle, message(3), message(4), ignored)
+      case (command_analyse)
+        call run_job(handle, 1, ignored)
+        analysed(handle) = ignored >= 0
+      case (command_factorize)
+        call factorize_job(handle, ignored)
+      case (command_solve)
+        call run_job(handle, 3, ignored)
+      case (command_destroy)
+        call destroy_instance(handle, ignored)
+      case (command_control)
+        instance(handle)%icntl(message(3)) = message(4)
+      case (command_real_control)
+        instance(handle)%cntl(message(3)) = transfer(message(5:6), 0.0_wp)
+      case default
+        exit
+      end select
+    end do
+    call end_mpi()
+  end subroutine solver_serve
+
+  !> Rank 0, at the end of the driver: free every instance (on all ranks), tell the ranks > 0
+  !> to stop and end MPI. Later calls of the solver fail with status_finished.
+  subroutine solver_finish(status)
+    integer, intent(out) :: status
+    integer :: handle, ignored
+    status = 0
+    if (mpi_state /= mpi_running) return
+    if (world_rank /= 0) then
+      status = status_not_host
+      return
+    end if
+    do handle = 1, max_solvers
+      if (in_use(handle)) call solver_destroy(handle, ignored)
+    end do
+    call send_command(command_stop, 0, 0, 0)
+    call end_mpi()
+  end subroutine solver_finish
+
+  subroutine end_mpi()
+    integer :: ierr
+    call mpi_finalize(ierr)
+    mpi_state = mpi_finished
+  end subroutine end_mpi
+
   !> Start a MUMPS instance. sym: 0 unsymmetric, 1 symmetric positive definite,
   !> 2 general symmetric. ordering: MUMPS ICNTL(7) (5 = METIS, 7 = automatic).
   subroutine solver_create(sym, ordering, handle, status)
     integer, intent(in) :: sym, ordering
     integer, intent(out) :: handle, status
-    include 'mpif.h'
-    integer :: h, ierr
-    logical, save :: mpi_started = .false.
+    integer :: h
     handle = 0
+    call start_mpi()
+    status = status_finished
+    if (mpi_state /= mpi_running) return
+    status = status_not_host
+    if (world_rank /= 0) return
     status = status_no_free_handle
     do h = 1, max_solvers
       if (.not. in_use(h)) then
@@ -52,10 +177,15 @@ contains
       end if
     end do
     if (handle == 0) return
-    if (.not. mpi_started) then
-      call mpi_init(ierr)
-      mpi_started = .true.
-    end if
+    call send_command(command_create, handle, sym, ordering)
+    call init_instance(handle, sym, ordering, status)
+    if (status < 0) handle = 0
+  end subroutine solver_create
+
+  !> The collective MUMPS initialization (job -1) of one handle, on every rank.
+  subroutine init_instance(handle, sym, ordering, status)
+    integer, intent(in) :: handle, sym, ordering
+    integer, intent(out) :: status
     associate (id => instance(handle))
       id%comm = mpi_comm_world
       id%sym = sym
@@ -63,10 +193,7 @@ contains
       id%job = -1
       call dmumps(id)
       status = id%infog(1)
-      if (status < 0) then
-        handle = 0
-        return
-      end if
+      if (status < 0) return
       ! Silence MUMPS: the core never prints.
       id%icntl(1) = -1
       id%icntl(2) = -1
@@ -75,12 +202,35 @@ contains
       id%icntl(7) = ordering
       ! Extra workspace: FE matrices with many equal pivots can outgrow the estimate.
       id%icntl(14) = 40
-      nullify (id%irn, id%jcn, id%a, id%rhs, id%perm_in)
+      nullify (id%irn, id%jcn, id%a, id%rhs, id%perm_in, id%eltptr, id%eltvar)
     end associate
     in_use(handle) = .true.
     analysed(handle) = .false.
     factorized(handle) = .false.
-  end subroutine solver_create
+  end subroutine init_instance
+
+  !> One collective MUMPS call (job) on a handle; status its INFOG(1), the same on all ranks.
+  subroutine run_job(handle, job, status)
+    integer, intent(in) :: handle, job
+    integer, intent(out) :: status
+    instance(handle)%job = job
+    call dmumps(instance(handle))
+    status = instance(handle)%infog(1)
+  end subroutine run_job
+
+  !> Numerical factorization (job 2); on a workspace shortage (INFO -8, -9) the relaxation
+  !> is raised and the factorization retried, on every rank alike.
+  subroutine factorize_job(handle, status)
+    integer, intent(in) :: handle
+    integer, intent(out) :: status
+    integer :: attempt
+    do attempt = 1, 4
+      call run_job(handle, 2, status)
+      if (status /= -8 .and. status /= -9) exit
+      instance(handle)%icntl(14) = 2*instance(handle)%icntl(14)
+    end do
+    factorized(handle) = status >= 0
+  end subroutine factorize_job
 
   !> Symbolic analysis of an n x n matrix given by its nz coordinates (1-based, duplicates
   !> are summed; for sym > 0 only one triangle is read).
@@ -104,18 +254,56 @@ contains
       end if
       call release_arrays(handle)
       allocate (id%irn(nz), id%jcn(nz), id%a(nz), id%rhs(n))
+      id%icntl(5) = 0
       id%irn = irn
       id%jcn = jcn
       id%a = 0.0_wp
       id%n = n
       id%nnz = int(nz, kind=8)
-      id%job = 1
-      call dmumps(id)
-      status = id%infog(1)
     end associate
+    call send_command(command_analyse, handle, 0, 0)
+    call run_job(handle, 1, status)
     analysed(handle) = status >= 0
     factorized(handle) = .false.
   end subroutine solver_analyse
+
+  !> Symbolic analysis of an n x n matrix given by its nelt elements (MUMPS's elemental
+  !> input, ICNTL(5) = 1): element e couples the variables eltvar(eltptr(e):eltptr(e+1)-1)
+  !> (1-based). For MUMPS's estimates of large structures (flops, factor entries, memory
+  !> per process) at a fraction of the coordinates' memory: the handle is left unanalysed,
+  !> so it cannot factorize; solver_info gives the estimates.
+  subroutine solver_analyse_elements(handle, n, nelt, nvar, eltptr, eltvar, status)
+    integer, intent(in) :: handle, n, nelt, nvar
+    integer, intent(in) :: eltptr(nelt + 1), eltvar(nvar)
+    integer, intent(out) :: status
+    if (.not. valid_handle(handle)) then
+      status = status_bad_handle
+      return
+    end if
+    associate (id => instance(handle))
+      if (id%icntl(7) == 1) then
+        if (.not. associated(id%perm_in)) then
+          status = status_size_mismatch
+          return
+        else if (size(id%perm_in) /= n) then
+          status = status_size_mismatch
+          return
+        end if
+      end if
+      call release_arrays(handle)
+      allocate (id%eltptr(nelt + 1), id%eltvar(nvar))
+      id%eltptr = eltptr
+      id%eltvar = eltvar
+      id%n = n
+      id%nelt = nelt
+      id%icntl(5) = 1
+    end associate
+    call send_command(command_analyse, handle, 0, 0)
+    call run_job(handle, 1, status)
+    call release_arrays(handle)
+    analysed(handle) = .false.
+    factorized(handle) = .false.
+  end subroutine solver_analyse_elements
 
   !> Numerical factorization with new values on the analysed structure. On a workspace
   !> shortage (INFO -8, -9) the relaxation is raised and the factorization retried.
@@ -123,7 +311,6 @@ contains
     integer, intent(in) :: handle, nz
     real(wp), intent(in) :: a(nz)
     integer, intent(out) :: status
-    integer :: attempt
     if (.not. valid_handle(handle)) then
       status = status_bad_handle
       return
@@ -132,21 +319,13 @@ contains
       status = status_not_analysed
       return
     end if
-    associate (id => instance(handle))
-      if (int(nz, kind=8) /= id%nnz) then
-        status = status_size_mismatch
-        return
-      end if
-      id%a = a
-      do attempt = 1, 4
-        id%job = 2
-        call dmumps(id)
-        status = id%infog(1)
-        if (status /= -8 .and. status /= -9) exit
-        id%icntl(14) = 2*id%icntl(14)
-      end do
-    end associate
-    factorized(handle) = status >= 0
+    if (int(nz, kind=8) /= instance(handle)%nnz) then
+      status = status_size_mismatch
+      return
+    end if
+    instance(handle)%a = a
+    call send_command(command_factorize, handle, 0, 0)
+    call factorize_job(handle, status)
   end subroutine solver_factorize
 
   !> Solve A x = rhs with the last factorization.
@@ -164,26 +343,27 @@ contains
       status = status_not_analysed
       return
     end if
-    associate (id => instance(handle))
-      if (n /= id%n) then
-        status = status_size_mismatch
-        return
-      end if
-      id%rhs = rhs
-      id%job = 3
-      call dmumps(id)
-      status = id%infog(1)
-      if (status >= 0) x = id%rhs
-    end associate
+    if (n /= instance(handle)%n) then
+      status = status_size_mismatch
+      return
+    end if
+    instance(handle)%rhs = rhs
+    call send_command(command_solve, handle, 0, 0)
+    call run_job(handle, 3, status)
+    if (status >= 0) x = instance(handle)%rhs
   end subroutine solver_solve
 
-  !> MUMPS statistics of the last call: INFOG(1), INFOG(2), ordering used (INFOG(7)),
-  !> entries in the factors (INFOG(29), may be negative when large: -value*1e6), and
-  !> estimated flops of the elimination (RINFOG(3)).
+  !> MUMPS statistics of the last call (rank 0, the host, holds them): values are INFOG(1),
+  !> INFOG(2), the ordering used (INFOG(7)), entries in the factors (INFOG(29)), their
+  !> estimate of the analysis (INFOG(3)), the estimated memory in MB of the factorization,
+  !> largest process and all (INFOG(16), INFOG(17)), the memory the factorization allocated
+  !> (INFOG(18), INFOG(19)) and used (INFOG(21), INFOG(22)), and the number of processes;
+  !> factor entries may be negative when large (-value*1e6). flops: the elimination's
+  !> (RINFOG(3)) and the analysis's estimate (RINFOG(1)).
   subroutine solver_info(handle, values, flops, status)
     integer, intent(in) :: handle
-    integer, intent(out) :: values(4)
-    real(wp), intent(out) :: flops
+    integer, intent(out) :: values(12)
+    real(wp), intent(out) :: flops(2)
     integer, intent(out) :: status
     values = 0
     flops = 0.0_wp
@@ -192,8 +372,10 @@ contains
       return
     end if
     associate (id => instance(handle))
-      values = [id%infog(1), id%infog(2), id%infog(7), id%infog(29)]
-      flops = id%rinfog(3)
+      values = [id%infog(1), id%infog(2), id%infog(7), id%infog(29), id%infog(3), &
+                id%infog(16), id%infog(17), id%infog(18), id%infog(19), id%infog(21), &
+                id%infog(22), world_size]
+      flops = [id%rinfog(3), id%rinfog(1)]
     end associate
     status = 0
   end subroutine solver_info
@@ -210,6 +392,7 @@ contains
       status = status_size_mismatch
       return
     end if
+    call send_command(command_control, handle, index, value)
     instance(handle)%icntl(index) = value
     status = 0
   end subroutine solver_set_control
@@ -228,12 +411,13 @@ contains
       status = status_size_mismatch
       return
     end if
+    call send_command(command_real_control, handle, index, 0, value)
     instance(handle)%cntl(index) = value
     status = 0
   end subroutine solver_set_real_control
 
   !> Use the pivot order perm for the next analyses (MUMPS ICNTL(7) = 1): perm(i) is the
-  !> position (1-based) of variable i in the pivot order.
+  !> position (1-based) of variable i in the pivot order. Only the host reads it.
   subroutine solver_set_ordering(handle, n, perm, status)
     integer, intent(in) :: handle, n, perm(n)
     integer, intent(out) :: status
@@ -258,17 +442,23 @@ contains
       status = status_bad_handle
       return
     end if
+    call send_command(command_destroy, handle, 0, 0)
+    call destroy_instance(handle, status)
+  end subroutine solver_destroy
+
+  !> The collective MUMPS end (job -2) of one handle, on every rank.
+  subroutine destroy_instance(handle, status)
+    integer, intent(in) :: handle
+    integer, intent(out) :: status
     call release_arrays(handle)
     associate (id => instance(handle))
       if (associated(id%perm_in)) deallocate (id%perm_in)
-      id%job = -2
-      call dmumps(id)
-      status = id%infog(1)
     end associate
+    call run_job(handle, -2, status)
     in_use(handle) = .false.
     analysed(handle) = .false.
     factorized(handle) = .false.
-  end subroutine solver_destroy
+  end subroutine destroy_instance
 
   subroutine release_arrays(handle)
     integer, intent(in) :: handle
@@ -277,6 +467,8 @@ contains
       if (associated(id%jcn)) deallocate (id%jcn)
       if (associated(id%a)) deallocate (id%a)
       if (associated(id%rhs)) deallocate (id%rhs)
+      if (associated(id%eltptr)) deallocate (id%eltptr)
+      if (associated(id%eltvar)) deallocate (id%eltvar)
     end associate
   end subroutine release_arrays
 

@@ -37,7 +37,7 @@ from ddpy.model.tool import RigidTool
 _log = logging.getLogger(__name__)
 
 __all__ = ["RigidTool", "FormingProblem", "FormingResult", "FormingError", "Linearization",
-           "PhaseProgress", "default_augmentation", "start_depth_limit"]
+           "PhaseProgress", "default_augmentation", "default_penalty", "start_depth_limit"]
 
 #: Most increments a phase may take at its largest increment: a max_increment smaller than
 #: the travel over this would only keep the process busy (1e-300 mm ran for ever).
@@ -223,7 +223,13 @@ class FormingProblem:
         default_r = default_augmentation(solid)
         self.r = np.concatenate([np.full(t.slaves.size, t.augmentation or default_r)
                                  for t in self.tools])
-        self._pack = ToolPack(self.tools, mesh)
+        #: per tool, the penalty of Gauss-point contact (N/mm^3; unused by the others)
+        self.penalty = [t.penalty or default_penalty(solid) for t in self.tools]
+        self._pack = ToolPack(self.tools, mesh, self.penalty)
+        #: pairs of Gauss-point tools: their law is a function of the positions (a penalty),
+        #: continuous at a release, which the release control leaves alone
+        self._gauss = np.concatenate([np.full(t.slaves.size, t.contact == "gauss")
+                                      for t in self.tools]) if self.tools else np.zeros(0, bool)
         self.mu = np.concatenate([np.full(t.slaves.size, t.friction) for t in self.tools])
         # State carried between increments and phases.
         self.u = np.zeros((n, 3))
@@ -231,6 +237,8 @@ class FormingProblem:
         self.position = {t.name: np.zeros(3) for t in self.tools}
         npair = sum(t.slaves.size for t in self.tools)
         self.force = np.zeros((npair, 3))
+        #: the tangential traction of every Gauss point of Gauss-point contact (points, 3)
+        self.traction = np.zeros((self._pack.n_points, 3))
         self._gap = (np.full(npair, np.inf), np.zeros((npair, 3)))
         #: reach of the contact search (mm): see REACH_SIZES; run() adds its tool travel
         self._reach = REACH_SIZES * self.size
@@ -358,7 +366,9 @@ class FormingProblem:
             initial[name] = self.position[other] + offset
         self._gap = self._contact(layout, x, x, initial, on, self.force, np.zeros(layout.n),
                                   np.empty(0))[1]
-        depth = np.where(on & np.isfinite(self._gap[0]), -self._gap[0], -np.inf)
+        # (Gauss-point contact that carries a force sits in the tool by its penalty's depth.)
+        holding = self._gauss & (np.abs(self.force).sum(axis=1) > 0.0)
+        depth = np.where(on & np.isfinite(self._gap[0]) & ~holding, -self._gap[0], -np.inf)
         worst = int(np.argmax(depth)) if depth.size else 0
         if depth.size and depth[worst] > start_depth_limit(limits.strain, self.size):
             raise ValueError(
@@ -457,6 +467,7 @@ class FormingProblem:
             normal = gap[1]
             last_dp = np.einsum("ij,ij->i", force - self.force, normal) / (target - factor)
             self.u, self.state, self.force, self._gap = u, state, force, gap
+            self.traction = outcome.traction
             self._status = in_contact
             self.position = positions
             result.sizes.append(target - factor)
@@ -566,6 +577,7 @@ class FormingProblem:
         loads, _ = self.solid.internal_force(self.u, self.state)
         loads[self.fixed] = 0.0
         self.force = np.zeros_like(self.force)
+        self.traction = np.zeros_like(self.traction)
         off = np.zeros(layout.node.size, dtype=bool)
         try:
             for k in range(1, int(increments) + 1):
@@ -623,6 +635,7 @@ class FormingProblem:
         phase factor), plus ``margin / 2`` so that it is free at the end."""
         pressure = np.einsum("ij,ij->i", self.force, self._gap[1])
         falling = (self._status != INACTIVE) & (pressure > 0.0) & (rate < 0.0) & ~minor
+        falling &= ~self._gauss
         ahead = np.full(pressure.size, np.inf)
         ahead[falling] = pressure[falling] / (-rate[falling] * step)
         first = float(ahead.min()) if ahead.size else np.inf
@@ -644,7 +657,7 @@ class FormingProblem:
         pressure = np.einsum("ij,ij->i", self.force, normal)
         after = np.einsum("ij,ij->i", force, normal) - self.r * distance
         released = (self._status != INACTIVE) & (state == INACTIVE) & (pressure > 0.0)
-        released &= np.isfinite(distance) & (after < 0.0) & ~minor
+        released &= np.isfinite(distance) & (after < 0.0) & ~minor & ~self._gauss
         if not released.any():
             return 1.0
         p = pressure[released]
@@ -711,12 +724,12 @@ class FormingProblem:
         equilibrium rows (which hold fint - external), and writes the contact entries of
         ``values`` (none when it is empty: a look at the gaps). Returns the pairs' states,
         and their gaps (inf: no patch) and normals."""
-        residual[:], values[:], state, gap, normal, status = _core.forming_contact(
+        residual[:], values[:], state, gap, normal, _, status = _core.forming_contact(
             x.ravel(), x_n.ravel(), layout.fixed_flags, *self._tool_arguments(positions),
             0.0 if touching is None else touching.distance,
             1 if touching is None or touching.resting else 0, layout.first, layout.node,
             layout.patch_first, layout.patch_node, on.astype(np.int32), force.ravel(), self.r,
-            self.mu, layout.held_flags,
+            self.mu, layout.held_flags, self.traction.ravel(),
             layout.eqn, layout.nf, layout.k_slots, residual, values)
         if status:
             raise RuntimeError("forming_contact: the tools' packed arrays or the layout do not "
@@ -782,7 +795,8 @@ class FormingProblem:
                     PENETRATION, MIN_STEP, reuse, KRYLOV_LOOSE, KRYLOV_TIGHT, KRYLOV_MAX,
                     KRYLOV_KEEP, touching=0.0 if touching is None else touching.distance,
                     resting=touching is None or touching.resting)
-        pairs = Pairs(self._tool_arguments(positions), on, self.r, self.mu, self.force)
+        pairs = Pairs(self._tool_arguments(positions), on, self.r, self.mu, self.force,
+                      self.traction)
         trial = increment(self.solid, layout, self._factors, self.state, self.u,
                           self.external, self.u, guess, loop, pairs)
         evaluations, corrections, factorizations, krylov, fallbacks = trial.counters
@@ -815,6 +829,11 @@ def default_augmentation(solid: Solid) -> float:
     lambda_T - r s): a value far above the blank's stiffness decides on gaps of 1e-3 mm
     and flips contact states from iteration to iteration (docs/theory/contact.md)."""
     return blank_stiffness(solid.mesh.nodes, solid.mesh.elements, float(solid.props[0]))
+
+
+def default_penalty(solid: Solid) -> float:
+    """The penalty (N/mm^3) of Gauss-point contact when a tool sets none (provisional)."""
+    return 0.01 * default_augmentation(solid) / solid.mesh.element_size() ** 2
 
 
 def blank_stiffness(nodes: ArrayLike, elements: ArrayLike, young: float) -> float:

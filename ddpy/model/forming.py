@@ -30,7 +30,17 @@ from ddpy.geometry.search import NONE
 from ddpy.model.contact import INACTIVE
 from ddpy.model.control import IncrementLimits, NewtonSettings, next_step
 from ddpy.model.mesh import HEX_EDGES, free_rigid_modes, largest_rotation
-from ddpy.model.newton import Factors, Layout, Loop, Pairs, ToolPack, Trial, increment
+from ddpy.model.newton import (
+    Factors,
+    Layout,
+    Loop,
+    Pairs,
+    ToolPack,
+    Trial,
+    contact_faces,
+    gauss_face_weights,
+    increment,
+)
 from ddpy.model.solid import Solid, SolidState, _components
 from ddpy.model.tool import RigidTool
 
@@ -224,7 +234,10 @@ class FormingProblem:
         self.r = np.concatenate([np.full(t.slaves.size, t.augmentation or default_r)
                                  for t in self.tools])
         #: per tool, the penalty of Gauss-point contact (N/mm^3; unused by the others)
-        self.penalty = [t.penalty or default_penalty(solid) for t in self.tools]
+        self.penalty = [t.penalty or (default_penalty(solid, faces) if t.contact == "gauss"
+                                      else 0.0)
+                        for t, faces in zip(self.tools, contact_faces(self.tools, mesh),
+                                            strict=True)]
         self._pack = ToolPack(self.tools, mesh, self.penalty)
         #: pairs of Gauss-point tools: their law is a function of the positions (a penalty),
         #: continuous at a release, which the release control leaves alone
@@ -831,9 +844,23 @@ def default_augmentation(solid: Solid) -> float:
     return blank_stiffness(solid.mesh.nodes, solid.mesh.elements, float(solid.props[0]))
 
 
-def default_penalty(solid: Solid) -> float:
-    """The penalty (N/mm^3) of Gauss-point contact when a tool sets none (provisional)."""
-    return 0.01 * default_augmentation(solid) / solid.mesh.element_size() ** 2
+def default_penalty(solid: Solid, faces: NDArray[np.integer]) -> float:
+    """The penalty eps (N/mm^3) of Gauss-point contact when a tool sets none: 8 sigma_0 T /
+    h^2, sigma_0 the initial yield stress, T the blank's thickness (its volume over the
+    area of the tool's contact faces) and h their size (the median over them of the
+    shorter of their two mean edge lengths). Under the pressure sigma_0 T / R of a sheet
+    drawn at yield over a radius R the faces then sink h^2 / (8 R) into it, the depth at
+    which node-to-surface contact already lets a face cut into a radius between two nodes;
+    lower loads (free bending) want a softer one (docs/theory/contact.md)."""
+    area = gauss_face_weights(solid.mesh.nodes, faces).sum(axis=1)
+    if area.size == 0:
+        raise ValueError("Gauss-point contact needs blank faces that face the tool")
+    x = solid.mesh.nodes[faces]                                     # (f, 4, 3)
+    along = np.linalg.norm(x[:, 1] - x[:, 0], axis=1) + np.linalg.norm(x[:, 2] - x[:, 3], axis=1)
+    across = np.linalg.norm(x[:, 3] - x[:, 0], axis=1) + np.linalg.norm(x[:, 2] - x[:, 1], axis=1)
+    h = float(np.median(0.5 * np.minimum(along, across)))
+    thickness = solid.mesh.volume() / float(area.sum())
+    return 8.0 * solid.yield_stress * thickness / h**2
 
 
 def blank_stiffness(nodes: ArrayLike, elements: ArrayLike, young: float) -> float:

@@ -172,6 +172,8 @@ class Solid:
         self._kind = ELEMENTS[element]
         self.mesh = mesh
         self.props = material_props(material)
+        #: the initial yield stress (MPa): the scale of Gauss-point contact's default penalty
+        self.yield_stress = float(material.hardening.initial_yield_stress)
         angle = np.asarray(rolling_direction_deg, dtype=float)
         if angle.ndim == 0:
             angle = np.full(mesh.n_elements, float(angle))

@@ -45,7 +45,7 @@ def contact_faces(tools: Sequence[RigidTool], mesh: HexMesh) -> list[NDArray[np.
     """Per tool, the blank's boundary faces (f, 4) that face it: outward normal within 60
     degrees of its ``facing`` direction (none for a tool without one). Their nodes give a
     node-to-surface tool's slaves their normals for the facing filter, and a
-    surface-to-surface tool its contact surface (Gauss points and patches)."""
+    surface-to-surface or Gauss-point tool its contact surface (Gauss points and patches)."""
     if not tools:
         return []
     boundary = boundary_faces(mesh.elements)
@@ -79,7 +79,7 @@ class Layout:
     without tools, whose contact blocks are not symmetric). Each pair's law depends on the
     positions of its patch of nodes (``patch_first``, ``patch_node``): its own node for a
     node-to-surface tool, every node of the tool's contact faces at its node for a
-    surface-to-surface one (its own node alone where it is on none)."""
+    surface-to-surface or Gauss-point one (its own node alone where it is on none)."""
 
     def __init__(self, solid: Solid, tools: Sequence[RigidTool], fixed: NDArray[np.bool_],
                  symmetric: bool = False) -> None:
@@ -152,7 +152,8 @@ class Layout:
 class ToolPack:
     """Every tool's surface and search structures packed one after another in flat arrays,
     with a table of their offsets, and the blank faces that face each tool: what the core's
-    forming_contact reads (fortran/mechanics/ddpy_forming.f90). Made once; empty for none."""
+    forming_contact reads (fortran/mechanics/ddpy_forming.f90), with the penalty of each
+    Gauss-point tool (``penalty``, per tool; 0 for the others). Made once; empty for none."""
 
     def __init__(self, tools: Sequence[RigidTool], mesh: HexMesh,
                  penalty: Sequence[float] | None = None) -> None:
@@ -178,8 +179,8 @@ class ToolPack:
         # Per tool with a facing direction, the blank's boundary faces that face it (normal
         # within 60 degrees) and the slave index of their corners (-1: not a slave): the
         # search keeps only patches opposing the blank's normal at each slave; a
-        # surface-to-surface tool projects their Gauss points, which stand for the areas
-        # face_weight of the undeformed blank.
+        # surface-to-surface or Gauss-point tool projects their Gauss points, which stand
+        # for the areas face_weight of the undeformed blank.
         faces = contact_faces(tools, mesh)
         corners, weights = [], []
         for tool, chosen in zip(tools, faces, strict=True):

@@ -8,7 +8,8 @@
 !> the caller), then dC/dx at the free dofs of each pair's node (pair-major, row, column),
 !> then dC/dlambda (pair-major, row, column). A pair's dC/dx runs over the nodes of its
 !> patch (patch_first, patch_node): its own node for node-to-surface contact, every node of
-!> the blank faces around it for surface-to-surface contact (row, patch node, column).
+!> the blank faces around it for surface-to-surface and Gauss-point contact (row, patch
+!> node, column).
 !> Tools are packed one after another in flat arrays (see forming_contact); a tool's own
 !> indices (tree children, grid starts) stay local to it, 1-based.
 module ddpy_forming
@@ -65,6 +66,12 @@ contains
   !> the faces around it weighted by its shape function and face_weight (the Gauss weight
   !> times the face's area element in the undeformed blank), and its law's derivatives
   !> along x run over the nodes of those faces (docs/theory/contact.md).
+  !>
+  !> A Gauss-point tool (table f_surface = surface_gauss) puts the penalty law of
+  !> gauss_traction at those Gauss points (penalty(1:2, t): normal and tangential penalty,
+  !> N/mm^3; traction_n(:, g, f): each point's tangential traction at the last converged
+  !> increment, traction: the new one, zero elsewhere) and each slave's law is
+  !> C = lambda - F(x), F its share of the points' forces by the shape functions.
   subroutine forming_contact(nnode, x, x_n, fixed, ntool, table, tol, coef, degrees, &
                              triangle, tree_lower, tree_upper, tree_child, frame, &
                              frame_lower, frame_upper, grid_start, grid_params, &

@@ -50,9 +50,10 @@ contains
   !> tangent, K_fp dp added to the free rows, and each step takes it whole (scaled by the
   !> step length like the rest): the linearized predictor, not a jump of the boundary
   !> nodes, which would invert the elements next to them. See the arguments of
-  !> forming_contact for the tools and pairs. Returns outcome with, as it says: u, force,
+  !> forming_contact for the tools and pairs (and the Gauss points' tangential tractions
+  !> traction_n of Gauss-point contact). Returns outcome with, as it says: u, force,
   !> the solid state, the internal forces fint, the contact states (inactive where off),
-  !> gaps and normals when converged; the landing
+  !> gaps, normals and the Gauss points' tractions when converged; the landing
   !> fraction in detail(1); the element status and element in info(1:2); the MUMPS code in
   !> info(3); the last relative residual and correction in detail(1:2) and the pairs that
   !> changed state in the last iteration in info(4) when stalled. history(1:4, 1:niter):

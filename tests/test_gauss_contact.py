@@ -36,10 +36,12 @@ def block_on_dome(friction: float) -> tuple[FormingProblem, HexMesh, RigidTool]:
     return problem, mesh, tool
 
 
-def test_jacobian_with_open_stick_and_slip_points_matches_central_differences() -> None:
+def test_jacobian_with_open_and_slipping_points_matches_central_differences() -> None:
     """The Jacobian of Gauss-point contact (the tool's curvature at every point, the
-    friction history, stick and slip) against central differences, at a state with open,
-    stick and slip pairs on the dome; measured 1e-10 of each block."""
+    friction history, slip) against central differences, at a state with open and
+    slip pairs on the dome; measured 3e-10 of the equilibrium block, 1.2e-9 of the law's
+    (without the curvature term 3.3e-5; with the tangential penalty's or the slip's
+    pressure term of the wrong sign 1.9 and 0.6)."""
     problem, mesh, tool = block_on_dome(0.3)
     assert np.abs(problem.traction).max() > 0.0  # a friction history to start from
     rng = np.random.default_rng(7)
@@ -53,13 +55,17 @@ def test_jacobian_with_open_stick_and_slip_points_matches_central_differences() 
 
 
 def test_jacobian_with_sticking_points_matches_central_differences() -> None:
-    """Every closed point sticks (the dome moved back by a fraction of the elastic slip):
-    the stick branch's derivative, curvature and history included."""
-    problem, _, _ = block_on_dome(0.3)
+    """Every closed point sticks (the dome moved back by a fraction of the elastic slip),
+    a column lifted off (open):
+    the stick branch's derivative, curvature and history included (measured 1.1e-10 and
+    1.1e-9; without the curvature term 3.3e-5)."""
+    problem, mesh, tool = block_on_dome(0.3)
+    u = problem.u.copy()
+    u[tool.slaves[mesh.nodes[tool.slaves, 0] < -0.4], 2] += 0.05  # open
     moved = {"dome": problem.position["dome"] + (-1e-5, 0, 1e-5)}
-    equilibrium, law, state = central_difference_errors(problem, problem.u, problem.force,
-                                                        moved, 3e-5)
-    assert STICK in set(state.tolist()), state
+    equilibrium, law, state = central_difference_errors(problem, u, problem.force, moved,
+                                                        3e-5)
+    assert {INACTIVE, STICK} <= set(state.tolist()), state
     assert equilibrium <= 1e-7 and law <= 1e-7, (equilibrium, law)
 
 

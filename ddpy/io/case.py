@@ -406,7 +406,8 @@ class Case:
             lines.append(f"  tool {t.name}: {t.description}, {t.file.name}, friction "
                          f"{t.friction:g}, contacts the {t.contact} of the blank"
                          + {"surface": ", surface-to-surface",
-                            "gauss": ", Gauss-point contact"}.get(t.discretization, ""))
+                            "gauss": ", Gauss-point contact"}.get(t.discretization, "")
+                         + (f", penalty {t.penalty:g} N/mm^3" if t.penalty is not None else ""))
         for p in self.phases:
             if p.is_springback:
                 lines.append(f"  phase {p.name}: springback in {p.increments} step(s)")

@@ -641,7 +641,9 @@ TOOL_ERRORS = [
     ("contact      top", "contact top\n  augmentation 0", "augmentation parameter must be > 0"),
     ("contact      top", "contact top\n  discretization mortar",
      "expected the contact discretization among node, surface"),
-    ("contact      top", "contact top\n  discretization", "expected 'discretization node|surface'"),
+    ("contact      top", "contact top\n  discretization",
+     "expected 'discretization node|surface|gauss'"),
+    ("contact      top", "contact top\n  penalty -1", "contact penalty (N/mm^3) must be > 0"),
     ("contact      top", "contact top\n  discretization node\n  discretization surface",
      "'discretization' given twice"),
 ]
@@ -672,6 +674,24 @@ def test_contact_discretization(tmp_path: Path) -> None:
     edit(case, "tools.dat", "discretization surface", "discretization edges")
     number = line_of(case, "tools.dat", "discretization edges")
     assert str(error_of(case)).startswith(f"{case / 'tools.dat'}:{number}: ")
+
+
+def test_gauss_contact_and_its_penalty(tmp_path: Path) -> None:
+    """discretization gauss selects Gauss-point contact; penalty sets its penalty (N/mm^3),
+    by default 8 sigma_0 T / h^2 (ddpy.model.forming.default_penalty)."""
+    from ddpy.app.runner import build_problem
+
+    case = edit(copy_example("bending", tmp_path), "tools.dat", "contact      bottom",
+                "contact      bottom\n  discretization gauss\n  penalty 150")
+    read = read_case(case)
+    assert (read.tool("die").discretization, read.tool("die").penalty) == ("gauss", 150.0)
+    assert "contacts the bottom of the blank, Gauss-point contact" in read.summary()
+    problem = build_problem(read)
+    assert [t.contact for t in problem.tools] == ["node", "gauss"]
+    assert problem.penalty == [0.0, 150.0]
+    edit(case, "tools.dat", "  penalty 150\n", "")
+    problem = build_problem(read_case(case))
+    assert problem.penalty[1] > 0.0
 
 
 def test_tool_friction_message(tmp_path: Path) -> None:

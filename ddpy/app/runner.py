@@ -90,7 +90,10 @@ _LIMITS = {"max": "max_increment", "touch": "contact_touch", "strain": "strain",
 
 #: Arrays of FormingProblem carried from one increment to the next (besides the solid state
 #: and the tool positions): a checkpoint stores them. Add here any new state of the loop.
-_CARRIED = ("u", "force", "_status")
+_CARRIED = ("u", "force", "_status", "traction")
+#: Of those, the ones a checkpoint written before they existed lacks (then zero): the
+#: tangential tractions of Gauss-point contact.
+_SINCE = ("traction",)
 
 
 class RunError(RuntimeError):
@@ -163,7 +166,7 @@ def build_problem(case: Case) -> FormingProblem:
     solid = Solid(case.mesh, case.material.material, _rolling_angle(case), element=case.element)
     tools = [RigidTool(t.name, t.model().surface, t.contact_nodes(case.mesh),
                        friction=t.friction, facing=t.facing, augmentation=t.augmentation,
-                       contact=t.discretization)
+                       contact=t.discretization, penalty=t.penalty)
              for t in case.tools]
     return FormingProblem(solid, tools)
 
@@ -272,7 +275,7 @@ class _Run:
             raise CheckpointError(f"{path}: the case's decks or tool files changed since the "
                                   "checkpoint was written; run again without --restart")
         p = self.problem
-        carried = {k: arrays[k] for k in _CARRIED}
+        carried = {k: arrays[k] for k in _CARRIED if k in arrays or k not in _SINCE}
         positions = {k: arrays[f"position/{k}"] for k in self.names}
         for name, value in carried.items():
             if value.shape != getattr(p, name).shape:

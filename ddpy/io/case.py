@@ -222,8 +222,9 @@ class Tool:
     friction coefficient, the side of the blank it touches (``facing``: the outward normal
     of that blank surface; ``contact`` is top, bottom or facing), the augmentation
     parameter r of its contact law, N/mm (None: the solver chooses it), and its contact
-    discretization (``discretization``: "node", node-to-surface, or "surface",
-    surface-to-surface)."""
+    discretization (``discretization``: "node", node-to-surface, "surface",
+    surface-to-surface, or "gauss", Gauss-point contact) with its penalty, N/mm^3 (None:
+    the solver chooses it)."""
 
     name: str
     description: Literal["bezier", "nagata", "facets"]
@@ -234,6 +235,7 @@ class Tool:
     augmentation: float | None = None
     origin: str = ""
     discretization: str = "node"
+    penalty: float | None = None
 
     def model(self) -> ToolModel:
         """The tool model read from the file (ddpy.io.toolfile); a Nagata file used with
@@ -405,7 +407,9 @@ class Case:
         for t in self.tools:
             lines.append(f"  tool {t.name}: {t.description}, {t.file.name}, friction "
                          f"{t.friction:g}, contacts the {t.contact} of the blank"
-                         + (", surface-to-surface" if t.discretization == "surface" else ""))
+                         + {"surface": ", surface-to-surface",
+                            "gauss": ", Gauss-point contact"}.get(t.discretization, "")
+                         + (f", penalty {t.penalty:g} N/mm^3" if t.penalty is not None else ""))
         for p in self.phases:
             if p.is_springback:
                 lines.append(f"  phase {p.name}: springback in {p.increments} step(s)")

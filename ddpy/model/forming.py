@@ -39,6 +39,8 @@ from ddpy.model.newton import (
     Pairs,
     ToolPack,
     Trial,
+    contact_faces,
+    gauss_face_weights,
     increment,
 )
 from ddpy.model.solid import Solid, SolidState, _components
@@ -47,7 +49,7 @@ from ddpy.model.tool import RigidTool
 _log = logging.getLogger(__name__)
 
 __all__ = ["RigidTool", "FormingProblem", "FormingResult", "FormingError", "Linearization",
-           "PhaseProgress", "default_augmentation", "start_depth_limit"]
+           "PhaseProgress", "default_augmentation", "default_penalty", "start_depth_limit"]
 
 #: Most increments a phase may take at its largest increment: a max_increment smaller than
 #: the travel over this would only keep the process busy (1e-300 mm ran for ever).
@@ -233,7 +235,16 @@ class FormingProblem:
         default_r = default_augmentation(solid)
         self.r = np.concatenate([np.full(t.slaves.size, t.augmentation or default_r)
                                  for t in self.tools])
-        self._pack = ToolPack(self.tools, mesh)
+        #: per tool, the penalty of Gauss-point contact (N/mm^3; unused by the others)
+        self.penalty = [t.penalty or (default_penalty(solid, faces) if t.contact == "gauss"
+                                      else 0.0)
+                        for t, faces in zip(self.tools, contact_faces(self.tools, mesh),
+                                            strict=True)]
+        self._pack = ToolPack(self.tools, mesh, self.penalty)
+        #: pairs of Gauss-point tools: their law is a function of the positions (a penalty),
+        #: continuous at a release, which the release control leaves alone
+        self._gauss = np.concatenate([np.full(t.slaves.size, t.contact == "gauss")
+                                      for t in self.tools]) if self.tools else np.zeros(0, bool)
         self.mu = np.concatenate([np.full(t.slaves.size, t.friction) for t in self.tools])
         # State carried between increments and phases.
         self.u = np.zeros((n, 3))
@@ -241,6 +252,8 @@ class FormingProblem:
         self.position = {t.name: np.zeros(3) for t in self.tools}
         npair = sum(t.slaves.size for t in self.tools)
         self.force = np.zeros((npair, 3))
+        #: the tangential traction of every Gauss point of Gauss-point contact (points, 3)
+        self.traction = np.zeros((self._pack.n_points, 3))
         self._gap = (np.full(npair, np.inf), np.zeros((npair, 3)))
         #: reach of the contact search (mm): see REACH_SIZES; run() adds its tool travel
         self._reach = REACH_SIZES * self.size
@@ -369,7 +382,9 @@ class FormingProblem:
             initial[name] = self.position[other] + offset
         self._gap = self._contact(layout, x, x, initial, on, self.force, np.zeros(layout.n),
                                   np.empty(0))[1]
-        depth = np.where(on & np.isfinite(self._gap[0]), -self._gap[0], -np.inf)
+        # (Gauss-point contact that carries a force sits in the tool by its penalty's depth.)
+        holding = self._gauss & (np.abs(self.force).sum(axis=1) > 0.0)
+        depth = np.where(on & np.isfinite(self._gap[0]) & ~holding, -self._gap[0], -np.inf)
         worst = int(np.argmax(depth)) if depth.size else 0
         if depth.size and depth[worst] > start_depth_limit(limits.strain, self.size):
             raise ValueError(
@@ -473,6 +488,7 @@ class FormingProblem:
             normal = gap[1]
             last_dp = np.einsum("ij,ij->i", force - self.force, normal) / (target - factor)
             self.u, self.state, self.force, self._gap = u, state, force, gap
+            self.traction = outcome.traction
             self._status = in_contact
             self.position = positions
             result.sizes.append(target - factor)
@@ -582,6 +598,7 @@ class FormingProblem:
         loads, _ = self.solid.internal_force(self.u, self.state)
         loads[self.fixed] = 0.0
         self.force = np.zeros_like(self.force)
+        self.traction = np.zeros_like(self.traction)
         off = np.zeros(layout.node.size, dtype=bool)
         try:
             for k in range(1, int(increments) + 1):
@@ -639,6 +656,7 @@ class FormingProblem:
         phase factor), plus ``margin / 2`` so that it is free at the end."""
         pressure = np.einsum("ij,ij->i", self.force, self._gap[1])
         falling = (self._status != INACTIVE) & (pressure > 0.0) & (rate < 0.0) & ~minor
+        falling &= ~self._gauss
         ahead = np.full(pressure.size, np.inf)
         ahead[falling] = pressure[falling] / (-rate[falling] * step)
         first = float(ahead.min()) if ahead.size else np.inf
@@ -660,7 +678,7 @@ class FormingProblem:
         pressure = np.einsum("ij,ij->i", self.force, normal)
         after = np.einsum("ij,ij->i", force, normal) - self.r * distance
         released = (self._status != INACTIVE) & (state == INACTIVE) & (pressure > 0.0)
-        released &= np.isfinite(distance) & (after < 0.0) & ~minor
+        released &= np.isfinite(distance) & (after < 0.0) & ~minor & ~self._gauss
         if not released.any():
             return 1.0
         p = pressure[released]
@@ -727,12 +745,12 @@ class FormingProblem:
         equilibrium rows (which hold fint - external), and writes the contact entries of
         ``values`` (none when it is empty: a look at the gaps). Returns the pairs' states,
         and their gaps (inf: no patch) and normals."""
-        residual[:], values[:], state, gap, normal, status = _core.forming_contact(
+        residual[:], values[:], state, gap, normal, _, status = _core.forming_contact(
             x.ravel(), x_n.ravel(), layout.fixed_flags, *self._tool_arguments(positions),
             0.0 if touching is None else touching.distance,
             1 if touching is None or touching.resting else 0, layout.first, layout.node,
             layout.patch_first, layout.patch_node, on.astype(np.int32), force.ravel(), self.r,
-            self.mu, layout.held_flags,
+            self.mu, layout.held_flags, self.traction.ravel(),
             layout.eqn, layout.nf, layout.k_slots, residual, values)
         if status:
             raise RuntimeError("forming_contact: the tools' packed arrays or the layout do not "
@@ -804,7 +822,8 @@ class FormingProblem:
                     KRYLOV_KEEP, touching=0.0 if touching is None else touching.distance,
                     resting=touching is None or touching.resting,
                     search=SEARCH_NONE if careful else SEARCH_MONOTONICITY)
-        pairs = Pairs(self._tool_arguments(positions), on, self.r, self.mu, self.force)
+        pairs = Pairs(self._tool_arguments(positions), on, self.r, self.mu, self.force,
+                      self.traction)
         trial = increment(self.solid, layout, self._factors, self.state, self.u,
                           self.external, self.u, guess, loop, pairs)
         evaluations, corrections, factorizations, krylov, fallbacks = trial.counters
@@ -837,6 +856,25 @@ def default_augmentation(solid: Solid) -> float:
     lambda_T - r s): a value far above the blank's stiffness decides on gaps of 1e-3 mm
     and flips contact states from iteration to iteration (docs/theory/contact.md)."""
     return blank_stiffness(solid.mesh.nodes, solid.mesh.elements, float(solid.props[0]))
+
+
+def default_penalty(solid: Solid, faces: NDArray[np.integer]) -> float:
+    """The penalty eps (N/mm^3) of Gauss-point contact when a tool sets none: 8 sigma_0 T /
+    h^2, sigma_0 the initial yield stress, T the blank's thickness (its volume over the
+    area of the tool's contact faces) and h their size (the median over them of the
+    shorter of their two mean edge lengths). Under the pressure sigma_0 T / R of a sheet
+    drawn at yield over a radius R the faces then sink h^2 / (8 R) into it, the depth at
+    which node-to-surface contact already lets a face cut into a radius between two nodes;
+    lower loads (free bending) want a softer one (docs/theory/contact.md)."""
+    area = gauss_face_weights(solid.mesh.nodes, faces).sum(axis=1)
+    if area.size == 0:
+        raise ValueError("Gauss-point contact needs blank faces that face the tool")
+    x = solid.mesh.nodes[faces]                                     # (f, 4, 3)
+    along = np.linalg.norm(x[:, 1] - x[:, 0], axis=1) + np.linalg.norm(x[:, 2] - x[:, 3], axis=1)
+    across = np.linalg.norm(x[:, 3] - x[:, 0], axis=1) + np.linalg.norm(x[:, 2] - x[:, 1], axis=1)
+    h = float(np.median(0.5 * np.minimum(along, across)))
+    thickness = solid.mesh.volume() / float(area.sum())
+    return 8.0 * solid.yield_stress * thickness / h**2
 
 
 def blank_stiffness(nodes: ArrayLike, elements: ArrayLike, young: float) -> float:

@@ -30,6 +30,8 @@ CONVERGED, LANDING, ELEMENT, NOT_FINITE, SOLVER, STALLED = range(6)
 #: fails); Deuflhard's natural monotonicity test with the residual-norm fallback (forming:
 #: the contact law has no potential); the energy line search (a problem with a potential).
 SEARCH_NONE, SEARCH_MONOTONICITY, SEARCH_ENERGY = range(3)
+#: The table's code of each contact discretization (ddpy_forming's f_surface column).
+SURFACE_CODES = {"node": 0, "surface": 1, "gauss": 2}
 #: The parts of a trial's time, as the core measures them.
 PARTS = ("assembly", "contact", "factorization", "solve")
 
@@ -43,7 +45,7 @@ def contact_faces(tools: Sequence[RigidTool], mesh: HexMesh) -> list[NDArray[np.
     """Per tool, the blank's boundary faces (f, 4) that face it: outward normal within 60
     degrees of its ``facing`` direction (none for a tool without one). Their nodes give a
     node-to-surface tool's slaves their normals for the facing filter, and a
-    surface-to-surface tool its contact surface (Gauss points and patches)."""
+    surface-to-surface or Gauss-point tool its contact surface (Gauss points and patches)."""
     if not tools:
         return []
     boundary = boundary_faces(mesh.elements)
@@ -77,7 +79,7 @@ class Layout:
     without tools, whose contact blocks are not symmetric). Each pair's law depends on the
     positions of its patch of nodes (``patch_first``, ``patch_node``): its own node for a
     node-to-surface tool, every node of the tool's contact faces at its node for a
-    surface-to-surface one (its own node alone where it is on none)."""
+    surface-to-surface or Gauss-point one (its own node alone where it is on none)."""
 
     def __init__(self, solid: Solid, tools: Sequence[RigidTool], fixed: NDArray[np.bool_],
                  symmetric: bool = False) -> None:
@@ -101,7 +103,7 @@ class Layout:
         npair = self.node.size
         patches = []
         for tool, faces in zip(tools, contact_faces(tools, solid.mesh), strict=True):
-            if tool.contact != "surface":
+            if tool.contact not in ("surface", "gauss"):
                 patches.extend([s] for s in tool.slaves)
                 continue
             around: dict[int, set[int]] = {int(s): {int(s)} for s in tool.slaves}
@@ -150,16 +152,18 @@ class Layout:
 class ToolPack:
     """Every tool's surface and search structures packed one after another in flat arrays,
     with a table of their offsets, and the blank faces that face each tool: what the core's
-    forming_contact reads (fortran/mechanics/ddpy_forming.f90). Made once; empty for none."""
+    forming_contact reads (fortran/mechanics/ddpy_forming.f90), with the penalty of each
+    Gauss-point tool (``penalty``, per tool; 0 for the others). Made once; empty for none."""
 
-    def __init__(self, tools: Sequence[RigidTool], mesh: HexMesh) -> None:
+    def __init__(self, tools: Sequence[RigidTool], mesh: HexMesh,
+                 penalty: Sequence[float] | None = None) -> None:
         searches = [t.search for t in tools]
         table = np.zeros((len(tools), 11), dtype=np.int32)
         offsets = np.zeros(4, dtype=np.int64)  # coef, patch, tree, grid
         for i, (tool, s) in enumerate(zip(tools, searches, strict=True)):
             n = s.surface.n_patches
             table[i] = (s.kind, s.stride, n, s.mode, s.max_iterations, *offsets,
-                        tool.facing is not None, tool.contact == "surface")
+                        tool.facing is not None, SURFACE_CODES[tool.contact])
             offsets += (s.surface.coefficients.size, n, 2 * n - 1, s.grid_params.shape[0])
         self.names = [t.name for t in tools]
         self.table = table.ravel()
@@ -175,21 +179,26 @@ class ToolPack:
         # Per tool with a facing direction, the blank's boundary faces that face it (normal
         # within 60 degrees) and the slave index of their corners (-1: not a slave): the
         # search keeps only patches opposing the blank's normal at each slave; a
-        # surface-to-surface tool projects their Gauss points, which stand for the areas
-        # face_weight of the undeformed blank.
+        # surface-to-surface or Gauss-point tool projects their Gauss points, which stand
+        # for the areas face_weight of the undeformed blank.
         faces = contact_faces(tools, mesh)
         corners, weights = [], []
         for tool, chosen in zip(tools, faces, strict=True):
             where = np.full(mesh.n_nodes, -1, dtype=np.int32)
             where[tool.slaves] = np.arange(tool.slaves.size)
             corners.append(where[chosen])
-            weights.append(gauss_face_weights(mesh.nodes, chosen) if tool.contact == "surface"
+            weights.append(gauss_face_weights(mesh.nodes, chosen) if tool.contact != "node"
                            else np.zeros(chosen.shape))
         self.face_first = np.concatenate([[0], np.cumsum([f.shape[0] for f in faces])]
                                          ).astype(np.int32)
         self.faces = _join([f.ravel() for f in faces], np.int32)
         self.corner = _join([c.ravel() for c in corners], np.int32)
         self.face_weight = _join([w.ravel() for w in weights], np.float64)
+        #: per tool, the normal and tangential penalty of Gauss-point contact (N/mm^3)
+        self.penalty = np.repeat(np.zeros(len(tools)) if penalty is None else
+                                 np.asarray(penalty, dtype=float), 2)
+        #: Gauss points of all faces: their tangential tractions are (3,) each
+        self.n_points = 4 * (self.face_first[-1] if len(tools) else 0)
 
     def arguments(self, positions: dict[str, NDArray[np.float64]],
                   positions_n: dict[str, NDArray[np.float64]], reach: float, size: float
@@ -199,7 +208,7 @@ class ToolPack:
         they are and where they were at the last converged increment, the search's reach
         and the element size."""
         return (self.table, self.tol, *self.arrays, self.facing, self.face_first, self.faces,
-                self.corner, self.face_weight,
+                self.corner, self.face_weight, self.penalty,
                 _join([positions[n] for n in self.names], np.float64),
                 _join([positions_n[n] for n in self.names], np.float64), reach, size)
 
@@ -252,6 +261,8 @@ class Trial:
     #: per iteration after the first, the length of the step that led to it
     steps: list[float] = field(default_factory=list)
     in_contact: NDArray[np.int32] | None = None
+    #: the tangential traction of every Gauss point of Gauss-point contact (points, 3)
+    traction: NDArray[np.float64] | None = None
     gap: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
     counters: tuple[int, ...] = (0, 0, 0, 0, 0)
     timings: dict[str, float] = field(default_factory=dict)
@@ -271,13 +282,15 @@ class Factors:
 class Pairs:
     """The (tool, slave) pairs of an increment: the tools (``ToolPack.arguments``) where
     the increment takes them, the pairs that take part (``on``), their augmentation ``r``,
-    friction ``mu`` and contact forces at the converged state."""
+    friction ``mu`` and contact forces at the converged state, and the tangential traction
+    of each Gauss point of Gauss-point contact there (``traction_n``, (points, 3))."""
 
     tools: tuple
     on: NDArray[np.bool_]
     r: NDArray[np.float64]
     mu: NDArray[np.float64]
     force_n: NDArray[np.float64]
+    traction_n: NDArray[np.float64]
 
 
 def increment(solid: Solid, layout: Layout, factors: Factors, state: SolidState,
@@ -315,15 +328,15 @@ def increment(solid: Solid, layout: Layout, factors: Factors, state: SolidState,
             u_n.ravel(),
             external.ravel(), prescribed.ravel(), start, settings, isettings, factored,
             *buffers)
-        force = pair_state = gap = normal = np.zeros(0)
+        force = pair_state = gap = normal = traction = np.zeros(0)
     else:
         (factored, reuse_next, u, force, fint, stress, ep, strain, axes, pair_state, gap,
-         normal, niter, history, counters, spent, outcome, info, detail) = \
+         normal, traction, niter, history, counters, spent, outcome, info, detail) = \
             _core.forming_increment(
                 *solid_state, layout.n_coupling, layout.rows.size, *layout.by_rows,
                 *pairs.tools, loop.touching, layout.first, layout.node, layout.patch_first,
                 layout.patch_node, pairs.on.astype(np.int32), pairs.r,
-                pairs.mu, layout.held_flags, u_n.ravel(),
+                pairs.mu, layout.held_flags, pairs.traction_n.ravel(), u_n.ravel(),
                 np.where(pairs.on[:, None], pairs.force_n, 0.0).ravel(), external.ravel(),
                 prescribed.ravel(), start, settings, isettings, factored, reuse_next,
                 *buffers)
@@ -343,7 +356,8 @@ def increment(solid: Solid, layout: Layout, factors: Factors, state: SolidState,
                                u.reshape(-1, 3))
         return Trial(u=u.reshape(-1, 3), state=converged, force=force.reshape(-1, 3),
                      fint=fint.reshape(-1, 3), in_contact=pair_state,
-                     gap=(gap, normal.reshape(-1, 3)), **work)
+                     gap=(gap, normal.reshape(-1, 3)), traction=traction.reshape(-1, 3),
+                     **work)
     if outcome == LANDING:
         return Trial(landing=float(detail[0]), **work)
     if outcome == ELEMENT:

@@ -173,6 +173,10 @@ class Solid:
         self._kind = ELEMENTS[element]
         self.mesh = mesh
         self.props = material_props(material)
+        #: the initial yield stress (MPa, of the hardening curve at ep = 0: Swift K eps0^n,
+        #: Voce Y0): the scale of Gauss-point contact's default penalty
+        self.yield_stress = float(self.props[9] * self.props[10] ** self.props[11]
+                                  if self.props[8] == 1.0 else self.props[9])
         angle = np.asarray(rolling_direction_deg, dtype=float)
         if angle.ndim == 0:
             angle = np.full(mesh.n_elements, float(angle))

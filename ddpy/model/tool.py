@@ -15,9 +15,10 @@ __all__ = ["RigidTool", "CONTACT_DISCRETIZATIONS"]
 
 #: How a tool's contact is discretized on the blank: "node" (node-to-surface, DD3IMP's: each
 #: slave node's own gap, normal and slip) or "surface" (surface-to-surface: each slave's
-#: gap, normal and slip averaged over the Gauss points of the blank faces around it,
-#: docs/theory/contact.md).
-CONTACT_DISCRETIZATIONS = ("node", "surface")
+#: gap, normal and slip averaged over the Gauss points of the blank faces around it) or
+#: "gauss" (a penalty law at the Gauss points of the blank faces, its force spread to their
+#: nodes by the shape functions; docs/theory/contact.md).
+CONTACT_DISCRETIZATIONS = ("node", "surface", "gauss")
 
 
 @dataclass
@@ -26,8 +27,9 @@ class RigidTool:
     friction, and optionally the outward normal of the blank face that meets it
     (``facing``: only patches facing the opposite way are contact candidates), the
     augmentation parameter r of the contact law (default: ``default_augmentation``) and the
-    contact discretization (``contact``, CONTACT_DISCRETIZATIONS: "surface" needs
-    ``facing``, which picks the blank faces that meet the tool)."""
+    contact discretization (``contact``, CONTACT_DISCRETIZATIONS: "surface" and "gauss"
+    need ``facing``, which picks the blank faces that meet the tool) with, for "gauss", the
+    penalty of its law in N/mm^3 (``penalty``, default ``default_penalty``)."""
 
     name: str
     surface: BezierSurface | NagataSurface
@@ -36,6 +38,7 @@ class RigidTool:
     facing: ArrayLike | None = None
     augmentation: float | None = None
     contact: str = "node"
+    penalty: float | None = None
     search: ContactSearch = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -55,9 +58,11 @@ class RigidTool:
         if self.contact not in CONTACT_DISCRETIZATIONS:
             raise ValueError(f"tool {self.name}: contact must be one of "
                              f"{', '.join(CONTACT_DISCRETIZATIONS)}, got {self.contact!r}")
-        if self.contact == "surface" and self.facing is None:
-            raise ValueError(f"tool {self.name}: surface-to-surface contact needs facing (the "
+        if self.contact in ("surface", "gauss") and self.facing is None:
+            raise ValueError(f"tool {self.name}: {self.contact} contact needs facing (the "
                              "outward normal of the blank faces that meet the tool)")
+        if self.penalty is not None and not self.penalty > 0.0:
+            raise ValueError(f"tool {self.name}: penalty must be > 0, got {self.penalty}")
         if self.facing is not None:
             facing = float_array(self.facing, f"facing of tool {self.name}", (3,))
             if np.linalg.norm(facing) == 0.0:

@@ -55,7 +55,7 @@ contains
       first = grid_start(po + t)
       last = grid_start(po + t + np_)
       if (first /= 1 .or. last < first .or. table(9, t) + last - 1 > ngrid) return
-      if (table(11, t) /= 0 .and. table(11, t) /= 1) return
+      if (table(11, t) < 0 .or. table(11, t) > 2) return
       if (table(11, t) == 0) then
         do p = tool_first(t) + 1, tool_first(t + 1)
           if (patch_first(p + 1) - patch_first(p) /= 1) return
@@ -102,11 +102,12 @@ contains
                                  tree_upper, tree_child, nframe, frame, frame_lower, &
                                  frame_upper, nstart, grid_start, ngrid, grid_params, &
                                  grid_normals, grid_points, facing, face_first, nface, &
-                                 faces, corner, face_weight, positions, positions_n, reach, &
-                                 size, touching, resting, npair, tool_first, pair_node, &
-                                 npatch, patch_first, patch_node, on, force, r, mu, held, eqn, &
-                                 nf, k_slots, nvalues, residual, values, state, gap, normal, &
-                                 status) bind(C, name="ddpy_forming_contact")
+                                 faces, corner, face_weight, penalty, positions, positions_n, &
+                                 reach, size, touching, resting, npair, tool_first, &
+                                 pair_node, npatch, patch_first, patch_node, on, force, r, mu, &
+                                 held, traction_n, eqn, nf, k_slots, nvalues, residual, &
+                                 values, state, gap, normal, traction, status) &
+    bind(C, name="ddpy_forming_contact")
     integer(c_int), value, intent(in) :: nnode, ntool, ncoef, ndeg, ntri, ntree, nframe, &
                                          nstart, ngrid, nface, resting, npair, npatch, nf, &
                                          k_slots, nvalues
@@ -117,7 +118,8 @@ contains
                                   grid_params(2*ngrid), grid_normals(3*ngrid), &
                                   grid_points(3*ngrid), facing(3, ntool), &
                                   positions(3, ntool), positions_n(3, ntool), &
-                                  force(3, npair), r(npair), mu(npair), face_weight(4, nface)
+                                  force(3, npair), r(npair), mu(npair), face_weight(4, nface), &
+                                  penalty(2, ntool), traction_n(3, 4, nface)
     integer(c_int), intent(in) :: fixed(3, nnode), table(tool_fields, ntool), degrees(ndeg), &
                                   triangle(ntri), tree_child(ntree), grid_start(nstart), &
                                   face_first(ntool + 1), faces(4, nface), corner(4, nface), &
@@ -126,10 +128,11 @@ contains
                                   held(3, npair), eqn(3, nnode)
     real(c_double), intent(inout) :: residual(nf + 3*npair), values(nvalues)
     integer(c_int), intent(out) :: state(npair), status
-    real(c_double), intent(out) :: gap(npair), normal(3, npair)
+    real(c_double), intent(out) :: gap(npair), normal(3, npair), traction(3, 4, nface)
     state = 0
     gap = 0.0_wp
     normal = 0.0_wp
+    traction = 0.0_wp
     status = 1
     if (.not. layout_ok(nnode, ntool, table, ncoef, ndeg, ntri, ntree, nframe, nstart, ngrid, &
                         grid_start, face_first, nface, faces, corner, npair, tool_first, &
@@ -139,10 +142,11 @@ contains
     call forming_contact(nnode, x, x_n, fixed, ntool, table, tol, coef, degrees, triangle, &
                          tree_lower, tree_upper, tree_child, frame, frame_lower, frame_upper, &
                          grid_start, grid_params, grid_normals, grid_points, facing, &
-                         face_first, nface, faces, corner, face_weight, positions, &
+                         face_first, nface, faces, corner, face_weight, penalty, positions, &
                          positions_n, reach, size, touching, resting, npair, tool_first, &
                          pair_node, npatch, patch_first, patch_node, on, force, r, mu, held, &
-                         eqn, nf, k_slots, nvalues, residual, values, state, gap, normal)
+                         traction_n, eqn, nf, k_slots, nvalues, residual, values, state, gap, &
+                         normal, traction)
   end subroutine api_forming_contact
 
   !> Newton iterations of one increment: see forming_increment. Connectivity arrives 0-based.
@@ -154,13 +158,14 @@ contains
                                    tree_upper, tree_child, nframe, frame, frame_lower, &
                                    frame_upper, nstart, grid_start, ngrid, grid_params, &
                                    grid_normals, grid_points, facing, face_first, nface, &
-                                   faces, corner, face_weight, positions, positions_n, reach, &
-                                   size, touching, npair, tool_first, pair_node, npatch, &
-                                   patch_first, patch_node, on, r, mu, held, &
-                                   u_n, force_n, external, prescribed, guess, settings, &
-                                   isettings, factored, reuse_next, u, force, fint, stress, &
-                                   ep, strain, axes, state, gap, normal, nhistory, niter, &
-                                   history, counters, timings, outcome, info, detail) &
+                                   faces, corner, face_weight, penalty, positions, &
+                                   positions_n, reach, size, touching, npair, tool_first, &
+                                   pair_node, npatch, patch_first, patch_node, on, r, mu, held, &
+                                   traction_n, u_n, force_n, external, prescribed, guess, &
+                                   settings, isettings, factored, reuse_next, u, force, fint, &
+                                   stress, ep, strain, axes, state, gap, normal, traction, &
+                                   nhistory, niter, history, counters, timings, outcome, info, &
+                                   detail) &
     bind(C, name="ddpy_forming_increment")
     integer(c_int), value, intent(in) :: nnode, ne, kind, nf, k_slots, n_coupling, nvalues, &
                                          nrow, ncsr, nsrc, ntool, ncoef, ndeg, ntri, ntree, &
@@ -183,7 +188,8 @@ contains
                                   frame_lower(3*nframe), frame_upper(3*nframe), &
                                   grid_params(2*ngrid), grid_normals(3*ngrid), &
                                   grid_points(3*ngrid), facing(3, ntool), &
-                                  face_weight(4, nface), &
+                                  face_weight(4, nface), penalty(2, ntool), &
+                                  traction_n(3, 4, nface), &
                                   positions(3, ntool), positions_n(3, ntool), r(npair), &
                                   mu(npair), u_n(3, nnode), force_n(3, npair), &
                                   external(3, nnode), prescribed(3, nnode), &
@@ -192,8 +198,8 @@ contains
     real(c_double), intent(out) :: u(3, nnode), force(3, npair), fint(3, nnode), &
                                    stress(6, 8, ne), ep(8, ne), &
                                    strain(6, 8, ne), axes(3, 3, 8, ne), gap(npair), &
-                                   normal(3, npair), history(4, nhistory), timings(4), &
-                                   detail(2)
+                                   normal(3, npair), traction(3, 4, nface), &
+                                   history(4, nhistory), timings(4), detail(2)
     integer(c_int), intent(out) :: state(npair), niter, counters(5), outcome, info(4)
     history = 0.0_wp
     outcome = -1
@@ -211,13 +217,13 @@ contains
                            table, tol, coef, degrees, triangle, &
                            tree_lower, tree_upper, tree_child, frame, frame_lower, &
                            frame_upper, grid_start, grid_params, grid_normals, grid_points, &
-                           facing, face_first, nface, faces, corner, face_weight, positions, &
-                           positions_n, reach, size, touching, npair, tool_first, pair_node, &
-                           npatch, patch_first, patch_node, on, r, mu, &
-                           held, u_n, force_n, external, prescribed, guess, settings, &
+                           facing, face_first, nface, faces, corner, face_weight, penalty, &
+                           positions, positions_n, reach, size, touching, npair, tool_first, &
+                           pair_node, npatch, patch_first, patch_node, on, r, mu, held, &
+                           traction_n, u_n, force_n, external, prescribed, guess, settings, &
                            isettings, factored, reuse_next, u, force, fint, stress, ep, &
-                           strain, axes, state, gap, normal, niter, history, counters, &
-                           timings, outcome, info, detail)
+                           strain, axes, state, gap, normal, traction, niter, history, &
+                           counters, timings, outcome, info, detail)
   end subroutine api_forming_increment
 
   !> Newton iterations of one increment of a solid without tools (the static problem): see
@@ -250,7 +256,7 @@ contains
     integer :: table(tool_fields, 0), ints(0), faces(4, 0), first(1), pairs(0), held(3, 0), &
                state(0), reuse_next
     real(wp) :: reals(0), tools(3, 0), forces(3, 0), force(3, 0), normal(3, 0), gap(0), &
-                weights(4, 0)
+                weights(4, 0), penalty(2, 0), tractions(3, 4, 0), traction(3, 4, 0)
     history = 0.0_wp
     outcome = -1
     if (nhistory < isettings(1) + 1 .or. offsets(ne + 1) /= k_slots .or. nvalues /= k_slots) &
@@ -265,11 +271,12 @@ contains
                            row_start, ncsr, col, sources, source_start, 0, table, reals, &
                            reals, ints, ints, reals, reals, ints, &
                            reals, reals, reals, ints, reals, reals, reals, tools, first, 0, &
-                           faces, faces, weights, tools, tools, 0.0_wp, size, 0.0_wp, 0, &
-                           first, pairs, 0, first, pairs, pairs, reals, reals, held, u_n, &
-                           forces, external, prescribed, &
+                           faces, faces, weights, penalty, tools, tools, 0.0_wp, size, 0.0_wp, &
+                           0, first, pairs, 0, first, pairs, pairs, reals, reals, held, &
+                           tractions, u_n, forces, external, prescribed, &
                            guess, settings, isettings, factored, reuse_next, u, force, fint, &
-                           stress, ep, strain, axes, state, gap, normal, niter, history, &
+                           stress, ep, strain, axes, state, gap, normal, traction, niter, &
+                           history, &
                            counters, timings, outcome, info, detail)
   end subroutine api_static_increment
 

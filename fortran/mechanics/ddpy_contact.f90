@@ -20,7 +20,7 @@ module ddpy_contact
   implicit none
   private
   public :: contact_residual, contact_law, normal_derivative, contact_inactive, contact_stick, &
-            contact_slip
+            contact_slip, gauss_traction
 
   !> State of a node after the residual: no force; sticking; slipping.
   integer, parameter :: contact_inactive = 0, contact_stick = 1, contact_slip = 2
@@ -170,6 +170,56 @@ contains
     dc_dn = dc_dn + dt_dn - mu*outer(e, lambda) - rho*matmul(de, dt_dn - r*ds_dn)
     dc_dv = r*rho*matmul(de, proj)
   end subroutine contact_law
+
+  !> Penalty law of one Gauss point of a blank face (docs/theory/contact.md, Gauss-point
+  !> contact): the traction of the tool on the face per undeformed area, p n + t, with
+  !> p = eps_n max(0, -g) and Coulomb friction by a penalty stick and return mapping: the
+  !> trial t_tr = (I - n n)(t_n - eps_t v) from the tangential traction t_n of the last
+  !> converged increment and the slip v of the point relative to the tool since then;
+  !> stick t = t_tr where |t_tr| <= mu p, else slip t = mu p t_tr / |t_tr|. Returns the
+  !> traction, its tangential part (the history to keep), its exact derivative along the
+  !> point's position (3 x 3, with the tool's curvature dndx) and the state.
+  pure subroutine gauss_traction(traction_n, n, g, dndx, v, mu, eps_n, eps_t, traction, &
+                                 tangential, dtr_dx, state)
+    real(wp), intent(in) :: traction_n(3), n(3), g, dndx(3, 3), v(3), mu, eps_n, eps_t
+    real(wp), intent(out) :: traction(3), tangential(3), dtr_dx(3, 3)
+    integer, intent(out) :: state
+    real(wp) :: p, eye(3, 3), proj(3, 3), w(3), trial(3), dp_dx(3), dtrial(3, 3), &
+                norm_trial, rho, e(3)
+    integer :: i
+    traction = 0.0_wp
+    tangential = 0.0_wp
+    dtr_dx = 0.0_wp
+    state = contact_inactive
+    p = -eps_n*g
+    if (.not. p > 0.0_wp) return
+    eye = 0.0_wp
+    do i = 1, 3
+      eye(i, i) = 1.0_wp
+    end do
+    proj = eye - outer(n, n)
+    w = traction_n - eps_t*v
+    trial = matmul(proj, w)
+    dp_dx = -eps_n*n
+    ! d(p n)/dx = n dp/dx + p dn/dx.
+    dtr_dx = outer(n, dp_dx) + p*dndx
+    ! d((I - n n) w)/dx = -((n . w) I + n w^T) dn/dx - eps_t (I - n n).
+    dtrial = -matmul(dot_product(n, w)*eye + outer(n, w), dndx) - eps_t*proj
+    norm_trial = norm2(trial)
+    rho = mu*p
+    if (norm_trial <= rho) then
+      state = contact_stick
+      tangential = trial
+      dtr_dx = dtr_dx + dtrial
+    else
+      state = contact_slip
+      e = trial/norm_trial
+      tangential = rho*e
+      dtr_dx = dtr_dx + mu*outer(e, dp_dx) + &
+               rho*matmul((eye - outer(e, e))/norm_trial, dtrial)
+    end if
+    traction = p*n + tangential
+  end subroutine gauss_traction
 
   pure function outer(a, b) result(m)
     real(wp), intent(in) :: a(3), b(3)

@@ -8,7 +8,8 @@
 !> the caller), then dC/dx at the free dofs of each pair's node (pair-major, row, column),
 !> then dC/dlambda (pair-major, row, column). A pair's dC/dx runs over the nodes of its
 !> patch (patch_first, patch_node): its own node for node-to-surface contact, every node of
-!> the blank faces around it for surface-to-surface contact (row, patch node, column).
+!> the blank faces around it for surface-to-surface and Gauss-point contact (row, patch
+!> node, column).
 !> Tools are packed one after another in flat arrays (see forming_contact); a tool's own
 !> indices (tree children, grid starts) stay local to it, 1-based.
 module ddpy_forming
@@ -16,7 +17,8 @@ module ddpy_forming
   use ddpy_kinds, only: wp
   use ddpy_surface, only: patch_evaluate
   use ddpy_global_search, only: contact_search, contact_none, contact_inside
-  use ddpy_contact, only: contact_residual, contact_law, normal_derivative, contact_inactive
+  use ddpy_contact, only: contact_residual, contact_law, normal_derivative, contact_inactive, &
+                          gauss_traction
   implicit none
   private
   public :: forming_contact, tool_fields, rank_of_rows
@@ -30,6 +32,9 @@ module ddpy_forming
   integer, parameter :: f_kind = 1, f_stride = 2, f_npatch = 3, f_mode = 4, f_iterations = 5, &
                         f_coef = 6, f_patch = 7, f_tree = 8, f_grid = 9, f_facing = 10, &
                         f_surface = 11
+  !> The table's f_surface value of Gauss-point contact (a penalty law at the Gauss points
+  !> of the blank's faces; 0 is node-to-surface, 1 surface-to-surface with weighted gaps).
+  integer, parameter, public :: surface_gauss = 2
   !> The 2 x 2 Gauss points of a blank face, in the order of its corners: the parameter of
   !> the corners (-1, -1), (1, -1), (1, 1), (-1, 1) times 1/sqrt(3).
   real(wp), parameter :: gauss_xi(4) = [-1.0_wp, 1.0_wp, 1.0_wp, -1.0_wp]/sqrt(3.0_wp), &
@@ -61,22 +66,29 @@ contains
   !> the faces around it weighted by its shape function and face_weight (the Gauss weight
   !> times the face's area element in the undeformed blank), and its law's derivatives
   !> along x run over the nodes of those faces (docs/theory/contact.md).
+  !>
+  !> A Gauss-point tool (table f_surface = surface_gauss) puts the penalty law of
+  !> gauss_traction at those Gauss points (penalty(1:2, t): normal and tangential penalty,
+  !> N/mm^3; traction_n(:, g, f): each point's tangential traction at the last converged
+  !> increment, traction: the new one, zero elsewhere) and each slave's law is
+  !> C = lambda - F(x), F its share of the points' forces by the shape functions.
   subroutine forming_contact(nnode, x, x_n, fixed, ntool, table, tol, coef, degrees, &
                              triangle, tree_lower, tree_upper, tree_child, frame, &
                              frame_lower, frame_upper, grid_start, grid_params, &
                              grid_normals, grid_points, facing, face_first, nface, faces, &
-                             corner, face_weight, &
+                             corner, face_weight, penalty, &
                              positions, positions_n, reach, size, touching, resting, &
                              npair, tool_first, pair_node, npatch, patch_first, patch_node, &
-                             on, force, r, mu, held, eqn, nf, &
-                             k_slots, nvalues, residual, values, state, gap, normal)
+                             on, force, r, mu, held, traction_n, eqn, nf, &
+                             k_slots, nvalues, residual, values, state, gap, normal, traction)
     integer, intent(in) :: nnode, ntool, nface, npair, npatch, nf, k_slots, nvalues, resting
     real(wp), intent(in) :: x(3, nnode), x_n(3, nnode), tol(ntool), coef(*), tree_lower(*), &
                             tree_upper(*), frame(*), frame_lower(*), frame_upper(*), &
                             grid_params(*), grid_normals(*), grid_points(*), facing(3, ntool), &
                             positions(3, ntool), positions_n(3, ntool), reach, size, &
                             touching, force(3, npair), r(npair), mu(npair), &
-                            face_weight(4, nface)
+                            face_weight(4, nface), penalty(2, ntool), &
+                            traction_n(3, 4, nface)
     integer, intent(in) :: fixed(3, nnode), table(tool_fields, ntool), degrees(*), &
                            triangle(*), tree_child(*), grid_start(*), &
                            face_first(ntool + 1), faces(4, nface), corner(4, nface), &
@@ -85,12 +97,12 @@ contains
                            on(npair), held(3, npair), eqn(3, nnode)
     real(wp), intent(inout) :: residual(nf + 3*npair), values(nvalues)
     integer, intent(out) :: state(npair)
-    real(wp), intent(out) :: gap(npair), normal(3, npair)
+    real(wp), intent(out) :: gap(npair), normal(3, npair), traction(3, 4, nface)
     real(wp), allocatable :: nodes(:, :), node_normals(:, :), params(:, :), points(:, :), &
                              tangents(:, :, :), distance(:), p_aug(:), c(:, :), &
                              dc_dlambda(:, :, :), dc_dx(:, :, :), slip(:, :), &
                              patch_gap(:, :), patch_normal(:, :, :), patch_weight(:), &
-                             patch_dc(:, :, :)
+                             patch_dc(:, :, :), gauss_force(:, :)
     integer, allocatable :: patch(:), status(:), iterations(:), ncandidates(:)
     logical, allocatable :: searched(:), shut(:), surface(:)
     integer :: t, p, a, b, k, i, j, e, pp, slot
@@ -106,6 +118,9 @@ contains
     do t = 1, ntool
       surface(tool_first(t) + 1:tool_first(t + 1)) = table(f_surface, t) /= 0
     end do
+    allocate(gauss_force(3, npair))
+    gauss_force = 0.0_wp
+    traction = 0.0_wp
     patch_dc = 0.0_wp
     gap = ieee_value(1.0_wp, ieee_positive_inf)
     normal = 0.0_wp
@@ -120,6 +135,10 @@ contains
       b = tool_first(t + 1)
       searched(t) = b >= a .and. any(on(a:b) /= 0)
       if (.not. searched(t)) cycle
+      if (table(f_surface, t) == surface_gauss) then
+        call gauss_search(t)
+        cycle
+      end if
       if (table(f_surface, t) /= 0) then
         call surface_search(t)
         cycle
@@ -150,6 +169,13 @@ contains
     dc_dx = 0.0_wp
     do t = 1, ntool
       if (.not. searched(t)) cycle
+      if (table(f_surface, t) == surface_gauss) then
+        ! C = lambda - F(x): the pair's force is the lumped force of the Gauss points.
+        do p = tool_first(t) + 1, tool_first(t + 1)
+          if (status(p) /= contact_none) c(:, p) = force(:, p) - gauss_force(:, p)
+        end do
+        cycle
+      end if
       if (table(f_surface, t) /= 0) then
         call surface_law(t)
         cycle
@@ -359,6 +385,109 @@ contains
       end do
     end subroutine surface_search
 
+    !> Gauss-point contact of tool t (table f_surface = surface_gauss): the 2 x 2 Gauss
+    !> points of its faces projected on it as in surface_search, the penalty law of each
+    !> (gauss_traction, its tangential traction at the last converged increment from
+    !> traction_n, the new one into traction), and the force of the points on each slave
+    !> a, F_a = sum N_a(xi_g) A_g t_g (A_g = face_weight, the undeformed area), into
+    !> gauss_force, with -dF_a/dx_b into patch_dc (the pair's law is C = lambda - F). The
+    !> pair's gap and normal (for the increment control) are the averages of its points'
+    !> weighted by N_a A_g; its state the highest of its points' (slip over stick over open).
+    subroutine gauss_search(t)
+      integer, intent(in) :: t
+      real(wp), allocatable :: gx(:, :), gn(:, :), gparams(:, :), gpoints(:, :), &
+                               gnormal(:, :), gtangents(:, :, :), gdistance(:), &
+                               wsum(:), gsum(:), msum(:, :)
+      integer, allocatable :: gpatch(:), gstatus(:), gits(:), gcand(:)
+      real(wp) :: basis(4, 4), area(3), e1(3), e2(3), vg(3), w, gpt(3), gd1(3, 2), &
+                  gd2(3, 3), dndx(3, 3), tr(3), tangential(3), dtr(3, 3), mu_t, len_m
+      integer :: f, first, nfc, kg, g, q, qq, s, p, e, i, pp, lo, hi, gstate
+      first = face_first(t)
+      nfc = face_first(t + 1) - first
+      kg = 4*nfc
+      lo = tool_first(t) + 1
+      hi = tool_first(t + 1)
+      do p = lo, hi
+        patch_dc(:, :, patch_first(p) + 1:patch_first(p + 1)) = 0.0_wp
+      end do
+      if (kg == 0 .or. hi < lo) return
+      mu_t = mu(lo)
+      do g = 1, 4
+        do q = 1, 4
+          basis(q, g) = 0.25_wp*(1.0_wp + corner_xi(q)*gauss_xi(g))* &
+                        (1.0_wp + corner_eta(q)*gauss_eta(g))
+        end do
+      end do
+      allocate(gx(3, kg), gn(3, kg), gparams(2, kg), gpoints(3, kg), gnormal(3, kg), &
+               gtangents(3, 2, kg), gdistance(kg), gpatch(kg), gstatus(kg), gits(kg), &
+               gcand(kg))
+      do f = 1, nfc
+        e1 = x(:, faces(3, first + f) + 1) - x(:, faces(1, first + f) + 1)
+        e2 = x(:, faces(4, first + f) + 1) - x(:, faces(2, first + f) + 1)
+        area = [e1(2)*e2(3) - e1(3)*e2(2), e1(3)*e2(1) - e1(1)*e2(3), &
+                e1(1)*e2(2) - e1(2)*e2(1)]
+        if (norm2(area) > 0.0_wp) area = area/norm2(area)
+        do g = 1, 4
+          i = 4*(f - 1) + g
+          gx(:, i) = 0.0_wp
+          do q = 1, 4
+            gx(:, i) = gx(:, i) + basis(q, g)*x(:, faces(q, first + f) + 1)
+          end do
+          gn(:, i) = area
+        end do
+      end do
+      call search_tool(t, kg, gx, gn, gpatch, gparams, gpoints, gnormal, gtangents, &
+                       gdistance, gstatus, gits, gcand)
+      allocate(wsum(lo:hi), gsum(lo:hi), msum(3, lo:hi))
+      wsum = 0.0_wp
+      gsum = 0.0_wp
+      msum = 0.0_wp
+      do f = 1, nfc
+        do g = 1, 4
+          i = 4*(f - 1) + g
+          if (gstatus(i) == contact_none) cycle
+          pp = table(f_patch, t) + gpatch(i)
+          call patch_evaluate(table(f_kind, t), table(f_stride, t), &
+                              coef(table(f_coef, t) + (gpatch(i) - 1)*table(f_stride, t) + 1), &
+                              degrees(2*pp - 1), gparams(1, i), gparams(2, i), gpt, gd1, gd2)
+          dndx = normal_derivative(gtangents(:, :, i), gd2, gnormal(:, i), gdistance(i))
+          vg = -(positions(:, t) - positions_n(:, t))
+          do q = 1, 4
+            s = faces(q, first + f) + 1
+            vg = vg + basis(q, g)*(x(:, s) - x_n(:, s))
+          end do
+          call gauss_traction(traction_n(:, g, first + f), gnormal(:, i), gdistance(i), &
+                              dndx, vg, mu_t, penalty(1, t), penalty(2, t), tr, tangential, &
+                              dtr, gstate)
+          traction(:, g, first + f) = tangential
+          do q = 1, 4
+            s = corner(q, first + f)
+            if (s < 0) cycle
+            p = lo + s
+            w = basis(q, g)*face_weight(g, first + f)
+            wsum(p) = wsum(p) + w
+            gsum(p) = gsum(p) + w*gdistance(i)
+            msum(:, p) = msum(:, p) + w*gnormal(:, i)
+            status(p) = contact_inside
+            state(p) = max(state(p), gstate)
+            if (gstate == contact_inactive) cycle
+            gauss_force(:, p) = gauss_force(:, p) + w*tr
+            do qq = 1, 4
+              e = patch_entry(p, faces(qq, first + f))
+              if (e == 0) cycle
+              patch_dc(:, :, e) = patch_dc(:, :, e) - w*basis(qq, g)*dtr
+            end do
+          end do
+        end do
+      end do
+      do p = lo, hi
+        if (.not. wsum(p) > 0.0_wp) cycle
+        gap(p) = gsum(p)/wsum(p)
+        len_m = norm2(msum(:, p))
+        if (len_m > 0.0_wp) normal(:, p) = msum(:, p)/len_m
+      end do
+    end subroutine gauss_search
+
     !> Entry of node (0-based) in the patch of pair p; 0 when it is not there.
     pure integer function patch_entry(p, node) result(entry)
       integer, intent(in) :: p, node
@@ -479,7 +608,7 @@ contains
           p_aug(p) = force(1, p)*normal(1, p) + force(2, p)*normal(2, p) + &
                      force(3, p)*normal(3, p) - r(p)*d
           shut(p) = status(p) /= contact_none .and. p_aug(p) <= 0.0_wp .and. &
-                    abs(d) <= touching
+                    abs(d) <= touching .and. table(f_surface, u) /= surface_gauss
           if (at_rest(u) .and. shut(p)) any_resting = .true.
         end do
       end do

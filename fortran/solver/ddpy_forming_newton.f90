@@ -50,9 +50,10 @@ contains
   !> tangent, K_fp dp added to the free rows, and each step takes it whole (scaled by the
   !> step length like the rest): the linearized predictor, not a jump of the boundary
   !> nodes, which would invert the elements next to them. See the arguments of
-  !> forming_contact for the tools and pairs. Returns outcome with, as it says: u, force,
+  !> forming_contact for the tools and pairs (and the Gauss points' tangential tractions
+  !> traction_n of Gauss-point contact). Returns outcome with, as it says: u, force,
   !> the solid state, the internal forces fint, the contact states (inactive where off),
-  !> gaps and normals when converged; the landing
+  !> gaps, normals and the Gauss points' tractions when converged; the landing
   !> fraction in detail(1); the element status and element in info(1:2); the MUMPS code in
   !> info(3); the last relative residual and correction in detail(1:2) and the pairs that
   !> changed state in the last iteration in info(4) when stalled. history(1:4, 1:niter):
@@ -73,12 +74,13 @@ contains
                                degrees, triangle, tree_lower, tree_upper, tree_child, frame, &
                                frame_lower, frame_upper, grid_start, grid_params, &
                                grid_normals, grid_points, facing, face_first, nface, faces, &
-                               corner, face_weight, positions, positions_n, reach, size, &
-                               touching, npair, tool_first, pair_node, npatch, patch_first, &
-                               patch_node, on, r, mu, held, u_n, force_n, external, &
-                               prescribed, guess, settings, isettings, factored, reuse_next, &
-                               u, force, fint, stress, ep, strain, axes, state, gap, normal, &
-                               niter, history, counters, timings, outcome, info, detail)
+                               corner, face_weight, penalty, positions, positions_n, reach, &
+                               size, touching, npair, tool_first, pair_node, npatch, &
+                               patch_first, patch_node, on, r, mu, held, traction_n, u_n, &
+                               force_n, external, prescribed, guess, settings, isettings, &
+                               factored, reuse_next, u, force, fint, stress, ep, strain, axes, &
+                               state, gap, normal, traction, niter, history, counters, &
+                               timings, outcome, info, detail)
     integer, intent(in) :: nnode, ne, kind, nf, k_slots, n_coupling, nvalues, ncsr, ntool, &
                            nface, npair, npatch
     integer, intent(in) :: conn(8, ne), eqn(3, nnode), offsets(ne + 1), fixed(3, nnode), &
@@ -95,22 +97,24 @@ contains
                             tree_upper(*), frame(*), frame_lower(*), frame_upper(*), &
                             grid_params(*), grid_normals(*), grid_points(*), &
                             facing(3, ntool), positions(3, ntool), positions_n(3, ntool), &
-                            face_weight(4, nface), &
-                            reach, size, touching, r(npair), mu(npair), u_n(3, nnode), &
+                            face_weight(4, nface), penalty(2, ntool), &
+                            traction_n(3, 4, nface), reach, size, touching, r(npair), mu(npair), u_n(3, nnode), &
                             force_n(3, npair), external(3, nnode), prescribed(3, nnode), &
                             guess(3, nnode), settings(newton_settings)
     integer, intent(inout) :: factored, reuse_next
     real(wp), intent(out) :: u(3, nnode), force(3, npair), fint(3, nnode), &
                              stress(6, 8, ne), ep(8, ne), &
                              strain(6, 8, ne), axes(3, 3, 8, ne), gap(npair), &
-                             normal(3, npair), history(4, *), timings(4), detail(2)
+                             normal(3, npair), traction(3, 4, nface), history(4, *), &
+                             timings(4), detail(2)
     integer, intent(out) :: state(npair), niter, counters(5), outcome, info(4)
 
     !> One evaluation: the iterate and what was evaluated there.
     type :: evaluation
       real(wp), allocatable :: u(:, :), force(:, :), residual(:), values(:), fint(:, :), &
                                stress(:, :, :), ep(:, :), strain(:, :, :), axes(:, :, :, :), &
-                               alpha(:, :), gap(:), normal(:, :), simplified(:)
+                               alpha(:, :), gap(:), normal(:, :), simplified(:), &
+                               traction(:, :, :)
       integer, allocatable :: state(:)
       logical :: moving  ! some fixed dof short of its prescribed value
       real(wp) :: rest   ! how far short: the norm over the fixed dofs
@@ -160,7 +164,8 @@ contains
                slot(cur)%stress(6, 8, ne), slot(cur)%ep(8, ne), slot(cur)%strain(6, 8, ne), &
                slot(cur)%axes(3, 3, 8, ne), slot(cur)%alpha(shell_modes, ne), &
                slot(cur)%gap(npair), slot(cur)%normal(3, npair), &
-               slot(cur)%simplified(n), slot(cur)%state(npair))
+               slot(cur)%simplified(n), slot(cur)%state(npair), &
+               slot(cur)%traction(3, 4, nface))
       slot(cur)%values(k_slots + 1:k_slots + n_coupling) = -1.0_wp
     end do
     correction = ieee_value(1.0_wp, ieee_positive_inf)
@@ -433,11 +438,11 @@ contains
       call forming_contact(nnode, x0 + s%u, x_n, fixed, ntool, table, tol, coef, degrees, &
                            triangle, tree_lower, tree_upper, tree_child, frame, frame_lower, &
                            frame_upper, grid_start, grid_params, grid_normals, grid_points, &
-                           facing, face_first, nface, faces, corner, face_weight, positions, &
-                           positions_n, reach, size, touching_gap, isettings(7), npair, &
-                           tool_first, pair_node, npatch, patch_first, patch_node, on, &
-                           s%force, r, mu, held, eqn, nf, k_slots, nvalues, s%residual, &
-                           s%values, s%state, s%gap, s%normal)
+                           facing, face_first, nface, faces, corner, face_weight, penalty, &
+                           positions, positions_n, reach, size, touching_gap, isettings(7), &
+                           npair, tool_first, pair_node, npatch, patch_first, patch_node, on, &
+                           s%force, r, mu, held, traction_n, eqn, nf, k_slots, nvalues, &
+                           s%residual, s%values, s%state, s%gap, s%normal, s%traction)
       call system_clock(t2)
       timings(2) = timings(2) + real(t2 - t1, wp)/real(clock_rate, wp)
     end subroutine evaluate
@@ -562,6 +567,7 @@ contains
       state = merge(s%state, contact_inactive, on /= 0)
       gap = s%gap
       normal = s%normal
+      traction = s%traction
     end subroutine finish
 
   end subroutine forming_increment

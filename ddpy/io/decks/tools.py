@@ -31,11 +31,12 @@ class _ToolDraft:
     model: Any = None
 
 
-_TOOL_KEYS = ("description", "file", "friction", "contact", "augmentation", "discretization")
+_TOOL_KEYS = ("description", "file", "friction", "contact", "augmentation", "discretization",
+              "penalty")
 _TOOL_REQUIRED = ("description", "file", "friction", "contact")
 _DESCRIPTIONS = ("bezier", "nagata", "facets")
-#: ddpy.model.tool.CONTACT_DISCRETIZATIONS (node-to-surface, surface-to-surface)
-_DISCRETIZATIONS = ("node", "surface")
+#: ddpy.model.tool.CONTACT_DISCRETIZATIONS (node-to-surface, surface-to-surface, Gauss-point)
+_DISCRETIZATIONS = ("node", "surface", "gauss")
 
 
 def _parse_tools(deck: Deck) -> list[_ToolDraft]:
@@ -77,9 +78,12 @@ def _parse_tools(deck: Deck) -> list[_ToolDraft]:
                     path = Path(w[1])
                     tool.values[key] = path if path.is_absolute() else deck.path.parent / path
                 elif key == "discretization":
-                    check_arity(line, "discretization node|surface", 1)
+                    check_arity(line, "discretization node|surface|gauss", 1)
                     tool.values[key] = read_choice(w[1], "the contact discretization",
                                                    _DISCRETIZATIONS)
+                elif key == "penalty":
+                    check_arity(line, "penalty EPS", 1)
+                    tool.values[key] = read_float(w[1], "the contact penalty (N/mm^3)", gt=0)
                 elif key == "augmentation":
                     check_arity(line, "augmentation R", 1)
                     tool.values[key] = read_float(w[1], "the augmentation parameter", gt=0)
@@ -102,7 +106,7 @@ def _parse_tools(deck: Deck) -> list[_ToolDraft]:
                 where = "in a tool" if tool is not None else "at the top of tools.dat"
                 raise BadValue(f"unknown keyword {show(key)} {where}: expected "
                            + ("description, file, friction, contact, augmentation, "
-                              "discretization or end" if tool
+                              "discretization, penalty or end" if tool
                    else "tool"))
         except BadValue as bad:
             deck.error(line.number, str(bad))

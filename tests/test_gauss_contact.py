@@ -1,0 +1,162 @@
+"""Gauss-point contact (RigidTool(..., contact="gauss")): a penalty law with Coulomb friction
+at the 2 x 2 Gauss points of the blank faces that meet a tool, its force spread to the
+faces' nodes by the shape functions, in the same Newton loop (docs/theory/contact.md)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from jacobian_check import central_difference_errors
+from test_surface_contact import ELASTIC, dome, last_rates
+
+from ddpy.geometry.surfaces import NagataSurface
+from ddpy.model.contact import INACTIVE, SLIP, STICK
+from ddpy.model.control import NewtonSettings
+from ddpy.model.forming import FormingProblem, RigidTool
+from ddpy.model.mesh import HexMesh
+from ddpy.model.solid import Solid
+
+#: The penalty of these tests (N/mm^3): a 4 um press gives about 200 MPa.
+PENALTY = 5e4
+
+
+def block_on_dome(friction: float) -> tuple[FormingProblem, HexMesh, RigidTool]:
+    """A 1 x 1 x 0.5 mm block clamped at its top, its bottom on the dome's crest, its side
+    y = -0.5 on a symmetry plane, pressed 4 um into the dome, then slid 2 um along x."""
+    surface = dome()
+    lift = float(surface.evaluate([0], [[0.5, 0.5]])[0][0, 2])
+    mesh = HexMesh.box(1.0, 1.0, 0.5, 3, 3, 2, origin=(-0.5, -0.5, lift))
+    tool = RigidTool("dome", surface, mesh.select(z=lift), friction=friction,
+                     facing=(0, 0, -1), contact="gauss", penalty=PENALTY)
+    problem = FormingProblem(Solid(mesh, ELASTIC), [tool])
+    problem.fix(mesh.select(z=lift + 0.5), "xyz")
+    problem.fix(mesh.select(y=-0.5), "y")
+    problem.run({"dome": (0, 0, 4e-3)}, max_increment=2e-3)
+    problem.run({"dome": (2e-3, 0, 0)}, max_increment=1e-3)
+    return problem, mesh, tool
+
+
+def test_jacobian_with_open_and_slipping_points_matches_central_differences() -> None:
+    """The Jacobian of Gauss-point contact (the tool's curvature at every point, the
+    friction history, slip) against central differences, at a state with open and
+    slip pairs on the dome; measured 3e-10 of the equilibrium block, 1.2e-9 of the law's
+    (without the curvature term 3.3e-5; with the tangential penalty's or the slip's
+    pressure term of the wrong sign 1.9 and 0.6)."""
+    problem, mesh, tool = block_on_dome(0.3)
+    assert np.abs(problem.traction).max() > 0.0  # a friction history to start from
+    rng = np.random.default_rng(7)
+    u = problem.u + 1e-5 * rng.standard_normal(problem.u.shape) * ~problem.fixed
+    # the column x = -0.5 lifted off the dome: every point of its faces opens
+    u[tool.slaves[mesh.nodes[tool.slaves, 0] < -0.4], 2] += 0.05
+    moved = {"dome": problem.position["dome"] + (3e-5, 1e-5, 2e-5)}
+    equilibrium, law, state = central_difference_errors(problem, u, problem.force, moved, 3e-5)
+    assert {INACTIVE, SLIP} <= set(state.tolist()), state
+    assert equilibrium <= 1e-7 and law <= 1e-7, (equilibrium, law)
+
+
+def test_jacobian_with_sticking_points_matches_central_differences() -> None:
+    """Every closed point sticks (the dome moved back by a fraction of the elastic slip),
+    a column lifted off (open):
+    the stick branch's derivative, curvature and history included (measured 1.1e-10 and
+    1.1e-9; without the curvature term 3.3e-5)."""
+    problem, mesh, tool = block_on_dome(0.3)
+    u = problem.u.copy()
+    u[tool.slaves[mesh.nodes[tool.slaves, 0] < -0.4], 2] += 0.05  # open
+    moved = {"dome": problem.position["dome"] + (-1e-5, 0, 1e-5)}
+    equilibrium, law, state = central_difference_errors(problem, u, problem.force, moved,
+                                                        3e-5)
+    assert {INACTIVE, STICK} <= set(state.tolist()), state
+    assert equilibrium <= 1e-7 and law <= 1e-7, (equilibrium, law)
+
+
+def test_tool_reaction_is_the_sum_of_the_contact_forces() -> None:
+    problem, _, tool = block_on_dome(0.3)
+    result = problem.run({"dome": (1e-3, 0, 1e-3)}, max_increment=1e-3)
+    total = problem.force.sum(axis=0)
+    assert np.abs(total).max() > 1.0
+    np.testing.assert_allclose(result.tool_forces["dome"][-1], -total, rtol=1e-12)
+    # and the forces are what the Gauss points carry: the blank's equilibrium
+    fint, _ = problem.solid.internal_force(problem.u, problem.state)
+    free = ~problem.fixed
+    lumped = np.zeros_like(fint)
+    np.add.at(lumped, tool.slaves, problem.force)
+    np.testing.assert_allclose(fint[free], lumped[free], atol=1e-6 * np.abs(total).max())
+
+
+def test_uniform_pressure_on_a_plane_patch_test() -> None:
+    """A block whose columns are irregular quadrilaterals, clamped at its top, pressed
+    onto a plane: every Gauss point sinks as deep, the pressure is uniform and each bottom
+    node carries it times int N_a dA (3 x 3 Gauss points here), to rounding."""
+    mesh = HexMesh.box(1.0, 1.0, 0.5, 3, 3, 2, origin=(-0.5, -0.5, 0.0))
+    nodes = mesh.nodes.copy()
+    inner = (np.abs(nodes[:, 0]) < 0.4) & (np.abs(nodes[:, 1]) < 0.4)
+    rng = np.random.default_rng(3)
+    shift = rng.uniform(-0.08, 0.08, (mesh.n_nodes, 2))
+    column = np.unique(np.round(mesh.nodes[:, :2], 9), axis=0, return_inverse=True)[1]
+    nodes[inner, :2] += shift[column.ravel()][inner]
+    mesh = HexMesh(nodes, mesh.elements)
+    plane = NagataSurface([[-5, -5, 0], [5, -5, 0], [5, 5, 0], [-5, 5, 0]], [[0, 0, 1]] * 4,
+                          [[0, 1, 2, 3]])
+    bottom = mesh.select(z=0.0)
+    tool = RigidTool("plane", plane, bottom, facing=(0, 0, -1), contact="gauss",
+                     penalty=PENALTY)
+    problem = FormingProblem(Solid(mesh, ELASTIC), [tool])
+    problem.fix(mesh.select(z=0.5), "xyz")
+    result = problem.run({"plane": (0, 0, 1e-3)}, max_increment=1e-3,
+                         newton=NewtonSettings(1e-12, 1e-9))
+    faces = mesh.boundary_faces()
+    faces = faces[np.isin(faces, bottom).all(axis=1)]
+    area = np.zeros(mesh.n_nodes)
+    points, weights = np.polynomial.legendre.leggauss(3)
+    sign = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]])
+    for xi, wx in zip(points, weights, strict=True):
+        for eta, wy in zip(points, weights, strict=True):
+            shape = 0.25 * (1 + sign[:, 0] * xi) * (1 + sign[:, 1] * eta)
+            dxi = 0.25 * sign[:, 0] * (1 + sign[:, 1] * eta)
+            deta = 0.25 * sign[:, 1] * (1 + sign[:, 0] * xi)
+            x = mesh.nodes[faces]
+            jac = np.linalg.norm(np.cross(np.einsum("q,fqk->fk", dxi, x),
+                                          np.einsum("q,fqk->fk", deta, x)), axis=1)
+            np.add.at(area, faces, wx * wy * jac[:, None] * shape[None, :])
+    pressure = problem.force[:, 2] / area[tool.slaves]
+    assert np.ptp(pressure) <= 1e-9 * pressure.mean(), pressure
+    # The penalty's depth d and the block's strain d / 0.5 carry the same stress (series
+    # springs): p = eps d, 1e-3 - d the block's shortening.
+    depth = -problem.contact_state()[1]
+    np.testing.assert_allclose(depth, depth.mean(), rtol=1e-9)
+    assert pressure.mean() == pytest.approx(PENALTY * depth.mean(), rel=1e-9)
+    assert -result.tool_forces["plane"][-1][2] == pytest.approx(problem.force[:, 2].sum(),
+                                                                rel=1e-12)
+
+
+def slide_over_dome(friction: float) -> list[list[float]]:
+    """A 2 x 1 x 0.5 mm block clamped at its top pressed 20 um into the dome, then 20 um
+    more while the dome slides 0.2 mm under it: the residual norms of every increment."""
+    surface = dome()
+    lift = float(surface.evaluate([0], [[0.5, 0.5]])[0][0, 2])
+    mesh = HexMesh.box(2.0, 1.0, 0.5, 8, 2, 2, origin=(-1.0, -0.5, lift))
+    tool = RigidTool("dome", surface, mesh.select(z=lift), friction=friction,
+                     facing=(0, 0, -1), contact="gauss", penalty=PENALTY)
+    problem = FormingProblem(Solid(mesh, ELASTIC), [tool])
+    problem.fix(mesh.select(z=lift + 0.5), "xyz")
+    tight = NewtonSettings(1e-10, 1e-6)
+    result = problem.run({"dome": (0, 0, 0.02)}, max_increment=0.02, newton=tight)
+    result = problem.run({"dome": (0.2, 0, 0.02)}, max_increment=0.05, result=result,
+                         newton=tight)
+    assert (result.status["dome"][-1] != INACTIVE).any()
+    return result.residuals
+
+
+def test_quadratic_convergence_sliding_with_friction_over_a_curved_tool() -> None:
+    """mu = 0.15: the last Newton step of each increment about squares the residual."""
+    rates = last_rates(slide_over_dome(0.15))
+    assert len(rates) >= 4 and np.median(rates) >= 1.6, rates
+
+
+def test_gauss_contact_needs_a_facing_direction_and_a_positive_penalty() -> None:
+    mesh = HexMesh.box(1.0, 1.0, 0.5, 1, 1, 1)
+    with pytest.raises(ValueError, match="needs facing"):
+        RigidTool("plane", dome(), mesh.select(z=0.0), contact="gauss")
+    with pytest.raises(ValueError, match="penalty must be > 0"):
+        RigidTool("plane", dome(), mesh.select(z=0.0), facing=(0, 0, -1), contact="gauss",
+                  penalty=0.0)

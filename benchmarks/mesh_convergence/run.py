@@ -6,7 +6,7 @@ benchmarks/cylindrical_bending, von Mises Swift steel, friction 0.148, largest i
 0.1 mm: the case an engineer with a 1 mm blank runs) meshed with structured hexahedra of
 length h = 2, 1, 0.5, 0.25 mm along the bend, 6 across the width and 1 to 4 layers, with
 each element (the mean-dilatation hexahedron, the solid-shell) and each contact treatment
-of the tools (node-to-surface, surface-to-surface). Writes
+of the tools (node-to-surface, surface-to-surface, Gauss-point with its default penalty). Writes
 docs/benchmarks/mesh_convergence.md with its figures:
 
     python benchmarks/mesh_convergence/run.py                      # every run missing
@@ -54,7 +54,7 @@ LENGTHS = (2.0, 1.0, 0.5, 0.25)       # element length along the bend, mm
 LAYERS = (1, 2, 3, 4)
 ACROSS = 6                            # elements across the 15 mm width
 ELEMENTS = ("hexahedron", "solid-shell")
-CONTACTS = ("node", "surface")
+CONTACTS = ("node", "surface", "gauss")
 STROKES = (1.0, 3.0, 5.0, 10.0, 20.0)  # punch travel of the force table, mm
 MAX_INCREMENT, FRICTION = 0.1, 0.148
 #: Chatter: RMS of the force about its moving mean over WINDOW mm of stroke, from

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from jacobian_check import central_difference_errors
-from test_surface_contact import ELASTIC, dome, last_rates
+from test_surface_contact import ELASTIC, dome, last_rates, nodal_areas
 
 from ddpy.geometry.surfaces import NagataSurface
 from ddpy.model.contact import INACTIVE, SLIP, STICK
@@ -104,20 +104,7 @@ def test_uniform_pressure_on_a_plane_patch_test() -> None:
     problem.fix(mesh.select(z=0.5), "xyz")
     result = problem.run({"plane": (0, 0, 1e-3)}, max_increment=1e-3,
                          newton=NewtonSettings(1e-12, 1e-9))
-    faces = mesh.boundary_faces()
-    faces = faces[np.isin(faces, bottom).all(axis=1)]
-    area = np.zeros(mesh.n_nodes)
-    points, weights = np.polynomial.legendre.leggauss(3)
-    sign = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]])
-    for xi, wx in zip(points, weights, strict=True):
-        for eta, wy in zip(points, weights, strict=True):
-            shape = 0.25 * (1 + sign[:, 0] * xi) * (1 + sign[:, 1] * eta)
-            dxi = 0.25 * sign[:, 0] * (1 + sign[:, 1] * eta)
-            deta = 0.25 * sign[:, 1] * (1 + sign[:, 0] * xi)
-            x = mesh.nodes[faces]
-            jac = np.linalg.norm(np.cross(np.einsum("q,fqk->fk", dxi, x),
-                                          np.einsum("q,fqk->fk", deta, x)), axis=1)
-            np.add.at(area, faces, wx * wy * jac[:, None] * shape[None, :])
+    area = nodal_areas(mesh, bottom)
     pressure = problem.force[:, 2] / area[tool.slaves]
     assert np.ptp(pressure) <= 1e-9 * pressure.mean(), pressure
     # The penalty's depth d and the block's strain d / 0.5 carry the same stress (series

@@ -131,6 +131,27 @@ def test_a_symmetry_plane_through_the_slaves_gives_the_full_model() -> None:
     np.testing.assert_allclose(2.0 * forces[1], forces[0], atol=1e-9 * np.abs(forces[0]).max())
 
 
+def nodal_areas(mesh: HexMesh, nodes: np.ndarray) -> np.ndarray:
+    """int N_a dA over the boundary faces whose corners are all in ``nodes``, per node of
+    the mesh, by 3 x 3 Gauss points (exact: a bilinear shape function times a Jacobian
+    linear in each parameter)."""
+    faces = mesh.boundary_faces()
+    faces = faces[np.isin(faces, nodes).all(axis=1)]
+    area = np.zeros(mesh.n_nodes)
+    points, weights = np.polynomial.legendre.leggauss(3)
+    sign = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]])
+    for xi, wx in zip(points, weights, strict=True):
+        for eta, wy in zip(points, weights, strict=True):
+            shape = 0.25 * (1 + sign[:, 0] * xi) * (1 + sign[:, 1] * eta)
+            dxi = 0.25 * sign[:, 0] * (1 + sign[:, 1] * eta)
+            deta = 0.25 * sign[:, 1] * (1 + sign[:, 0] * xi)
+            x = mesh.nodes[faces]
+            jac = np.linalg.norm(np.cross(np.einsum("q,fqk->fk", dxi, x),
+                                          np.einsum("q,fqk->fk", deta, x)), axis=1)
+            np.add.at(area, faces, wx * wy * jac[:, None] * shape[None, :])
+    return area
+
+
 def test_uniform_pressure_on_a_plane_patch_test() -> None:
     """A block whose columns are irregular quadrilaterals, clamped at its top, pressed
     uniformly onto a plane: the stress is uniform, and each bottom node carries the
@@ -154,20 +175,7 @@ def test_uniform_pressure_on_a_plane_patch_test() -> None:
     result = problem.run({"plane": (0, 0, 1e-3)}, max_increment=1e-3)
     # Nodal areas int N_a dA of the bottom faces, 3 x 3 Gauss points (exact: bilinear
     # shape function times a Jacobian linear in each parameter).
-    faces = mesh.boundary_faces()
-    faces = faces[np.isin(faces, bottom).all(axis=1)]
-    area = np.zeros(mesh.n_nodes)
-    points, weights = np.polynomial.legendre.leggauss(3)
-    sign = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]])
-    for xi, wx in zip(points, weights, strict=True):
-        for eta, wy in zip(points, weights, strict=True):
-            shape = 0.25 * (1 + sign[:, 0] * xi) * (1 + sign[:, 1] * eta)
-            dxi = 0.25 * sign[:, 0] * (1 + sign[:, 1] * eta)
-            deta = 0.25 * sign[:, 1] * (1 + sign[:, 0] * xi)
-            x = mesh.nodes[faces]
-            jac = np.linalg.norm(np.cross(np.einsum("q,fqk->fk", dxi, x),
-                                          np.einsum("q,fqk->fk", deta, x)), axis=1)
-            np.add.at(area, faces, wx * wy * jac[:, None] * shape[None, :])
+    area = nodal_areas(mesh, bottom)
     pressure = problem.force[:, 2] / area[tool.slaves]
     assert np.ptp(pressure) <= 1e-9 * pressure.mean(), pressure
     # Uniaxial compression by 2 per mil with nu = 0: the nominal stress -E ln(s) / s.

@@ -257,43 +257,23 @@ contains
 
   contains
 
-    !> The weighted gaps, normals and slips of the pairs of surface-to-surface tool t, with
-    !> their derivatives along every node of their patches: the Gauss points of the tool's
-    !> faces projected on it (the facing filter from each face's normal at x), and their
-    !> gaps, normals and slips averaged around each slave with the weights N_a w J. A
-    !> held component of a slave (a symmetry plane through it) is left out of its normal
-    !> and slip, as the mirror image of its faces would cancel it. A pair none of whose
-    !> points finds the tool has no partner (status none).
-    subroutine surface_search(t)
+    !> The Gauss points of tool t's contact faces, 4 per face in face order (gx), each
+    !> with its face's unit normal from the diagonals (gn), and the shape functions of the
+    !> corners (rows) at the Gauss points (columns) (basis): what surface-to-surface and
+    !> Gauss-point contact search and weigh.
+    subroutine face_points(t, basis, gx, gn)
       integer, intent(in) :: t
-      real(wp), allocatable :: gx(:, :), gn(:, :), gparams(:, :), gpoints(:, :), &
-                               gnormal(:, :), gtangents(:, :, :), gdistance(:), gdn(:, :, :), &
-                               wsum(:), gsum(:), msum(:, :)
-      integer, allocatable :: gpatch(:), gstatus(:), gits(:), gcand(:)
-      real(wp) :: basis(4, 4), area(3), e1(3), e2(3), vg(3), w, wn, len_m, keep(3), &
-                  m(3), eye(3, 3), proj(3, 3), gpt(3), gd1(3, 2), gd2(3, 3)
-      integer :: f, first, nfc, kg, g, q, qq, s, p, e, i, pp, lo, hi
-      first = face_first(t)
-      nfc = face_first(t + 1) - first
-      kg = 4*nfc
-      do p = tool_first(t) + 1, tool_first(t + 1)
-        patch_gap(:, patch_first(p) + 1:patch_first(p + 1)) = 0.0_wp
-        patch_normal(:, :, patch_first(p) + 1:patch_first(p + 1)) = 0.0_wp
-        patch_weight(patch_first(p) + 1:patch_first(p + 1)) = 0.0_wp
-        slip(:, p) = 0.0_wp
-      end do
-      if (kg == 0) return
-      ! Shape functions of the corners (rows) at the Gauss points (columns).
+      real(wp), intent(out) :: basis(4, 4), gx(:, :), gn(:, :)
+      real(wp) :: area(3), e1(3), e2(3)
+      integer :: f, first, g, q, i
       do g = 1, 4
         do q = 1, 4
           basis(q, g) = 0.25_wp*(1.0_wp + corner_xi(q)*gauss_xi(g))* &
                         (1.0_wp + corner_eta(q)*gauss_eta(g))
         end do
       end do
-      allocate(gx(3, kg), gn(3, kg), gparams(2, kg), gpoints(3, kg), gnormal(3, kg), &
-               gtangents(3, 2, kg), gdistance(kg), gdn(3, 3, kg), gpatch(kg), gstatus(kg), &
-               gits(kg), gcand(kg))
-      do f = 1, nfc
+      first = face_first(t)
+      do f = 1, face_first(t + 1) - first
         e1 = x(:, faces(3, first + f) + 1) - x(:, faces(1, first + f) + 1)
         e2 = x(:, faces(4, first + f) + 1) - x(:, faces(2, first + f) + 1)
         area = [e1(2)*e2(3) - e1(3)*e2(2), e1(3)*e2(1) - e1(1)*e2(3), &
@@ -308,6 +288,38 @@ contains
           gn(:, i) = area
         end do
       end do
+    end subroutine face_points
+
+    !> The weighted gaps, normals and slips of the pairs of surface-to-surface tool t, with
+    !> their derivatives along every node of their patches: the Gauss points of the tool's
+    !> faces projected on it (the facing filter from each face's normal at x), and their
+    !> gaps, normals and slips averaged around each slave with the weights N_a w J. A
+    !> held component of a slave (a symmetry plane through it) is left out of its normal
+    !> and slip, as the mirror image of its faces would cancel it. A pair none of whose
+    !> points finds the tool has no partner (status none).
+    subroutine surface_search(t)
+      integer, intent(in) :: t
+      real(wp), allocatable :: gx(:, :), gn(:, :), gparams(:, :), gpoints(:, :), &
+                               gnormal(:, :), gtangents(:, :, :), gdistance(:), gdn(:, :, :), &
+                               wsum(:), gsum(:), msum(:, :)
+      integer, allocatable :: gpatch(:), gstatus(:), gits(:), gcand(:)
+      real(wp) :: basis(4, 4), vg(3), w, wn, len_m, keep(3), &
+                  m(3), eye(3, 3), proj(3, 3), gpt(3), gd1(3, 2), gd2(3, 3)
+      integer :: f, first, nfc, kg, g, q, qq, s, p, e, i, pp, lo, hi
+      first = face_first(t)
+      nfc = face_first(t + 1) - first
+      kg = 4*nfc
+      do p = tool_first(t) + 1, tool_first(t + 1)
+        patch_gap(:, patch_first(p) + 1:patch_first(p + 1)) = 0.0_wp
+        patch_normal(:, :, patch_first(p) + 1:patch_first(p + 1)) = 0.0_wp
+        patch_weight(patch_first(p) + 1:patch_first(p + 1)) = 0.0_wp
+        slip(:, p) = 0.0_wp
+      end do
+      if (kg == 0) return
+      allocate(gx(3, kg), gn(3, kg), gparams(2, kg), gpoints(3, kg), gnormal(3, kg), &
+               gtangents(3, 2, kg), gdistance(kg), gdn(3, 3, kg), gpatch(kg), gstatus(kg), &
+               gits(kg), gcand(kg))
+      call face_points(t, basis, gx, gn)
       call search_tool(t, kg, gx, gn, gpatch, gparams, gpoints, gnormal, gtangents, &
                        gdistance, gstatus, gits, gcand)
       ! The derivative of the tool's normal along each point (its curvature).
@@ -399,7 +411,7 @@ contains
                                gnormal(:, :), gtangents(:, :, :), gdistance(:), &
                                wsum(:), gsum(:), msum(:, :)
       integer, allocatable :: gpatch(:), gstatus(:), gits(:), gcand(:)
-      real(wp) :: basis(4, 4), area(3), e1(3), e2(3), vg(3), w, gpt(3), gd1(3, 2), &
+      real(wp) :: basis(4, 4), vg(3), w, gpt(3), gd1(3, 2), &
                   gd2(3, 3), dndx(3, 3), tr(3), tangential(3), dtr(3, 3), mu_t, len_m
       integer :: f, first, nfc, kg, g, q, qq, s, p, e, i, pp, lo, hi, gstate
       first = face_first(t)
@@ -412,30 +424,10 @@ contains
       end do
       if (kg == 0 .or. hi < lo) return
       mu_t = mu(lo)
-      do g = 1, 4
-        do q = 1, 4
-          basis(q, g) = 0.25_wp*(1.0_wp + corner_xi(q)*gauss_xi(g))* &
-                        (1.0_wp + corner_eta(q)*gauss_eta(g))
-        end do
-      end do
       allocate(gx(3, kg), gn(3, kg), gparams(2, kg), gpoints(3, kg), gnormal(3, kg), &
                gtangents(3, 2, kg), gdistance(kg), gpatch(kg), gstatus(kg), gits(kg), &
                gcand(kg))
-      do f = 1, nfc
-        e1 = x(:, faces(3, first + f) + 1) - x(:, faces(1, first + f) + 1)
-        e2 = x(:, faces(4, first + f) + 1) - x(:, faces(2, first + f) + 1)
-        area = [e1(2)*e2(3) - e1(3)*e2(2), e1(3)*e2(1) - e1(1)*e2(3), &
-                e1(1)*e2(2) - e1(2)*e2(1)]
-        if (norm2(area) > 0.0_wp) area = area/norm2(area)
-        do g = 1, 4
-          i = 4*(f - 1) + g
-          gx(:, i) = 0.0_wp
-          do q = 1, 4
-            gx(:, i) = gx(:, i) + basis(q, g)*x(:, faces(q, first + f) + 1)
-          end do
-          gn(:, i) = area
-        end do
-      end do
+      call face_points(t, basis, gx, gn)
       call search_tool(t, kg, gx, gn, gpatch, gparams, gpoints, gnormal, gtangents, &
                        gdistance, gstatus, gits, gcand)
       allocate(wsum(lo:hi), gsum(lo:hi), msum(3, lo:hi))

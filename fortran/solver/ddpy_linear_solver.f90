@@ -232,6 +232,19 @@ contains
     factorized(handle) = status >= 0
   end subroutine factorize_job
 
+  !> status_size_mismatch where an ordering is to be given (ICNTL(7) = 1) and none of n
+  !> entries was set, else 0.
+  integer function ordering_status(handle, n) result(status)
+    integer, intent(in) :: handle, n
+    status = 0
+    if (instance(handle)%icntl(7) /= 1) return
+    if (.not. associated(instance(handle)%perm_in)) then
+      status = status_size_mismatch
+    else if (size(instance(handle)%perm_in) /= n) then
+      status = status_size_mismatch
+    end if
+  end function ordering_status
+
   !> Symbolic analysis of an n x n matrix given by its nz coordinates (1-based, duplicates
   !> are summed; for sym > 0 only one triangle is read).
   subroutine solver_analyse(handle, n, nz, irn, jcn, status)
@@ -242,16 +255,9 @@ contains
       status = status_bad_handle
       return
     end if
+    status = ordering_status(handle, n)
+    if (status /= 0) return
     associate (id => instance(handle))
-      if (id%icntl(7) == 1) then
-        if (.not. associated(id%perm_in)) then
-          status = status_size_mismatch
-          return
-        else if (size(id%perm_in) /= n) then
-          status = status_size_mismatch
-          return
-        end if
-      end if
       call release_arrays(handle)
       allocate (id%irn(nz), id%jcn(nz), id%a(nz), id%rhs(n))
       id%icntl(5) = 0
@@ -280,16 +286,9 @@ contains
       status = status_bad_handle
       return
     end if
+    status = ordering_status(handle, n)
+    if (status /= 0) return
     associate (id => instance(handle))
-      if (id%icntl(7) == 1) then
-        if (.not. associated(id%perm_in)) then
-          status = status_size_mismatch
-          return
-        else if (size(id%perm_in) /= n) then
-          status = status_size_mismatch
-          return
-        end if
-      end if
       call release_arrays(handle)
       allocate (id%eltptr(nelt + 1), id%eltvar(nvar))
       id%eltptr = eltptr

@@ -56,7 +56,8 @@ ACROSS = 6                            # elements across the 15 mm width
 ELEMENTS = ("hexahedron", "solid-shell")
 #: The contact treatments; "gauss-pN": Gauss-point contact with the penalty N N/mm^3 (the
 #: default penalty is drawing's; light bending on a coarse blank wants the bound
-#: 12 q R / h^3 of docs/theory/contact.md, about 190 N/mm^3 here).
+#: 12 q R / h^3 of docs/theory/contact.md, about 190 N/mm^3 here); "-nK": K x K Gauss
+#: points per blank face.
 CONTACTS = ("node", "surface", "gauss", "gauss-p100")
 STROKES = (1.0, 3.0, 5.0, 10.0, 20.0)  # punch travel of the force table, mm
 MAX_INCREMENT, FRICTION = 0.1, 0.148
@@ -148,14 +149,23 @@ def write_case(blank: Blank, root: Path, tools: Path) -> Path:
                                 nx=blank.along, ny=ACROSS, nz=blank.layers),
         "material.dat": MATERIAL,
         "tools.dat": TOOLS.format(tools=os.path.relpath(tools, folder), friction=FRICTION,
-                                  contact=blank.contact.split("-p")[0],
-                                  penalty=(f"  penalty         {blank.contact.split('-p')[1]}\n"
-                                           if "-p" in blank.contact else "")),
+                                  contact=blank.contact.split("-")[0],
+                                  penalty=contact_options(blank.contact)),
         "bc.dat": BC,
     }
     for name, text in decks.items():
         (folder / name).write_text(text)
     return folder
+
+
+def contact_options(contact: str) -> str:
+    """The tool deck's lines for a treatment's options: "-pN" the penalty N (N/mm^3), "-nK"
+    K x K Gauss points per blank face."""
+    lines = ""
+    for option in contact.split("-")[1:]:
+        key = {"p": "penalty", "n": "points"}[option[0]]
+        lines += f"  {key:<16}{option[1:]}\n"
+    return lines
 
 
 def run_blank(blank: Blank, root: Path, tools: Path, timeout: float) -> dict[str, Any]:

@@ -166,7 +166,8 @@ def build_problem(case: Case) -> FormingProblem:
     solid = Solid(case.mesh, case.material.material, _rolling_angle(case), element=case.element)
     tools = [RigidTool(t.name, t.model().surface, t.contact_nodes(case.mesh),
                        friction=t.friction, facing=t.facing, augmentation=t.augmentation,
-                       contact=t.discretization, penalty=t.penalty)
+                       contact=t.discretization, penalty=t.penalty,
+                       points=t.points)
              for t in case.tools]
     return FormingProblem(solid, tools)
 

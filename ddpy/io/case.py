@@ -25,6 +25,7 @@ from numpy.typing import ArrayLike, NDArray
 from ddpy.model.control import IncrementLimits, NewtonSettings
 from ddpy.model.material import Material
 from ddpy.model.mesh import HEX_FACES, HexMesh
+from ddpy.model.tool import FACE_POINTS
 
 if TYPE_CHECKING:
     from ddpy.io.toolfile import ToolModel
@@ -224,7 +225,7 @@ class Tool:
     parameter r of its contact law, N/mm (None: the solver chooses it), and its contact
     discretization (``discretization``: "node", node-to-surface, "surface",
     surface-to-surface, or "gauss", Gauss-point contact) with its penalty, N/mm^3 (None:
-    the solver chooses it)."""
+    the solver chooses it) and Gauss points per direction of a blank face (``points``)."""
 
     name: str
     description: Literal["bezier", "nagata", "facets"]
@@ -236,6 +237,7 @@ class Tool:
     origin: str = ""
     discretization: str = "node"
     penalty: float | None = None
+    points: int = FACE_POINTS
 
     def model(self) -> ToolModel:
         """The tool model read from the file (ddpy.io.toolfile); a Nagata file used with
@@ -409,7 +411,9 @@ class Case:
                          f"{t.friction:g}, contacts the {t.contact} of the blank"
                          + {"surface": ", surface-to-surface",
                             "gauss": ", Gauss-point contact"}.get(t.discretization, "")
-                         + (f", penalty {t.penalty:g} N/mm^3" if t.penalty is not None else ""))
+                         + (f", penalty {t.penalty:g} N/mm^3" if t.penalty is not None else "")
+                         + (f", {t.points} x {t.points} points per face"
+                            if t.discretization != "node" else ""))
         for p in self.phases:
             if p.is_springback:
                 lines.append(f"  phase {p.name}: springback in {p.increments} step(s)")

@@ -55,20 +55,22 @@ def contact_faces(tools: Sequence[RigidTool], mesh: HexMesh) -> list[NDArray[np.
             for tool in tools]
 
 
-def gauss_face_weights(nodes: NDArray[np.float64], faces: NDArray[np.integer]
-                       ) -> NDArray[np.float64]:
-    """The area each 2 x 2 Gauss point of quadrilateral faces (f, 4) stands for (f, 4):
-    the Gauss weight 1 times |dX/dxi x dX/deta| at the point, in the order of the core's
-    points (xi, eta) = (-1, -1), (1, -1), (1, 1), (-1, 1) / sqrt(3), the corners in the
-    same order. They sum to each face's area."""
+def gauss_face_weights(nodes: NDArray[np.float64], faces: NDArray[np.integer],
+                       order: int = 2) -> NDArray[np.float64]:
+    """The area each of the order x order Gauss points of quadrilateral faces (f, 4) stands
+    for (f, order^2): the Gauss weights times |dX/dxi x dX/deta| at the point, in the order
+    of the core's points (xi runs fastest, each from -1 to 1), the corners (xi, eta) =
+    (-1, -1), (1, -1), (1, 1), (-1, 1). They sum to each face's area."""
     corner = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
+    points, weights_1d = np.polynomial.legendre.leggauss(order)
     x = nodes[faces]                                              # (f, 4, 3)
-    weights = np.empty(faces.shape, dtype=float)
-    for g, (xi, eta) in enumerate(corner / np.sqrt(3.0)):
+    weights = np.empty((faces.shape[0], order * order), dtype=float)
+    for g in range(order * order):
+        xi, eta = points[g % order], points[g // order]
         dxi = 0.25 * corner[:, 0] * (1.0 + corner[:, 1] * eta)    # dN_q/dxi
         deta = 0.25 * corner[:, 1] * (1.0 + corner[:, 0] * xi)
-        weights[:, g] = np.linalg.norm(np.cross(np.einsum("q,fqk->fk", dxi, x),
-                                                np.einsum("q,fqk->fk", deta, x)), axis=1)
+        weights[:, g] = weights_1d[g % order] * weights_1d[g // order] * np.linalg.norm(
+            np.cross(np.einsum("q,fqk->fk", dxi, x), np.einsum("q,fqk->fk", deta, x)), axis=1)
     return weights
 
 
@@ -158,13 +160,17 @@ class ToolPack:
     def __init__(self, tools: Sequence[RigidTool], mesh: HexMesh,
                  penalty: Sequence[float] | None = None) -> None:
         searches = [t.search for t in tools]
-        table = np.zeros((len(tools), 11), dtype=np.int32)
+        faces = contact_faces(tools, mesh)
+        table = np.zeros((len(tools), 13), dtype=np.int32)
         offsets = np.zeros(4, dtype=np.int64)  # coef, patch, tree, grid
+        first_point = 0
         for i, (tool, s) in enumerate(zip(tools, searches, strict=True)):
             n = s.surface.n_patches
             table[i] = (s.kind, s.stride, n, s.mode, s.max_iterations, *offsets,
-                        tool.facing is not None, SURFACE_CODES[tool.contact])
+                        tool.facing is not None, SURFACE_CODES[tool.contact], tool.points,
+                        first_point)
             offsets += (s.surface.coefficients.size, n, 2 * n - 1, s.grid_params.shape[0])
+            first_point += tool.points**2 * faces[i].shape[0]
         self.names = [t.name for t in tools]
         self.table = table.ravel()
         self.tol = np.array([s.tol for s in searches], dtype=float)
@@ -180,15 +186,16 @@ class ToolPack:
         # within 60 degrees) and the slave index of their corners (-1: not a slave): the
         # search keeps only patches opposing the blank's normal at each slave; a
         # surface-to-surface or Gauss-point tool projects their Gauss points, which stand
-        # for the areas face_weight of the undeformed blank.
-        faces = contact_faces(tools, mesh)
+        # for the areas face_weight of the undeformed blank (n x n per face, n the tool's
+        # points).
         corners, weights = [], []
         for tool, chosen in zip(tools, faces, strict=True):
             where = np.full(mesh.n_nodes, -1, dtype=np.int32)
             where[tool.slaves] = np.arange(tool.slaves.size)
             corners.append(where[chosen])
-            weights.append(gauss_face_weights(mesh.nodes, chosen) if tool.contact != "node"
-                           else np.zeros(chosen.shape))
+            weights.append(gauss_face_weights(mesh.nodes, chosen, tool.points)
+                           if tool.contact != "node"
+                           else np.zeros((chosen.shape[0], tool.points**2)))
         self.face_first = np.concatenate([[0], np.cumsum([f.shape[0] for f in faces])]
                                          ).astype(np.int32)
         self.faces = _join([f.ravel() for f in faces], np.int32)
@@ -198,7 +205,7 @@ class ToolPack:
         self.penalty = np.repeat(np.zeros(len(tools)) if penalty is None else
                                  np.asarray(penalty, dtype=float), 2)
         #: Gauss points of all faces: their tangential tractions are (3,) each
-        self.n_points = 4 * (self.face_first[-1] if len(tools) else 0)
+        self.n_points = first_point if len(tools) else 0
 
     def arguments(self, positions: dict[str, NDArray[np.float64]],
                   positions_n: dict[str, NDArray[np.float64]], reach: float, size: float

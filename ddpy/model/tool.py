@@ -11,7 +11,7 @@ from ddpy._validate import float_array, int_array
 from ddpy.geometry.search import ContactSearch
 from ddpy.geometry.surfaces import BezierSurface, NagataSurface
 
-__all__ = ["RigidTool", "CONTACT_DISCRETIZATIONS"]
+__all__ = ["RigidTool", "CONTACT_DISCRETIZATIONS", "FACE_POINTS", "MAX_POINTS"]
 
 #: How a tool's contact is discretized on the blank: "node" (node-to-surface, DD3IMP's: each
 #: slave node's own gap, normal and slip) or "surface" (surface-to-surface: each slave's
@@ -19,6 +19,10 @@ __all__ = ["RigidTool", "CONTACT_DISCRETIZATIONS"]
 #: "gauss" (a penalty law at the Gauss points of the blank faces, its force spread to their
 #: nodes by the shape functions; docs/theory/contact.md).
 CONTACT_DISCRETIZATIONS = ("node", "surface", "gauss")
+#: Gauss points per direction of the blank faces of surface-to-surface and Gauss-point
+#: contact (n x n per face), by default and at most (the core's max_face_order).
+FACE_POINTS = 2
+MAX_POINTS = 8
 
 
 @dataclass
@@ -29,7 +33,8 @@ class RigidTool:
     augmentation parameter r of the contact law (default: ``default_augmentation``) and the
     contact discretization (``contact``, CONTACT_DISCRETIZATIONS: "surface" and "gauss"
     need ``facing``, which picks the blank faces that meet the tool) with, for "gauss", the
-    penalty of its law in N/mm^3 (``penalty``, default ``default_penalty``)."""
+    penalty of its law in N/mm^3 (``penalty``, default ``default_penalty``); "surface" and
+    "gauss" integrate over the blank faces with ``points`` x ``points`` Gauss points each."""
 
     name: str
     surface: BezierSurface | NagataSurface
@@ -39,6 +44,7 @@ class RigidTool:
     augmentation: float | None = None
     contact: str = "node"
     penalty: float | None = None
+    points: int = FACE_POINTS
     search: ContactSearch = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -63,6 +69,9 @@ class RigidTool:
                              "outward normal of the blank faces that meet the tool)")
         if self.penalty is not None and not self.penalty > 0.0:
             raise ValueError(f"tool {self.name}: penalty must be > 0, got {self.penalty}")
+        if not (isinstance(self.points, (int, np.integer)) and 1 <= self.points <= MAX_POINTS):
+            raise ValueError(f"tool {self.name}: points must be an integer from 1 to "
+                             f"{MAX_POINTS}, got {self.points!r}")
         if self.facing is not None:
             facing = float_array(self.facing, f"facing of tool {self.name}", (3,))
             if np.linalg.norm(facing) == 0.0:

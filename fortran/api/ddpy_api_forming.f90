@@ -3,7 +3,7 @@
 module ddpy_api_forming
   use, intrinsic :: iso_c_binding, only: c_int, c_double
   use ddpy_kinds, only: wp
-  use ddpy_forming, only: forming_contact, tool_fields
+  use ddpy_forming, only: forming_contact, tool_fields, max_face_order
   use ddpy_forming_newton, only: forming_increment, newton_settings, newton_integer_settings, &
                                  penetration_step, gmres
   use ddpy_material, only: material_prop_count
@@ -23,15 +23,15 @@ contains
   !> blocks of the layout (or 0: no Jacobian).
   pure logical function layout_ok(nnode, ntool, table, ncoef, ndeg, ntri, ntree, nframe, &
                                   nstart, ngrid, grid_start, face_first, nface, faces, &
-                                  corner, npair, tool_first, pair_node, npatch, patch_first, &
-                                  patch_node, eqn, k_slots, nvalues) result(ok)
+                                  corner, npoint, npair, tool_first, pair_node, npatch, &
+                                  patch_first, patch_node, eqn, k_slots, nvalues) result(ok)
     integer(c_int), intent(in) :: nnode, ntool, ncoef, ndeg, ntri, ntree, nframe, nstart, &
-                                  ngrid, nface, npair, npatch, k_slots, nvalues
+                                  ngrid, nface, npoint, npair, npatch, k_slots, nvalues
     integer(c_int), intent(in) :: table(tool_fields, ntool), grid_start(nstart), &
                                   face_first(ntool + 1), faces(4, nface), corner(4, nface), &
                                   tool_first(ntool + 1), pair_node(npair), &
                                   patch_first(npair + 1), patch_node(npatch), eqn(3, nnode)
-    integer :: t, np_, po, first, last, coupled, p, f, q, qq, e, entries
+    integer :: t, np_, po, first, last, coupled, p, f, q, qq, e, entries, points
     logical :: found
     ok = .false.
     if (any(pair_node < 0) .or. any(pair_node >= nnode)) return
@@ -41,6 +41,14 @@ contains
     if (any(faces < 0) .or. any(faces >= nnode) .or. any(corner < -1)) return
     if (tool_first(1) /= 0 .or. tool_first(ntool + 1) /= npair) return
     if (face_first(1) /= 0 .or. face_first(ntool + 1) /= nface) return
+    ! Each tool's n x n points per face, one tool after another, fill the point arrays.
+    points = 0
+    do t = 1, ntool
+      if (table(12, t) < 1 .or. table(12, t) > max_face_order .or. table(13, t) /= points) &
+        return
+      points = points + table(12, t)**2*(face_first(t + 1) - face_first(t))
+    end do
+    if (points /= npoint) return
     do t = 1, ntool
       if (tool_first(t + 1) < tool_first(t) .or. face_first(t + 1) < face_first(t)) return
       if (any(corner(:, face_first(t) + 1:face_first(t + 1)) >= &
@@ -102,15 +110,15 @@ contains
                                  tree_upper, tree_child, nframe, frame, frame_lower, &
                                  frame_upper, nstart, grid_start, ngrid, grid_params, &
                                  grid_normals, grid_points, facing, face_first, nface, &
-                                 faces, corner, face_weight, penalty, positions, positions_n, &
-                                 reach, size, touching, resting, npair, tool_first, &
+                                 faces, corner, npoint, face_weight, penalty, positions, &
+                                 positions_n, reach, size, touching, resting, npair, tool_first, &
                                  pair_node, npatch, patch_first, patch_node, on, force, r, mu, &
                                  held, traction_n, eqn, nf, k_slots, nvalues, residual, &
                                  values, state, gap, normal, traction, status) &
     bind(C, name="ddpy_forming_contact")
     integer(c_int), value, intent(in) :: nnode, ntool, ncoef, ndeg, ntri, ntree, nframe, &
-                                         nstart, ngrid, nface, resting, npair, npatch, nf, &
-                                         k_slots, nvalues
+                                         nstart, ngrid, nface, npoint, resting, npair, npatch, &
+                                         nf, k_slots, nvalues
     real(c_double), value, intent(in) :: reach, size, touching
     real(c_double), intent(in) :: x(3, nnode), x_n(3, nnode), tol(ntool), coef(ncoef), &
                                   tree_lower(3*ntree), tree_upper(3*ntree), frame(9*nframe), &
@@ -118,8 +126,8 @@ contains
                                   grid_params(2*ngrid), grid_normals(3*ngrid), &
                                   grid_points(3*ngrid), facing(3, ntool), &
                                   positions(3, ntool), positions_n(3, ntool), &
-                                  force(3, npair), r(npair), mu(npair), face_weight(4, nface), &
-                                  penalty(2, ntool), traction_n(3, 4, nface)
+                                  force(3, npair), r(npair), mu(npair), face_weight(npoint), &
+                                  penalty(2, ntool), traction_n(3, npoint)
     integer(c_int), intent(in) :: fixed(3, nnode), table(tool_fields, ntool), degrees(ndeg), &
                                   triangle(ntri), tree_child(ntree), grid_start(nstart), &
                                   face_first(ntool + 1), faces(4, nface), corner(4, nface), &
@@ -128,22 +136,22 @@ contains
                                   held(3, npair), eqn(3, nnode)
     real(c_double), intent(inout) :: residual(nf + 3*npair), values(nvalues)
     integer(c_int), intent(out) :: state(npair), status
-    real(c_double), intent(out) :: gap(npair), normal(3, npair), traction(3, 4, nface)
+    real(c_double), intent(out) :: gap(npair), normal(3, npair), traction(3, npoint)
     state = 0
     gap = 0.0_wp
     normal = 0.0_wp
     traction = 0.0_wp
     status = 1
     if (.not. layout_ok(nnode, ntool, table, ncoef, ndeg, ntri, ntree, nframe, nstart, ngrid, &
-                        grid_start, face_first, nface, faces, corner, npair, tool_first, &
-                        pair_node, npatch, patch_first, patch_node, eqn, k_slots, &
-                        nvalues)) return
+                        grid_start, face_first, nface, faces, corner, npoint, npair, &
+                        tool_first, pair_node, npatch, patch_first, patch_node, eqn, &
+                        k_slots, nvalues)) return
     status = 0
     call forming_contact(nnode, x, x_n, fixed, ntool, table, tol, coef, degrees, triangle, &
                          tree_lower, tree_upper, tree_child, frame, frame_lower, frame_upper, &
                          grid_start, grid_params, grid_normals, grid_points, facing, &
-                         face_first, nface, faces, corner, face_weight, penalty, positions, &
-                         positions_n, reach, size, touching, resting, npair, tool_first, &
+                         face_first, nface, faces, corner, npoint, face_weight, penalty, &
+                         positions, positions_n, reach, size, touching, resting, npair, tool_first, &
                          pair_node, npatch, patch_first, patch_node, on, force, r, mu, held, &
                          traction_n, eqn, nf, k_slots, nvalues, residual, values, state, gap, &
                          normal, traction)
@@ -158,7 +166,7 @@ contains
                                    tree_upper, tree_child, nframe, frame, frame_lower, &
                                    frame_upper, nstart, grid_start, ngrid, grid_params, &
                                    grid_normals, grid_points, facing, face_first, nface, &
-                                   faces, corner, face_weight, penalty, positions, &
+                                   faces, corner, npoint, face_weight, penalty, positions, &
                                    positions_n, reach, size, touching, npair, tool_first, &
                                    pair_node, npatch, patch_first, patch_node, on, r, mu, held, &
                                    traction_n, u_n, force_n, external, prescribed, guess, &
@@ -169,7 +177,8 @@ contains
     bind(C, name="ddpy_forming_increment")
     integer(c_int), value, intent(in) :: nnode, ne, kind, nf, k_slots, n_coupling, nvalues, &
                                          nrow, ncsr, nsrc, ntool, ncoef, ndeg, ntri, ntree, &
-                                         nframe, nstart, ngrid, nface, npair, npatch, nhistory
+                                         nframe, nstart, ngrid, nface, npoint, npair, npatch, &
+                                         nhistory
     real(c_double), value, intent(in) :: reach, size, touching
     integer(c_int), intent(in) :: conn(8, ne), eqn(3, nnode), offsets(ne + 1), &
                                   fixed(3, nnode), row_start(nrow + 1), col(ncsr), &
@@ -188,8 +197,8 @@ contains
                                   frame_lower(3*nframe), frame_upper(3*nframe), &
                                   grid_params(2*ngrid), grid_normals(3*ngrid), &
                                   grid_points(3*ngrid), facing(3, ntool), &
-                                  face_weight(4, nface), penalty(2, ntool), &
-                                  traction_n(3, 4, nface), &
+                                  face_weight(npoint), penalty(2, ntool), &
+                                  traction_n(3, npoint), &
                                   positions(3, ntool), positions_n(3, ntool), r(npair), &
                                   mu(npair), u_n(3, nnode), force_n(3, npair), &
                                   external(3, nnode), prescribed(3, nnode), &
@@ -198,7 +207,7 @@ contains
     real(c_double), intent(out) :: u(3, nnode), force(3, npair), fint(3, nnode), &
                                    stress(6, 8, ne), ep(8, ne), &
                                    strain(6, 8, ne), axes(3, 3, 8, ne), gap(npair), &
-                                   normal(3, npair), traction(3, 4, nface), &
+                                   normal(3, npair), traction(3, npoint), &
                                    history(4, nhistory), timings(4), detail(2)
     integer(c_int), intent(out) :: state(npair), niter, counters(5), outcome, info(4)
     history = 0.0_wp
@@ -208,17 +217,17 @@ contains
     if (any(conn < 0) .or. any(conn >= nnode) .or. nrow /= nf + 3*npair) return
     if (.not. rows_ok(nrow, ncsr, nsrc, nvalues, row_start, col, sources, source_start)) return
     if (.not. layout_ok(nnode, ntool, table, ncoef, ndeg, ntri, ntree, nframe, nstart, ngrid, &
-                        grid_start, face_first, nface, faces, corner, npair, tool_first, &
-                        pair_node, npatch, patch_first, patch_node, eqn, k_slots, &
-                        nvalues)) return
+                        grid_start, face_first, nface, faces, corner, npoint, npair, &
+                        tool_first, pair_node, npatch, patch_first, patch_node, eqn, &
+                        k_slots, nvalues)) return
     call forming_increment(nnode, x0, ne, conn + 1, kind, props, u_ref, axes_old, stress_old, &
                            ep_old, strain_old, eqn, offsets, fixed, nf, k_slots, n_coupling, &
                            nvalues, row_start, ncsr, col, sources, source_start, ntool, &
                            table, tol, coef, degrees, triangle, &
                            tree_lower, tree_upper, tree_child, frame, frame_lower, &
                            frame_upper, grid_start, grid_params, grid_normals, grid_points, &
-                           facing, face_first, nface, faces, corner, face_weight, penalty, &
-                           positions, positions_n, reach, size, touching, npair, tool_first, &
+                           facing, face_first, nface, faces, corner, npoint, face_weight, &
+                           penalty, positions, positions_n, reach, size, touching, npair, tool_first, &
                            pair_node, npatch, patch_first, patch_node, on, r, mu, held, &
                            traction_n, u_n, force_n, external, prescribed, guess, settings, &
                            isettings, factored, reuse_next, u, force, fint, stress, ep, &
@@ -256,7 +265,7 @@ contains
     integer :: table(tool_fields, 0), ints(0), faces(4, 0), first(1), pairs(0), held(3, 0), &
                state(0), reuse_next
     real(wp) :: reals(0), tools(3, 0), forces(3, 0), force(3, 0), normal(3, 0), gap(0), &
-                weights(4, 0), penalty(2, 0), tractions(3, 4, 0), traction(3, 4, 0)
+                weights(0), penalty(2, 0), tractions(3, 0), traction(3, 0)
     history = 0.0_wp
     outcome = -1
     if (nhistory < isettings(1) + 1 .or. offsets(ne + 1) /= k_slots .or. nvalues /= k_slots) &
@@ -271,7 +280,8 @@ contains
                            row_start, ncsr, col, sources, source_start, 0, table, reals, &
                            reals, ints, ints, reals, reals, ints, &
                            reals, reals, reals, ints, reals, reals, reals, tools, first, 0, &
-                           faces, faces, weights, penalty, tools, tools, 0.0_wp, size, 0.0_wp, &
+                           faces, faces, 0, weights, penalty, tools, tools, 0.0_wp, size, &
+                           0.0_wp, &
                            0, first, pairs, 0, first, pairs, pairs, reals, reals, held, &
                            tractions, u_n, forces, external, prescribed, &
                            guess, settings, isettings, factored, reuse_next, u, force, fint, &

@@ -21,25 +21,26 @@ module ddpy_forming
                           gauss_traction
   implicit none
   private
-  public :: forming_contact, tool_fields, rank_of_rows
+  public :: forming_contact, tool_fields, rank_of_rows, gauss_legendre
 
   !> Columns of a tool's row in the tool table: surface kind, reals per patch, patches,
   !> search mode, local search iterations, offsets (0-based) into the packed coefficient,
   !> patch, tree and grid arrays, 1 when it has a facing direction (its faces are
-  !> face_first(t) + 1 .. face_first(t + 1)), and 1 for surface-to-surface contact (0:
-  !> node-to-surface).
-  integer, parameter :: tool_fields = 11
+  !> face_first(t) + 1 .. face_first(t + 1)), 1 for surface-to-surface contact (0:
+  !> node-to-surface, surface_gauss: Gauss-point contact), the Gauss points per direction
+  !> of its faces (n: n x n per face) and the offset (0-based) of its first point in the
+  !> flat point arrays (face_weight, traction_n, traction).
+  integer, parameter :: tool_fields = 13
   integer, parameter :: f_kind = 1, f_stride = 2, f_npatch = 3, f_mode = 4, f_iterations = 5, &
                         f_coef = 6, f_patch = 7, f_tree = 8, f_grid = 9, f_facing = 10, &
-                        f_surface = 11
+                        f_surface = 11, f_order = 12, f_point = 13
   !> The table's f_surface value of Gauss-point contact (a penalty law at the Gauss points
   !> of the blank's faces; 0 is node-to-surface, 1 surface-to-surface with weighted gaps).
   integer, parameter, public :: surface_gauss = 2
-  !> The 2 x 2 Gauss points of a blank face, in the order of its corners: the parameter of
-  !> the corners (-1, -1), (1, -1), (1, 1), (-1, 1) times 1/sqrt(3).
-  real(wp), parameter :: gauss_xi(4) = [-1.0_wp, 1.0_wp, 1.0_wp, -1.0_wp]/sqrt(3.0_wp), &
-                         gauss_eta(4) = [-1.0_wp, -1.0_wp, 1.0_wp, 1.0_wp]/sqrt(3.0_wp), &
-                         corner_xi(4) = [-1.0_wp, 1.0_wp, 1.0_wp, -1.0_wp], &
+  !> The most Gauss points per direction of a blank face.
+  integer, parameter, public :: max_face_order = 8
+  !> The corners of a blank face in its parameters (xi, eta).
+  real(wp), parameter :: corner_xi(4) = [-1.0_wp, 1.0_wp, 1.0_wp, -1.0_wp], &
                          corner_eta(4) = [-1.0_wp, -1.0_wp, 1.0_wp, 1.0_wp]
   !> A singular value of the rigid-mode rows above this counts (numpy's matrix_rank tol).
   real(wp), parameter :: rank_tolerance = 1.0e-9_wp
@@ -61,7 +62,7 @@ contains
   !> leave a rigid motion free). A pair that found no patch (or whose tool is off) keeps
   !> C = lambda, state 0 and an infinite gap.
   !>
-  !> A surface-to-surface tool (table f_surface) projects the 2 x 2 Gauss points of its
+  !> A surface-to-surface tool (table f_surface) projects the n x n Gauss points of its
   !> faces instead of its slaves: each slave's gap, normal and slip are the averages over
   !> the faces around it weighted by its shape function and face_weight (the Gauss weight
   !> times the face's area element in the undeformed blank), and its law's derivatives
@@ -69,26 +70,27 @@ contains
   !>
   !> A Gauss-point tool (table f_surface = surface_gauss) puts the penalty law of
   !> gauss_traction at those Gauss points (penalty(1:2, t): normal and tangential penalty,
-  !> N/mm^3; traction_n(:, g, f): each point's tangential traction at the last converged
+  !> N/mm^3; traction_n(:, i): each point's tangential traction at the last converged
   !> increment, traction: the new one, zero elsewhere) and each slave's law is
   !> C = lambda - F(x), F its share of the points' forces by the shape functions.
   subroutine forming_contact(nnode, x, x_n, fixed, ntool, table, tol, coef, degrees, &
                              triangle, tree_lower, tree_upper, tree_child, frame, &
                              frame_lower, frame_upper, grid_start, grid_params, &
                              grid_normals, grid_points, facing, face_first, nface, faces, &
-                             corner, face_weight, penalty, &
+                             corner, npoint, face_weight, penalty, &
                              positions, positions_n, reach, size, touching, resting, &
                              npair, tool_first, pair_node, npatch, patch_first, patch_node, &
                              on, force, r, mu, held, traction_n, eqn, nf, &
                              k_slots, nvalues, residual, values, state, gap, normal, traction)
-    integer, intent(in) :: nnode, ntool, nface, npair, npatch, nf, k_slots, nvalues, resting
+    integer, intent(in) :: nnode, ntool, nface, npoint, npair, npatch, nf, k_slots, nvalues, &
+                           resting
     real(wp), intent(in) :: x(3, nnode), x_n(3, nnode), tol(ntool), coef(*), tree_lower(*), &
                             tree_upper(*), frame(*), frame_lower(*), frame_upper(*), &
                             grid_params(*), grid_normals(*), grid_points(*), facing(3, ntool), &
                             positions(3, ntool), positions_n(3, ntool), reach, size, &
                             touching, force(3, npair), r(npair), mu(npair), &
-                            face_weight(4, nface), penalty(2, ntool), &
-                            traction_n(3, 4, nface)
+                            face_weight(npoint), penalty(2, ntool), &
+                            traction_n(3, npoint)
     integer, intent(in) :: fixed(3, nnode), table(tool_fields, ntool), degrees(*), &
                            triangle(*), tree_child(*), grid_start(*), &
                            face_first(ntool + 1), faces(4, nface), corner(4, nface), &
@@ -97,7 +99,7 @@ contains
                            on(npair), held(3, npair), eqn(3, nnode)
     real(wp), intent(inout) :: residual(nf + 3*npair), values(nvalues)
     integer, intent(out) :: state(npair)
-    real(wp), intent(out) :: gap(npair), normal(3, npair), traction(3, 4, nface)
+    real(wp), intent(out) :: gap(npair), normal(3, npair), traction(3, npoint)
     real(wp), allocatable :: nodes(:, :), node_normals(:, :), params(:, :), points(:, :), &
                              tangents(:, :, :), distance(:), p_aug(:), c(:, :), &
                              dc_dlambda(:, :, :), dc_dx(:, :, :), slip(:, :), &
@@ -257,19 +259,21 @@ contains
 
   contains
 
-    !> The Gauss points of tool t's contact faces, 4 per face in face order (gx), each
-    !> with its face's unit normal from the diagonals (gn), and the shape functions of the
-    !> corners (rows) at the Gauss points (columns) (basis): what surface-to-surface and
-    !> Gauss-point contact search and weigh.
-    subroutine face_points(t, basis, gx, gn)
-      integer, intent(in) :: t
-      real(wp), intent(out) :: basis(4, 4), gx(:, :), gn(:, :)
-      real(wp) :: area(3), e1(3), e2(3)
-      integer :: f, first, g, q, i
-      do g = 1, 4
+    !> The Gauss points of tool t's contact faces, npf = n x n per face in face order (gx;
+    !> xi runs fastest), each with its face's unit normal from the diagonals (gn), and the
+    !> shape functions of the corners (rows) at the points of a face (columns) (basis):
+    !> what surface-to-surface and Gauss-point contact search and weigh.
+    subroutine face_points(t, npf, basis, gx, gn)
+      integer, intent(in) :: t, npf
+      real(wp), intent(out) :: basis(4, npf), gx(:, :), gn(:, :)
+      real(wp) :: area(3), e1(3), e2(3), xi(max_face_order)
+      integer :: f, first, g, q, i, n
+      n = table(f_order, t)
+      call gauss_legendre(n, xi(:n))
+      do g = 1, npf
         do q = 1, 4
-          basis(q, g) = 0.25_wp*(1.0_wp + corner_xi(q)*gauss_xi(g))* &
-                        (1.0_wp + corner_eta(q)*gauss_eta(g))
+          basis(q, g) = 0.25_wp*(1.0_wp + corner_xi(q)*xi(mod(g - 1, n) + 1))* &
+                        (1.0_wp + corner_eta(q)*xi((g - 1)/n + 1))
         end do
       end do
       first = face_first(t)
@@ -279,8 +283,8 @@ contains
         area = [e1(2)*e2(3) - e1(3)*e2(2), e1(3)*e2(1) - e1(1)*e2(3), &
                 e1(1)*e2(2) - e1(2)*e2(1)]
         if (norm2(area) > 0.0_wp) area = area/norm2(area)
-        do g = 1, 4
-          i = 4*(f - 1) + g
+        do g = 1, npf
+          i = npf*(f - 1) + g
           gx(:, i) = 0.0_wp
           do q = 1, 4
             gx(:, i) = gx(:, i) + basis(q, g)*x(:, faces(q, first + f) + 1)
@@ -303,12 +307,13 @@ contains
                                gnormal(:, :), gtangents(:, :, :), gdistance(:), gdn(:, :, :), &
                                wsum(:), gsum(:), msum(:, :)
       integer, allocatable :: gpatch(:), gstatus(:), gits(:), gcand(:)
-      real(wp) :: basis(4, 4), vg(3), w, wn, len_m, keep(3), &
+      real(wp) :: basis(4, table(f_order, t)**2), vg(3), w, wn, len_m, keep(3), &
                   m(3), eye(3, 3), proj(3, 3), gpt(3), gd1(3, 2), gd2(3, 3)
-      integer :: f, first, nfc, kg, g, q, qq, s, p, e, i, pp, lo, hi
+      integer :: f, first, nfc, kg, g, q, qq, s, p, e, i, pp, lo, hi, npf, ip
       first = face_first(t)
       nfc = face_first(t + 1) - first
-      kg = 4*nfc
+      npf = table(f_order, t)**2
+      kg = npf*nfc
       do p = tool_first(t) + 1, tool_first(t + 1)
         patch_gap(:, patch_first(p) + 1:patch_first(p + 1)) = 0.0_wp
         patch_normal(:, :, patch_first(p) + 1:patch_first(p + 1)) = 0.0_wp
@@ -319,7 +324,7 @@ contains
       allocate(gx(3, kg), gn(3, kg), gparams(2, kg), gpoints(3, kg), gnormal(3, kg), &
                gtangents(3, 2, kg), gdistance(kg), gdn(3, 3, kg), gpatch(kg), gstatus(kg), &
                gits(kg), gcand(kg))
-      call face_points(t, basis, gx, gn)
+      call face_points(t, npf, basis, gx, gn)
       call search_tool(t, kg, gx, gn, gpatch, gparams, gpoints, gnormal, gtangents, &
                        gdistance, gstatus, gits, gcand)
       ! The derivative of the tool's normal along each point (its curvature).
@@ -342,8 +347,9 @@ contains
       gsum = 0.0_wp
       msum = 0.0_wp
       do f = 1, nfc
-        do g = 1, 4
-          i = 4*(f - 1) + g
+        do g = 1, npf
+          i = npf*(f - 1) + g
+          ip = table(f_point, t) + i
           if (gstatus(i) == contact_none) cycle
           vg = -(positions(:, t) - positions_n(:, t))
           do q = 1, 4
@@ -354,7 +360,7 @@ contains
             s = corner(q, first + f)
             if (s < 0) cycle
             p = tool_first(t) + s + 1
-            w = basis(q, g)*face_weight(g, first + f)
+            w = basis(q, g)*face_weight(ip)
             wsum(p) = wsum(p) + w
             gsum(p) = gsum(p) + w*gdistance(i)
             msum(:, p) = msum(:, p) + w*gnormal(:, i)
@@ -397,7 +403,7 @@ contains
       end do
     end subroutine surface_search
 
-    !> Gauss-point contact of tool t (table f_surface = surface_gauss): the 2 x 2 Gauss
+    !> Gauss-point contact of tool t (table f_surface = surface_gauss): the n x n Gauss
     !> points of its faces projected on it as in surface_search, the penalty law of each
     !> (gauss_traction, its tangential traction at the last converged increment from
     !> traction_n, the new one into traction), and the force of the points on each slave
@@ -411,12 +417,13 @@ contains
                                gnormal(:, :), gtangents(:, :, :), gdistance(:), &
                                wsum(:), gsum(:), msum(:, :)
       integer, allocatable :: gpatch(:), gstatus(:), gits(:), gcand(:)
-      real(wp) :: basis(4, 4), vg(3), w, gpt(3), gd1(3, 2), &
+      real(wp) :: basis(4, table(f_order, t)**2), vg(3), w, gpt(3), gd1(3, 2), &
                   gd2(3, 3), dndx(3, 3), tr(3), tangential(3), dtr(3, 3), mu_t, len_m
-      integer :: f, first, nfc, kg, g, q, qq, s, p, e, i, pp, lo, hi, gstate
+      integer :: f, first, nfc, kg, g, q, qq, s, p, e, i, pp, lo, hi, gstate, npf, ip
       first = face_first(t)
       nfc = face_first(t + 1) - first
-      kg = 4*nfc
+      npf = table(f_order, t)**2
+      kg = npf*nfc
       lo = tool_first(t) + 1
       hi = tool_first(t + 1)
       do p = lo, hi
@@ -427,7 +434,7 @@ contains
       allocate(gx(3, kg), gn(3, kg), gparams(2, kg), gpoints(3, kg), gnormal(3, kg), &
                gtangents(3, 2, kg), gdistance(kg), gpatch(kg), gstatus(kg), gits(kg), &
                gcand(kg))
-      call face_points(t, basis, gx, gn)
+      call face_points(t, npf, basis, gx, gn)
       call search_tool(t, kg, gx, gn, gpatch, gparams, gpoints, gnormal, gtangents, &
                        gdistance, gstatus, gits, gcand)
       allocate(wsum(lo:hi), gsum(lo:hi), msum(3, lo:hi))
@@ -435,8 +442,9 @@ contains
       gsum = 0.0_wp
       msum = 0.0_wp
       do f = 1, nfc
-        do g = 1, 4
-          i = 4*(f - 1) + g
+        do g = 1, npf
+          i = npf*(f - 1) + g
+          ip = table(f_point, t) + i
           if (gstatus(i) == contact_none) cycle
           pp = table(f_patch, t) + gpatch(i)
           call patch_evaluate(table(f_kind, t), table(f_stride, t), &
@@ -448,15 +456,15 @@ contains
             s = faces(q, first + f) + 1
             vg = vg + basis(q, g)*(x(:, s) - x_n(:, s))
           end do
-          call gauss_traction(traction_n(:, g, first + f), gnormal(:, i), gdistance(i), &
+          call gauss_traction(traction_n(:, ip), gnormal(:, i), gdistance(i), &
                               dndx, vg, mu_t, penalty(1, t), penalty(2, t), tr, tangential, &
                               dtr, gstate)
-          traction(:, g, first + f) = tangential
+          traction(:, ip) = tangential
           do q = 1, 4
             s = corner(q, first + f)
             if (s < 0) cycle
             p = lo + s
-            w = basis(q, g)*face_weight(g, first + f)
+            w = basis(q, g)*face_weight(ip)
             wsum(p) = wsum(p) + w
             gsum(p) = gsum(p) + w*gdistance(i)
             msum(:, p) = msum(:, p) + w*gnormal(:, i)
@@ -694,5 +702,36 @@ contains
       if (sqrt(sum(a(:, i)**2)) > rank_tolerance) rank = rank + 1
     end do
   end function rank_of_rows
+
+  !> The n Gauss-Legendre points on [-1, 1], ascending: the roots of the Legendre
+  !> polynomial P_n by Newton's method from Tricomi's estimates (the weights, which the
+  !> core does not need, come with the points' areas from the caller).
+  pure subroutine gauss_legendre(n, xi)
+    integer, intent(in) :: n
+    real(wp), intent(out) :: xi(n)
+    real(wp), parameter :: pi = acos(-1.0_wp)
+    real(wp) :: z, p0, p1, p2, dp
+    integer :: i, k, it
+    do i = 1, (n + 1)/2
+      z = cos(pi*(i - 0.25_wp)/(n + 0.5_wp))
+      do it = 1, 100
+        p0 = 1.0_wp
+        p1 = z
+        do k = 2, n
+          p2 = ((2*k - 1)*z*p1 - (k - 1)*p0)/k
+          p0 = p1
+          p1 = p2
+        end do
+        if (n == 1) p0 = 1.0_wp
+        dp = n*(z*p1 - p0)/(z*z - 1.0_wp)
+        if (n == 1) dp = 1.0_wp
+        z = z - p1/dp
+        if (abs(p1/dp) < 1.0e-15_wp) exit
+      end do
+      xi(n + 1 - i) = z
+      xi(i) = -z
+    end do
+    if (mod(n, 2) == 1) xi((n + 1)/2) = 0.0_wp
+  end subroutine gauss_legendre
 
 end module ddpy_forming

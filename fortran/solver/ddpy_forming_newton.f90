@@ -74,15 +74,15 @@ contains
                                degrees, triangle, tree_lower, tree_upper, tree_child, frame, &
                                frame_lower, frame_upper, grid_start, grid_params, &
                                grid_normals, grid_points, facing, face_first, nface, faces, &
-                               corner, face_weight, penalty, positions, positions_n, reach, &
-                               size, touching, npair, tool_first, pair_node, npatch, &
+                               corner, npoint, face_weight, penalty, positions, positions_n, &
+                               reach, size, touching, npair, tool_first, pair_node, npatch, &
                                patch_first, patch_node, on, r, mu, held, traction_n, u_n, &
                                force_n, external, prescribed, guess, settings, isettings, &
                                factored, reuse_next, u, force, fint, stress, ep, strain, axes, &
                                state, gap, normal, traction, niter, history, counters, &
                                timings, outcome, info, detail)
     integer, intent(in) :: nnode, ne, kind, nf, k_slots, n_coupling, nvalues, ncsr, ntool, &
-                           nface, npair, npatch
+                           nface, npoint, npair, npatch
     integer, intent(in) :: conn(8, ne), eqn(3, nnode), offsets(ne + 1), fixed(3, nnode), &
                            row_start(nf + 3*npair + 1), col(ncsr), sources(*), &
                            source_start(ncsr + 1), table(tool_fields, ntool), &
@@ -97,15 +97,16 @@ contains
                             tree_upper(*), frame(*), frame_lower(*), frame_upper(*), &
                             grid_params(*), grid_normals(*), grid_points(*), &
                             facing(3, ntool), positions(3, ntool), positions_n(3, ntool), &
-                            face_weight(4, nface), penalty(2, ntool), &
-                            traction_n(3, 4, nface), reach, size, touching, r(npair), mu(npair), u_n(3, nnode), &
+                            face_weight(npoint), penalty(2, ntool), &
+                            traction_n(3, npoint), reach, size, touching, r(npair), &
+                            mu(npair), u_n(3, nnode), &
                             force_n(3, npair), external(3, nnode), prescribed(3, nnode), &
                             guess(3, nnode), settings(newton_settings)
     integer, intent(inout) :: factored, reuse_next
     real(wp), intent(out) :: u(3, nnode), force(3, npair), fint(3, nnode), &
                              stress(6, 8, ne), ep(8, ne), &
                              strain(6, 8, ne), axes(3, 3, 8, ne), gap(npair), &
-                             normal(3, npair), traction(3, 4, nface), history(4, *), &
+                             normal(3, npair), traction(3, npoint), history(4, *), &
                              timings(4), detail(2)
     integer, intent(out) :: state(npair), niter, counters(5), outcome, info(4)
 
@@ -114,7 +115,7 @@ contains
       real(wp), allocatable :: u(:, :), force(:, :), residual(:), values(:), fint(:, :), &
                                stress(:, :, :), ep(:, :), strain(:, :, :), axes(:, :, :, :), &
                                alpha(:, :), gap(:), normal(:, :), simplified(:), &
-                               traction(:, :, :)
+                               traction(:, :)
       integer, allocatable :: state(:)
       logical :: moving  ! some fixed dof short of its prescribed value
       real(wp) :: rest   ! how far short: the norm over the fixed dofs
@@ -165,7 +166,7 @@ contains
                slot(cur)%axes(3, 3, 8, ne), slot(cur)%alpha(shell_modes, ne), &
                slot(cur)%gap(npair), slot(cur)%normal(3, npair), &
                slot(cur)%simplified(n), slot(cur)%state(npair), &
-               slot(cur)%traction(3, 4, nface))
+               slot(cur)%traction(3, npoint))
       slot(cur)%values(k_slots + 1:k_slots + n_coupling) = -1.0_wp
     end do
     correction = ieee_value(1.0_wp, ieee_positive_inf)
@@ -438,8 +439,8 @@ contains
       call forming_contact(nnode, x0 + s%u, x_n, fixed, ntool, table, tol, coef, degrees, &
                            triangle, tree_lower, tree_upper, tree_child, frame, frame_lower, &
                            frame_upper, grid_start, grid_params, grid_normals, grid_points, &
-                           facing, face_first, nface, faces, corner, face_weight, penalty, &
-                           positions, positions_n, reach, size, touching_gap, isettings(7), &
+                           facing, face_first, nface, faces, corner, npoint, face_weight, &
+                           penalty, positions, positions_n, reach, size, touching_gap, isettings(7), &
                            npair, tool_first, pair_node, npatch, patch_first, patch_node, on, &
                            s%force, r, mu, held, traction_n, eqn, nf, k_slots, nvalues, &
                            s%residual, s%values, s%state, s%gap, s%normal, s%traction)

@@ -38,6 +38,7 @@ from ddpy.io.decks.tools import _ToolDraft
 from ddpy.model.control import IncrementLimits, NewtonSettings
 from ddpy.model.forming import MAX_INCREMENTS, blank_stiffness
 from ddpy.model.mesh import HEX_EDGES, HexMesh
+from ddpy.model.tool import FACE_POINTS
 
 
 class _Cross:
@@ -94,7 +95,8 @@ class _Cross:
                         d.values["friction"], side if side != "facing" else
                         "surface facing (" + ", ".join(f"{c:.3g}" for c in facing) + ")",
                         facing, d.values.get("augmentation"), self.tools_deck.where(d.line),
-                        d.values.get("discretization", "node"), d.values.get("penalty"))
+                        d.values.get("discretization", "node"), d.values.get("penalty"),
+                        d.values.get("points", FACE_POINTS))
             if d.model is not None:
                 object.__setattr__(tool, "_model", d.model)
             if tool.contact_nodes(mesh).size == 0:

@@ -1,6 +1,6 @@
 """tools.dat: per tool its description, tool file (read and checked against the description when
 ddpy.io.toolfile is available), friction, contact side, augmentation and contact
-discretization.
+discretization (with its penalty and Gauss points per face direction).
 """
 
 from __future__ import annotations
@@ -16,10 +16,12 @@ from ddpy.io.decks.lines import (
     first_time,
     read_choice,
     read_float,
+    read_int,
     read_name,
     read_unit,
     show,
 )
+from ddpy.model.tool import MAX_POINTS
 
 
 @dataclass
@@ -32,7 +34,7 @@ class _ToolDraft:
 
 
 _TOOL_KEYS = ("description", "file", "friction", "contact", "augmentation", "discretization",
-              "penalty")
+              "penalty", "points")
 _TOOL_REQUIRED = ("description", "file", "friction", "contact")
 _DESCRIPTIONS = ("bezier", "nagata", "facets")
 #: ddpy.model.tool.CONTACT_DISCRETIZATIONS (node-to-surface, surface-to-surface, Gauss-point)
@@ -84,6 +86,10 @@ def _parse_tools(deck: Deck) -> list[_ToolDraft]:
                 elif key == "penalty":
                     check_arity(line, "penalty EPS", 1)
                     tool.values[key] = read_float(w[1], "the contact penalty (N/mm^3)", gt=0)
+                elif key == "points":
+                    check_arity(line, "points N", 1)
+                    tool.values[key] = read_int(w[1], "the Gauss points per direction of a "
+                                                "blank face", 1, MAX_POINTS)
                 elif key == "augmentation":
                     check_arity(line, "augmentation R", 1)
                     tool.values[key] = read_float(w[1], "the augmentation parameter", gt=0)
@@ -106,7 +112,7 @@ def _parse_tools(deck: Deck) -> list[_ToolDraft]:
                 where = "in a tool" if tool is not None else "at the top of tools.dat"
                 raise BadValue(f"unknown keyword {show(key)} {where}: expected "
                            + ("description, file, friction, contact, augmentation, "
-                              "discretization, penalty or end" if tool
+                              "discretization, penalty, points or end" if tool
                    else "tool"))
         except BadValue as bad:
             deck.error(line.number, str(bad))

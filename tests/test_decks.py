@@ -644,6 +644,9 @@ TOOL_ERRORS = [
     ("contact      top", "contact top\n  discretization",
      "expected 'discretization node|surface|gauss'"),
     ("contact      top", "contact top\n  penalty -1", "contact penalty (N/mm^3) must be > 0"),
+    ("contact      top", "contact top\n  points 9",
+     "Gauss points per direction of a blank face must be <= 8"),
+    ("contact      top", "contact top\n  points 2.5", "expected an integer for the Gauss points"),
     ("contact      top", "contact top\n  discretization node\n  discretization surface",
      "'discretization' given twice"),
 ]
@@ -676,22 +679,26 @@ def test_contact_discretization(tmp_path: Path) -> None:
     assert str(error_of(case)).startswith(f"{case / 'tools.dat'}:{number}: ")
 
 
-def test_gauss_contact_and_its_penalty(tmp_path: Path) -> None:
+def test_gauss_contact_its_penalty_and_points(tmp_path: Path) -> None:
     """discretization gauss selects Gauss-point contact; penalty sets its penalty (N/mm^3),
-    by default 8 sigma_0 T / h^2 (ddpy.model.forming.default_penalty)."""
+    by default 8 sigma_0 T / h^2 (ddpy.model.forming.default_penalty); points its Gauss
+    points per face direction, by default 4."""
     from ddpy.app.runner import build_problem
 
     case = edit(copy_example("bending", tmp_path), "tools.dat", "contact      bottom",
-                "contact      bottom\n  discretization gauss\n  penalty 150")
+                "contact      bottom\n  discretization gauss\n  penalty 150\n  points 3")
     read = read_case(case)
     assert (read.tool("die").discretization, read.tool("die").penalty) == ("gauss", 150.0)
-    assert "contacts the bottom of the blank, Gauss-point contact" in read.summary()
+    assert "contacts the bottom of the blank, Gauss-point contact, penalty 150 N/mm^3, " \
+        "3 x 3 points per face" in read.summary()
     problem = build_problem(read)
     assert [t.contact for t in problem.tools] == ["node", "gauss"]
+    assert [t.points for t in problem.tools] == [2, 3]
     assert problem.penalty == [0.0, 150.0]
-    edit(case, "tools.dat", "  penalty 150\n", "")
+    edit(case, "tools.dat", "  penalty 150\n  points 3\n", "")
     problem = build_problem(read_case(case))
     assert problem.penalty[1] > 0.0
+    assert problem.tools[1].points == 4
 
 
 def test_tool_friction_message(tmp_path: Path) -> None:

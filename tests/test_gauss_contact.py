@@ -1,5 +1,5 @@
 """Gauss-point contact (RigidTool(..., contact="gauss")): a penalty law with Coulomb friction
-at the 2 x 2 Gauss points of the blank faces that meet a tool, its force spread to the
+at the n x n Gauss points of the blank faces that meet a tool, its force spread to the
 faces' nodes by the shape functions, in the same Newton loop (docs/theory/contact.md)."""
 
 from __future__ import annotations
@@ -20,14 +20,15 @@ from ddpy.model.solid import Solid
 PENALTY = 5e4
 
 
-def block_on_dome(friction: float) -> tuple[FormingProblem, HexMesh, RigidTool]:
+def block_on_dome(friction: float, points: int = 2
+                  ) -> tuple[FormingProblem, HexMesh, RigidTool]:
     """A 1 x 1 x 0.5 mm block clamped at its top, its bottom on the dome's crest, its side
     y = -0.5 on a symmetry plane, pressed 4 um into the dome, then slid 2 um along x."""
     surface = dome()
     lift = float(surface.evaluate([0], [[0.5, 0.5]])[0][0, 2])
     mesh = HexMesh.box(1.0, 1.0, 0.5, 3, 3, 2, origin=(-0.5, -0.5, lift))
     tool = RigidTool("dome", surface, mesh.select(z=lift), friction=friction,
-                     facing=(0, 0, -1), contact="gauss", penalty=PENALTY)
+                     facing=(0, 0, -1), contact="gauss", penalty=PENALTY, points=points)
     problem = FormingProblem(Solid(mesh, ELASTIC), [tool])
     problem.fix(mesh.select(z=lift + 0.5), "xyz")
     problem.fix(mesh.select(y=-0.5), "y")
@@ -36,13 +37,15 @@ def block_on_dome(friction: float) -> tuple[FormingProblem, HexMesh, RigidTool]:
     return problem, mesh, tool
 
 
-def test_jacobian_with_open_and_slipping_points_matches_central_differences() -> None:
+@pytest.mark.parametrize("points", [2, 3])
+def test_jacobian_with_open_and_slipping_points_matches_central_differences(points: int
+                                                                            ) -> None:
     """The Jacobian of Gauss-point contact (the tool's curvature at every point, the
     friction history, slip) against central differences, at a state with open and
-    slip pairs on the dome; measured 3e-10 of the equilibrium block, 1.2e-9 of the law's
-    (without the curvature term 3.3e-5; with the tangential penalty's or the slip's
-    pressure term of the wrong sign 1.9 and 0.6)."""
-    problem, mesh, tool = block_on_dome(0.3)
+    slip pairs on the dome, with 2 x 2 and 3 x 3 points per face; measured 3e-10 of the
+    equilibrium block, 1.2e-9 of the law's (without the curvature term 3.3e-5; with the
+    tangential penalty's or the slip's pressure term of the wrong sign 1.9 and 0.6)."""
+    problem, mesh, tool = block_on_dome(0.3, points)
     assert np.abs(problem.traction).max() > 0.0  # a friction history to start from
     rng = np.random.default_rng(7)
     u = problem.u + 1e-5 * rng.standard_normal(problem.u.shape) * ~problem.fixed
@@ -83,10 +86,8 @@ def test_tool_reaction_is_the_sum_of_the_contact_forces() -> None:
     np.testing.assert_allclose(fint[free], lumped[free], atol=1e-6 * np.abs(total).max())
 
 
-def test_uniform_pressure_on_a_plane_patch_test() -> None:
-    """A block whose columns are irregular quadrilaterals, clamped at its top, pressed
-    onto a plane: every Gauss point sinks as deep, the pressure is uniform and each bottom
-    node carries it times int N_a dA (3 x 3 Gauss points here), to rounding."""
+def irregular_block() -> HexMesh:
+    """A 1 x 1 x 0.5 mm block whose columns are irregular quadrilaterals."""
     mesh = HexMesh.box(1.0, 1.0, 0.5, 3, 3, 2, origin=(-0.5, -0.5, 0.0))
     nodes = mesh.nodes.copy()
     inner = (np.abs(nodes[:, 0]) < 0.4) & (np.abs(nodes[:, 1]) < 0.4)
@@ -94,17 +95,33 @@ def test_uniform_pressure_on_a_plane_patch_test() -> None:
     shift = rng.uniform(-0.08, 0.08, (mesh.n_nodes, 2))
     column = np.unique(np.round(mesh.nodes[:, :2], 9), axis=0, return_inverse=True)[1]
     nodes[inner, :2] += shift[column.ravel()][inner]
-    mesh = HexMesh(nodes, mesh.elements)
-    plane = NagataSurface([[-5, -5, 0], [5, -5, 0], [5, 5, 0], [-5, 5, 0]], [[0, 0, 1]] * 4,
-                          [[0, 1, 2, 3]])
-    bottom = mesh.select(z=0.0)
-    tool = RigidTool("plane", plane, bottom, facing=(0, 0, -1), contact="gauss",
-                     penalty=PENALTY)
+    return HexMesh(nodes, mesh.elements)
+
+
+def press_on_plane(mesh: HexMesh, slope: float, points: int
+                   ) -> tuple[FormingProblem, RigidTool, object]:
+    """The block clamped at its top, pressed onto the plane z = slope x moved up by 1 um
+    and 2 slope mm: every point of its bottom faces closed."""
+    normal = np.array([-slope, 0.0, 1.0]) / np.hypot(slope, 1.0)
+    plane = NagataSurface([[-5, -5, -5 * slope], [5, -5, 5 * slope], [5, 5, 5 * slope],
+                           [-5, 5, -5 * slope]], [normal] * 4, [[0, 1, 2, 3]])
+    tool = RigidTool("plane", plane, mesh.select(z=0.0), facing=(0, 0, -1), contact="gauss",
+                     penalty=PENALTY, points=points)
     problem = FormingProblem(Solid(mesh, ELASTIC), [tool])
     problem.fix(mesh.select(z=0.5), "xyz")
-    result = problem.run({"plane": (0, 0, 1e-3)}, max_increment=1e-3,
+    result = problem.run({"plane": (0, 0, 1e-3 + 2 * abs(slope))}, max_increment=1e-3,
                          newton=NewtonSettings(1e-12, 1e-9))
-    area = nodal_areas(mesh, bottom)
+    return problem, tool, result
+
+
+@pytest.mark.parametrize("points", [2, 4])
+def test_uniform_pressure_on_a_plane_patch_test(points: int) -> None:
+    """The irregular block pressed onto a plane: every Gauss point sinks as deep, the
+    pressure is uniform and each bottom node carries it times int N_a dA (3 x 3 Gauss
+    points here), to rounding, with 2 x 2 and 4 x 4 points per face."""
+    mesh = irregular_block()
+    problem, tool, result = press_on_plane(mesh, 0.0, points)
+    area = nodal_areas(mesh, tool.slaves)
     pressure = problem.force[:, 2] / area[tool.slaves]
     assert np.ptp(pressure) <= 1e-9 * pressure.mean(), pressure
     # The penalty's depth d and the block's strain d / 0.5 carry the same stress (series
@@ -114,6 +131,21 @@ def test_uniform_pressure_on_a_plane_patch_test() -> None:
     assert pressure.mean() == pytest.approx(PENALTY * depth.mean(), rel=1e-9)
     assert -result.tool_forces["plane"][-1][2] == pytest.approx(problem.force[:, 2].sum(),
                                                                 rel=1e-12)
+
+
+def test_every_face_rule_integrates_a_linear_pressure_exactly() -> None:
+    """Pressed onto a tilted plane, the irregular block's faces sink by a depth bilinear in
+    their parameters; with the area element and the shape functions the integrand has
+    degree 3 in each parameter, which every Gauss rule from 2 x 2 points on integrates
+    exactly. So 2 x 2, 3 x 3 and 5 x 5 points per face give the same solution to the
+    Newton tolerance (a point rule whose points and weights were out of order would not:
+    the faces are irregular)."""
+    mesh = irregular_block()
+    forces = [press_on_plane(mesh, 1e-3, n)[0].force for n in (2, 3, 5)]
+    assert np.ptp(forces[0][:, 2]) > 0.2 * np.abs(forces[0][:, 2]).max()  # not uniform
+    for other in forces[1:]:
+        np.testing.assert_allclose(other, forces[0], rtol=0,
+                                   atol=1e-8 * np.abs(forces[0]).max())
 
 
 def slide_over_dome(friction: float) -> list[list[float]]:
@@ -140,10 +172,13 @@ def test_quadratic_convergence_sliding_with_friction_over_a_curved_tool() -> Non
     assert len(rates) >= 4 and np.median(rates) >= 1.6, rates
 
 
-def test_gauss_contact_needs_a_facing_direction_and_a_positive_penalty() -> None:
+def test_gauss_contact_needs_a_facing_direction_a_positive_penalty_and_points() -> None:
     mesh = HexMesh.box(1.0, 1.0, 0.5, 1, 1, 1)
     with pytest.raises(ValueError, match="needs facing"):
         RigidTool("plane", dome(), mesh.select(z=0.0), contact="gauss")
     with pytest.raises(ValueError, match="penalty must be > 0"):
         RigidTool("plane", dome(), mesh.select(z=0.0), facing=(0, 0, -1), contact="gauss",
                   penalty=0.0)
+    with pytest.raises(ValueError, match="points must be an integer from 1 to 8"):
+        RigidTool("plane", dome(), mesh.select(z=0.0), facing=(0, 0, -1), contact="gauss",
+                  points=9)

@@ -439,8 +439,15 @@ def main(argv: list[str] | None = None) -> int:
                         "asked for that have none kept (runs stopped before they ended)")
     parser.add_argument("--json", action="store_true", help="print the numbers only")
     args = parser.parse_args(argv)
+    for contact in listed(args.contacts, str):
+        try:
+            assert contact.split("-")[0] in ("node", "surface", "gauss")
+            contact_options(contact)
+        except (AssertionError, KeyError, IndexError):
+            parser.error(f"{contact}: expected node, surface or gauss, each optionally "
+                         "followed by -pN (penalty) and -nK (points), as in gauss-p100-n4")
     blanks = [Blank(h, n, e, c) for e in listed(args.elements, str, ELEMENTS)
-              for c in listed(args.contacts, str, CONTACTS)
+              for c in listed(args.contacts, str)
               for h in listed(args.lengths, float) for n in listed(args.layers, int)]
     runs = kept()
     if args.collect:

@@ -237,7 +237,7 @@ class Tool:
     origin: str = ""
     discretization: str = "node"
     penalty: float | None = None
-    points: int = FACE_POINTS
+    points: int | None = None
 
     def model(self) -> ToolModel:
         """The tool model read from the file (ddpy.io.toolfile); a Nagata file used with
@@ -412,7 +412,8 @@ class Case:
                          + {"surface": ", surface-to-surface",
                             "gauss": ", Gauss-point contact"}.get(t.discretization, "")
                          + (f", penalty {t.penalty:g} N/mm^3" if t.penalty is not None else "")
-                         + (f", {t.points} x {t.points} points per face"
+                         + (f", {t.points or FACE_POINTS[t.discretization]} x "
+                            f"{t.points or FACE_POINTS[t.discretization]} points per face"
                             if t.discretization != "node" else ""))
         for p in self.phases:
             if p.is_springback:

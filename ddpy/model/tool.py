@@ -19,9 +19,12 @@ __all__ = ["RigidTool", "CONTACT_DISCRETIZATIONS", "FACE_POINTS", "MAX_POINTS"]
 #: "gauss" (a penalty law at the Gauss points of the blank faces, its force spread to their
 #: nodes by the shape functions; docs/theory/contact.md).
 CONTACT_DISCRETIZATIONS = ("node", "surface", "gauss")
-#: Gauss points per direction of the blank faces of surface-to-surface and Gauss-point
-#: contact (n x n per face), by default and at most (the core's max_face_order).
-FACE_POINTS = 2
+#: Gauss points per direction of the blank faces (n x n per face) of surface-to-surface and
+#: Gauss-point contact by default, and at most (the core's max_face_order). Gauss-point
+#: contact takes 4: a line contact (a sheet over a radius) then spans several points at the
+#: default penalty, which removes the force's chatter (docs/theory/contact.md); the
+#: weighted gaps of surface-to-surface contact do not change with more points.
+FACE_POINTS = {"node": 2, "surface": 2, "gauss": 4}
 MAX_POINTS = 8
 
 
@@ -34,7 +37,8 @@ class RigidTool:
     contact discretization (``contact``, CONTACT_DISCRETIZATIONS: "surface" and "gauss"
     need ``facing``, which picks the blank faces that meet the tool) with, for "gauss", the
     penalty of its law in N/mm^3 (``penalty``, default ``default_penalty``); "surface" and
-    "gauss" integrate over the blank faces with ``points`` x ``points`` Gauss points each."""
+    "gauss" integrate over the blank faces with ``points`` x ``points`` Gauss points each
+    (default FACE_POINTS)."""
 
     name: str
     surface: BezierSurface | NagataSurface
@@ -44,7 +48,7 @@ class RigidTool:
     augmentation: float | None = None
     contact: str = "node"
     penalty: float | None = None
-    points: int = FACE_POINTS
+    points: int | None = None
     search: ContactSearch = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -69,6 +73,8 @@ class RigidTool:
                              "outward normal of the blank faces that meet the tool)")
         if self.penalty is not None and not self.penalty > 0.0:
             raise ValueError(f"tool {self.name}: penalty must be > 0, got {self.penalty}")
+        if self.points is None:
+            self.points = FACE_POINTS.get(self.contact, 2)
         if not (isinstance(self.points, (int, np.integer)) and 1 <= self.points <= MAX_POINTS):
             raise ValueError(f"tool {self.name}: points must be an integer from 1 to "
                              f"{MAX_POINTS}, got {self.points!r}")

@@ -38,7 +38,6 @@ from ddpy.io.decks.tools import _ToolDraft
 from ddpy.model.control import IncrementLimits, NewtonSettings
 from ddpy.model.forming import MAX_INCREMENTS, blank_stiffness
 from ddpy.model.mesh import HEX_EDGES, HexMesh
-from ddpy.model.tool import FACE_POINTS
 
 
 class _Cross:
@@ -96,7 +95,7 @@ class _Cross:
                         "surface facing (" + ", ".join(f"{c:.3g}" for c in facing) + ")",
                         facing, d.values.get("augmentation"), self.tools_deck.where(d.line),
                         d.values.get("discretization", "node"), d.values.get("penalty"),
-                        d.values.get("points", FACE_POINTS))
+                        d.values.get("points"))
             if d.model is not None:
                 object.__setattr__(tool, "_model", d.model)
             if tool.contact_nodes(mesh).size == 0:

@@ -18,7 +18,8 @@ from ddpy._validate import float_array, int_array
 __all__ = ["HEX_EDGES", "HEX_FACES", "RIGID_MODES", "BadElement", "HexMesh", "MeshError",
            "boundary_faces", "free_rigid_modes",
            "corner_scaled_jacobians", "face_area_vectors", "find_bad_elements",
-           "largest_rotation", "through_thickness_columns", "zeta_off_normal"]
+           "largest_rotation", "through_thickness_columns", "zeta_along_normal",
+           "zeta_off_normal"]
 
 #: Relative size below which a Jacobian determinant counts as degenerate.
 DEGENERATE = 1e-10
@@ -107,18 +108,42 @@ def through_thickness_columns(nodes: ArrayLike, elements: ArrayLike, normal: Arr
     return ends[0], ends[1]
 
 
-def zeta_off_normal(nodes: ArrayLike, elements: ArrayLike, normal: ArrayLike
-                    ) -> NDArray[np.int64]:
-    """0-based indices of the elements whose zeta edges (nodes 0-4, 1-5, 2-6, 3-7) are not,
-    of their three edge directions, the one closest to ``normal``: the elements the
-    solid-shell cannot take as they are (it needs zeta through the thickness)."""
+def _normal_axis(nodes: ArrayLike, elements: ArrayLike, normal: ArrayLike
+                 ) -> NDArray[np.int64]:
+    """Per element, which of its edge directions (0 xi, 1 eta, 2 zeta: HEX_EDGES) is on
+    average the closest to ``normal``."""
     x = np.asarray(nodes, dtype=float).reshape(-1, 3)
     e = np.asarray(elements, dtype=np.int64).reshape(-1, 8)
     vectors = x[e[:, HEX_EDGES][..., 1]] - x[e[:, HEX_EDGES][..., 0]]  # (m, 3, 4, 3)
     lengths = np.linalg.norm(vectors, axis=-1)
     alignment = np.abs(vectors @ np.asarray(normal, dtype=float)) / np.where(lengths > 0,
                                                                               lengths, 1.0)
-    return np.flatnonzero(np.argmax(alignment.mean(axis=2), axis=1) != 2)
+    return np.argmax(alignment.mean(axis=2), axis=1)
+
+
+def zeta_off_normal(nodes: ArrayLike, elements: ArrayLike, normal: ArrayLike
+                    ) -> NDArray[np.int64]:
+    """0-based indices of the elements whose zeta edges (nodes 0-4, 1-5, 2-6, 3-7) are not,
+    of their three edge directions, the one closest to ``normal``: the elements the
+    solid-shell cannot take as they are (it needs zeta through the thickness)."""
+    return np.flatnonzero(_normal_axis(nodes, elements, normal) != 2)
+
+
+#: Node orders that turn a hexahedron's xi (row 0) or eta (row 1) edges into its zeta edges
+#: (nodes 0-4, 1-5, 2-6, 3-7), each a cyclic change of its axes (the volume keeps its sign).
+ZETA_FROM = np.array([[0, 3, 7, 4, 1, 2, 6, 5],
+                      [0, 4, 5, 1, 3, 7, 6, 2],
+                      [0, 1, 2, 3, 4, 5, 6, 7]])
+
+
+def zeta_along_normal(nodes: ArrayLike, elements: ArrayLike, normal: ArrayLike
+                      ) -> NDArray[np.int32]:
+    """The elements (m, 8) with each one's nodes reordered so that its zeta edges are, of
+    its three edge directions, the one closest to ``normal`` (what the solid-shell needs);
+    the same element, by a cyclic change of its axes."""
+    e = np.asarray(elements, dtype=np.int64).reshape(-1, 8)
+    closest = _normal_axis(nodes, e, normal)
+    return np.take_along_axis(e, ZETA_FROM[closest], axis=1).astype(np.int32)
 
 
 def _frozen(array: NDArray) -> NDArray:

@@ -31,7 +31,7 @@ from ddpy.io.decks.lines import (
     read_vector,
     show,
 )
-from ddpy.model.mesh import HexMesh, MeshError, zeta_off_normal
+from ddpy.model.mesh import HexMesh, MeshError, zeta_along_normal, zeta_off_normal
 from ddpy.model.solid import ELEMENTS
 
 #: Largest mesh a deck may generate or list (elements).
@@ -145,17 +145,12 @@ def _parse_mesh(deck: Deck) -> tuple[HexMesh, dict[str, NDArray[np.int64]], str]
         mesh = None
     if not _no_free_nodes(deck, raw) or mesh is None:  # reported with the bad elements
         return None
-    if element == "solid-shell":
-        off = zeta_off_normal(mesh.nodes, mesh.elements, mesh.normal)
-        if off.size:
-            labels = ", ".join(str(int(mesh.element_ids[e])) for e in off[:_MAX_REPORTED])
-            more = f" and {off.size - _MAX_REPORTED} more" if off.size > _MAX_REPORTED else ""
-            deck.error(seen["element"], f"the solid-shell needs the sheet normal through every "
-                       f"element's faces N1-N4 and N5-N8 (edges N1-N5, N2-N6, N3-N7, N4-N8 "
-                       f"through the thickness): element {labels}{more} "
-                       f"{'is' if off.size == 1 else 'are'} ordered across it; reorder them, "
-                       f"or use 'element hexahedron'")
-            return None
+    if element == "solid-shell" and zeta_off_normal(mesh.nodes, mesh.elements,
+                                                    mesh.normal).size:
+        # The solid-shell's zeta runs through the sheet: each element's nodes are reordered
+        # (a cyclic change of its axes, the same element) so that it does.
+        mesh = HexMesh(mesh.nodes, zeta_along_normal(mesh.nodes, mesh.elements, mesh.normal),
+                       mesh.node_ids, mesh.element_ids, mesh.normal, mesh.source)
     return mesh, raw.nodesets, element
 
 

@@ -334,27 +334,30 @@ def test_mesh_errors(tmp_path: Path, old: str, new: str, expected: str, line: in
 
 
 def test_mesh_element(tmp_path: Path) -> None:
-    """The blank's element: the hexahedron by default, the solid-shell when asked for, and
-    the runner's Solid takes it; the hexahedron takes any node order, the solid-shell's
-    check names every element ordered across the sheet, at the element line."""
+    """The blank's element: the solid-shell by default, the hexahedron when asked for, and
+    the runner's Solid takes it; the hexahedron takes any node order, the solid-shell
+    reorders each element so that its zeta edges run through the sheet."""
     from ddpy.app.runner import build_problem
     from ddpy.io.results import ResultsReader, ResultsWriter
 
-    assert read_case(EXAMPLES / "bending", geometry=False).element == "hexahedron"
+    assert read_case(EXAMPLES / "bending", geometry=False).element == "solid-shell"
     case = copy_example("bending", tmp_path)
-    edit(case, "mesh.dat", "normal  z ", "element solid-shell\nnormal  z ")
+    edit(case, "mesh.dat", "normal  z ", "element hexahedron\nnormal  z ")
     read = read_case(case, geometry=False)
-    assert read.element == "solid-shell"
-    assert build_problem(read).solid.element == "solid-shell"
+    assert read.element == "hexahedron"
+    assert build_problem(read).solid.element == "hexahedron"
     ResultsWriter.for_case(tmp_path / "run.h5", read).close()  # the results say so
     with ResultsReader(tmp_path / "run.h5") as results:
-        assert results.element == "solid-shell"
+        assert results.element == "hexahedron"
     sideways = OWN_MESH.replace("10 1 2 3 4 5 6 7 8", "10 1 4 8 5 2 3 7 6")  # zeta along x
     case = copy_example("bending", tmp_path / "b", mesh=sideways)
     edit(case, "bc.dat", "nodeset    centre  box 0 0  0 0  -inf inf", "nodeset centre ids 1-8")
     edit(case, "control.dat", "output_at 7 14 21 28.5", "")
-    assert read_case(case, geometry=False).element == "hexahedron"
-    edit(case, "mesh.dat", "normal z", "normal z\nelement solid-shell")
+    edit(case, "mesh.dat", "normal z", "normal z\nelement hexahedron")
+    hexahedron = read_case(case, geometry=False)
+    assert hexahedron.element == "hexahedron"
+    assert list(hexahedron.mesh.elements[0]) == [0, 3, 7, 4, 1, 2, 6, 5]  # as given
+    edit(case, "mesh.dat", "normal z\nelement hexahedron", "normal z")
     # The solid-shell reorders the element so that its zeta edges run through the sheet:
     # the same nodes, the bottom face N1-N4 (z = 0) first, a positive volume.
     mesh = read_case(case, geometry=False).mesh
@@ -664,19 +667,23 @@ def test_tool_errors(tmp_path: Path, old: str, new: str, expected: str) -> None:
 
 
 def test_contact_discretization(tmp_path: Path) -> None:
-    """discretization surface selects surface-to-surface contact for that tool; node, the
-    default, node-to-surface; a bad value is reported at its line of tools.dat."""
+    """discretization surface selects surface-to-surface contact for that tool, node
+    node-to-surface; gauss, the default, Gauss-point contact; a bad value is reported at its
+    line of tools.dat."""
     from ddpy.app.runner import build_problem
 
     case = edit(copy_example("bending", tmp_path), "tools.dat", "contact      bottom",
                 "contact      bottom\n  discretization surface")
     read = read_case(case)
     assert (read.tool("punch").discretization, read.tool("die").discretization) == (
-        "node", "surface")
+        "gauss", "surface")
     assert "die: nagata, die.tool, friction 0.148, contacts the bottom of the blank, " \
         "surface-to-surface" in read.summary()
     problem = build_problem(read)
-    assert [t.contact for t in problem.tools] == ["node", "surface"]
+    assert [t.contact for t in problem.tools] == ["gauss", "surface"]
+    edit(case, "tools.dat", "contact      top", "contact      top\n  discretization node")
+    assert [t.contact for t in build_problem(read_case(case)).tools] == ["node", "surface"]
+    assert "contacts the top of the blank, node-to-surface" in read_case(case).summary()
     edit(case, "tools.dat", "discretization surface", "discretization edges")
     number = line_of(case, "tools.dat", "discretization edges")
     assert str(error_of(case)).startswith(f"{case / 'tools.dat'}:{number}: ")
@@ -695,9 +702,9 @@ def test_gauss_contact_its_penalty_and_points(tmp_path: Path) -> None:
     assert "contacts the bottom of the blank, Gauss-point contact, penalty 150 N/mm^3, " \
         "3 x 3 points per face" in read.summary()
     problem = build_problem(read)
-    assert [t.contact for t in problem.tools] == ["node", "gauss"]
-    assert [t.points for t in problem.tools] == [2, 3]
-    assert problem.penalty == [0.0, 150.0]
+    assert [t.contact for t in problem.tools] == ["gauss", "gauss"]
+    assert [t.points for t in problem.tools] == [4, 3]
+    assert problem.penalty[1] == 150.0
     edit(case, "tools.dat", "  penalty 150\n  points 3\n", "")
     problem = build_problem(read_case(case))
     assert problem.penalty[1] > 0.0

@@ -1,8 +1,12 @@
-"""Frictional contact with rigid tools in the single Newton loop (ddpy.model.forming)."""
+"""Frictional contact with rigid tools in the single Newton loop (ddpy.model.forming), with
+DD3IMP's discretization: node-to-surface contact on the mean-dilatation hexahedron, which
+stay selectable beside the defaults (Gauss-point contact: tests/test_gauss_contact.py; the
+solid-shell: tests/test_solid_shell.py)."""
 
 from __future__ import annotations
 
 from dataclasses import replace
+from functools import partial
 from math import comb
 
 import numpy as np
@@ -12,11 +16,16 @@ from jacobian_check import central_difference_errors
 from ddpy.geometry.surfaces import BezierSurface, NagataSurface
 from ddpy.model.contact import SLIP, STICK
 from ddpy.model.control import IncrementLimits, NewtonSettings, next_step
-from ddpy.model.forming import FormingProblem, RigidTool
+from ddpy.model.forming import FormingProblem
+from ddpy.model.forming import RigidTool as _RigidTool
 from ddpy.model.material import Hill48, Material, Swift, yield_landing
 from ddpy.model.mesh import HexMesh, largest_rotation
-from ddpy.model.solid import Solid, material_props
+from ddpy.model.solid import Solid as _Solid
+from ddpy.model.solid import material_props
 from ddpy.model.static import StaticProblem
+
+Solid = partial(_Solid, element="hexahedron")
+RigidTool = partial(_RigidTool, contact="node")
 
 #: Elastic in practice (yield stress 1e7 MPa), no Poisson effect: the analytic answers hold.
 ELASTIC = Material(210e3, 0.0, Hill48.von_mises(), Swift(1e7, 0.01, 0.0))
@@ -608,7 +617,8 @@ def test_a_newton_step_stops_where_free_nodes_would_enter_a_tool() -> None:
 
 def test_a_line_search_that_no_step_passes_takes_the_longest_that_lowered_the_residual(
 ) -> None:
-    # The first increment of the built-in bending case: the blank starts on the die and the
+    # The first increment of the built-in bending case with DD3IMP's discretization
+    # (hexahedra, node-to-surface contact): the blank starts on the die and the
     # contact set changes from iteration to iteration, so that the natural monotonicity test
     # (which sees this iteration's contact set) fails at every step length of some Newton
     # steps. Those steps take the longest trial that lowered the residual norm, and the
@@ -617,6 +627,8 @@ def test_a_line_search_that_no_step_passes_takes_the_longest_that_lowered_the_re
     from ddpy.io.decks import read_case
 
     case = read_case(DEFAULT_CASE)
+    case = replace(case, element="hexahedron",
+                   tools=[replace(t, discretization="node") for t in case.tools])
     phase = case.phases[0]
     problem = build_problem(case)
     for nodes, component in zip(*case.boundary.constrained(phase.name), strict=True):

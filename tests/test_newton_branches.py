@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import logging
 import re
+from functools import partial
 
 import numpy as np
 import pytest
@@ -27,11 +28,11 @@ from ddpy.model.forming import (
     FormingError,
     FormingProblem,
     PhaseProgress,
-    RigidTool,
     default_augmentation,
 )
+from ddpy.model.forming import RigidTool as _RigidTool
 from ddpy.model.mesh import HexMesh
-from ddpy.model.solid import Solid
+from ddpy.model.solid import Solid as _Solid
 from tests.test_forming import ELASTIC, block_on_plane, plane_tool
 from tests.test_linear_reuse import slide
 
@@ -43,6 +44,11 @@ UNLIMITED = IncrementLimits(strain=0.99, rotation_deg=90.0, yield_tolerance=None
 #: again with the resting tools' touching pairs open, and its retries start so).
 ONE_CUT = IncrementLimits(min_fraction=1.0)
 TIGHT = NewtonSettings(1e-10, 1e-8)
+
+#: DD3IMP's discretization (the mean-dilatation hexahedron, node-to-surface contact),
+#: selectable beside the defaults, which these cases were made with.
+RigidTool = partial(_RigidTool, contact="node")
+Solid = partial(_Solid, element="hexahedron")
 
 
 def far_tool(slaves: np.ndarray) -> RigidTool:

@@ -38,6 +38,17 @@ def tiny_case(folder: Path, draw: float = 2.0, max_increment: float = 0.2) -> Pa
     return folder
 
 
+def dd3imp(case: Path) -> Path:
+    """The case with DD3IMP's discretization: the mean-dilatation hexahedron (unless its
+    mesh deck names an element) and node-to-surface contact on every tool."""
+    mesh = case / "mesh.dat"
+    if "element" not in mesh.read_text():
+        mesh.write_text(mesh.read_text() + "element hexahedron\n")
+    tools = case / "tools.dat"
+    tools.write_text(re.sub(r"(?m)^end$", "  discretization node\nend", tools.read_text()))
+    return case
+
+
 def compare(a: Path, b: Path) -> None:
     """Two results files hold the same run: every column but the timings, every frame."""
     with ResultsReader(a / RESULTS) as ra, ResultsReader(b / RESULTS) as rb:
@@ -123,7 +134,7 @@ def test_restart_after_a_stop_ends_as_the_uninterrupted_run(
     assert first.status == "stopped" and first.increments == 7
     meta, _ = read_checkpoint(tmp_path / CHECKPOINT)
     assert meta["increments"] == 7 and meta["progress"] is not None
-    second = run_case(loaded, tmp_path, restart=True, max_increments=20, checkpoint_every=4)
+    second = run_case(loaded, tmp_path, restart=True, max_increments=8, checkpoint_every=4)
     assert second.status == "stopped"
     last = run_case(loaded, tmp_path, restart=True)
     assert last.status == "completed"
@@ -299,8 +310,8 @@ def test_verbose_run_reports_newton_iterations_and_cuts(tmp_path: Path) -> None:
 
 
 def test_a_fine_blank_lying_on_the_die_converges_in_its_first_increment(tmp_path) -> None:
-    # The built-in case with its blank refined to 240 x 6 x 2 hexahedra (0.25 mm) starts
-    # with 868 bottom nodes on the die at zero gap; its first increment (ended by the first
+    # The built-in case with DD3IMP's discretization and its blank refined to 240 x 6 x 2
+    # hexahedra (0.25 mm) starts with 868 bottom nodes on the die at zero gap; its first increment (ended by the first
     # touch of the next punch row) failed at every cut down to the smallest increment. The
     # second start of a phase's first increment, with the touching pairs of the die (at
     # rest) left open, exact solves and full steps, converges at the first size, shortened
@@ -308,6 +319,7 @@ def test_a_fine_blank_lying_on_the_die_converges_in_its_first_increment(tmp_path
     case = tmp_path / "case"
     shutil.copytree(DEFAULT_CASE, case)
     (case / "mesh.dat").write_text("normal z\nbox 60 15 1 240 6 2\n")
+    dd3imp(case)
     seen = []
     outcome = run_case(read_case(case), tmp_path / "out", max_increments=1, threads=1,
                        progress=seen.append)
@@ -318,7 +330,8 @@ def test_a_fine_blank_lying_on_the_die_converges_in_its_first_increment(tmp_path
 
 def test_a_first_increment_whose_default_start_fails_converges_on_the_careful_start(
         tmp_path, caplog) -> None:
-    # The built-in case's tools with a von Mises blank of 30 x 6 x 2 solid-shells: the
+    # The built-in case's tools, node-to-surface contact, with a von Mises blank of
+    # 30 x 6 x 2 solid-shells: the
     # default start of the first increment cycles between contact states for 25
     # iterations at every cut, down to the smallest increment (found by
     # benchmarks/mesh_convergence). The careful start (the die's touching pairs open, exact
@@ -334,6 +347,7 @@ def test_a_first_increment_whose_default_start_fails_converges_on_the_careful_st
     control = case / "control.dat"
     control.write_text(re.sub(r"(?m)^max_increment\s+\S+", "max_increment 0.1",
                               control.read_text()))
+    dd3imp(case)
     seen = []
     outcome = run_case(read_case(case), tmp_path / "out", max_increments=1, threads=1,
                        progress=seen.append)
@@ -353,7 +367,10 @@ def test_restart_at_a_phase_boundary_is_the_same_run_with_reused_factors(
     import ddpy.model.forming
 
     monkeypatch.setattr(ddpy.model.forming, "REUSE_FROM", 0)  # the tiny case is below it
-    case = read_case(tiny_case(tmp_path / "case"))
+    # (With the solid-shell, the tiny case's springback step 3 does not converge in 25
+    # iterations on reused factors: hexahedra here, the open finding in docs/theory/
+    # solid_shell.md.)
+    case = read_case(dd3imp(tiny_case(tmp_path / "case")))
     assert run_case(case, tmp_path / "whole").status == "completed"
     with ResultsReader(tmp_path / "whole" / RESULTS) as r:
         phase = r.curve("phase")

@@ -22,7 +22,7 @@ from test_solid import convergence_order, last_ratio
 
 from ddpy.core.parallel import threads
 from ddpy.model.control import NewtonSettings
-from ddpy.model.mesh import HexMesh
+from ddpy.model.mesh import HexMesh, zeta_along_normal
 from ddpy.model.solid import Solid
 from ddpy.model.static import StaticProblem
 
@@ -391,8 +391,9 @@ def test_two_threads_equal_one_thread() -> None:
 
 
 def test_element_choice_and_thickness_direction_are_checked() -> None:
-    """The element is named; the solid-shell refuses a mesh whose elements do not have
-    their zeta edges along the sheet normal, and the hexahedron takes any."""
+    """The element is named; the solid-shell (the default) refuses a mesh whose elements
+    do not have their zeta edges along the sheet normal, which zeta_along_normal reorders,
+    and the hexahedron takes any."""
     mesh = HexMesh.box(1.0, 1.0, 0.2, 2, 2, 1)
     with pytest.raises(ValueError, match="element must be one of 'hexahedron', "
                                          "'solid-shell'"):
@@ -401,6 +402,12 @@ def test_element_choice_and_thickness_direction_are_checked() -> None:
     sideways = HexMesh(mesh.nodes, turned)
     with pytest.raises(ValueError, match="element 0, 1, 2 and 1 more are not so ordered"):
         Solid(sideways, ELASTIC, element=SHELL)
-    Solid(sideways, ELASTIC)
-    assert Solid(mesh, ELASTIC).element == "hexahedron"
-    assert Solid(mesh, ELASTIC).assemble(np.zeros((mesh.n_nodes, 3))).alpha is None
+    with pytest.raises(ValueError, match="not so ordered"):
+        Solid(sideways, ELASTIC)
+    Solid(sideways, ELASTIC, element="hexahedron")
+    again = HexMesh(mesh.nodes, zeta_along_normal(mesh.nodes, turned, mesh.normal))
+    assert Solid(again, ELASTIC).element == "solid-shell"
+    np.testing.assert_array_equal(np.sort(again.elements, axis=1), np.sort(turned, axis=1))
+    assert again.jacobians().min() > 0.0
+    hexahedron = Solid(mesh, ELASTIC, element="hexahedron")
+    assert hexahedron.assemble(np.zeros((mesh.n_nodes, 3))).alpha is None

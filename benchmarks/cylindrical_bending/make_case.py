@@ -15,7 +15,7 @@ Writes, next to this script (all generated, git-ignored):
   discretization"), so that model reads the Nagata file with ``description facets``;
 - ``meshes/<mesh>.msh``: the blank, a quarter 60 x 15 x 1 mm (rolling direction along x):
   ``paper``, unstructured quadrilaterals extruded in 3 layers, as close to the paper's 19,950
-  hexahedra as gmsh's recombination gets; ``coarse``, structured, graded along x;
+  hexahedra as gmsh's recombination gets; ``coarse``, structured, 1 mm along x, 2 layers;
 - ``cases/<mesh>/<model>/``: the five decks of each case, for the models ``bezier``,
   ``nagata``, ``facets_coarse`` and ``facets_fine``.
 """
@@ -36,14 +36,14 @@ PAPER_HEXAHEDRA, LAYERS = 19950, 3
 #: Tools (a reconstruction of the paper's Fig. 6): punch radius, die shoulder radius and the
 #: distance of the shoulder's centre from the symmetry plane.
 PUNCH_RADIUS, SHOULDER_RADIUS, SHOULDER_X = 23.5, 4.0, 29.5
-#: Coarse blank: elements along x in [0, COARSE_SPLIT] and beyond, across y, through z.
-#: The fine zone (1.5 mm) must hold all the material drawn over the die shoulder (radius
-#: 4 mm): up to x = 39 mm at full stroke. With the split at 36 mm, the 4 mm elements beyond
-#: reached the shoulder at 25.6 mm of stroke; the shoulder cut 0.5 mm into their bottom face
-#: between two nodes (the contact keeps nodes out of the tools, not faces) and the blank,
-#: with its one node on the shoulder gone onto the vertical inner wall, slid down with the
-#: punch on the wall's friction alone (punch force 18 N) until the next node landed.
-COARSE_SPLIT, COARSE_X, COARSE_Y = 42.0, (28, 5), 2
+#: Coarse blank: uniform, 1 mm elements along x (the blank engineers run), 5 mm across y,
+#: 2 layers of solid-shells (ddpy's default element and contact: 4 x 4 Gauss points per face
+#: against each tool). Measured on the built-in case (benchmarks/mesh_convergence for the
+#: von Mises blank): within 1 % of the punch force of a 0.25 mm blank, its chatter below
+#: 0.5 %; 6 elements across instead of 3 change the force by at most 0.9 % and take three
+#: times as long. (The first coarse blank, graded 1.5 / 3.6 mm hexahedra in 3 layers, was
+#: 25-30 % too stiff: the hexahedron locks in bending, docs/theory/solid_shell.md.)
+COARSE_X, COARSE_Y, COARSE_LAYERS = 60, 3, 2
 #: Tool file of each model and tool, and the description the deck gives it.
 TOOL_FILES = {"bezier": ("bezier", "bezier"), "nagata": ("nagata", "nagata"),
               "facets_coarse": ("facets", "nagata"), "facets_fine": ("facets", "facets")}
@@ -149,16 +149,14 @@ def paper_mesh(path: Path, quads: int = PAPER_HEXAHEDRA // LAYERS, tries: int = 
     return hexahedra
 
 
-def coarse_mesh(path: Path, nx: tuple[int, int] = COARSE_X, ny: int = COARSE_Y,
-                layers: int = LAYERS) -> int:
-    """The coarse blank: structured, ``nx[0]`` elements over the bending zone
-    0 <= x <= COARSE_SPLIT (punch and die shoulder), ``nx[1]`` over the straight flange
-    beyond, ``ny`` across and ``layers`` through the thickness. Returns the hexahedra."""
+def coarse_mesh(path: Path, nx: int = COARSE_X, ny: int = COARSE_Y,
+                layers: int = COARSE_LAYERS) -> int:
+    """The coarse blank: structured and uniform, ``nx`` elements along x, ``ny`` across and
+    ``layers`` through the thickness. Writes a Gmsh file; returns the hexahedra."""
     import meshio
     import numpy as np
 
-    x = np.concatenate([np.linspace(0.0, COARSE_SPLIT, nx[0] + 1),
-                        np.linspace(COARSE_SPLIT, LENGTH, nx[1] + 1)[1:]])
+    x = np.linspace(0.0, LENGTH, nx + 1)
     y = np.linspace(0.0, WIDTH, ny + 1)
     z = np.linspace(0.0, THICKNESS, layers + 1)
     nodes = np.stack(np.meshgrid(x, y, z, indexing="ij"), axis=-1).reshape(-1, 3)
@@ -261,7 +259,7 @@ def write_case(folder: Path, model: str, mesh: str, stroke: float = STROKE,
     rmin_yield = RMIN_YIELD.get(mesh, 0.1) if rmin_yield is None else rmin_yield
     folder.mkdir(parents=True, exist_ok=True)
     what = {"paper": "unstructured, 3 layers (paper: 19,950 hexahedra)",
-            "coarse": "structured, graded, 3 layers"}.get(mesh, "3 layers")
+            "coarse": "structured, 1 mm along x, 2 layers"}.get(mesh, "")
     at = " ".join(f"{s:g}" for s in OUTPUT_AT if s <= stroke + 1e-9)
     decks = {
         "control.dat": CONTROL.format(model=model, mesh=mesh, max_increment=max_increment,

@@ -25,6 +25,7 @@ from numpy.typing import ArrayLike, NDArray
 from ddpy.model.control import IncrementLimits, NewtonSettings
 from ddpy.model.material import Material
 from ddpy.model.mesh import HEX_FACES, HexMesh
+from ddpy.model.solid import DEFAULT_ELEMENT
 from ddpy.model.tool import FACE_POINTS
 
 if TYPE_CHECKING:
@@ -235,7 +236,7 @@ class Tool:
     facing: tuple[float, float, float]
     augmentation: float | None = None
     origin: str = ""
-    discretization: str = "node"
+    discretization: str = "gauss"
     penalty: float | None = None
     points: int | None = None
 
@@ -368,7 +369,7 @@ class Case:
     material: BlankMaterial
     tools: tuple[Tool, ...]
     warnings: tuple[str, ...] = ()
-    element: str = "hexahedron"
+    element: str = DEFAULT_ELEMENT
 
     @property
     def title(self) -> str:
@@ -410,7 +411,8 @@ class Case:
             lines.append(f"  tool {t.name}: {t.description}, {t.file.name}, friction "
                          f"{t.friction:g}, contacts the {t.contact} of the blank"
                          + {"surface": ", surface-to-surface",
-                            "gauss": ", Gauss-point contact"}.get(t.discretization, "")
+                            "gauss": ", Gauss-point contact",
+                            "node": ", node-to-surface"}[t.discretization]
                          + (f", penalty {t.penalty:g} N/mm^3" if t.penalty is not None else "")
                          + (f", {t.points or FACE_POINTS[t.discretization]} x "
                             f"{t.points or FACE_POINTS[t.discretization]} points per face"

@@ -29,13 +29,18 @@ from ddpy.core.ordering import nested_dissection, node_adjacency
 from ddpy.model.material import PROP_COUNT
 from ddpy.model.mesh import HexMesh, zeta_off_normal
 
-__all__ = ["Assembly", "ELEMENTS", "Solid", "SolidState", "ElementError", "material_props"]
+__all__ = ["Assembly", "DEFAULT_ELEMENT", "ELEMENTS", "Solid", "SolidState", "ElementError",
+           "material_props"]
 
 #: The element kinds and their codes in the core: the mean-dilatation hexahedron
 #: (docs/theory/solid.md) and the solid-shell with assumed natural and 13 enhanced strains
 #: (docs/theory/solid_shell.md), whose third natural direction (nodes 0-3 on one face,
 #: 4-7 on the other) must be the sheet's normal.
 ELEMENTS = {"hexahedron": 0, "solid-shell": 1}
+#: The blank's element by default: the solid-shell, which gives the converged bending of a
+#: sheet with two layers of elements several thicknesses long; the mean-dilatation
+#: hexahedron (DD3IMP's) locks there (docs/theory/solid_shell.md).
+DEFAULT_ELEMENT = "solid-shell"
 #: Enhanced parameters per solid-shell element.
 SHELL_MODES = 13
 _STATUS = {1: "is inverted (det F <= 0 or det J0 <= 0 at a Gauss point)",
@@ -153,15 +158,16 @@ class Solid:
 
     ``material``: a ``ddpy.model.material.Material`` or its 16-vector of properties (see
     ``material_props``). ``rolling_direction_deg``: angle of the rolling direction from the
-    global x axis about z, one value or one per element. ``element``: "hexahedron" (the
-    mean-dilatation hexahedron, the default) or "solid-shell" (for sheets: free of shear,
-    thickness and volumetric locking; every element's nodes 0-3 on one face of the sheet
-    and 4-7 on the other, as ``HexMesh.box`` makes them for a sheet normal to z).
+    global x axis about z, one value or one per element. ``element``: "solid-shell" (the
+    default, DEFAULT_ELEMENT; for sheets: free of shear, thickness and volumetric locking;
+    every element's nodes 0-3 on one face of the sheet and 4-7 on the other, as
+    ``HexMesh.box`` makes them for a sheet normal to z, ``zeta_along_normal`` for any mesh)
+    or "hexahedron" (the mean-dilatation hexahedron, DD3IMP's).
     """
 
     def __init__(self, mesh: HexMesh, material: Any,
                  rolling_direction_deg: float | ArrayLike = 0.0,
-                 element: str = "hexahedron") -> None:
+                 element: str = DEFAULT_ELEMENT) -> None:
         if not isinstance(mesh, HexMesh):
             raise TypeError(f"mesh must be a HexMesh, got {type(mesh).__name__}")
         if element not in ELEMENTS:

@@ -35,7 +35,8 @@ class RigidTool:
     (``facing``: only patches facing the opposite way are contact candidates), the
     augmentation parameter r of the contact law (default: ``default_augmentation``) and the
     contact discretization (``contact``, CONTACT_DISCRETIZATIONS: "surface" and "gauss"
-    need ``facing``, which picks the blank faces that meet the tool) with, for "gauss", the
+    need ``facing``, which picks the blank faces that meet the tool; by default "gauss"
+    where it is given, else "node") with, for "gauss", the
     penalty of its law in N/mm^3 (``penalty``, default ``default_penalty``); "surface" and
     "gauss" integrate over the blank faces with ``points`` x ``points`` Gauss points each
     (default FACE_POINTS)."""
@@ -46,7 +47,7 @@ class RigidTool:
     friction: float = 0.0
     facing: ArrayLike | None = None
     augmentation: float | None = None
-    contact: str = "node"
+    contact: str | None = None
     penalty: float | None = None
     points: int | None = None
     search: ContactSearch = field(init=False, repr=False)
@@ -65,6 +66,8 @@ class RigidTool:
         if self.augmentation is not None and not self.augmentation > 0.0:
             raise ValueError(f"tool {self.name}: augmentation must be > 0, got "
                              f"{self.augmentation}")
+        if self.contact is None:
+            self.contact = "gauss" if self.facing is not None else "node"
         if self.contact not in CONTACT_DISCRETIZATIONS:
             raise ValueError(f"tool {self.name}: contact must be one of "
                              f"{', '.join(CONTACT_DISCRETIZATIONS)}, got {self.contact!r}")

@@ -94,7 +94,7 @@ class _Cross:
                         d.values["friction"], side if side != "facing" else
                         "surface facing (" + ", ".join(f"{c:.3g}" for c in facing) + ")",
                         facing, d.values.get("augmentation"), self.tools_deck.where(d.line),
-                        d.values.get("discretization", "node"), d.values.get("penalty"),
+                        d.values.get("discretization", "gauss"), d.values.get("penalty"),
                         d.values.get("points"))
             if d.model is not None:
                 object.__setattr__(tool, "_model", d.model)

@@ -32,7 +32,7 @@ from ddpy.io.decks.lines import (
     show,
 )
 from ddpy.model.mesh import HexMesh, MeshError, zeta_along_normal, zeta_off_normal
-from ddpy.model.solid import ELEMENTS
+from ddpy.model.solid import DEFAULT_ELEMENT, ELEMENTS
 
 #: Largest mesh a deck may generate or list (elements).
 MAX_ELEMENTS = 5_000_000
@@ -61,7 +61,7 @@ def _parse_mesh(deck: Deck) -> tuple[HexMesh, dict[str, NDArray[np.int64]], str]
     """The mesh, its node sets and the element (ddpy.model.solid.ELEMENTS), or None after
     reporting what is wrong."""
     seen: dict[str, int] = {}
-    element = "hexahedron"
+    element = DEFAULT_ELEMENT
     normal: tuple[float, float, float] = (0.0, 0.0, 1.0)
     scale = 1.0
     origin = np.zeros(3)

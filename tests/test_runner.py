@@ -311,8 +311,9 @@ def test_verbose_run_reports_newton_iterations_and_cuts(tmp_path: Path) -> None:
 
 def test_a_fine_blank_lying_on_the_die_converges_in_its_first_increment(tmp_path) -> None:
     # The built-in case with DD3IMP's discretization and its blank refined to 240 x 6 x 2
-    # hexahedra (0.25 mm) starts with 868 bottom nodes on the die at zero gap; its first increment (ended by the first
-    # touch of the next punch row) failed at every cut down to the smallest increment. The
+    # hexahedra (0.25 mm) starts with 868 bottom nodes on the die at zero gap; its first
+    # increment (ended by the first touch of the next punch row) failed at every cut down
+    # to the smallest increment. The
     # second start of a phase's first increment, with the touching pairs of the die (at
     # rest) left open, exact solves and full steps, converges at the first size, shortened
     # only by the landing of the first yielding point (docs/theory/contact.md).

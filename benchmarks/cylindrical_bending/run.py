@@ -499,14 +499,21 @@ def alone_time(numbers: dict[str, Any]) -> str:
     return f"{timed['wall_s'] / 60:.1f} min ({timed['threads']}, {timed['code'] or '?'})"
 
 
+#: The contact discretizations as the report names them.
+DISCRETIZATIONS = {"gauss": "Gauss-point contact (4 x 4 points per blank face, the default "
+                            "penalty)", "node": "node-to-surface contact",
+                   "surface": "surface-to-surface contact"}
+
+
 def report(mesh: str, hexahedra: int, numbers: dict[str, dict[str, Any]],
            shape: dict[str, dict[str, dict[str, Any]]], figures: dict[str, Path],
-           threads: int, code: str = "") -> str:
+           threads: int, code: str = "", element: str = "solid-shell",
+           contact: str = DISCRETIZATIONS["gauss"]) -> str:
     """The markdown report; ``code``: the code version that wrote it (its runs name
-    their own)."""
+    their own); ``element`` and ``contact``: the discretization the decks ask for."""
     models = [m for m in MODELS if m in numbers]
     # On the coarse blank theta moves in steps of the node spacing over the punch.
-    spacing = make_case.COARSE_SPLIT / make_case.COARSE_X[0]
+    spacing = make_case.LENGTH / make_case.COARSE_X
     arc = np.degrees(spacing / (make_case.PUNCH_RADIUS + make_case.THICKNESS))
     # A fine facet's chord off its arc, R (1 - cos(half its angle)), in um.
     sag = 1e3 * (1.0 - np.cos(np.radians(FINE_FACET / 2)))
@@ -539,11 +546,12 @@ def report(mesh: str, hexahedra: int, numbers: dict[str, dict[str, Any]],
         "paper's section *Bilinear facets*: c = 0, same discretization); fine facets, "
         f"{make_case.FACETS_PER_ARC} per arc. Straight edges: elements of at most 5 mm.",
         "",
-        f"Blank: **{mesh}** mesh, {hexahedra} hexahedra in {make_case.LAYERS} layers"
+        f"Blank: **{mesh}** mesh, {hexahedra} elements ({element}) in "
+        f"{make_case.LAYERS if mesh == 'paper' else make_case.COARSE_LAYERS} layers; "
+        f"{contact} with both tools"
         + (f" (the paper: {make_case.PAPER_HEXAHEDRA:,}, unstructured)." if mesh == "paper"
-           else f" (structured, {make_case.COARSE_X[0]} elements over 0 <= x <= "
-           f"{make_case.COARSE_SPLIT:g} mm, {make_case.COARSE_X[1]} beyond, "
-           f"{make_case.COARSE_Y} across; the paper: {make_case.PAPER_HEXAHEDRA:,} "
+           else f" (structured, {make_case.COARSE_X} elements along x, {make_case.COARSE_Y} "
+           f"across; the paper: {make_case.PAPER_HEXAHEDRA:,} "
            "unstructured). Contact angles come from nodes: on this mesh they move in steps "
            f"of the node spacing over the punch, {arc:.1f} degrees of arc ({2 * arc:.1f} "
            "degrees of theta)."),
@@ -859,14 +867,14 @@ def findings(numbers: dict[str, dict[str, Any]], mesh: str = "coarse") -> list[s
         n, b = numbers["nagata"], numbers["bezier"]
         diffs = [x - y for x, y in zip(n["theta_deg"], b["theta_deg"], strict=True)]
         # theta steps by twice the arc between node columns over the punch
-        step = np.degrees(2 * (make_case.COARSE_SPLIT / make_case.COARSE_X[0])
+        step = np.degrees(2 * (make_case.LENGTH / make_case.COARSE_X)
                           / (make_case.PUNCH_RADIUS + make_case.THICKNESS))
         if max(abs(d) for d in diffs) > 1.0:
             out.append(
                 "- Nagata against Bezier, theta differences " + ", ".join(
                     f"{d:+.1f}" for d in diffs) + f" degrees: theta comes from nodes, and on "
                 f"this blank it moves in steps of {step:.1f} degrees (node columns "
-                f"{make_case.COARSE_SPLIT / make_case.COARSE_X[0]:g} mm apart over the "
+                f"{make_case.LENGTH / make_case.COARSE_X:g} mm apart over the "
                 "punch); a difference of one step is one node column that touches the punch "
                 "in one run and not yet in the other at that stroke. beta_1 and beta_2, "
                 "fitted through the flange's nodes, differ by "
@@ -890,7 +898,7 @@ def findings(numbers: dict[str, dict[str, Any]], mesh: str = "coarse") -> list[s
             f"{paper['beta2'] - paper['beta1']:.1f}, is {smaller}: the reconstructed "
             "tools" + (", " if mesh == "coarse" else " and ") + "the assumed elastic "
             "constants (E, nu are lost from the paper's text)" + (
-                f" and this mesh of {make_case.COARSE_X[0]} elements over the bend all bear "
+                f" and this mesh of {make_case.COARSE_X} elements along the strip all bear "
                 "on it." if mesh == "coarse" else " bear on it (the blank is the paper's)."))
     if {"nagata", "facets_coarse"} <= set(numbers):
         n, f = numbers["nagata"], numbers["facets_coarse"]
@@ -925,7 +933,7 @@ def findings(numbers: dict[str, dict[str, Any]], mesh: str = "coarse") -> list[s
                 f"- Fine facets against the smooth models: oscillation {osc['facets_fine']:.3g} "
                 f"N against {osc['bezier']:.3g} (Bezier) and {osc['nagata']:.3g} N (Nagata). "
                 "On this blank the punch force jumps each time a node column ("
-                f"{make_case.COARSE_SPLIT / make_case.COARSE_X[0]:g} mm apart) reaches the "
+                f"{make_case.LENGTH / make_case.COARSE_X:g} mm apart) reaches the "
                 "punch, with every description (Fig. 9 here); the deviation from the smoothed "
                 f"curve measures these jumps first, and {FINE_FACET:g}-degree facets add "
                 f"little to them. The coarse facets ({COARSE_FACET:g} degrees) oscillate "
@@ -1001,9 +1009,11 @@ def main(argv: list[str] | None = None) -> int:
     shape = shape_errors(HERE / "tools")
     from ddpy.io.decks import read_case
 
-    hexahedra = read_case(case_root / models[0], geometry=False).mesh.n_elements
-    text = report(args.mesh, hexahedra, numbers, shape, figures, max_threads(),
-                  code_version())
+    case = read_case(case_root / models[0], geometry=False)
+    contact = {t.discretization for t in case.tools}
+    text = report(args.mesh, case.mesh.n_elements, numbers, shape, figures, max_threads(),
+                  code_version(), element=case.element,
+                  contact=DISCRETIZATIONS[contact.pop()] if len(contact) == 1 else "mixed")
     out = DOCS / f"{stem}.md"
     out.write_text(text)
     print(f"wrote {out}", file=sys.stderr)

@@ -773,7 +773,7 @@ class FormingProblem:
         force = self.force if force is None else float_array(force, "force", (npair, 3))
         where = self._positions(positions)
         values = np.empty(layout.rows.size)
-        values[layout.k_slots:layout.k_slots + layout.n_coupling] = -1.0
+        values[layout.k_slots:layout.k_slots + layout.n_coupling] = layout.coupling_values
         out = self.solid.assemble(u, self.state, layout.pattern, values=values[:layout.k_slots])
         residual = np.empty(layout.n)
         residual[:layout.nf] = (out.fint - self.external).ravel()[~self.fixed.ravel()]

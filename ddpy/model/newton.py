@@ -126,7 +126,13 @@ class Layout:
         self.fixed_flags = fixed.astype(np.int32).ravel()
         # The structure of the contact blocks, in the order the core writes their values:
         # the coupling entries (-1), dC/dx at the free dofs of each pair's patch (pair, row,
-        # patch node, column), dC/dlambda (pair, row, column).
+        # patch node, column), dC/dlambda (pair, row, column). A Gauss-point pair's
+        # multiplier is eliminated (lambda = F(x), ddpy_forming): its coupling entries are 0
+        # and its patch entries, -dF/dx, lie in its node's equilibrium rows (or, for a held
+        # component, zero in its law row), where the faces' nodes already couple: no fill.
+        #: per pair, whether its multiplier is eliminated (a Gauss-point tool's)
+        self.eliminated = _join([np.full(t.slaves.size, t.contact == "gauss")
+                                 for t in tools], bool)
         coupling = equ >= 0
         size = np.diff(self.patch_first)
         width = int(size.max()) if npair else 1
@@ -136,13 +142,17 @@ class Layout:
         free_patch = inside[:, :, None] & (patch >= 0)                  # (npair, width, 3)
         pi, ii, ei, jj = np.nonzero(np.broadcast_to(free_patch[:, None],
                                                     (npair, 3, width, 3)))
-        rows = [self.pattern.rows, equ[coupling], lam[pi, ii], np.repeat(lam, 3, axis=1).ravel()]
+        into = np.where(self.eliminated[pi] & (equ[pi, ii] >= 0), equ[pi, ii], lam[pi, ii])
+        rows = [self.pattern.rows, equ[coupling], into, np.repeat(lam, 3, axis=1).ravel()]
         cols = [self.pattern.cols, lam[coupling], patch[pi, ei, jj],
                 np.tile(lam, (1, 3)).ravel()]
         self.rows = np.concatenate(rows).astype(np.int32)
         self.cols = np.concatenate(cols).astype(np.int32)
         self.k_slots = self.pattern.rows.size
         self.n_coupling = int(coupling.sum())
+        #: the coupling entries' values: -1, 0 for an eliminated multiplier
+        self.coupling_values = np.where(np.broadcast_to(self.eliminated[:, None], equ.shape),
+                                        0.0, -1.0)[coupling]
 
     @cached_property
     def by_rows(self) -> RowStructure:

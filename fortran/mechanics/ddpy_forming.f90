@@ -21,7 +21,7 @@ module ddpy_forming
                           gauss_traction
   implicit none
   private
-  public :: forming_contact, tool_fields, rank_of_rows, gauss_legendre
+  public :: forming_contact, tool_fields, f_surface, rank_of_rows, gauss_legendre
 
   !> Columns of a tool's row in the tool table: surface kind, reals per patch, patches,
   !> search mode, local search iterations, offsets (0-based) into the packed coefficient,
@@ -72,7 +72,11 @@ contains
   !> gauss_traction at those Gauss points (penalty(1:2, t): normal and tangential penalty,
   !> N/mm^3; traction_n(:, i): each point's tangential traction at the last converged
   !> increment, traction: the new one, zero elsewhere) and each slave's law is
-  !> C = lambda - F(x), F its share of the points' forces by the shape functions.
+  !> C = lambda - F(x), F its share of the points' forces by the shape functions. Its
+  !> multiplier is eliminated: the equilibrium rows take F(x) and its derivative dF/dx
+  !> (the layout puts a Gauss-point pair's patch entries in its node's equilibrium rows),
+  !> and its law rows have dC/dlambda = I alone; the Newton loop sets lambda = F(x) at each
+  !> evaluation (forming_increment).
   subroutine forming_contact(nnode, x, x_n, fixed, ntool, table, tol, coef, degrees, &
                              triangle, tree_lower, tree_upper, tree_child, frame, &
                              frame_lower, frame_upper, grid_start, grid_params, &
@@ -216,11 +220,20 @@ contains
         if (surface(p)) patch_dc(i, :, patch_first(p) + 1:patch_first(p + 1)) = 0.0_wp
       end do
     end do
-    ! Equilibrium rows: minus the forces of the tools on their slave nodes, in pair order.
-    do p = 1, npair
-      do i = 1, 3
-        j = eqn(i, pair_node(p) + 1)
-        if (j >= 0) residual(j + 1) = residual(j + 1) - force(i, p)
+    ! Equilibrium rows: minus the forces of the tools on their slave nodes, in pair order;
+    ! a Gauss-point pair's is the points' force F(x) itself (its multiplier is eliminated:
+    ! its dF/dx goes into the equilibrium rows, see forming_increment).
+    do t = 1, ntool
+      do p = tool_first(t) + 1, tool_first(t + 1)
+        do i = 1, 3
+          j = eqn(i, pair_node(p) + 1)
+          if (j < 0) cycle
+          if (table(f_surface, t) == surface_gauss) then
+            residual(j + 1) = residual(j + 1) - gauss_force(i, p)
+          else
+            residual(j + 1) = residual(j + 1) - force(i, p)
+          end if
+        end do
       end do
     end do
     residual(nf + 1:) = reshape(c, [3*npair])

@@ -13,7 +13,7 @@ module ddpy_forming_newton
   use ddpy_kinds, only: wp
   use ddpy_material, only: material_prop_count, yield_landing
   use ddpy_solid_assembly, only: solid_assemble, shell_modes
-  use ddpy_forming, only: forming_contact, tool_fields
+  use ddpy_forming, only: forming_contact, tool_fields, surface_gauss, f_surface
   use ddpy_contact, only: contact_inactive
   use ddpy_linear_solver, only: solver_factorize, solver_solve
   use ddpy_sparse, only: sum_duplicates
@@ -125,6 +125,9 @@ contains
                              kdu(:, :), dp(:, :), u_cur(:, :), force_cur(:, :), &
                              alpha_cur(:, :)
     integer, allocatable :: previous(:)
+    logical, allocatable :: eliminated(:)
+    real(wp), allocatable :: coupling(:)
+    integer :: tool, pair, comp, entry
     real(wp) :: tol_force, tol_disp, yield_tol, floor, norm, scale, moved, correction, rel, &
                 forcing, alpha, step_size, du_norm, landing, t_norm, t_scale, t_moved, &
                 alpha_fallback
@@ -158,6 +161,21 @@ contains
     step_size = 0.0_wp
     weight(1:nf) = 1.0_wp
     weight(nf + 1:) = reshape(spread(1.0_wp/r, 1, 3), [3*npair])
+    ! The pairs of Gauss-point tools, whose multipliers are eliminated (forming_contact):
+    ! their coupling entries (node's equilibrium row, multiplier) are 0, the others' -1.
+    allocate(eliminated(npair), coupling(n_coupling))
+    do tool = 1, ntool
+      eliminated(tool_first(tool) + 1:tool_first(tool + 1)) = &
+        table(f_surface, tool) == surface_gauss
+    end do
+    entry = 0
+    do pair = 1, npair
+      do comp = 1, 3
+        if (eqn(comp, pair_node(pair) + 1) < 0) cycle
+        entry = entry + 1
+        coupling(entry) = merge(0.0_wp, -1.0_wp, eliminated(pair))
+      end do
+    end do
     x_n = x0 + u_n
     do cur = 1, 2
       allocate(slot(cur)%u(3, nnode), slot(cur)%force(3, npair), slot(cur)%residual(n), &
@@ -167,7 +185,7 @@ contains
                slot(cur)%gap(npair), slot(cur)%normal(3, npair), &
                slot(cur)%simplified(n), slot(cur)%state(npair), &
                slot(cur)%traction(3, npoint))
-      slot(cur)%values(k_slots + 1:k_slots + n_coupling) = -1.0_wp
+      slot(cur)%values(k_slots + 1:k_slots + n_coupling) = coupling
     end do
     correction = ieee_value(1.0_wp, ieee_positive_inf)
     alpha = 0.0_wp
@@ -405,7 +423,7 @@ contains
       real(wp), intent(in) :: touching_gap
       integer, intent(out) :: status, element
       integer(int64) :: t0, t1, t2
-      integer :: a, c
+      integer :: a, c, p
       counters(1) = counters(1) + 1
       call system_clock(t0)
       where (fixed /= 0)
@@ -444,6 +462,12 @@ contains
                            npair, tool_first, pair_node, npatch, patch_first, patch_node, on, &
                            s%force, r, mu, held, traction_n, eqn, nf, k_slots, nvalues, &
                            s%residual, s%values, s%state, s%gap, s%normal, s%traction)
+      ! A Gauss-point pair's multiplier is eliminated: lambda = F(x), C = 0.
+      do p = 1, npair
+        if (.not. eliminated(p)) cycle
+        s%force(:, p) = s%force(:, p) - s%residual(nf + 3*p - 2:nf + 3*p)
+        s%residual(nf + 3*p - 2:nf + 3*p) = 0.0_wp
+      end do
       call system_clock(t2)
       timings(2) = timings(2) + real(t2 - t1, wp)/real(clock_rate, wp)
     end subroutine evaluate

@@ -412,9 +412,9 @@ def test_what_check_accepts_run_starts(name: str, change: tuple[str, object, obj
     ("rmin_strain 1.5", "control.dat:11", "rmin_strain must lie in (0, 1), got 1.5"),
     ("rmin_yield 1.0", "control.dat:10",
      "rmin_yield must lie in [0, 1), got 1.0"),
-    ("sink 0.05", "tools.dat:5", "tool 'punch' starts inside the blank: node 4 at (0, 0, 1) "
+    ("sink 0.05", "tools.dat:5", "tool 'punch' starts inside the blank: node 3 at (0, 0, 1) "
      "is 0.05 mm behind its surface, more than the first phase's rmin_strain times the "
-     "element size (0.02 x 1.66 = 0.0331 mm)"),
+     "element size (0.02 x 1.36 = 0.0271 mm)"),
 ])
 def test_check_refuses_what_run_refuses_at_once(tmp_path: Path, change: str, where: str,
                                                 message: str,

@@ -851,7 +851,9 @@ def report(mesh: str, numbers: dict[str, dict[str, Any]],
         "",
         f"Blank: **{mesh}** mesh, {hexahedra} hexahedra in {make_case.LAYERS} layers "
         f"(unstructured, elements of about {make_case.ELEMENT_SIZE[mesh]:.3g} mm; the "
-        f"paper: {make_case.PAPER_HEXAHEDRA} hexahedra). Report written on {threads} "
+        f"paper: {make_case.PAPER_HEXAHEDRA} hexahedra): DD3IMP's discretization, the "
+        "mean-dilatation hexahedron and node-to-surface contact, as the decks ask (not "
+        f"ddpy's defaults: make_case.py says why). Report written on {threads} "
         "thread(s); each run's threads and code version are in the table of runs. Wall "
         f"times are this machine's ({platform.machine()}, {cores()} cores), of runs that "
         "may have shared the cores "

@@ -499,6 +499,9 @@ def alone_time(numbers: dict[str, Any]) -> str:
     return f"{timed['wall_s'] / 60:.1f} min ({timed['threads']}, {timed['code'] or '?'})"
 
 
+#: The discretization of a run kept without one: every run kept before the defaults became
+#: the solid-shell and Gauss-point contact used DD3IMP's.
+OLD_DISCRETIZATION = "hexahedron, node-to-surface"
 #: The contact discretizations as the report names them.
 DISCRETIZATIONS = {"gauss": "Gauss-point contact (4 x 4 points per blank face, the default "
                             "penalty)", "node": "node-to-surface contact",
@@ -613,6 +616,8 @@ def report(mesh: str, hexahedra: int, numbers: dict[str, dict[str, Any]],
               *["" for _ in models]]),
         _row(["code, date", *[f"{numbers[m].get('code') or '?'}, {numbers[m].get('date') or '?'}"
                               for m in models], *["" for _ in models]]),
+        _row(["element, contact", *[numbers[m].get("discretization", OLD_DISCRETIZATION)
+                                    for m in models], *["" for _ in models]]),
         _row(["redos at a release, most per increment (`rmin_release_redos`)",
               *[_redos(numbers[m].get("release_redos")) for m in models],
               *["" for _ in models]]),
@@ -993,10 +998,16 @@ def main(argv: list[str] | None = None) -> int:
         print(f"  {runs[model].stroke.size} increments, {runs[model].wall_s:.0f} s",
               file=sys.stderr, flush=True)
     numbers = {m: summary(m, r) for m, r in runs.items()}
+    from ddpy.io.decks import read_case
+
     for model, run in runs.items():
         if not run.kept:  # a kept run's numbers hold their own record
             record = stored[model].kept.get("timed_alone") if model in stored else None
             numbers[model]["timed_alone"] = timed_alone(numbers[model], record, cores())
+            deck = read_case(case_root / model, geometry=False)
+            numbers[model]["discretization"] = ", ".join(
+                [deck.element, *sorted({t.discretization for t in deck.tools})]).replace(
+                    "gauss", "Gauss-point").replace("node", "node-to-surface")
     if args.json:
         print(json.dumps({"mesh": args.mesh, "models": numbers,
                           "claims": [{"claim": c, "holds": h, "detail": d}
@@ -1007,8 +1018,6 @@ def main(argv: list[str] | None = None) -> int:
     figures = {"force": plot_force(runs, DOCS / f"{stem}_force.png", (20.0, 24.0)),
                "increments": plot_increments(runs, DOCS / f"{stem}_increments.png")}
     shape = shape_errors(HERE / "tools")
-    from ddpy.io.decks import read_case
-
     case = read_case(case_root / models[0], geometry=False)
     contact = {t.discretization for t in case.tools}
     text = report(args.mesh, case.mesh.n_elements, numbers, shape, figures, max_threads(),

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from jacobian_check import central_difference_errors
-from test_surface_contact import ELASTIC, dome, last_rates, nodal_areas
+from test_surface_contact import ELASTIC, dome, last_rates, nodal_areas, slide_over_dome
 
 from ddpy.geometry.surfaces import NagataSurface
 from ddpy.model.contact import INACTIVE, SLIP, STICK
@@ -148,27 +148,11 @@ def test_every_face_rule_integrates_a_linear_pressure_exactly() -> None:
                                    atol=1e-8 * np.abs(forces[0]).max())
 
 
-def slide_over_dome(friction: float) -> list[list[float]]:
-    """A 2 x 1 x 0.5 mm block clamped at its top pressed 20 um into the dome, then 20 um
-    more while the dome slides 0.2 mm under it: the residual norms of every increment."""
-    surface = dome()
-    lift = float(surface.evaluate([0], [[0.5, 0.5]])[0][0, 2])
-    mesh = HexMesh.box(2.0, 1.0, 0.5, 8, 2, 2, origin=(-1.0, -0.5, lift))
-    tool = RigidTool("dome", surface, mesh.select(z=lift), friction=friction,
-                     facing=(0, 0, -1), contact="gauss", penalty=PENALTY)
-    problem = FormingProblem(Solid(mesh, ELASTIC), [tool])
-    problem.fix(mesh.select(z=lift + 0.5), "xyz")
-    tight = NewtonSettings(1e-10, 1e-6)
-    result = problem.run({"dome": (0, 0, 0.02)}, max_increment=0.02, newton=tight)
-    result = problem.run({"dome": (0.2, 0, 0.02)}, max_increment=0.05, result=result,
-                         newton=tight)
-    assert (result.status["dome"][-1] != INACTIVE).any()
-    return result.residuals
-
-
 def test_quadratic_convergence_sliding_with_friction_over_a_curved_tool() -> None:
     """mu = 0.15: the last Newton step of each increment about squares the residual."""
-    rates = last_rates(slide_over_dome(0.15))
+    result = slide_over_dome(0.15, 1e-10, Solid, contact="gauss", penalty=PENALTY)
+    assert (result.status["dome"][-1] != INACTIVE).any()
+    rates = last_rates(result.residuals)
     assert len(rates) >= 4 and np.median(rates) >= 1.6, rates
 
 

@@ -126,6 +126,30 @@ def test_run_writes_every_phase_and_the_outputs(reference: tuple[Path, Path]) ->
         assert np.all(np.isinf(r.iterations()["residual_displacement"][first]))
 
 
+def test_an_output_frame_leaves_the_path_of_increments_unchanged(tmp_path: Path) -> None:
+    """An output_at travel the run reaches anyway (its first increment ends at 0.2 mm)
+    splits the phase there; the next segment goes on with the phase's rate and step, so
+    the increments, their iterations and the forces are those of the run without it (a
+    segment that started afresh took other increments: no rate to start from)."""
+    histories = []
+    for label, output in (("frames", "  output_at 0.2\n"), ("none", "")):
+        case = tiny_case(tmp_path / label)
+        control = case / "control.dat"
+        control.write_text(control.read_text().replace("  output_at 0.5 1\n", output))
+        outcome = run_case(read_case(case), tmp_path / f"{label}_out")
+        assert outcome.status == "completed", outcome.message
+        with ResultsReader(tmp_path / f"{label}_out" / RESULTS) as r:
+            histories.append(r.history())
+            if label == "frames":
+                assert (0, 0.2) in {(f.phase, round(f.travel, 9)) for f in r.frames}
+    frames, none = histories
+    for name in ("increment", "phase", "limit", "iterations", "newton_iterations"):
+        np.testing.assert_array_equal(frames[name], none[name], err_msg=name)
+    for name in ("travel", "step", "tool_force", "residual_force"):
+        np.testing.assert_allclose(frames[name], none[name], rtol=1e-6, atol=1e-9,
+                                   err_msg=name)
+
+
 def test_restart_after_a_stop_ends_as_the_uninterrupted_run(
         reference: tuple[Path, Path], tmp_path: Path) -> None:
     case, ref = reference

@@ -190,6 +190,19 @@ def _segments(phase: Phase) -> list[float]:
     return [*ends, phase.travel]
 
 
+def _carried(last: PhaseProgress, share: float, next_share: float,
+             position: dict[str, NDArray[np.float64]]) -> PhaseProgress:
+    """The progress that starts the next segment of a phase where ``last`` ended one: the
+    rates and the trial step of the phase go on, rescaled from the old segment's factor
+    (``share`` of the phase) to the new one's, so an output frame costs no careful start."""
+    scale = next_share / share  # d(old factor) / d(new factor) is share_new / share_old
+    return PhaseProgress(
+        start={name: x.copy() for name, x in position.items()}, offsets=last.offsets,
+        factor=0.0, step=last.step / scale, reason=last.reason,
+        last_du=None if last.last_du is None else last.last_du * scale,
+        last_dp=None if last.last_dp is None else last.last_dp * scale)
+
+
 class _Run:
     """One run of a case; its counters are what a checkpoint stores."""
 
@@ -389,9 +402,12 @@ class _Run:
                     for m in phase.motions if isinstance(m, HoldGap)} if self.segment == 0 else {}
             result = FormingResult()
             clock = [time.perf_counter(), dict(result.timings), _counts(result)]
+            last = [self.resume]  # the progress the segment has reached
 
             def hook(progress: PhaseProgress, a: float = a, b: float = b,
-                     result: FormingResult = result, clock: list = clock) -> bool:
+                     result: FormingResult = result, clock: list = clock,
+                     last: list = last) -> bool:
+                last[0] = progress
                 now = time.perf_counter()
                 spent = {k: v - clock[1][k] for k, v in result.timings.items()}
                 counts = {k: v - clock[2][k] for k, v in _counts(result).items()}
@@ -423,6 +439,9 @@ class _Run:
                 self.fields(result)
                 return
             self.segment += 1
+            if self.segment < len(ends) and last[0] is not None:
+                self.resume = _carried(last[0], share,
+                                       (ends[self.segment] - b) / phase.travel, p.position)
 
     def springback(self, phase: Phase) -> None:
         result = FormingResult()

@@ -511,9 +511,11 @@ DISCRETIZATIONS = {"gauss": "Gauss-point contact (4 x 4 points per blank face, t
 def report(mesh: str, hexahedra: int, numbers: dict[str, dict[str, Any]],
            shape: dict[str, dict[str, dict[str, Any]]], figures: dict[str, Path],
            threads: int, code: str = "", element: str = "solid-shell",
-           contact: str = DISCRETIZATIONS["gauss"]) -> str:
+           contact: str = DISCRETIZATIONS["gauss"],
+           baseline: dict[str, Any] | None = None) -> str:
     """The markdown report; ``code``: the code version that wrote it (its runs name
-    their own); ``element`` and ``contact``: the discretization the decks ask for."""
+    their own); ``element`` and ``contact``: the discretization the decks ask for;
+    ``baseline``: the runs at DD3IMP's discretization to compare with (baseline_file)."""
     models = [m for m in MODELS if m in numbers]
     # On the coarse blank theta moves in steps of the node spacing over the punch.
     spacing = make_case.LENGTH / make_case.COARSE_X
@@ -657,6 +659,7 @@ def report(mesh: str, hexahedra: int, numbers: dict[str, dict[str, Any]],
         *target(mesh, numbers),
         f"![increment size]({figures['increments'].name})",
         "",
+        *(against_dd3imp(numbers, baseline) if baseline else []),
         "## Punch force (Fig. 9)",
         "",
         f"![punch force]({figures['force'].name})",
@@ -780,6 +783,64 @@ def target(mesh: str, numbers: dict[str, dict[str, Any]]) -> list[str]:
             "each factorization), a low-rank update of the factors for the "
             "contact rows (the solid's rows drift as much), block low-rank and single-"
             "precision factors.", ""])
+
+
+def baseline_file(stem: str) -> Path:
+    """The runs kept at DD3IMP's discretization, the baseline the defaults are compared
+    with: {"about": what they are, "kept_at": the commit, "runs": {model: numbers}}."""
+    return DOCS / f"{stem}_dd3imp.json"
+
+
+def against_dd3imp(numbers: dict[str, dict[str, Any]], baseline: dict[str, Any]
+                   ) -> list[str]:
+    """The section comparing each model's run with its run at DD3IMP's discretization
+    (``baseline``, baseline_file's content): what the defaults changed."""
+    models = [m for m in MODELS if m in numbers and m in baseline["runs"]]
+    if not models:
+        return []
+
+    def pair(before: float, now: float, form: str, relative: bool = True) -> str:
+        change = (f"{100 * (now - before) / before:+.0f} %" if relative and before
+                  else f"{now - before:+.2f}")
+        return f"{before:{form}} / {now:{form}} ({change})"
+
+    def per_it(n: dict[str, Any]) -> float:
+        return n["wall_s"] / max(n["iterations"] + n.get("springback_iterations", 0), 1)
+
+    lines = ["## The defaults against DD3IMP's discretization", "",
+             baseline["about"] + " Each cell: that run / this report's run (change); a "
+             "wall time is of a run as it was made (its threads in Table 3 and below), "
+             "and so is the time per iteration (wall time over forming and springback "
+             "iterations).", "",
+             _row(["", *[LABELS[m] for m in models]]), _row(["---"] * (1 + len(models)))]
+    old, new = baseline["runs"], numbers
+    rows = [
+        ("element, contact", lambda m: f"{OLD_DISCRETIZATION} / "
+         f"{new[m].get('discretization', OLD_DISCRETIZATION)}"),
+        ("increments", lambda m: pair(old[m]["increments"], new[m]["increments"], "d")),
+        ("increments at the maximum size",
+         lambda m: pair(old[m]["full_size_increments"], new[m]["full_size_increments"], "d")),
+        ("forming iterations", lambda m: pair(old[m]["iterations"], new[m]["iterations"],
+                                              "d")),
+        ("largest punch force [N]", lambda m: pair(old[m]["max_force_N"],
+                                                   new[m]["max_force_N"], ".1f")),
+        ("oscillation / mean force [%]", lambda m: pair(
+            100 * old[m]["oscillation_rel"], 100 * new[m]["oscillation_rel"], ".2f", False)),
+        *[(f"theta_{i + 1} [deg]", lambda m, i=i: pair(
+            old[m]["theta_deg"][i], new[m]["theta_deg"][i], ".1f", False))
+          for i in range(len(make_case.OUTPUT_AT))],
+        ("beta_1 [deg]", lambda m: pair(old[m]["beta1_deg"], new[m]["beta1_deg"], ".2f",
+                                        False)),
+        ("beta_2 [deg]", lambda m: pair(old[m]["beta2_deg"], new[m]["beta2_deg"], ".2f",
+                                        False)),
+        ("wall time [s] (threads)", lambda m: f"{old[m]['wall_s']:.0f} ({old[m]['threads']}) "
+         f"/ {new[m]['wall_s']:.0f} ({new[m]['threads']})"),
+        ("wall time per iteration [s]", lambda m: pair(per_it(old[m]), per_it(new[m]),
+                                                       ".3g")),
+    ]
+    for label, cell in rows:
+        lines.append(_row([label, *[cell(m) for m in models]]))
+    return [*lines, ""]
 
 
 def _polygon_angles(numbers: dict[str, dict[str, Any]]) -> list[str]:
@@ -1020,9 +1081,11 @@ def main(argv: list[str] | None = None) -> int:
     shape = shape_errors(HERE / "tools")
     case = read_case(case_root / models[0], geometry=False)
     contact = {t.discretization for t in case.tools}
+    baseline = baseline_file(stem)
     text = report(args.mesh, case.mesh.n_elements, numbers, shape, figures, max_threads(),
                   code_version(), element=case.element,
-                  contact=DISCRETIZATIONS[contact.pop()] if len(contact) == 1 else "mixed")
+                  contact=DISCRETIZATIONS[contact.pop()] if len(contact) == 1 else "mixed",
+                  baseline=json.loads(baseline.read_text()) if baseline.exists() else None)
     out = DOCS / f"{stem}.md"
     out.write_text(text)
     print(f"wrote {out}", file=sys.stderr)

@@ -243,12 +243,12 @@ def reference(runs: dict[str, dict[str, Any]]) -> dict[str, Any] | None:
                                       r["blank"]["contact"] != "gauss"))
     same = [r for r in done if r["blank"]["length"] == finest["blank"]["length"]
             and r["blank"]["layers"] == finest["blank"]["layers"]]
-    spread_f = max(abs(a - b) / abs(b) for r in same
-                   for a, b in zip(mean_forces(r), mean_forces(finest), strict=True))
-    spread_b = max(max(abs(r["beta1_deg"] - finest["beta1_deg"]),
-                       abs(r["beta2_deg"] - finest["beta2_deg"])) for r in same)
-    return {**finest, "label": Blank(**finest["blank"]).label, "others": len(same) - 1,
-            "spread_force": spread_f, "spread_angle": spread_b}
+    others = {Blank(**r["blank"]).label: (
+        max(abs(a - b) / abs(b) for a, b in zip(mean_forces(r), mean_forces(finest),
+                                                 strict=True)),
+        max(abs(r["beta1_deg"] - finest["beta1_deg"]),
+            abs(r["beta2_deg"] - finest["beta2_deg"]))) for r in same if r is not finest}
+    return {**finest, "label": Blank(**finest["blank"]).label, "others": others}
 
 
 def mean_forces(run: dict[str, Any]) -> list[float]:
@@ -396,9 +396,11 @@ def report(runs: dict[str, dict[str, Any]], code: str) -> str:
         + ", ".join(f"{v:.2f} N at {s:g} mm" for v, s in zip(mean_forces(ref), STROKES,
                                                               strict=True))
         + f"; beta_1 {ref['beta1_deg']:.2f} and beta_2 {ref['beta2_deg']:.2f} degrees. "
-        + (f"The {ref['others']} other run(s) on the same blank differ from it by at most "
-           f"{_pct(ref['spread_force'])} in force and {ref['spread_angle']:.2f} degrees in "
-           "angle: how far the reference itself may be from converged."
+        + ("The other runs on the same blank differ from it by at most "
+           + "; ".join(f"{_pct(f)} in force and {a:.2f} degrees in angle (`{label}`)"
+                       for label, (f, a) in ref["others"].items())
+           + ": how far the reference itself may be from converged (a run of the other "
+           "element carries that element's own error)."
            if ref["others"] else "No other element or contact completed on that blank, "
            "so its own distance from the converged answer is not measured here."),
         "",

@@ -600,16 +600,21 @@ class FormingProblem:
         self.force = np.zeros_like(self.force)
         self.traction = np.zeros_like(self.traction)
         off = np.zeros(layout.node.size, dtype=bool)
+        last_du: NDArray[np.float64] | None = None
         try:
             for k in range(1, int(increments) + 1):
                 self.external = loads * (1.0 - k / increments)
+                # The loads fall in equal steps and the blank unloads nearly elastically:
+                # each step starts from the last one's displacement change.
+                guess = None if last_du is None else self.u + last_du
                 outcome = self._increment(layout, self.position, off,
                                           newton.force_tolerance,
                                           newton.displacement_tolerance,
-                                          newton.max_iterations, result)
+                                          newton.max_iterations, result, guess=guess)
                 if outcome.failure:
                     raise FormingError(f"springback step {k} failed: {outcome.failure}",
                                        result)
+                last_du = outcome.u - self.u
                 self.u, self.state = outcome.u, outcome.state
                 result.factors.append(k / increments)
                 result.sizes.append(1.0 / increments)

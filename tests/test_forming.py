@@ -536,11 +536,14 @@ def test_springback_of_a_bent_strip_converges_quadratically() -> None:
         # The rate on the corrections (relative to the step's motion), the measure of the
         # error; a step after the first starts from the last one's rate, where the
         # residual, of second order in the bending, is no scale for it.
+        checked = 0
         for relative in result.relative:
             e = np.array([moved for _, moved in relative[1:]])
             for now, after in zip(e[:-1], e[1:], strict=True):
                 if now < 0.02 and after > 1e-8:  # quadratic above round-off
                     assert after <= 10.0 * now**2, e
+                    checked += 1
+        assert checked >= (1 if increments == 1 else 3)  # the rate is seen
     # Elastic unloading does not depend on the steps (up to the rotating frame's path
     # dependence): the strip springs back by 0.28 mm at its tip.
     np.testing.assert_allclose(shapes[1], shapes[5], atol=1e-6)

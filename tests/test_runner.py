@@ -150,6 +150,23 @@ def test_an_output_frame_leaves_the_path_of_increments_unchanged(tmp_path: Path)
                                    err_msg=name)
 
 
+def test_an_output_frame_closer_than_the_largest_increment_does_not_shorten_the_next(
+        tmp_path: Path) -> None:
+    """A frame at 0.05 mm (the largest increment is 0.2 mm) ends the first increment there;
+    the next one is again as long as the largest increment allows (before, it kept the
+    first segment's clipped step: 0.05 mm)."""
+    case = tiny_case(tmp_path / "case")
+    control = case / "control.dat"
+    control.write_text(control.read_text().replace("  output_at 0.5 1\n",
+                                                   "  output_at 0.05\n"))
+    outcome = run_case(read_case(case), tmp_path / "out")
+    assert outcome.status == "completed", outcome.message
+    with ResultsReader(tmp_path / "out" / RESULTS) as r:
+        travel, step = r.curve("travel"), r.curve("step")
+    assert travel[0] == pytest.approx(0.05)
+    assert step[1] == pytest.approx(0.2)
+
+
 def test_restart_after_a_stop_ends_as_the_uninterrupted_run(
         reference: tuple[Path, Path], tmp_path: Path) -> None:
     case, ref = reference

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import os
 import resource
 import tempfile
@@ -196,9 +197,13 @@ def _carried(last: PhaseProgress, share: float, next_share: float,
     rates and the trial step of the phase go on, rescaled from the old segment's factor
     (``share`` of the phase) to the new one's, so an output frame costs no careful start."""
     scale = next_share / share  # d(old factor) / d(new factor) is share_new / share_old
+    # A step limited by nothing but the largest increment is the new segment's nominal one
+    # (FormingProblem.run clamps it): a segment shorter than the largest increment clipped
+    # its own.
+    step = math.inf if last.reason == "max" else last.step / scale
     return PhaseProgress(
         start={name: x.copy() for name, x in position.items()}, offsets=last.offsets,
-        factor=0.0, step=last.step / scale, reason=last.reason,
+        factor=0.0, step=step, reason=last.reason,
         last_du=None if last.last_du is None else last.last_du * scale,
         last_dp=None if last.last_dp is None else last.last_dp * scale)
 

@@ -371,8 +371,7 @@ class FormingProblem:
         last_dp: NDArray[np.float64] | None = None  # pressure rate of the last increment
         careful = False  # the first increment's default start failed: careful starts only
         if resume is not None:
-            start, factor = resume.start, resume.factor
-            step = max(limits.min_fraction * nominal, min(resume.step, nominal))
+            start, factor, step = resume.start, resume.factor, min(resume.step, nominal)
             reason, last_du, last_dp = resume.reason, resume.last_du, resume.last_dp
         # Gaps at the start of the phase (tools held at a gap placed there), for first touch;
         # a tool deeper in the blank than one increment may push it out is refused (seen

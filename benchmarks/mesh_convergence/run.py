@@ -318,6 +318,29 @@ def _contact_rank(contact: str) -> tuple[int, str]:
     return (CONTACTS.index(contact) if contact in CONTACTS else len(CONTACTS), contact)
 
 
+#: The blanks each element and treatment of the matrix is run on: every element length
+#: with 2 layers, every number of layers at 1 mm (the goal's blank is at the crossing).
+STAR = tuple(sorted({(h, 2) for h in LENGTHS} | {(1.0, n) for n in LAYERS},
+                    key=lambda b: (-b[0], b[1])))
+
+
+def coverage(runs: dict[str, dict[str, Any]]) -> list[str]:
+    """Per element and treatment of the matrix, the blanks of STAR without a completed
+    run (absent or stopped)."""
+    out = []
+    for element in ELEMENTS:
+        for contact in MATRIX:
+            done = {(r["blank"]["length"], r["blank"]["layers"]) for r in runs.values()
+                    if r["status"] == "completed" and r["blank"]["element"] == element
+                    and r["blank"]["contact"] == contact}
+            missing = [b for b in STAR if b not in done]
+            out.append(f"- {element}, {contact}: "
+                       + ("every blank completed" if not missing else "not completed: "
+                          + ", ".join(f"h = {h:g} mm with {n} layer(s)" for h, n in missing))
+                       + f" ({len(done)} blanks completed in all).")
+    return out
+
+
 def _holds(run: dict[str, Any], ref: dict[str, Any]) -> bool:
     e = errors(run, ref)
     return (e["force"] <= GOAL_FORCE and max(e["beta1"], e["beta2"]) <= GOAL_ANGLE
@@ -386,6 +409,10 @@ def report(runs: dict[str, dict[str, Any]], code: str) -> str:
         "penalty); -nK with K x K points per face, -pN with the penalty N N/mm^3.",
         "",
     ]
+    lines += ["The matrix: each element with node-to-surface and Gauss-point contact on "
+              "every element length with 2 layers and every number of layers at 1 mm "
+              "(the goal's blank is at the crossing); other blanks and settings where a "
+              "run was made. Not completed of that design:", "", *coverage(runs), ""]
     if ref is None:
         return "\n".join(lines + ["No run has completed yet.", ""])
     lines += [

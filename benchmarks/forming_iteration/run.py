@@ -397,15 +397,18 @@ def notes(numbers: dict[str, Any]) -> list[str]:
         if fb and fa:
             ob = b["time"]["factorization"] / fb
             oa = a["time"]["factorization"] / fa
+            same = compare_paths(b, a)["same"]
             lines.append(
                 f"{mesh}: one factorization {ob:.4g} s before, {oa:.4g} s after (after / before "
-                f"{oa / ob:.2f}): both factorize the same matrices (same path) with MUMPS, so "
-                f"its ratio shows the machine's drift between the kept tries and the way to "
-                f"MUMPS (before through its Python wrapper).")
+                f"{oa / ob:.2f}): " + (
+                    "both factorize the same matrices (same path) with MUMPS, so its ratio "
+                    "shows the machine's drift between the kept tries and the way to MUMPS."
+                    if same else "the two paths factorize different matrices, so the ratio "
+                    "also holds the change of the Jacobian (its pattern and values)."))
         gap = sb["gap"] - sa["gap"]
         lines.append(
-            f"{mesh}: run wall time minus the increments' total (set-up, writing; before also "
-            f"its evaluations' gather) {sb['gap']:.3g} s before, {sa['gap']:.3g} s after "
+            f"{mesh}: run wall time minus the increments' total (set-up, writing) "
+            f"{sb['gap']:.3g} s before, {sa['gap']:.3g} s after "
             f"({gap:+.3g} s, {gap / max(corrections(b), 1):+.2g} s per correction, against "
             f"{sb['total']:.3g} s per correction in the table); run wall time per correction "
             f"after / before {ratio(sb['run_wall'], sa['run_wall'])}.")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import logging
 import os
@@ -233,6 +234,13 @@ def test_restart_refuses_a_changed_case_and_a_missing_checkpoint(
     shutil.copytree(ref, tmp_path / "out")
     with pytest.raises(CheckpointError, match="changed since the checkpoint"):
         run_case(read_case(changed), tmp_path / "out", restart=True)
+    # The same decks read with another default element (as after a change of the code's
+    # defaults): the checkpoint's state belongs to the other element.
+    other = {"solid-shell": "hexahedron", "hexahedron": "solid-shell"}
+    loaded = read_case(case)
+    with pytest.raises(CheckpointError, match="a default changed"):
+        run_case(dataclasses.replace(loaded, element=other[loaded.element]),
+                 tmp_path / "out", restart=True)
 
 
 def _start(case: Path, out: Path, *extra: str) -> subprocess.Popen[str]:

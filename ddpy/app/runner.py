@@ -47,6 +47,7 @@ from ddpy.model.forming import (
     RigidTool,
 )
 from ddpy.model.solid import Solid, SolidState
+from ddpy.model.tool import FACE_POINTS
 
 __all__ = ["BUILT_IN_CASES", "CHECKPOINT", "DEFAULT_CASE", "RESULTS", "STATUS", "Progress",
            "RunError", "RunOutcome", "build_problem", "case_folder", "default_output",
@@ -139,6 +140,17 @@ def read_status(output: str | os.PathLike[str]) -> dict[str, Any]:
     return json.loads((Path(output) / STATUS).read_text())
 
 
+def discretization(case: Case) -> str:
+    """What the case's decks resolve to with this code's defaults: the blank's element and
+    each tool's contact and points. A checkpoint keeps it: a default that changed between
+    the run and its restart (the element, the contact) would otherwise go unseen, the decks
+    being the same."""
+    tools = ", ".join(f"{t.name} {t.discretization}"
+                      + (f" {t.points or FACE_POINTS[t.discretization]}"
+                         if t.discretization != "node" else "") for t in case.tools)
+    return f"{case.element}; {tools}"
+
+
 def case_fingerprint(case: Case) -> str:
     """SHA-256 of the decks and tool files of a case: a restart refuses a changed case."""
     digest = hashlib.sha256()
@@ -219,6 +231,7 @@ class _Run:
         self.checkpoint_every, self.max_increments = checkpoint_every, max_increments
         self.problem = build_problem(case)
         self.fingerprint = case_fingerprint(case)
+        self.discretization = discretization(case)
         self.names = [t.name for t in self.problem.tools]
         self.slaves = np.concatenate([t.slaves for t in self.problem.tools])
         self.tool_of = np.concatenate([np.full(t.slaves.size, i)
@@ -247,7 +260,8 @@ class _Run:
         arrays.update(state_arrays(p.state))
         arrays.update({f"position/{k}": v for k, v in p.position.items()})
         meta: dict[str, Any] = {
-            "fingerprint": self.fingerprint, "phase_index": self.phase_index,
+            "fingerprint": self.fingerprint, "discretization": self.discretization,
+            "phase_index": self.phase_index,
             "segment": self.segment, "phase_increments": self.phase_increments,
             "last_frame": self.last_frame, "increments": self.writer.increments,
             "iterations": self.writer.iteration_rows, "frames": self.writer.frame_count,
@@ -293,6 +307,12 @@ class _Run:
         if meta["fingerprint"] != self.fingerprint:
             raise CheckpointError(f"{path}: the case's decks or tool files changed since the "
                                   "checkpoint was written; run again without --restart")
+        written = meta.get("discretization")  # (checkpoints before it was kept lack it)
+        if written is not None and written != self.discretization:
+            raise CheckpointError(
+                f"{path}: written with {written}, and this code reads the case as "
+                f"{self.discretization} (a default changed); run again without --restart, "
+                "or name the element and contact in the decks")
         p = self.problem
         carried = {k: arrays[k] for k in _CARRIED if k in arrays or k not in _SINCE}
         positions = {k: arrays[f"position/{k}"] for k in self.names}

@@ -306,16 +306,16 @@ tool {tool}
   file         {prefix}{tool}.{file}.tool
   friction     {friction}
   contact      {side}
-  discretization node    # DD3IMP's: Gauss-point contact's answer differs (make_case.py)
+  discretization node    # DD3IMP's, the kept runs' (make_case.py)
 {augmentation}end
 """
 
 #: The decks keep DD3IMP's element and contact, not ddpy's defaults (the solid-shell and
-#: Gauss-point contact): the runs kept in docs/benchmarks were made with them, and with the
-#: defaults the coarse blank runs both stages (902 + 1,207 iterations against 1,792 + 1,985)
-#: but not to the same answer: its stage 2 peak force is 36 % lower and the blank loses
-#: 2.6 % of its volume in the elements wrapped over die 2's radius (docs/theory/contact.md,
-#: Gauss-point contact), where the hexahedron conserves it.
+#: Gauss-point contact): the runs kept in docs/benchmarks were made with them. With
+#: Gauss-point contact and the hexahedron the coarse blank runs both stages in half the
+#: iterations (904 + 1,059 against 1,792 + 1,985), its volume kept to 0.1 %; the
+#: solid-shell cuts its stage-1 increments from about 33 mm on (docs/theory/contact.md,
+#: Gauss-point contact).
 #: Augmentation r of the contact law (N/mm) set in the decks of a blank, else the solver's
 #: default (E t^2 / h of the elements: 1.3e4 on the coarse blank, 2.5e4 on the medium one).
 #: The medium blank failed its first increment with the default (10 cuts to a step of 4e-8

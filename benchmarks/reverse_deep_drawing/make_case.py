@@ -314,8 +314,8 @@ tool {tool}
 #: Gauss-point contact): the runs kept in docs/benchmarks were made with them. With
 #: Gauss-point contact and the hexahedron the coarse blank runs both stages in half the
 #: iterations (904 + 1,059 against 1,792 + 1,985), its volume kept to 0.1 %; the
-#: solid-shell cuts its stage-1 increments from about 33 mm on (docs/theory/contact.md,
-#: Gauss-point contact).
+#: solid-shell cuts its stage-1 increments from about 33 mm on, two elements inverting
+#: (docs/theory/contact.md, Gauss-point contact).
 #: Augmentation r of the contact law (N/mm) set in the decks of a blank, else the solver's
 #: default (E t^2 / h of the elements: 1.3e4 on the coarse blank, 2.5e4 on the medium one).
 #: The medium blank failed its first increment with the default (10 cuts to a step of 4e-8

@@ -47,7 +47,6 @@ from ddpy.model.forming import (
     RigidTool,
 )
 from ddpy.model.solid import Solid, SolidState
-from ddpy.model.tool import FACE_POINTS
 
 __all__ = ["BUILT_IN_CASES", "CHECKPOINT", "DEFAULT_CASE", "RESULTS", "STATUS", "Progress",
            "RunError", "RunOutcome", "build_problem", "case_folder", "default_output",
@@ -146,8 +145,7 @@ def discretization(case: Case) -> str:
     the run and its restart (the element, the contact) would otherwise go unseen, the decks
     being the same."""
     tools = ", ".join(f"{t.name} {t.discretization}"
-                      + (f" {t.points or FACE_POINTS[t.discretization]}"
-                         if t.discretization != "node" else "") for t in case.tools)
+                      + (f" {t.face_points}" if t.face_points else "") for t in case.tools)
     return f"{case.element}; {tools}"
 
 

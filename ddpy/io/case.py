@@ -240,6 +240,14 @@ class Tool:
     penalty: float | None = None
     points: int | None = None
 
+    @property
+    def face_points(self) -> int | None:
+        """Gauss points per direction of a blank face as the solver takes them (the deck's
+        ``points`` or the default of the discretization); None for node-to-surface."""
+        if self.discretization == "node":
+            return None
+        return self.points or FACE_POINTS[self.discretization]
+
     def model(self) -> ToolModel:
         """The tool model read from the file (ddpy.io.toolfile); a Nagata file used with
         description facets gives its facets (same mesh, flat patches)."""
@@ -414,9 +422,8 @@ class Case:
                             "gauss": ", Gauss-point contact",
                             "node": ", node-to-surface"}[t.discretization]
                          + (f", penalty {t.penalty:g} N/mm^3" if t.penalty is not None else "")
-                         + (f", {t.points or FACE_POINTS[t.discretization]} x "
-                            f"{t.points or FACE_POINTS[t.discretization]} points per face"
-                            if t.discretization != "node" else ""))
+                         + (f", {t.face_points} x {t.face_points} points per face"
+                            if t.face_points else ""))
         for p in self.phases:
             if p.is_springback:
                 lines.append(f"  phase {p.name}: springback in {p.increments} step(s)")

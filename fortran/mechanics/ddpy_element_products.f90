@@ -7,7 +7,8 @@ module ddpy_element_products
   use ddpy_kinds, only: wp
   implicit none
   private
-  public :: lower_product, add_congruence, add_congruence_t
+  public :: lower_product, subtract_lower_gram, add_congruence, add_congruence_t, &
+            add_pair_product
 
 contains
 
@@ -44,6 +45,34 @@ contains
     end do
   end subroutine lower_product
 
+  !> The lower triangle of k = k - y y^T (k: 24 x 24, y: 24 x 13; some entries of the
+  !> strict upper triangle change too): the static condensation of the solid-shell's 13
+  !> enhanced parameters, in the bands of lower_product.
+  pure subroutine subtract_lower_gram(y, k)
+    real(wp), intent(in) :: y(24, 13)
+    real(wp), intent(inout) :: k(24, 24)
+    real(wp) :: k1(8), k2(8), k3(8), k4(8)
+    integer :: i0, j, q
+    do i0 = 0, 16, 8
+      do j = 1, i0 + 8, 4
+        k1 = 0.0_wp
+        k2 = 0.0_wp
+        k3 = 0.0_wp
+        k4 = 0.0_wp
+        do q = 1, 13
+          k1 = k1 + y(i0 + 1:i0 + 8, q)*y(j, q)
+          k2 = k2 + y(i0 + 1:i0 + 8, q)*y(j + 1, q)
+          k3 = k3 + y(i0 + 1:i0 + 8, q)*y(j + 2, q)
+          k4 = k4 + y(i0 + 1:i0 + 8, q)*y(j + 3, q)
+        end do
+        k(i0 + 1:i0 + 8, j) = k(i0 + 1:i0 + 8, j) - k1
+        k(i0 + 1:i0 + 8, j + 1) = k(i0 + 1:i0 + 8, j + 1) - k2
+        k(i0 + 1:i0 + 8, j + 2) = k(i0 + 1:i0 + 8, j + 2) - k3
+        k(i0 + 1:i0 + 8, j + 3) = k(i0 + 1:i0 + 8, j + 3) - k4
+      end do
+    end do
+  end subroutine subtract_lower_gram
+
   !> m = m + w r^T d r (6 x 6): the material part of the element tangent in the strains
   !> of the element (r: the strain map into material axes, d: the material tangent).
   pure subroutine add_congruence(w, r, d, m)
@@ -76,5 +105,16 @@ contains
       k(:, j) = k(:, j) + gs(:, 1)*g(j, 1) + gs(:, 2)*g(j, 2) + gs(:, 3)*g(j, 3)
     end do
   end subroutine add_congruence_t
+
+  !> k = k + a b^T (8 x 8; a, b: 8 x 2): a geometric stiffness term of two derivative
+  !> directions (the solid-shell's in-plane stresses, assumed shears and thickness stress).
+  pure subroutine add_pair_product(a, b, k)
+    real(wp), intent(in) :: a(8, 2), b(8, 2)
+    real(wp), intent(inout) :: k(8, 8)
+    integer :: j
+    do j = 1, 8
+      k(:, j) = k(:, j) + a(:, 1)*b(j, 1) + a(:, 2)*b(j, 2)
+    end do
+  end subroutine add_pair_product
 
 end module ddpy_element_products

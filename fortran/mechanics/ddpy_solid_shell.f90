@@ -27,8 +27,9 @@
 module ddpy_solid_shell
   use ddpy_kinds, only: wp
   use ddpy_material, only: material_update_checked, material_check, material_yield_stress, &
-                           material_prop_count
-  use ddpy_element_products, only: lower_product, add_congruence, add_congruence_t
+                           material_prop_count, material_hardening, hill48_equivalent_stress
+  use ddpy_element_products, only: lower_product, subtract_lower_gram, add_congruence, &
+                                   add_pair_product
   use ddpy_log_strain, only: hencky_type, hencky_evaluate, hencky_first, hencky_second, &
                              symmetric_eigen
   implicit none
@@ -49,6 +50,10 @@ module ddpy_solid_shell
   !> square of it.
   real(wp), parameter :: local_tolerance = 1.0e-10_wp
   integer, parameter :: local_iterations = 25, local_searches = 4
+  !> The elastic shortcut of the local iteration keeps this relative margin below the
+  !> yield surface (material_update_checked's own margin is 1e-12 above it), so that a
+  !> point it calls elastic is elastic to the material update too.
+  real(wp), parameter :: elastic_margin = -1.0e-10_wp
 
   real(wp), parameter :: corner(3, 8) = reshape([ &
     -1.0_wp, -1.0_wp, -1.0_wp, 1.0_wp, -1.0_wp, -1.0_wp, 1.0_wp, 1.0_wp, -1.0_wp, &
@@ -198,34 +203,37 @@ contains
   end subroutine stretch
 
   !> In-place Cholesky factor (lower triangle) of a symmetric n x n matrix; ok false when
-  !> it is not positive definite.
+  !> it is not positive definite. By columns (left-looking), so that every update runs
+  !> down a contiguous column.
   pure subroutine cholesky(n, a, ok)
     integer, intent(in) :: n
     real(wp), intent(inout) :: a(n, n)
     logical, intent(out) :: ok
-    integer :: j, i
+    integer :: j, k
     ok = .true.
     do j = 1, n
-      a(j, j) = a(j, j) - dot_product(a(j, 1:j - 1), a(j, 1:j - 1))
+      do k = 1, j - 1
+        a(j:n, j) = a(j:n, j) - a(j:n, k)*a(j, k)
+      end do
       if (.not. a(j, j) > 0.0_wp) then
         ok = .false.
         return
       end if
       a(j, j) = sqrt(a(j, j))
-      do i = j + 1, n
-        a(i, j) = (a(i, j) - dot_product(a(i, 1:j - 1), a(j, 1:j - 1)))/a(j, j)
-      end do
+      a(j + 1:n, j) = a(j + 1:n, j)/a(j, j)
     end do
   end subroutine cholesky
 
-  !> b = L^-1 b for the lower factor L (forward substitution), one right-hand side.
+  !> b = L^-1 b for the lower factor L (forward substitution by columns), one right-hand
+  !> side.
   pure subroutine forward(n, l, b)
     integer, intent(in) :: n
     real(wp), intent(in) :: l(n, n)
     real(wp), intent(inout) :: b(n)
-    integer :: i
-    do i = 1, n
-      b(i) = (b(i) - dot_product(l(i, 1:i - 1), b(1:i - 1)))/l(i, i)
+    integer :: j
+    do j = 1, n
+      b(j) = b(j)/l(j, j)
+      b(j + 1:n) = b(j + 1:n) - l(j + 1:n, j)*b(j)
     end do
   end subroutine forward
 
@@ -277,20 +285,36 @@ contains
     ! g4 S with g4 the four columns (W0_c / W0_p) rot T_c(:, 1:4) and S the monomials mono
     ! of each mode in its component's row (see grouped); dg4 = D g4; the material's stress
     ! and tangent; rk the columns of the tangent.
-    real(wp) :: bt(24, 6, 8), pm(6, 6, 8), rot(6, 6, 8), g4(6, 4, 8), mono(shell_modes, 8), &
+    real(wp) :: bt(24, 6, 8), pm(6, 6, 8), rot(6, 6, 8), g4(6, 4, 8), &
                 de0(6, 8), dg4(6, 4, 8), s_mat(6, 8), d_mat(6, 6, 8), rk(24, 6, 8), &
-                tmap(6, 6, 8), w0(8), fgs(3, 3, 8), dnp(8, 3, 8)
-    ! The sampling points: natural derivatives, the sampled strain and its derivative.
-    real(wp) :: dnq(8, 3, 12), eq(12), bq(24, 12)
+                tmap(6, 6, 8), w0(8), fgs(3, 3, 8)
+    ! The sampling points: the sampled strain and its derivative.
+    real(wp) :: eq(12), bq(24, 12)
     real(wp) :: dn(8, 3), gb(3, 3), db(3, 3), gc(3, 3), inv(3, 3), tc(6, 6), w0c, vj, &
                 ecov(6), bcov(24, 6), e_as(6), ratio, xi(3), wgt(4), kaa(shell_modes, &
                 shell_modes), fa(shell_modes), dalpha(shell_modes), kua(24, shell_modes), &
-                cq(3, 3, 20), kg(8, 8), mmat(6, 6), a_hat(6), s6(6), &
+                cq(3, 3, 20), kg(8, 8), ga(8, 2), gb8(8, 2), mmat(6, 6), a_hat(6), s6(6), &
                 t_mat(6), tg(6), rp(6, 6), rdg(6, 4), bg(24, 4), a4(4), u(3, 3), u_inv(3, 3), &
                 s3(3, 3), scale, change, yield_floor, zero24(24), s_start, &
                 s_end, step, lo, hi, s_lo, s_hi
     integer :: p, q, a, c, i, j, m, col, level, iteration, mstatus, off, search
-    logical :: ok, converged
+    logical :: ok, converged, elastic
+    ! The shape functions' natural derivatives dN_a/dxi_j (8, 3) at the fixed points of the
+    ! element, constants: at the centre, at the Gauss points gauss*corner(:, p) and at the
+    ! sampling points; and the enhanced modes' monomials at the Gauss points (their
+    ! exponents are 0 or 1).
+    real(wp), parameter :: dn_centre(8, 3) = 0.125_wp*transpose(corner)
+    real(wp), parameter :: dn_gauss(8, 3, 8) = reshape([(((0.125_wp*corner(j, a) &
+      *(1.0_wp + corner(mod(j, 3) + 1, a)*gauss*corner(mod(j, 3) + 1, p)) &
+      *(1.0_wp + corner(mod(j + 1, 3) + 1, a)*gauss*corner(mod(j + 1, 3) + 1, p)), &
+      a = 1, 8), j = 1, 3), p = 1, 8)], [8, 3, 8])
+    real(wp), parameter :: dn_sample(8, 3, 12) = reshape([(((0.125_wp*corner(j, a) &
+      *(1.0_wp + corner(mod(j, 3) + 1, a)*sample(mod(j, 3) + 1, p)) &
+      *(1.0_wp + corner(mod(j + 1, 3) + 1, a)*sample(mod(j + 1, 3) + 1, p)), &
+      a = 1, 8), j = 1, 3), p = 1, 12)], [8, 3, 12])
+    real(wp), parameter :: mono_gauss(shell_modes, 8) = reshape([((product(merge( &
+      gauss*corner(:, p), 1.0_wp, mode_power(:, m) == 1)), m = 1, shell_modes), p = 1, 8)], &
+      [shell_modes, 8])
 
     f = 0.0_wp
     k = 0.0_wp
@@ -302,10 +326,9 @@ contains
     status = shell_ok
 
     ! The element centre of x_n: the map of the enhanced strains; W0_c of the initial one.
-    call shape_derivatives([0.0_wp, 0.0_wp, 0.0_wp], dn)
-    gc = matmul(xn, dn)
+    gc = matmul(xn, dn_centre)
     vj = det3(gc)
-    w0c = det3(matmul(x0, dn))
+    w0c = det3(matmul(x0, dn_centre))
     if (vj <= 0.0_wp .or. w0c <= 0.0_wp) then
       status = shell_inverted
       return
@@ -315,9 +338,8 @@ contains
     ! The sampling points: E_31 (engineering, 2 E_13) at 1, 2 and 5, 6; E_23 at 3, 4 and
     ! 7, 8; E_33 at 9 .. 12, with their derivatives by the dofs, on g = G + D.
     do q = 1, 12
-      call shape_derivatives(sample(:, q), dnq(:, :, q))
-      gb = matmul(xn, dnq(:, :, q))
-      db = matmul(du, dnq(:, :, q))
+      gb = matmul(xn, dn_sample(:, :, q))
+      db = matmul(du, dn_sample(:, :, q))
       select case (mod(q - 1, 4) + 1 + merge(4, 0, q > 8))
       case (1, 2)
         i = 1
@@ -338,9 +360,9 @@ contains
       gb = gb + db
       do a = 1, 8
         if (i == j) then
-          bq(3*a - 2:3*a, q) = gb(:, 3)*dnq(a, 3, q)
+          bq(3*a - 2:3*a, q) = gb(:, 3)*dn_sample(a, 3, q)
         else
-          bq(3*a - 2:3*a, q) = gb(:, j)*dnq(a, i, q) + gb(:, i)*dnq(a, j, q)
+          bq(3*a - 2:3*a, q) = gb(:, j)*dn_sample(a, i, q) + gb(:, i)*dn_sample(a, j, q)
         end if
       end do
     end do
@@ -350,16 +372,15 @@ contains
       xi = gauss*corner(:, p)
       level = merge(1, 2, corner(3, p) < 0.0_wp)
       off = 4*(level - 1)
-      call shape_derivatives(xi, dnp(:, :, p))
-      w0(p) = det3(matmul(x0, dnp(:, :, p)))
-      gb = matmul(xn, dnp(:, :, p))
+      w0(p) = det3(matmul(x0, dn_gauss(:, :, p)))
+      gb = matmul(xn, dn_gauss(:, :, p))
       vj = det3(gb)
       if (w0(p) <= 0.0_wp .or. vj <= 0.0_wp) then
         status = shell_inverted
         return
       end if
       inv = inverse3(gb, vj)
-      db = matmul(du, dnp(:, :, p))
+      db = matmul(du, dn_gauss(:, :, p))
       ! Compatible relative deformation dF = I + D J^-1 (for the polar decomposition).
       fgs(:, :, p) = matmul(db, inv)
       do i = 1, 3
@@ -377,9 +398,9 @@ contains
       gb = gb + db
       do a = 1, 8
         col = 3*a - 2
-        bcov(col:col + 2, 1) = gb(:, 1)*dnp(a, 1, p)
-        bcov(col:col + 2, 2) = gb(:, 2)*dnp(a, 2, p)
-        bcov(col:col + 2, 4) = gb(:, 1)*dnp(a, 2, p) + gb(:, 2)*dnp(a, 1, p)
+        bcov(col:col + 2, 1) = gb(:, 1)*dn_gauss(a, 1, p)
+        bcov(col:col + 2, 2) = gb(:, 2)*dn_gauss(a, 2, p)
+        bcov(col:col + 2, 4) = gb(:, 1)*dn_gauss(a, 2, p) + gb(:, 2)*dn_gauss(a, 1, p)
       end do
       wgt = 0.25_wp*(1.0_wp + corner(1, 1:4)*xi(1))*(1.0_wp + corner(2, 1:4)*xi(2))
       ecov(3) = dot_product(wgt, eq(9:12))
@@ -405,10 +426,8 @@ contains
       ! Enhanced modes in the material axes.
       ratio = w0c/w0(p)
       do c = 1, 4
-        g4(:, c, p) = ratio*matmul(rot(:, :, p), tc(:, c))
-      end do
-      do m = 1, shell_modes
-        mono(m, p) = product(xi**mode_power(:, m))
+        g4(:, c, p) = ratio*(rot(:, 1, p)*tc(1, c) + rot(:, 2, p)*tc(2, c) + rot(:, 3, p)*tc(3, c) &
+                             + rot(:, 4, p)*tc(4, c) + rot(:, 5, p)*tc(5, c) + rot(:, 6, p)*tc(6, c))
       end do
     end do
 
@@ -424,8 +443,8 @@ contains
       return
     end if
     yield_floor = material_yield_stress(props, 0.0_wp)
-    call local_state(props, yield_floor, stress_old, ep_old, de0, g4, mono, w0, alpha, s_mat, ep, &
-                     d_mat, dg4, strain, fa, kaa, scale, mstatus)
+    call local_state(props, yield_floor, stress_old, ep_old, de0, g4, mono_gauss, w0, alpha, s_mat, ep, &
+                     d_mat, dg4, strain, fa, kaa, scale, elastic, mstatus)
     if (mstatus /= shell_ok) then
       status = mstatus
       return
@@ -442,19 +461,31 @@ contains
       call backward(shell_modes, kaa, dalpha)
       change = 0.0_wp
       do p = 1, 8
-        change = max(change, maxval(abs(matmul(g4(:, :, p), grouped(mono(:, p), dalpha)))))
+        a4 = grouped(mono_gauss(:, p), dalpha)
+        change = max(change, maxval(abs(g4(:, 1, p)*a4(1) + g4(:, 2, p)*a4(2) &
+                                        + g4(:, 3, p)*a4(3) + g4(:, 4, p)*a4(4))))
       end do
       if (change <= local_tolerance*scale) then
         converged = .true.
         exit
+      end if
+      ! Every point elastic, here and at alpha + dalpha: f_alpha is linear in alpha there,
+      ! so dalpha is its exact solution and the forces below (to first order in dalpha) are
+      ! exact; evaluating the material again would only confirm it (most elements of a
+      ! forming blank, in most iterations).
+      if (elastic) then
+        if (stays_elastic(props, yield_floor, ep_old, s_mat, dg4, mono_gauss, dalpha)) then
+          converged = .true.
+          exit
+        end if
       end if
       ! Near a point's yield surface the plastic tangent is soft along the flow, and a full
       ! step can go far beyond where the point unloads: at most the element's strain scale.
       if (change > scale) dalpha = (scale/change)*dalpha
       s_start = dot_product(dalpha, fa)
       step = 1.0_wp
-      call local_state(props, yield_floor, stress_old, ep_old, de0, g4, mono, w0, alpha + dalpha, &
-                       s_mat, ep, d_mat, dg4, strain, fa, kaa, scale, mstatus)
+      call local_state(props, yield_floor, stress_old, ep_old, de0, g4, mono_gauss, w0, alpha + dalpha, &
+                       s_mat, ep, d_mat, dg4, strain, fa, kaa, scale, elastic, mstatus)
       if (mstatus /= shell_ok) then
         status = mstatus
         return
@@ -469,9 +500,9 @@ contains
         do search = 1, local_searches
           step = hi - s_hi*(hi - lo)/(s_hi - s_lo)
           step = min(max(step, lo + 0.1_wp*(hi - lo)), hi - 0.1_wp*(hi - lo))
-          call local_state(props, yield_floor, stress_old, ep_old, de0, g4, mono, w0, &
+          call local_state(props, yield_floor, stress_old, ep_old, de0, g4, mono_gauss, w0, &
                            alpha + step*dalpha, s_mat, ep, d_mat, dg4, strain, fa, kaa, &
-                           scale, mstatus)
+                           scale, elastic, mstatus)
           if (mstatus /= shell_ok) then
             status = mstatus
             return
@@ -499,7 +530,7 @@ contains
     ! the end of the increment as in ddpy_hex8: strain, the axes turned by dR and the
     ! rotated Kirchhoff stress dU S dU of the compatible dF = dR dU.
     do p = 1, 8
-      a4 = grouped(mono(:, p), dalpha)
+      a4 = grouped(mono_gauss(:, p), dalpha)
       t_mat = s_mat(:, p) + matmul(dg4(:, :, p), a4)
       strain(:, p) = strain_old(:, p) + strain(:, p) + matmul(g4(:, :, p), a4)
       do c = 1, 6
@@ -536,17 +567,24 @@ contains
       off = 4*merge(0, 1, corner(3, p) < 0.0_wp)
       a_hat = w0(p)*s_mat(:, p)
       call hencky_second(hk(p), a_hat, mmat)
-      rp = matmul(rot(:, :, p), pm(:, :, p))
+      do j = 1, 6
+        rp(:, j) = rot(:, 1, p)*pm(1, j, p) + rot(:, 2, p)*pm(2, j, p) + rot(:, 3, p)*pm(3, j, p) &
+                   + rot(:, 4, p)*pm(4, j, p) + rot(:, 5, p)*pm(5, j, p) + rot(:, 6, p)*pm(6, j, p)
+      end do
       call add_congruence(w0(p), rp, d_mat(:, :, p), mmat)
       do i = 1, 6
         rk(:, i, p) = by_dofs(bt(:, :, p), mmat(i, :))
       end do
-      rdg = w0(p)*matmul(transpose(rp), dg4(:, :, p))
+      do c = 1, 4
+        do i = 1, 6
+          rdg(i, c) = w0(p)*dot_product(rp(:, i), dg4(:, c, p))
+        end do
+      end do
       do c = 1, 4
         bg(:, c) = by_dofs(bt(:, :, p), rdg(:, c))
       end do
       do m = 1, shell_modes
-        kua(:, m) = kua(:, m) + mono(m, p)*bg(:, mode_component(m))
+        kua(:, m) = kua(:, m) + mono_gauss(m, p)*bg(:, mode_component(m))
       end do
       do c = 1, 6
         s6(c) = dot_product(a_hat, pm(:, c, p))
@@ -567,23 +605,34 @@ contains
     end do
     zero24 = 0.0_wp
     call lower_product(bt, rk, zero24, zero24, k)
+    ! kg = sum of g c g^T over the points, g their shape derivatives, c the stress
+    ! coefficients, each with only the terms it has: the in-plane pair at the Gauss points,
+    ! a shear with the thickness direction at the first eight sampling points, the
+    ! thickness stress at the last four.
     kg = 0.0_wp
-    do q = 1, 20
-      cq(3, 1, q) = cq(1, 3, q)
-      cq(3, 2, q) = cq(2, 3, q)
-      if (q <= 8) then
-        call add_congruence_t(dnp(:, :, q), cq(:, :, q), kg)
-      else
-        call add_congruence_t(dnq(:, :, q - 8), cq(:, :, q), kg)
-      end if
+    do q = 1, 8
+      ga(:, 1) = dn_gauss(:, 1, q)*cq(1, 1, q) + dn_gauss(:, 2, q)*cq(1, 2, q)
+      ga(:, 2) = dn_gauss(:, 1, q)*cq(1, 2, q) + dn_gauss(:, 2, q)*cq(2, 2, q)
+      call add_pair_product(ga, dn_gauss(:, 1:2, q), kg)
+    end do
+    do q = 1, 8
+      i = merge(1, 2, mod(q - 1, 4) < 2)  ! E_31 at 1, 2, 5, 6; E_23 at 3, 4, 7, 8
+      ga(:, 1) = cq(i, 3, q + 8)*dn_sample(:, i, q)
+      ga(:, 2) = cq(i, 3, q + 8)*dn_sample(:, 3, q)
+      gb8(:, 1) = dn_sample(:, 3, q)
+      gb8(:, 2) = dn_sample(:, i, q)
+      call add_pair_product(ga, gb8, kg)
+    end do
+    do q = 9, 12
+      ga(:, 1) = cq(3, 3, q + 8)*dn_sample(:, 3, q)
+      ga(:, 2) = 0.0_wp
+      gb8(:, 1) = dn_sample(:, 3, q)
+      gb8(:, 2) = 0.0_wp
+      call add_pair_product(ga, gb8, kg)
     end do
     ! Condensation: K - K_ua K_aa^-1 K_ua^T = K - Y Y^T, Y = K_ua L^-T.
     call forward_rows(shell_modes, kaa, kua)
-    do m = 1, shell_modes
-      do j = 1, 24
-        k(j:24, j) = k(j:24, j) - kua(j:24, m)*kua(j, m)
-      end do
-    end do
+    call subtract_lower_gram(kua, k)
     do j = 1, 8
       do i = j, 8
         do c = 1, 3
@@ -600,6 +649,26 @@ contains
 
   end subroutine solid_shell_element
 
+  !> Whether every point's stress s_mat + dg4 grouped(mono, dalpha), the elastic prediction
+  !> at alpha + dalpha, is inside the yield surface of its ep_old, by the test of
+  !> material_update_checked (the same trial stress, up to rounding).
+  pure logical function stays_elastic(props, yield_floor, ep_old, s_mat, dg4, mono, dalpha)
+    real(wp), intent(in) :: props(material_prop_count), yield_floor, ep_old(8), s_mat(6, 8), &
+                            dg4(6, 4, 8), mono(shell_modes, 8), dalpha(shell_modes)
+    real(wp) :: sigma, y, slope
+    integer :: p
+    stays_elastic = .false.
+    do p = 1, 8
+      sigma = hill48_equivalent_stress(props(3:8), &
+                                       s_mat(:, p) + matmul(dg4(:, :, p), grouped(mono(:, p), dalpha)))
+      if (sigma > yield_floor*(1.0_wp + elastic_margin)) then
+        call material_hardening(props, ep_old(p), y, slope)
+        if (sigma > y*(1.0_wp + elastic_margin)) return
+      end if
+    end do
+    stays_elastic = .true.
+  end function stays_elastic
+
   !> The enhanced strain's four component amplitudes of the parameters v at a point with
   !> monomials mono: a4(c) = sum of mono(m) v(m) over the modes m of component c.
   pure function grouped(mono, v) result(a4)
@@ -614,21 +683,24 @@ contains
   !> The material at the 8 points of an element for the enhanced parameters at: the strain
   !> increment de = de0 + g4 grouped(mono, at) (material axes), the material's stress
   !> s_mat, plastic strain ep and tangent d_mat, dg4 = d_mat g4, f_alpha (fa) and K_aa
-  !> (kaa; from the 4 x 4 blocks g4^T D g4 of the points), and the strain scale of the
+  !> (kaa; from the 4 x 4 blocks g4^T D g4 of the points), the strain scale of the
   !> local iteration's tolerance (the largest strain increment or stress over Young's
-  !> modulus); status shell_ok or shell_material_failed.
+  !> modulus), and whether every point stayed elastic; status shell_ok or
+  !> shell_material_failed.
   pure subroutine local_state(props, yield_floor, stress_old, ep_old, de0, g4, mono, w0, at, &
-                              s_mat, ep, d_mat, dg4, de, fa, kaa, scale, status)
+                              s_mat, ep, d_mat, dg4, de, fa, kaa, scale, elastic, status)
     real(wp), intent(in) :: props(material_prop_count), yield_floor, stress_old(6, 8), &
                             ep_old(8), de0(6, 8), g4(6, 4, 8), mono(shell_modes, 8), w0(8), &
                             at(shell_modes)
     real(wp), intent(out) :: s_mat(6, 8), ep(8), d_mat(6, 6, 8), dg4(6, 4, 8), de(6, 8), &
                              fa(shell_modes), kaa(shell_modes, shell_modes), scale
+    logical, intent(out) :: elastic
     integer, intent(out) :: status
     real(wp) :: h(4, 4), gs(4), wm(shell_modes)
     integer :: p, m, n, mstatus
     logical :: plastic
     status = shell_ok
+    elastic = .true.
     scale = 0.0_wp
     fa = 0.0_wp
     kaa = 0.0_wp
@@ -640,6 +712,7 @@ contains
         status = shell_material_failed
         return
       end if
+      elastic = elastic .and. .not. plastic
       scale = max(scale, maxval(abs(de(:, p))), maxval(abs(s_mat(:, p)))/props(1))
       dg4(:, :, p) = matmul(d_mat(:, :, p), g4(:, :, p))
       h = matmul(transpose(g4(:, :, p)), dg4(:, :, p))

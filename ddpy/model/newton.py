@@ -142,6 +142,15 @@ class Layout:
         free_patch = inside[:, :, None] & (patch >= 0)                  # (npair, width, 3)
         pi, ii, ei, jj = np.nonzero(np.broadcast_to(free_patch[:, None],
                                                     (npair, 3, width, 3)))
+        # A held component of a surface-to-surface or Gauss-point pair (a slave on a
+        # symmetry plane) has the law lambda_k = 0, with no patch entries: in its row they
+        # would join the nodes of the patch to one another through the multiplier (the
+        # pivot order does not see that), and the paper's bending mesh took 81 million
+        # factor entries instead of 59 for these 410 pairs.
+        patch_pair = _join([np.full(t.slaves.size, t.contact in ("surface", "gauss"))
+                            for t in tools], bool)
+        keep = ~(patch_pair[pi] & (equ[pi, ii] < 0))
+        pi, ii, ei, jj = pi[keep], ii[keep], ei[keep], jj[keep]
         into = np.where(self.eliminated[pi] & (equ[pi, ii] >= 0), equ[pi, ii], lam[pi, ii])
         rows = [self.pattern.rows, equ[coupling], into, np.repeat(lam, 3, axis=1).ravel()]
         cols = [self.pattern.cols, lam[coupling], patch[pi, ei, jj],

@@ -31,7 +31,7 @@ contains
                                   face_first(ntool + 1), faces(4, nface), corner(4, nface), &
                                   tool_first(ntool + 1), pair_node(npair), &
                                   patch_first(npair + 1), patch_node(npatch), eqn(3, nnode)
-    integer :: t, np_, po, first, last, coupled, p, f, q, qq, e, entries, points
+    integer :: t, np_, po, first, last, coupled, p, f, q, qq, e, entries, points, rows
     logical :: found
     ok = .false.
     if (any(pair_node < 0) .or. any(pair_node >= nnode)) return
@@ -87,9 +87,19 @@ contains
       end do
     end do
     coupled = count(eqn(:, pair_node + 1) >= 0)
-    entries = count(eqn(:, patch_node + 1) >= 0)
+    ! dC/dx: 3 rows per pair over its patch's free dofs; a surface-to-surface or
+    ! Gauss-point pair has no row for a held component (its law is lambda_k = 0).
+    entries = 0
+    do t = 1, ntool
+      do p = tool_first(t) + 1, tool_first(t + 1)
+        rows = 3
+        if (table(11, t) /= 0) rows = count(eqn(:, pair_node(p) + 1) >= 0)
+        entries = entries + rows*count(eqn(:, patch_node(patch_first(p) + 1: &
+                                                         patch_first(p + 1)) + 1) >= 0)
+      end do
+    end do
     ok = k_slots >= 0 .and. &
-         (nvalues == k_slots + coupled + 3*entries + 9*npair .or. nvalues == 0)
+         (nvalues == k_slots + coupled + entries + 9*npair .or. nvalues == 0)
   end function layout_ok
 
   !> Whether a row structure (ddpy.core.linalg.row_structure) fits: rows and sources in

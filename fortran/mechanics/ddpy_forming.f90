@@ -243,6 +243,9 @@ contains
     do p = 1, npair
       if (surface(p)) then
         do i = 1, 3
+          ! A held component's row is lambda_k = 0 (above): no patch entries in the
+          ! structure (ddpy.model.newton.Layout), which would join the patch's nodes.
+          if (held(i, p) /= 0) cycle
           do e = patch_first(p) + 1, patch_first(p + 1)
             do j = 1, 3
               if (eqn(j, patch_node(e) + 1) < 0) cycle

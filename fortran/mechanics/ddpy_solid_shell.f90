@@ -696,8 +696,8 @@ contains
                              fa(shell_modes), kaa(shell_modes, shell_modes), scale
     logical, intent(out) :: elastic
     integer, intent(out) :: status
-    real(wp) :: h(4, 4), gs(4), wm(shell_modes)
-    integer :: p, m, n, mstatus
+    real(wp) :: h(4, 4), gs(4), wm(shell_modes), hw(shell_modes, 4)
+    integer :: p, m, n, c, mstatus
     logical :: plastic
     status = shell_ok
     elastic = .true.
@@ -714,15 +714,27 @@ contains
       end if
       elastic = elastic .and. .not. plastic
       scale = max(scale, maxval(abs(de(:, p))), maxval(abs(s_mat(:, p)))/props(1))
-      dg4(:, :, p) = matmul(d_mat(:, :, p), g4(:, :, p))
-      h = matmul(transpose(g4(:, :, p)), dg4(:, :, p))
-      gs = matmul(s_mat(:, p), g4(:, :, p))
-      wm = w0(p)*mono(:, p)
-      do n = 1, shell_modes
-        fa(n) = fa(n) + wm(n)*gs(mode_component(n))
-        do m = n, shell_modes
-          kaa(m, n) = kaa(m, n) + wm(m)*mono(n, p)*h(mode_component(m), mode_component(n))
+      do c = 1, 4
+        dg4(:, c, p) = d_mat(:, 1, p)*g4(1, c, p) + d_mat(:, 2, p)*g4(2, c, p) &
+                       + d_mat(:, 3, p)*g4(3, c, p) + d_mat(:, 4, p)*g4(4, c, p) &
+                       + d_mat(:, 5, p)*g4(5, c, p) + d_mat(:, 6, p)*g4(6, c, p)
+      end do
+      do c = 1, 4
+        do m = 1, 4
+          h(m, c) = dot_product(g4(:, m, p), dg4(:, c, p))
         end do
+        gs(c) = dot_product(s_mat(:, p), g4(:, c, p))
+      end do
+      wm = w0(p)*mono(:, p)
+      ! hw(:, c): the column of h of component c spread over the modes, times wm; whole
+      ! columns of K_aa (both triangles) in vector sums rather than the lower triangle
+      ! entry by entry.
+      do c = 1, 4
+        hw(:, c) = wm*h(mode_component, c)
+      end do
+      fa = fa + wm*gs(mode_component)
+      do n = 1, shell_modes
+        kaa(:, n) = kaa(:, n) + mono(n, p)*hw(:, mode_component(n))
       end do
     end do
   end subroutine local_state

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from ddpy.core.linalg import LinearSolverError, MumpsSolver, spsolve
-from ddpy.core.parallel import max_threads, set_threads, threads
+from ddpy.core.parallel import blas_threads, max_threads, set_threads, threads
 
 
 @pytest.mark.parametrize("n", [1, 2, 3])
@@ -30,6 +30,18 @@ def test_threads_context_restores() -> None:
     assert max_threads() == before
     with pytest.raises(ValueError, match="between 1 and"):
         set_threads(0)
+
+
+def test_the_blas_follows_the_threads() -> None:
+    """The BLAS behind MUMPS (OpenBLAS here, with a thread pool of its own) runs on the
+    threads asked for: one after set_threads(1), not one per core."""
+    if blas_threads() is None:
+        pytest.skip("the BLAS behind MUMPS is not OpenBLAS")
+    with threads(2):
+        assert blas_threads() == 2
+        with threads(1):
+            assert blas_threads() == 1
+        assert blas_threads() == 2
 
 
 def random_system(n: int, seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

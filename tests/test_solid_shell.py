@@ -132,6 +132,34 @@ def test_forces_do_not_depend_on_where_the_local_iteration_starts(plastic: bool)
             1e-9 * np.abs(cold.state.stress).max()
 
 
+def test_enhanced_strains_that_make_an_element_yield_are_seen() -> None:
+    """An element bent from the stress-free state, its thickness kept at the nodes: from
+    the local iteration's start (alpha = 0) its thickness strain is zero through the
+    thickness, sigma_33 = lambda eps and the von Mises stress 2 mu eps = 0.85 Y at every
+    point; the enhanced thickness strain that frees sigma_33 raises it to about 1.07 Y
+    (E eps sqrt(1 - nu + nu^2) / (1 - nu^2), the width held). So every point is elastic
+    where the iteration starts and plastic at its solution: the shortcut that takes a first
+    correction as exact where the points stay elastic must see them yield (with it
+    unchecked, ep stays 0 and the stress 7 % above the yield stress)."""
+    yield_stress, thickness = 200.0, 0.1
+    # a small element about x = 0: the membrane strain of the deflection, (kappa x)^2 / 2,
+    # stays below 1 % of the bending strain
+    solid = Solid(HexMesh.box(0.2, 0.2, thickness, 1, 1, 1, origin=(-0.1, -0.1, 0.0)),
+                  props_vector(swift=(yield_stress, 1.0, 0.0)), element=SHELL)
+    gauss = 1.0 / np.sqrt(3.0)
+    curvature = 2.2 * yield_stress / (E * gauss * thickness)  # E eps = 1.1 Y at the points
+    x = solid.mesh.nodes
+    u = np.zeros_like(x)
+    u[:, 0] = curvature * x[:, 0] * (x[:, 2] - 0.5 * thickness)
+    u[:, 2] = -0.5 * curvature * x[:, 0] ** 2
+    trial = solid.assemble(u).state
+    s = trial.stress.reshape(-1, 6)
+    mises = np.sqrt(0.5 * ((s[:, 0] - s[:, 1]) ** 2 + (s[:, 1] - s[:, 2]) ** 2
+                           + (s[:, 2] - s[:, 0]) ** 2) + 3.0 * (s[:, 3:] ** 2).sum(axis=1))
+    assert np.all(trial.ep > 0.0), trial.ep
+    assert np.all(mises <= yield_stress * (1.0 + 5e-3)), mises / yield_stress
+
+
 @pytest.mark.parametrize("plastic", [False, True])
 def test_stresses_unchanged_under_rigid_rotation(plastic: bool) -> None:
     """A 90 degree rotation superposed on a deformation (elastic, or plastic DDQ steel)

@@ -332,6 +332,7 @@ def from_results(path: Path, case_folder: Path) -> Run:
         "lu_s": float(f"{totals['factorization'] / lus:.4g}") if lus else None,
         "peak_memory_mb": None if peak_mb is None else round(peak_mb, 1),
         "hexahedra": int(case.mesh.n_elements),
+        "discretization": discretization(case),
         "last_increments": ending,
         "stages": stages,
     }
@@ -378,6 +379,13 @@ class StallWatch:
 
     def stop(self) -> bool:
         return bool(self.reason)
+
+
+def discretization(case: Any) -> str:
+    """The blank's element and the tools' contact of a case, as the report names them."""
+    names = {"gauss": "Gauss-point", "node": "node-to-surface", "surface": "surface-to-surface"}
+    contacts = sorted({t.discretization for t in case.tools})
+    return f"{case.element}, {' and '.join(names[c] for c in contacts)} contact"
 
 
 def run_case_folder(folder: Path, output: Path | None = None, verbose: bool = False,
@@ -851,10 +859,12 @@ def report(mesh: str, numbers: dict[str, dict[str, Any]],
         "",
         f"Blank: **{mesh}** mesh, {hexahedra} hexahedra in {make_case.LAYERS} layers "
         f"(unstructured, elements of about {make_case.ELEMENT_SIZE[mesh]:.3g} mm; the "
-        f"paper: {make_case.PAPER_HEXAHEDRA} hexahedra): DD3IMP's discretization, the "
-        "mean-dilatation hexahedron and node-to-surface contact, as the decks ask (not "
-        f"ddpy's defaults: make_case.py says why). Report written on {threads} "
-        "thread(s); each run's threads and code version are in the table of runs. Wall "
+        f"paper: {make_case.PAPER_HEXAHEDRA} hexahedra), "
+        f"{' / '.join(sorted({numbers[m].get('discretization', 'not recorded') for m in models}))}"
+        " (the decks' choice; the element is not ddpy's default: make_case.py says why). "
+        f"Report written on {threads} "
+        "thread(s); each run's element and contact, threads and code version are in the "
+        "table of runs. Wall "
         f"times are this machine's ({platform.machine()}, {cores()} cores), of runs that "
         "may have shared the cores "
         "with other jobs.",
@@ -866,6 +876,8 @@ def report(mesh: str, numbers: dict[str, dict[str, Any]],
         _row(["reached (stage, punch travel)", *[_reached(numbers[m]) for m in models]]),
         _row(["stopped", *[numbers[m]["stopped"] or numbers[m]["run_status"]
                            for m in models]]),
+        _row(["element, contact", *[numbers[m].get("discretization", "not recorded")
+                                    for m in models]]),
         _row(["threads", *[numbers[m]["threads"] or "?" for m in models]]),
         _row(["code, date", *[f"{numbers[m]['code'] or '?'}, {numbers[m]['date'] or '?'}"
                               for m in models]]),

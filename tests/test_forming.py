@@ -503,14 +503,14 @@ def test_bad_contact_input_is_refused_before_the_run() -> None:
 
 @pytest.mark.parametrize("linear_solver", ["auto", "reuse"])
 def test_springback_of_a_bent_strip_converges_quadratically(linear_solver: str) -> None:
-    # With "reuse" the forming's Newton solves by GMRES on older factors; springback solves
-    # exactly all the same (on the bending paper mesh the older factors made 16 iterations
-    # of each step, 3 without them). A steel strip (half of a symmetric one: u_x = 0 at
-    # x = 0, u_y = 0 at y = 0, the centre line held in z) bent as a cantilever by a tip
-    # load well into the plastic range, then released. The unloading is elastic and its tangent exact, so Newton converges
-    # quadratically; the residual norm is a poor measure of progress for it (a step that
-    # bends the strip right leaves a large membrane residual of second order), and
-    # backtracking on that norm crept along at 1/16 steps (24 to 31 iterations per step).
+    # With "reuse" the forming's Newton solves by GMRES on older factors; springback solves exactly
+    # all the same (on the bending paper mesh the older factors made 16 iterations of each step, 3
+    # without them). A steel strip (half of a symmetric one: u_x = 0 at x = 0, u_y = 0 at y = 0, the
+    # centre line held in z) bent as a cantilever by a tip load well into the plastic range, then
+    # released. The unloading is elastic and its tangent exact, so Newton converges quadratically;
+    # the residual norm is a poor measure of progress for it (a step that bends the strip right
+    # leaves a large membrane residual of second order), and backtracking on that norm crept along
+    # at 1/16 steps (24 to 31 iterations per step).
     steel = Material(210e3, 0.3, Hill48.von_mises(), Swift(645.3, 0.0102, 0.252))
     mesh = HexMesh.box(20.0, 2.0, 1.0, 20, 1, 2)
     solid = Solid(mesh, steel)

@@ -217,7 +217,6 @@ contains
         dc_dlambda(i, :, p) = 0.0_wp
         dc_dlambda(i, i, p) = 1.0_wp
         dc_dx(i, :, p) = 0.0_wp
-        if (surface(p)) patch_dc(i, :, patch_first(p) + 1:patch_first(p + 1)) = 0.0_wp
       end do
     end do
     ! Equilibrium rows: minus the forces of the tools on their slave nodes, in pair order;

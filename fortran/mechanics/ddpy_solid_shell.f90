@@ -83,20 +83,6 @@ module ddpy_solid_shell
 
 contains
 
-  !> Shape functions' natural derivatives dn(a, j) = dN_a/dxi_j at xi.
-  pure subroutine shape_derivatives(xi, dn)
-    real(wp), intent(in) :: xi(3)
-    real(wp), intent(out) :: dn(8, 3)
-    real(wp) :: p(3)
-    integer :: a
-    do a = 1, 8
-      p = 1.0_wp + corner(:, a)*xi
-      dn(a, 1) = 0.125_wp*corner(1, a)*p(2)*p(3)
-      dn(a, 2) = 0.125_wp*corner(2, a)*p(1)*p(3)
-      dn(a, 3) = 0.125_wp*corner(3, a)*p(1)*p(2)
-    end do
-  end subroutine shape_derivatives
-
   pure function det3(a) result(d)
     real(wp), intent(in) :: a(3, 3)
     real(wp) :: d
@@ -290,7 +276,7 @@ contains
                 tmap(6, 6, 8), w0(8), fgs(3, 3, 8)
     ! The sampling points: the sampled strain and its derivative.
     real(wp) :: eq(12), bq(24, 12)
-    real(wp) :: dn(8, 3), gb(3, 3), db(3, 3), gc(3, 3), inv(3, 3), tc(6, 6), w0c, vj, &
+    real(wp) :: gb(3, 3), db(3, 3), gc(3, 3), inv(3, 3), tc(6, 6), w0c, vj, &
                 ecov(6), bcov(24, 6), e_as(6), ratio, xi(3), wgt(4), kaa(shell_modes, &
                 shell_modes), fa(shell_modes), dalpha(shell_modes), kua(24, shell_modes), &
                 cq(3, 3, 20), kg(8, 8), ga(8, 2), gb8(8, 2), mmat(6, 6), a_hat(6), s6(6), &

@@ -182,6 +182,29 @@ def test_convex_crease_between_two_faces() -> None:
     np.testing.assert_allclose(found.distance[1:], [0.3, 0.4], atol=1e-12)
 
 
+def test_a_point_held_on_a_facet_sees_its_plane_past_the_edge() -> None:
+    # A roof of two facets meeting at a convex ridge along y (x = 0, z = 0), 10 degrees
+    # apart. A point 1 mm past the ridge over the right facet, slightly inside the tool:
+    # the search gives the right facet; held on the left one it gets the left facet's plane
+    # continued past the ridge (the distance along its normal, status inside), which is what
+    # the Newton loop holds a node hopping between the two facets of an edge to.
+    drop = 5.0 * np.tan(np.radians(5.0))
+    vertices = np.array([[-5, 0, -drop], [0, 0, 0], [0, 2, 0], [-5, 2, -drop],
+                         [5, 0, -drop], [5, 2, -drop]], dtype=float)
+    faces = np.array([[0, 1, 2, 3], [1, 4, 5, 2]])
+    search = ContactSearch(NagataSurface(vertices, [[0, 0, 1.0]] * 6, faces, smooth=False))
+    a = np.radians(5.0)
+    left, right = np.array([-np.sin(a), 0.0, np.cos(a)]), np.array([np.sin(a), 0.0, np.cos(a)])
+    x = np.array([[1.0, 1.0, -0.1], [1.0, 1.0, -0.1]])
+    found = search.project(x, held=[-1, 0])
+    assert found.patch.tolist() == [1, 0] and (found.status == INSIDE).all()
+    np.testing.assert_allclose(found.normal, [right, left], atol=1e-12)
+    # Both planes pass through the ridge line, which holds the origin.
+    np.testing.assert_allclose(found.distance, [x[0] @ right, x[1] @ left], atol=1e-12)
+    with pytest.raises(ValueError, match="held must be"):
+        search.project(x, held=[0, 2])
+
+
 def test_tool_displacement_moves_the_tool() -> None:
     v, n, f = Sphere(10.0).mesh(4)
     search = ContactSearch(NagataSurface(v, n, f))

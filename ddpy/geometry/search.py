@@ -137,6 +137,7 @@ class ContactSearch:
         node_normals: ArrayLike | None = None,
         brute_force: bool = False,
         reach: float | None = None,
+        held: ArrayLike | None = None,
     ) -> Projection:
         """Closest point on the tool of each of ``points`` (k, 3), the tool moved by
         ``tool_displacement``. With ``node_normals`` (k, 3), only patch points whose outward
@@ -145,7 +146,10 @@ class ContactSearch:
         (Euclidean distance) do not count: a node with none nearer gets status NONE, and
         the search does not look at patches beyond it (None: no limit).
         ``brute_force`` projects on every patch (within the same reach): the reference for
-        tests."""
+        tests. ``held`` (k,): a patch number holds that point on that patch (no search;
+        its projection there counts as inside, with its signed normal distance: on a facet,
+        the distance to the facet's plane continued past its edges), -1 searches; the
+        forming Newton loop holds pairs so (docs/theory/contact.md)."""
         x = float_array(np.reshape(points, (-1, 3)) if np.size(points) == 0 else points,
                         "points", (None, 3))
         k = x.shape[0]
@@ -163,6 +167,15 @@ class ContactSearch:
             if not limit >= 0.0:
                 raise ValueError(f"reach must be >= 0 or None, got {reach}")
             limit = min(limit, float(np.finfo(np.float64).max))
+        if held is None:
+            on_patch = np.full(k, -1, dtype=np.int32)
+        else:
+            on_patch = np.asarray(held)
+            if on_patch.shape != (k,) or not np.issubdtype(on_patch.dtype, np.integer) or \
+                    ((on_patch < -1) | (on_patch >= self.surface.n_patches)).any():
+                raise ValueError(f"held must be ({k},) patch numbers in -1..."
+                                 f"{self.surface.n_patches - 1}")
+            on_patch = on_patch.astype(np.int32)
         if k == 0:
             empty = np.zeros(0, dtype=np.int32)
             return Projection(empty, np.zeros((0, 2)), np.zeros((0, 3)), np.zeros((0, 3)),
@@ -173,7 +186,7 @@ class ContactSearch:
             self.kind, self.stride, a.coef, a.degrees, a.triangle, mode, a.tree_lower,
             a.tree_upper, a.tree_child, a.frame, a.frame_lower, a.frame_upper, a.grid_start,
             a.grid_params, a.grid_normals, a.grid_points, x.ravel(), nn.ravel(), u,
-            self.max_iterations, self.tol, limit,
+            self.max_iterations, self.tol, limit, on_patch,
         )
         patch, params, point, normal, tangents, distance, status, iterations, ncand_out = out
         return Projection(patch, params.reshape(k, 2), point.reshape(k, 3),

@@ -147,6 +147,7 @@ contains
     real(c_double), intent(inout) :: residual(nf + 3*npair), values(nvalues)
     integer(c_int), intent(out) :: state(npair), status
     real(c_double), intent(out) :: gap(npair), normal(3, npair), traction(3, npoint)
+    integer, allocatable :: lock(:), found(:)
     state = 0
     gap = 0.0_wp
     normal = 0.0_wp
@@ -157,14 +158,16 @@ contains
                         tool_first, pair_node, npatch, patch_first, patch_node, eqn, &
                         k_slots, nvalues)) return
     status = 0
+    allocate(lock(npair), found(npair))
+    lock = 0  ! no pair held: a plain search
     call forming_contact(nnode, x, x_n, fixed, ntool, table, tol, coef, degrees, triangle, &
                          tree_lower, tree_upper, tree_child, frame, frame_lower, frame_upper, &
                          grid_start, grid_params, grid_normals, grid_points, facing, &
                          face_first, nface, faces, corner, npoint, face_weight, penalty, &
                          positions, positions_n, reach, size, touching, resting, npair, tool_first, &
                          pair_node, npatch, patch_first, patch_node, on, force, r, mu, held, &
-                         traction_n, eqn, nf, k_slots, nvalues, residual, values, state, gap, &
-                         normal, traction)
+                         traction_n, lock, eqn, nf, k_slots, nvalues, residual, values, state, &
+                         gap, normal, traction, found)
   end subroutine api_forming_contact
 
   !> Newton iterations of one increment: see forming_increment. Connectivity arrives 0-based.

@@ -37,14 +37,15 @@ contains
 
   !> Global and local search of nnode nodes against one tool (see ddpy_global_search);
   !> projections farther than reach are dropped (huge: no limit).
-  !> tree_child and grid_start arrive 1-based (see above).
+  !> tree_child and grid_start arrive 1-based (see above); held (0-based, -1: search) the
+  !> patch each node is held on.
   !> Outputs: patch (0-based, -1 for none), parameters, closest point (moved with the tool),
   !> unit normal, tangents, signed normal distance, status, Newton iterations, projections.
   subroutine api_contact_search(kind, npatch, stride, coef, degrees, triangle, mode, ntree, &
                                 tree_lower, tree_upper, tree_child, frame, frame_lower, &
                                 frame_upper, ngrid, grid_start, grid_params, grid_normals, &
                                 grid_points, nnode, nodes, node_normals, tool_displacement, &
-                                max_iterations, tol, reach, patch, params, points, &
+                                max_iterations, tol, reach, held, patch, params, points, &
                                 normals, tangents, distance, status, iterations, &
                                 ncandidates) &
     bind(C, name="ddpy_contact_search")
@@ -58,16 +59,19 @@ contains
                                   grid_points(3, ngrid), nodes(3, nnode), &
                                   node_normals(3, nnode), tool_displacement(3)
     integer(c_int), intent(in) :: degrees(2, npatch), triangle(npatch), tree_child(ntree), &
-                                  grid_start(npatch + 1)
+                                  grid_start(npatch + 1), held(nnode)
     integer(c_int), intent(out) :: patch(nnode), status(nnode), iterations(nnode), &
                                    ncandidates(nnode)
     real(c_double), intent(out) :: params(2, nnode), points(3, nnode), normals(3, nnode), &
                                    tangents(3, 2, nnode), distance(nnode)
+    integer, allocatable :: lock(:)
+    allocate(lock(nnode))
+    lock = merge(held + 1, 0, held >= 0 .and. held < npatch)  ! 1-based; 0: search
     call contact_search(kind, npatch, stride, coef, degrees, triangle, mode, ntree, &
                         tree_lower, tree_upper, tree_child, frame, frame_lower, frame_upper, &
                         ngrid, grid_start, grid_params, grid_normals, grid_points, nnode, &
                         nodes, node_normals, tool_displacement, max_iterations, tol, reach, &
-                        patch, params, points, normals, tangents, distance, status, &
+                        lock, patch, params, points, normals, tangents, distance, status, &
                         iterations, ncandidates)
     patch = patch - 1
   end subroutine api_contact_search

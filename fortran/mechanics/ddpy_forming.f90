@@ -77,6 +77,10 @@ contains
   !> (the layout puts a Gauss-point pair's patch entries in its node's equilibrium rows),
   !> and its law rows have dC/dlambda = I alone; the Newton loop sets lambda = F(x) at each
   !> evaluation (forming_increment).
+  !>
+  !> lock(p) > 0 holds node-to-surface pair p on that patch of its tool (ddpy_global_search:
+  !> no search, the patch's plane continued past its edges); found(p) is the patch each
+  !> node-to-surface pair took (0: none, or another kind of contact).
   subroutine forming_contact(nnode, x, x_n, fixed, ntool, table, tol, coef, degrees, &
                              triangle, tree_lower, tree_upper, tree_child, frame, &
                              frame_lower, frame_upper, grid_start, grid_params, &
@@ -84,8 +88,9 @@ contains
                              corner, npoint, face_weight, penalty, &
                              positions, positions_n, reach, size, touching, resting, &
                              npair, tool_first, pair_node, npatch, patch_first, patch_node, &
-                             on, force, r, mu, held, traction_n, eqn, nf, &
-                             k_slots, nvalues, residual, values, state, gap, normal, traction)
+                             on, force, r, mu, held, traction_n, lock, eqn, nf, &
+                             k_slots, nvalues, residual, values, state, gap, normal, traction, &
+                             found)
     integer, intent(in) :: nnode, ntool, nface, npoint, npair, npatch, nf, k_slots, nvalues, &
                            resting
     real(wp), intent(in) :: x(3, nnode), x_n(3, nnode), tol(ntool), coef(*), tree_lower(*), &
@@ -100,9 +105,9 @@ contains
                            face_first(ntool + 1), faces(4, nface), corner(4, nface), &
                            tool_first(ntool + 1), pair_node(npair), &
                            patch_first(npair + 1), patch_node(npatch), &
-                           on(npair), held(3, npair), eqn(3, nnode)
+                           on(npair), held(3, npair), eqn(3, nnode), lock(npair)
     real(wp), intent(inout) :: residual(nf + 3*npair), values(nvalues)
-    integer, intent(out) :: state(npair)
+    integer, intent(out) :: state(npair), found(npair)
     real(wp), intent(out) :: gap(npair), normal(3, npair), traction(3, npoint)
     real(wp), allocatable :: nodes(:, :), node_normals(:, :), params(:, :), points(:, :), &
                              tangents(:, :, :), distance(:), p_aug(:), c(:, :), &
@@ -133,6 +138,7 @@ contains
     state = 0
     status = contact_none
     patch = 0
+    found = 0
     shut = .false.
     p_aug = 0.0_wp
     ! Search each tool that has an active pair.
@@ -157,9 +163,10 @@ contains
       end do
       node_normals = 0.0_wp
       if (table(f_facing, t) /= 0) call facing_normals(t, k, node_normals)
-      call search_tool(t, k, nodes, node_normals, patch(a:b), params(:, a:b), points, &
-                       normal(:, a:b), tangents(:, :, a:b), distance, status(a:b), &
+      call search_tool(t, k, nodes, node_normals, lock(a:b), patch(a:b), params(:, a:b), &
+                       points, normal(:, a:b), tangents(:, :, a:b), distance, status(a:b), &
                        iterations, ncandidates)
+      found(a:b) = patch(a:b)
       do i = 1, k
         if (status(a + i - 1) /= contact_none) gap(a + i - 1) = distance(i)
       end do
@@ -321,7 +328,7 @@ contains
       real(wp), allocatable :: gx(:, :), gn(:, :), gparams(:, :), gpoints(:, :), &
                                gnormal(:, :), gtangents(:, :, :), gdistance(:), gdn(:, :, :), &
                                wsum(:), gsum(:), msum(:, :)
-      integer, allocatable :: gpatch(:), gstatus(:), gits(:), gcand(:)
+      integer, allocatable :: gpatch(:), gstatus(:), gits(:), gcand(:), unlocked(:)
       real(wp) :: basis(4, table(f_order, t)**2), vg(3), w, wn, len_m, keep(3), &
                   m(3), eye(3, 3), proj(3, 3), gpt(3), gd1(3, 2), gd2(3, 3)
       integer :: f, first, nfc, kg, g, q, qq, s, p, e, i, pp, lo, hi, npf, ip
@@ -338,10 +345,11 @@ contains
       if (kg == 0) return
       allocate(gx(3, kg), gn(3, kg), gparams(2, kg), gpoints(3, kg), gnormal(3, kg), &
                gtangents(3, 2, kg), gdistance(kg), gdn(3, 3, kg), gpatch(kg), gstatus(kg), &
-               gits(kg), gcand(kg))
+               gits(kg), gcand(kg), unlocked(kg))
+      unlocked = 0  ! the Gauss points are never held on a patch
       call face_points(t, npf, basis, gx, gn)
-      call search_tool(t, kg, gx, gn, gpatch, gparams, gpoints, gnormal, gtangents, &
-                       gdistance, gstatus, gits, gcand)
+      call search_tool(t, kg, gx, gn, unlocked, gpatch, gparams, gpoints, gnormal, &
+                       gtangents, gdistance, gstatus, gits, gcand)
       ! The derivative of the tool's normal along each point (its curvature).
       gdn = 0.0_wp
       !$omp parallel do schedule(static) private(pp, gpt, gd1, gd2) if(kg > 256)
@@ -431,7 +439,7 @@ contains
       real(wp), allocatable :: gx(:, :), gn(:, :), gparams(:, :), gpoints(:, :), &
                                gnormal(:, :), gtangents(:, :, :), gdistance(:), &
                                wsum(:), gsum(:), msum(:, :)
-      integer, allocatable :: gpatch(:), gstatus(:), gits(:), gcand(:)
+      integer, allocatable :: gpatch(:), gstatus(:), gits(:), gcand(:), unlocked(:)
       real(wp) :: basis(4, table(f_order, t)**2), vg(3), w, gpt(3), gd1(3, 2), &
                   gd2(3, 3), dndx(3, 3), tr(3), tangential(3), dtr(3, 3), mu_t, len_m
       integer :: f, first, nfc, kg, g, q, qq, s, p, e, i, pp, lo, hi, gstate, npf, ip
@@ -448,10 +456,11 @@ contains
       mu_t = mu(lo)
       allocate(gx(3, kg), gn(3, kg), gparams(2, kg), gpoints(3, kg), gnormal(3, kg), &
                gtangents(3, 2, kg), gdistance(kg), gpatch(kg), gstatus(kg), gits(kg), &
-               gcand(kg))
+               gcand(kg), unlocked(kg))
+      unlocked = 0
       call face_points(t, npf, basis, gx, gn)
-      call search_tool(t, kg, gx, gn, gpatch, gparams, gpoints, gnormal, gtangents, &
-                       gdistance, gstatus, gits, gcand)
+      call search_tool(t, kg, gx, gn, unlocked, gpatch, gparams, gpoints, gnormal, &
+                       gtangents, gdistance, gstatus, gits, gcand)
       allocate(wsum(lo:hi), gsum(lo:hi), msum(3, lo:hi))
       wsum = 0.0_wp
       gsum = 0.0_wp
@@ -548,9 +557,9 @@ contains
     end subroutine surface_law
 
     !> Global and local search of the k slaves of tool t.
-    subroutine search_tool(t, k, nodes, node_normals, patch, params, points, normals, &
+    subroutine search_tool(t, k, nodes, node_normals, lock, patch, params, points, normals, &
                            tangents, distance, status, iterations, ncandidates)
-      integer, intent(in) :: t, k
+      integer, intent(in) :: t, k, lock(k)
       real(wp), intent(in) :: nodes(3, k), node_normals(3, k)
       integer, intent(out) :: patch(k), status(k), iterations(k), ncandidates(k)
       real(wp), intent(out) :: params(2, k), points(3, k), normals(3, k), tangents(3, 2, k), &
@@ -569,8 +578,9 @@ contains
                           frame_lower(3*po + 1), frame_upper(3*po + 1), ngrid, &
                           grid_start(po + t), grid_params(2*go + 1), grid_normals(3*go + 1), &
                           grid_points(3*go + 1), k, nodes, node_normals, positions(:, t), &
-                          table(f_iterations, t), tol(t), reach, patch, params, points, &
-                          normals, tangents, distance, status, iterations, ncandidates)
+                          table(f_iterations, t), tol(t), reach, lock, patch, params, &
+                          points, normals, tangents, distance, status, iterations, &
+                          ncandidates)
     end subroutine search_tool
 
     !> Outward normals of the blank at the k slaves of tool t (pairs a..): the sum of the

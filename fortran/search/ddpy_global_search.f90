@@ -56,11 +56,15 @@ contains
   !> whose nearest to a node starts the local search on p. node_normals (zero = no filter)
   !> keep only patches with a grid point whose normal opposes the node's within 60 degrees.
   !> Projections farther than reach (Euclidean distance) are dropped.
+  !> lock(i) > 0 holds node i on that patch: no search, its projection there taken as
+  !> inside, with its signed normal distance (on a facet: the distance to the facet's
+  !> plane, continued past its edges). The Newton loop holds the nodes that keep hopping
+  !> between the two facets of an edge (ddpy_forming_newton, docs/theory/contact.md).
   subroutine contact_search(kind, npatch, stride, coef, degrees, triangle, mode, ntree, &
                             tree_lower, tree_upper, tree_child, frame, frame_lower, &
                             frame_upper, ngrid, grid_start, grid_params, grid_normals, &
                             grid_points, nnode, nodes, node_normals, tool_displacement, &
-                            max_iterations, tol, reach, patch, params, points, normals, &
+                            max_iterations, tol, reach, lock, patch, params, points, normals, &
                             tangents, distance, status, iterations, ncandidates)
     integer, intent(in) :: kind, npatch, stride, mode, ntree, ngrid, nnode, max_iterations
     real(wp), intent(in) :: coef(stride, npatch), tree_lower(3, ntree), tree_upper(3, ntree), &
@@ -69,7 +73,7 @@ contains
                             grid_normals(3, ngrid), grid_points(3, ngrid), nodes(3, nnode), &
                             node_normals(3, nnode), tool_displacement(3), tol, reach
     integer, intent(in) :: degrees(2, npatch), triangle(npatch), tree_child(ntree), &
-                           grid_start(npatch + 1)
+                           grid_start(npatch + 1), lock(nnode)
     integer, intent(out) :: patch(nnode), status(nnode), iterations(nnode), &
                             ncandidates(nnode)
     real(wp), intent(out) :: params(2, nnode), points(3, nnode), normals(3, nnode), &
@@ -107,6 +111,13 @@ contains
       filter = any(node_normals(:, i) /= 0.0_wp)
       iterations(i) = 0
       ncandidates(i) = 0
+      patch(i) = 0; params(:, i) = 0.0_wp; points(:, i) = 0.0_wp; normals(:, i) = 0.0_wp
+      tangents(:, :, i) = 0.0_wp; distance(i) = huge(1.0_wp); status(i) = contact_none
+      if (lock(i) > 0) then
+        call consider(i, x, .false., lock(i), nearest, nearest_inside)
+        if (nearest%patch > 0) call take(i, nearest, nearest%distance, contact_inside)
+        return
+      end if
       if (mode == search_mode_brute) then
         do pp = 1, npatch
           call consider(i, x, filter, pp, nearest, nearest_inside)
@@ -133,8 +144,6 @@ contains
           end if
         end do
       end if
-      patch(i) = 0; params(:, i) = 0.0_wp; points(:, i) = 0.0_wp; normals(:, i) = 0.0_wp
-      tangents(:, :, i) = 0.0_wp; distance(i) = huge(1.0_wp); status(i) = contact_none
       if (nearest_inside%patch > 0) then
         if (nearest_inside%measure <= nearest%measure + tie(nearest%measure)) then
           call take(i, nearest_inside, nearest_inside%distance, contact_inside)

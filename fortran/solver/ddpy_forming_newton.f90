@@ -38,6 +38,11 @@ module ddpy_forming_newton
   !> problem's: the contact law has no potential); the energy line search, a secant on
   !> s(alpha) = du . r(u + alpha du) (a problem with a potential and a symmetric tangent).
   integer, parameter, public :: search_none = 0, search_monotonicity = 1, search_energy = 2
+  !> Pairs are held on their patches after 1/hold_fraction of the iterations
+  !> (forming_increment); the answer's gaps may then differ from the search's by
+  !> hold_depth element sizes.
+  integer, parameter :: hold_fraction = 3
+  real(wp), parameter :: hold_depth = 1.0e-4_wp
   !> What forming_increment returns.
   integer, parameter :: outcome_converged = 0, outcome_landing = 1, outcome_element = 2, &
                         outcome_not_finite = 3, outcome_solver = 4, outcome_stalled = 5
@@ -116,7 +121,7 @@ contains
                                stress(:, :, :), ep(:, :), strain(:, :, :), axes(:, :, :, :), &
                                alpha(:, :), gap(:), normal(:, :), simplified(:), &
                                traction(:, :)
-      integer, allocatable :: state(:)
+      integer, allocatable :: state(:), patch(:)
       logical :: moving  ! some fixed dof short of its prescribed value
       real(wp) :: rest   ! how far short: the norm over the fixed dofs
     end type evaluation
@@ -124,7 +129,7 @@ contains
     real(wp), allocatable :: weight(:), delta(:), du(:, :), dforce(:, :), x_n(:, :), &
                              kdu(:, :), dp(:, :), u_cur(:, :), force_cur(:, :), &
                              alpha_cur(:, :)
-    integer, allocatable :: previous(:)
+    integer, allocatable :: previous(:), lock(:)
     logical, allocatable :: eliminated(:)
     real(wp), allocatable :: coupling(:)
     integer :: tool, pair, comp, entry
@@ -132,8 +137,9 @@ contains
                 forcing, alpha, step_size, du_norm, landing, t_norm, t_scale, t_moved, &
                 alpha_fallback
     integer :: max_iterations, cur, trial, fallback, buffer, iteration, ls, n, status, &
-               element, handle, last_status, last_element
-    logical :: converged, have_previous, have_hint, accepted, t_converged, symmetric, moving
+               element, handle, last_status, last_element, hold_after
+    logical :: converged, have_previous, have_hint, accepted, t_converged, symmetric, &
+               moving, held_on_patches
     integer :: search
     integer(int64) :: clock_rate
 
@@ -143,6 +149,7 @@ contains
     yield_tol = settings(3)
     floor = settings(8)
     max_iterations = isettings(1)
+    hold_after = max(2, max_iterations/hold_fraction)
     handle = isettings(5)
     symmetric = isettings(8) /= 0
     search = isettings(9)
@@ -155,8 +162,10 @@ contains
     outcome = outcome_stalled
     allocate(weight(n), delta(n), du(3, nnode), dforce(3, npair), x_n(3, nnode), &
              kdu(3, nnode), dp(3, nnode), previous(npair), u_cur(3, nnode), &
-             force_cur(3, npair), alpha_cur(shell_modes, ne))
+             force_cur(3, npair), alpha_cur(shell_modes, ne), lock(npair))
     alpha_cur = 0.0_wp
+    lock = 0
+    held_on_patches = .false.
     dp = 0.0_wp
     step_size = 0.0_wp
     weight(1:nf) = 1.0_wp
@@ -183,7 +192,7 @@ contains
                slot(cur)%stress(6, 8, ne), slot(cur)%ep(8, ne), slot(cur)%strain(6, 8, ne), &
                slot(cur)%axes(3, 3, 8, ne), slot(cur)%alpha(shell_modes, ne), &
                slot(cur)%gap(npair), slot(cur)%normal(3, npair), &
-               slot(cur)%simplified(n), slot(cur)%state(npair), &
+               slot(cur)%simplified(n), slot(cur)%state(npair), slot(cur)%patch(npair), &
                slot(cur)%traction(3, npoint))
       slot(cur)%values(k_slots + 1:k_slots + n_coupling) = coupling
     end do
@@ -220,9 +229,35 @@ contains
         outcome = outcome_not_finite
         return
       end if
+      if (converged .and. held_on_patches) then
+        if (.not. held_ok(slot(cur), slot(3 - cur))) then
+          outcome = outcome_stalled
+          detail = [norm/scale, correction/moved]
+          return
+        end if
+      end if
       if (converged) then
         call finish(slot(cur))
         return
+      end if
+      if (iteration == hold_after .and. iteration < max_iterations) then
+        ! Nodes that hop between the facets of an edge keep this increment from
+        ! converging: from here each node-to-surface pair stays on the patch it has
+        ! (docs/theory/contact.md), and the answer is checked against the search.
+        lock = merge(slot(cur)%patch, 0, on /= 0)
+        if (any(lock > 0)) then
+          held_on_patches = .true.
+          call evaluate(slot(cur), 0.0_wp, status, element)
+          if (status /= 0) then
+            outcome = outcome_element
+            info(1:2) = [status, element]
+            return
+          end if
+          call measure(slot(cur), correction, norm, scale, moved, converged)
+          history(1, niter) = norm
+          history(2, niter) = norm/scale
+          history(3, niter) = correction/moved
+        end if
       end if
       if (iteration == max_iterations) then
         outcome = outcome_stalled
@@ -460,8 +495,9 @@ contains
                            facing, face_first, nface, faces, corner, npoint, face_weight, &
                            penalty, positions, positions_n, reach, size, touching_gap, isettings(7), &
                            npair, tool_first, pair_node, npatch, patch_first, patch_node, on, &
-                           s%force, r, mu, held, traction_n, eqn, nf, k_slots, nvalues, &
-                           s%residual, s%values, s%state, s%gap, s%normal, s%traction)
+                           s%force, r, mu, held, traction_n, lock, eqn, nf, k_slots, nvalues, &
+                           s%residual, s%values, s%state, s%gap, s%normal, s%traction, &
+                           s%patch)
       ! A Gauss-point pair's multiplier is eliminated: lambda = F(x), C = 0.
       do p = 1, npair
         if (.not. eliminated(p)) cycle
@@ -577,6 +613,30 @@ contains
       real(wp), intent(in) :: v(n)
       weighted_norm = sqrt(sum((weight*v)**2))
     end function weighted_norm
+
+    !> Whether the iterate s, converged with pairs held on their patches, stands: the
+    !> search (into slot check) puts no pair that is in contact, or inside a tool, farther
+    !> than hold_depth element sizes from where the held patch has it.
+    logical function held_ok(s, check)
+      type(evaluation), intent(in) :: s
+      type(evaluation), intent(inout) :: check
+      integer :: p, status, element
+      check%u = s%u
+      check%force = s%force
+      lock = 0
+      call evaluate(check, 0.0_wp, status, element)
+      held_ok = status == 0
+      do p = 1, npair
+        if (.not. held_ok) exit
+        if (on(p) == 0 .or. s%patch(p) == 0) cycle
+        if (.not. (ieee_is_finite(check%gap(p)) .and. ieee_is_finite(s%gap(p)))) then
+          held_ok = s%state(p) == contact_inactive  ! the search finds it beyond the reach
+          cycle
+        end if
+        if (s%state(p) == contact_inactive .and. .not. check%gap(p) < 0.0_wp) cycle
+        held_ok = abs(check%gap(p) - s%gap(p)) <= hold_depth*size
+      end do
+    end function held_ok
 
     !> The converged iterate s as the answer.
     subroutine finish(s)

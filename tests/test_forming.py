@@ -234,6 +234,34 @@ def test_blank_holder_held_at_a_fixed_gap() -> None:
                     gaps={"holder": ("die", 0.5, (0, 0, 1))})
 
 
+def test_a_lifted_tool_lets_go_of_the_blank_in_steps() -> None:
+    # A block clamped at its side between a die below and a punch above that presses it
+    # 1 um. The next phase lifts the punch off: its forces become nodal loads brought to
+    # zero in RELEASE_STEPS steps before the phase's first increment, whose iterations
+    # they join (lifting it in one go leaves the blank out of balance by the whole force,
+    # which no cut of that increment makes smaller). The block, elastic, comes back.
+    from ddpy.model.forming import RELEASE_STEPS
+
+    mesh = HexMesh.box(1.0, 1.0, 0.5, 2, 2, 1, origin=(-0.5, -0.5, 0.0))
+    top = NagataSurface([[-5, -5, 0.5], [-5, 5, 0.5], [5, 5, 0.5], [5, -5, 0.5]],
+                        [[0, 0, -1]] * 4, [[0, 1, 2, 3]])
+    die = RigidTool("die", plane_tool(), mesh.select(z=0.0), facing=(0, 0, -1))
+    punch = RigidTool("punch", top, mesh.select(z=0.5), facing=(0, 0, 1))
+    problem = FormingProblem(Solid(mesh, ELASTIC), [die, punch])
+    problem.fix(mesh.select(x=-0.5), "xy")
+    pressed = problem.run({"punch": (0, 0, -1e-3)}, max_increment=1e-3)
+    force = pressed.tool_forces["punch"][-1][2]
+    assert force > 1.0  # the block pushes the punch up (the tool's reaction)
+    assert pressed.tool_forces["die"][-1][2] == pytest.approx(-force, rel=1e-9)
+    lifted = problem.run({}, max_increment=1.0, active=["die"])
+    assert len(lifted.factors) == 1
+    # One iteration at least per release step, then the (empty) increment's own.
+    assert len(lifted.residuals[0]) >= RELEASE_STEPS + 1, lifted.residuals
+    assert np.abs(lifted.tool_forces["punch"][-1]).max() == 0.0
+    assert np.abs(lifted.tool_forces["die"][-1]).max() < 1e-6 * abs(force)
+    np.testing.assert_allclose(problem.u[:, 2], 0.0, atol=1e-9)
+
+
 def test_frictionless_cylinder_into_a_plate_gives_the_hertz_pressure() -> None:
     # Plane strain: a rigid cylinder (R 10 mm, Nagata, 64 patches on 80 degrees) pressed
     # 20 um into a 2 x 6 x 4 mm elastic plate (half model, x = 0 symmetry), 0.1 mm

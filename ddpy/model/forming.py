@@ -87,6 +87,9 @@ KRYLOV_KEEP = 8
 #: of its patch: it may be a deep penetration to the law), and that run stopped at 31.7 mm
 #: of its 40 mm first stage (docs/theory/contact.md, "Reach").
 REACH_SIZES, REACH_TRAVELS = 2.0, 4.0
+#: Steps in which the forces of tools lifted at the start of a phase are released (each
+#: halved while it fails, down to RELEASE_SMALLEST of the whole release).
+RELEASE_STEPS, RELEASE_SMALLEST = 4, 1.0 / 1024.0
 
 
 @dataclass(frozen=True)
@@ -392,6 +395,13 @@ class FormingProblem:
                 f"slave node {int(layout.node[worst])} is {depth[worst]:.3g} mm deep, more "
                 f"than the strain limit times the element size ({limits.strain:g} x "
                 f"{self.size:.3g} mm); move the tool out first")
+        # Tools lifted off at the start of the phase let go of the blank gradually, before
+        # the phase's first increment (docs/theory/contact.md): their iterations count as
+        # that increment's.
+        released: tuple[list, list] = ([], [])
+        if resume is None:
+            released = self._release(layout, on, initial, tol_force, tol_disp,
+                                     max_iterations, result)
         while factor < 1.0 - 1e-12:
             if limits.first_touch and reason != "cut":
                 touch = self._touch_factor(layout, on, moves, step, last_du, limits)
@@ -484,6 +494,10 @@ class FormingProblem:
                     redos += 1
                     continue
 
+            if released[0]:
+                residuals = released[0] + list(residuals)
+                relative = released[1] + list(relative)
+                released = ([], [])
             last_du = (u - self.u) / (target - factor)
             normal = gap[1]
             last_dp = np.einsum("ij,ij->i", force - self.force, normal) / (target - factor)
@@ -511,6 +525,54 @@ class FormingProblem:
                     PhaseProgress(start, offsets, factor, step, reason, last_du, last_dp)):
                 break
         return result
+
+    def _release(self, layout: Layout, on: NDArray[np.bool_],
+                 positions: Mapping[str, NDArray[np.float64]], tol_force: float,
+                 tol_disp: float, max_iterations: int, result: FormingResult,
+                 ) -> tuple[list, list]:
+        """Let go of the blank where tools that held it are lifted off (pairs not ``on``
+        that carry a force): their forces become nodal loads, brought to zero in
+        RELEASE_STEPS steps (halved while one fails) with the other tools at
+        ``positions``, as springback does with all of them. Lifting them in one increment
+        leaves the blank out of balance by their whole force, which the first increment
+        of the phase has to absorb whatever its size: a cut cannot help it. Returns every
+        iteration's residual norm and relative residual and correction (none when nothing
+        is lifted)."""
+        lifted = ~on & (np.abs(self.force).sum(axis=1) > 0.0)
+        if not lifted.any():
+            return [], []
+        loads = np.zeros_like(self.u)
+        np.add.at(loads, layout.node[lifted], self.force[lifted])
+        self.force = np.where(lifted[:, None], 0.0, self.force)
+        done, size, spent, relative = 0.0, 1.0 / RELEASE_STEPS, [], []
+        last_du: NDArray[np.float64] | None = None
+        base = self.external.copy()
+        try:
+            while done < 1.0 - 1e-12:
+                target = min(1.0, done + size)
+                self.external = base + loads * (1.0 - target)
+                guess = None if last_du is None else self.u + (target - done) * last_du
+                outcome = self._increment(layout, positions, on, tol_force, tol_disp,
+                                          max_iterations, result,
+                                          touching=_Touching(TOUCHING * self.size, True),
+                                          guess=guess, exact=True)
+                spent += list(outcome.residuals)
+                relative += list(outcome.relative)
+                if outcome.failure:
+                    if size / 2.0 < RELEASE_SMALLEST:
+                        raise FormingError(f"release of the lifted tools at {done:.4g} of "
+                                           f"their force failed: {outcome.failure}", result)
+                    size /= 2.0
+                    continue
+                last_du = (outcome.u - self.u) / (target - done)
+                self.u, self.state, self.force = outcome.u, outcome.state, outcome.force
+                self._gap, self.traction = outcome.gap, outcome.traction
+                self._status = outcome.in_contact
+                done = target
+                size = min(2.0 * size, 1.0 / RELEASE_STEPS)
+        finally:
+            self.external = base
+        return spent, relative
 
     def _gap_offsets(self, gaps: Mapping[str, tuple[str, float, ArrayLike]],
                      moves: Mapping[str, NDArray[np.float64]],

@@ -21,7 +21,8 @@ module ddpy_forming
                           gauss_traction
   implicit none
   private
-  public :: forming_contact, tool_fields, f_surface, rank_of_rows, gauss_legendre
+  public :: forming_contact, tool_fields, f_surface, f_order, f_point, rank_of_rows, &
+            gauss_legendre
 
   !> Columns of a tool's row in the tool table: surface kind, reals per patch, patches,
   !> search mode, local search iterations, offsets (0-based) into the packed coefficient,
@@ -44,6 +45,10 @@ module ddpy_forming
                          corner_eta(4) = [-1.0_wp, -1.0_wp, 1.0_wp, 1.0_wp]
   !> A singular value of the rigid-mode rows above this counts (numpy's matrix_rank tol).
   real(wp), parameter :: rank_tolerance = 1.0e-9_wp
+  !> Pairs and Gauss points held on their patch (forming_contact's found) lie less than
+  !> this many element sizes outside the tool: a held point far from the tool would carry
+  !> the patch's plane continued far past its edges into the averaged gaps of its pairs.
+  real(wp), parameter :: hold_band = 1.0e-2_wp
   !> A touching pair's force is lifted this far past p_aug = 0 (times r and the size).
   real(wp), parameter :: lift_fraction = 1.0e-9_wp
 
@@ -79,8 +84,11 @@ contains
   !> evaluation (forming_increment).
   !>
   !> lock(p) > 0 holds node-to-surface pair p on that patch of its tool (ddpy_global_search:
-  !> no search, the patch's plane continued past its edges); found(p) is the patch each
-  !> node-to-surface pair took (0: none, or another kind of contact).
+  !> no search, the patch's plane continued past its edges), lock(npair + i) Gauss point i
+  !> of a surface-to-surface or Gauss-point tool; found gives the patch each of them took
+  !> where it lies less than hold_band element sizes outside the tool (0 elsewhere: none,
+  !> farther, or not that kind of contact), the ones worth holding; point_gap the signed
+  !> distance of each Gauss point of those tools (huge where it found no patch).
   subroutine forming_contact(nnode, x, x_n, fixed, ntool, table, tol, coef, degrees, &
                              triangle, tree_lower, tree_upper, tree_child, frame, &
                              frame_lower, frame_upper, grid_start, grid_params, &
@@ -90,7 +98,7 @@ contains
                              npair, tool_first, pair_node, npatch, patch_first, patch_node, &
                              on, force, r, mu, held, traction_n, lock, eqn, nf, &
                              k_slots, nvalues, residual, values, state, gap, normal, traction, &
-                             found)
+                             found, point_gap)
     integer, intent(in) :: nnode, ntool, nface, npoint, npair, npatch, nf, k_slots, nvalues, &
                            resting
     real(wp), intent(in) :: x(3, nnode), x_n(3, nnode), tol(ntool), coef(*), tree_lower(*), &
@@ -105,10 +113,11 @@ contains
                            face_first(ntool + 1), faces(4, nface), corner(4, nface), &
                            tool_first(ntool + 1), pair_node(npair), &
                            patch_first(npair + 1), patch_node(npatch), &
-                           on(npair), held(3, npair), eqn(3, nnode), lock(npair)
+                           on(npair), held(3, npair), eqn(3, nnode), lock(npair + npoint)
     real(wp), intent(inout) :: residual(nf + 3*npair), values(nvalues)
-    integer, intent(out) :: state(npair), found(npair)
-    real(wp), intent(out) :: gap(npair), normal(3, npair), traction(3, npoint)
+    integer, intent(out) :: state(npair), found(npair + npoint)
+    real(wp), intent(out) :: gap(npair), normal(3, npair), traction(3, npoint), &
+                             point_gap(npoint)
     real(wp), allocatable :: nodes(:, :), node_normals(:, :), params(:, :), points(:, :), &
                              tangents(:, :, :), distance(:), p_aug(:), c(:, :), &
                              dc_dlambda(:, :, :), dc_dx(:, :, :), slip(:, :), &
@@ -139,6 +148,7 @@ contains
     status = contact_none
     patch = 0
     found = 0
+    point_gap = huge(1.0_wp)
     shut = .false.
     p_aug = 0.0_wp
     ! Search each tool that has an active pair.
@@ -166,7 +176,7 @@ contains
       call search_tool(t, k, nodes, node_normals, lock(a:b), patch(a:b), params(:, a:b), &
                        points, normal(:, a:b), tangents(:, :, a:b), distance, status(a:b), &
                        iterations, ncandidates)
-      found(a:b) = patch(a:b)
+      found(a:b) = merge(patch(a:b), 0, distance < hold_band*size)
       do i = 1, k
         if (status(a + i - 1) /= contact_none) gap(a + i - 1) = distance(i)
       end do
@@ -328,7 +338,7 @@ contains
       real(wp), allocatable :: gx(:, :), gn(:, :), gparams(:, :), gpoints(:, :), &
                                gnormal(:, :), gtangents(:, :, :), gdistance(:), gdn(:, :, :), &
                                wsum(:), gsum(:), msum(:, :)
-      integer, allocatable :: gpatch(:), gstatus(:), gits(:), gcand(:), unlocked(:)
+      integer, allocatable :: gpatch(:), gstatus(:), gits(:), gcand(:)
       real(wp) :: basis(4, table(f_order, t)**2), vg(3), w, wn, len_m, keep(3), &
                   m(3), eye(3, 3), proj(3, 3), gpt(3), gd1(3, 2), gd2(3, 3)
       integer :: f, first, nfc, kg, g, q, qq, s, p, e, i, pp, lo, hi, npf, ip
@@ -345,11 +355,10 @@ contains
       if (kg == 0) return
       allocate(gx(3, kg), gn(3, kg), gparams(2, kg), gpoints(3, kg), gnormal(3, kg), &
                gtangents(3, 2, kg), gdistance(kg), gdn(3, 3, kg), gpatch(kg), gstatus(kg), &
-               gits(kg), gcand(kg), unlocked(kg))
-      unlocked = 0  ! the Gauss points are never held on a patch
+               gits(kg), gcand(kg))
       call face_points(t, npf, basis, gx, gn)
-      call search_tool(t, kg, gx, gn, unlocked, gpatch, gparams, gpoints, gnormal, &
-                       gtangents, gdistance, gstatus, gits, gcand)
+      call search_points(t, kg, gx, gn, gpatch, gparams, gpoints, gnormal, gtangents, &
+                         gdistance, gstatus, gits, gcand)
       ! The derivative of the tool's normal along each point (its curvature).
       gdn = 0.0_wp
       !$omp parallel do schedule(static) private(pp, gpt, gd1, gd2) if(kg > 256)
@@ -439,7 +448,7 @@ contains
       real(wp), allocatable :: gx(:, :), gn(:, :), gparams(:, :), gpoints(:, :), &
                                gnormal(:, :), gtangents(:, :, :), gdistance(:), &
                                wsum(:), gsum(:), msum(:, :)
-      integer, allocatable :: gpatch(:), gstatus(:), gits(:), gcand(:), unlocked(:)
+      integer, allocatable :: gpatch(:), gstatus(:), gits(:), gcand(:)
       real(wp) :: basis(4, table(f_order, t)**2), vg(3), w, gpt(3), gd1(3, 2), &
                   gd2(3, 3), dndx(3, 3), tr(3), tangential(3), dtr(3, 3), mu_t, len_m
       integer :: f, first, nfc, kg, g, q, qq, s, p, e, i, pp, lo, hi, gstate, npf, ip
@@ -456,11 +465,10 @@ contains
       mu_t = mu(lo)
       allocate(gx(3, kg), gn(3, kg), gparams(2, kg), gpoints(3, kg), gnormal(3, kg), &
                gtangents(3, 2, kg), gdistance(kg), gpatch(kg), gstatus(kg), gits(kg), &
-               gcand(kg), unlocked(kg))
-      unlocked = 0
+               gcand(kg))
       call face_points(t, npf, basis, gx, gn)
-      call search_tool(t, kg, gx, gn, unlocked, gpatch, gparams, gpoints, gnormal, &
-                       gtangents, gdistance, gstatus, gits, gcand)
+      call search_points(t, kg, gx, gn, gpatch, gparams, gpoints, gnormal, gtangents, &
+                         gdistance, gstatus, gits, gcand)
       allocate(wsum(lo:hi), gsum(lo:hi), msum(3, lo:hi))
       wsum = 0.0_wp
       gsum = 0.0_wp
@@ -555,6 +563,24 @@ contains
       end do
       !$omp end parallel do
     end subroutine surface_law
+
+    !> search_tool for the kg Gauss points of tool t's faces (at gx, face normals gn), each
+    !> held on its patch where lock says so, the patches taken into found.
+    subroutine search_points(t, kg, gx, gn, gpatch, gparams, gpoints, gnormal, gtangents, &
+                             gdistance, gstatus, gits, gcand)
+      integer, intent(in) :: t, kg
+      real(wp), intent(in) :: gx(3, kg), gn(3, kg)
+      integer, intent(out) :: gpatch(kg), gstatus(kg), gits(kg), gcand(kg)
+      real(wp), intent(out) :: gparams(2, kg), gpoints(3, kg), gnormal(3, kg), &
+                               gtangents(3, 2, kg), gdistance(kg)
+      integer :: first_point
+      first_point = npair + table(f_point, t)
+      call search_tool(t, kg, gx, gn, lock(first_point + 1:first_point + kg), gpatch, &
+                       gparams, gpoints, gnormal, gtangents, gdistance, gstatus, gits, gcand)
+      found(first_point + 1:first_point + kg) = merge(gpatch, 0, gdistance < hold_band*size)
+      point_gap(table(f_point, t) + 1:table(f_point, t) + kg) = &
+        merge(gdistance, huge(1.0_wp), gstatus /= contact_none)
+    end subroutine search_points
 
     !> Global and local search of the k slaves of tool t.
     subroutine search_tool(t, k, nodes, node_normals, lock, patch, params, points, normals, &

@@ -13,7 +13,8 @@ module ddpy_forming_newton
   use ddpy_kinds, only: wp
   use ddpy_material, only: material_prop_count, yield_landing
   use ddpy_solid_assembly, only: solid_assemble, shell_modes
-  use ddpy_forming, only: forming_contact, tool_fields, surface_gauss, f_surface
+  use ddpy_forming, only: forming_contact, tool_fields, surface_gauss, f_surface, f_order, &
+                          f_point
   use ddpy_contact, only: contact_inactive
   use ddpy_linear_solver, only: solver_factorize, solver_solve
   use ddpy_sparse, only: sum_duplicates
@@ -120,7 +121,7 @@ contains
       real(wp), allocatable :: u(:, :), force(:, :), residual(:), values(:), fint(:, :), &
                                stress(:, :, :), ep(:, :), strain(:, :, :), axes(:, :, :, :), &
                                alpha(:, :), gap(:), normal(:, :), simplified(:), &
-                               traction(:, :)
+                               traction(:, :), point_gap(:)
       integer, allocatable :: state(:), patch(:)
       logical :: moving  ! some fixed dof short of its prescribed value
       real(wp) :: rest   ! how far short: the norm over the fixed dofs
@@ -130,7 +131,7 @@ contains
                              kdu(:, :), dp(:, :), u_cur(:, :), force_cur(:, :), &
                              alpha_cur(:, :)
     integer, allocatable :: previous(:), lock(:)
-    logical, allocatable :: eliminated(:)
+    logical, allocatable :: eliminated(:), averaged(:)
     real(wp), allocatable :: coupling(:)
     integer :: tool, pair, comp, entry
     real(wp) :: tol_force, tol_disp, yield_tol, floor, norm, scale, moved, correction, rel, &
@@ -162,7 +163,7 @@ contains
     outcome = outcome_stalled
     allocate(weight(n), delta(n), du(3, nnode), dforce(3, npair), x_n(3, nnode), &
              kdu(3, nnode), dp(3, nnode), previous(npair), u_cur(3, nnode), &
-             force_cur(3, npair), alpha_cur(shell_modes, ne), lock(npair))
+             force_cur(3, npair), alpha_cur(shell_modes, ne), lock(npair + npoint))
     alpha_cur = 0.0_wp
     lock = 0
     held_on_patches = .false.
@@ -172,10 +173,12 @@ contains
     weight(nf + 1:) = reshape(spread(1.0_wp/r, 1, 3), [3*npair])
     ! The pairs of Gauss-point tools, whose multipliers are eliminated (forming_contact):
     ! their coupling entries (node's equilibrium row, multiplier) are 0, the others' -1.
-    allocate(eliminated(npair), coupling(n_coupling))
+    allocate(eliminated(npair), averaged(npair), coupling(n_coupling))
     do tool = 1, ntool
       eliminated(tool_first(tool) + 1:tool_first(tool + 1)) = &
         table(f_surface, tool) == surface_gauss
+      ! Pairs whose gap averages Gauss points' (held_ok checks the points instead).
+      averaged(tool_first(tool) + 1:tool_first(tool + 1)) = table(f_surface, tool) /= 0
     end do
     entry = 0
     do pair = 1, npair
@@ -192,7 +195,8 @@ contains
                slot(cur)%stress(6, 8, ne), slot(cur)%ep(8, ne), slot(cur)%strain(6, 8, ne), &
                slot(cur)%axes(3, 3, 8, ne), slot(cur)%alpha(shell_modes, ne), &
                slot(cur)%gap(npair), slot(cur)%normal(3, npair), &
-               slot(cur)%simplified(n), slot(cur)%state(npair), slot(cur)%patch(npair), &
+               slot(cur)%simplified(n), slot(cur)%state(npair), &
+               slot(cur)%patch(npair + npoint), slot(cur)%point_gap(npoint), &
                slot(cur)%traction(3, npoint))
       slot(cur)%values(k_slots + 1:k_slots + n_coupling) = coupling
     end do
@@ -230,10 +234,16 @@ contains
         return
       end if
       if (converged .and. held_on_patches) then
+        held_on_patches = .false.
         if (.not. held_ok(slot(cur), slot(3 - cur))) then
-          outcome = outcome_stalled
-          detail = [norm/scale, correction/moved]
-          return
+          ! The search disagrees with the held answer: the iterations go on from the same
+          ! iterate without the hold (slot 3 - cur holds its evaluation), and it stands if
+          ! the free equations are already met there.
+          cur = 3 - cur
+          call measure(slot(cur), correction, norm, scale, moved, converged)
+          history(1, niter) = norm
+          history(2, niter) = norm/scale
+          history(3, niter) = correction/moved
         end if
       end if
       if (converged) then
@@ -241,10 +251,11 @@ contains
         return
       end if
       if (iteration == hold_after .and. iteration < max_iterations) then
-        ! Nodes that hop between the facets of an edge keep this increment from
-        ! converging: from here each node-to-surface pair stays on the patch it has
+        ! Nodes (or Gauss points) that hop between the facets of an edge keep this
+        ! increment from converging: from here each stays on the patch it has
         ! (docs/theory/contact.md), and the answer is checked against the search.
-        lock = merge(slot(cur)%patch, 0, on /= 0)
+        lock = slot(cur)%patch
+        lock(1:npair) = merge(lock(1:npair), 0, on /= 0)
         if (any(lock > 0)) then
           held_on_patches = .true.
           call evaluate(slot(cur), 0.0_wp, status, element)
@@ -497,7 +508,7 @@ contains
                            npair, tool_first, pair_node, npatch, patch_first, patch_node, on, &
                            s%force, r, mu, held, traction_n, lock, eqn, nf, k_slots, nvalues, &
                            s%residual, s%values, s%state, s%gap, s%normal, s%traction, &
-                           s%patch)
+                           s%patch, s%point_gap)
       ! A Gauss-point pair's multiplier is eliminated: lambda = F(x), C = 0.
       do p = 1, npair
         if (.not. eliminated(p)) cycle
@@ -614,13 +625,17 @@ contains
       weighted_norm = sqrt(sum((weight*v)**2))
     end function weighted_norm
 
-    !> Whether the iterate s, converged with pairs held on their patches, stands: the
-    !> search (into slot check) puts no pair that is in contact, or inside a tool, farther
-    !> than hold_depth element sizes from where the held patch has it.
+    !> Whether the iterate s, converged with pairs held on their patches, stands against
+    !> the search (into slot check): no node-to-surface pair that is in contact, or inside
+    !> a tool, farther than hold_depth element sizes from where the held patch has it; and
+    !> the Gauss points' normal penalty forces, w_i eps max(0, -g_i), changed by less than
+    !> the force tolerance allows the residual (their gaps one by one: an averaged pair's
+    !> gap mixes its open points' with those that carry its force).
     logical function held_ok(s, check)
       type(evaluation), intent(in) :: s
       type(evaluation), intent(inout) :: check
-      integer :: p, status, element
+      integer :: p, i, t, status, element
+      real(wp) :: change, held_force, free_force
       check%u = s%u
       check%force = s%force
       lock = 0
@@ -628,7 +643,7 @@ contains
       held_ok = status == 0
       do p = 1, npair
         if (.not. held_ok) exit
-        if (on(p) == 0 .or. s%patch(p) == 0) cycle
+        if (on(p) == 0 .or. averaged(p)) cycle
         if (.not. (ieee_is_finite(check%gap(p)) .and. ieee_is_finite(s%gap(p)))) then
           held_ok = s%state(p) == contact_inactive  ! the search finds it beyond the reach
           cycle
@@ -636,6 +651,18 @@ contains
         if (s%state(p) == contact_inactive .and. .not. check%gap(p) < 0.0_wp) cycle
         held_ok = abs(check%gap(p) - s%gap(p)) <= hold_depth*size
       end do
+      if (.not. held_ok) return
+      change = 0.0_wp
+      do t = 1, ntool
+        if (table(f_surface, t) == 0) cycle
+        do i = table(f_point, t) + 1, table(f_point, t) + &
+                                      table(f_order, t)**2*(face_first(t + 1) - face_first(t))
+          held_force = face_weight(i)*penalty(1, t)*max(0.0_wp, -s%point_gap(i))
+          free_force = face_weight(i)*penalty(1, t)*max(0.0_wp, -check%point_gap(i))
+          change = change + (held_force - free_force)**2
+        end do
+      end do
+      held_ok = sqrt(change) <= tol_force*scale
     end function held_ok
 
     !> The converged iterate s as the answer.

@@ -223,11 +223,8 @@ contains
       end if
     end if
     do iteration = 0, max_iterations
-      call measure(slot(cur), correction, norm, scale, moved, converged)
       niter = niter + 1
-      history(1, niter) = norm
-      history(2, niter) = norm/scale
-      history(3, niter) = correction/moved
+      call record(slot(cur))
       history(4, niter) = alpha
       if (.not. ieee_is_finite(norm)) then
         outcome = outcome_not_finite
@@ -240,10 +237,7 @@ contains
           ! iterate without the hold (slot 3 - cur holds its evaluation), and it stands if
           ! the free equations are already met there.
           cur = 3 - cur
-          call measure(slot(cur), correction, norm, scale, moved, converged)
-          history(1, niter) = norm
-          history(2, niter) = norm/scale
-          history(3, niter) = correction/moved
+          call record(slot(cur))
         end if
       end if
       if (converged) then
@@ -264,10 +258,7 @@ contains
             info(1:2) = [status, element]
             return
           end if
-          call measure(slot(cur), correction, norm, scale, moved, converged)
-          history(1, niter) = norm
-          history(2, niter) = norm/scale
-          history(3, niter) = correction/moved
+          call record(slot(cur))
         end if
       end if
       if (iteration == max_iterations) then
@@ -518,6 +509,16 @@ contains
       call system_clock(t2)
       timings(2) = timings(2) + real(t2 - t1, wp)/real(clock_rate, wp)
     end subroutine evaluate
+
+    !> measure for slot s, as this iteration's history (residual, relative residual and
+    !> correction).
+    subroutine record(s)
+      type(evaluation), intent(in) :: s
+      call measure(s, correction, norm, scale, moved, converged)
+      history(1, niter) = norm
+      history(2, niter) = norm/scale
+      history(3, niter) = correction/moved
+    end subroutine record
 
     !> Residual norm, force scale, motion, and whether converged with this correction.
     subroutine measure(s, correction, norm, scale, moved, converged)

@@ -262,6 +262,36 @@ def test_a_lifted_tool_lets_go_of_the_blank_in_steps() -> None:
     np.testing.assert_allclose(problem.u[:, 2], 0.0, atol=1e-9)
 
 
+def faceted_groove(angle_deg: float) -> NagataSurface:
+    """Two facets meeting in a valley along x (y = 0, z = 0), each rising from it by half
+    the angle: a concave facet edge, as the facets around the axis of a faceted die bore
+    are to the cup inside it."""
+    rise = 5.0 * np.tan(np.radians(angle_deg / 2))
+    vertices = [[-10, -5, rise], [10, -5, rise], [10, 0, 0], [-10, 0, 0], [10, 5, rise],
+                [-10, 5, rise]]
+    return NagataSurface(vertices, [[0, 0, 1]] * 6, [[0, 1, 2, 3], [3, 2, 4, 5]],
+                         smooth=False)
+
+
+def test_a_node_hopping_between_two_facets_is_held_on_one() -> None:
+    # A block clamped at its top is pressed 0.05 mm into a groove of two facets 4 degrees
+    # apart (friction 0.1); its middle row of bottom nodes lands on the valley, where
+    # each facet's force pushes the node onto the other one. Without the hold that
+    # increment hops between the facets for 25 iterations and is cut; held on its facet
+    # from iteration 8 (ddpy_forming_newton), it converges in 10, the search agreeing.
+    mesh = HexMesh.box(1.0, 2.0, 0.5, 2, 2, 2, origin=(-0.5, -1.0, 0.2))
+    tool = RigidTool("groove", faceted_groove(4.0), mesh.select(z=0.2), facing=(0, 0, -1),
+                     friction=0.1)
+    problem = FormingProblem(Solid(mesh, ELASTIC), [tool])
+    problem.fix(mesh.select(z=0.7), "xyz")
+    result = problem.run({"groove": (0, 0, 0.25)}, max_increment=0.05)
+    assert result.cuts == 0 and max(result.iterations) <= 12, (result.cuts,
+                                                              result.iterations)
+    # The valley row touches: the groove carries the block's whole push.
+    assert result.contacts["groove"][-1] == 9
+    assert result.tool_forces["groove"][-1][2] < 0.0
+
+
 def test_frictionless_cylinder_into_a_plate_gives_the_hertz_pressure() -> None:
     # Plane strain: a rigid cylinder (R 10 mm, Nagata, 64 patches on 80 degrees) pressed
     # 20 um into a 2 x 6 x 4 mm elastic plate (half model, x = 0 symmetry), 0.1 mm

@@ -43,7 +43,7 @@ def test_force_against_stroke_follows_the_lead_tool(runs: tuple[Path, Path, Path
     # The punch moves down (-z): stroke = -u_z over both forming phases, force = +F_z.
     np.testing.assert_allclose(run.stroke[forming], -punch_z[forming], atol=1e-12)
     np.testing.assert_allclose(run.force[forming], punch_f[forming], atol=1e-9)
-    assert run.stroke[forming][-1] == pytest.approx(2.5)
+    assert run.stroke[forming][-1] == pytest.approx(2.55)
     assert run.force[forming].max() > 0.0
 
 
@@ -58,7 +58,7 @@ def test_post_writes_figures_and_tables(runs: tuple[Path, Path, Path], tmp_path:
         rows = list(csv.DictReader(f))
     run = load_run(full)
     assert len(rows) == len(run.phase)
-    assert float(rows[-5]["stroke_mm"]) == pytest.approx(2.5)
+    assert float(rows[-5]["stroke_mm"]) == pytest.approx(2.55)
     assert {"contact_punch", "contact_die", "contact_holder", "limit"} <= set(rows[0])
     with open(tmp_path / "phases.csv") as f:
         phases = list(csv.DictReader(f))

@@ -26,9 +26,10 @@ from ddpy.io.results import ResultsReader
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def tiny_case(folder: Path, draw: float = 2.0, max_increment: float = 0.2) -> Path:
+def tiny_case(folder: Path, draw: float = 2.05, max_increment: float = 0.2) -> Path:
     """examples/strip_draw with short strokes: three phases, a gap-held holder switched off
-    in the second, output_at, springback in 4 steps."""
+    in the second, output_at, springback in 4 steps. The draw is no multiple of the
+    largest increment, so that its last increment lands on the phase end."""
     shutil.copytree(ROOT / "examples" / "strip_draw", folder)
     control = folder / "control.dat"
     text = control.read_text()
@@ -90,8 +91,8 @@ def test_run_writes_every_phase_and_the_outputs(reference: tuple[Path, Path]) ->
         travel, step = r.curve("travel"), r.curve("step")
         draw = phase == 0
         # Each phase ends at its travel; steps add up to it; max_increment holds.
-        assert travel[draw][-1] == pytest.approx(2.0)
-        assert step[draw].sum() == pytest.approx(2.0)
+        assert travel[draw][-1] == pytest.approx(2.05)
+        assert step[draw].sum() == pytest.approx(2.05)
         assert step[phase == 1].sum() == pytest.approx(0.5)
         assert step.max() <= 0.2 + 1e-12
         # The punch moved down with its travel, pushed back by the blank.
@@ -104,7 +105,7 @@ def test_run_writes_every_phase_and_the_outputs(reference: tuple[Path, Path]) ->
         # Frames at output_at 0.5 and 1, every 10 increments, and every phase end.
         frames = r.frames
         at = {(f.phase, round(f.travel, 9)) for f in frames}
-        assert {(0, 0.5), (0, 1.0), (0, 2.0), (1, 0.5)} <= at
+        assert {(0, 0.5), (0, 1.0), (0, 2.05), (1, 0.5)} <= at
         assert frames[-1].increment == r.n_increments and frames[-1].phase == 2
         limits = r.curve("limit")
         assert 6 in limits  # a phase end landed

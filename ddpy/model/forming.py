@@ -495,8 +495,11 @@ class FormingProblem:
                     continue
 
             if released[0]:
-                residuals = released[0] + list(residuals)
-                relative = released[1] + list(relative)
+                # One history for the release and the increment: each later solve's start
+                # (the residual after the load's change) is left out, so that its
+                # iterations count the corrections of both.
+                residuals = released[0] + list(residuals)[1:]
+                relative = released[1] + list(relative)[1:]
                 released = ([], [])
             last_du = (u - self.u) / (target - factor)
             normal = gap[1]
@@ -535,9 +538,9 @@ class FormingProblem:
         RELEASE_STEPS steps (halved while one fails) with the other tools at
         ``positions``, as springback does with all of them. Lifting them in one increment
         leaves the blank out of balance by their whole force, which the first increment
-        of the phase has to absorb whatever its size: a cut cannot help it. Returns every
-        iteration's residual norm and relative residual and correction (none when nothing
-        is lifted)."""
+        of the phase has to absorb whatever its size: a cut cannot help it. Returns the
+        residual norms and the relative residuals and corrections of the steps' converged
+        iterations (none when nothing is lifted)."""
         lifted = ~on & (np.abs(self.force).sum(axis=1) > 0.0)
         if not lifted.any():
             return [], []
@@ -556,14 +559,16 @@ class FormingProblem:
                                           max_iterations, result,
                                           touching=_Touching(TOUCHING * self.size, True),
                                           guess=guess, exact=True)
-                spent += list(outcome.residuals)
-                relative += list(outcome.relative)
                 if outcome.failure:
                     if size / 2.0 < RELEASE_SMALLEST:
                         raise FormingError(f"release of the lifted tools at {done:.4g} of "
                                            f"their force failed: {outcome.failure}", result)
                     size /= 2.0
                     continue
+                # A later step's start is left out (see run): the corrections count.
+                skip = 1 if spent else 0
+                spent += list(outcome.residuals)[skip:]
+                relative += list(outcome.relative)[skip:]
                 last_du = (outcome.u - self.u) / (target - done)
                 self.u, self.state, self.force = outcome.u, outcome.state, outcome.force
                 self._gap, self.traction = outcome.gap, outcome.traction

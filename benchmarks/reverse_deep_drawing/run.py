@@ -934,11 +934,12 @@ def report(mesh: str, numbers: dict[str, dict[str, Any]],
         "partial, with the fields of its last increment as its end of stage (a run that "
         "failed has no fields after its last end of stage).",
         *(["", "Where a failed faceted run was analysed (the coarse facets on the coarse "
-           "blank), it stopped on a blank node pressed onto a facet edge: there the closest "
-           "point has two normals and the Newton loop no smooth equation. "
+           "blank, at 4b31900), it stopped on a blank node pressed onto a facet edge: there "
+           "the closest point has two normals and the Newton loop no smooth equation. Since "
+           "a8dad5e an increment that has not converged by a third of its iterations holds "
+           "each node on its facet, and that run completes. "
            "[docs/theory/contact.md](../theory/contact.md#a-limit-a-node-on-a-facet-edge) "
-           "gives the numbers and the cures tried; the other faceted stops are not analysed "
-           "yet."]
+           "gives the numbers; a faceted run of an older code that stopped may not stop now."]
           if any(m.startswith("facets") and numbers[m]["status"] != "completed"
                  for m in models) else []),
         "",

@@ -31,9 +31,12 @@ RigidTool = partial(_RigidTool, contact="node")
 ELASTIC = Material(210e3, 0.0, Hill48.von_mises(), Swift(1e7, 0.01, 0.0))
 
 
-def plane_tool() -> NagataSurface:
-    return NagataSurface([[-5, -5, 0], [5, -5, 0], [5, 5, 0], [-5, 5, 0]], [[0, 0, 1]] * 4,
-                         [[0, 1, 2, 3]])
+def plane_tool(height: float = 0.0, up: bool = True) -> NagataSurface:
+    """A 10 x 10 mm plane at z = height facing up (a die) or down (a punch, a holder)."""
+    corners = [[-5, -5, height], [5, -5, height], [5, 5, height], [-5, 5, height]]
+    if not up:
+        corners.reverse()
+    return NagataSurface(corners, [[0, 0, 1 if up else -1]] * 4, [[0, 1, 2, 3]])
 
 
 def block_on_plane(friction: float) -> tuple[FormingProblem, HexMesh]:
@@ -218,8 +221,7 @@ def test_blank_holder_held_at_a_fixed_gap() -> None:
     # (facing down); the holder is set 0.5 mm from the die, i.e. pressing the 0.5 mm block
     # not at all, then follows the die as the die moves.
     mesh = HexMesh.box(1.0, 1.0, 0.5, 2, 2, 1, origin=(-0.5, -0.5, 0.0))
-    holder_surface = NagataSurface([[-5, -5, 2], [-5, 5, 2], [5, 5, 2], [5, -5, 2]],
-                                   [[0, 0, -1]] * 4, [[0, 1, 2, 3]])
+    holder_surface = plane_tool(2.0, up=False)
     die = RigidTool("die", plane_tool(), mesh.select(z=0.0), facing=(0, 0, -1))
     holder = RigidTool("holder", holder_surface, mesh.select(z=0.5), facing=(0, 0, 1))
     problem = FormingProblem(Solid(mesh, ELASTIC), [die, holder])
@@ -243,8 +245,7 @@ def test_a_lifted_tool_lets_go_of_the_blank_in_steps() -> None:
     from ddpy.model.forming import RELEASE_STEPS
 
     mesh = HexMesh.box(1.0, 1.0, 0.5, 2, 2, 1, origin=(-0.5, -0.5, 0.0))
-    top = NagataSurface([[-5, -5, 0.5], [-5, 5, 0.5], [5, 5, 0.5], [5, -5, 0.5]],
-                        [[0, 0, -1]] * 4, [[0, 1, 2, 3]])
+    top = plane_tool(0.5, up=False)
     die = RigidTool("die", plane_tool(), mesh.select(z=0.0), facing=(0, 0, -1))
     punch = RigidTool("punch", top, mesh.select(z=0.5), facing=(0, 0, 1))
     problem = FormingProblem(Solid(mesh, ELASTIC), [die, punch])

@@ -504,9 +504,7 @@ class FormingProblem:
             last_du = (u - self.u) / (target - factor)
             normal = gap[1]
             last_dp = np.einsum("ij,ij->i", force - self.force, normal) / (target - factor)
-            self.u, self.state, self.force, self._gap = u, state, force, gap
-            self.traction = outcome.traction
-            self._status = in_contact
+            self._take(outcome)
             self.position = positions
             result.sizes.append(target - factor)
             result.limited_by.append(reason)
@@ -570,14 +568,18 @@ class FormingProblem:
                 spent += list(outcome.residuals)[skip:]
                 relative += list(outcome.relative)[skip:]
                 last_du = (outcome.u - self.u) / (target - done)
-                self.u, self.state, self.force = outcome.u, outcome.state, outcome.force
-                self._gap, self.traction = outcome.gap, outcome.traction
-                self._status = outcome.in_contact
+                self._take(outcome)
                 done = target
                 size = min(2.0 * size, 1.0 / RELEASE_STEPS)
         finally:
             self.external = base
         return spent, relative
+
+    def _take(self, outcome: Trial) -> None:
+        """A converged increment's state as the problem's."""
+        self.u, self.state, self.force, self._gap = (outcome.u, outcome.state, outcome.force,
+                                                     outcome.gap)
+        self.traction, self._status = outcome.traction, outcome.in_contact
 
     def _gap_offsets(self, gaps: Mapping[str, tuple[str, float, ArrayLike]],
                      moves: Mapping[str, NDArray[np.float64]],

@@ -418,6 +418,29 @@ def test_a_first_increment_whose_default_start_fails_converges_on_the_careful_st
     assert not any(" cut: " in m for m in logged)
 
 
+def test_a_careful_start_may_take_more_iterations_than_the_deck_allows(tmp_path) -> None:
+    # The blank above with max_iterations 12: its careful start needs about twice that
+    # (it opens the die's pairs the blank does not need a few at a time), and it may take
+    # CAREFUL_ITERATIONS times the deck's limit, once per phase (docs/theory/contact.md).
+    # Held to the deck's 12 it is cut at every size.
+    case = tmp_path / "case"
+    shutil.copytree(DEFAULT_CASE, case)
+    (case / "mesh.dat").write_text("normal z\nelement solid-shell\nbox 60 15 1 30 6 2\n")
+    (case / "material.dat").write_text(
+        "elastic E 210000 nu 0.3\nyield vonmises\n"
+        "hardening swift K 645.3 eps0 0.0102 n 0.252\n")
+    control = case / "control.dat"
+    text = re.sub(r"(?m)^max_increment\s+\S+", "max_increment 0.1", control.read_text())
+    control.write_text(re.sub(r"(?m)^max_iterations\s+\S+", "max_iterations 12", text))
+    assert "max_iterations 12" in control.read_text()
+    dd3imp(case)
+    seen = []
+    outcome = run_case(read_case(case), tmp_path / "out", max_increments=1, threads=1,
+                       progress=seen.append)
+    assert outcome.status == "stopped" and len(seen) == 1
+    assert seen[0].limit != "cutback" and 12 < seen[0].iterations <= 48
+
+
 def test_restart_at_a_phase_boundary_is_the_same_run_with_reused_factors(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     # With older factors reused (GMRES on them), a run continued from a checkpoint has none

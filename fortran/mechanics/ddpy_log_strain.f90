@@ -37,7 +37,6 @@ module ddpy_log_strain
     real(wp) :: dyads(6, 6)
   end type hencky_type
 
-  integer, parameter :: voigt(2, 6) = reshape([1, 1, 2, 2, 3, 3, 1, 2, 2, 3, 3, 1], [2, 6])
   !> Relative spread of three eigenvalues below which the second divided difference is taken
   !> from its Taylor series (error ~ spread^4) instead of the difference quotient (rounding
   !> ~ epsilon / spread): both near 1e-13 at 1e-3.

@@ -161,3 +161,17 @@ def test_kept_runs_round_trip_and_figures(tmp_path: Path) -> None:
     figures = run.make_figures(kept, "test", tmp_path)
     for name in figures.values():
         assert (tmp_path / name).stat().st_size > 1000
+
+
+def test_a_run_is_stopped_at_its_time_limit_and_says_where() -> None:
+    # A run longer than a session (the paper's blank) is stopped at --minutes and reported
+    # as far as it got; without a limit the same progress does not stop it.
+    class Progress:
+        increment, phase, travel, phase_travel, step = 7, "stage1", 1.25, 40.0, 0.1
+
+    watch = run.StallWatch("nagata", minutes=0.0)
+    watch.progress(Progress())
+    assert watch.stop() and "time limit of 0 min, at stage1 1.2500 mm" in watch.reason
+    unlimited = run.StallWatch("nagata")
+    unlimited.progress(Progress())
+    assert not unlimited.stop()

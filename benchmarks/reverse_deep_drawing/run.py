@@ -25,6 +25,7 @@ import datetime
 import json
 import platform
 import sys
+import time
 from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
@@ -365,12 +366,15 @@ def _travel_mean(travel: np.ndarray, values: np.ndarray) -> float:
 class StallWatch:
     """Progress callback and stop test of a run: stop when the lead tool has advanced less
     than STALL_MM over the last STALL_INCREMENTS increments, or less than STALL_STEP in
-    one; ``reason`` says where."""
+    one, or after ``minutes`` of wall time (a run that cannot finish within a session);
+    ``reason`` says where."""
 
-    def __init__(self, name: str, verbose: bool = False) -> None:
-        self.name, self.verbose = name, verbose
+    def __init__(self, name: str, verbose: bool = False,
+                 minutes: float | None = None) -> None:
+        self.name, self.verbose, self.minutes = name, verbose, minutes
         self.steps: list[float] = []
         self.reason = ""
+        self.start = time.monotonic()
 
     def progress(self, p: Any) -> None:
         self.steps.append(p.step)
@@ -380,7 +384,10 @@ class StallWatch:
         recent = self.steps[-STALL_INCREMENTS:]
         if self.reason:
             return
-        if len(recent) == STALL_INCREMENTS and sum(recent) < STALL_MM:
+        if self.minutes is not None and time.monotonic() - self.start > 60.0 * self.minutes:
+            self.reason = (f"stopped at the time limit of {self.minutes:g} min, at {p.phase} "
+                           f"{p.travel:.4f} mm")
+        elif len(recent) == STALL_INCREMENTS and sum(recent) < STALL_MM:
             self.reason = (f"stalled: the lead tool advanced {sum(recent):.2g} mm in the "
                            f"last {STALL_INCREMENTS} increments, at {p.phase} "
                            f"{p.travel:.4f} mm")
@@ -400,10 +407,11 @@ def discretization(case: Any) -> str:
 
 
 def run_case_folder(folder: Path, output: Path | None = None, verbose: bool = False,
-                    threads: int | None = None) -> Run:
+                    threads: int | None = None, minutes: float | None = None) -> Run:
     """Run one case folder with the case runner (``ddpy run``) into ``output`` (default:
-    results/<mesh>/<model> next to this script), stopping it if it stalls, and read back
-    what the report needs. A stopped or failed run is read as far as it got."""
+    results/<mesh>/<model> next to this script), stopping it if it stalls or runs longer
+    than ``minutes``, and read back what the report needs. A stopped or failed run is read
+    as far as it got."""
     from ddpy.app.runner import run_case
     from ddpy.io.decks import read_case
 
@@ -412,7 +420,7 @@ def run_case_folder(folder: Path, output: Path | None = None, verbose: bool = Fa
     record: dict[str, Any] = {"code": code_version(),
                               "date": datetime.date.today().isoformat()}
     (output / CODE_FILE).write_text(json.dumps(record))
-    watch = StallWatch(folder.name, verbose)
+    watch = StallWatch(folder.name, verbose, minutes)
     try:
         run_case(read_case(folder), output, overwrite=True, progress=watch.progress,
                  stop=watch.stop, threads=threads)
@@ -1298,6 +1306,9 @@ def main(argv: list[str] | None = None) -> int:
                         "report's runs file (no new run)")
     parser.add_argument("--threads", type=int, default=None,
                         help="OpenMP threads of each run (default: OMP_NUM_THREADS)")
+    parser.add_argument("--minutes", type=float, default=None,
+                        help="stop each run after this wall time and report it as far as "
+                        "it got (the paper's blank: a run longer than a session)")
     args = parser.parse_args(argv)
     from ddpy.core.parallel import max_threads
 
@@ -1322,7 +1333,7 @@ def main(argv: list[str] | None = None) -> int:
         else:
             print(f"running {args.mesh}/{model} ...", file=sys.stderr, flush=True)
             runs[model] = run_case_folder(case_root / model, verbose=True,
-                                          threads=args.threads)
+                                          threads=args.threads, minutes=args.minutes)
             n = runs[model].numbers
             print(f"  {n['status']}, {n['increments']} increments, {n['wall_s']:.0f} s",
                   file=sys.stderr, flush=True)

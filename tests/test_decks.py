@@ -178,6 +178,8 @@ CONTROL_ERRORS = [
     ("max_increment        0.114", "max_increment 0.114\nmin_increment 1",
      "min_increment 1 mm exceeds max_increment 0.114 mm"),
     ("rmin_contact         on", "rmin_contact maybe", "expected rmin_contact among on, off"),
+    ("rmin_contact         on", "rmin_contact on\nrmin_touch sometimes",
+     "expected rmin_touch among new, every"),
     ("rmin_contact         on", "rmin_contact on\nrmin_release 2",
      "rmin_release must lie in [0, 1], got 2"),
     ("rmin_rotation        1.0", "rmin_rotation 120",

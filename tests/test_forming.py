@@ -207,6 +207,39 @@ def test_first_touch_and_strain_limit_set_the_increments() -> None:
     assert steps.max() <= 1.05 * 0.01 / np.sqrt(2.0 / 3.0) * 0.5 / 0.9
 
 
+def test_first_touch_lands_a_new_contact_zone_and_lets_its_front_join_inside() -> None:
+    # A block whose bottom slopes 0.02 mm per mm over its 2 mm: its node rows hang 0.1,
+    # 0.11, ..., 0.14 mm above a plane pushed up by 0.16 mm. Landing every node ends an
+    # increment at each row; "new" lands the first row only (a new contact zone) and lets
+    # the next rows, each next to a row in contact, close inside the increments.
+    def pressed(touch: str):
+        box = HexMesh.box(2.0, 1.0, 0.5, 4, 1, 1, origin=(0.0, -0.5, 0.1))
+        bottom = box.select(z=0.1)
+        nodes = box.nodes.copy()
+        nodes[bottom, 2] += 0.02 * nodes[bottom, 0]
+        mesh = HexMesh(nodes, box.elements)
+        tool = RigidTool("plane", plane_tool(), bottom, facing=(0, 0, -1))
+        problem = FormingProblem(Solid(mesh, ELASTIC), [tool])
+        problem.fix(box.select(z=0.6), "xyz")
+        limits = IncrementLimits(strain=0.5, rotation_deg=90.0, touch=touch)
+        return problem.run({"plane": (0, 0, 0.16)}, max_increment=0.25, limits=limits)
+
+    every, new = pressed("every"), pressed("new")
+    landed = [d[2] for d, why in zip(every.tool_displacements["plane"], every.limited_by,
+                                     strict=True) if why == "touch"]
+    # One landing per row (the later rows a little later than 0.11, 0.12, ...: the pressed
+    # block bends up).
+    assert len(landed) == 5 and landed[0] == pytest.approx(0.1, rel=2e-3)
+    assert np.all(np.diff(landed) > 0.005)
+    assert new.limited_by.count("touch") == 1
+    assert new.tool_displacements["plane"][0][2] == pytest.approx(0.1, rel=2e-3)
+    # The same end: every bottom node in contact, the same force (elastic, frictionless:
+    # path-independent, to the Newton loop's force tolerance).
+    assert new.contacts["plane"][-1] == every.contacts["plane"][-1] == 10
+    assert new.tool_forces["plane"][-1][2] == pytest.approx(
+        every.tool_forces["plane"][-1][2], rel=1e-4)
+
+
 def test_springback_of_an_elastic_block_returns_it() -> None:
     problem, mesh = block_on_plane(0.2)
     problem.run({"plane": (3e-4, 0, 1e-3)}, max_increment=5e-4)

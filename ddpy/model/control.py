@@ -13,6 +13,8 @@ __all__ = ["IncrementLimits", "NewtonSettings", "next_step"]
 #: Most Newton iterations of an increment, and most redos of one at a release: beyond, a
 #: run only spends time (a stalled increment is cut instead).
 MAX_ITERATIONS, MAX_REDOS = 1000, 10**6
+#: Which free nodes first touch lands (IncrementLimits.touch).
+TOUCH_RULES = ("new", "every")
 
 
 @dataclass(frozen=True)
@@ -31,6 +33,12 @@ class IncrementLimits:
       0.01 landed them one by one (docs/input-format.md);
     - ``first_touch`` (``rmin_contact``): a free node that would pass through a tool lands
       on it instead; gaps below ``touch_gap`` times the element size count as touching;
+    - ``touch`` (``rmin_touch``): which free nodes land: ``"new"`` (the default) only a
+      node that opens a new contact zone; a node linked to a node in contact with that
+      tool by a chain of element neighbours that all touch within the increment joins the
+      contact inside it (the semi-smooth Newton closes it), so a contact front advancing
+      over a tool does not end every increment (docs/theory/contact.md, increment
+      control). ``"every"``: every free node, as DD3IMP's r_min;
     - ``release`` (``rmin_contact``): a node in contact at the start of the increment and
       released at its end, whose release (interpolated where its augmented pressure
       p - r g reaches zero) falls before the last ``release`` fraction of the increment,
@@ -50,6 +58,7 @@ class IncrementLimits:
     rotation_deg: float = 1.0
     yield_tolerance: float | None = 0.1
     first_touch: bool = True
+    touch: str = "new"
     touch_gap: float = 1e-3
     release: float | None = 0.05
     release_share: float = 0.1
@@ -64,6 +73,9 @@ class IncrementLimits:
                              f"{self.rotation_deg}")
         if not 0.0 < self.min_fraction <= 1.0 or not self.touch_gap >= 0.0:
             raise ValueError("min_fraction must lie in (0, 1] and touch_gap be >= 0")
+        if self.touch not in TOUCH_RULES:
+            raise ValueError(f"touch must be one of {', '.join(TOUCH_RULES)}, got "
+                             f"{self.touch!r}")
         if not 0.0 <= self.release_share <= 1.0:
             raise ValueError(f"release_share must lie in [0, 1], got {self.release_share}")
         if self.release_redos is not None and not 0 <= self.release_redos <= MAX_REDOS:

@@ -20,6 +20,7 @@ from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
 
 from ddpy import _core
@@ -254,6 +255,8 @@ class FormingProblem:
         self._gauss = np.concatenate([np.full(t.slaves.size, t.contact == "gauss")
                                       for t in self.tools]) if self.tools else np.zeros(0, bool)
         self.mu = np.concatenate([np.full(t.slaves.size, t.friction) for t in self.tools])
+        #: pairs of one tool whose nodes share an element (first touch: a contact's front)
+        self._neighbours = _neighbour_pairs(mesh.elements, self.tools, mesh.n_nodes)
         # State carried between increments and phases.
         self.u = np.zeros((n, 3))
         self.state: SolidState = solid.initial_state()
@@ -720,6 +723,17 @@ class FormingProblem:
         free = on & (self.force @ np.ones(3) == 0.0) & np.isfinite(gap)
         free &= gap > limits.touch_gap * self.size
         hits = free & (approach > gap)
+        if limits.touch == "new" and hits.any():
+            # Nodes linked to the contact by a chain of nodes that all touch within the
+            # increment are its advancing front: the Newton loop closes them inside it
+            # (docs/theory/contact.md); only a new contact zone lands.
+            joined = np.abs(self.force).sum(axis=1) > 0.0
+            while True:
+                front = hits & ~joined & (self._neighbours @ joined.astype(float) > 0.0)
+                if not front.any():
+                    break
+                joined |= front
+            hits &= ~joined
         if not hits.any():
             return 1.0
         # Land just past the surface, so that the node is caught in contact.
@@ -932,6 +946,20 @@ class FormingProblem:
     def close(self) -> None:
         """Free the MUMPS instance."""
         self._reset()
+
+
+def _neighbour_pairs(elements: NDArray[np.int_], tools: list[RigidTool],
+                     n_nodes: int) -> sp.csr_matrix:
+    """Pairs x pairs: 1 where two pairs of the same tool have nodes that share an element
+    (the diagonal left out)."""
+    k = elements.shape[1]
+    rows, cols = np.repeat(elements, k, axis=1).ravel(), np.tile(elements, (1, k)).ravel()
+    nodes = sp.csr_matrix((np.ones(rows.size), (rows, cols)), shape=(n_nodes, n_nodes))
+    blocks = [nodes[t.slaves][:, t.slaves] for t in tools]
+    pairs = sp.block_diag(blocks, format="csr") if blocks else sp.csr_matrix((0, 0))
+    pairs.setdiag(0.0)
+    pairs.eliminate_zeros()
+    return pairs
 
 
 def default_augmentation(solid: Solid) -> float:

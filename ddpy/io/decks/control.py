@@ -22,7 +22,7 @@ from ddpy.io.decks.lines import (
     read_vector,
     show,
 )
-from ddpy.model.control import IncrementLimits, NewtonSettings
+from ddpy.model.control import TOUCH_RULES, IncrementLimits, NewtonSettings
 
 
 def _model_setting(key: str, model: type, name: str,
@@ -60,6 +60,7 @@ _SETTINGS: dict[str, Callable[[str], Any]] = {
     "rmin_rotation": _model_setting("rmin_rotation", IncrementLimits, "rotation_deg",
                                     read_float),
     "rmin_contact": lambda w: read_choice(w, "rmin_contact", ("on", "off")) == "on",
+    "rmin_touch": lambda w: read_choice(w, "rmin_touch", TOUCH_RULES),
     "rmin_release": _model_setting("rmin_release", IncrementLimits, "release_share",
                                    read_float),
     "rmin_release_redos": _model_setting("rmin_release_redos", IncrementLimits,

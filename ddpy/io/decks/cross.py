@@ -144,6 +144,7 @@ class _Cross:
             limits=IncrementLimits(
                 strain=s("rmin_strain", r.strain), rotation_deg=s("rmin_rotation", r.rotation_deg),
                 yield_tolerance=s("rmin_yield", r.yield_tolerance), first_touch=contact,
+                touch=s("rmin_touch", r.touch),
                 release=r.release if contact else None,
                 release_share=s("rmin_release", r.release_share),
                 release_redos=s("rmin_release_redos", r.release_redos)),

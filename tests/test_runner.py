@@ -364,7 +364,8 @@ def test_verbose_run_reports_newton_iterations_and_cuts(tmp_path: Path) -> None:
     cutting = subprocess.run([sys.executable, "-m", "ddpy", "run", str(case), "--output",
                               str(tmp_path / "cutting")], capture_output=True, text=True)
     assert cutting.returncode == 1
-    cuts = [x for x in cutting.stderr.splitlines() if " cut: no convergence in 1 " in x]
+    # (The first increment's careful start may take 4 iterations: its cuts say so.)
+    cuts = [x for x in cutting.stderr.splitlines() if " cut: no convergence in " in x]
     assert len(cuts) >= 3, cutting.stderr
 
 

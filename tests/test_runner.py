@@ -18,7 +18,15 @@ import h5py
 import numpy as np
 import pytest
 
-from ddpy.app.runner import CHECKPOINT, DEFAULT_CASE, RESULTS, RunError, read_status, run_case
+from ddpy.app.runner import (
+    CHECKPOINT,
+    DEFAULT_CASE,
+    RESULTS,
+    Progress,
+    RunError,
+    read_status,
+    run_case,
+)
 from ddpy.io.checkpoint import CheckpointError, read_checkpoint
 from ddpy.io.decks import read_case
 from ddpy.io.results import ResultsReader
@@ -389,6 +397,32 @@ def test_a_fine_blank_lying_on_the_die_converges_in_its_first_increment(tmp_path
     assert seen[0].iterations < 25
 
 
+def first_increment_of_a_solid_shell_blank(tmp_path: Path,
+                                            max_iterations: int | None = None) -> Progress:
+    """The built-in case's tools with DD3IMP's node-to-surface contact and a von Mises
+    blank of 30 x 6 x 2 solid-shells, largest increment 0.1 mm (and ``max_iterations``):
+    the progress of its first increment."""
+    case = tmp_path / "case"
+    shutil.copytree(DEFAULT_CASE, case)
+    (case / "mesh.dat").write_text("normal z\nelement solid-shell\nbox 60 15 1 30 6 2\n")
+    (case / "material.dat").write_text(
+        "elastic E 210000 nu 0.3\nyield vonmises\n"
+        "hardening swift K 645.3 eps0 0.0102 n 0.252\n")
+    control = case / "control.dat"
+    text = re.sub(r"(?m)^max_increment\s+\S+", "max_increment 0.1", control.read_text())
+    if max_iterations is not None:
+        text = re.sub(r"(?m)^max_iterations\s+\S+", f"max_iterations {max_iterations}",
+                      text)
+        assert f"max_iterations {max_iterations}" in text
+    control.write_text(text)
+    dd3imp(case)
+    seen: list[Progress] = []
+    outcome = run_case(read_case(case), tmp_path / "out", max_increments=1, threads=1,
+                       progress=seen.append)
+    assert outcome.status == "stopped" and len(seen) == 1
+    return seen[0]
+
+
 def test_a_first_increment_whose_default_start_fails_converges_on_the_careful_start(
         tmp_path, caplog) -> None:
     # The built-in case's tools, node-to-surface contact, with a von Mises blank of
@@ -399,21 +433,8 @@ def test_a_first_increment_whose_default_start_fails_converges_on_the_careful_st
     # solves, full steps: docs/theory/contact.md) converges at the first size, and the
     # increment is not cut.
     caplog.set_level(logging.INFO, logger="ddpy.model.forming")
-    case = tmp_path / "case"
-    shutil.copytree(DEFAULT_CASE, case)
-    (case / "mesh.dat").write_text("normal z\nelement solid-shell\nbox 60 15 1 30 6 2\n")
-    (case / "material.dat").write_text(
-        "elastic E 210000 nu 0.3\nyield vonmises\n"
-        "hardening swift K 645.3 eps0 0.0102 n 0.252\n")
-    control = case / "control.dat"
-    control.write_text(re.sub(r"(?m)^max_increment\s+\S+", "max_increment 0.1",
-                              control.read_text()))
-    dd3imp(case)
-    seen = []
-    outcome = run_case(read_case(case), tmp_path / "out", max_increments=1, threads=1,
-                       progress=seen.append)
-    assert outcome.status == "stopped" and len(seen) == 1
-    assert seen[0].limit != "cutback" and seen[0].iterations <= 25
+    first = first_increment_of_a_solid_shell_blank(tmp_path)
+    assert first.limit != "cutback" and first.iterations <= 25
     logged = [r.getMessage() for r in caplog.records]
     assert any("starts again" in m for m in logged)      # the default start failed
     assert not any(" cut: " in m for m in logged)
@@ -424,22 +445,8 @@ def test_a_careful_start_may_take_more_iterations_than_the_deck_allows(tmp_path)
     # (it opens the die's pairs the blank does not need a few at a time), and it may take
     # CAREFUL_ITERATIONS times the deck's limit, once per phase (docs/theory/contact.md).
     # Held to the deck's 12 it is cut at every size.
-    case = tmp_path / "case"
-    shutil.copytree(DEFAULT_CASE, case)
-    (case / "mesh.dat").write_text("normal z\nelement solid-shell\nbox 60 15 1 30 6 2\n")
-    (case / "material.dat").write_text(
-        "elastic E 210000 nu 0.3\nyield vonmises\n"
-        "hardening swift K 645.3 eps0 0.0102 n 0.252\n")
-    control = case / "control.dat"
-    text = re.sub(r"(?m)^max_increment\s+\S+", "max_increment 0.1", control.read_text())
-    control.write_text(re.sub(r"(?m)^max_iterations\s+\S+", "max_iterations 12", text))
-    assert "max_iterations 12" in control.read_text()
-    dd3imp(case)
-    seen = []
-    outcome = run_case(read_case(case), tmp_path / "out", max_increments=1, threads=1,
-                       progress=seen.append)
-    assert outcome.status == "stopped" and len(seen) == 1
-    assert seen[0].limit != "cutback" and 12 < seen[0].iterations <= 48
+    first = first_increment_of_a_solid_shell_blank(tmp_path, max_iterations=12)
+    assert first.limit != "cutback" and 12 < first.iterations <= 48
 
 
 def test_restart_at_a_phase_boundary_is_the_same_run_with_reused_factors(

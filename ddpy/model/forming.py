@@ -720,14 +720,15 @@ class FormingProblem:
                                     for t in self.tools])
         node_step = 0.0 if last_du is None else step * last_du[layout.node]
         approach = np.einsum("ij,ij->i", tool_step - node_step, normal)
-        free = on & (self.force @ np.ones(3) == 0.0) & np.isfinite(gap)
+        loaded = np.abs(self.force).sum(axis=1) > 0.0
+        free = on & ~loaded & np.isfinite(gap)
         free &= gap > limits.touch_gap * self.size
         hits = free & (approach > gap)
         if limits.touch == "new" and hits.any():
             # Nodes linked to the contact by a chain of nodes that all touch within the
             # increment are its advancing front: the Newton loop closes them inside it
             # (docs/theory/contact.md); only a new contact zone lands.
-            joined = np.abs(self.force).sum(axis=1) > 0.0
+            joined = loaded.copy()
             while True:
                 front = hits & ~joined & (self._neighbours @ joined.astype(float) > 0.0)
                 if not front.any():

@@ -717,14 +717,16 @@ def test_a_newton_step_stops_where_free_nodes_would_enter_a_tool() -> None:
     assert step(1e6 * down, state) == MIN_STEP
 
 
-def test_a_line_search_that_no_step_passes_takes_the_longest_that_lowered_the_residual(
+def test_nodes_at_a_tools_edge_keep_their_contact_state_through_the_first_increment(
 ) -> None:
     # The first increment of the built-in bending case with DD3IMP's discretization
-    # (hexahedra, node-to-surface contact): the blank starts on the die and the
-    # contact set changes from iteration to iteration, so that the natural monotonicity test
-    # (which sees this iteration's contact set) fails at every step length of some Newton
-    # steps. Those steps take the longest trial that lowered the residual norm, and the
-    # increment still converges; without that fallback they would take the shortest trial.
+    # (hexahedra, node-to-surface contact): the blank's side nodes at y = 0 and 10 lie on
+    # the die's edges, and its Poisson contraction moves them off by rounding-sized
+    # amounts. Their gap there is the normal distance (a seam within 1e-5 of the tool's
+    # size, docs/theory/contact.md): the increment converges as a smooth one, in 6
+    # iterations with no line search that every step length fails. With the Euclidean
+    # distance signed by a normal distance near zero, those nodes flipped between closed
+    # and open: 13 iterations, 2 of them on the line search's fallback.
     from ddpy.app.runner import DEFAULT_CASE, build_problem
     from ddpy.io.decks import read_case
 
@@ -739,10 +741,9 @@ def test_a_line_search_that_no_step_passes_takes_the_longest_that_lowered_the_re
     result = problem.run(motion, phase.max_increment, active=phase.tools,
                          newton=phase.newton, limits=phase.limits,
                          on_increment=lambda progress: True)  # one increment
-    assert len(result.factors) == 1
-    assert result.fallbacks >= 1, result.fallbacks
-    last = result.relative[0][-1]
-    assert last[0] <= phase.newton.force_tolerance
+    assert len(result.factors) == 1 and result.cuts == 0
+    assert result.fallbacks == 0 and result.newton_iterations <= 8
+    assert result.relative[0][-1][0] <= phase.newton.force_tolerance
 
 
 def test_jacobian_of_the_combined_equations_matches_central_differences() -> None:

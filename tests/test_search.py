@@ -158,6 +158,31 @@ def test_plane_edges_and_corners_are_inside() -> None:
     np.testing.assert_allclose(far.point[0], [4.0, 2.0, 0.0], atol=1e-12)
 
 
+def test_a_node_in_the_sliver_between_two_patches_that_miss_each_other_lies_on_the_seam() -> None:
+    # Two flat patches (z = 0) whose edges miss each other by 4e-4 mm, as Bezier patches
+    # fitted to two CAD faces one by one may (the fit's tolerance is 1e-3 mm): a node in
+    # the sliver gets its normal distance, continuous with the patches on both sides, not
+    # the sliver's half width signed by a normal distance near zero.
+    width = 4.0e-4
+
+    def flat(x0: float, x1: float) -> np.ndarray:
+        return np.array([[[x0, 0.0, 0.0], [x0, 50.0, 0.0]], [[x1, 0.0, 0.0], [x1, 50.0, 0.0]]])
+
+    search = ContactSearch(BezierSurface([flat(0.0, 50.0), flat(50.0 + width, 100.0)]))
+    across = np.linspace(50.0 - 2 * width, 50.0 + 3 * width, 41)
+    for z in (0.0, 1.0e-5, -3.0e-5, 2.0e-3):
+        found = search.project(np.column_stack([across, np.full(41, 25.0), np.full(41, z)]))
+        np.testing.assert_allclose(found.distance, z, atol=1e-12)
+        sliver = (across > 50.0 + 1e-6) & (across < 50.0 + width - 1e-6)
+        beside = (across < 50.0 - 1e-6) | (across > 50.0 + width + 1e-6)
+        assert (found.status[sliver] == EDGE).all() and (found.status[beside] == INSIDE).all()
+    # Beyond the tool's own edge the distance stays the Euclidean one.
+    off = search.project([[100.5, 25.0, 0.3], [-0.2, 25.0, -0.1]])
+    assert off.status.tolist() == [EDGE, EDGE]
+    np.testing.assert_allclose(off.distance, [np.hypot(0.5, 0.3), -np.hypot(0.2, 0.1)],
+                               atol=1e-12)
+
+
 def test_convex_crease_between_two_faces() -> None:
     # Two planes meeting at a convex 90 degree crease along the y axis (x = 0, z = 0):
     # the top z = 0 for x <= 0 and the side x = 0 for z <= 0, with per-face normals.

@@ -62,7 +62,9 @@ class Projection:
     normal: NDArray[np.float64]  #: (k, 3) unit outward normal there
     tangents: NDArray[np.float64]  #: (k, 2, 3) S_,1 and S_,2 there
     #: (k,) signed normal distance, negative = penetration; at an EDGE point the Euclidean
-    #: distance signed by the side of the patch normal
+    #: distance signed by the side of the patch normal, unless the point lies beside the
+    #: edge in the patch's tangent plane within 1e-5 of the tool's size (a seam between
+    #: patches that miss each other by a fit's tolerance): then the normal distance
     distance: NDArray[np.float64]
     status: NDArray[np.int32]  #: NONE, INSIDE or EDGE
     iterations: NDArray[np.int32]  #: Newton iterations spent on the node (all candidates)

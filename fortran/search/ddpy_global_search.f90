@@ -31,6 +31,14 @@ module ddpy_global_search
   !> diagonal of the tool's box and d the distance, are a tie (rounding: the same point of
   !> an edge seen from the two patches that share it).
   real(wp), parameter :: tie_tolerance = 1.0e-12_wp
+  !> A node beside a patch edge, within seam_tolerance L of it in the patch's tangent
+  !> plane, lies on a seam: Bezier patches fitted to CAD faces one by one meet only within
+  !> the fit's tolerance (1e-3 mm by default, about 1e-5 of a forming tool's size), and a
+  !> node on the surface may fall in the sliver between two patch edges. Its gap is the
+  !> normal distance there, continuous with the inside projections on both sides; the
+  !> Euclidean distance, signed by a normal distance near zero, would put it +-the
+  !> sliver's width off the tool and flip with rounding (docs/theory/contact.md, "Seams").
+  real(wp), parameter :: seam_tolerance = 1.0e-5_wp
   !> The facing filter keeps the tool points whose normal is within 60 degrees of opposing
   !> the node's: a contact partner's normal opposes it up to the blank's discretization
   !> (about 16 degrees for 4 mm elements on a 7 mm punch nose). A bound at 90 degrees let a
@@ -150,8 +158,13 @@ contains
           return
         end if
       end if
-      if (nearest%patch > 0) call take(i, nearest, sign(nearest%measure, nearest%distance), &
-                                       contact_edge)
+      if (nearest%patch > 0) then
+        if (nearest%measure**2 - nearest%distance**2 <= (seam_tolerance*tool_size)**2) then
+          call take(i, nearest, nearest%distance, contact_edge)
+        else
+          call take(i, nearest, sign(nearest%measure, nearest%distance), contact_edge)
+        end if
+      end if
     end subroutine search_node
 
     !> Distances within tie(d) of d are equal.

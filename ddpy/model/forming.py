@@ -71,14 +71,15 @@ CAREFUL_ITERATIONS = 4
 REUSE_FROM = 20_000
 #: GMRES on the older factors: bounds of its relative tolerance (of the preconditioned,
 #: weighted residual: the correction's relative error; see _increment), the iterations
-#: before it gives up (a factorization costs about 14 on the paper's bending blank), and
-#: the most after which the same factors are tried again.
+#: before it gives up (a factorization costs about 14 on the paper's bending blank, 15 on
+#: the deep drawing's: docs/theory/speed.md), and the most after which the same factors
+#: are tried again.
 KRYLOV_LOOSE, KRYLOV_TIGHT = 1e-2, 1e-10
 KRYLOV_MAX = 12
+KRYLOV_KEEP = 8
 #: Deepest a free node may be pushed into a tool by one Newton step, in element sizes, and
 #: the shortest step that limit may leave (penetration_step of the core's Newton loop).
 PENETRATION, MIN_STEP = 0.02, 1.0 / 64.0
-KRYLOV_KEEP = 8
 #: Reach of the contact search of a forming run: a slave node whose nearest admissible
 #: point of a tool (the facing filter applied) lies farther than
 #: max(REACH_SIZES x element size, REACH_TRAVELS x the leading tool's largest travel of an

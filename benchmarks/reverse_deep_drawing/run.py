@@ -1253,8 +1253,8 @@ def findings(numbers: dict[str, dict[str, Any]], models: list[str]) -> list[str]
                        + (f" ({n['stopped']})" if n["stopped"] else
                           f" ({n['run_status']})") + "." + ("" if not last else
                        f" Of its last {last['increments']} increments, "
-                       f"{last.get('cut_increments', '?')} were cut ({last['cuts']} cuts in "
-                       f"all), down to {last['smallest_mm']:.2g} mm of punch travel, each "
+                       f"{last.get('cut_increments', '?')} were cut ({last['cuts']} cuts among "
+                       f"them), down to {last['smallest_mm']:.2g} mm of punch travel, each "
                        f"converging in at most {last['most_iterations']} iteration(s) once "
                        "cut" + (": the trials failed at every size tried, and the run could "
                                 "not pass this point." if last.get("cut_increments")

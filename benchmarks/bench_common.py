@@ -1,11 +1,13 @@
 """What the benchmark scripts share: loading a sibling script as a module, the code version
-a run records (and reading it back), the cores, the kept-runs file and a markdown table row.
+a run records (read back, and kept when a run is continued), the cores, the kept-runs file
+and a markdown table row.
 
 A script puts this folder on ``sys.path`` and imports it; tests do the same to load a
 benchmark's scripts (``load_module``)."""
 
 from __future__ import annotations
 
+import datetime
 import importlib.util
 import json
 import os
@@ -18,7 +20,7 @@ from typing import Any
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs" / "benchmarks"
 #: Written next to a run's results by a benchmark's run_case_folder: its code version and
-#: date (and why a run was stopped).
+#: date, the dates it was continued on (and why a run was stopped).
 CODE_FILE = "code.json"
 #: What makes a run's numbers: a change elsewhere (the reports in docs/) leaves them.
 CODE_PATHS = ("ddpy", "fortran", "meson.build", "pyproject.toml", "benchmarks")
@@ -79,6 +81,24 @@ def recorded_code(folder: Path) -> dict[str, Any]:
         return json.loads((folder / CODE_FILE).read_text())
     except (OSError, ValueError):
         return {}
+
+
+def record_code(output: Path, code: str, restart: bool, **settings: Any) -> dict[str, Any]:
+    """Write the code version and date of the run in ``output`` next to its results, with
+    the deck ``settings`` the report states. A run continued from its checkpoint
+    (``restart``) keeps the date it started and adds today's to "continued"; with other
+    code its code reads "<first>, continued at <code>"."""
+    output.mkdir(parents=True, exist_ok=True)
+    earlier = recorded_code(output) if restart else {}
+    if earlier.get("code"):
+        code = earlier["code"] if earlier["code"].endswith(code) else \
+            f"{earlier['code']}, continued at {code}"
+    today = datetime.date.today().isoformat()
+    record = {"code": code, "date": earlier.get("date", today), **settings}
+    if restart:
+        record["continued"] = [*earlier.get("continued", []), today]
+    (output / CODE_FILE).write_text(json.dumps(record))
+    return record
 
 
 def runs_file(stem: str) -> Path:

@@ -213,11 +213,15 @@ def test_a_kept_run_reports_the_numbers_it_was_kept_with(tmp_path: Path) -> None
 def test_a_continued_run_keeps_the_code_it_started_with(tmp_path: Path) -> None:
     bench = _module("run")
     first = bench.record_code(tmp_path, "abc1234", restart=False)
-    assert bench.record_code(tmp_path, "abc1234", restart=True) == first
+    today = first["date"]
+    assert bench.record_code(tmp_path, "abc1234", restart=True) == {**first,
+                                                                   "continued": [today]}
     again = bench.record_code(tmp_path, "def5678", restart=True)
-    assert again == {"code": "abc1234, continued at def5678", "date": first["date"]}
-    assert bench.record_code(tmp_path, "def5678", restart=True) == again
-    assert bench.record_code(tmp_path, "0123abc", restart=False)["code"] == "0123abc"
+    assert again == {"code": "abc1234, continued at def5678", "date": first["date"],
+                     "continued": [today, today]}
+    assert bench.record_code(tmp_path, "def5678", restart=True)["code"] == again["code"]
+    assert bench.record_code(tmp_path, "0123abc", restart=False) == {"code": "0123abc",
+                                                                    "date": today}
 
 
 def test_the_release_effort_finding_counts_the_redone_work() -> None:

@@ -175,3 +175,27 @@ def test_a_run_is_stopped_at_its_time_limit_and_says_where() -> None:
     unlimited = run.StallWatch("nagata")
     unlimited.progress(Progress())
     assert not unlimited.stop()
+
+
+def test_a_run_stopped_at_its_time_limit_continues_from_its_checkpoint(tmp_path: Path) -> None:
+    # The paper's blank runs longer than a session: --restart continues it, and the report
+    # says so. Each leg here stops after its first increment (a limit of 0 minutes).
+    import datetime
+
+    from ddpy.app.runner import BUILT_IN_CASES
+
+    case = BUILT_IN_CASES["deep-drawing"]
+    first = run.run_case_folder(case, tmp_path, minutes=0.0)
+    assert first.numbers["increments"] == 1 and first.numbers["continued"] == []
+    assert "time limit of 0 min" in first.numbers["stopped"]
+    again = run.run_case_folder(case, tmp_path, minutes=0.0, restart=True)
+    n = again.numbers
+    assert n["increments"] == 2 and n["status"] == "partial"
+    assert n["continued"] == [datetime.date.today().isoformat()]
+    assert n["code"] == first.numbers["code"] and n["date"] == first.numbers["date"]
+    # The second increment starts where the first ended: the punch went on.
+    travel = again.curves["stage1"]["travel"]
+    assert travel[1] > travel[0] == first.curves["stage1"]["travel"][0]
+    lines = run.report("coarse", {"nagata": n}, SHAPE, {"nagata": "map.png"}, FIGURES, 1,
+                       "abc").splitlines()
+    assert any(line.startswith("| continued from its checkpoint on |") for line in lines)

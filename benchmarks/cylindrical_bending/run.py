@@ -22,7 +22,6 @@ made each).
 from __future__ import annotations
 
 import argparse
-import datetime
 import json
 import platform
 import sys
@@ -38,12 +37,12 @@ from ddpy.studies.bending import contact_angle, force_oscillation, line_angle
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))  # the benchmarks' shared module
 from bench_common import (  # noqa: E402
-    CODE_FILE,
     DOCS,
     code_version,
     computed_at,
     cores,
     load_module,
+    record_code,
     recorded_code,
     runs_file,
 )
@@ -267,21 +266,6 @@ def kept_runs(path: Path) -> dict[str, Run]:
             date=numbers.get("date", ""), release_redos=numbers.get("release_redos"),
             kept=numbers)
     return runs
-
-
-def record_code(output: Path, code: str, restart: bool, **settings: Any) -> dict[str, Any]:
-    """Write the code version and date of the run in ``output`` next to its results, with
-    the deck ``settings`` the report states. A run continued (``restart``) with other code
-    keeps its history: "<first>, continued at <code>", and the date it started."""
-    output.mkdir(parents=True, exist_ok=True)
-    earlier = recorded_code(output) if restart else {}
-    if earlier.get("code"):
-        code = earlier["code"] if earlier["code"].endswith(code) else \
-            f"{earlier['code']}, continued at {code}"
-    record = {"code": code, "date": earlier.get("date", datetime.date.today().isoformat()),
-              **settings}
-    (output / CODE_FILE).write_text(json.dumps(record))
-    return record
 
 
 def run_case_folder(folder: Path, output: Path | None = None, verbose: bool = False,

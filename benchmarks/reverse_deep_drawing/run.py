@@ -8,6 +8,7 @@ meshes) with its figures, next to the paper's values.
     python benchmarks/reverse_deep_drawing/run.py --models nagata    # one model
     python benchmarks/reverse_deep_drawing/run.py --json             # print the numbers only
     python benchmarks/reverse_deep_drawing/run.py --reuse            # report from saved runs
+    python benchmarks/reverse_deep_drawing/run.py --mesh paper --restart   # continue them
 
 The cases are written first by make_case.py (tools, meshes, decks) when missing; each case
 runs through the case runner (``ddpy run``) into results/<mesh>/<model>/ (git-ignored), which
@@ -21,7 +22,6 @@ takes a model without results/ from there.
 from __future__ import annotations
 
 import argparse
-import datetime
 import json
 import platform
 import sys
@@ -53,6 +53,7 @@ from bench_common import (  # noqa: E402
     computed_at,
     cores,
     load_module,
+    record_code,
     recorded_code,
     runs_file,
 )
@@ -332,6 +333,7 @@ def from_results(path: Path, case_folder: Path) -> Run:
         "run_status": status + (f": {message}" if message else ""), "stopped": stopped,
         "reached": {"stage": reached, "travel_mm": stages[reached]["reached_mm"]},
         "code": record.get("code", ""), "date": record.get("date", ""), "threads": threads,
+        "continued": list(record.get("continued", [])),
         "increments": sum(s["increments"] for s in stages.values()),
         "iterations": iterations,
         "wall_s": round(sum(s["wall_s"] for s in stages.values()), 1),
@@ -407,23 +409,22 @@ def discretization(case: Any) -> str:
 
 
 def run_case_folder(folder: Path, output: Path | None = None, verbose: bool = False,
-                    threads: int | None = None, minutes: float | None = None) -> Run:
+                    threads: int | None = None, minutes: float | None = None,
+                    restart: bool = False) -> Run:
     """Run one case folder with the case runner (``ddpy run``) into ``output`` (default:
     results/<mesh>/<model> next to this script), stopping it if it stalls or runs longer
     than ``minutes``, and read back what the report needs. A stopped or failed run is read
-    as far as it got."""
+    as far as it got. ``restart`` continues the run saved there from its last checkpoint
+    (``minutes`` then counts from the restart)."""
     from ddpy.app.runner import run_case
     from ddpy.io.decks import read_case
 
     output = output or HERE / "results" / folder.parent.name / folder.name
-    output.mkdir(parents=True, exist_ok=True)
-    record: dict[str, Any] = {"code": code_version(),
-                              "date": datetime.date.today().isoformat()}
-    (output / CODE_FILE).write_text(json.dumps(record))
+    record = record_code(output, code_version(), restart)
     watch = StallWatch(folder.name, verbose, minutes)
     try:
-        run_case(read_case(folder), output, overwrite=True, progress=watch.progress,
-                 stop=watch.stop, threads=threads)
+        run_case(read_case(folder), output, overwrite=not restart, restart=restart,
+                 progress=watch.progress, stop=watch.stop, threads=threads)
     except Exception as error:  # kept as a partial run, with the reason
         watch.reason = f"failed: {type(error).__name__}: {error}"
     if watch.reason:
@@ -936,6 +937,9 @@ def report(mesh: str, numbers: dict[str, dict[str, Any]],
         _row(["threads", *[numbers[m]["threads"] or "?" for m in models]]),
         _row(["code, date", *[f"{numbers[m]['code'] or '?'}, {numbers[m]['date'] or '?'}"
                               for m in models]]),
+        *([_row(["continued from its checkpoint on",
+                 *[", ".join(numbers[m].get("continued", [])) or "-" for m in models]])]
+          if any(numbers[m].get("continued") for m in models) else []),
         "",
         f"A run whose punch advances less than {STALL_MM:g} mm over {STALL_INCREMENTS} "
         f"increments, or less than {STALL_STEP:g} mm in one, is stopped and reported as "
@@ -1306,10 +1310,15 @@ def main(argv: list[str] | None = None) -> int:
                         "report's runs file (no new run)")
     parser.add_argument("--threads", type=int, default=None,
                         help="OpenMP threads of each run (default: OMP_NUM_THREADS)")
+    parser.add_argument("--restart", action="store_true",
+                        help="continue the runs saved in results/ from their checkpoints "
+                        "(a run stopped at --minutes or cut off; a completed one is read "
+                        "back)")
     parser.add_argument("--minutes", type=float, default=None,
                         help="stop each run after this wall time and report it as far as "
                         "it got (the paper's blank: a run longer than a session)")
     args = parser.parse_args(argv)
+    from ddpy.app.runner import read_status
     from ddpy.core.parallel import max_threads
 
     models = [m.strip() for m in args.models.split(",") if m.strip()]
@@ -1330,10 +1339,16 @@ def main(argv: list[str] | None = None) -> int:
             runs[model] = kept[model]
         elif args.reuse:
             print(f"no saved run of {args.mesh}/{model}", file=sys.stderr)
+        elif args.restart and saved.exists() and \
+                read_status(saved.parent).get("status") == "completed":
+            runs[model] = from_results(saved, case_root / model)
         else:
-            print(f"running {args.mesh}/{model} ...", file=sys.stderr, flush=True)
+            restart = args.restart and saved.exists()
+            print(f"{'continuing' if restart else 'running'} {args.mesh}/{model} ...",
+                  file=sys.stderr, flush=True)
             runs[model] = run_case_folder(case_root / model, verbose=True,
-                                          threads=args.threads, minutes=args.minutes)
+                                          threads=args.threads, minutes=args.minutes,
+                                          restart=restart)
             n = runs[model].numbers
             print(f"  {n['status']}, {n['increments']} increments, {n['wall_s']:.0f} s",
                   file=sys.stderr, flush=True)

@@ -116,6 +116,29 @@ def test_a_partial_run_leaves_its_claims_not_checked() -> None:
         in found["(d)"][1]
 
 
+def test_partial_runs_compare_their_effort_over_the_travel_they_all_reached() -> None:
+    # The paper's blank: the facet runs stop within stage 1. Claim (d) stays not checked,
+    # and compares the counts up to the last whole mm that all three runs reached (7 mm
+    # here): the facets' increments and iterations there over Nagata's.
+    numbers = {m: synthetic_run(m, partial=m.startswith("facets")).numbers
+               for m in run.MODELS}
+    mm = np.arange(1, 41)
+    by_mm = {"nagata": (10 * mm, 40 * mm), "facets_coarse": (25 * mm[:7], 90 * mm[:7]),
+             "facets_fine": (19 * mm[:8], 65 * mm[:8])}
+    for m, (increments, iterations) in by_mm.items():
+        numbers[m]["stages"]["stage1"]["by_mm"] = {"increments": increments.tolist(),
+                                                   "iterations": iterations.tolist()}
+    found = {text[:3]: (verdict, detail) for text, verdict, detail in run.claims(numbers)}
+    assert found["(d)"][0] == "not checked"
+    assert ("over the first 7 mm of stage1, which all three runs reached, the ratios to "
+            "Nagata: Faceted-coarse increments 2.50, Faceted-coarse iterations 2.25, "
+            "Faceted-fine increments 1.90, Faceted-fine iterations 1.62 (within 1.5-2.5: "
+            "yes; Nagata 70 increments and 280 iterations there)") in found["(d)"][1]
+    numbers["facets_fine"]["stages"]["stage1"]["by_mm"]["increments"][6] = 300
+    found = {text[:3]: detail for text, _, detail in run.claims(numbers)}
+    assert "Faceted-fine increments 4.29" in found["(d)"] and "2.5: no;" in found["(d)"]
+
+
 def test_a_partial_bezier_run_leaves_the_claims_that_need_it() -> None:
     # Nagata stands for the smooth models in (a); (b) and (c) need Bezier; (d) does not.
     numbers = {m: synthetic_run(m, partial=m == "bezier").numbers for m in run.MODELS}

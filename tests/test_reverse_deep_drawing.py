@@ -121,7 +121,7 @@ def numbers(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     out = tmp_path_factory.mktemp("deep_drawing")
     outcome = run_case(read_case(CASE), out)
     return {"status": outcome.status, "message": outcome.message,
-            **read_numbers(outcome.results)}
+            "results": outcome.results, **read_numbers(outcome.results)}
 
 
 @pytest.fixture(scope="module")
@@ -293,3 +293,26 @@ def write_reference(results: Path | None = None) -> None:
 
 if __name__ == "__main__":
     write_reference(Path(sys.argv[1]) if len(sys.argv) > 1 else None)
+
+
+def test_the_report_counts_the_effort_up_to_each_mm_of_travel(numbers: dict[str, Any]) -> None:
+    # The benchmark's report compares runs that stopped over the travel they all reached
+    # (claim (d) on the paper's blank): its counts up to each whole mm of punch travel
+    # must be those of the increments that ended there.
+    report = load_module(BENCH / "run.py", "drawing_run")
+    run = report.from_results(Path(numbers["results"]), CASE).numbers
+    with ResultsReader(numbers["results"]) as r:
+        history = r.history()
+    for p, name in enumerate(report.STAGES):
+        stage, mask = run["stages"][name], history["phase"] == p
+        travel, iterations = history["travel"][mask], history["iterations"][mask]
+        by_mm = stage["by_mm"]
+        assert len(by_mm["increments"]) == math.floor(stage["travel_mm"] + 1e-9)
+        for mm, (count, its) in enumerate(zip(by_mm["increments"], by_mm["iterations"],
+                                              strict=True), start=1):
+            ended = travel <= mm + 1e-9
+            assert count == ended.sum() and its == iterations[ended].sum(), (name, mm)
+    # Stage 1 ends at a whole mm (40): its last count is the stage's.
+    first = run["stages"]["stage1"]
+    assert first["by_mm"]["increments"][-1] == first["increments"]
+    assert first["by_mm"]["iterations"][-1] == first["iterations"]

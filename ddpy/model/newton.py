@@ -245,8 +245,10 @@ class Loop:
     iterations, the force scale's floor (N), the yield landing's tolerance (None: off),
     the penetration limit (element sizes) and the shortest step it may leave, the linear
     solver (reuse of older factors by GMRES: its tolerance bounds, iterations at most and
-    after which the next correction factorizes), the line search (SEARCH_*), and the
-    touching predictor's gap and resting flag."""
+    after which the next correction factorizes), the line search (SEARCH_*) with the
+    residual ratio under which a whole step that changed contact states stands although
+    it fails the monotonicity test (0: off), and the touching predictor's gap and resting
+    flag."""
 
     force_tolerance: float
     displacement_tolerance: float
@@ -261,6 +263,7 @@ class Loop:
     krylov_max: int = 12
     krylov_keep: int = 8
     search: int = SEARCH_MONOTONICITY
+    whole_step: float = 0.0
     touching: float = 0.0
     resting: bool = True
 
@@ -330,7 +333,7 @@ def increment(solid: Solid, layout: Layout, factors: Factors, state: SolidState,
     settings = np.array([loop.force_tolerance, loop.displacement_tolerance,
                          -1.0 if loop.yield_tolerance is None else loop.yield_tolerance,
                          loop.penetration, loop.min_step, loop.krylov_loose, loop.krylov_tight,
-                         loop.floor])
+                         loop.floor, loop.whole_step])
     isettings = np.array([loop.max_iterations, loop.krylov_max, loop.krylov_keep, loop.reuse,
                           factors.handle, guess is not None, loop.resting, layout.symmetric,
                           loop.search], dtype=np.int32)

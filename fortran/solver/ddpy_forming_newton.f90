@@ -26,8 +26,10 @@ module ddpy_forming_newton
 
   !> Entries of the real settings: force and displacement tolerances, the yield landing
   !> tolerance (< 0: off), the penetration limit (element sizes) and the shortest step it
-  !> may leave, the bounds of the Krylov tolerance, the force scale's floor.
-  integer, parameter :: newton_settings = 8
+  !> may leave, the bounds of the Krylov tolerance, the force scale's floor, the whole-step
+  !> ratio (a whole step that fails the monotonicity test is taken where pairs changed
+  !> state in it and its residual norm is at most this times the last; <= 0: off).
+  integer, parameter :: newton_settings = 9
   !> Entries of the integer settings: iterations, GMRES iterations at most, GMRES
   !> iterations after which the next correction factorizes, reuse of older factors (0/1),
   !> the MUMPS handle, a guess given (0/1), the touching predictor's resting flag, the
@@ -136,7 +138,7 @@ contains
     integer :: tool, pair, comp, entry
     real(wp) :: tol_force, tol_disp, yield_tol, floor, norm, scale, moved, correction, rel, &
                 forcing, alpha, step_size, du_norm, landing, t_norm, t_scale, t_moved, &
-                alpha_fallback
+                alpha_fallback, whole_step
     integer :: max_iterations, cur, trial, fallback, buffer, iteration, ls, n, status, &
                element, handle, last_status, last_element, hold_after
     logical :: converged, have_previous, have_hint, accepted, t_converged, symmetric, &
@@ -149,6 +151,7 @@ contains
     tol_disp = settings(2)
     yield_tol = settings(3)
     floor = settings(8)
+    whole_step = settings(9)
     max_iterations = isettings(1)
     hold_after = max(2, max_iterations/hold_fraction)
     handle = isettings(5)
@@ -343,6 +346,16 @@ contains
             exit
           end if
           t_norm = sqrt(dot_product(slot(trial)%residual, slot(trial)%residual))
+          ! The simplified correction is computed with this iteration's contact set, so a
+          ! pair that changes state in the step makes it long however good the step: a
+          ! whole step that changed some pairs and cut the residual enough stands.
+          if (alpha == 1.0_wp .and. t_norm <= whole_step*norm) then
+            if (any(on /= 0 .and. slot(trial)%state /= slot(cur)%state)) then
+              accepted = .true.
+              have_hint = .true.
+              exit
+            end if
+          end if
           if (fallback == 0 .and. t_norm <= (1.0_wp - 1.0e-4_wp*alpha)*norm) then
             fallback = trial
             alpha_fallback = alpha

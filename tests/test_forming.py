@@ -182,6 +182,27 @@ def test_newton_converges_quadratically_while_sliding() -> None:
     assert rates[-1] > 1.6, (rates, history)
 
 
+def test_the_start_of_an_increment_is_second_order_on_a_smooth_path() -> None:
+    # A compressible elastic block (nu = 0.3) clamped at its top, pressed 10 % by a
+    # frictionless plane: every pair stays closed, and the large-strain path is smooth and
+    # curved in the travel (the block bulges). The first Newton correction from the start
+    # measures the start's error: extrapolated through the last three states (a quadratic)
+    # it is O(h^3), so relative to the increment's motion (O(h)) it falls 4 times as the
+    # increment halves; the last increment's rate alone would leave O(h^2), 2 times.
+    material = Material(210e3, 0.3, Hill48.von_mises(), Swift(1e7, 0.01, 0.0))
+    errors = []
+    for h in (0.005, 0.0025):
+        mesh = HexMesh.box(1.0, 1.0, 0.5, 3, 3, 2, origin=(-0.5, -0.5, 0.0))
+        tool = RigidTool("plane", plane_tool(), mesh.select(z=0.0), facing=(0, 0, -1))
+        problem = FormingProblem(Solid(mesh, material), [tool])
+        problem.fix(mesh.select(z=0.5), "xyz")
+        result = problem.run({"plane": (0, 0, 0.1)}, max_increment=h)
+        assert set(result.limited_by) == {"max"}
+        # From the third increment on, two earlier ones give the second-order start.
+        errors.append(np.median([rel[1][1] for rel in result.relative[3:]]))
+    assert errors[0] / errors[1] > 3.0, errors
+
+
 def test_first_touch_and_strain_limit_set_the_increments() -> None:
     # The block hangs 0.1 mm above the plane; a 0.25 mm increment would push it 0.15 mm
     # through: the increment stops where the first (every) node touches.

@@ -101,6 +101,26 @@ def record_code(output: Path, code: str, restart: bool, **settings: Any) -> dict
     return record
 
 
+def restart_plan(results: dict[str, Path]) -> dict[str, str]:
+    """What ``--restart`` does with each model's saved results file: "read" a completed run
+    back, "continue" one from its checkpoint, "run" a model with nothing saved. Refuses,
+    before any run starts, a saved run that did not complete and has no checkpoint."""
+    from ddpy.app.runner import CHECKPOINT, read_status
+
+    plan = {}
+    for model, path in results.items():
+        if not path.exists():
+            plan[model] = "run"
+        elif read_status(path.parent).get("status") == "completed":
+            plan[model] = "read"
+        elif (path.parent / CHECKPOINT).is_file():
+            plan[model] = "continue"
+        else:
+            sys.exit(f"{path.parent}: the saved run of {model} did not complete and has no "
+                     f"checkpoint to continue from; run it again without --restart")
+    return plan
+
+
 def runs_file(stem: str) -> Path:
     """The kept runs of a report: docs/benchmarks/<stem>_runs.json."""
     return DOCS / f"{stem}_runs.json"

@@ -12,7 +12,7 @@ import pytest
 
 BENCH = Path(__file__).resolve().parents[1] / "benchmarks" / "reverse_deep_drawing"
 sys.path.insert(0, str(BENCH.parent))  # the benchmarks' shared module
-from bench_common import load_module  # noqa: E402
+from bench_common import load_module, restart_plan  # noqa: E402
 
 run = load_module(BENCH / "run.py", "drawing_run")
 
@@ -222,3 +222,27 @@ def test_a_run_stopped_at_its_time_limit_continues_from_its_checkpoint(tmp_path:
     lines = run.report("coarse", {"nagata": n}, SHAPE, {"nagata": "map.png"}, FIGURES, 1,
                        "abc").splitlines()
     assert any(line.startswith("| continued from its checkpoint on |") for line in lines)
+
+
+def test_restart_refuses_a_saved_run_it_cannot_continue_before_any_run(tmp_path: Path) -> None:
+    import json
+
+    from ddpy.app.runner import CHECKPOINT, STATUS
+
+    def saved(model: str, status: str, checkpoint: bool) -> Path:
+        folder = tmp_path / model
+        folder.mkdir()
+        (folder / "results.h5").write_bytes(b"")
+        (folder / STATUS).write_text(json.dumps({"status": status}))
+        if checkpoint:
+            (folder / CHECKPOINT).write_bytes(b"")
+        return folder / "results.h5"
+
+    results = {"bezier": saved("bezier", "completed", False),
+               "nagata": saved("nagata", "interrupted", True),
+               "facets_coarse": tmp_path / "facets_coarse" / "results.h5"}
+    assert restart_plan(results) == {"bezier": "read", "nagata": "continue",
+                                     "facets_coarse": "run"}
+    results["facets_fine"] = saved("facets_fine", "failed", False)
+    with pytest.raises(SystemExit, match="facets_fine.*no checkpoint"):
+        restart_plan(results)

@@ -44,6 +44,7 @@ from bench_common import (  # noqa: E402
     load_module,
     record_code,
     recorded_code,
+    restart_plan,
     runs_file,
 )
 from bench_common import table_row as _row  # noqa: E402
@@ -1019,20 +1020,21 @@ def main(argv: list[str] | None = None) -> int:
     stem = "cylindrical_bending" + ("_paper" if args.mesh == "paper" else "")
     stored = kept_runs(runs_file(stem))  # also the earlier timings alone
     kept = stored if args.reuse else {}
+    saved_runs = {m: HERE / "results" / args.mesh / m / "results.h5" for m in models}
+    plan = restart_plan(saved_runs) if args.restart and not args.reuse else {}
     runs: dict[str, Run] = {}
     for model in models:
-        saved = HERE / "results" / args.mesh / model / "results.h5"
+        saved = saved_runs[model]
         if args.reuse and saved.exists():
             runs[model] = from_results(saved)
             continue
         if model in kept:
             runs[model] = kept[model]
             continue
-        if args.restart and saved.exists():
-            state = json.loads((saved.parent / "status.json").read_text())["status"]
-            if state == "completed":
-                runs[model] = from_results(saved)
-                continue
+        if plan.get(model) == "read":
+            runs[model] = from_results(saved)
+            continue
+        if plan.get(model) == "continue":
             print(f"continuing {args.mesh}/{model} ...", file=sys.stderr, flush=True)
             runs[model] = run_case_folder(case_root / model, verbose=True, restart=True,
                                           max_increments=args.max_increments or None)

@@ -55,6 +55,7 @@ from bench_common import (  # noqa: E402
     load_module,
     record_code,
     recorded_code,
+    restart_plan,
     runs_file,
 )
 from bench_common import table_row as _row  # noqa: E402
@@ -1350,7 +1351,6 @@ def main(argv: list[str] | None = None) -> int:
                         help="stop each run after this wall time and report it as far as "
                         "it got (the paper's blank: a run longer than a session)")
     args = parser.parse_args(argv)
-    from ddpy.app.runner import read_status
     from ddpy.core.parallel import max_threads
 
     models = [m.strip() for m in args.models.split(",") if m.strip()]
@@ -1362,20 +1362,21 @@ def main(argv: list[str] | None = None) -> int:
         make_case.main(["--mesh", args.mesh])
     stem = "reverse_deep_drawing" + ("" if args.mesh == "coarse" else f"_{args.mesh}")
     kept = kept_runs(runs_file(stem)) if args.reuse else {}
+    saved_runs = {m: HERE / "results" / args.mesh / m / "results.h5" for m in models}
+    plan = restart_plan(saved_runs) if args.restart and not args.reuse else {}
     runs: dict[str, Run] = {}
     for model in models:
-        saved = HERE / "results" / args.mesh / model / "results.h5"
+        saved = saved_runs[model]
         if args.reuse and saved.exists():
             runs[model] = from_results(saved, case_root / model)
         elif model in kept:
             runs[model] = kept[model]
         elif args.reuse:
             print(f"no saved run of {args.mesh}/{model}", file=sys.stderr)
-        elif args.restart and saved.exists() and \
-                read_status(saved.parent).get("status") == "completed":
+        elif plan.get(model) == "read":
             runs[model] = from_results(saved, case_root / model)
         else:
-            restart = args.restart and saved.exists()
+            restart = plan.get(model) == "continue"
             print(f"{'continuing' if restart else 'running'} {args.mesh}/{model} ...",
                   file=sys.stderr, flush=True)
             runs[model] = run_case_folder(case_root / model, verbose=True,

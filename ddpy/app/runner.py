@@ -217,7 +217,7 @@ def _carried(last: PhaseProgress, share: float, next_share: float,
         last_du=None if last.last_du is None else last.last_du * scale,
         last_dp=None if last.last_dp is None else last.last_dp * scale,
         last_ddu=None if last.last_ddu is None else last.last_ddu * scale**2,
-        last_size=last.last_size / scale)
+        last_size=last.last_size / scale, last_kink=last.last_kink)
 
 
 class _Run:
@@ -269,6 +269,7 @@ class _Run:
         if progress is not None:
             meta["progress"] = {"factor": progress.factor, "step": progress.step,
                                 "reason": progress.reason, "last_size": progress.last_size,
+                                "last_kink": progress.last_kink,
                                 "offsets": {k: o for k, (o, _) in progress.offsets.items()}}
             arrays.update({f"start/{k}": v for k, v in progress.start.items()})
             arrays.update({f"offset/{k}": v for k, (_, v) in progress.offsets.items()})
@@ -335,7 +336,8 @@ class _Run:
                 factor=float(prog["factor"]), step=float(prog["step"]),
                 reason=str(prog["reason"]), last_du=arrays.get("last_du"),
                 last_dp=arrays.get("last_dp"), last_ddu=arrays.get("last_ddu"),
-                last_size=float(prog.get("last_size", 0.0)))
+                last_size=float(prog.get("last_size", 0.0)),
+                last_kink=bool(prog.get("last_kink", False)))
         self._reopen_at = (int(meta["increments"]), int(meta["iterations"]),
                            int(meta["frames"]))
 

@@ -80,10 +80,16 @@ KRYLOV_KEEP = 8
 #: Order of the extrapolated start of an increment: 1, the last increment's rate; 2, the
 #: rate taken as linear in the phase factor through the last two increments' rates (the
 #: quadratic through the last three converged states). And the line search's whole-step
-#: ratio (Loop.whole_step). Together they take the paper's deep drawing blank through 60
-#: increments in 275 Newton iterations and 97 LU instead of 353 and 165 (docs/theory/speed.md).
-START_ORDER = 2
+#: ratio (Loop.whole_step). The second order pays where the path is smooth at the scale of
+#: an increment (the paper's deep drawing blank at 20-26 mm: 22 % fewer iterations) and
+#: costs where the contact moves node by node (that blank's first 8 mm, the coarse blanks:
+#: 7 to 55 % more), so the default is the first (docs/theory/speed.md).
+START_ORDER = 1
 WHOLE_STEP = 0.5
+#: Limits that end an increment where the path has a kink (a contact zone starts, points
+#: start to yield, a node lets go): the rate changes there, so a second difference of the
+#: rates across such an end extrapolates the kink; the start is linear after it.
+KINKS = frozenset({"touch", "yield", "release"})
 #: Deepest a free node may be pushed into a tool by one Newton step, in element sizes, and
 #: the shortest step that limit may leave (penetration_step of the core's Newton loop).
 PENETRATION, MIN_STEP = 0.02, 1.0 / 64.0
@@ -169,7 +175,8 @@ class PhaseProgress:
     at the start of the phase, the offsets of gap-held tools, the phase factor reached, the
     next trial increment with what set it, the last displacement increment and pressure
     change per unit factor, and for the second-order start the change of that
-    displacement rate per unit factor and the last increment's size. Given back as
+    displacement rate per unit factor, the last increment's size and whether it ended at
+    a kink of the path (KINKS). Given back as
     ``resume`` (with the problem's state restored) the run continues exactly as it would
     have."""
 
@@ -182,6 +189,7 @@ class PhaseProgress:
     last_dp: NDArray[np.float64] | None = None
     last_ddu: NDArray[np.float64] | None = None
     last_size: float = 0.0
+    last_kink: bool = False
 
 
 class FormingError(RuntimeError):
@@ -409,12 +417,12 @@ class FormingProblem:
         last_dp: NDArray[np.float64] | None = None  # pressure rate of the last increment
         # Change of the displacement rate per unit factor, and the last increment's size.
         last_ddu: NDArray[np.float64] | None = None
-        last_size = 0.0
+        last_size, last_kink = 0.0, False
         careful = False  # the first increment's default start failed: careful starts only
         if resume is not None:
             start, factor, step = resume.start, resume.factor, min(resume.step, nominal)
             reason, last_du, last_dp = resume.reason, resume.last_du, resume.last_dp
-            last_ddu, last_size = resume.last_ddu, resume.last_size
+            last_ddu, last_size, last_kink = resume.last_ddu, resume.last_size, resume.last_kink
         # Gaps at the start of the phase (tools held at a gap placed there), for first touch;
         # a tool deeper in the blank than one increment may push it out is refused (seen
         # here within the search's reach; the deck's checks search without one).
@@ -541,10 +549,12 @@ class FormingProblem:
                 relative = released[1] + list(relative)[1:]
                 released = ([], [])
             rate = (u - self.u) / (target - factor)
-            if START_ORDER == 2 and last_du is not None:
+            kink = reason in KINKS
+            last_ddu = None
+            if START_ORDER == 2 and last_du is not None and not (kink or last_kink):
                 # The mean rates of two increments are the rate at their midpoints.
                 last_ddu = 2.0 * (rate - last_du) / (last_size + target - factor)
-            last_du, last_size = rate, target - factor
+            last_du, last_size, last_kink = rate, target - factor, kink
             normal = gap[1]
             last_dp = np.einsum("ij,ij->i", force - self.force, normal) / (target - factor)
             self._take(outcome)
@@ -567,7 +577,7 @@ class FormingProblem:
                                       rotation / limit)
             if on_increment is not None and on_increment(
                     PhaseProgress(start, offsets, factor, step, reason, last_du, last_dp,
-                                  last_ddu, last_size)):
+                                  last_ddu, last_size, last_kink)):
                 break
         return result
 

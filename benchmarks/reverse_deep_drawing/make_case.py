@@ -314,9 +314,14 @@ tool {tool}
 #: Gauss-point contact): the runs kept in docs/benchmarks were made with them. With
 #: Gauss-point contact and the hexahedron the coarse blank's Nagata case runs both stages
 #: in half the iterations (904 + 1,059 against 1,792 + 1,985), its volume kept to 0.1 %;
-#: but the other three tool models fail where node-to-surface contact completes two of
-#: them (runs of commit f7aee33): Bezier at stage 2's first increment, the coarse facets
-#: at 39.996 of stage 1's 40 mm, the fine facets at 24.5 mm of stage 2. The solid-shell
+#: but the other three tool models failed where node-to-surface contact completes them
+#: (runs of commit f7aee33): Bezier at stage 2's first increment, the coarse facets
+#: at 39.996 of stage 1's 40 mm, the fine facets at 24.5 mm of stage 2. At commit 813c140
+#: (the decks' discretization set to gauss, 1 thread each) Bezier, Nagata and the fine
+#: facets complete, in 640 / 640 / 641 increments and 1,933 / 1,970 / 2,920 iterations
+#: (node-to-surface: 811 / 811 / 843 and 2,907 / 2,921 / 3,718), and the coarse facets
+#: still fail at 0.99997 of stage 1 (39 pairs changing state at every iteration, the
+#: flange's edge leaving the holder). The solid-shell
 #: cuts its stage-1 increments from about 33 mm on, two elements inverting
 #: (docs/theory/contact.md, Gauss-point contact).
 #: Augmentation r of the contact law (N/mm) set in the decks of a blank, else the solver's

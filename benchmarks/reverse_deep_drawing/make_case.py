@@ -320,9 +320,9 @@ tool {tool}
 #: (the decks' discretization set to gauss, 1 thread each) Bezier, Nagata and the fine
 #: facets complete, in 640 / 640 / 641 increments and 1,933 / 1,970 / 2,920 iterations
 #: (node-to-surface: 811 / 811 / 843 and 2,907 / 2,921 / 3,718), and the coarse facets
-#: still fail at 0.99997 of stage 1 (39 pairs changing state at every iteration, the
-#: flange's edge leaving the holder). The solid-shell
-#: cuts its stage-1 increments from about 33 mm on, two elements inverting
+#: still fail at 0.99997 of stage 1 (the held patches refused by the search in an
+#: increment almost converged, then 39 pairs changing state at every iteration). The
+#: solid-shell cuts its stage-1 increments from about 33 mm on, two elements inverting
 #: (docs/theory/contact.md, Gauss-point contact).
 #: Augmentation r of the contact law (N/mm) set in the decks of a blank, else the solver's
 #: default (E t^2 / h of the elements: 1.3e4 on the coarse blank, 2.5e4 on the medium one).

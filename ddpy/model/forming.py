@@ -176,9 +176,8 @@ class PhaseProgress:
     next trial increment with what set it, the last displacement increment and pressure
     change per unit factor, and for the second-order start the change of that
     displacement rate per unit factor, the last increment's size and whether it ended at
-    a kink of the path (KINKS). Given back as
-    ``resume`` (with the problem's state restored) the run continues exactly as it would
-    have."""
+    a kink of the path (KINKS). Given back as ``resume`` (with the problem's state
+    restored) the run continues exactly as it would have."""
 
     start: dict[str, NDArray[np.float64]]
     offsets: dict[str, tuple[str, NDArray[np.float64]]]

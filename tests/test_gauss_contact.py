@@ -13,6 +13,7 @@ from ddpy.geometry.surfaces import NagataSurface
 from ddpy.model.contact import INACTIVE, SLIP, STICK
 from ddpy.model.control import NewtonSettings
 from ddpy.model.forming import FormingProblem, RigidTool
+from ddpy.model.material import Hill48, Material, Swift
 from ddpy.model.mesh import HexMesh
 from ddpy.model.newton import Layout
 from ddpy.model.solid import Solid
@@ -186,3 +187,39 @@ def test_gauss_contact_needs_a_facing_direction_a_positive_penalty_and_points() 
     with pytest.raises(ValueError, match="points must be an integer from 1 to 8"):
         RigidTool("plane", dome(), mesh.select(z=0.0), facing=(0, 0, -1), contact="gauss",
                   points=9)
+
+
+def corrugated_plane(angle_deg: float, width: float, n: int) -> NagataSurface:
+    """n flat facets of ``width`` along x, alternately rising and falling by ``angle_deg``:
+    a plane z = 0 corrugated by facet edges every ``width`` mm."""
+    x = (np.arange(n + 1) - n / 2) * width
+    z = (np.arange(n + 1) % 2) * width * np.tan(np.radians(angle_deg))
+    vertices = [[xi, y, zi] for y in (-2.0, 2.0) for xi, zi in zip(x, z, strict=True)]
+    i = np.arange(n)
+    faces = np.column_stack([i, i + 1, i + n + 2, i + n + 1])
+    return NagataSurface(vertices, [[0, 0, 1]] * len(vertices), faces, smooth=False)
+
+
+def test_an_answer_held_on_facets_stands_only_where_the_search_agrees() -> None:
+    """A soft block (E 100 MPa) clamped at its top, pressed 20 um into facets 0.02 mm wide
+    and dragged 0.1 mm along x with mu = 0.5 in one increment of at most 9 iterations: its
+    points, held on their facets from iteration 3, cross edges as they settle, and the held
+    answer is refused by the search. Whatever the loop then does (hold again on the
+    search's facets, or go on without the hold), what it returns must meet the equations
+    as the search sees them: the residual of the free rows at the answer, evaluated anew
+    without any hold, within the force tolerance of the tool's force. (An answer held a
+    second time and accepted unchecked left 4e-4 of it.)"""
+    soft = Material(100.0, 0.0, Hill48.von_mises(), Swift(1e7, 0.01, 0.0))
+    mesh = HexMesh.box(1.0, 1.0, 0.5, 4, 2, 2, origin=(-0.5, -0.5, 0.05))
+    tool = RigidTool("plane", corrugated_plane(5.0, 0.02, 200), mesh.select(z=0.05),
+                     facing=(0, 0, -1), contact="gauss", penalty=PENALTY * 100.0 / 210e3,
+                     friction=0.5)
+    problem = FormingProblem(Solid(mesh, soft), [tool])
+    problem.fix(mesh.select(z=0.55), "xyz")
+    problem.run({"plane": (0, 0, 0.07)}, max_increment=0.01)
+    result = problem.run({"plane": (0.1, 0, 0)}, max_increment=0.1,
+                         newton=NewtonSettings(max_iterations=9))
+    assert result.cuts == 0 and len(result.iterations) == 1
+    equations = problem.linearization()
+    free = np.linalg.norm(equations.residual[:equations.n_free])
+    assert free <= 1e-4 * np.linalg.norm(result.tool_forces["plane"][-1]), free

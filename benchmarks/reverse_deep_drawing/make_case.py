@@ -306,24 +306,19 @@ tool {tool}
   file         {prefix}{tool}.{file}.tool
   friction     {friction}
   contact      {side}
-  discretization node    # DD3IMP's, the kept runs' (make_case.py)
+  discretization gauss
 {augmentation}end
 """
 
-#: The decks keep DD3IMP's element and contact, not ddpy's defaults (the solid-shell and
-#: Gauss-point contact): the runs kept in docs/benchmarks were made with them. With
-#: Gauss-point contact and the hexahedron the coarse blank's Nagata case runs both stages
-#: in half the iterations (904 + 1,059 against 1,792 + 1,985), its volume kept to 0.1 %;
-#: but the other three tool models failed where node-to-surface contact completes them
-#: (runs of commit f7aee33): Bezier at stage 2's first increment, the coarse facets
-#: at 39.996 of stage 1's 40 mm, the fine facets at 24.5 mm of stage 2. At commit 813c140
-#: (the decks' discretization set to gauss, 1 thread each) Bezier, Nagata and the fine
-#: facets complete, in 640 / 640 / 641 increments and 1,933 / 1,970 / 2,920 iterations
-#: (node-to-surface: 811 / 811 / 843 and 2,907 / 2,921 / 3,718), and the coarse facets
-#: still fail at 0.99997 of stage 1 (the held patches refused by the search in an
-#: increment almost converged, then 39 pairs changing state at every iteration). The
-#: solid-shell cuts its stage-1 increments from about 33 mm on, two elements inverting
-#: (docs/theory/contact.md, Gauss-point contact).
+#: The decks keep DD3IMP's element (the hexahedron; the solid-shell cuts its stage-1
+#: increments from about 33 mm on, two elements inverting) with Gauss-point contact,
+#: ddpy's default (docs/theory/contact.md, Gauss-point contact). Against node-to-surface
+#: contact, DD3IMP's and that of the runs kept up to 2026-11-27, the coarse
+#: blank's four tool models need a third fewer iterations and the paper blank's Nagata
+#: stage 1 about half: the measurements are in docs/speed.md. The coarse facets completed
+#: only once an answer the search refuses is held again on the search's patches
+#: (ddpy_forming_newton, hold_limit): without, the held answer of an increment at 0.99997
+#: of stage 1 was refused and 39 pairs changed state at every iteration after.
 #: Augmentation r of the contact law (N/mm) set in the decks of a blank, else the solver's
 #: default (E t^2 / h of the elements: 1.3e4 on the coarse blank, 2.5e4 on the medium one).
 #: The medium blank failed its first increment with the default (10 cuts to a step of 4e-8

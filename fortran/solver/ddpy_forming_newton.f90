@@ -43,8 +43,9 @@ module ddpy_forming_newton
   integer, parameter, public :: search_none = 0, search_monotonicity = 1, search_energy = 2
   !> Pairs are held on their patches after 1/hold_fraction of the iterations
   !> (forming_increment); the answer's gaps may then differ from the search's by
-  !> hold_depth element sizes.
-  integer, parameter :: hold_fraction = 3
+  !> hold_depth element sizes. An answer the search refuses is held again on the search's
+  !> patches, at most hold_limit times in an increment.
+  integer, parameter :: hold_fraction = 3, hold_limit = 3
   real(wp), parameter :: hold_depth = 1.0e-4_wp
   !> What forming_increment returns.
   integer, parameter :: outcome_converged = 0, outcome_landing = 1, outcome_element = 2, &
@@ -140,7 +141,7 @@ contains
                 forcing, alpha, step_size, du_norm, landing, t_norm, t_scale, t_moved, &
                 alpha_fallback, whole_step
     integer :: max_iterations, cur, trial, fallback, buffer, iteration, ls, n, status, &
-               element, handle, last_status, last_element, hold_after
+               element, handle, last_status, last_element, hold_after, holds
     logical :: converged, have_previous, have_hint, accepted, t_converged, symmetric, &
                moving, held_on_patches
     integer :: search
@@ -170,6 +171,7 @@ contains
     alpha_cur = 0.0_wp
     lock = 0
     held_on_patches = .false.
+    holds = 0
     dp = 0.0_wp
     step_size = 0.0_wp
     weight(1:nf) = 1.0_wp
@@ -233,16 +235,21 @@ contains
         outcome = outcome_not_finite
         return
       end if
-      if (converged .and. held_on_patches) then
+      do while (converged .and. held_on_patches)
         held_on_patches = .false.
         if (.not. held_ok(slot(cur), slot(3 - cur))) then
           ! The search disagrees with the held answer: the iterations go on from the same
-          ! iterate without the hold (slot 3 - cur holds its evaluation), and it stands if
-          ! the free equations are already met there.
+          ! iterate (slot 3 - cur holds its evaluation without the hold), and it stands if
+          ! the free equations are already met there; else they go on held on the
+          ! search's patches there, which the next answer is checked against in turn.
           cur = 3 - cur
           call record(slot(cur))
+          if (.not. converged .and. holds < hold_limit .and. iteration < max_iterations) then
+            call hold(slot(cur))
+            if (outcome == outcome_element) return
+          end if
         end if
-      end if
+      end do
       if (converged) then
         call finish(slot(cur))
         return
@@ -251,18 +258,8 @@ contains
         ! Nodes (or Gauss points) that hop between the facets of an edge keep this
         ! increment from converging: from here each stays on the patch it has
         ! (docs/theory/contact.md), and the answer is checked against the search.
-        lock = slot(cur)%patch
-        lock(1:npair) = merge(lock(1:npair), 0, on /= 0)
-        if (any(lock > 0)) then
-          held_on_patches = .true.
-          call evaluate(slot(cur), 0.0_wp, status, element)
-          if (status /= 0) then
-            outcome = outcome_element
-            info(1:2) = [status, element]
-            return
-          end if
-          call record(slot(cur))
-        end if
+        call hold(slot(cur))
+        if (outcome == outcome_element) return
       end if
       if (iteration == max_iterations) then
         outcome = outcome_stalled
@@ -678,6 +675,24 @@ contains
       end do
       held_ok = sqrt(change) <= tol_force*scale
     end function held_ok
+
+    !> Holds the pairs in contact on the patches they have at s, and evaluates s so.
+    subroutine hold(s)
+      type(evaluation), intent(inout) :: s
+      integer :: status, element
+      lock = s%patch
+      lock(1:npair) = merge(lock(1:npair), 0, on /= 0)
+      if (.not. any(lock > 0)) return
+      held_on_patches = .true.
+      holds = holds + 1
+      call evaluate(s, 0.0_wp, status, element)
+      if (status /= 0) then
+        outcome = outcome_element
+        info(1:2) = [status, element]
+        return
+      end if
+      call record(s)
+    end subroutine hold
 
     !> The converged iterate s as the answer.
     subroutine finish(s)

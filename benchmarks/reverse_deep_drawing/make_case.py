@@ -306,19 +306,25 @@ tool {tool}
   file         {prefix}{tool}.{file}.tool
   friction     {friction}
   contact      {side}
-  discretization gauss
+  discretization {discretization}
 {augmentation}end
 """
 
 #: The decks keep DD3IMP's element (the hexahedron; the solid-shell cuts its stage-1
-#: increments from about 33 mm on, two elements inverting) with Gauss-point contact,
-#: ddpy's default (docs/theory/contact.md, Gauss-point contact). Against node-to-surface
-#: contact, DD3IMP's and that of the runs kept up to 2026-11-27, the coarse
-#: blank's four tool models need a third fewer iterations and the paper blank's Nagata
-#: stage 1 about half: the measurements are in docs/speed.md. The coarse facets completed
-#: only once an answer the search refuses is held again on the search's patches
-#: (ddpy_forming_newton, hold_limit): without, the held answer of an increment at 0.99997
-#: of stage 1 was refused and 39 pairs changed state at every iteration after.
+#: increments from about 33 mm on, two elements inverting) and, on the coarse and medium
+#: blanks, DD3IMP's node-to-surface contact; the paper's blank (faces of 0.86 mm) takes
+#: Gauss-point contact, ddpy's default (docs/theory/contact.md, "The default
+#: discretization"). A bilinear face's chord stands c^2 / 8R off a tool radius R: 0.25 mm
+#: for the coarse blank's 4 mm faces on die 1's 8 mm shoulder, more than the 0.15 mm between
+#: blank and holder, so the default penalty left the coarse flange 0.68 mm deep in
+#: blank-holder 1 and a stiff one pinched it; on the paper's faces it is 0.012 mm. On the
+#: paper's blank Gauss-point contact halves the iterations of stage 1 (docs/theory/speed.md).
+#: (The coarse blank's four models with Gauss-point contact, runs of 2026-11-28, 1 thread:
+#: 640 / 640 / 640 / 641 increments and 1,933 / 1,970 / 3,579 / 2,916 iterations for
+#: Bezier / Nagata / coarse facets / fine facets, against 811 / 811 / 948 / 843 and
+#: 2,907 / 2,921 / 4,429 / 3,718 with node-to-surface contact; the coarse facets complete
+#: only since an answer the search refuses is held again on the search's patches.)
+DISCRETIZATION = {"coarse": "node", "medium": "node", "paper": "gauss"}
 #: Augmentation r of the contact law (N/mm) set in the decks of a blank, else the solver's
 #: default (E t^2 / h of the elements: 1.3e4 on the coarse blank, 2.5e4 on the medium one).
 #: The medium blank failed its first increment with the default (10 cuts to a step of 4e-8
@@ -357,7 +363,8 @@ def write_case(folder: Path, model: str, mesh: str, dims: Dimensions = DIMENSION
                      f"{model} model.\n" + "\n".join(
                          TOOL.format(tool=t, description=description, file=file,
                                      prefix=tools_prefix, friction=FRICTION, side=SIDE[t],
-                                     augmentation=augmentation)
+                                     augmentation=augmentation,
+                                     discretization=DISCRETIZATION.get(mesh, "node"))
                          for t in TOOLS),
     }
     for name, text in decks.items():

@@ -38,11 +38,15 @@ def load_module(path: Path, name: str) -> ModuleType:
 
 
 def code_version(checkout: Path = ROOT) -> str:
-    """The checkout's ``git describe --always`` (this repository's, or another checkout's),
-    with "-dirty" when the code (CODE_PATHS) differs from it; empty outside a git
-    checkout."""
+    """The ``git describe --always`` of the last commit that changed the code (CODE_PATHS)
+    in the checkout (this repository's, or another checkout's), with "-dirty" when the code
+    differs from HEAD; empty outside a git checkout. Commits that change only the reports
+    leave it, so runs made on either side of them count as the same code."""
     try:
-        described = subprocess.run(["git", "describe", "--always"], cwd=checkout,
+        last = subprocess.run(["git", "log", "-1", "--format=%H", "HEAD", "--", *CODE_PATHS],
+                              cwd=checkout, capture_output=True, text=True,
+                              check=True).stdout.strip() or "HEAD"
+        described = subprocess.run(["git", "describe", "--always", last], cwd=checkout,
                                    capture_output=True, text=True, check=True).stdout.strip()
         changed = subprocess.run(["git", "diff", "--quiet", "HEAD", "--", *CODE_PATHS],
                                  cwd=checkout).returncode != 0

@@ -215,9 +215,7 @@ def _carried(last: PhaseProgress, share: float, next_share: float,
         start={name: x.copy() for name, x in position.items()}, offsets=last.offsets,
         factor=0.0, step=step, reason=last.reason,
         last_du=None if last.last_du is None else last.last_du * scale,
-        last_dp=None if last.last_dp is None else last.last_dp * scale,
-        last_ddu=None if last.last_ddu is None else last.last_ddu * scale**2,
-        last_size=last.last_size / scale, last_kink=last.last_kink)
+        last_dp=None if last.last_dp is None else last.last_dp * scale)
 
 
 class _Run:
@@ -268,12 +266,11 @@ class _Run:
             "elapsed": self.elapsed + time.perf_counter() - self._clock, "progress": None}
         if progress is not None:
             meta["progress"] = {"factor": progress.factor, "step": progress.step,
-                                "reason": progress.reason, "last_size": progress.last_size,
-                                "last_kink": progress.last_kink,
+                                "reason": progress.reason,
                                 "offsets": {k: o for k, (o, _) in progress.offsets.items()}}
             arrays.update({f"start/{k}": v for k, v in progress.start.items()})
             arrays.update({f"offset/{k}": v for k, (_, v) in progress.offsets.items()})
-            for name in ("last_du", "last_dp", "last_ddu"):
+            for name in ("last_du", "last_dp"):
                 if getattr(progress, name) is not None:
                     arrays[name] = getattr(progress, name)
         write_checkpoint(self.output / CHECKPOINT, meta, arrays)
@@ -335,9 +332,7 @@ class _Run:
                 offsets={k: (o, arrays[f"offset/{k}"]) for k, o in prog["offsets"].items()},
                 factor=float(prog["factor"]), step=float(prog["step"]),
                 reason=str(prog["reason"]), last_du=arrays.get("last_du"),
-                last_dp=arrays.get("last_dp"), last_ddu=arrays.get("last_ddu"),
-                last_size=float(prog.get("last_size", 0.0)),
-                last_kink=bool(prog.get("last_kink", False)))
+                last_dp=arrays.get("last_dp"))
         self._reopen_at = (int(meta["increments"]), int(meta["iterations"]),
                            int(meta["frames"]))
 

@@ -77,19 +77,10 @@ REUSE_FROM = 20_000
 KRYLOV_LOOSE, KRYLOV_TIGHT = 1e-2, 1e-10
 KRYLOV_MAX = 12
 KRYLOV_KEEP = 8
-#: Order of the extrapolated start of an increment: 1, the last increment's rate; 2, the
-#: rate taken as linear in the phase factor through the last two increments' rates (the
-#: quadratic through the last three converged states). And the line search's whole-step
-#: ratio (Loop.whole_step). The second order pays where the path is smooth at the scale of
-#: an increment (the paper's deep drawing blank at 20-26 mm: 22 % fewer iterations) and
-#: costs where the contact moves node by node (that blank's first 8 mm, the coarse blanks:
-#: 7 to 55 % more), so the default is the first (docs/theory/speed.md).
-START_ORDER = 1
+#: The line search's whole-step ratio (Loop.whole_step). The increment's start is the
+#: last increment's rate (first order): a start extrapolated to second order, through the
+#: last three converged states, was measured and removed (docs/theory/speed.md).
 WHOLE_STEP = 0.5
-#: Limits that end an increment where the path has a kink (a contact zone starts, points
-#: start to yield, a node lets go): the rate changes there, so a second difference of the
-#: rates across such an end extrapolates the kink; the start is linear after it.
-KINKS = frozenset({"touch", "yield", "release"})
 #: Deepest a free node may be pushed into a tool by one Newton step, in element sizes, and
 #: the shortest step that limit may leave (penetration_step of the core's Newton loop).
 PENETRATION, MIN_STEP = 0.02, 1.0 / 64.0
@@ -113,18 +104,10 @@ RELEASE_STEPS, RELEASE_SMALLEST = 4, 1.0 / 1024.0
 
 
 def _extrapolated(u: NDArray[np.float64], step: float, rate: NDArray[np.float64] | None,
-                  change: NDArray[np.float64] | None, last_size: float,
                   ) -> NDArray[np.float64] | None:
-    """The start of an increment of ``step`` (phase factor) from the converged ``u``: the
-    last increment's mean ``rate`` (the rate at its midpoint, ``last_size`` back), and
-    where given its ``change`` per unit factor (the quadratic through the last three
-    states). None without a rate."""
-    if rate is None:
-        return None
-    guess = u + step * rate
-    if change is not None:
-        guess += (0.5 * step * (step + last_size)) * change
-    return guess
+    """The start of an increment of ``step`` (phase factor) from the converged ``u`` at the
+    last increment's mean ``rate``. None without a rate."""
+    return None if rate is None else u + step * rate
 
 
 @dataclass(frozen=True)
@@ -173,10 +156,8 @@ class Linearization:
 class PhaseProgress:
     """Where a ``FormingProblem.run`` stands after a converged increment: the tool positions
     at the start of the phase, the offsets of gap-held tools, the phase factor reached, the
-    next trial increment with what set it, the last displacement increment and pressure
-    change per unit factor, and for the second-order start the change of that
-    displacement rate per unit factor, the last increment's size and whether it ended at
-    a kink of the path (KINKS). Given back as ``resume`` (with the problem's state
+    next trial increment with what set it, and the last displacement increment and
+    pressure change per unit factor. Given back as ``resume`` (with the problem's state
     restored) the run continues exactly as it would have."""
 
     start: dict[str, NDArray[np.float64]]
@@ -186,9 +167,6 @@ class PhaseProgress:
     reason: str
     last_du: NDArray[np.float64] | None
     last_dp: NDArray[np.float64] | None = None
-    last_ddu: NDArray[np.float64] | None = None
-    last_size: float = 0.0
-    last_kink: bool = False
 
 
 class FormingError(RuntimeError):
@@ -414,14 +392,10 @@ class FormingProblem:
         redos = 0  # redos at a release of the present increment
         last_du: NDArray[np.float64] | None = None
         last_dp: NDArray[np.float64] | None = None  # pressure rate of the last increment
-        # Change of the displacement rate per unit factor, and the last increment's size.
-        last_ddu: NDArray[np.float64] | None = None
-        last_size, last_kink = 0.0, False
         careful = False  # the first increment's default start failed: careful starts only
         if resume is not None:
             start, factor, step = resume.start, resume.factor, min(resume.step, nominal)
             reason, last_du, last_dp = resume.reason, resume.last_du, resume.last_dp
-            last_ddu, last_size, last_kink = resume.last_ddu, resume.last_size, resume.last_kink
         # Gaps at the start of the phase (tools held at a gap placed there), for first touch;
         # a tool deeper in the blank than one increment may push it out is refused (seen
         # here within the search's reach; the deck's checks search without one).
@@ -469,7 +443,7 @@ class FormingProblem:
                                step <= limits.min_fraction * nominal) else max(
                                    limits.yield_tolerance, 1e-6)
             # Start from the last increment's displacement rate (docs/theory/contact.md).
-            guess = _extrapolated(self.u, target - factor, last_du, last_ddu, last_size)
+            guess = _extrapolated(self.u, target - factor, last_du)
             careful = careful and last_du is None
             touching = _Touching(TOUCHING * self.size, resting=not careful)
             outcome = self._increment(layout, positions, on, tol_force, tol_disp,
@@ -547,13 +521,7 @@ class FormingProblem:
                 residuals = released[0] + list(residuals)[1:]
                 relative = released[1] + list(relative)[1:]
                 released = ([], [])
-            rate = (u - self.u) / (target - factor)
-            kink = reason in KINKS
-            last_ddu = None
-            if START_ORDER == 2 and last_du is not None and not (kink or last_kink):
-                # The mean rates of two increments are the rate at their midpoints.
-                last_ddu = 2.0 * (rate - last_du) / (last_size + target - factor)
-            last_du, last_size, last_kink = rate, target - factor, kink
+            last_du = (u - self.u) / (target - factor)
             normal = gap[1]
             last_dp = np.einsum("ij,ij->i", force - self.force, normal) / (target - factor)
             self._take(outcome)
@@ -575,8 +543,7 @@ class FormingProblem:
             step, reason = next_step(step, nominal, reason, strain / limits.strain,
                                       rotation / limit)
             if on_increment is not None and on_increment(
-                    PhaseProgress(start, offsets, factor, step, reason, last_du, last_dp,
-                                  last_ddu, last_size, last_kink)):
+                    PhaseProgress(start, offsets, factor, step, reason, last_du, last_dp)):
                 break
         return result
 

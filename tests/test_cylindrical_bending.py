@@ -249,6 +249,21 @@ def test_the_release_effort_finding_counts_the_redone_work() -> None:
     assert bench.release_effort({"nagata": numbers["nagata"]}) == []
 
 
+def test_the_increment_limits_finding_names_every_limit_that_shortened() -> None:
+    bench = _module("run")
+    numbers = {"nagata": {"limited_by": {"max_increment": 90, "contact_touch": 6,
+                                         "output": 3, "phase_end": 1}},
+               "facets_fine": {"limited_by": {"max_increment": 40, "yield": 10}}}
+    text = " ".join(bench.increment_limits(numbers))
+    assert "Nagata: 90 of 100 at the largest size (90%), 6 contact_touch, 3 output, " \
+        "1 phase_end;" in text
+    assert "Faceted-fine: 40 of 50 at the largest size (80%), 10 yield." in text
+    for limit in ("contact_touch", "output", "phase_end", "yield"):
+        assert f"{limit}, {bench.LIMIT_MEANING[limit]}" in text
+    assert "cutback" not in text  # no run was cut
+    assert bench.increment_limits({"bezier": {}}) == []
+
+
 def test_the_target_is_timed_by_a_run_alone_on_the_machine() -> None:
     """A run that shared the cores (1 thread) does not time the target: the wall time comes
     from a run alone with a thread per core that took the same path, or the target is not

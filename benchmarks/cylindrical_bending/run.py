@@ -855,6 +855,43 @@ def _redos(cap: int | None) -> str:
     return "no cap" if cap is None else str(cap)
 
 
+#: What each limit that ends a forming increment means (docs/theory/contact.md, "Increment
+#: control"), in the order the report lists them.
+LIMIT_MEANING = {
+    "max_increment": "at the largest size of the deck",
+    "contact_touch": "shortened to land a node that opens a new contact zone on its tool",
+    "contact_release": "shortened at a node that leaves its tool carrying a share of its "
+                       "force",
+    "yield": "shortened to land points of the blank on the yield surface",
+    "strain": "shortened by the largest strain increment",
+    "rotation": "shortened by the largest rotation increment",
+    "output": "shortened to end at a stroke of an output frame (Table 2's strokes)",
+    "phase_end": "shortened to end at the full stroke",
+    "cutback": "cut after a failed trial, or regrowing after one",
+}
+
+
+def increment_limits(numbers: dict[str, dict[str, Any]]) -> list[str]:
+    """What set the forming increments, per model: the increments each limit ended."""
+    parts = []
+    for model in MODELS:
+        limits = numbers.get(model, {}).get("limited_by")
+        if not limits:
+            continue
+        total = sum(limits.values())
+        at_max = limits.get("max_increment", 0)
+        parts.append(f"{LABELS[model]}: {at_max} of {total} at the largest size ("
+                     f"{at_max / max(total, 1):.0%})" + "".join(
+                         f", {limits[k]} {k}" for k in LIMIT_MEANING
+                         if k != "max_increment" and limits.get(k)))
+    if not parts:
+        return []
+    seen = {k for m in MODELS for k, v in numbers.get(m, {}).get("limited_by", {}).items() if v}
+    return ["- What set the forming increments: " + "; ".join(parts) + ". The limits: "
+            + "; ".join(f"{k}, {LIMIT_MEANING[k]}" for k in LIMIT_MEANING if k in seen)
+            + "."]
+
+
 def release_effort(numbers: dict[str, dict[str, Any]]) -> list[str]:
     """Where the forming's Newton work and time went, by the limit that ended the
     increments: the share of the increments redone at a release (docs/theory/contact.md)."""
@@ -976,6 +1013,7 @@ def findings(numbers: dict[str, dict[str, Any]], mesh: str = "coarse") -> list[s
                 "this coarse blank the events of the blank's own nodes dominate."))
     if mesh != "coarse":
         out += _polygon_angles(numbers)
+        out += increment_limits(numbers)
         out += release_effort(numbers)
     if {"bezier", "nagata", "facets_fine"} <= set(numbers):
         osc = {m: numbers[m]["oscillation_N"] for m in numbers}

@@ -330,7 +330,10 @@ DISCRETIZATION = {"coarse": "node", "medium": "node", "paper": "gauss"}
 #: The medium blank failed its first increment with the default (10 cuts to a step of 4e-8
 #: of the stage, 25 iterations each) and with 5e3; with 6e4 its first increment converged in
 #: 25 iterations and the next ones in 3 to 15, with 2e5 only after cuts. The blank starts
-#: held by contact alone, flat on die 1 and under the ring of punch 1's end.
+#: held by contact alone, flat on die 1 and under the ring of punch 1's end. The paper
+#: blank's tools take Gauss-point contact, whose stiffness is the tools' penalty
+#: (docs/theory/contact.md, Gauss-point contact): there r no longer sets it, and its value
+#: is the medium blank's, kept, not tuned for that blank.
 AUGMENTATION = {"medium": 6e4, "paper": 6e4}
 #: Largest increment (mm of punch travel) of each blank.
 MAX_INCREMENT = {"coarse": 0.5, "medium": 0.25, "paper": 0.1}

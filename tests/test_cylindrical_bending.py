@@ -247,6 +247,12 @@ def test_the_release_effort_finding_counts_the_redone_work() -> None:
     assert "Faceted-coarse: punch 14, die 12" in text
     assert "The runs differ in this setting" in text  # Bezier had no cap, the facets 1
     assert bench.release_effort({"nagata": numbers["nagata"]}) == []
+    none = {"bezier": {"newton_iterations_all": 50,
+                       "effort_by_limit": {"max_increment": [10, 50, 50, 40.0]}}}
+    assert bench.release_effort(none) == [
+        "- No forming increment ended at a release (a node in contact at the start of an "
+        "increment that carries more than `rmin_release`, 10%, of its tool's normal force and "
+        "is free at the end; docs/theory/contact.md), in any run."]
 
 
 def test_the_increment_limits_finding_names_every_limit_that_shortened() -> None:

@@ -914,12 +914,18 @@ def release_effort(numbers: dict[str, dict[str, Any]]) -> list[str]:
             f"{rejected} corrections of rejected trials)")
     if not parts:
         return []
+    share = IncrementLimits().release_share  # the decks leave rmin_release at its default
+    if not any(numbers[m]["effort_by_limit"].get("contact_release", [0])[0]
+               for m in MODELS if numbers.get(m, {}).get("effort_by_limit")):
+        return [f"- No forming increment ended at a release (a node in contact at the start "
+                f"of an increment that carries more than `rmin_release`, {share:.0%}, of its "
+                "tool's normal force and is free at the end; docs/theory/contact.md), in any "
+                "run."]
     contact = "; ".join(
         f"{LABELS[m]}: " + ", ".join(f"{t} {c:g}" for t, c in numbers[m]["contact_nodes"].items())
         for m in MODELS if numbers.get(m, {}).get("contact_nodes"))
     contact = "nodes in contact, mean over the forming: " + contact if contact else \
         "the nodes in contact are counted in the results"
-    share = IncrementLimits().release_share  # the decks leave rmin_release at its default
     caps = {numbers[m].get("release_redos") for m in MODELS if m in numbers}
     mixed = (" The runs differ in this setting (Table 3), and the increments and iterations "
              "compared between them include it." if len(caps) > 1 else "")

@@ -41,18 +41,22 @@ def test_each_installed_solver_solves_the_matrix(small_matrix: Path, solver: str
     assert out["factorization_s"] > 0 and out["solve_s"] > 0
 
 
-def test_the_report_weighs_factorizations_and_solves_as_the_run_did() -> None:
-    mix = {"factorizations": 10, "iterations": 100, "solves": 500}
+def test_the_report_weighs_factorizations_and_solves_as_each_run_did() -> None:
+    mixes = {"reuse": {"factorizations": 10, "iterations": 100, "solve_s": 25.0, "threads": 1},
+             "exact": {"factorizations": 60, "iterations": 50, "solve_s": 5.0, "threads": 1}}
     ours = {"solver": "mumps_nested", "threads": 1, "factorization_s": 1.0, "solve_s": 0.05,
             "analysis_s": 0.2, "factor_entries": 5e7, "residual": 1e-16, "peak_memory_mb": 900}
-    other = {**ours, "solver": "pardiso", "factorization_s": 0.8, "solve_s": 0.15}
-    # (10 x 1.0 + 500 x 0.05) / 100 = 0.35 s; (10 x 0.8 + 500 x 0.15) / 100 = 0.83 s
-    assert bench._per_iteration(ours, mix) == pytest.approx(0.35)
+    other = {**ours, "solver": "pardiso", "factorization_s": 0.5, "solve_s": 0.15}
+    # reuse: 10 x 1.0 + 25 = 35 s against 10 x 0.5 + 25 x 3 = 80 s;
+    # exact: 60 x 1.0 + 5 = 65 s against 60 x 0.5 + 5 x 3 = 45 s
+    assert bench.linear_time(other, mixes["exact"], ours) == pytest.approx(45.0)
     text = bench.report([ours, other, {"solver": "superlu", "threads": 1,
                                        "failed": "over 900 s"}],
                         {"n": 300, "entries": 2000, "elements": 1, "plastic": 1.0,
-                         "machine": "x86_64, 2 cores"}, "abc1234", mix)
-    assert "| 0.350 |" in text and "| 0.830 |" in text
-    assert "factorization 0.80 times, solve 3.00 times, per Newton iteration 2.37 times" in text
+                         "machine": "x86_64, 2 cores"}, "abc1234", mixes)
+    assert "| ddpy's MUMPS | 1 | 35 | 65 |" in text and "| PARDISO | 1 | 80 | 45 |" in text
+    assert "PARDISO factorization 0.50 times, solve 3.00 times" in text
+    assert "- reuse: the least linear time with ddpy's MUMPS on 1 thread(s), 35 s." in text
+    assert "- exact: the least linear time with PARDISO on 1 thread(s), 45 s." in text
     assert "failed: over 900 s" in text
     assert "UMFPACK (scikits.umfpack) (Debian libsuitesparse-dev, PyPI scikit-umfpack)" in text

@@ -230,24 +230,45 @@ def _s(value: float | None) -> str:
     return "-" if value is None else f"{value:.3f}"
 
 
-def solver_mix() -> dict[str, int]:
-    """LU factorizations, solves (one per Newton iteration and one per GMRES iteration)
-    and Newton iterations of the bending paper report's Nagata run (its kept numbers)."""
-    numbers = json.loads(runs_file("cylindrical_bending_paper").read_text())["nagata"][
-        "numbers"]
-    iterations = numbers["iterations"] + numbers["springback_iterations"]
-    return {"factorizations": numbers["factorizations"], "iterations": iterations,
-            "solves": iterations + numbers["krylov_iterations"]}
+def run_mixes() -> dict[str, dict[str, Any]]:
+    """What the linear solver did in two runs of the bending paper mesh with Nagata tools:
+    the paper report's (GMRES on older factors between factorizations) and the levers
+    report's with direct solves (a factorization at every iteration): LU factorizations,
+    Newton iterations (forming and springback), the run's total time in solves with
+    factors (GMRES's and the line search's included) and its threads. Empty for a run
+    not kept."""
+    mixes = {}
+    for name, (stem, key) in {"reuse": ("cylindrical_bending_paper", "nagata"),
+                              "exact": ("cylindrical_bending_levers", "direct")}.items():
+        path = runs_file(stem)
+        entry = json.loads(path.read_text()).get(key) if path.exists() else None
+        if not entry:
+            continue
+        n = entry["numbers"]
+        iterations = n["iterations"] + n["springback_iterations"]
+        mixes[name] = {"factorizations": n["factorizations"], "iterations": iterations,
+                       "solve_s": n["per_iteration_s"]["solve"] * iterations,
+                       "threads": n["threads"]}
+    return mixes
 
 
-def _per_iteration(run: dict[str, Any], mix: dict[str, int]) -> float:
+def linear_time(run: dict[str, Any], mix: dict[str, Any], base: dict[str, Any]) -> float:
+    """The linear solver's time over a run with ``mix`` had it used the solver of ``run``:
+    its factorizations at ``run``'s time each, and the run's time in solves scaled by
+    ``run``'s solve against ``base``'s (ddpy's MUMPS on the run's threads, which the run
+    used)."""
     return (mix["factorizations"] * run["factorization_s"]
-            + mix["solves"] * run["solve_s"]) / mix["iterations"]
+            + mix["solve_s"] * run["solve_s"] / base["solve_s"])
+
+
+MIX_TEXT = {"reuse": "the paper report's Nagata run (GMRES on older factors)",
+            "exact": "the levers report's run with direct solves (a factorization at "
+                     "every iteration)"}
 
 
 def report(runs: list[dict[str, Any]], matrix: dict[str, Any], code: str,
-           mix: dict[str, int]) -> str:
-    """The report of the kept runs; ``mix``: solver_mix()."""
+           mixes: dict[str, dict[str, Any]]) -> str:
+    """The report of the kept runs; ``mixes``: run_mixes()."""
     lines = [
         "# Sparse direct solvers on the paper blank's matrix", "",
         computed_at(code) + f" Machine: {matrix['machine']}.", "",
@@ -257,59 +278,64 @@ def report(runs: list[dict[str, Any]], matrix: dict[str, Any], code: str,
         f"bending benchmark's paper blank ({matrix['elements']:,} solid-shells) with "
         f"{matrix['plastic']:.0%} of its integration points plastic. Times in s, the best "
         f"of {REPEATS} factorizations and solves (SuperLU: one factorization, its ordering "
-        "inside). A forming run factorizes now and then and solves with older factors in "
-        "between (GMRES, docs/theory/linear-solver.md), so both count: the last column "
-        "weighs them as the paper report's Nagata run did ("
-        f"{mix['factorizations']} LU factorizations and {mix['solves']} solves, GMRES "
-        f"iterations included, over {mix['iterations']} Newton iterations): its linear "
-        "solver's time per Newton iteration with each solver; the column before it, a "
-        "factorization and a solve at every iteration (exact Newton).", "",
+        "inside).", "",
         _row(["solver", "from", "threads", "analysis", "factorization", "solve",
-              "factor entries", "residual", "peak memory (MB)",
-              "per Newton iteration, factorizing each", "per Newton iteration, the Nagata "
-              "run's mix"]),
-        _row(["---"] * 11)]
+              "factor entries", "residual", "peak memory (MB)"]),
+        _row(["---"] * 9)]
     for r in runs:
         what, where, _ = SOLVERS[r["solver"]]
         if "failed" in r:
             lines.append(_row([what, where, r["threads"], "-", f"failed: {r['failed']}", "-",
-                               "-", "-", "-", "-", "-"]))
+                               "-", "-", "-"]))
             continue
         entries = r.get("factor_entries")
         lines.append(_row([what, where, r["threads"], _s(r.get("analysis_s")),
                            _s(r["factorization_s"]), _s(r["solve_s"]),
                            f"{entries / 1e6:.1f} M" if entries else "-",
-                           f"{r['residual']:.1e}", f"{r['peak_memory_mb']:.0f}",
-                           f"{r['factorization_s'] + r['solve_s']:.3f}",
-                           f"{_per_iteration(r, mix):.3f}"]))
+                           f"{r['residual']:.1e}", f"{r['peak_memory_mb']:.0f}"]))
     done = [r for r in runs if "failed" not in r]
     ours = {r["threads"]: r for r in done if r["solver"] == "mumps_nested"}
     lines += ["", "## What it says", ""]
     for threads, base in sorted(ours.items()):
         others = [r for r in done if r["threads"] == threads and r["solver"] != "mumps_nested"]
-        if not others:
-            continue
-        lines.append(
-            f"- On {threads} thread(s), against ddpy's MUMPS (factorization "
-            f"{base['factorization_s']:.3f} s, solve {base['solve_s']:.4f} s): " + "; ".join(
-                f"{SHORT[r['solver']]} factorization "
-                f"{r['factorization_s'] / base['factorization_s']:.2f} times, solve "
-                f"{r['solve_s'] / base['solve_s']:.2f} times, per Newton iteration "
-                f"{_per_iteration(r, mix) / _per_iteration(base, mix):.2f} times"
-                for r in others) + ".")
-    best = min(done, key=lambda r: (r["factorization_s"] + r["solve_s"], r["threads"]),
-               default=None)
-    fastest = min(done, key=lambda r: _per_iteration(r, mix), default=None)
-    if best and fastest:
-        lines.append(
-            f"- Factorizing at every iteration, the fastest is {SHORT[best['solver']]} on "
-            f"{best['threads']} thread(s), {best['factorization_s'] + best['solve_s']:.3f} s "
-            f"per Newton iteration; at the run's mix of factorizations and solves, "
-            f"{SHORT[fastest['solver']]} on {fastest['threads']} thread(s), "
-            f"{_per_iteration(fastest, mix):.3f} s.")
+        if others:
+            lines.append(
+                f"- On {threads} thread(s), against ddpy's MUMPS (factorization "
+                f"{base['factorization_s']:.3f} s, solve {base['solve_s']:.4f} s): "
+                + "; ".join(f"{SHORT[r['solver']]} factorization "
+                            f"{r['factorization_s'] / base['factorization_s']:.2f} times, "
+                            f"solve {r['solve_s'] / base['solve_s']:.2f} times"
+                            for r in others) + ".")
+    usable = {name: mix for name, mix in mixes.items() if mix["threads"] in ours}
+    if usable:
+        lines += [
+            "", "## Over a whole run", "",
+            "A forming run factorizes and solves in proportions its linear solver sets. The "
+            "linear solver's time over two measured runs of the bending paper mesh with "
+            "Nagata tools, had each used the solver of the row (their factorizations at the "
+            "row's time each, their time in solves scaled by the row's solve against ddpy's "
+            "MUMPS on the run's threads): " + "; ".join(
+                f"{name}: {MIX_TEXT[name]}, {mix['factorizations']} LU factorizations over "
+                f"{mix['iterations']} Newton iterations on {mix['threads']} thread(s)"
+                for name, mix in usable.items()) + ". Assembly and contact search come on "
+            "top, per Newton iteration.", "",
+            _row(["solver", "threads", *(f"{name}: linear time of the run [s]"
+                                         for name in usable)]),
+            _row(["---"] * (2 + len(usable)))]
+        for r in done:
+            lines.append(_row([SHORT[r["solver"]], r["threads"], *(
+                f"{linear_time(r, mix, ours[mix['threads']]):.0f}"
+                for mix in usable.values())]))
+        lines.append("")
+        for name, mix in usable.items():
+            best = min(done, key=lambda r, m=mix: linear_time(r, m, ours[m["threads"]]))
+            lines.append(f"- {name}: the least linear time with "
+                         f"{SHORT[best['solver']]} on {best['threads']} thread(s), "
+                         f"{linear_time(best, mix, ours[mix['threads']]):.0f} s.")
     missing = sorted({s for s in SOLVERS} - {r["solver"] for r in runs})
     if missing:
-        lines.append("- Not installed where this report was written: " + ", ".join(
+        lines.append(("\n" if not usable else "") + "- Not installed where this report "
+                     "was written: " + ", ".join(
             f"{SOLVERS[s][0]} ({SOLVERS[s][1]})" for s in missing) + ".")
     return "\n".join(lines) + "\n"
 
@@ -349,7 +375,7 @@ def main(argv: list[str] | None = None) -> int:
         kept.write_text(json.dumps({"code": code, "matrix": matrix, "runs": runs},
                                    indent=1) + "\n")
     out = DOCS / f"{STEM}.md"
-    out.write_text(report(runs, matrix, code, solver_mix()))
+    out.write_text(report(runs, matrix, code, run_mixes()))
     print(f"wrote {out}", file=sys.stderr)
     return 0
 

@@ -27,7 +27,8 @@ def small_matrix(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
     a = (a + sp.diags(np.abs(a).sum(axis=1).A1 + 1.0)).tocoo()
     path = tmp_path / "matrix.npz"
     np.savez(path, n=n, rows=a.row.astype(np.int32), cols=a.col.astype(np.int32),
-             values=a.data, position=rng.permutation(n), elements=1, plastic=1.0)
+             values=a.data, node_order=rng.permutation(n), equation_nodes=np.arange(n),
+             elements=1, plastic=1.0)
     monkeypatch.setattr(bench, "MATRIX", path)
     return path
 

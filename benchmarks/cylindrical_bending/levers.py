@@ -22,6 +22,7 @@ The levers, and how a variant switches them off (docs/theory/speed.md):
 from __future__ import annotations
 
 import argparse
+import json
 import shutil
 import sys
 from pathlib import Path
@@ -98,7 +99,12 @@ def run_variant(variant: str, restart: bool = False) -> dict[str, Any]:
     folder = case_folder(variant)
     output = HERE / "results" / "paper" / f"levers_{variant}"
     print(f"running {variant} ({VARIANTS[variant]}) ...", file=sys.stderr, flush=True)
-    run = bench.run_case_folder(folder, output=output, verbose=True, restart=restart)
+    return keep(variant, bench.run_case_folder(folder, output=output, verbose=True,
+                                               restart=restart))
+
+
+def keep(variant: str, run: Any) -> dict[str, Any]:
+    """The numbers of a variant's run (``run.Run``), merged into the kept runs."""
     numbers = bench.summary("nagata", run)
     numbers["switched_off"] = VARIANTS[variant]
     bench.keep_runs(runs_file(STEM), {variant: numbers}, {variant: run})
@@ -125,11 +131,6 @@ def verdicts(on: dict[str, Any], off: dict[str, Any]) -> dict[str, Any]:
             "angles_hold": bool(largest <= ANGLE_BOUND),
             "oscillation_holds": bool(on["oscillation_N"]
                                       <= off["oscillation_N"] + resolution(on))}
-
-
-def _per_iteration(n: dict[str, Any]) -> str:
-    """Wall time per Newton iteration of the whole run (forming and springback)."""
-    return f"{n['wall_s'] / max(n['iterations'] + n['springback_iterations'], 1):.3f}"
 
 
 def report(on: dict[str, Any], variants: dict[str, dict[str, Any]], code: str) -> str:
@@ -160,7 +161,7 @@ def report(on: dict[str, Any], variants: dict[str, dict[str, Any]], code: str) -
         _row(["LU factorizations", *(n["factorizations"] for n in runs)]),
         _row(["GMRES iterations (older factors)", *(n["krylov_iterations"] for n in runs)]),
         _row(["wall time [min]", *(f"{n['wall_s'] / 60:.1f}" for n in runs)]),
-        _row(["per iteration [s]", *(_per_iteration(n) for n in runs)]),
+        _row(["per iteration [s]", *(f"{bench._per_iteration(n)[1]:.3f}" for n in runs)]),
         _row(["largest punch force, quarter [N]", *(f"{n['max_force_N']:.2f}" for n in runs)]),
         _row(["oscillation [N]", *(f"{n['oscillation_N']:.4g}" for n in runs)]),
         _row(["oscillation after 20 mm [N]",
@@ -204,8 +205,6 @@ def _force_difference(on: dict[str, Any], off: dict[str, Any]) -> float:
 
 
 def _with_curves(path: Path) -> dict[str, dict[str, Any]]:
-    import json
-
     if not path.exists():
         return {}
     return {k: {**e["numbers"], "curves": e["curves"]}
@@ -226,10 +225,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.reuse:  # read the saved runs back into the kept runs
         for variant, path in saved.items():
             if path.exists():
-                run = bench.from_results(path)
-                numbers = bench.summary("nagata", run)
-                numbers["switched_off"] = VARIANTS[variant]
-                bench.keep_runs(runs_file(STEM), {variant: numbers}, {variant: run})
+                keep(variant, bench.from_results(path))
     variants = _with_curves(runs_file(STEM))
     on = _with_curves(runs_file("cylindrical_bending_paper")).get("nagata")
     if not variants or on is None:

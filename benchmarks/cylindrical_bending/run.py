@@ -873,11 +873,12 @@ LIMIT_MEANING = {
 
 def increment_limits(numbers: dict[str, dict[str, Any]]) -> list[str]:
     """What set the forming increments, per model: the increments each limit ended."""
-    parts = []
+    parts, seen = [], set()
     for model in MODELS:
         limits = numbers.get(model, {}).get("limited_by")
         if not limits:
             continue
+        seen |= {k for k, v in limits.items() if v}
         total = sum(limits.values())
         at_max = limits.get("max_increment", 0)
         parts.append(f"{LABELS[model]}: {at_max} of {total} at the largest size ("
@@ -886,7 +887,6 @@ def increment_limits(numbers: dict[str, dict[str, Any]]) -> list[str]:
                          if k != "max_increment" and limits.get(k)))
     if not parts:
         return []
-    seen = {k for m in MODELS for k, v in numbers.get(m, {}).get("limited_by", {}).items() if v}
     return ["- What set the forming increments: " + "; ".join(parts) + ". The limits: "
             + "; ".join(f"{k}, {LIMIT_MEANING[k]}" for k in LIMIT_MEANING if k in seen)
             + "."]

@@ -64,9 +64,9 @@ SOLVERS = {
 
 
 def build_matrix() -> Path:
-    """Assemble the matrix and the pivot order ddpy gives MUMPS; save them to MATRIX."""
+    """Assemble the matrix; save it to MATRIX with what ddpy's pivot order is made of (the
+    nodes' nested-dissection order, each equation's node)."""
     from ddpy.app.runner import build_problem
-    from ddpy.core.ordering import equation_order
     from ddpy.io.decks import read_case
     from ddpy.model.newton import Layout
 
@@ -84,11 +84,10 @@ def build_matrix() -> Path:
     layout = Layout(solid, [], fixed)
     assembly = solid.assemble(u, pattern=layout.pattern)
     plastic = float(np.mean(assembly.state.ep > 0))
-    free = ~fixed.ravel()
-    position = equation_order(solid.node_order(), np.flatnonzero(free) // 3)
     MATRIX.parent.mkdir(parents=True, exist_ok=True)
     np.savez(MATRIX, n=layout.n, rows=layout.rows, cols=layout.cols, values=assembly.values,
-             position=position, elements=solid.mesh.n_elements, plastic=plastic)
+             node_order=solid.node_order(), equation_nodes=np.flatnonzero(~fixed.ravel()) // 3,
+             elements=solid.mesh.n_elements, plastic=plastic)
     return MATRIX
 
 
@@ -106,6 +105,8 @@ def measure(solver: str) -> dict[str, Any]:
     the relative residual of the solution."""
     import scipy.sparse as sp
 
+    from ddpy.app.runner import peak_memory_mb
+
     data = np.load(MATRIX)
     n = int(data["n"])
     rows, cols, values = data["rows"], data["cols"], data["values"]
@@ -114,11 +115,10 @@ def measure(solver: str) -> dict[str, Any]:
     b = matrix @ rng.standard_normal(n)
     out: dict[str, Any] = {"solver": solver, "n": n, "entries": int(matrix.nnz)}
     if solver.startswith("mumps"):
-        from ddpy.core.linalg import MumpsSolver
+        from ddpy.core.ordering import mesh_solver
 
-        mumps = MumpsSolver("unsymmetric", "amd" if solver == "mumps_nested" else "metis")
-        if solver == "mumps_nested":
-            mumps.set_ordering(data["position"])
+        mumps = mesh_solver("unsymmetric", "nested" if solver == "mumps_nested" else "metis",
+                            lambda: data["node_order"], data["equation_nodes"])
         coo = matrix.tocoo()
         out["analysis_s"], _ = _best(lambda: mumps.analyse(n, coo.row, coo.col), 1)
         out["factorization_s"], _ = _best(lambda: mumps.factorize(coo.data), REPEATS)
@@ -156,7 +156,7 @@ def measure(solver: str) -> dict[str, Any]:
     else:
         raise SystemExit(f"unknown solver {solver!r}")
     out["residual"] = float(np.linalg.norm(matrix @ x - b) / np.linalg.norm(b))
-    out["peak_memory_mb"] = _peak_memory_mb()
+    out["peak_memory_mb"] = peak_memory_mb()
     return out
 
 
@@ -195,12 +195,6 @@ class _Pardiso:
         if error.value:
             raise RuntimeError(f"PARDISO error {error.value} in phase {phase}")
         return x
-
-
-def _peak_memory_mb() -> float:
-    import resource
-
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
 def available(solver: str) -> bool:

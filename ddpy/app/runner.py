@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import logging
 import math
 import os
 import resource
@@ -47,6 +48,8 @@ from ddpy.model.forming import (
     RigidTool,
 )
 from ddpy.model.solid import Solid, SolidState
+
+_log = logging.getLogger(__name__)
 
 __all__ = ["BUILT_IN_CASES", "CHECKPOINT", "DEFAULT_CASE", "RESULTS", "STATUS", "Progress",
            "RunError", "RunOutcome", "build_problem", "case_folder", "default_output",
@@ -91,10 +94,10 @@ _LIMITS = {"max": "max_increment", "touch": "contact_touch", "strain": "strain",
 
 #: Arrays of FormingProblem carried from one increment to the next (besides the solid state
 #: and the tool positions): a checkpoint stores them. Add here any new state of the loop.
-_CARRIED = ("u", "force", "_status", "traction")
+_CARRIED = ("u", "force", "_status", "traction", "pressure")
 #: Of those, the ones a checkpoint written before they existed lacks (then zero): the
-#: tangential tractions of Gauss-point contact.
-_SINCE = ("traction",)
+#: tangential tractions and the pressures of Gauss-point contact.
+_SINCE = ("traction", "pressure")
 
 
 class RunError(RuntimeError):
@@ -245,6 +248,7 @@ class _Run:
         # Increments, iteration rows and frames of the results file at the checkpoint.
         self._reopen_at = (0, 0, 0)
         self.halt = ""  # why the run stops early: "interrupted" or "stopped"
+        self.warned: set[str] = set()  # tools whose penetration limit a warning named
         self._clock = time.perf_counter()
         self._since_checkpoint = 0
 
@@ -367,6 +371,9 @@ class _Run:
         # The measures convergence is judged on (FormingResult.relative): the residual over
         # the force scale and the correction over the increment's displacement.
         history = np.asarray(result.relative[-1], dtype=float).reshape(-1, 2)
+        depth = [result.penetration[k][-1] if result.penetration.get(k) else 0.0
+                 for k in self.names]
+        self._warn_penetration(phase, depth)
         self.writer.increment(
             phase=self.phase_index, step=step, travel=travel,
             tool_displacement=np.array([self.problem.position[k] for k in self.names]),
@@ -380,13 +387,28 @@ class _Run:
             if phase.max_increment else 1.0, limit=limit, residual_history=history,
             factorizations=counts["factorizations"],
             krylov_iterations=counts["krylov_iterations"],
-            newton_iterations=counts["newton_iterations"], evaluations=counts["evaluations"])
+            newton_iterations=counts["newton_iterations"], evaluations=counts["evaluations"],
+            penetration=depth)
         self.phase_increments += 1
         self._since_checkpoint += 1
         if self.progress is not None:
             self.progress(Progress(phase.name, self.phase_index, len(self.case.phases),
                                    self.writer.increments, phase.lead, travel, phase.travel,
                                    step, len(history) - 1, limit))
+
+    def _warn_penetration(self, phase: Phase, depth: list[float]) -> None:
+        """Warn, once per tool and run, where the blank lies deeper in a tool than the
+        phase's penetration_limit (a fraction of the blank's thickness)."""
+        thickness = self.problem.thickness
+        limit = phase.newton.penetration_warning * thickness
+        for name, d in zip(self.names, depth, strict=True):
+            if d > limit and name not in self.warned:
+                self.warned.add(name)
+                _log.warning(
+                    "warning: the blank lies %.3g mm (%.1f %% of its %.3g mm thickness) inside "
+                    "tool %s in phase %s, deeper than penetration_limit %g; the run goes on "
+                    "(docs/theory/contact.md, \"Penetration\")", d, 100.0 * d / thickness,
+                    thickness, name, phase.name, phase.newton.penetration_warning)
 
     def _should_halt(self) -> bool:
         if self.stop is not None and self.stop():

@@ -85,18 +85,9 @@ class DeckError(ValueError):
 
 
 def blank_thickness(mesh: HexMesh) -> float | None:
-    """Smallest initial thickness of a layered blank (mm); its extent along the normal else."""
-    try:
-        bottom, top = mesh.columns()
-    except ValueError:
-        pass
-    else:
-        spanning = top != bottom
-        if spanning.any():
-            x = mesh.nodes
-            return float(np.linalg.norm(x[top[spanning]] - x[bottom[spanning]], axis=1).min())
-    axis = mesh.normal_axis
-    return float(np.ptp(mesh.nodes[:, axis])) or None
+    """Smallest initial thickness of a layered blank (mm); its extent along the normal else
+    (HexMesh.initial_thickness); None for a flat one."""
+    return mesh.initial_thickness() or None
 
 
 @dataclass(frozen=True, eq=False)

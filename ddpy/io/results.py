@@ -63,6 +63,9 @@ TENSOR6 = np.array([0, 3, 5, 1, 4, 2])
 VOIGT = np.argsort(TENSOR6)
 
 #: Per-increment scalar columns: name -> (dtype, units, meaning).
+#: The per-tool column of the deepest penetration: name and dtype, units and meaning.
+_PENETRATION = ("penetration", "f8")
+_PENETRATION_TEXT = ("mm", "deepest penetration of the blank into each tool")
 _SCALARS: dict[str, tuple[str, str, str]] = {
     "increment": ("i4", "1", "increment number, from 1 over the whole run"),
     "phase": ("i4", "1", "index of the phase (root attribute 'phases')"),
@@ -238,6 +241,7 @@ class ResultsWriter:
                      "displacement of each tool since the start of the run")
         self._column(inc, "tool_force", "f8", (t, 3), "N", "reaction force on each tool")
         self._column(inc, "nodes_in_contact", "i4", (t,), "1", "nodes in contact, per tool")
+        self._column(inc, *_PENETRATION, (t,), *_PENETRATION_TEXT)
         inc["limit"].attrs["codes"] = str(LIMITS)
         inc.attrs["count"] = 0
         it = f.create_group("iterations")
@@ -365,6 +369,9 @@ class ResultsWriter:
             if name not in inc:  # a file of an older version: the column starts at zero
                 cls._column(inc, name, dtype, (), units, meaning)
                 inc[name].resize(increments, axis=0)
+        if _PENETRATION[0] not in inc:
+            cls._column(inc, *_PENETRATION, (len(f.attrs["tools"]),), *_PENETRATION_TEXT)
+            inc[_PENETRATION[0]].resize(increments, axis=0)
         fields.attrs["count"] = frames
         for index in range(frames, have[2]):
             del fields[f"{index:06d}"]
@@ -438,15 +445,18 @@ class ResultsWriter:
                   cutbacks: int = 0, rmin: float = 1.0, limit: int | str = 0,
                   residual_history: ArrayLike | None = None, factorizations: int = 0,
                   krylov_iterations: int = 0, newton_iterations: int = 0,
-                  evaluations: int = 0) -> int:
+                  evaluations: int = 0, penetration: ArrayLike | None = None) -> int:
         """Append one converged increment; return its number (from 1). ``tool_displacement``
         and ``tool_force`` are (tools, 3); ``residual_history`` (iterations, 2) holds the
-        force and displacement residuals of each Newton iteration."""
+        force and displacement residuals of each Newton iteration; ``penetration`` (tools,)
+        the deepest penetration of the blank into each tool (mm)."""
         t = len(self.tools)
         u = _shaped(tool_displacement, (t, 3), "tool_displacement")
         force = _shaped(tool_force, (t, 3), "tool_force")
         contact = (np.zeros(t, np.int32) if nodes_in_contact is None
                    else _shaped(nodes_in_contact, (t,), "nodes_in_contact"))
+        depth = (np.zeros(t) if penetration is None
+                 else _shaped(penetration, (t,), "penetration"))
         if int(phase) < 0 or (self.phases and int(phase) >= len(self.phases)):
             raise ValueError(f"phase {phase} is not an index of phases {list(self.phases)}")
         code = _limit_code(limit)
@@ -461,7 +471,8 @@ class ResultsWriter:
                "limit": code, "time_assembly": timings.assembly,
                "time_contact": timings.contact, "time_factorization": timings.factorization,
                "time_solve": timings.solve, "time_rest": timings.rest, "time_total": timings.total,
-               "tool_displacement": u, "tool_force": force, "nodes_in_contact": contact}
+               "tool_displacement": u, "tool_force": force, "nodes_in_contact": contact,
+               "penetration": depth}
         with self._writing():
             inc = self._file["increments"]
             for name, value in row.items():

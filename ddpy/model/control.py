@@ -93,18 +93,31 @@ class IncrementLimits:
         return max(1, math.ceil(math.log(1.0 / self.min_fraction) / -math.log(cutback)))
 
 
+#: The deepest the blank may lie inside a tool, as a fraction of its thickness, past which
+#: a run warns unless a deck sets penetration_limit: 1 %, below what a forming engineer
+#: reads off a part.
+DEFAULT_PENETRATION = 0.01
+
+
 @dataclass(frozen=True)
 class NewtonSettings:
     """Convergence of the Newton loop (deck ``newton_force``, ``newton_displacement``,
-    ``max_iterations``, ``cutback``): converged when the residual is below
-    ``force_tolerance`` times the force scale and the correction below
+    ``max_iterations``, ``cutback``, ``penetration_limit``): converged when the residual is
+    below ``force_tolerance`` times the force scale and the correction below
     ``displacement_tolerance`` times the increment's displacement; an increment that has not
-    converged in ``max_iterations`` is cut by ``cutback`` and tried again."""
+    converged in ``max_iterations`` is cut by ``cutback`` and tried again. ``penetration``
+    (deck ``penetration_limit``): the deepest the blank may lie inside a tool at a
+    converged increment, as a fraction of its thickness: Gauss-point contact then carries
+    its pressures from increment to increment and augments them (Uzawa) until it holds, and
+    a run warns once per tool where it does not. None (the default, deck ``off``):
+    Gauss-point contact is the plain penalty, and runs warn at DEFAULT_PENETRATION
+    (docs/theory/contact.md, "Penetration")."""
 
     force_tolerance: float = 1e-4
     displacement_tolerance: float = 1e-4
     max_iterations: int = 25
     cutback: float = 0.5
+    penetration: float | None = None
 
     def __post_init__(self) -> None:
         for name in ("force_tolerance", "displacement_tolerance"):
@@ -117,6 +130,14 @@ class NewtonSettings:
                              f"{self.max_iterations}")
         if not 0.0 < self.cutback < 1.0:
             raise ValueError(f"cutback must lie in (0, 1), got {self.cutback}")
+        if self.penetration is not None and not 0.0 < self.penetration < 1.0:
+            raise ValueError(f"penetration must lie in (0, 1) (a fraction of the blank's "
+                             f"thickness) or be None, got {self.penetration}")
+
+    @property
+    def penetration_warning(self) -> float:
+        """The fraction of the blank's thickness past which a run warns."""
+        return DEFAULT_PENETRATION if self.penetration is None else self.penetration
 
 
 def next_step(step: float, nominal: float, reason: str, strain_ratio: float,

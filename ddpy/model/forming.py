@@ -101,6 +101,9 @@ REACH_SIZES, REACH_TRAVELS = 2.0, 4.0
 #: Steps in which the forces of tools lifted at the start of a phase are released (each
 #: halved while it fails, down to RELEASE_SMALLEST of the whole release).
 RELEASE_STEPS, RELEASE_SMALLEST = 4, 1.0 / 1024.0
+#: Most Uzawa updates of the Gauss points' pressure multipliers within one increment
+#: (NewtonSettings.penetration; docs/theory/contact.md, "The augmented Lagrangian").
+MAX_AUGMENTATIONS = 6
 
 
 def _extrapolated(u: NDArray[np.float64], step: float, rate: NDArray[np.float64] | None,
@@ -217,6 +220,13 @@ class FormingResult:
     #: Newton steps whose line search found no step length that passed the natural
     #: monotonicity test and took the longest that lowered the residual norm instead
     fallbacks: int = 0
+    #: per tool and increment, the deepest penetration of the blank into the tool (mm, 0
+    #: when none): its slave nodes' gaps for node-to-surface and surface-to-surface
+    #: contact, its Gauss points' for Gauss-point contact
+    penetration: dict[str, list[float]] = field(default_factory=dict)
+    #: Uzawa updates of the Gauss points' pressure multipliers (each one more solve of its
+    #: increment, its iterations counted in the increment's)
+    augmentations: int = 0
     timings: dict[str, float] = field(default_factory=lambda: {
         "assembly": 0.0, "contact": 0.0, "factorization": 0.0, "solve": 0.0})
 
@@ -277,6 +287,11 @@ class FormingProblem:
         self.force = np.zeros((npair, 3))
         #: the tangential traction of every Gauss point of Gauss-point contact (points, 3)
         self.traction = np.zeros((self._pack.n_points, 3))
+        #: the pressure of every Gauss point at the last converged increment (points,): the
+        #: multiplier of its augmented Lagrangian law p = max(0, p_n - eps g)
+        self.pressure = np.zeros(self._pack.n_points)
+        #: the blank's thickness (mm), the scale of NewtonSettings.penetration
+        self.thickness = mesh.initial_thickness()
         self._gap = (np.full(npair, np.inf), np.zeros((npair, 3)))
         #: reach of the contact search (mm): see REACH_SIZES; run() adds its tool travel
         self._reach = REACH_SIZES * self.size
@@ -382,6 +397,7 @@ class FormingProblem:
             result.tool_forces.setdefault(t.name, [])
             result.contacts.setdefault(t.name, [])
             result.status.setdefault(t.name, [])
+            result.penetration.setdefault(t.name, [])
         layout = self._prepare()
         on = np.concatenate([np.full(t.slaves.size, t.name in active_set) for t in self.tools])
         start = {name: p.copy() for name, p in self.position.items()}
@@ -485,6 +501,11 @@ class FormingProblem:
                         f"largest): {outcome.failure}", result)
                 step, reason = step * cutback, "cut"
                 continue
+            multiplier = self.pressure  # of the Gauss points' law in the outcome
+            if newton.penetration is not None:
+                outcome, multiplier = self._augmented(
+                    outcome, newton.penetration * self.thickness, layout, positions, on,
+                    tol_force, tol_disp, max_iterations, result, touching)
             u, state, force, in_contact, gap = (outcome.u, outcome.state, outcome.force,
                                                 outcome.in_contact, outcome.gap)
             residuals, relative = outcome.residuals, outcome.relative
@@ -524,7 +545,10 @@ class FormingProblem:
             last_du = (u - self.u) / (target - factor)
             normal = gap[1]
             last_dp = np.einsum("ij,ij->i", force - self.force, normal) / (target - factor)
+            depth = self._penetration(layout, outcome, multiplier, on)
             self._take(outcome)
+            if newton.penetration is None:  # the plain penalty: no multipliers
+                self.pressure = np.zeros_like(self.pressure)
             self.position = positions
             result.sizes.append(target - factor)
             result.limited_by.append(reason)
@@ -539,6 +563,7 @@ class FormingProblem:
                 result.tool_forces[t.name].append(-force[pairs].sum(axis=0))
                 result.contacts[t.name].append(int((in_contact[pairs] != INACTIVE).sum()))
                 result.status[t.name].append(in_contact[pairs].copy())
+                result.penetration[t.name].append(depth[i])
             cuts_in_row = redos = 0
             step, reason = next_step(step, nominal, reason, strain / limits.strain,
                                       rotation / limit)
@@ -596,10 +621,76 @@ class FormingProblem:
         return spent, relative
 
     def _take(self, outcome: Trial) -> None:
-        """A converged increment's state as the problem's."""
+        """A converged increment's state as the problem's (its Gauss points' pressures the
+        multipliers of the next increment)."""
         self.u, self.state, self.force, self._gap = (outcome.u, outcome.state, outcome.force,
                                                      outcome.gap)
         self.traction, self._status = outcome.traction, outcome.in_contact
+        self.pressure = outcome.pressure
+
+    def _point_depth(self, pressure: NDArray[np.float64], multiplier: NDArray[np.float64]
+                     ) -> list[float]:
+        """Per tool, the deepest of its Gauss points in it (mm, 0 when none; 0 for a tool
+        without Gauss-point contact), from their pressures p = max(0, p_n - eps g) at the
+        multipliers p_n: a point that carries pressure lies (p - p_n) / eps deep."""
+        first = self._pack.point_first
+        depth = []
+        for i, eps in enumerate(self.penalty):
+            points = slice(first[i], first[i + 1])
+            p, p_n = pressure[points], multiplier[points]
+            inside = p > 0.0
+            depth.append(float(np.max((p[inside] - p_n[inside]) / eps, initial=0.0))
+                         if eps > 0.0 else 0.0)
+        return depth
+
+    def _penetration(self, layout: Layout, outcome: Trial, multiplier: NDArray[np.float64],
+                     on: NDArray[np.bool_]) -> list[float]:
+        """Per tool, the deepest penetration of the blank at a converged ``outcome`` of
+        an increment (mm, >= 0): the Gauss points' (whose law had the pressure
+        ``multiplier``) for Gauss-point contact, the slave nodes' gaps otherwise
+        (FormingResult.penetration)."""
+        assert outcome.pressure is not None and outcome.gap is not None
+        points = self._point_depth(outcome.pressure, multiplier)
+        gap = np.where(on & np.isfinite(outcome.gap[0]), outcome.gap[0], np.inf)
+        depth = []
+        for i, t in enumerate(self.tools):
+            if t.contact == "gauss":
+                depth.append(points[i])
+                continue
+            pairs = gap[layout.first[i]:layout.first[i + 1]]
+            depth.append(max(0.0, -float(pairs.min(initial=np.inf))))
+        return depth
+
+    def _augmented(self, outcome: Trial, limit: float, layout: Layout,
+                   positions: Mapping[str, NDArray[np.float64]], on: NDArray[np.bool_],
+                   tol_force: float, tol_disp: float, max_iterations: int,
+                   result: FormingResult, touching: _Touching
+                   ) -> tuple[Trial, NDArray[np.float64]]:
+        """The converged ``outcome`` of an increment with its Gauss points at most
+        ``limit`` (mm) inside their tools: while one is deeper, the points' multipliers
+        take their pressures (an Uzawa update of the augmented Lagrangian) and the
+        increment is solved again from there, at most MAX_AUGMENTATIONS times. The
+        residual histories of the solves are joined, as the release's are. A solve that
+        fails leaves the last converged answer (its depth is recorded, and the run warns).
+        Returns the answer and the multipliers of its law."""
+        multiplier = self.pressure
+        for _ in range(MAX_AUGMENTATIONS):
+            assert outcome.pressure is not None
+            if max(self._point_depth(outcome.pressure, multiplier), default=0.0) <= limit:
+                break
+            multiplier = outcome.pressure
+            again = self._increment(layout, positions, on, tol_force, tol_disp,
+                                    max_iterations, result, touching=touching,
+                                    guess=outcome.u, pressure=multiplier)
+            if again.failure or again.landing < 1.0:
+                _log.info("an augmentation of the Gauss points' pressures failed: %s",
+                          again.failure or "a yield landing")
+                break
+            result.augmentations += 1
+            again.residuals = list(outcome.residuals) + list(again.residuals)[1:]
+            again.relative = list(outcome.relative) + list(again.relative)[1:]
+            outcome = again
+        return outcome, multiplier
 
     def _gap_offsets(self, gaps: Mapping[str, tuple[str, float, ArrayLike]],
                      moves: Mapping[str, NDArray[np.float64]],
@@ -688,6 +779,7 @@ class FormingProblem:
         loads[self.fixed] = 0.0
         self.force = np.zeros_like(self.force)
         self.traction = np.zeros_like(self.traction)
+        self.pressure = np.zeros_like(self.pressure)
         off = np.zeros(layout.node.size, dtype=bool)
         last_du: NDArray[np.float64] | None = None
         try:
@@ -857,12 +949,12 @@ class FormingProblem:
         equilibrium rows (which hold fint - external), and writes the contact entries of
         ``values`` (none when it is empty: a look at the gaps). Returns the pairs' states,
         and their gaps (inf: no patch) and normals."""
-        residual[:], values[:], state, gap, normal, _, status = _core.forming_contact(
+        residual[:], values[:], state, gap, normal, _, _, status = _core.forming_contact(
             x.ravel(), x_n.ravel(), layout.fixed_flags, *self._tool_arguments(positions),
             0.0 if touching is None else touching.distance,
             1 if touching is None or touching.resting else 0, layout.first, layout.node,
             layout.patch_first, layout.patch_node, on.astype(np.int32), force.ravel(), self.r,
-            self.mu, layout.held_flags, self.traction.ravel(),
+            self.mu, layout.held_flags, self.traction.ravel(), self.pressure,
             layout.eqn, layout.nf, layout.k_slots, residual, values)
         if status:
             raise RuntimeError("forming_contact: the tools' packed arrays or the layout do not "
@@ -904,7 +996,8 @@ class FormingProblem:
                    result: FormingResult, yield_tolerance: float | None = None,
                    touching: _Touching | None = None,
                    guess: NDArray[np.float64] | None = None,
-                   careful: bool = False, exact: bool = False) -> Trial:
+                   careful: bool = False, exact: bool = False,
+                   pressure: NDArray[np.float64] | None = None) -> Trial:
         """One increment trial, the Newton iterations run by the core (forming_increment,
         fortran/solver/ddpy_forming_newton.f90): the new state, or (with
         ``yield_tolerance``) the fraction of the increment at which the first elastic Gauss
@@ -918,7 +1011,8 @@ class FormingProblem:
         line search), for the first increment of a phase whose default start failed: a
         semi-smooth Newton on a degenerate contact set (pairs at g = 0, p = 0) needs exact
         active-set steps (docs/theory/contact.md). ``exact``: exact solves only, the line
-        search kept (springback).
+        search kept (springback). ``pressure``: the Gauss points' pressure multipliers
+        (default: the last converged pressures).
 
         The semi-smooth Newton step is globalized by backtracking until Deuflhard's natural
         monotonicity test holds (the simplified correction at the trial point, solved with
@@ -939,7 +1033,7 @@ class FormingProblem:
                     search=SEARCH_NONE if careful else SEARCH_MONOTONICITY,
                     whole_step=WHOLE_STEP)
         pairs = Pairs(self._tool_arguments(positions), on, self.r, self.mu, self.force,
-                      self.traction)
+                      self.traction, self.pressure if pressure is None else pressure)
         trial = increment(self.solid, layout, self._factors, self.state, self.u,
                           self.external, self.u, guess, loop, pairs)
         evaluations, corrections, factorizations, krylov, fallbacks = trial.counters

@@ -432,6 +432,19 @@ class HexMesh:
         when the mesh is not layered through the thickness (see through_thickness_columns)."""
         return through_thickness_columns(self.nodes, self.elements, self.normal)
 
+    def initial_thickness(self) -> float:
+        """The blank's thickness (mm): the thinnest of its through-thickness columns that
+        span more than one node, or its extent along its normal when it is not layered."""
+        try:
+            bottom, top = self.columns()
+        except ValueError:
+            return float(np.ptp(self.nodes[:, self.normal_axis]))
+        spanning = top != bottom
+        if not spanning.any():
+            return float(np.ptp(self.nodes[:, self.normal_axis]))
+        x = self.nodes
+        return float(np.linalg.norm(x[top[spanning]] - x[bottom[spanning]], axis=1).min())
+
     def thickness(self, displacement: ArrayLike | None = None) -> NDArray[np.float64]:
         """Per node, the distance between the top and bottom node of its column, in the
         current configuration (nodes + displacement)."""

@@ -183,6 +183,7 @@ class ToolPack:
         table = np.zeros((len(tools), 13), dtype=np.int32)
         offsets = np.zeros(4, dtype=np.int64)  # coef, patch, tree, grid
         first_point = 0
+        point_first = [0]
         for i, (tool, s) in enumerate(zip(tools, searches, strict=True)):
             n = s.surface.n_patches
             table[i] = (s.kind, s.stride, n, s.mode, s.max_iterations, *offsets,
@@ -190,6 +191,7 @@ class ToolPack:
                         first_point)
             offsets += (s.surface.coefficients.size, n, 2 * n - 1, s.grid_params.shape[0])
             first_point += tool.points**2 * faces[i].shape[0]
+            point_first.append(first_point)
         self.names = [t.name for t in tools]
         self.table = table.ravel()
         self.tol = np.array([s.tol for s in searches], dtype=float)
@@ -225,6 +227,8 @@ class ToolPack:
                                  np.asarray(penalty, dtype=float), 2)
         #: Gauss points of all faces: their tangential tractions are (3,) each
         self.n_points = first_point if len(tools) else 0
+        #: the Gauss points of tool i are point_first[i]:point_first[i + 1]
+        self.point_first = np.array(point_first, dtype=np.int64)
 
     def arguments(self, positions: dict[str, NDArray[np.float64]],
                   positions_n: dict[str, NDArray[np.float64]], reach: float, size: float
@@ -292,6 +296,8 @@ class Trial:
     in_contact: NDArray[np.int32] | None = None
     #: the tangential traction of every Gauss point of Gauss-point contact (points, 3)
     traction: NDArray[np.float64] | None = None
+    #: the normal pressure of every Gauss point of Gauss-point contact (points,)
+    pressure: NDArray[np.float64] | None = None
     gap: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
     counters: tuple[int, ...] = (0, 0, 0, 0, 0)
     timings: dict[str, float] = field(default_factory=dict)
@@ -312,7 +318,9 @@ class Pairs:
     """The (tool, slave) pairs of an increment: the tools (``ToolPack.arguments``) where
     the increment takes them, the pairs that take part (``on``), their augmentation ``r``,
     friction ``mu`` and contact forces at the converged state, and the tangential traction
-    of each Gauss point of Gauss-point contact there (``traction_n``, (points, 3))."""
+    of each Gauss point of Gauss-point contact there (``traction_n``, (points, 3)) with its
+    pressure multiplier (``pressure_n``, (points,): the augmented Lagrangian's, 0 for the
+    plain penalty)."""
 
     tools: tuple
     on: NDArray[np.bool_]
@@ -320,6 +328,7 @@ class Pairs:
     mu: NDArray[np.float64]
     force_n: NDArray[np.float64]
     traction_n: NDArray[np.float64]
+    pressure_n: NDArray[np.float64]
 
 
 def increment(solid: Solid, layout: Layout, factors: Factors, state: SolidState,
@@ -357,15 +366,17 @@ def increment(solid: Solid, layout: Layout, factors: Factors, state: SolidState,
             u_n.ravel(),
             external.ravel(), prescribed.ravel(), start, settings, isettings, factored,
             *buffers)
-        force = pair_state = gap = normal = traction = np.zeros(0)
+        force = pair_state = gap = normal = traction = pressure = np.zeros(0)
     else:
         (factored, reuse_next, u, force, fint, stress, ep, strain, axes, pair_state, gap,
-         normal, traction, niter, history, counters, spent, outcome, info, detail) = \
+         normal, traction, pressure, niter, history, counters, spent, outcome, info,
+         detail) = \
             _core.forming_increment(
                 *solid_state, layout.n_coupling, layout.rows.size, *layout.by_rows,
                 *pairs.tools, loop.touching, layout.first, layout.node, layout.patch_first,
                 layout.patch_node, pairs.on.astype(np.int32), pairs.r,
-                pairs.mu, layout.held_flags, pairs.traction_n.ravel(), u_n.ravel(),
+                pairs.mu, layout.held_flags, pairs.traction_n.ravel(), pairs.pressure_n,
+                u_n.ravel(),
                 np.where(pairs.on[:, None], pairs.force_n, 0.0).ravel(), external.ravel(),
                 prescribed.ravel(), start, settings, isettings, factored, reuse_next,
                 *buffers)
@@ -386,7 +397,7 @@ def increment(solid: Solid, layout: Layout, factors: Factors, state: SolidState,
         return Trial(u=u.reshape(-1, 3), state=converged, force=force.reshape(-1, 3),
                      fint=fint.reshape(-1, 3), in_contact=pair_state,
                      gap=(gap, normal.reshape(-1, 3)), traction=traction.reshape(-1, 3),
-                     **work)
+                     pressure=pressure, **work)
     if outcome == LANDING:
         return Trial(landing=float(detail[0]), **work)
     if outcome == ELEMENT:

@@ -123,8 +123,9 @@ contains
                                  faces, corner, npoint, face_weight, penalty, positions, &
                                  positions_n, reach, size, touching, resting, npair, tool_first, &
                                  pair_node, npatch, patch_first, patch_node, on, force, r, mu, &
-                                 held, traction_n, eqn, nf, k_slots, nvalues, residual, &
-                                 values, state, gap, normal, traction, status) &
+                                 held, traction_n, pressure_n, eqn, nf, k_slots, nvalues, &
+                                 residual, values, state, gap, normal, traction, pressure, &
+                                 status) &
     bind(C, name="ddpy_forming_contact")
     integer(c_int), value, intent(in) :: nnode, ntool, ncoef, ndeg, ntri, ntree, nframe, &
                                          nstart, ngrid, nface, npoint, resting, npair, npatch, &
@@ -137,7 +138,8 @@ contains
                                   grid_points(3*ngrid), facing(3, ntool), &
                                   positions(3, ntool), positions_n(3, ntool), &
                                   force(3, npair), r(npair), mu(npair), face_weight(npoint), &
-                                  penalty(2, ntool), traction_n(3, npoint)
+                                  penalty(2, ntool), traction_n(3, npoint), &
+                                  pressure_n(npoint)
     integer(c_int), intent(in) :: fixed(3, nnode), table(tool_fields, ntool), degrees(ndeg), &
                                   triangle(ntri), tree_child(ntree), grid_start(nstart), &
                                   face_first(ntool + 1), faces(4, nface), corner(4, nface), &
@@ -146,13 +148,15 @@ contains
                                   held(3, npair), eqn(3, nnode)
     real(c_double), intent(inout) :: residual(nf + 3*npair), values(nvalues)
     integer(c_int), intent(out) :: state(npair), status
-    real(c_double), intent(out) :: gap(npair), normal(3, npair), traction(3, npoint)
+    real(c_double), intent(out) :: gap(npair), normal(3, npair), traction(3, npoint), &
+                                   pressure(npoint)
     integer, allocatable :: lock(:), found(:)
     real(wp), allocatable :: point_gap(:)
     state = 0
     gap = 0.0_wp
     normal = 0.0_wp
     traction = 0.0_wp
+    pressure = 0.0_wp
     status = 1
     if (.not. layout_ok(nnode, ntool, table, ncoef, ndeg, ntri, ntree, nframe, nstart, ngrid, &
                         grid_start, face_first, nface, faces, corner, npoint, npair, &
@@ -167,8 +171,8 @@ contains
                          face_first, nface, faces, corner, npoint, face_weight, penalty, &
                          positions, positions_n, reach, size, touching, resting, npair, tool_first, &
                          pair_node, npatch, patch_first, patch_node, on, force, r, mu, held, &
-                         traction_n, lock, eqn, nf, k_slots, nvalues, residual, values, state, &
-                         gap, normal, traction, found, point_gap)
+                         traction_n, pressure_n, lock, eqn, nf, k_slots, nvalues, residual, &
+                         values, state, gap, normal, traction, pressure, found, point_gap)
   end subroutine api_forming_contact
 
   !> Newton iterations of one increment: see forming_increment. Connectivity arrives 0-based.
@@ -183,11 +187,11 @@ contains
                                    faces, corner, npoint, face_weight, penalty, positions, &
                                    positions_n, reach, size, touching, npair, tool_first, &
                                    pair_node, npatch, patch_first, patch_node, on, r, mu, held, &
-                                   traction_n, u_n, force_n, external, prescribed, guess, &
-                                   settings, isettings, factored, reuse_next, u, force, fint, &
-                                   stress, ep, strain, axes, state, gap, normal, traction, &
-                                   nhistory, niter, history, counters, timings, outcome, info, &
-                                   detail) &
+                                   traction_n, pressure_n, u_n, force_n, external, &
+                                   prescribed, guess, settings, isettings, factored, &
+                                   reuse_next, u, force, fint, stress, ep, strain, axes, state, &
+                                   gap, normal, traction, pressure, nhistory, niter, history, &
+                                   counters, timings, outcome, info, detail) &
     bind(C, name="ddpy_forming_increment")
     integer(c_int), value, intent(in) :: nnode, ne, kind, nf, k_slots, n_coupling, nvalues, &
                                          nrow, ncsr, nsrc, ntool, ncoef, ndeg, ntri, ntree, &
@@ -212,7 +216,7 @@ contains
                                   grid_params(2*ngrid), grid_normals(3*ngrid), &
                                   grid_points(3*ngrid), facing(3, ntool), &
                                   face_weight(npoint), penalty(2, ntool), &
-                                  traction_n(3, npoint), &
+                                  traction_n(3, npoint), pressure_n(npoint), &
                                   positions(3, ntool), positions_n(3, ntool), r(npair), &
                                   mu(npair), u_n(3, nnode), force_n(3, npair), &
                                   external(3, nnode), prescribed(3, nnode), &
@@ -221,7 +225,7 @@ contains
     real(c_double), intent(out) :: u(3, nnode), force(3, npair), fint(3, nnode), &
                                    stress(6, 8, ne), ep(8, ne), &
                                    strain(6, 8, ne), axes(3, 3, 8, ne), gap(npair), &
-                                   normal(3, npair), traction(3, npoint), &
+                                   normal(3, npair), traction(3, npoint), pressure(npoint), &
                                    history(4, nhistory), timings(4), detail(2)
     integer(c_int), intent(out) :: state(npair), niter, counters(5), outcome, info(4)
     history = 0.0_wp
@@ -243,10 +247,10 @@ contains
                            facing, face_first, nface, faces, corner, npoint, face_weight, &
                            penalty, positions, positions_n, reach, size, touching, npair, tool_first, &
                            pair_node, npatch, patch_first, patch_node, on, r, mu, held, &
-                           traction_n, u_n, force_n, external, prescribed, guess, settings, &
-                           isettings, factored, reuse_next, u, force, fint, stress, ep, &
-                           strain, axes, state, gap, normal, traction, niter, history, &
-                           counters, timings, outcome, info, detail)
+                           traction_n, pressure_n, u_n, force_n, external, prescribed, guess, &
+                           settings, isettings, factored, reuse_next, u, force, fint, stress, &
+                           ep, strain, axes, state, gap, normal, traction, pressure, niter, &
+                           history, counters, timings, outcome, info, detail)
   end subroutine api_forming_increment
 
   !> Newton iterations of one increment of a solid without tools (the static problem): see
@@ -279,7 +283,8 @@ contains
     integer :: table(tool_fields, 0), ints(0), faces(4, 0), first(1), pairs(0), held(3, 0), &
                state(0), reuse_next
     real(wp) :: reals(0), tools(3, 0), forces(3, 0), force(3, 0), normal(3, 0), gap(0), &
-                weights(0), penalty(2, 0), tractions(3, 0), traction(3, 0)
+                weights(0), penalty(2, 0), tractions(3, 0), traction(3, 0), pressures(0), &
+                pressure(0)
     history = 0.0_wp
     outcome = -1
     if (nhistory < isettings(1) + 1 .or. offsets(ne + 1) /= k_slots .or. nvalues /= k_slots) &
@@ -297,9 +302,10 @@ contains
                            faces, faces, 0, weights, penalty, tools, tools, 0.0_wp, size, &
                            0.0_wp, &
                            0, first, pairs, 0, first, pairs, pairs, reals, reals, held, &
-                           tractions, u_n, forces, external, prescribed, &
+                           tractions, pressures, u_n, forces, external, prescribed, &
                            guess, settings, isettings, factored, reuse_next, u, force, fint, &
-                           stress, ep, strain, axes, state, gap, normal, traction, niter, &
+                           stress, ep, strain, axes, state, gap, normal, traction, pressure, &
+                           niter, &
                            history, &
                            counters, timings, outcome, info, detail)
   end subroutine api_static_increment

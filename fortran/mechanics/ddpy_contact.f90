@@ -173,16 +173,20 @@ contains
 
   !> Penalty law of one Gauss point of a blank face (docs/theory/contact.md, Gauss-point
   !> contact): the traction of the tool on the face per undeformed area, p n + t, with
-  !> p = eps_n max(0, -g) and Coulomb friction by a penalty stick and return mapping: the
+  !> p = max(0, p_n - eps_n g) (p_n the point's pressure multiplier: 0 for the plain
+  !> penalty, the augmented Lagrangian's pressure of the last augmentation otherwise, so
+  !> that the point sinks only by the change of its pressure over eps_n) and Coulomb friction by a penalty stick and return mapping: the
   !> trial t_tr = (I - n n)(t_n - eps_t v) from the tangential traction t_n of the last
   !> converged increment and the slip v of the point relative to the tool since then;
   !> stick t = t_tr where |t_tr| <= mu p, else slip t = mu p t_tr / |t_tr|. Returns the
-  !> traction, its tangential part (the history to keep), its exact derivative along the
-  !> point's position (3 x 3, with the tool's curvature dndx) and the state.
-  pure subroutine gauss_traction(traction_n, n, g, dndx, v, mu, eps_n, eps_t, traction, &
-                                 tangential, dtr_dx, state)
-    real(wp), intent(in) :: traction_n(3), n(3), g, dndx(3, 3), v(3), mu, eps_n, eps_t
-    real(wp), intent(out) :: traction(3), tangential(3), dtr_dx(3, 3)
+  !> traction, its tangential part (the history to keep), the pressure p, its exact
+  !> derivative along the point's position (3 x 3, with the tool's curvature dndx) and the
+  !> state.
+  pure subroutine gauss_traction(traction_n, pressure_n, n, g, dndx, v, mu, eps_n, eps_t, &
+                                 traction, tangential, pressure, dtr_dx, state)
+    real(wp), intent(in) :: traction_n(3), pressure_n, n(3), g, dndx(3, 3), v(3), mu, eps_n, &
+                            eps_t
+    real(wp), intent(out) :: traction(3), tangential(3), pressure, dtr_dx(3, 3)
     integer, intent(out) :: state
     real(wp) :: p, eye(3, 3), proj(3, 3), w(3), trial(3), dp_dx(3), dtrial(3, 3), &
                 norm_trial, rho, e(3)
@@ -191,8 +195,10 @@ contains
     tangential = 0.0_wp
     dtr_dx = 0.0_wp
     state = contact_inactive
-    p = -eps_n*g
+    pressure = 0.0_wp
+    p = pressure_n - eps_n*g
     if (.not. p > 0.0_wp) return
+    pressure = p
     eye = 0.0_wp
     do i = 1, 3
       eye(i, i) = 1.0_wp

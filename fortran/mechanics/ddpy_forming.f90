@@ -76,7 +76,8 @@ contains
   !> A Gauss-point tool (table f_surface = surface_gauss) puts the penalty law of
   !> gauss_traction at those Gauss points (penalty(1:2, t): normal and tangential penalty,
   !> N/mm^3; traction_n(:, i): each point's tangential traction at the last converged
-  !> increment, traction: the new one, zero elsewhere) and each slave's law is
+  !> increment, traction: the new one, zero elsewhere; pressure_n(i): its pressure
+  !> multiplier, pressure: its new pressure) and each slave's law is
   !> C = lambda - F(x), F its share of the points' forces by the shape functions. Its
   !> multiplier is eliminated: the equilibrium rows take F(x) and its derivative dF/dx
   !> (the layout puts a Gauss-point pair's patch entries in its node's equilibrium rows),
@@ -96,9 +97,9 @@ contains
                              corner, npoint, face_weight, penalty, &
                              positions, positions_n, reach, size, touching, resting, &
                              npair, tool_first, pair_node, npatch, patch_first, patch_node, &
-                             on, force, r, mu, held, traction_n, lock, eqn, nf, &
+                             on, force, r, mu, held, traction_n, pressure_n, lock, eqn, nf, &
                              k_slots, nvalues, residual, values, state, gap, normal, traction, &
-                             found, point_gap)
+                             pressure, found, point_gap)
     integer, intent(in) :: nnode, ntool, nface, npoint, npair, npatch, nf, k_slots, nvalues, &
                            resting
     real(wp), intent(in) :: x(3, nnode), x_n(3, nnode), tol(ntool), coef(*), tree_lower(*), &
@@ -107,7 +108,7 @@ contains
                             positions(3, ntool), positions_n(3, ntool), reach, size, &
                             touching, force(3, npair), r(npair), mu(npair), &
                             face_weight(npoint), penalty(2, ntool), &
-                            traction_n(3, npoint)
+                            traction_n(3, npoint), pressure_n(npoint)
     integer, intent(in) :: fixed(3, nnode), table(tool_fields, ntool), degrees(*), &
                            triangle(*), tree_child(*), grid_start(*), &
                            face_first(ntool + 1), faces(4, nface), corner(4, nface), &
@@ -117,7 +118,7 @@ contains
     real(wp), intent(inout) :: residual(nf + 3*npair), values(nvalues)
     integer, intent(out) :: state(npair), found(npair + npoint)
     real(wp), intent(out) :: gap(npair), normal(3, npair), traction(3, npoint), &
-                             point_gap(npoint)
+                             pressure(npoint), point_gap(npoint)
     real(wp), allocatable :: nodes(:, :), node_normals(:, :), params(:, :), points(:, :), &
                              tangents(:, :, :), distance(:), p_aug(:), c(:, :), &
                              dc_dlambda(:, :, :), dc_dx(:, :, :), slip(:, :), &
@@ -141,6 +142,7 @@ contains
     allocate(gauss_force(3, npair))
     gauss_force = 0.0_wp
     traction = 0.0_wp
+    pressure = 0.0_wp
     patch_dc = 0.0_wp
     gap = ieee_value(1.0_wp, ieee_positive_inf)
     normal = 0.0_wp
@@ -488,9 +490,9 @@ contains
             s = faces(q, first + f) + 1
             vg = vg + basis(q, g)*(x(:, s) - x_n(:, s))
           end do
-          call gauss_traction(traction_n(:, ip), gnormal(:, i), gdistance(i), &
-                              dndx, vg, mu_t, penalty(1, t), penalty(2, t), tr, tangential, &
-                              dtr, gstate)
+          call gauss_traction(traction_n(:, ip), pressure_n(ip), gnormal(:, i), &
+                              gdistance(i), dndx, vg, mu_t, penalty(1, t), penalty(2, t), tr, &
+                              tangential, pressure(ip), dtr, gstate)
           traction(:, ip) = tangential
           do q = 1, 4
             s = corner(q, first + f)

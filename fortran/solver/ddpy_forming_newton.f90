@@ -60,9 +60,10 @@ contains
   !> step length like the rest): the linearized predictor, not a jump of the boundary
   !> nodes, which would invert the elements next to them. See the arguments of
   !> forming_contact for the tools and pairs (and the Gauss points' tangential tractions
-  !> traction_n of Gauss-point contact). Returns outcome with, as it says: u, force,
-  !> the solid state, the internal forces fint, the contact states (inactive where off),
-  !> gaps, normals and the Gauss points' tractions when converged; the landing
+  !> traction_n and pressure multipliers pressure_n of Gauss-point contact). Returns
+  !> outcome with, as it says: u, force, the solid state, the internal forces fint, the
+  !> contact states (inactive where off), gaps, normals and the Gauss points' tractions and
+  !> pressures when converged; the landing
   !> fraction in detail(1); the element status and element in info(1:2); the MUMPS code in
   !> info(3); the last relative residual and correction in detail(1:2) and the pairs that
   !> changed state in the last iteration in info(4) when stalled. history(1:4, 1:niter):
@@ -85,10 +86,12 @@ contains
                                grid_normals, grid_points, facing, face_first, nface, faces, &
                                corner, npoint, face_weight, penalty, positions, positions_n, &
                                reach, size, touching, npair, tool_first, pair_node, npatch, &
-                               patch_first, patch_node, on, r, mu, held, traction_n, u_n, &
+                               patch_first, patch_node, on, r, mu, held, traction_n, &
+                               pressure_n, u_n, &
                                force_n, external, prescribed, guess, settings, isettings, &
                                factored, reuse_next, u, force, fint, stress, ep, strain, axes, &
-                               state, gap, normal, traction, niter, history, counters, &
+                               state, gap, normal, traction, pressure, niter, history, &
+                               counters, &
                                timings, outcome, info, detail)
     integer, intent(in) :: nnode, ne, kind, nf, k_slots, n_coupling, nvalues, ncsr, ntool, &
                            nface, npoint, npair, npatch
@@ -107,7 +110,8 @@ contains
                             grid_params(*), grid_normals(*), grid_points(*), &
                             facing(3, ntool), positions(3, ntool), positions_n(3, ntool), &
                             face_weight(npoint), penalty(2, ntool), &
-                            traction_n(3, npoint), reach, size, touching, r(npair), &
+                            traction_n(3, npoint), pressure_n(npoint), reach, size, &
+                            touching, r(npair), &
                             mu(npair), u_n(3, nnode), &
                             force_n(3, npair), external(3, nnode), prescribed(3, nnode), &
                             guess(3, nnode), settings(newton_settings)
@@ -115,7 +119,8 @@ contains
     real(wp), intent(out) :: u(3, nnode), force(3, npair), fint(3, nnode), &
                              stress(6, 8, ne), ep(8, ne), &
                              strain(6, 8, ne), axes(3, 3, 8, ne), gap(npair), &
-                             normal(3, npair), traction(3, npoint), history(4, *), &
+                             normal(3, npair), traction(3, npoint), pressure(npoint), &
+                             history(4, *), &
                              timings(4), detail(2)
     integer, intent(out) :: state(npair), niter, counters(5), outcome, info(4)
 
@@ -124,7 +129,7 @@ contains
       real(wp), allocatable :: u(:, :), force(:, :), residual(:), values(:), fint(:, :), &
                                stress(:, :, :), ep(:, :), strain(:, :, :), axes(:, :, :, :), &
                                alpha(:, :), gap(:), normal(:, :), simplified(:), &
-                               traction(:, :), point_gap(:)
+                               traction(:, :), pressure(:), point_gap(:)
       integer, allocatable :: state(:), patch(:)
       logical :: moving  ! some fixed dof short of its prescribed value
       real(wp) :: rest   ! how far short: the norm over the fixed dofs
@@ -202,7 +207,7 @@ contains
                slot(cur)%gap(npair), slot(cur)%normal(3, npair), &
                slot(cur)%simplified(n), slot(cur)%state(npair), &
                slot(cur)%patch(npair + npoint), slot(cur)%point_gap(npoint), &
-               slot(cur)%traction(3, npoint))
+               slot(cur)%traction(3, npoint), slot(cur)%pressure(npoint))
       slot(cur)%values(k_slots + 1:k_slots + n_coupling) = coupling
     end do
     correction = ieee_value(1.0_wp, ieee_positive_inf)
@@ -507,9 +512,9 @@ contains
                            facing, face_first, nface, faces, corner, npoint, face_weight, &
                            penalty, positions, positions_n, reach, size, touching_gap, isettings(7), &
                            npair, tool_first, pair_node, npatch, patch_first, patch_node, on, &
-                           s%force, r, mu, held, traction_n, lock, eqn, nf, k_slots, nvalues, &
-                           s%residual, s%values, s%state, s%gap, s%normal, s%traction, &
-                           s%patch, s%point_gap)
+                           s%force, r, mu, held, traction_n, pressure_n, lock, eqn, nf, &
+                           k_slots, nvalues, s%residual, s%values, s%state, s%gap, s%normal, &
+                           s%traction, s%pressure, s%patch, s%point_gap)
       ! A Gauss-point pair's multiplier is eliminated: lambda = F(x), C = 0.
       do p = 1, npair
         if (.not. eliminated(p)) cycle
@@ -639,7 +644,8 @@ contains
     !> Whether the iterate s, converged with pairs held on their patches, stands against
     !> the search (into slot check): no node-to-surface pair that is in contact, or inside
     !> a tool, farther than hold_depth element sizes from where the held patch has it; and
-    !> the Gauss points' normal penalty forces, w_i eps max(0, -g_i), changed by less than
+    !> the Gauss points' normal forces, w_i p_i (p_i = max(0, p_n,i - eps g_i)), changed by
+    !> less than
     !> the force tolerance allows the residual (their gaps one by one: an averaged pair's
     !> gap mixes its open points' with those that carry its force).
     logical function held_ok(s, check)
@@ -668,8 +674,8 @@ contains
         if (table(f_surface, t) == 0) cycle
         do i = table(f_point, t) + 1, table(f_point, t) + &
                                       table(f_order, t)**2*(face_first(t + 1) - face_first(t))
-          held_force = face_weight(i)*penalty(1, t)*max(0.0_wp, -s%point_gap(i))
-          free_force = face_weight(i)*penalty(1, t)*max(0.0_wp, -check%point_gap(i))
+          held_force = face_weight(i)*s%pressure(i)
+          free_force = face_weight(i)*check%pressure(i)
           change = change + (held_force - free_force)**2
         end do
       end do
@@ -709,6 +715,7 @@ contains
       gap = s%gap
       normal = s%normal
       traction = s%traction
+      pressure = s%pressure
     end subroutine finish
 
   end subroutine forming_increment

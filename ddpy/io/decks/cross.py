@@ -151,7 +151,8 @@ class _Cross:
             newton=NewtonSettings(s("newton_force", n.force_tolerance),
                                   s("newton_displacement", n.displacement_tolerance),
                                   s("max_iterations", n.max_iterations),
-                                  s("cutback", n.cutback)),
+                                  s("cutback", n.cutback),
+                                  s("penetration_limit", n.penetration)),
             output_every=s("output_every", DEFAULT_OUTPUT_EVERY),
             origin=self.control.where(p.line))
 

@@ -146,3 +146,34 @@ def test_penetration_into_a_plane_tool() -> None:
     # Beyond the tool's edge, a point below its plane is not inside it.
     assert penetration(points, search, nodes=[3]).depth == 0.0
     assert penetration(points, search, nodes=[0]).node == -1
+
+
+def test_siebel_force_by_hand() -> None:
+    """Siebel's terms one by one, against the arithmetic written out: a 100 mm mean
+    diameter cup from a 170 mm disc, 1 mm, flow stresses 300 / 400 MPa, mu 0.1 over a
+    quarter turn, one 8 mm radius, 10 kN on the holder."""
+    from ddpy.studies.drawing import siebel_force
+
+    ideal = 1.1 * 300.0 * math.log(1.7)
+    holder = 2 * 0.1 * 10e3 / (math.pi * 170.0 * 1.0)
+    bend = 400.0 * 1.0 / 16.0
+    expected = math.pi * 100.0 * (math.exp(0.1 * math.pi / 2) * (ideal + holder) + bend)
+    got = siebel_force(170.0, 100.0, 1.0, 300.0, 400.0, 0.1, (8.0,), math.pi / 2, 10e3)
+    assert got == pytest.approx(expected, rel=1e-12)
+    # without friction, bending and holder: the ideal drawing force alone
+    assert siebel_force(170.0, 100.0, 1.0, 300.0, 400.0, 0.0, (), 0.0) == pytest.approx(
+        math.pi * 100.0 * ideal, rel=1e-12)
+    with pytest.raises(ValueError, match="reduce"):
+        siebel_force(90.0, 100.0, 1.0, 300.0, 400.0, 0.1, (8.0,), 1.0)
+
+
+def test_tensile_limit_is_the_largest_engineering_stress_of_the_swift_curve() -> None:
+    """Considere's strain n - eps0 gives the top of K (eps0 + e)^n exp(-e), found here by
+    a dense search instead (the paper's DDQ steel)."""
+    from ddpy.studies.drawing import swift_stress, tensile_limit
+
+    k, eps0, n = 568.3, 0.0059, 0.233
+    e = np.linspace(0.0, 1.0, 200_001)
+    engineering = k * (eps0 + e) ** n * np.exp(-e)
+    assert tensile_limit(k, eps0, n) == pytest.approx(engineering.max(), rel=1e-9)
+    assert swift_stress(0.0, k, eps0, n) == pytest.approx(k * eps0**n)

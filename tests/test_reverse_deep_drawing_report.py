@@ -17,13 +17,14 @@ from bench_common import load_module, restart_plan  # noqa: E402
 run = load_module(BENCH / "run.py", "drawing_run")
 
 #: Per model: oscillation per stage (N), largest plastic strain, die contact per stage,
-#: increments and iterations per stage: facets oscillate, strain more and need twice the
-#: increments of Nagata; Bezier touches the die with more nodes, most in stage 1.
+#: increments and iterations per stage, wall time (s): facets oscillate, strain more and
+#: need twice the increments and time of Nagata; Bezier touches the die with more nodes,
+#: most in stage 1, and refining the facets helps the contact more in stage 2.
 SYNTHETIC = {
-    "bezier": ((10.0, 12.0), 0.60, (80.0, 60.0), (500, 450), (2000, 1800)),
-    "nagata": ((11.0, 12.5), 0.61, (78.0, 59.0), (480, 440), (1900, 1750)),
-    "facets_coarse": ((40.0, 90.0), 0.75, (50.0, 50.0), (1000, 900), (4000, 3500)),
-    "facets_fine": ((20.0, 40.0), 0.68, (60.0, 55.0), (950, 880), (3800, 3400)),
+    "bezier": ((10.0, 12.0), 0.60, (80.0, 60.0), (500, 450), (2000, 1800), 120.0),
+    "nagata": ((11.0, 12.5), 0.61, (78.0, 59.0), (480, 440), (1900, 1750), 118.0),
+    "facets_coarse": ((40.0, 90.0), 0.75, (50.0, 50.0), (1000, 900), (4000, 3500), 250.0),
+    "facets_fine": ((20.0, 40.0), 0.68, (55.0, 58.0), (950, 880), (3800, 3400), 230.0),
 }
 
 
@@ -43,7 +44,7 @@ def _end(stage: str, travel: float, ep: float) -> dict[str, Any]:
 def synthetic_run(model: str, partial: bool = False) -> Any:
     """A run of ``model`` with the numbers of SYNTHETIC; ``partial``: it stopped in stage 2
     at 30 mm."""
-    osc, ep, contact, increments, iterations = SYNTHETIC[model]
+    osc, ep, contact, increments, iterations, wall = SYNTHETIC[model]
     stages, curves = {}, {"sections": {}}
     for k, stage in enumerate(run.STAGES):
         full = 40.0 if stage == "stage1" else 42.0
@@ -75,7 +76,7 @@ def synthetic_run(model: str, partial: bool = False) -> Any:
         "stopped": "stalled: the lead tool advanced 1e-09 mm" if partial else "",
         "reached": {"stage": "stage2", "travel_mm": stages["stage2"]["reached_mm"]},
         "code": "abc1234", "date": "2026-01-01", "threads": 1,
-        "increments": sum(increments), "iterations": sum(iterations), "wall_s": 120.0,
+        "increments": sum(increments), "iterations": sum(iterations), "wall_s": wall,
         "per_iteration_s": {p: 0.01 for p in run.PARTS}, "hexahedra": 768, "stages": stages}
     return run.Run(numbers, curves)
 
@@ -91,7 +92,7 @@ FIGURES = {key: f"{key}.png" for key in ("force", "strain_map", "strain_section"
 def test_claims_hold_on_runs_made_to_hold_them() -> None:
     numbers = {m: synthetic_run(m).numbers for m in run.MODELS}
     verdicts = {text[:3]: verdict for text, verdict, _ in run.claims(numbers)}
-    assert verdicts == {"(a)": "holds", "(b)": "holds", "(c)": "holds", "(d)": "holds"}
+    assert verdicts == {f"({c})": "holds" for c in "abcdefgh"}, verdicts
 
 
 def test_claims_that_do_not_hold() -> None:
@@ -263,3 +264,126 @@ def test_restart_refuses_a_saved_run_it_cannot_continue_before_any_run(tmp_path:
     results["facets_fine"] = saved("facets_fine", "failed", False)
     with pytest.raises(SystemExit, match="facets_fine.*no checkpoint"):
         restart_plan(results)
+
+
+def test_the_soundness_check_reads_its_verdicts_off_the_forces() -> None:
+    """The hand check of the reconstruction: forces set at 0.95 of Siebel's estimate pass
+    it ("within", "all below" the necking force where the estimate is below it); forces
+    above the necking force are said to be so; the stage whose estimate exceeds the
+    necking force is named as not shown to be sound."""
+    numbers = {m: synthetic_run(m).numbers for m in run.MODELS}
+    estimates = run.stage_estimates({})
+    for n in numbers.values():
+        for stage in run.STAGES:
+            n["stages"][stage]["max_force_N"] = 0.95 * estimates[stage]["siebel_N"]
+    lines = [line for line in run.soundness_section(numbers, list(run.MODELS))
+             if line.startswith("- stage")]
+    assert len(lines) == 2
+    for line, stage in zip(lines, run.STAGES, strict=True):
+        e = estimates[stage]
+        assert "within its 20 %" in line
+        assert ("all below it" in line) == (0.95 * e["siebel_N"] < e["neck_N"])
+        assert ("not show it to be a sound drawing" in line) == (e["siebel_N"] > e["neck_N"])
+    for n in numbers.values():
+        n["stages"]["stage1"]["max_force_N"] = 1.5 * estimates["stage1"]["neck_N"]
+    first = [line for line in run.soundness_section(numbers, list(run.MODELS))
+             if line.startswith("- stage1")][0]
+    assert "some above it" in first and "outside its 20 %" in first
+
+
+def test_the_effort_claims_fail_where_the_runs_say_so() -> None:
+    """(e)-(h) each turned by one number: the facets as fast as the smooth models; the
+    fine facets' contact gain largest in stage 1; the facets' increments within the smooth
+    models' spread; the fine facets needing more increments. And (c) on a difference
+    within the smooth models' spread: Bezier above the facets by less than Bezier and
+    Nagata differ does not count as more."""
+    base = {m: synthetic_run(m).numbers for m in run.MODELS}
+    verdict = lambda numbers, c: {t[:3]: v for t, v, _ in run.claims(numbers)}[c]  # noqa: E731
+    numbers = {m: synthetic_run(m).numbers for m in run.MODELS}
+    for m in ("facets_coarse", "facets_fine"):
+        numbers[m]["wall_s"] = 119.0
+    assert verdict(numbers, "(e)") == "does not hold"
+    numbers = {m: synthetic_run(m).numbers for m in run.MODELS}
+    numbers["facets_fine"]["stages"]["stage1"]["die_contact_mean"] = 70.0
+    assert verdict(numbers, "(f)") == "does not hold"
+    numbers = {m: synthetic_run(m).numbers for m in run.MODELS}
+    for m in ("facets_coarse", "facets_fine"):
+        for k, stage in enumerate(run.STAGES):
+            numbers[m]["stages"][stage]["increments"] = (500, 450)[k]
+    assert verdict(numbers, "(g)") == "does not hold"
+    numbers = {m: synthetic_run(m).numbers for m in run.MODELS}
+    numbers["facets_fine"]["increments"] = numbers["facets_coarse"]["increments"] + 1
+    assert verdict(numbers, "(h)") == "does not hold"
+    numbers = {m: synthetic_run(m).numbers for m in run.MODELS}
+    numbers["nagata"]["stages"]["stage2"]["die_contact_mean"] = 50.0  # spread 10
+    assert verdict(numbers, "(c)") == "does not hold"
+    assert all(verdict(base, f"({c})") == "holds" for c in "cefgh")
+    numbers = {m: synthetic_run(m).numbers for m in run.MODELS}
+    numbers["bezier"]["threads"] = 2
+    assert verdict(numbers, "(e)") == "not checked"
+
+
+def test_claim_d_explains_itself_from_what_set_the_increments() -> None:
+    """The explanation of (d) is read off the runs' limits: at the largest size for at
+    least AT_MAX_SHARE of every run it says the size fixed the count; otherwise it names
+    the run and its share below the largest size."""
+    numbers = {m: synthetic_run(m).numbers for m in run.MODELS}
+    for m in ("nagata", "facets_coarse", "facets_fine"):
+        n = numbers[m]
+        for stage in run.STAGES:
+            s = n["stages"][stage]
+            s["limits"] = {"max_increment": int(0.9 * s["increments"]),
+                           "contact_touch": s["increments"] - int(0.9 * s["increments"])}
+    text = run.increment_cause(numbers, ("nagata", "facets_coarse", "facets_fine"))
+    assert "the increment size, not the contact, fixed their count" in text
+    s = numbers["facets_coarse"]["stages"]["stage1"]
+    s["limits"] = {"max_increment": 100, "contact_touch": s["increments"] - 100}
+    text = run.increment_cause(numbers, ("nagata", "facets_coarse", "facets_fine"))
+    assert "fixed their count" not in text and "Faceted-coarse ran" in text
+    assert "contact_touch +" in text
+
+
+def test_the_shape_claim_reads_where_the_errors_sit() -> None:
+    """(i): Nagata's largest positive error on die 1 and negative on punch 2, the fine
+    facets' largest about twice Nagata's; moved to another tool, it does not hold."""
+    shape = {tool: {m: {"max_signed_um": 5.0, "min_signed_um": -3.0} for m in run.MODELS}
+             for tool in run.TOOLS}
+    shape["die1"]["nagata"]["max_signed_um"] = 9.6
+    shape["punch2"]["nagata"]["min_signed_um"] = -6.2
+    shape["die1"]["facets_fine"]["max_signed_um"] = 19.0
+    assert run.shape_claim(shape)[1] == "holds"
+    shape["holder2"]["nagata"]["max_signed_um"] = 12.0
+    assert run.shape_claim(shape)[1] == "does not hold"
+
+
+def test_the_convergence_table_names_what_does_not_converge_and_why() -> None:
+    """Three blanks of one model: the two finest agree within 3 % on every quantity but
+    the stage-2 force (+10 %), which is named; the reason reads the runs' setups: the
+    same element, contact and code make it the blank's refinement, others no pure mesh
+    effect."""
+    by_mesh = {}
+    for k, mesh in enumerate(make_case_meshes()):
+        n = synthetic_run("nagata").numbers
+        n["discretization"] = "solid-shell, Gauss-point contact"
+        for stage in run.STAGES:
+            n["stages"][stage]["end"]["balance"] = {
+                h: {"reaction_N": 1000.0, "mismatch_N": 0.0, "relative": 0.0, "nodes": 5}
+                for h in ("holder1", "holder2")}
+        if k == 2:
+            n["stages"]["stage2"]["max_force_N"] *= 1.10
+        by_mesh[mesh] = {"nagata": n}
+    lines = run.convergence_section(by_mesh)
+    text = "\n".join(lines)
+    assert "Not converged between medium and paper: stage2: largest punch force (+10.0 %)" \
+        in text
+    assert "the blank's refinement" in text
+    assert text.count("(outside)") == 1
+    by_mesh["paper"]["nagata"]["discretization"] = "hexahedron, node-to-surface contact"
+    assert "no pure mesh effect" in "\n".join(run.convergence_section(by_mesh))
+    by_mesh["paper"]["nagata"]["stages"]["stage2"]["max_force_N"] /= 1.10
+    assert "Every quantity of medium and paper agrees" in "\n".join(
+        run.convergence_section(by_mesh))
+
+
+def make_case_meshes() -> tuple[str, ...]:
+    return ("coarse", "medium", "paper")

@@ -130,6 +130,79 @@ class Dimensions:
 
 DIMENSIONS = Dimensions()
 
+#: Swift's law of the DDQ steel (paper Table 4), as the material deck gives it.
+SWIFT = {"k": 568.3, "eps0": 0.0059, "n": 0.233}
+
+#: What each dimension is, and where its value comes from. The benchmark's drawing
+#: (Numisheet'99 benchmark C) is not in the paper, and no public copy of it was found, so
+#: no value has a drawing as its source: each says which fact of the paper or which rule
+#: of drawing practice it follows, or that it was changed after a failed run (CHANGES).
+DIMENSION_SOURCES: dict[str, tuple[str, str]] = {
+    "die_bore": ("die 1: radius of the bore",
+                 "punch 1's radius plus a radial clearance of 1.25 mm, 1.28 times the "
+                 "thickness (practice for mild steel: 1.1 to 1.3 t); our first guess"),
+    "die_shoulder": ("die 1: shoulder radius (stage 1's die radius)",
+                     "8 t, within practice's 5 to 10 t; larger than die 2's radius, as the "
+                     "paper says stage 2's is; our first guess"),
+    "die_outer": ("die 1 and blank-holder 1: outer radius of the flat",
+                  "beyond the blank's 85 mm radius, so that the flange never leaves the flat"),
+    "die_depth": ("die 1: bore wall below the shoulder",
+                  "longer than stage 1's travel, so that the cup wall never meets the bore's "
+                  "free lower edge (CHANGES)"),
+    "punch1_radius": ("punch 1: outer radius",
+                      "a 100 mm cup from the 170 mm disc: first draw ratio 1.7, below the "
+                      "limiting ratio of about 2 of a DDQ steel; our first guess"),
+    "punch1_nose": ("punch 1: outer nose radius", "7 t; 6 mm first (CHANGES)"),
+    "punch1_edge": ("punch 1's inner edge = die 2's shoulder radius",
+                    "5 t, smaller than die 1's 8 mm as the paper says; 4 mm first (CHANGES)"),
+    "punch1_bore": ("punch 1's bore = die 2's opening",
+                    "punch 2's radius plus the same 1.25 mm clearance as stage 1"),
+    "punch1_height": ("punch 1: height of its walls above its end ring",
+                      "above the cup's height at the end of stage 1 (no contact with its top)"),
+    "punch2_radius": ("punch 2: radius",
+                      "second draw ratio 100 / 73 = 1.37, within practice's 1.2 to 1.4 for a "
+                      "redraw; our first guess"),
+    "punch2_nose": ("punch 2: nose radius", "5 t, as die 2's; our first guess"),
+    "punch2_height": ("punch 2: height of its wall", "above stage 2's travel"),
+    "holder1_edge": ("blank-holder 1: radius of its inner edge",
+                     "rounded so that the flange's edge cannot catch on it (CHANGES)"),
+    "holder1_inner": ("blank-holder 1: where its flat begins",
+                      "2 mm outside the end of die 1's shoulder (59.25 mm) (CHANGES)"),
+    "holder2_inner": ("blank-holder 2: inner radius",
+                      "just outside die 2's opening (37.75 mm), under punch 1's end ring; our "
+                      "first guess"),
+    "holder2_outer": ("blank-holder 2: outer radius",
+                      "covers the cup bottom's annulus over die 2's edge and punch 1's end "
+                      "ring (37.75 to 43 mm) with a margin; our first guess"),
+    "holder2_edge": ("blank-holder 2: radius of its two edges",
+                     "rounded for the same reason as blank-holder 1's, 2 t; not tuned"),
+    "stage1": ("punch 1's travel down (stage 1)",
+               "draws the cup and leaves a flange under blank-holder 1, held at the paper's "
+               "gap of 1.13 mm"),
+    "stage2": ("punch 2's travel up from the cup's bottom (stage 2)",
+               "reverses most of the first cup's wall (the paper shows a finished reverse "
+               "draw, Fig. 19)"),
+    "approach": ("punch 2's start below the cup's bottom", "a small gap, not a dimension"),
+}
+
+#: Every change made to the reconstruction after a run failed: what changed, and the
+#: failure it answered (the runs and their numbers: the Dimensions docstring).
+CHANGES: tuple[tuple[str, str], ...] = (
+    ("punch 1's outer nose 6 -> 7 mm and inner edge (die 2) 4 -> 5 mm",
+     "stage 2 tore the cup wall beside punch 2's nose (0.10 mm thick, plastic strain 1.7) "
+     "under 27 kN, above what the reversed wall carries in plane strain (about 21 kN on "
+     "the quarter): the sheet wraps 180 and 90 degrees around the two radii"),
+    ("blank-holder 1's flat moved 2 mm out from the shoulder's end, its inner edge rounded "
+     "(3 mm)",
+     "the medium blank's stage 1 failed at 39.77 mm, where the trough of an ear reached the "
+     "holder's sharp edge and a node slid off it"),
+    ("die 1's bore wall made 50 mm deep",
+     "the cup wall met the bore's free lower edge"),
+    ("die 1 and blank-holder 1 lifted off in stage 2",
+     "with them on, the top of the wall, thickened to 1.27 mm, stayed wedged in die 1's "
+     "1.25 mm clearance and the bottom tore instead of drawing the wall back"),
+)
+
 
 def build_tools(folder: Path = HERE / "tools", dims: Dimensions = DIMENSIONS,
                 models: tuple[str, ...] = MODELS) -> dict[str, dict[str, Path]]:

@@ -17,6 +17,9 @@ from it. Lengths in mm, forces in N.
   the only load between the blank and the tool).
 - :func:`penetration`: the largest depth of blank nodes inside a tool, from an orthogonal
   projection on the tool at its position (:class:`ddpy.geometry.search.ContactSearch`).
+- :func:`siebel_force`, :func:`tensile_limit`, :func:`swift_stress`: a hand estimate of a
+  cylindrical draw's largest punch force (Siebel's elementary theory of deep drawing) and
+  the force at which the cup's wall would neck, to hold a computed force against.
 """
 
 from __future__ import annotations
@@ -34,7 +37,8 @@ if TYPE_CHECKING:
 
 __all__ = ["ForceBalance", "Penetration", "contact_force_balance", "cup_height",
            "element_centroids", "hexahedron_volumes", "penetration", "plane_section",
-           "rim_nodes", "rim_radius", "volume_change"]
+           "rim_nodes", "rim_radius", "siebel_force", "swift_stress", "tensile_limit",
+           "volume_change"]
 
 #: Natural coordinates of the 8 nodes of a hexahedron (Gmsh / C3D8 order).
 _CORNERS = np.array([[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1],
@@ -198,3 +202,48 @@ def penetration(points: ArrayLike, search: ContactSearch, tool_displacement: Arr
         return Penetration(0.0, -1, 0)
     k = int(np.argmax(depth))
     return Penetration(float(depth[k]), int(index[k]), inside)
+
+
+def swift_stress(strain: float, k: float, eps0: float, n: float) -> float:
+    """Swift's flow stress K (eps0 + strain)^n (MPa) at an equivalent plastic strain."""
+    return float(k * (eps0 + strain) ** n)
+
+
+def tensile_limit(k: float, eps0: float, n: float) -> float:
+    """The engineering tensile strength (MPa) of a Swift material: the largest of
+    K (eps0 + e)^n exp(-e) over the plastic strain e (elastic strain neglected), reached at
+    Considere's e = n - eps0 (at e = 0 when eps0 >= n)."""
+    e = max(0.0, n - eps0)
+    return swift_stress(e, k, eps0, n) * float(np.exp(-e))
+
+
+def siebel_force(diameter: float, mean_diameter: float, thickness: float,
+                 flow_stress_mean: float, flow_stress_bend: float, friction: float,
+                 radii: tuple[float, ...], wrap: float, holder_force: float = 0.0) -> float:
+    """Siebel's estimate of the largest punch force (N, the whole cup) of a cylindrical
+    draw that reduces ``diameter`` (the blank's, or the last cup's, at the start of the
+    draw) to ``mean_diameter`` (the new cup's mid-wall diameter) in a sheet of
+    ``thickness`` (mm):
+
+        F = pi d_m s [exp(mu alpha) (1.1 k_m ln(D / d_m) + 2 mu F_N / (pi D s))
+                      + sum_r k_b s / (2 r)]
+
+    the ideal work of the flange's radial drawing (k_m its mean flow stress, 1.1 for the
+    inhomogeneity), the blank-holder's friction (F_N its force), the belt friction over the
+    angle ``wrap`` (rad) that the sheet wraps around the tool radii, and the bending and
+    unbending over each of ``radii`` at the flow stress ``flow_stress_bend``. An
+    elementary bound to hold a computed force against (to 10 or 20 %), not a model."""
+    for name, value in (("diameter", diameter), ("mean_diameter", mean_diameter),
+                        ("thickness", thickness), ("flow_stress_mean", flow_stress_mean),
+                        ("flow_stress_bend", flow_stress_bend)):
+        if not value > 0.0:
+            raise ValueError(f"{name} must be positive, got {value}")
+    if not diameter > mean_diameter:
+        raise ValueError(f"the draw must reduce the diameter: {diameter} -> {mean_diameter}")
+    if any(not r > 0.0 for r in radii) or friction < 0.0 or wrap < 0.0 or holder_force < 0.0:
+        raise ValueError("radii must be positive; friction, wrap and holder_force >= 0")
+    ideal = 1.1 * flow_stress_mean * np.log(diameter / mean_diameter)
+    holder = 2.0 * friction * holder_force / (np.pi * diameter * thickness)
+    bending = sum(flow_stress_bend * thickness / (2.0 * r) for r in radii)
+    stress = np.exp(friction * wrap) * (ideal + holder) + bending
+    return float(np.pi * mean_diameter * thickness * stress)

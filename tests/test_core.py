@@ -128,6 +128,39 @@ def test_symmetric_mode_reads_one_triangle() -> None:
     assert np.linalg.norm(spd @ x - b) / np.linalg.norm(b) < 1e-12
 
 
+def test_spd_mode_refuses_an_indefinite_matrix() -> None:
+    """symmetry="spd" factorizes LDL^T without pivoting, which MUMPS completes on an
+    indefinite matrix too (and solves: an answer to the wrong question). Its negative pivots
+    are counted (INFOG(12)) and the factorization refused; "symmetric" takes the same matrix,
+    with as many negative pivots as it has negative eigenvalues (Sylvester's law)."""
+    n = 60
+    rng = np.random.default_rng(6)
+    a = rng.normal(size=(n, n)) * (rng.random((n, n)) < 0.1)
+    indefinite = a + a.T + np.diag(np.linspace(-3.0, 12.0, n))
+    negative = int((np.linalg.eigvalsh(indefinite) < 0).sum())
+    assert 0 < negative < n
+    rows, cols = np.nonzero(np.tril(indefinite))
+    b = rng.normal(size=n)
+    with MumpsSolver(symmetry="spd") as solver:
+        solver.analyse(n, rows, cols)
+        with pytest.raises(LinearSolverError, match="code -1007: the matrix is not positive "
+                                                    "definite"):
+            solver.factorize(indefinite[rows, cols])
+        with pytest.raises(LinearSolverError, match="analyse and factorize"):
+            solver.solve(b)  # nothing to solve with
+        # the instance stays usable: a positive definite matrix on the same structure
+        spd = indefinite + 20.0 * np.eye(n)
+        solver.factorize(spd[rows, cols])
+        assert np.linalg.norm(spd @ solver.solve(b) - b) / np.linalg.norm(b) < 1e-12
+        assert solver.statistics()["negative_pivots"] == 0
+    with MumpsSolver(symmetry="symmetric") as solver:
+        solver.analyse(n, rows, cols)
+        solver.factorize(indefinite[rows, cols])
+        x = solver.solve(b)
+        assert solver.statistics()["negative_pivots"] == negative
+    assert np.linalg.norm(indefinite @ x - b) / np.linalg.norm(b) < 1e-10
+
+
 def test_scipy_sparse_input() -> None:
     sparse = pytest.importorskip("scipy.sparse")
     n = 100

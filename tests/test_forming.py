@@ -80,6 +80,34 @@ def test_block_sticks_below_and_slips_above_coulomb() -> None:
     assert (problem.u[bottom, 0] < 2e-3 + 2e-5 - 1e-6).all()
 
 
+@pytest.mark.parametrize("contact", ["node", "surface", "gauss"])
+def test_friction_on_the_blank_follows_a_sliding_tool(contact: str) -> None:
+    """A block clamped at its top, pressed onto a plane tool that then slides along
+    (4, -2, 0) um, for every contact discretization: every face of the block slips, and the
+    friction force on the blank (minus the tool's reaction) opposes its slip relative to the
+    tool, so it points along the tool's motion, at mu times the normal force. Its size alone
+    would not tell a slip of the wrong sign: |Ft| = mu Fz either way."""
+    mu = 0.2
+    mesh = HexMesh.box(1.0, 1.0, 0.5, 3, 3, 2, origin=(-0.5, -0.5, 0.0))
+    options = {"penalty": 5e4} if contact == "gauss" else {}
+    tool = _RigidTool("plane", plane_tool(), mesh.select(z=0.0), friction=mu,
+                      facing=(0, 0, -1), contact=contact, **options)
+    problem = FormingProblem(Solid(mesh, ELASTIC), [tool])
+    problem.fix(mesh.select(z=0.5), "xyz")
+    result = problem.run({"plane": (0, 0, 4e-3)}, max_increment=2e-3)
+    motion = np.array([4e-3, -2e-3, 0.0])
+    result = problem.run({"plane": tuple(motion)}, max_increment=1e-3, result=result,
+                         newton=NewtonSettings(1e-11, 1e-6))
+    assert (result.status["plane"][-1] == SLIP).all()
+    on_blank = -result.tool_forces["plane"][-1]
+    assert on_blank[2] > 1.0  # pressed: the tool pushes the blank up
+    tangential = on_blank[:2]
+    along = motion[:2] / np.linalg.norm(motion[:2])
+    assert tangential @ along == pytest.approx(mu * on_blank[2], rel=1e-3), on_blank
+    across = tangential[0] * along[1] - tangential[1] * along[0]
+    assert abs(across) <= 1e-3 * np.linalg.norm(tangential), on_blank
+
+
 def test_tool_reaction_equals_contact_forces_and_supports() -> None:
     problem, mesh = block_on_plane(0.3)
     result = problem.run({"plane": (4e-4, 0, 1e-3)}, max_increment=5e-4)

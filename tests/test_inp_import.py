@@ -20,7 +20,8 @@ from ddpy.io.inp_model import read_inp
 from ddpy.io.toolfile import read_tool
 from ddpy.model.material import HardeningTable
 
-EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "calculix_bending"
+ROOT = Path(__file__).resolve().parents[1]
+EXAMPLE = ROOT / "examples" / "calculix_bending"
 FILES = ("bending.inp", "blank.inp", "punch.inp", "die.inp")
 
 
@@ -360,6 +361,50 @@ def test_material_deck_hardening_table(tmp_path: Path, old: str, new: str, line:
     assert _parse_material(deck) is None
     assert message in deck.errors[0].message
     assert deck.errors[0].line == line
+
+
+#: MATERIAL with a perfectly plastic plateau: 250 MPa from ep = 0.1 on (lines 5 to 7).
+PLATEAU = MATERIAL.replace("table 3", "table 4").replace("  0.3 280\n", "  0.3 250\n  0.5 250\n")
+
+
+def test_material_deck_accepts_a_plateau_and_refuses_a_decrease_at_its_line(
+        tmp_path: Path) -> None:
+    """Tabulated hardening may stay level (a perfectly plastic stretch: equal stresses on
+    rows that follow each other) but never fall: a decrease is refused at its row's line.
+    Through the whole case: the table's reader, HardeningTable and the core's check."""
+    case = tmp_path / "case"
+    shutil.copytree(ROOT / "examples" / "bending", case)
+    (case / "material.dat").write_text(PLATEAU)
+    material = read_case(case).material.material
+    assert material.hardening == HardeningTable((0.0, 0.1, 0.3, 0.5),
+                                                (200.0, 250.0, 250.0, 250.0))
+    np.testing.assert_allclose(material.hardening_curve([0.05, 0.2, 0.4, 2.0]),
+                               [[225.0, 250.0, 250.0, 250.0], [500.0, 0.0, 0.0, 0.0]])
+    # On the plateau the return mapping lands on 250 MPa: uniaxial strain far beyond yield.
+    stress, ep, _, plastic = material.update(np.zeros(6), 0.2, [0.05, -0.025, -0.025, 0, 0, 0])
+    assert plastic and ep > 0.2
+    assert stress[0] - stress[1] == pytest.approx(250.0, rel=1e-10)
+    (case / "material.dat").write_text(PLATEAU.replace("0.5 250", "0.5 249.99"))
+    with pytest.raises(DeckError) as caught:
+        read_case(case)
+    error = caught.value.errors[0]
+    assert (error.path.name, error.line) == ("material.dat", 7), str(caught.value)
+    assert "the yield stress 249.99 is below the one before (250): softening" in error.message
+
+
+def test_plastic_card_accepts_a_plateau_and_refuses_a_decrease_at_its_line(deck: Path
+                                                                           ) -> None:
+    """*PLASTIC likewise: a row at the stress of the row before is a perfectly plastic
+    stretch, accepted; one below it is refused at its line."""
+    line = _edit(deck, "300., 0.05", "260., 0.05")
+    model = read_inp(deck)
+    assert model.hardening[:4] == [(0.0, 200.0), (0.02, 260.0), (0.05, 260.0), (0.1, 340.0)]
+    _edit(deck, "260., 0.05", "259.9, 0.05")
+    with pytest.raises(DeckError) as caught:
+        read_inp(deck)
+    error = caught.value.errors[0]
+    assert (error.path, error.line) == (deck, line), str(caught.value)
+    assert "yield stress 259.9 is below the one before (260)" in error.message
 
 
 def test_rigid_body_by_node_set(tmp_path: Path) -> None:

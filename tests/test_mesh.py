@@ -6,7 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import ddpy.model.mesh
 from ddpy.model.mesh import (
+    MAX_ELEMENTS,
     MIN_SCALED_JACOBIAN,
     HexMesh,
     MeshError,
@@ -169,3 +171,24 @@ def test_a_large_valid_mesh_is_checked_as_a_whole() -> None:
     assert sorted(b.index for b in error.bad_elements) == sorted(flipped.tolist())
     assert [b.label for b in error.bad_elements] == sorted(flipped + 1)
     assert str(error).startswith("50 bad elements, the first 3: ")
+
+
+def test_a_box_beyond_the_element_limit_is_refused_before_it_is_built() -> None:
+    """HexMesh.box checks its element count against MAX_ELEMENTS, the mesh deck's limit
+    (tests/test_decks.py), before it allocates: these 10^10 elements would take 75 GiB and
+    end in numpy's MemoryError."""
+    with pytest.raises(MeshError, match=rf"the box has 10000000000 elements \(10000 x 10000 x "
+                                        rf"100\): at most {MAX_ELEMENTS}$"):
+        HexMesh.box(1, 1, 1, 10**4, 10**4, 10**2)
+
+
+def test_the_constructor_checks_the_element_limit(monkeypatch: pytest.MonkeyPatch) -> None:
+    """HexMesh itself holds at most MAX_ELEMENTS (lowered here to keep the test small)."""
+    row = HexMesh.box(3.0, 1.0, 1.0, 3, 1, 1)
+    monkeypatch.setattr(ddpy.model.mesh, "MAX_ELEMENTS", 2)
+    with pytest.raises(MeshError, match="a mesh of 16 nodes and 3 elements: at most .* and 2 "
+                                        "elements"):
+        HexMesh(row.nodes, row.elements)
+    with pytest.raises(MeshError, match="the box has 3 elements"):
+        HexMesh.box(3.0, 1.0, 1.0, 3, 1, 1)
+    assert HexMesh(row.nodes, row.elements[:2]).n_elements == 2

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from ddpy.app.cli import main
+from ddpy.geometry import mesh_normals
 from ddpy.geometry.mesh_normals import DEFAULT_ESTIMATOR, estimate_normals
 from ddpy.geometry.shapes import Sphere
 from ddpy.io.toolfile import read_tool
@@ -68,6 +69,33 @@ def test_max_weights_are_exact_on_a_closed_sphere(kind: str) -> None:
     assert errors["max"] < 1e-10          # Max 1999: exact for vertices on a sphere
     assert errors["area"] > 1.0 and errors["angle"] > 0.5   # measured 1.4-2.6, 1.0-1.1
     assert errors["cubic"] < 0.25         # measured 0.17 (the cube's corners)
+
+
+@pytest.mark.parametrize(("surface", "kind"), [("sphere", "unstructured tri"),
+                                               ("cylinder", "perturbed quad")])
+def test_the_fitted_normals_do_not_depend_on_their_starting_normals(
+        surface: str, kind: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The fits start in the tangent plane of Max's normal and fit again in the plane of
+    their own first normal. Max's normals tilted by 10 degrees (patched in where the fits
+    take them) move the estimated normals by at most 2.7e-4 and 1.2e-3 degrees here
+    (measured), 4.9e-2 and 1.1e-1 with the first fit alone."""
+    mesh = make_mesh(SURFACES[surface](), kind, 16)
+    found = estimate_normals(mesh.vertices, mesh.faces)
+    weighted = mesh_normals._weighted
+
+    def tilted_max(*args: object) -> np.ndarray:
+        normals = weighted(*args)
+        if args[-1] != "max":
+            return normals
+        axis = np.eye(3)[np.argmin(np.abs(normals), axis=1)]
+        tangent = np.cross(normals, axis)
+        tangent /= np.linalg.norm(tangent, axis=1)[:, None]
+        return np.cos(np.radians(10.0)) * normals + np.sin(np.radians(10.0)) * tangent
+
+    monkeypatch.setattr(mesh_normals, "_weighted", tilted_max)
+    moved = estimate_normals(mesh.vertices, mesh.faces)
+    assert found.fallbacks == moved.fallbacks == 0  # every normal is a fit's
+    assert angle_between(found.corner_normals, moved.corner_normals).max() < 1e-2
 
 
 def _l_shape(n: int = 4) -> tuple[np.ndarray, np.ndarray]:

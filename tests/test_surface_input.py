@@ -43,6 +43,11 @@ NAGATA_CASES = {
                            "degenerate: two of its edges are parallel"),
     "collinear quad corner": (dict(faces=[[0, 1, 4, 2]]), ValueError,
                               "degenerate: two of its edges are parallel"),
+    # Its corners' areas cancel: without the check its normal is 0 / 0 and it is accepted.
+    "bow-tie quad": (dict(faces=[[0, 2, 1, 3]]), ValueError,
+                     "face 0 = .* is degenerate: its area is zero"),
+    "bow-tie facet": (dict(faces=[[0, 2, 1, 3]], smooth=False), ValueError,
+                      "face 0 = .* is degenerate: its area is zero"),
     "vertex index too large": (dict(faces=[[0, 1, 2, 5]]), ValueError,
                                r"vertex indices must lie in 0\.\.4"),
     "-1 in a wrong column": (dict(faces=[[0, -1, 2, 3]]), ValueError,
@@ -106,6 +111,9 @@ def test_smallest_degenerate_ratio_keeps_parallel_normals_finite():
 
 # --- Bezier construction ----------------------------------------------------------------------
 
+#: A bilinear patch: the unit square in z = 0.
+GOOD_NET = np.array([[[0.0, 0, 0], [0, 1, 0]], [[1, 0, 0], [1, 1, 0]]])
+
 BEZIER_CASES = {
     "degree 7": ([np.zeros((8, 8, 3))], ValueError, r"degree \(7, 7\).*between 1 and 6"),
     "degree 7 in v": ([np.zeros((3, 8, 3))], ValueError, r"degree \(2, 7\)"),
@@ -123,6 +131,15 @@ BEZIER_CASES = {
                           r"non-finite value at index \(1, 2, 0\)"),
     "string net": ([np.full((3, 3, 3), "a")], TypeError, "real numbers"),
     "complex net": ([np.zeros((3, 3, 3), dtype=complex)], TypeError, "real numbers"),
+    # Nets collapsed to a point, a straight line or a curve have no area: their normals
+    # would be zero, or the unit vector of rounding noise.
+    "net at a point": ([np.full((3, 3, 3), 2.5)], ValueError,
+                       "patch 0 is degenerate: its tangents are zero or parallel"),
+    "net on a line": ([GOOD_NET, (np.linspace(0, 1, 12)[:, None] * [0.3, -1.7, 2.9]
+                                  + [1, 2, 3]).reshape(3, 4, 3)], ValueError,
+                      "patch 1 is degenerate"),
+    "net on a curve": ([np.broadcast_to(np.array([[0.0, 0, 0], [1, 1, 0], [2, 0, 1]])[:, None],
+                                        (3, 4, 3))], ValueError, "patch 0 is degenerate"),
 }
 
 
@@ -163,6 +180,12 @@ QUERY_CASES = {
     "NaN params": ([0, 0], [[0.5, 0.5], [0.1, np.nan]], ValueError,
                    r"params has a non-finite value at index \(1, 1\)"),
     "infinite params": ([0], [[np.inf, 0.5]], ValueError, "params has a non-finite value"),
+    # Far outside the domain the polynomial overflows (-inf at 1e300): refused.
+    "params 1e300": ([0], [[1e300, 0.5]], ValueError,
+                     re.escape("params[0] = [1e+300, 0.5] is outside patch 0")),
+    "params beyond the margin": ([1, 0], [[0.5, 0.5], [0.5, -1.001]], ValueError,
+                                 r"params\[1\] = .* is outside patch 0: expected parameters in "
+                                 r"\[0, 1\] \(up to 1 beyond: -1 to 2\)"),
 }
 
 
@@ -177,7 +200,8 @@ def test_bad_queries(surface, method, ids, params, error, message):
 @pytest.mark.parametrize(("ids", "params", "error", "message"), list(QUERY_CASES.values())[:3],
                          ids=list(QUERY_CASES)[:3])
 def test_bad_de_casteljau_queries(ids, params, error, message):
-    surface = BezierSurface([np.zeros((3, 4, 3)), np.zeros((2, 2, 3))])
+    rng = np.random.default_rng(0)
+    surface = BezierSurface([rng.normal(size=(3, 4, 3)), GOOD_NET])
     with pytest.raises(error, match=message):
         surface.evaluate_de_casteljau(ids, params)
 
@@ -190,8 +214,16 @@ def test_empty_batch(surface, params):
 
 
 def test_empty_de_casteljau_batch():
-    surface = BezierSurface([np.zeros((3, 4, 3))])
+    surface = BezierSurface([GOOD_NET])
     assert surface.evaluate_de_casteljau(np.zeros(0, dtype=int), np.zeros((0, 2))).shape == (0, 3)
+
+
+def test_parameters_within_the_margin_are_evaluated(surface):
+    """Up to DOMAIN_MARGIN outside the domain the polynomial is evaluated (extrapolation,
+    finite differences at an edge); the edges of the margin themselves included."""
+    params = [[-1.0, 0.5], [2.0, 2.0], [0.5, -1.0], [1.5, 0.25]]
+    points, _, _ = surface.evaluate([0, 1, 0, 1], params)
+    assert np.isfinite(points).all()
 
 
 def test_scalar_patch_id_is_one_query(surface):

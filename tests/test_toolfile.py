@@ -10,6 +10,9 @@ import pytest
 from ddpy.geometry.surfaces import BezierSurface, NagataSurface
 from ddpy.io.toolfile import ToolFileError, ToolModel, read_tool, write_tool
 
+#: A bilinear Bezier patch: the unit square in z = 0.
+SQUARE_NET = np.array([[[0.0, 0, 0], [0, 1, 0]], [[1, 0, 0], [1, 1, 0]]])
+
 NAGATA = """\
 # a comment line
 ddpy-tool 1
@@ -99,7 +102,7 @@ def test_facets_file_and_facets_of_nagata(tmp_path: Path) -> None:
     np.testing.assert_array_equal(back.surface.coefficients, facets.surface.coefficients)
     assert back.facets() is back
     with pytest.raises(ValueError, match="only a Nagata model"):
-        ToolModel("b", "bezier", BezierSurface([np.zeros((2, 2, 3))]), [1]).facets()
+        ToolModel("b", "bezier", BezierSurface([SQUARE_NET]), [1]).facets()
 
 
 def test_bezier_round_trip_is_exact(tmp_path: Path) -> None:
@@ -207,7 +210,7 @@ def test_unreadable_file(tmp_path: Path) -> None:
 
 
 def test_model_checks() -> None:
-    surface = BezierSurface([np.zeros((2, 2, 3))])
+    surface = BezierSurface([SQUARE_NET])
     with pytest.raises(ValueError, match="description must be one of"):
         ToolModel("a", "nurbs", surface, [1])
     with pytest.raises(ValueError, match="cannot have description 'nagata'"):
@@ -239,11 +242,14 @@ def test_a_bezier_patch_collapsed_inside_is_refused(tmp_path: Path) -> None:
     square = np.stack([u, v, np.zeros((2, 2))], axis=-1)
     pole = square.copy()
     pole[0, :] = 0.0  # the edge u = 0 collapsed to the origin
-    point = np.zeros((3, 3, 3))
-    model = ToolModel("die", "bezier", BezierSurface([square, pole, point]), [1, 2, 3])
+    u, v = np.meshgrid([0.0, 0.5, 1.0], [0.0, 0.5, 1.0], indexing="ij")
+    quadratic = np.stack([u, v, np.zeros((3, 3))], axis=-1)
+    model = ToolModel("die", "bezier", BezierSurface([square, pole, quadratic]), [1, 2, 3])
     path = write_tool(tmp_path / "die.bezier.tool", model)
-    line = next(n for n, x in enumerate(path.read_text().split("\n"), start=1)
-                if x.startswith("patch 2 2"))
+    text = path.read_text().split("\n")
+    line = next(n for n, x in enumerate(text, start=1) if x.startswith("patch 2 2"))
+    text[line:line + 9] = ["0 0 0"] * 9  # BezierSurface refuses such a net: write it by hand
+    path.write_text("\n".join(text))
     with pytest.raises(ToolFileError, match=rf"die.bezier.tool:{line}: patch 2 is degenerate"):
         read_tool(path)
     model = ToolModel("die", "bezier", BezierSurface([square, pole]), [1, 2])

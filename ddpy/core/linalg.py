@@ -37,6 +37,8 @@ _MESSAGES = {
     -1004: "too many solvers open at once; close some",
     -1005: "the processes were finished (ddpy.core.mpi.finish)",
     -1006: "only rank 0 drives the solver; ranks > 0 serve it (ddpy.core.mpi.serve)",
+    -1007: "the matrix is not positive definite (MUMPS found negative pivots, INFOG(12)); "
+           "factorize it with symmetry='symmetric' if it is meant to be indefinite",
 }
 
 
@@ -86,7 +88,8 @@ class LinearSolverError(RuntimeError):
 class MumpsSolver:
     """One MUMPS instance: analyse a structure once, then factorize and solve repeatedly.
 
-    ``symmetry`` is "unsymmetric", "symmetric" or "spd" (for the last two give one triangle);
+    ``symmetry`` is "unsymmetric", "symmetric" or "spd" (for the last two give one triangle;
+    "spd" refuses, at ``factorize``, a matrix that is not positive definite);
     ``ordering`` a MUMPS ordering name ("metis" by default; MUMPS
     falls back to its own choice when the library lacks it); ``controls`` sets further MUMPS
     ICNTL entries by their 1-based index, e.g. ``{10: -2}`` for two refinement steps, and
@@ -181,7 +184,9 @@ class MumpsSolver:
         return self._live()
 
     def factorize(self, values: ArrayLike) -> None:
-        """LU (or LDL^T) factorization with the values of the analysed entries."""
+        """LU (or LDL^T) factorization with the values of the analysed entries.
+        LinearSolverError when MUMPS fails, and for "spd" when the matrix has a negative
+        pivot (it is not positive definite)."""
         values = float_array(values, "values", (self.nnz,))
         status = _core.solver_factorize(self._live(), values)
         if status < 0:
@@ -202,7 +207,9 @@ class MumpsSolver:
         INFOG(16)/(17): in-core memory of the factorization on the largest process / all
         processes); after a factorization the memory it allocated (``memory_mb_max``/
         ``_total``, INFOG(18)/(19)) and used (``memory_used_mb_max``/``_total``,
-        INFOG(21)/(22)); ``processes``, the MPI processes sharing the work."""
+        INFOG(21)/(22)); ``processes``, the MPI processes sharing the work;
+        ``negative_pivots``, those of the last factorization with "symmetric" or "spd"
+        (INFOG(12); with "unsymmetric" MUMPS counts its off-diagonal pivots there)."""
         values, flops, status = _core.solver_info(self._live())
         if status < 0:
             raise LinearSolverError(int(status), "statistics")
@@ -219,7 +226,7 @@ class MumpsSolver:
                 "estimated_memory_mb_total": int(values[6]),
                 "memory_mb_max": int(values[7]), "memory_mb_total": int(values[8]),
                 "memory_used_mb_max": int(values[9]), "memory_used_mb_total": int(values[10]),
-                "processes": int(values[11])}
+                "processes": int(values[11]), "negative_pivots": int(values[12])}
 
     def close(self) -> None:
         """Free the MUMPS instance (also done when the object is collected)."""

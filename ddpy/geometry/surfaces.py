@@ -4,7 +4,10 @@ Every description answers the same questions for a batch of (patch, parameters) 
 the point S, the first derivatives S_,a, the unit normal n = unit(S_,1 x S_,2) and the
 second derivatives S_,ab. Parameters follow the paper: a Bezier or quadrilateral patch
 lives on [0, 1]^2, a triangle on 0 <= zeta <= eta <= 1 (vertices at (0,0), (1,0), (1,1)).
-The polynomials are defined everywhere, so points outside the domain are evaluated too.
+The polynomials are defined beyond the domain too: parameters up to DOMAIN_MARGIN (one domain
+width) outside it are evaluated (an extrapolation, a finite difference at an edge), and
+farther ones refused, as are patches of zero area (nets or faces collapsed to a point or a
+line).
 
 >>> import numpy as np
 >>> from ddpy.geometry.surfaces import NagataSurface
@@ -25,8 +28,8 @@ from numpy.typing import ArrayLike, NDArray
 from ddpy import _core
 from ddpy._validate import float_array, int_array
 
-__all__ = ["BezierSurface", "NagataSurface", "MAX_BEZIER_DEGREE", "NAGATA_DEGENERATE_RATIO",
-           "nagata_edge_coefficient"]
+__all__ = ["BezierSurface", "NagataSurface", "DEGENERATE_AREA", "DOMAIN_MARGIN",
+           "MAX_BEZIER_DEGREE", "NAGATA_DEGENERATE_RATIO", "nagata_edge_coefficient"]
 
 #: Highest Bezier degree in each direction (the paper's cap for a stable power basis).
 MAX_BEZIER_DEGREE = 6
@@ -36,6 +39,16 @@ MAX_BEZIER_DEGREE = 6
 NAGATA_DEGENERATE_RATIO = 8.0
 #: Allowed deviation of a given normal from unit length.
 UNIT_TOL = 1.0e-6
+#: Parameters are accepted up to this far outside a patch's domain ([0, 1] in each, the
+#: triangle 0 <= zeta <= eta <= 1 within the same square): beyond it a polynomial's value says
+#: nothing of the tool, and far beyond it overflows.
+DOMAIN_MARGIN = 1.0
+#: |S_,1 x S_,2| at or below this times the patch's size squared is zero: a patch collapsed to
+#: a point or a line there (rounding leaves about 1e-16).
+DEGENERATE_AREA = 1.0e-10
+#: Where a Bezier patch's tangents are checked: a 3 x 3 grid inside it (a patch may have a
+#: singular edge, the pole of a disc-shaped face, never a singular inside).
+_INSIDE = np.linspace(0.25, 0.75, 3)
 
 _NB = MAX_BEZIER_DEGREE + 1
 
@@ -58,6 +71,14 @@ class _Surface:
             raise IndexError(
                 f"patch_ids[{bad}] = {ids[bad]} is not a patch: expected 0 <= id < "
                 f"{self.n_patches}"
+            )
+        outside = (np.abs(uv - 0.5) > 0.5 + DOMAIN_MARGIN).any(axis=1)
+        if outside.any():
+            bad = int(np.flatnonzero(outside)[0])
+            raise ValueError(
+                f"params[{bad}] = {uv[bad].tolist()} is outside patch {ids[bad]}: expected "
+                f"parameters in [0, 1] (up to {DOMAIN_MARGIN:g} beyond: "
+                f"{-DOMAIN_MARGIN:g} to {1 + DOMAIN_MARGIN:g})"
             )
         return ids, uv
 
@@ -129,6 +150,35 @@ class BezierSurface(_Surface):
         if info != 0:
             raise RuntimeError(f"core refused the degree of patch {info - 1}")
         self.coefficients = coef
+        self._check_tangents()
+
+    def _check_tangents(self) -> None:
+        """Refuse a patch whose tangents are zero or parallel inside it (no area there)."""
+        params = np.column_stack([np.repeat(_INSIDE, _INSIDE.size),
+                                  np.tile(_INSIDE, _INSIDE.size)])
+        count = self.n_patches
+        ids = np.repeat(np.arange(count, dtype=np.int32), len(params))
+        overflow = ~np.isfinite(self.coefficients.reshape(count, -1)).all(axis=1)
+        if overflow.any():
+            p = int(np.flatnonzero(overflow)[0])
+            raise ValueError(f"patch {p}'s control points are too large to evaluate: its "
+                             "power-basis coefficients overflow")
+        derivs = self._run(ids, np.tile(params, (count, 1)))[1].reshape(count, -1, 2, 3)
+        with np.errstate(over="ignore", invalid="ignore"):
+            cross = np.linalg.norm(np.cross(derivs[..., 0, :], derivs[..., 1, :]), axis=2)
+        # The size of each net over its own points (the padded rows and columns are zero).
+        k = np.arange(_NB)
+        used = ((k[None, :, None] <= self.degrees[:, 1, None, None])
+                & (k[None, None, :] <= self.degrees[:, 0, None, None]))[..., None]
+        with np.errstate(over="ignore"):
+            size = (np.where(used, self.control, -np.inf).max(axis=(1, 2))
+                    - np.where(used, self.control, np.inf).min(axis=(1, 2))).max(axis=1)
+        size = np.maximum(size, np.finfo(float).tiny)
+        degenerate = ~(cross.min(axis=1) / size / size > DEGENERATE_AREA)
+        if degenerate.any():
+            p = int(np.flatnonzero(degenerate)[0])
+            raise ValueError(f"patch {p} is degenerate: its tangents are zero or parallel "
+                             "inside it (control points collapsed to a point or a line)")
 
     def _evaluate_all(self, ids, uv):
         return _core.bezier_evaluate(self.degrees.ravel(), self.coefficients, ids, uv)
@@ -229,7 +279,17 @@ class NagataSurface(_Surface):
             )
         corner[tri, 3] = 0.0
         self._face_normal = corner.sum(axis=1)
-        self._face_normal /= np.linalg.norm(self._face_normal, axis=1)[:, None]
+        # Four times a quadrilateral's vector area: zero for one whose edges cross (a bow-tie)
+        # although no two of its edges are parallel.
+        area = np.linalg.norm(self._face_normal, axis=1)
+        flat = ~(area > DEGENERATE_AREA * scale.max(axis=1) ** 2)
+        if flat.any():
+            f = int(np.flatnonzero(flat)[0])
+            raise ValueError(
+                f"face {f} = {faces[f].tolist()} is degenerate: its area is zero (its edges "
+                "cross)"
+            )
+        self._face_normal /= area[:, None]
 
     def _corner_normals(self, normals: ArrayLike, n_vertices: int) -> NDArray[np.float64]:
         array = np.asarray(normals)

@@ -317,18 +317,13 @@ def _read_bezier(lines: _Lines) -> tuple[BezierSurface, NDArray[np.int64]]:
         points = [_floats(lines, k, w, "a control point")
                   for k, w in lines.rows((n + 1) * (m + 1), f"control points of patch {len(nets)}")]
         nets.append(np.array(points).reshape(n + 1, m + 1, 3))
-    surface = BezierSurface(nets)
-    # A patch may have a singular edge (a pole of a disc-shaped face), never a singular
-    # inside: there the normal of a patch collapsed to a point or a line would be zero.
-    u = np.linspace(0.25, 0.75, 3)
-    params = np.column_stack([np.repeat(u, 3), np.tile(u, 3)])
-    ids = np.repeat(np.arange(count), len(params))
-    normals = surface.evaluate(ids, np.tile(params, (count, 1)))[2].reshape(count, -1, 3)
-    flat = np.linalg.norm(normals, axis=2).min(axis=1) < 0.5
-    if flat.any():
-        k = int(np.flatnonzero(flat)[0])
-        raise lines.error(patch_lines[k], f"patch {k} is degenerate: its tangents are zero or "
-                          "parallel inside it (control points collapsed to a point or a line)")
+    try:
+        surface = BezierSurface(nets)
+    except ValueError as error:  # a degenerate patch (BezierSurface checks its tangents)
+        match = re.match(r"patch (\d+)", str(error))
+        if match is None:
+            raise ToolFileError(f"{lines.path}: {error}") from None
+        raise lines.error(patch_lines[int(match.group(1))], str(error)) from None
     return surface, np.array(tags, dtype=np.int64)
 
 

@@ -15,12 +15,17 @@ from numpy.typing import ArrayLike, NDArray
 from ddpy import _core
 from ddpy._validate import float_array, int_array
 
-__all__ = ["HEX_EDGES", "HEX_FACES", "RIGID_MODES", "BadElement", "HexMesh", "MeshError",
+__all__ = ["HEX_EDGES", "HEX_FACES", "MAX_ELEMENTS", "MAX_NODES", "RIGID_MODES", "BadElement",
+           "HexMesh", "MeshError",
            "boundary_faces", "free_rigid_modes",
            "corner_scaled_jacobians", "face_area_vectors", "find_bad_elements",
            "largest_rotation", "through_thickness_columns", "zeta_along_normal",
            "zeta_off_normal"]
 
+#: Largest mesh (elements) a HexMesh holds, made or read from a deck (docs/input-format.md).
+MAX_ELEMENTS = 5_000_000
+#: Largest number of nodes: those of MAX_ELEMENTS hexahedra that share none.
+MAX_NODES = 8 * MAX_ELEMENTS
 #: Relative size below which a Jacobian determinant counts as degenerate.
 DEGENERATE = 1e-10
 #: A corner of a hexahedron whose scaled Jacobian is at most this is degenerate.
@@ -340,6 +345,9 @@ class HexMesh:
         n, m = self.nodes.shape[0], self.elements.shape[0]
         if n == 0 or m == 0:
             raise MeshError("a mesh needs at least one node and one element")
+        if m > MAX_ELEMENTS or n > MAX_NODES:
+            raise MeshError(f"a mesh of {n} nodes and {m} elements: at most {MAX_NODES} "
+                            f"nodes and {MAX_ELEMENTS} elements")
         self.node_ids = _frozen(np.arange(n) if node_ids is None else
                                 int_array(node_ids, "node_ids", (n,)).astype(np.int64))
         self.element_ids = _frozen(np.arange(m) if element_ids is None else
@@ -457,7 +465,8 @@ class HexMesh:
     def box(cls, lx: float, ly: float, lz: float, nx: int, ny: int, nz: int,
             origin: ArrayLike = (0.0, 0.0, 0.0)) -> HexMesh:
         """Structured mesh of the box [0, lx] x [0, ly] x [0, lz] (shifted by origin) with
-        nx x ny x nz elements; node (i, j, k) has index i + (nx + 1) (j + (ny + 1) k)."""
+        nx x ny x nz elements (at most MAX_ELEMENTS, checked before anything is allocated);
+        node (i, j, k) has index i + (nx + 1) (j + (ny + 1) k)."""
         for name, value in (("lx", lx), ("ly", ly), ("lz", lz)):
             if not float(value) > 0.0:
                 raise ValueError(f"{name} must be positive, got {value}")
@@ -465,6 +474,9 @@ class HexMesh:
             if int(value) != value or int(value) < 1:
                 raise ValueError(f"{name} must be a positive integer, got {value}")
         nx, ny, nz = int(nx), int(ny), int(nz)
+        if nx * ny * nz > MAX_ELEMENTS:
+            raise MeshError(f"the box has {nx * ny * nz} elements ({nx} x {ny} x {nz}): at "
+                            f"most {MAX_ELEMENTS}")
         x0 = float_array(origin, "origin", (3,))
         gx, gy, gz = (np.linspace(0.0, float(length), count + 1)
                       for length, count in ((lx, nx), (ly, ny), (lz, nz)))

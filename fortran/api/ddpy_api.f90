@@ -210,7 +210,7 @@ contains
 
   subroutine api_solver_info(handle, values, flops, status) bind(C, name="ddpy_solver_info")
     integer(c_int), value, intent(in) :: handle
-    integer(c_int), intent(out) :: values(12)
+    integer(c_int), intent(out) :: values(13)
     real(c_double), intent(out) :: flops(2)
     integer(c_int), intent(out) :: status
     call solver_info(handle, values, flops, status)

@@ -32,7 +32,8 @@ module ddpy_linear_solver
   !> Status values besides MUMPS's own (negative INFOG(1) values are passed through).
   integer, parameter, public :: status_bad_handle = -1001, status_not_analysed = -1002, &
                                 status_size_mismatch = -1003, status_no_free_handle = -1004, &
-                                status_finished = -1005, status_not_host = -1006
+                                status_finished = -1005, status_not_host = -1006, &
+                                status_not_positive_definite = -1007
 
   !> Commands rank 0 broadcasts to the ranks > 0: one integer message (command, handle,
   !> value, value, and a real value's bits in the last two: one type for every broadcast,
@@ -230,6 +231,13 @@ contains
       instance(handle)%icntl(14) = 2*instance(handle)%icntl(14)
     end do
     factorized(handle) = status >= 0
+    ! SYM = 1 factorizes LDL^T without pivoting, which completes on an indefinite matrix
+    ! too: its negative pivots (INFOG(12), the same on every rank) tell that it is not
+    ! positive definite, and its solutions would be an answer to the wrong question.
+    if (status >= 0 .and. instance(handle)%sym == 1 .and. instance(handle)%infog(12) > 0) then
+      status = status_not_positive_definite
+      factorized(handle) = .false.
+    end if
   end subroutine factorize_job
 
   !> status_size_mismatch where an ordering is to be given (ICNTL(7) = 1) and none of n
@@ -356,12 +364,13 @@ contains
   !> INFOG(2), the ordering used (INFOG(7)), entries in the factors (INFOG(29)), their
   !> estimate of the analysis (INFOG(3)), the estimated memory in MB of the factorization,
   !> largest process and all (INFOG(16), INFOG(17)), the memory the factorization allocated
-  !> (INFOG(18), INFOG(19)) and used (INFOG(21), INFOG(22)), and the number of processes;
+  !> (INFOG(18), INFOG(19)) and used (INFOG(21), INFOG(22)), the number of processes and
+  !> the negative pivots of the last factorization (INFOG(12), SYM = 1 or 2);
   !> factor entries may be negative when large (-value*1e6). flops: the elimination's
   !> (RINFOG(3)) and the analysis's estimate (RINFOG(1)).
   subroutine solver_info(handle, values, flops, status)
     integer, intent(in) :: handle
-    integer, intent(out) :: values(12)
+    integer, intent(out) :: values(13)
     real(wp), intent(out) :: flops(2)
     integer, intent(out) :: status
     values = 0
@@ -373,7 +382,7 @@ contains
     associate (id => instance(handle))
       values = [id%infog(1), id%infog(2), id%infog(7), id%infog(29), id%infog(3), &
                 id%infog(16), id%infog(17), id%infog(18), id%infog(19), id%infog(21), &
-                id%infog(22), world_size]
+                id%infog(22), world_size, id%infog(12)]
       flops = [id%rinfog(3), id%rinfog(1)]
     end associate
     status = 0

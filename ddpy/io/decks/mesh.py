@@ -31,11 +31,15 @@ from ddpy.io.decks.lines import (
     read_vector,
     show,
 )
-from ddpy.model.mesh import HexMesh, MeshError, zeta_along_normal, zeta_off_normal
+from ddpy.model.mesh import (
+    MAX_ELEMENTS,
+    HexMesh,
+    MeshError,
+    zeta_along_normal,
+    zeta_off_normal,
+)
 from ddpy.model.solid import DEFAULT_ELEMENT, ELEMENTS
 
-#: Largest mesh a deck may generate or list (elements).
-MAX_ELEMENTS = 5_000_000
 #: Mesh files read through meshio.
 MESH_SUFFIXES = (".inp", ".msh")
 #: Largest node or element id.

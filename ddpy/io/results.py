@@ -209,7 +209,10 @@ class ResultsWriter:
                 nodes, elements, normal)
         except ValueError:
             self._columns = None  # not layered: no thickness unless given
-        self._file = h5py.File(self.path, "w" if overwrite else "w-")
+        if overwrite:
+            # Removed, not truncated: a process that has the old file open keeps it whole.
+            self.path.unlink(missing_ok=True)
+        self._file = h5py.File(self.path, "w-")
         self.failed = ""  # why a write failed; the file is closed then
         with self._writing():
             self._create(nodes, elements, ids, eids, normal, title, case, element)

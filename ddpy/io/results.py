@@ -188,7 +188,9 @@ class ResultsWriter:
     ``mesh`` is a :class:`ddpy.model.mesh.HexMesh` (or a tuple nodes, elements); ``tools`` and
     ``phases`` name the tools and phases, in the order of the per-tool arrays and phase
     indices. Frame 0, the initial state, is written at once. Use as a context manager or call
-    :meth:`close`; a writer never closed still leaves a readable file.
+    :meth:`close`; a writer never closed still leaves a readable file. An existing file at
+    ``path`` is an error, or with ``overwrite`` removed for a new one (never truncated: a
+    process that has it open keeps reading it whole).
     """
 
     def __init__(self, path: str | os.PathLike[str], mesh: Any, tools: Sequence[str],

@@ -557,8 +557,8 @@ def run_case(case: Case, output: str | os.PathLike[str], restart: bool = False,
         from ddpy.core.parallel import set_threads
 
         set_threads(threads)
-    if restart and not (output / CHECKPOINT).is_file():
-        raise _no_checkpoint(output)
+    if restart and not output.is_dir():
+        raise _no_checkpoint(output)  # (and no folder made for it)
     output.mkdir(parents=True, exist_ok=True)
     # The folder is this run's from here to the end; another run, an --overwrite or a
     # --restart of it is refused before anything in it is read or changed.
@@ -582,7 +582,7 @@ def _run_locked(case: Case, output: Path, restart: bool,
     run = _Run(case, output, progress, stop, checkpoint_every, max_increments)
     results = output / RESULTS
     if restart:
-        if not (output / CHECKPOINT).is_file():  # (removed before the lock was taken)
+        if not (output / CHECKPOINT).is_file():
             raise _no_checkpoint(output)
         run.load()
     else:

@@ -471,3 +471,37 @@ def test_restart_at_a_phase_boundary_is_the_same_run_with_reused_factors(
         assert first.status == "stopped"
         assert run_case(case, tmp_path / f"part{end}", restart=True).status == "completed"
         compare(tmp_path / "whole", tmp_path / f"part{end}")
+
+
+def _snapshot(folder: Path) -> dict[str, tuple[bytes, int]]:
+    """Every file of a folder: its bytes and modification time."""
+    return {p.name: (p.read_bytes(), p.stat().st_mtime_ns) for p in sorted(folder.iterdir())}
+
+
+def test_a_second_run_on_a_running_folder_is_refused_and_the_first_ends_as_a_lone_run(
+        slow_case: tuple[Path, Path], tmp_path: Path) -> None:
+    # Issue 51: the second run deleted the first one's checkpoint and truncated its results
+    # before it was refused; the first then ended with an unreadable results.h5.
+    case, lone = slow_case
+    first = _start(case, tmp_path)
+    _wait_for_checkpoint(tmp_path, first, 1)  # running, with rows and a checkpoint written
+    first.send_signal(signal.SIGSTOP)  # held still: the folder cannot change but by others
+    try:
+        before = _snapshot(tmp_path)
+        for extra in ([], ["--overwrite"], ["--restart"]):
+            second = subprocess.run([sys.executable, "-m", "ddpy", "run", str(case),
+                                     "--output", str(tmp_path), *extra],
+                                    capture_output=True, text=True,
+                                    env={**os.environ, "OMP_NUM_THREADS": "1"})
+            assert second.returncode == 1, (extra, second.stderr)
+            assert second.stderr.splitlines() == [
+                f"ddpy run: error: {tmp_path}: in use by another ddpy run (process "
+                f"{first.pid}); nothing in it was changed: wait for that run to end, or "
+                "choose another --output"], extra
+            assert _snapshot(tmp_path) == before, extra
+    finally:
+        first.send_signal(signal.SIGCONT)
+    stdout, stderr = first.communicate(timeout=120)
+    assert first.returncode == 0 and "completed" in stdout, stderr
+    compare(lone, tmp_path)
+    assert not (tmp_path / ".ddpy.lock").exists()  # given back at the end

@@ -9,7 +9,6 @@ import sys
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
-from pathlib import Path
 from types import FrameType
 from typing import TYPE_CHECKING, TextIO
 
@@ -119,6 +118,7 @@ def _run(args: argparse.Namespace) -> int:
     from ddpy.app.runner import RunError, case_folder, default_output, run_case
     from ddpy.io.checkpoint import CheckpointError
     from ddpy.io.decks import DeckError, read_case
+    from ddpy.io.output_folder import OutputFolderError, check_output_folder
     from ddpy.io.results import ResultsWriteError
 
     folder = case_folder(args.case)
@@ -143,7 +143,12 @@ def _run(args: argparse.Namespace) -> int:
         return 2
     for warning in case.warnings:  # the same as 'ddpy check' prints
         print(f"warning: {warning}", file=sys.stderr)
-    output = Path(args.output) if args.output else default_output(folder)
+    try:  # the path's faults before anything starts (run_case checks them again)
+        output = (check_output_folder(args.output) if args.output is not None
+                  else default_output(folder))
+    except OutputFolderError as error:
+        print(f"ddpy run: error: {error}", file=sys.stderr)
+        return 1
     display = ProgressDisplay(sys.stdout)
     verb = "continuing" if args.restart else "running"
     print(f"ddpy run: {verb} {case.title} ({folder}) -> {output}", flush=True)

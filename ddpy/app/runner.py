@@ -39,6 +39,7 @@ from ddpy.io.checkpoint import (
     state_from_arrays,
     write_checkpoint,
 )
+from ddpy.io.output_folder import FolderLock, OutputFolderError, check_output_folder
 from ddpy.io.results import MIN_FREE, ResultsWriteError, ResultsWriter, Timings, frame_bytes
 from ddpy.model.forming import (
     FormingError,
@@ -539,27 +540,19 @@ def _share(total: int, k: int, parts: int) -> int:
     return (k + 1) * total // parts - k * total // parts
 
 
-def _check_free_space(case: Case, output: Path) -> None:
-    """Refuse to start where the results cannot be written: less free space than a few
-    frames (results.frame_bytes) and checkpoints (per node about 15 numbers, per element 8
-    Gauss points of 8) of this mesh beyond the results writer's MIN_FREE. HDF5 ended a run
-    started with 64 KB free in a segmentation fault while it closed the file."""
-    import shutil
-
-    folder = output
-    while not folder.exists() and folder != folder.parent:
-        folder = folder.parent
-    try:
-        free = shutil.disk_usage(folder).free
-    except OSError:
-        return  # the first write will say what is wrong
+def _bytes_to_start(case: Case) -> int:
+    """The free space a run of ``case`` needs to start: a few frames (results.frame_bytes)
+    and checkpoints (per node about 15 numbers, per element 8 Gauss points of 8) of its mesh
+    beyond the results writer's MIN_FREE. HDF5 ended a run started with 64 KB free in a
+    segmentation fault while it closed the file."""
     n, m = case.mesh.n_nodes, case.mesh.n_elements
     checkpoint = 8 * (15 * n + 64 * m)
-    needed = MIN_FREE + 4 * (frame_bytes(n, m) + checkpoint)  # the writer's margin, and more
-    if free < needed:
-        raise RunError(f"{folder}: {free / 1e6:.3g} MB free, the results of this mesh need "
-                       f"at least {needed / 1e6:.3g} MB to start; free some space or choose "
-                       "another --output")
+    return MIN_FREE + 4 * (frame_bytes(n, m) + checkpoint)  # the writer's margin, and more
+
+
+def _no_checkpoint(output: Path) -> RunError:
+    return RunError(f"{output / CHECKPOINT}: no checkpoint to restart from; run without "
+                    "--restart")
 
 
 def run_case(case: Case, output: str | os.PathLike[str], restart: bool = False,
@@ -576,29 +569,50 @@ def run_case(case: Case, output: str | os.PathLike[str], restart: bool = False,
     replaces earlier results; without it an existing results file is an error. ``threads``:
     OpenMP threads of the core. A failed increment (no convergence after the cuts allowed)
     ends with status failed; the results so far and the last checkpoint stay."""
-    output = Path(output)
     if checkpoint_every < 1:
         raise ValueError(f"checkpoint_every must be >= 1, got {checkpoint_every}")
+    try:
+        output = check_output_folder(output, _bytes_to_start(case))
+    except OutputFolderError as error:
+        raise RunError(str(error)) from error
     if threads is not None:
         from ddpy.core.parallel import set_threads
 
         set_threads(threads)
-    if output.exists() and not output.is_dir():
-        raise RunError(f"{output}: a file is there; the output must be a folder")
-    _check_free_space(case, output)
+    if restart and not output.is_dir():
+        raise _no_checkpoint(output)  # (and no folder made for it)
+    output.mkdir(parents=True, exist_ok=True)
+    # The folder is this run's from here to the end; another run, an --overwrite or a
+    # --restart of it is refused before anything in it is read or changed.
+    lock = FolderLock(output)
+    try:
+        lock.acquire()
+    except OutputFolderError as error:
+        raise RunError(str(error)) from error
+    try:
+        return _run_locked(case, output, restart, progress, stop, overwrite,
+                           checkpoint_every, max_increments)
+    finally:
+        lock.release()
+
+
+def _run_locked(case: Case, output: Path, restart: bool,
+                progress: Callable[[Progress], None] | None, stop: Callable[[], bool] | None,
+                overwrite: bool, checkpoint_every: int, max_increments: int | None
+                ) -> RunOutcome:
+    """run_case once the output folder is checked and locked."""
     run = _Run(case, output, progress, stop, checkpoint_every, max_increments)
     results = output / RESULTS
     if restart:
         if not (output / CHECKPOINT).is_file():
-            raise RunError(f"{output / CHECKPOINT}: no checkpoint to restart from; run "
-                           "without --restart")
+            raise _no_checkpoint(output)
         run.load()
     else:
         if results.exists() and not overwrite:
             raise RunError(f"{results} exists: continue it with --restart, or replace it "
                            "with --overwrite")
-        output.mkdir(parents=True, exist_ok=True)
         (output / CHECKPOINT).unlink(missing_ok=True)
+        # A new file, not the old one truncated: a reader of the old results keeps them.
         run.writer = ResultsWriter.for_case(results, case, overwrite=True)
         run.save(None)
     assert run.writer is not None

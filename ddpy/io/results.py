@@ -191,7 +191,9 @@ class ResultsWriter:
     ``mesh`` is a :class:`ddpy.model.mesh.HexMesh` (or a tuple nodes, elements); ``tools`` and
     ``phases`` name the tools and phases, in the order of the per-tool arrays and phase
     indices. Frame 0, the initial state, is written at once. Use as a context manager or call
-    :meth:`close`; a writer never closed still leaves a readable file.
+    :meth:`close`; a writer never closed still leaves a readable file. An existing file at
+    ``path`` is an error, or with ``overwrite`` removed for a new one (never truncated: a
+    process that has it open keeps reading it whole).
     """
 
     def __init__(self, path: str | os.PathLike[str], mesh: Any, tools: Sequence[str],
@@ -212,7 +214,10 @@ class ResultsWriter:
                 nodes, elements, normal)
         except ValueError:
             self._columns = None  # not layered: no thickness unless given
-        self._file = h5py.File(self.path, "w" if overwrite else "w-")
+        if overwrite:
+            # Removed, not truncated: a process that has the old file open keeps it whole.
+            self.path.unlink(missing_ok=True)
+        self._file = h5py.File(self.path, "w-")
         self.failed = ""  # why a write failed; the file is closed then
         with self._writing():
             self._create(nodes, elements, ids, eids, normal, title, case, element)

@@ -507,3 +507,13 @@ def test_tool_mesh_limit_is_checked(tmp_path: Path, monkeypatch: pytest.MonkeyPa
     assert code == 2
     assert err.strip() == f"ddpy tools build: error: {path}: " \
         f"{path.stat().st_size / 1024:.3g} kB: larger than the 300 bytes limit for a tool mesh"
+
+
+def test_an_abaqus_include_of_a_fifo_is_refused(tmp_path: Path) -> None:
+    (tmp_path / "model.inp").write_text("*HEADING\nfifo\n*INCLUDE, INPUT=nodes.inp\n")
+    os.mkfifo(tmp_path / "nodes.inp")
+    done = _ddpy_child(["-m", "ddpy", "convert", str(tmp_path / "model.inp"),
+                        str(tmp_path / "case")])
+    assert done.returncode == 2, done.stderr
+    assert f"{tmp_path}/nodes.inp: a fifo (named pipe): expected a regular file as an Abaqus " \
+        "input file" in done.stderr

@@ -120,7 +120,7 @@ def _include(path: Path, number: int, params: dict[str, str], depth: int) -> lis
     if depth >= MAX_INCLUDE_DEPTH:
         raise DeckError(f"*INCLUDE nested deeper than {MAX_INCLUDE_DEPTH} files: does {target} "
                         "include itself?", path, number)
-    if not target.is_file():
+    if not target.exists():  # a fifo or device is refused, by name, when it is read
         raise DeckError(f"*INCLUDE: no such file {target}", path, number)
     return read_cards(target, depth + 1)
 

@@ -1,8 +1,8 @@
 """mesh.dat: the blank, as own 'nodes' and 'hexahedra' blocks, a generated 'box' or a mesh file
-(Abaqus input or Gmsh, through meshio), with its sheet normal, scale and origin, and the
-element it is discretized with. The nodes are checked to belong to an element here, the
-elements by HexMesh (ddpy.model.mesh, find_bad_elements), whose findings are reported at the
-elements' lines.
+(Abaqus input or Gmsh, checked entry by entry at their lines, then read through meshio), with
+its sheet normal, scale and origin, and the element it is discretized with. The nodes are
+checked to belong to an element here, the elements by HexMesh (ddpy.model.mesh,
+find_bad_elements), whose findings are reported at the elements' lines.
 """
 
 from __future__ import annotations

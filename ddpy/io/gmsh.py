@@ -124,7 +124,7 @@ class _Elements:
 def check_gmsh(path: str | Path, data: bytes, hexahedra: bool = False) -> None:
     """Check the bytes of Gmsh file ``path``; raise :class:`GmshFileError` at the first
     defect. With ``hexahedra`` (the blank) every 3-D element must be an 8-node hexahedron,
-    and no element of lower dimension may sit among the hexahedra of its entity."""
+    every other one first-order, and none of them among the hexahedra of its entity."""
     path = Path(path)
     head = data[:4096].lstrip()
     if not head.startswith(b"$MeshFormat"):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import shutil
 from dataclasses import replace
 from pathlib import Path
 
@@ -22,6 +23,8 @@ from ddpy.io.decks import DeckError, parse_case, read_case
 from ddpy.model.control import IncrementLimits, NewtonSettings
 from ddpy.model.material import Hill48, Swift, Voce
 from ddpy.model.mesh import MAX_ELEMENTS
+
+BUILT_IN = Path(__file__).resolve().parents[1] / "ddpy" / "cases" / "cylindrical_bending"
 
 
 def error_of(case: Path, geometry: bool = False) -> DeckError:
@@ -309,6 +312,9 @@ MESH_ERRORS = [
     ("3 1 1 0", "2 1 1 0", "node 2 defined twice (first at line 4)", 5),
     ("3 1 1 0", "0 1 1 0", "node ids must be >= 1, got 0", 5),
     ("10 1 2 3 4 5 6 7 8", "10 1 2 3 4 5 6 7 9", "element 10 refers to node 9, which is not", 12),
+    ("10 1 2 3 4 5 6 7 8", "10 1 2 3 4 5 6 7 0", "element 10 refers to node 0, which is not", 12),
+    ("10 1 2 3 4 5 6 7 8", "10 1 2 3 4 -1 6 7 8", "element 10 refers to node -1, which is not",
+     12),
     ("10 1 2 3 4 5 6 7 8", "10 1 2 3 4 5 6 7 7", "element 10 repeats a node", 12),
     ("10 1 2 3 4 5 6 7 8", "10 1 4 3 2 5 8 7 6", "element 10 is inverted at its corner 0", 12),
     ("10 1 2 3 4 5 6 7 8", "10 1 2 3 4 5 6 7 8.0", "expected integers ID N1 ... N8", 12),
@@ -452,15 +458,15 @@ def test_mesh_files(tmp_path: Path) -> None:
     meshio.write(case / "tet.msh", meshio.Mesh(box.nodes[:4], [("tetra", [[0, 1, 2, 3]])]),
                  file_format="gmsh22", binary=False)
     (case / "mesh.dat").write_text("file tet.msh\n")
-    assert "holds 1 tetra cells: only 8-node hexahedra" in str(error_of(case))
+    assert "tet.msh:13: element 1 is of type 4 (4-node tetra): the blank takes 8-node " \
+        "hexahedra" in str(error_of(case))
     (case / "mesh.dat").write_text("file none.inp\n")
     assert "mesh.dat:1: mesh file" in str(error_of(case)) and "not found" in str(error_of(case))
     (case / "mesh.dat").write_text("file blank.vtu\n")
     assert "ending in .inp or .msh" in str(error_of(case))
     (case / "bad.inp").write_text("*NODE\n1, a, b\n")
     (case / "mesh.dat").write_text("file bad.inp\n")
-    assert "cannot read mesh file" in str(error_of(case)) or "no hexahedra" in str(
-        error_of(case))
+    assert "bad.inp:2: expected a number for a coordinate, got 'a'" in str(error_of(case))
 
 
 def test_mesh_file_bad_elements_named_by_the_file(tmp_path: Path) -> None:
@@ -478,6 +484,83 @@ def test_mesh_file_bad_elements_named_by_the_file(tmp_path: Path) -> None:
         (None, ["blank.inp:", "element", "41"])]
     assert str(error).splitlines()[1].endswith("mesh.dat: blank.inp: element 8 repeats a node: "
                                                "[8, 9, 34, 33, 108, 109, 134, 134]")
+
+
+@pytest.mark.parametrize("old, new, message", [
+    ("11,11,12,37,36,111,112,137,136", "11,11,12,0,36,111,112,137,136",
+     "expected a positive integer for a node id, got '0'"),
+    ("11,11,12,37,36,111,112,137,136", "11,11,12,37,36,111,112,137,9999",
+     "element 11 refers to node 9999, which no *NODE defines"),
+    ("11,11,12,37,36,111,112,137,136", "11,11,12,37,36",
+     "element 11 has 4 nodes: a C3D8RH element has 8 (was its type or a node changed?)"),
+    ("11,11,12,37,36,111,112,137,136", "1_1,11,12,37,36,111,112,137,136",
+     "expected a positive integer for the element id, got '1_1'"),
+    ("11,11,12,37,36,111,112,137,136", "11,11,12,37,-36,111,112,137,136",
+     "expected a positive integer for a node id, got '-36'"),
+    ("12,12,13,38,37,112,113,138,137", "11,12,13,38,37,112,113,138,137",
+     "element 11 is defined again (first at"),
+])
+def test_abaqus_blank_checked_at_the_element_line(tmp_path: Path, old: str, new: str,
+                                                  message: str) -> None:
+    # meshio wired these silently (its element lines are one stream) or failed with a bare
+    # KeyError; each is refused at the element's line.
+    meshio = pytest.importorskip("meshio")
+    case = copy_example("bending", tmp_path)
+    box = read_case(EXAMPLES / "bending").mesh
+    meshio.write(case / "blank.inp", meshio.Mesh(box.nodes, [("hexahedron", box.elements)]))
+    (case / "mesh.dat").write_text("normal z\nfile blank.inp\n")
+    line = line_of(case, "blank.inp", old)
+    edit(case, "blank.inp", old, new)
+    error = error_of(case)
+    assert len(error.errors) == 1
+    assert str(error).startswith(f"{case}/mesh.dat:2: mesh file {case}/blank.inp:{line}: "
+                                 f"{message}"), str(error)
+
+
+def test_abaqus_blank_of_other_solids_refused_at_its_element_card(tmp_path: Path) -> None:
+    case = copy_example("bending", tmp_path)
+    (case / "blank.inp").write_text("*NODE\n1, 0, 0, 0\n2, 1, 0, 0\n3, 0, 1, 0\n4, 0, 0, 1\n"
+                                    "*ELEMENT, TYPE=C3D4\n1, 1, 2, 3, 4\n")
+    (case / "mesh.dat").write_text("file blank.inp\n")
+    assert str(error_of(case)).endswith("blank.inp:6: *ELEMENT, TYPE=C3D4: the blank takes "
+                                        "8-node hexahedra (C3D8, C3D8H, C3D8I, C3D8IH, C3D8R, "
+                                        "C3D8RH)")
+
+
+def test_gmsh_hexahedron_made_a_second_order_quad_is_refused(tmp_path: Path) -> None:
+    # Type 16 (8-node quad) has a hexahedron's node count: meshio dropped the element.
+    case = tmp_path / "case"
+    shutil.copytree(BUILT_IN, case)
+    text = (case / "mesh.msh").read_text().replace("\n1 5 2 1 1 1 13 16 4 2 14 17 5\n",
+                                                   "\n1 16 2 1 1 1 13 16 4 2 14 17 5\n")
+    (case / "mesh.msh").write_text(text)
+    line = line_of(case, "mesh.msh", "1 16 2 1 1")
+    assert f"mesh.msh:{line}: element 1 is of type 16 (8-node quad), not a vertex, edge or " \
+        "face of 8-node hexahedra" in str(error_of(case))
+
+
+def test_gmsh_quad_among_the_hexahedra_is_refused(tmp_path: Path) -> None:
+    # A hexahedron given as a quadrangle (its type and node count changed): meshio dropped
+    # it and left a hole in the blank.
+    case = tmp_path / "case"
+    shutil.copytree(BUILT_IN, case)
+    text = (case / "mesh.msh").read_text().replace("\n5 5 2 1 1 7 19 22 10 8 20 23 11\n",
+                                                   "\n5 3 2 1 1 7 19 22 10\n")
+    (case / "mesh.msh").write_text(text)
+    line = line_of(case, "mesh.msh", "5 3 2 1 1")
+    assert f"mesh.msh:{line}: element 5 is of type 3 (4-node quad) among the hexahedra of " \
+        "entity 1 (from line 741 to line 1100)" in str(error_of(case))
+
+
+def test_meshio_failures_name_the_file_and_what_was_expected(tmp_path: Path) -> None:
+    case = tmp_path / "case"
+    shutil.copytree(BUILT_IN, case)
+    text = (case / "mesh.msh").read_text().replace("$EndMeshFormat\n", "$EndMeshFormat\n"
+                                                   "$PhysicalNames\nx\n$EndPhysicalNames\n")
+    (case / "mesh.msh").write_text(text)
+    message = str(error_of(case))
+    assert f"mesh file {case}/mesh.msh: meshio cannot read it (" in message
+    assert message.endswith("expected a Gmsh file of format 2.2 or 4.1 (docs/input-format.md)")
 
 
 # ----------------------------------------------------------------------------------- bc

@@ -1,12 +1,17 @@
 """Fuzzing the decks: valid example decks mutated at random (lines deleted, duplicated, swapped,
 tokens replaced by random text, numbers, NaN or huge values, files truncated or replaced by
 random bytes) are either accepted or refused with a DeckError: never another exception, never
-a hang."""
+a hang. The blank's Gmsh file (node indices 0, -1 or beyond, element types changed, ids like
+'1_0'), STL tool meshes (scaled by 1e30 or 3e-11, a vertex at 1e308) and special files (a
+fifo, /dev/zero, /dev/urandom, a folder as a deck, mesh or tool file) are refused by the
+command line with exit code 2 and one message naming the file."""
 
 from __future__ import annotations
 
 import os
+import shutil
 import signal
+import subprocess
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
@@ -225,3 +230,290 @@ def test_mutated_tool_files_read_or_refused(tmp_path_factory: pytest.TempPathFac
     finally:
         signal.alarm(0)
         signal.signal(signal.SIGALRM, previous)
+
+
+# ------------------------------------------------------------------ mesh files, tool meshes
+# Mutations of the files meshio or ddpy's own readers take: each is refused by the command
+# line with exit code 2 and one message naming the file (and the line, where it has lines).
+
+BUILT_IN_CASE = Path(__file__).resolve().parent.parent / "ddpy" / "cases" / "cylindrical_bending"
+
+
+def _cli(argv: list[str]) -> tuple[int, str]:
+    """The ddpy command run in this process: its exit code and what it wrote to stderr."""
+    import contextlib
+    import io
+
+    from ddpy.app.cli import main
+
+    err = io.StringIO()
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(err):
+        try:
+            code = main(argv)
+        except SystemExit as stop:
+            code = stop.code
+    return int(code or 0), err.getvalue()
+
+
+def _gmsh_texts() -> dict[str, str]:
+    """The built-in case's blank as ASCII Gmsh 2.2 (the case's own file) and 4.1."""
+    import meshio
+
+    with tempfile.TemporaryDirectory() as tmp:
+        v41 = Path(tmp) / "mesh.msh"
+        meshio.write(v41, meshio.read(BUILT_IN_CASE / "mesh.msh"), file_format="gmsh",
+                     binary=False)
+        return {"2.2": (BUILT_IN_CASE / "mesh.msh").read_text(), "4.1": v41.read_text()}
+
+
+GMSH_TEXTS = _gmsh_texts()
+
+
+#: Mutations of a blank's Gmsh file: (what, the new word); nodes 0, -1, beyond the 732
+#: nodes; element types other than the 8-node hexahedron (5), known or not; an id with '_'.
+GMSH_CHANGES = st.one_of(
+    st.tuples(st.just("node"), st.sampled_from(["0", "-1", "733", "1732", str(2**31)])),
+    st.tuples(st.just("type"), st.sampled_from([str(t) for t in (0, 1, 2, 3, 4, 6, 7, 12, 15,
+                                                                 16, 17, 92, 99, 200)])),
+    st.tuples(st.just("id"), st.just("_")))
+
+
+def _mutate_gmsh(version: str, element: int, position: int, change: tuple[str, str]
+                 ) -> tuple[str, int]:
+    """The blank's Gmsh text with one element changed, and the line a refusal must name."""
+    lines = GMSH_TEXTS[version].split("\n")
+    head = lines.index("$Elements") + 1
+    first = head + (1 if version == "2.2" else 2)  # after the count (and the block header)
+    row = first + element
+    words = lines[row].split()
+    what, new = change
+    if what == "node":
+        words[(5 if version == "2.2" else 1) + position] = new
+    elif what == "type" and version == "2.2":
+        words[1] = new
+    elif what == "type":  # the type is the block's
+        row = first - 1
+        words = lines[row].split()
+        words[2] = new
+    else:
+        words[0] = "1_0" if len(words[0]) == 1 else words[0][:1] + "_" + words[0][1:]
+    lines[row] = " ".join(words)
+    return "\n".join(lines), row + 1
+
+
+@settings(max_examples=EXAMPLES_RUN or 40, deadline=10000, derandomize=not EXAMPLES_RUN,
+          suppress_health_check=[HealthCheck.too_slow])
+@given(st.sampled_from(sorted(GMSH_TEXTS)), st.integers(0, 359), st.integers(0, 7),
+       GMSH_CHANGES)
+def test_mutated_gmsh_blank_refused_at_its_line(tmp_path_factory: pytest.TempPathFactory,
+                                                version: str, element: int, position: int,
+                                                change: tuple[str, str]) -> None:
+    # A node 0 wired the element to the last node, a changed type dropped the hexahedron
+    # and '1_0' read as 10, all without a word; a node beyond the nodes was a bare IndexError.
+    text, line = _mutate_gmsh(version, element, position, change)
+    case = tmp_path_factory.mktemp("gmsh") / "case"
+    shutil.copytree(BUILT_IN_CASE, case)
+    (case / "mesh.msh").write_text(text)
+    code, err = _cli(["check", "--no-geometry", str(case)])
+    assert code == 2, err
+    errors = err.strip().splitlines()[:-1]  # the last line counts them
+    assert len(errors) == 1 and f"mesh.msh:{line}: " in errors[0], (line, err)
+
+
+@pytest.mark.parametrize("version", ["gmsh22", "gmsh"])
+@pytest.mark.parametrize("index", [-1, -2, 732])   # node tags 0, -1 and one beyond the nodes
+def test_binary_gmsh_node_out_of_range_refused(tmp_path: Path, version: str,
+                                               index: int) -> None:
+    import meshio
+
+    mesh = meshio.read(BUILT_IN_CASE / "mesh.msh")
+    cells = np.array(mesh.cells[0].data)
+    cells[7, 3] = index
+    case = tmp_path / "case"
+    shutil.copytree(BUILT_IN_CASE, case)
+    meshio.write(case / "mesh.msh", meshio.Mesh(mesh.points, [("hexahedron", cells)]),
+                 file_format=version, binary=True)
+    code, err = _cli(["check", "--no-geometry", str(case)])
+    assert code == 2
+    assert f"mesh.msh: $Elements entry 8: element 8 refers to node {index + 1}, which is not " \
+        "in $Nodes" in err
+
+
+def _stl_tool(path: Path, scale: float = 1.0) -> list[int]:
+    """An ASCII STL of a gently curved strip, 50 x 20 mm; the lines of its vertices."""
+    x, y = np.meshgrid(np.linspace(0, 50, 5), np.linspace(0, 20, 3), indexing="ij")
+    points = np.column_stack([x.ravel(), y.ravel(), 0.01 * x.ravel() ** 2]) * scale
+    lines, vertex_lines = ["solid tool"], []
+    for i in range(4):
+        for j in range(2):
+            a = 3 * i + j
+            for triangle in ((a, a + 3, a + 4), (a, a + 4, a + 1)):
+                lines += ["  facet normal 0 0 1", "    outer loop"]
+                for k in triangle:
+                    vertex_lines.append(len(lines) + 1)
+                    lines.append("      vertex " + " ".join(f"{c:.9g}" for c in points[k]))
+                lines += ["    endloop", "  endfacet"]
+    path.write_text("\n".join(lines + ["endsolid tool"]) + "\n")
+    return vertex_lines
+
+
+@pytest.mark.parametrize("scale", [1e30, 3e-11])
+def test_stl_scaled_absurdly_refused(tmp_path: Path, scale: float) -> None:
+    path = tmp_path / "die.stl"
+    _stl_tool(path, scale)
+    code, err = _cli(["tools", "build", str(path), "--out", str(tmp_path / "out")])
+    assert code == 2
+    assert len(err.strip().splitlines()) == 1 and str(path) in err, err
+    assert not (tmp_path / "out").exists()
+
+
+@settings(max_examples=EXAMPLES_RUN // 4 or 20, deadline=10000, derandomize=not EXAMPLES_RUN,
+          suppress_health_check=[HealthCheck.too_slow])
+@given(st.integers(0, 47), st.integers(0, 2),
+       st.sampled_from(["1e308", "-1e308", "1e999", "inf", "nan", "2e6"]))
+def test_stl_vertex_beyond_limits_refused_at_its_line(tmp_path_factory: pytest.TempPathFactory,
+                                                      vertex: int, axis: int, value: str
+                                                      ) -> None:
+    # 1e308 gave numpy's overflow text and no file name.
+    folder = tmp_path_factory.mktemp("stl")
+    path = folder / "die.stl"
+    line = _stl_tool(path)[vertex]
+    lines = path.read_text().split("\n")
+    words = lines[line - 1].split()
+    words[1 + axis] = value
+    lines[line - 1] = "      " + " ".join(words)
+    path.write_text("\n".join(lines))
+    code, err = _cli(["tools", "build", str(path), "--out", str(folder / "out")])
+    assert code == 2
+    assert len(err.strip().splitlines()) == 1 and f"{path}:{line}: " in err, err
+    assert "overflow" not in err
+
+
+# -------------------------------------------------------------------------- special files
+# Files that are not regular files are refused with their path before anything reads them:
+# a fifo made ddpy check hang, /dev/urandom and /dev/zero were read until memory ran out.
+# Run in a child process under a timeout and a memory limit, so the bug cannot hang or
+# swamp the tests should it come back.
+
+SPECIAL_TIMEOUT = 60
+
+
+def _ddpy_child(args: list[str]) -> subprocess.CompletedProcess[str]:
+    import resource
+    import sys
+
+    def limit_memory() -> None:
+        resource.setrlimit(resource.RLIMIT_AS, (2 * 2**30, 2 * 2**30))
+
+    try:
+        return subprocess.run([sys.executable, *args], capture_output=True, text=True,
+                              timeout=SPECIAL_TIMEOUT, preexec_fn=limit_memory,
+                              env={**os.environ, "OMP_NUM_THREADS": "1",
+                                   "OPENBLAS_NUM_THREADS": "1"})
+    except subprocess.TimeoutExpired:
+        pytest.fail(f"{' '.join(args)} did not finish in {SPECIAL_TIMEOUT} s")
+
+
+def test_decks_that_are_not_regular_files_refused(tmp_path: Path) -> None:
+    case = tmp_path / "bending"
+    shutil.copytree(EXAMPLES / "bending", case)
+    for deck in ("tools.dat", "material.dat", "control.dat", "bc.dat"):
+        (case / deck).unlink()
+    os.mkfifo(case / "tools.dat")
+    os.symlink("/dev/urandom", case / "material.dat")
+    (case / "control.dat").mkdir()
+    os.symlink("/dev/zero", case / "bc.dat")
+    done = _ddpy_child(["-m", "ddpy", "check", str(case)])
+    assert done.returncode == 2, done.stderr
+    errors = done.stderr.strip().splitlines()
+    assert errors[:-1] == [
+        f"{case}/control.dat: a directory: expected a regular file as a deck",
+        f"{case}/bc.dat: a link to /dev/zero, a character device: expected a regular file as "
+        "a deck",
+        f"{case}/material.dat: a link to /dev/urandom, a character device: expected a regular "
+        "file as a deck",
+        f"{case}/tools.dat: a fifo (named pipe): expected a regular file as a deck"]
+
+
+def test_mesh_and_tool_files_that_are_not_regular_files_refused(tmp_path: Path) -> None:
+    case = tmp_path / "case"
+    shutil.copytree(BUILT_IN_CASE, case)
+    (case / "mesh.msh").unlink()
+    os.mkfifo(case / "mesh.msh")
+    (case / "tools" / "punch.tool").unlink()
+    os.symlink("/dev/zero", case / "tools" / "punch.tool")
+    done = _ddpy_child(["-m", "ddpy", "check", str(case)])
+    assert done.returncode == 2, done.stderr
+    errors = done.stderr.strip().splitlines()
+    assert errors[0].endswith(f"mesh file {case}/mesh.msh: a fifo (named pipe): expected a "
+                              "regular file as a mesh file")
+    assert errors[1].endswith(f"cannot read tool file: {case}/tools/punch.tool: a link to "
+                              "/dev/zero, a character device: expected a regular file as a "
+                              "tool file")
+    stl = tmp_path / "die.stl"
+    os.mkfifo(stl)
+    done = _ddpy_child(["-m", "ddpy", "tools", "build", str(stl), "--out",
+                        str(tmp_path / "out")])
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.strip() == f"ddpy tools build: error: {stl}: a fifo (named pipe): " \
+        "expected a regular file as a tool mesh"
+
+
+def test_read_tool_refuses_dev_zero_in_the_api() -> None:
+    done = _ddpy_child(["-c", "from ddpy.io.toolfile import read_tool\n"
+                        "try:\n    read_tool('/dev/zero')\n"
+                        "except ValueError as error:\n    print(error)\n"])
+    assert done.stdout.strip() == "/dev/zero: a character device: expected a regular file as " \
+        "a tool file", done.stderr
+
+
+def test_a_deck_beyond_its_size_limit_is_refused_before_reading(tmp_path: Path) -> None:
+    case = tmp_path / "bending"
+    shutil.copytree(EXAMPLES / "bending", case)
+    with open(case / "control.dat", "r+b") as deck:
+        deck.truncate(17 * 2**20)  # sparse: no disk used
+    with pytest.raises(DeckError) as error:
+        read_case(case)
+    assert str(error.value) == f"{case}/control.dat: 17 MB: larger than the 16 MB limit for " \
+        "a deck"
+
+
+@pytest.mark.parametrize("module, what", [("ddpy.io.decks", "a deck"),
+                                          ("ddpy.io.decks.mesh", "a mesh file")])
+def test_mesh_deck_and_file_limits_are_checked(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                               module: str, what: str) -> None:
+    # The 1 GB limit is what a test cannot write: the check is the same at any limit.
+    import importlib
+
+    monkeypatch.setattr(importlib.import_module(module), "MESH_LIMIT", 300)
+    case = tmp_path / "case"
+    shutil.copytree(BUILT_IN_CASE, case)
+    (case / "mesh.dat").write_text("file mesh.msh\n" + "#" * 400 * (what == "a deck") + "\n")
+    path = case / ("mesh.dat" if what == "a deck" else "mesh.msh")
+    code, err = _cli(["check", "--no-geometry", str(case)])
+    assert code == 2
+    size = path.stat().st_size
+    shown = f"{size} bytes" if size < 1024 else f"{size / 1024:.3g} kB"
+    assert f"{path}: {shown}: larger than the 300 bytes limit for {what}" in err, err
+
+
+def test_tool_mesh_limit_is_checked(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    import ddpy.cad.surface_mesh
+
+    monkeypatch.setattr(ddpy.cad.surface_mesh, "TOOL_LIMIT", 300)
+    path = tmp_path / "die.stl"
+    _stl_tool(path)
+    code, err = _cli(["tools", "build", str(path), "--out", str(tmp_path / "out")])
+    assert code == 2
+    assert err.strip() == f"ddpy tools build: error: {path}: " \
+        f"{path.stat().st_size / 1024:.3g} kB: larger than the 300 bytes limit for a tool mesh"
+
+
+def test_an_abaqus_include_of_a_fifo_is_refused(tmp_path: Path) -> None:
+    (tmp_path / "model.inp").write_text("*HEADING\nfifo\n*INCLUDE, INPUT=nodes.inp\n")
+    os.mkfifo(tmp_path / "nodes.inp")
+    done = _ddpy_child(["-m", "ddpy", "convert", str(tmp_path / "model.inp"),
+                        str(tmp_path / "case")])
+    assert done.returncode == 2, done.stderr
+    assert f"{tmp_path}/nodes.inp: a fifo (named pipe): expected a regular file as an Abaqus " \
+        "input file" in done.stderr

@@ -439,6 +439,18 @@ REFUSALS = {
     "edge-on": (lambda p: _triangles_stl(p, [[(0, 0, 0), (1, 0, 0), (0, 0, 1)]]),
                 "is edge-on to the blank side"),
     "not stl": (lambda p: p.write_bytes(b"\x00\x01garbage"), ".stl: not an STL file"),
+    "huge vertex": (lambda p: _triangles_stl(p, [[(0, 0, 0), (1, 0, 0), (0, 1e308, 0)]]),
+                    ".stl:6: expected finite coordinates within +-1e+06 mm, got '0 1e+308 0' "
+                    "(in the facet of line 2)"),
+    "huge binary": (lambda p: _stl_binary(p, np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]]) * 1e30,
+                                          np.array([[0, 1, 2]])),
+                    ".stl: triangle 1 has a coordinate that is not a finite number within "
+                    "+-1e+06 mm"),
+    "tiny": (lambda p: _triangles_stl(p, [[(0, 0, 0), (3e-11, 0, 0), (0, 3e-11, 0)]]),
+             ".stl: the mesh is 3e-11 mm across: a tool mesh is in mm and at least 0.001 mm "
+             "across"),
+    "not a number": (lambda p: _triangles_stl(p, [[(0, 0, 0), (1, 0, 0), ("1_0", 1, 0)]]),
+                     ".stl:6: expected 'vertex <x> <y> <z>' with numbers, got 'vertex 1_0 1 0'"),
 }
 
 
@@ -471,7 +483,25 @@ INP_REFUSALS = {
                    "*SURFACE: nothing to model"),
     "bad number": ("*NODE\n1, 0, zero, 0\n", ".inp:2: expected '<node id>, <x>, <y>[, <z>]'"),
     "include": ("*INCLUDE, INPUT=other.inp\n", ".inp:1: *INCLUDE is not read"),
+    "huge node": ("*NODE\n1, 0, 0, 0\n2, 1e308, 0, 0\n", ".inp:3: expected 2 or 3 finite "
+                  "coordinates within +-1e+06 mm for node 2"),
 }
+
+
+@pytest.mark.parametrize("tag", [0, -1, 4])
+def test_gmsh_tool_mesh_node_out_of_range_refused_at_its_line(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], tag: int) -> None:
+    # meshio wired node 0 to the last node, and failed on one beyond with a bare IndexError.
+    import meshio
+
+    path = tmp_path / "tool.msh"
+    meshio.write(path, meshio.Mesh([[0.0, 0, 0], [1, 0, 0], [1, 1, 0]],
+                                   [("triangle", [[0, 1, 2], [0, 1, tag - 1]])]),
+                 file_format="gmsh22", binary=False)
+    line = path.read_text().split("\n").index(f"2 2 2 0 0 1 2 {tag}") + 1
+    code, _, err = _build(capsys, str(path), "--out", str(tmp_path / "out"))
+    assert code == 2
+    assert f"{path}:{line}: element 2 refers to node {tag}, which is not in $Nodes" in err, err
 
 
 @pytest.mark.parametrize("case", sorted(INP_REFUSALS))

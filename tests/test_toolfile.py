@@ -146,6 +146,7 @@ NAGATA_ERRORS = [
     (8, "1 0", "expected 3 numbers for a vertex, got 2"),
     (8, "1 0 zero", "expected a number in a vertex, got 'zero'"),
     (8, "1 0 nan", "expected a finite number in a vertex, got 'nan'"),
+    (8, "1 0 1e308", "expected a number within +-1e+06 in a vertex, got '1e308'"),
     (12, "normals 3", "expected 3 normals, got 2 before 'faces'"),  # found at line 15
     (14, "0 0.6", "expected 3 numbers for a normal, got 2"),
     (14, "0 0 2", "expected a unit normal, got one of length 2"),
@@ -207,6 +208,22 @@ def test_structural_errors(tmp_path: Path) -> None:
 def test_unreadable_file(tmp_path: Path) -> None:
     with pytest.raises(ToolFileError, match="cannot read the tool file"):
         read_tool(tmp_path / "missing.tool")
+    with pytest.raises(ToolFileError, match="a directory: expected a regular file as a tool "
+                       "file"):
+        read_tool(tmp_path)
+
+
+def test_a_tool_file_beyond_its_size_limit_is_refused(tmp_path: Path,
+                                                      monkeypatch: pytest.MonkeyPatch) -> None:
+    # The limit (1 GB) is what a test cannot write: the check is the same at any limit.
+    import ddpy.io.toolfile
+
+    path = _write(tmp_path, NAGATA)
+    monkeypatch.setattr(ddpy.io.toolfile, "TOOL_LIMIT", 100)
+    with pytest.raises(ToolFileError) as error:
+        read_tool(path)
+    assert str(error.value) == f"{path}: {path.stat().st_size} bytes: larger than the 100 " \
+        "bytes limit for a tool file"
 
 
 def test_model_checks() -> None:

@@ -16,6 +16,8 @@ import sys
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
+from ddpy._validate import TOOL_LIMIT, InputFileError, check_input_file, read_input_file
+
 __all__ = ["CadError", "CAD_SUFFIXES", "check_step", "gmsh_session", "load_cad", "quiet"]
 
 CAD_SUFFIXES = {".step": "STEP", ".stp": "STEP", ".iges": "IGES", ".igs": "IGES",
@@ -81,8 +83,12 @@ def load_cad(path: str | os.PathLike[str]) -> list[int]:
     if kind is None:
         raise CadError(f"{path}: unknown CAD format '{path.suffix}': expected STEP (.step, "
                        ".stp), IGES (.iges, .igs) or BREP (.brep)")
-    if not path.is_file():
+    if not path.exists():
         raise CadError(f"{path}: no such CAD file")
+    try:
+        check_input_file(path, "a CAD file", TOOL_LIMIT)
+    except InputFileError as error:
+        raise CadError(str(error)) from None
     declared = check_step(path) if kind == "STEP" else 0
     _trial_read(path, kind)
     gmsh.model.add(path.stem)
@@ -197,7 +203,9 @@ def check_step(path: Path) -> int:
     Returns the number of faces the file defines.
     """
     try:
-        text = path.read_bytes().decode("latin-1")
+        text = read_input_file(path, "a CAD file", TOOL_LIMIT).decode("latin-1")
+    except InputFileError as error:
+        raise CadError(str(error)) from None
     except OSError as error:
         raise CadError(f"{path}: cannot read: {error.strerror or error}") from None
     # Strings may hold anything, ';' and '#' included: blank them out, keeping the length.

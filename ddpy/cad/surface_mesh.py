@@ -22,8 +22,17 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ddpy._validate import (
+    MAX_LENGTH,
+    NUMBER_PATTERN,
+    TOOL_LIMIT,
+    InputFileError,
+    check_input_file,
+    read_input_file,
+)
 from ddpy.cad.mesh import point_text
 from ddpy.cad.read import CadError
+from ddpy.io.gmsh import GmshFileError, check_gmsh
 
 __all__ = ["DEFAULT_MERGE_TOL", "MESH_FORMATS", "MeshFileError", "SurfaceMesh",
            "prepare_surface_mesh", "read_surface_mesh"]
@@ -33,6 +42,9 @@ DEFAULT_MERGE_TOL = 1.0e-4
 #: A part whose normals point towards the blank by less than this on average (the mean of
 #: n . d over its area) is edge-on to it; a crease-bounded region below minus this, away.
 AWAY_TOL = 1.0e-3
+#: Smallest extent of a tool mesh (mm): a tool smaller than a micrometre across is a mesh in
+#: another unit or a damaged file. The largest coordinate is the decks' MAX_LENGTH.
+MIN_TOOL_SIZE = 1.0e-3
 #: What the readers take, for messages.
 MESH_FORMATS = "STL (.stl), Abaqus/CalculiX (.inp), Gmsh (.msh) or a format meshio reads " \
     "(.obj, .off, .ply, .vtk, .vtu, ...)"
@@ -101,25 +113,49 @@ def read_surface_mesh(path: str | Path, groups: Sequence[str] | None = None) -> 
     oriented); ``groups`` keeps the named ones only (STL solids, Abaqus *SURFACE or ELSET
     names, Gmsh physical names)."""
     path = Path(path)
-    if not path.is_file():
+    if not path.exists():
         raise MeshFileError(f"{path}: no such mesh file")
     suffix = path.suffix.lower()
     try:
+        check_input_file(path, "a tool mesh", TOOL_LIMIT)
         if suffix == ".stl":
             mesh = _read_stl(path)
         elif suffix == ".inp":
             mesh = _read_inp(path, groups)
         else:
             mesh = _read_meshio(path)
+    except InputFileError as error:
+        raise MeshFileError(str(error)) from None
     except OSError as error:
         raise MeshFileError(f"{path}: cannot read the mesh file: {error.strerror or error}") \
             from None
+    _check_size(mesh)
     if groups and suffix != ".inp":
         mesh = _select(mesh, groups)
     if len(mesh.faces) == 0:
         raise MeshFileError(f"{path}: the {mesh.kind} file holds no triangles or "
                             "quadrilaterals: nothing to model")
     return mesh
+
+
+def _within_limits(x: NDArray[np.float64]) -> NDArray[np.bool_]:
+    """Per point (or per number of a 1-D array): all coordinates finite and within
+    +-MAX_LENGTH mm (beyond, squares of distances overflow and the mesh is not in mm)."""
+    with np.errstate(invalid="ignore"):
+        inside = np.abs(x) <= MAX_LENGTH
+    return inside.all(axis=-1) if x.ndim > 1 else inside
+
+
+def _check_size(mesh: SurfaceMesh) -> None:
+    """Refuse a mesh smaller than MIN_TOOL_SIZE across (a unit mistake)."""
+    used = mesh.faces[mesh.faces >= 0]
+    if not used.size:
+        return
+    extent = float(np.ptp(mesh.vertices[np.unique(used)], axis=0).max())
+    if extent < MIN_TOOL_SIZE:
+        raise MeshFileError(f"{mesh.path}: the mesh is {extent:.3g} mm across: a tool mesh is "
+                            f"in mm and at least {MIN_TOOL_SIZE:g} mm across (is it in another "
+                            "unit?)")
 
 
 def _select(mesh: SurfaceMesh, groups: Sequence[str]) -> SurfaceMesh:
@@ -134,7 +170,7 @@ def _select(mesh: SurfaceMesh, groups: Sequence[str]) -> SurfaceMesh:
 
 
 def _read_stl(path: Path) -> SurfaceMesh:
-    data = path.read_bytes()
+    data = read_input_file(path, "a tool mesh", TOOL_LIMIT)
     if len(data) >= 84:
         count = int(np.frombuffer(data, dtype="<u4", count=1, offset=80)[0])
         if len(data) == 84 + 50 * count:
@@ -152,10 +188,11 @@ def _stl_binary(path: Path, data: bytes, count: int) -> SurfaceMesh:
     record = np.dtype([("normal", "<f4", 3), ("v", "<f4", (3, 3)), ("attribute", "<u2")])
     triangles = np.frombuffer(data, dtype=record, count=count, offset=84)
     x = triangles["v"].astype(np.float64).reshape(-1, 3)
-    if not np.all(np.isfinite(x)):
-        k = int(np.flatnonzero(~np.isfinite(x).all(axis=1))[0]) // 3
+    inside = _within_limits(x)
+    if not inside.all():
+        k = int(np.argmin(inside)) // 3
         raise MeshFileError(f"{path}: triangle {k + 1} has a coordinate that is not a finite "
-                            "number")
+                            f"number within +-{MAX_LENGTH:g} mm")
     faces = np.column_stack([np.arange(3 * count).reshape(-1, 3), np.full(count, -1)])
     return SurfaceMesh(path, "STL (binary)", x, faces.astype(np.int64),
                        np.ones(count, dtype=np.int64), np.zeros(count, dtype=np.int64), {1: "1"})
@@ -209,13 +246,13 @@ def _stl_ascii(path: Path, data: bytes) -> SurfaceMesh:
                 if len(words) != 4:
                     raise MeshFileError(f"{path}:{number}: expected 'vertex <x> <y> <z>' (3 "
                                         f"numbers), got {len(words) - 1}")
-                try:
-                    xyz = [float(w) for w in words[1:]]
-                except ValueError:
-                    raise expect("'vertex <x> <y> <z>' with numbers") from None
-                if not all(np.isfinite(xyz)):
-                    raise MeshFileError(f"{path}:{number}: expected finite coordinates, got "
-                                        f"'{' '.join(words[1:])}'")
+                if not all(NUMBER_PATTERN.fullmatch(w) for w in words[1:]):
+                    raise expect("'vertex <x> <y> <z>' with numbers")
+                xyz = [float(w) for w in words[1:]]
+                if not _within_limits(np.array(xyz)).all():
+                    raise MeshFileError(f"{path}:{number}: expected finite coordinates within "
+                                        f"+-{MAX_LENGTH:g} mm, got '{' '.join(words[1:])}' (in "
+                                        f"the facet of line {facet_line})")
                 points.append(xyz)
                 count += 1
             elif key == "endloop":
@@ -257,7 +294,7 @@ def _inp_lines(path: Path) -> list[tuple[int, str]]:
     """The lines of an input file with their numbers; comments and blank lines dropped, a
     data line ending in a comma joined to the next (long element lines)."""
     result: list[tuple[int, str]] = []
-    text = path.read_bytes().decode("latin-1")
+    text = read_input_file(path, "a tool mesh", TOOL_LIMIT).decode("latin-1")
     pending: tuple[int, str] | None = None
     for number, raw in enumerate(text.replace("\r\n", "\n").replace("\r", "\n").split("\n"),
                                  start=1):
@@ -330,9 +367,9 @@ def _read_inp(path: Path, groups: Sequence[str] | None) -> SurfaceMesh:
             except (ValueError, IndexError):
                 raise MeshFileError(f"{path}:{number}: expected '<node id>, <x>, <y>[, <z>]', "
                                     f"got '{line[:60]}'") from None
-            if len(xyz) < 2 or not all(np.isfinite(xyz)):
-                raise MeshFileError(f"{path}:{number}: expected 2 or 3 finite coordinates for "
-                                    f"node {ident}")
+            if len(xyz) < 2 or not _within_limits(np.array(xyz)).all():
+                raise MeshFileError(f"{path}:{number}: expected 2 or 3 finite coordinates "
+                                    f"within +-{MAX_LENGTH:g} mm for node {ident}")
             if ident in nodes:
                 raise MeshFileError(f"{path}:{number}: node {ident} is defined again (first on "
                                     f"line {nodes[ident][1]})")
@@ -518,14 +555,10 @@ def _read_meshio(path: Path) -> SurfaceMesh:
     import meshio
 
     if path.suffix.lower() == ".msh":
-        from ddpy.io.decks.lines import BadValue
-        from ddpy.io.decks.mesh import _check_gmsh_counts
-
         try:
-            _check_gmsh_counts(path)
-        except BadValue as error:
-            text = str(error).removeprefix("mesh file ").removeprefix(path.name)
-            raise MeshFileError(f"{path}{text}") from None
+            check_gmsh(path, read_input_file(path, "a tool mesh", TOOL_LIMIT))
+        except GmshFileError as error:
+            raise MeshFileError(str(error)) from None
     try:
         data = meshio.read(path)
     except meshio.ReadError as error:
@@ -543,8 +576,10 @@ def _read_meshio(path: Path) -> SurfaceMesh:
         raise MeshFileError(f"{path}: the mesh's points are not 2- or 3-dimensional")
     if points.shape[1] == 2:
         points = np.column_stack([points, np.zeros(len(points))])
-    if not np.all(np.isfinite(points)):
-        raise MeshFileError(f"{path}: a point has a coordinate that is not a finite number")
+    inside = _within_limits(points)
+    if not inside.all():
+        raise MeshFileError(f"{path}: point {int(np.argmin(inside)) + 1} has a coordinate that "
+                            f"is not a finite number within +-{MAX_LENGTH:g} mm")
     tag_data = data.cell_data.get("gmsh:physical") or data.cell_data.get("gmsh:geometrical")
     names = {int(v[0]): str(k) for k, v in getattr(data, "field_data", {}).items()
              if len(v) > 1 and int(v[1]) == 2}

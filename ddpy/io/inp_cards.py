@@ -12,6 +12,7 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ddpy._validate import MESH_LIMIT, InputFileError, read_input_file
 from ddpy.io.case import DeckError
 
 __all__ = ["Card", "DataLine", "number", "integer", "read_cards"]
@@ -68,7 +69,9 @@ def read_cards(path: str | Path, _depth: int = 0) -> list[Card]:
     """The cards of an input file, those of its *INCLUDE files in their place."""
     path = Path(path)
     try:
-        text = path.read_bytes().decode("latin-1")
+        text = read_input_file(path, "an Abaqus input file", MESH_LIMIT).decode("latin-1")
+    except InputFileError as error:
+        raise DeckError(error.reason, path) from None
     except OSError as error:
         raise DeckError(f"cannot read the input file: {error.strerror or error}", path) \
             from None
@@ -117,7 +120,7 @@ def _include(path: Path, number: int, params: dict[str, str], depth: int) -> lis
     if depth >= MAX_INCLUDE_DEPTH:
         raise DeckError(f"*INCLUDE nested deeper than {MAX_INCLUDE_DEPTH} files: does {target} "
                         "include itself?", path, number)
-    if not target.is_file():
+    if not target.exists():  # a fifo or device is refused, by name, when it is read
         raise DeckError(f"*INCLUDE: no such file {target}", path, number)
     return read_cards(target, depth + 1)
 

@@ -24,7 +24,13 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from ddpy._validate import input_lines
+from ddpy._validate import (
+    MAX_LENGTH,
+    TOOL_LIMIT,
+    InputFileError,
+    input_lines,
+    read_input_file,
+)
 from ddpy.geometry.surfaces import MAX_BEZIER_DEGREE, BezierSurface, NagataSurface
 
 __all__ = ["DESCRIPTIONS", "ToolFileError", "ToolModel", "read_tool", "write_tool"]
@@ -237,6 +243,9 @@ def _floats(lines: _Lines, number: int, words: list[str], what: str) -> list[flo
             raise lines.error(number, f"expected a number in {what}, got '{word}'") from None
         if not math.isfinite(value):
             raise lines.error(number, f"expected a finite number in {what}, got '{word}'")
+        if abs(value) > MAX_LENGTH:  # beyond, squared distances overflow: not a tool in mm
+            raise lines.error(number, f"expected a number within +-{MAX_LENGTH:g} in {what}, "
+                              f"got '{word}'")
         values.append(value)
     return values
 
@@ -245,9 +254,15 @@ def read_tool(path: str | os.PathLike[str]) -> ToolModel:
     """Read a tool file; raise :class:`ToolFileError` (``file:line: ...``) on any defect."""
     path = Path(path)
     try:
-        text = path.read_text()
-    except (OSError, UnicodeDecodeError) as error:
-        raise ToolFileError(f"{path}: cannot read the tool file: {error}") from None
+        text = read_input_file(path, "a tool file", TOOL_LIMIT).decode("utf-8")
+    except InputFileError as error:
+        raise ToolFileError(str(error)) from None
+    except UnicodeDecodeError as error:
+        raise ToolFileError(f"{path}: not UTF-8 text (byte {error.start}): expected a "
+                            "plain-text tool file") from None
+    except OSError as error:
+        raise ToolFileError(f"{path}: cannot read the tool file: {error.strerror or error}"
+                            ) from None
     lines = _Lines(path, text)
     header = _read_header(lines)
     if header["description"] == "bezier":

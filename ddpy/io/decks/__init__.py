@@ -22,6 +22,7 @@ import dataclasses
 from collections.abc import Mapping
 from pathlib import Path
 
+from ddpy._validate import DECK_LIMIT, MESH_LIMIT, InputFileError, read_input_file
 from ddpy.io.case import Case, DeckError
 from ddpy.io.decks.boundary import _parse_bc
 from ddpy.io.decks.control import _PHASE_KEYS as _PHASE_KEYS
@@ -54,15 +55,16 @@ def read_case(folder: str | Path, geometry: bool = True) -> Case:
     errors: list[DeckError] = []
     for name in DECKS:
         path = folder / name
+        limit = MESH_LIMIT if name == "mesh.dat" else DECK_LIMIT
         try:
-            texts[name] = path.read_bytes().decode("utf-8")
+            texts[name] = read_input_file(path, "a deck", limit).decode("utf-8")
         except FileNotFoundError:
             errors.append(DeckError(f"missing: every case needs {', '.join(DECKS)}", path))
+        except InputFileError as error:
+            errors.append(DeckError(error.reason, path))
         except UnicodeDecodeError as error:
             errors.append(DeckError(f"not UTF-8 text (byte {error.start}): expected a "
                                     "plain-text deck", path))
-        except OSError as error:
-            errors.append(DeckError(f"cannot read: {error.strerror or error}", path))
     if errors:
         raise DeckError.collect(errors)
     return parse_case(texts, folder, geometry=geometry)

@@ -14,17 +14,12 @@ from typing import Any
 
 import numpy as np
 
-from ddpy._validate import input_lines
+from ddpy._validate import MAX_LENGTH as MAX_LENGTH  # the decks' readers take it from here
+from ddpy._validate import NUMBER_PATTERN, input_lines
 from ddpy.io.case import DeckError
 
-#: Largest length a deck may give (mm): displacements, gaps, increments, box sizes.
-MAX_LENGTH = 1e6
 NAME_PATTERN = re.compile(r"[A-Za-z][A-Za-z0-9_.\-]{0,63}")
 INT_PATTERN = re.compile(r"[+-]?[0-9]+")
-#: The numbers of the decks (docs/input-format.md): decimal with an optional exponent, in
-#: ASCII digits; float() alone would also take '210_000', full-width digits and 'nan'.
-NUMBER_PATTERN = re.compile(r"[+-]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][+-]?[0-9]+)?|[+-]?(inf|nan)",
-                     re.ASCII)
 
 
 class BadValue(Exception):

@@ -1,8 +1,8 @@
 """mesh.dat: the blank, as own 'nodes' and 'hexahedra' blocks, a generated 'box' or a mesh file
-(Abaqus input or Gmsh, through meshio), with its sheet normal, scale and origin, and the
-element it is discretized with. The nodes are checked to belong to an element here, the
-elements by HexMesh (ddpy.model.mesh, find_bad_elements), whose findings are reported at the
-elements' lines.
+(Abaqus input or Gmsh, checked entry by entry at their lines, then read through meshio), with
+its sheet normal, scale and origin, and the element it is discretized with. The nodes are
+checked to belong to an element here, the elements by HexMesh (ddpy.model.mesh,
+find_bad_elements), whose findings are reported at the elements' lines.
 """
 
 from __future__ import annotations
@@ -15,7 +15,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ddpy.io.case import AXES
+from ddpy._validate import MESH_LIMIT, InputFileError, check_input_file, read_input_file
+from ddpy.io import inp_cards
+from ddpy.io.case import AXES, DeckError
 from ddpy.io.decks.lines import (
     INT_PATTERN,
     MAX_LENGTH,
@@ -31,6 +33,7 @@ from ddpy.io.decks.lines import (
     read_vector,
     show,
 )
+from ddpy.io.gmsh import GmshFileError, check_gmsh
 from ddpy.model.mesh import (
     MAX_ELEMENTS,
     HexMesh,
@@ -296,19 +299,33 @@ def _mesh_file(deck: Deck, line: Line) -> _RawMesh:
     path = Path(line.words[1])
     if not path.is_absolute():
         path = deck.path.parent / path
-    if path.suffix.lower() not in MESH_SUFFIXES:
+    suffix = path.suffix.lower()
+    if suffix not in MESH_SUFFIXES:
         raise BadValue(f"expected a mesh file ending in {' or '.join(MESH_SUFFIXES)} (Abaqus input "
                    f"or Gmsh), got {show(line.words[1])}")
-    if not path.is_file():
+    if not path.exists():
         raise BadValue(f"mesh file {path} not found")
-    if path.suffix.lower() == ".msh":
-        _check_gmsh_counts(path)
+    # meshio loses the lines and takes what does not fit its counts: the file is checked
+    # entry by entry first, each defect named at its line.
+    try:
+        if suffix == ".msh":
+            check_gmsh(path, read_input_file(path, "a mesh file", MESH_LIMIT), hexahedra=True)
+        else:
+            check_input_file(path, "a mesh file", MESH_LIMIT)
+            _check_inp(path)
+    except (InputFileError, GmshFileError, DeckError) as error:
+        raise BadValue(f"mesh file {error}") from None
+    except OSError as error:
+        raise BadValue(f"cannot read mesh file {path}: {error.strerror or error}") from None
     try:
         import meshio
 
         data = meshio.read(path)
     except Exception as error:  # meshio raises many types for a bad file
-        raise BadValue(f"cannot read mesh file {path}: {type(error).__name__}: {error}") from None
+        expected = ("a Gmsh file of format 2.2 or 4.1" if suffix == ".msh" else
+                    "an Abaqus input file of *NODE and *ELEMENT cards")
+        raise BadValue(f"mesh file {path}: meshio cannot read it ({type(error).__name__}: "
+                       f"{error}): expected {expected} (docs/input-format.md)") from None
     solids = {"tetra", "hexahedron", "wedge", "pyramid"}
     other = {}
     hexes = []
@@ -344,57 +361,53 @@ def _mesh_file(deck: Deck, line: Line) -> _RawMesh:
                     np.arange(1, len(elements) + 1), None, nodesets, path.name)
 
 
-def _check_gmsh_counts(path: Path) -> None:
-    """The counts of an ASCII Gmsh file's $Nodes and $Elements sections against the lines they
-    hold: meshio reads as many entries as a count says and ignores the rest, so a count made
-    too small would silently drop elements. Binary files are left to meshio."""
-    try:
-        with open(path, encoding="latin-1") as f:
-            lines = f.read().split("\n")
-    except OSError as error:
-        raise BadValue(f"cannot read mesh file {path}: {error.strerror or error}") from None
-    version, binary = None, False
-    sections: dict[str, tuple[int, list[str]]] = {}
-    start = None
-    for number, raw in enumerate(lines, start=1):
-        text = raw.strip()
-        if text in ("$MeshFormat", "$Nodes", "$Elements"):
-            start = (text[1:], number)
-            body: list[str] = []
-        elif start is not None and text == f"$End{start[0]}":
-            sections[start[0]] = (start[1], body)
-            start = None
-        elif start is not None:
-            body.append(text)
-    if "MeshFormat" in sections and sections["MeshFormat"][1]:
-        words = sections["MeshFormat"][1][0].split()
-        version = words[0] if words else None
-        binary = len(words) > 1 and words[1] == "1"
-    if binary or version is None:
-        return
-    for name in ("Nodes", "Elements"):
-        if name not in sections:
-            continue
-        first, body = sections[name]
-        body = [b for b in body if b]
-        try:
-            header = [int(w) for w in body[0].split()] if body else []
-            if version.startswith("2"):
-                expected, found = header[0], len(body) - 1
-            else:  # 4.x: blocks, each a header line and its entries (nodes: tags, then xyz)
-                expected, found, row = header[1], 0, 1
-                while row < len(body):
-                    count = int(body[row].split()[3])
-                    found += count
-                    row += 1 + (2 * count if name == "Nodes" else count)
-                if row != len(body):
-                    raise ValueError
-        except (IndexError, ValueError):
-            raise BadValue(f"mesh file {path.name}:{first}: the ${name} section is malformed") \
-                from None
-        if expected != found:
-            raise BadValue(f"mesh file {path.name}:{first + 1}: ${name} says {expected} entries, "
-                       f"the section holds {found}")
+#: Abaqus element types meshio reads as 8-node hexahedra.
+_INP_HEXAHEDRA = ("C3D8", "C3D8H", "C3D8I", "C3D8IH", "C3D8R", "C3D8RH")
+
+
+def _check_inp(path: Path) -> None:
+    """An Abaqus input file as the blank's mesh, checked card by card before meshio reads it
+    (meshio joins the element lines of a block into one stream, takes any word int() takes
+    and fails on a missing node with a bare KeyError): node and element ids positive
+    integers, each once; every element's nodes defined; a line of a hexahedron block holds
+    8 nodes; other solid elements refused. Raises DeckError at the line."""
+    nodes: dict[int, inp_cards.DataLine] = {}
+    elements: dict[int, inp_cards.DataLine] = {}
+    for card in inp_cards.read_cards(path):
+        if card.keyword == "NODE":
+            for data in card.data:
+                ident = inp_cards.integer(data, 0, "the node id")
+                if len(data.words) < 3:
+                    raise DeckError(f"expected '<node id>, <x>, <y>, <z>', got "
+                                    f"'{', '.join(data.words)[:60]}'", data.path, data.number)
+                for k in range(1, len(data.words)):
+                    inp_cards.number(data, k, "a coordinate")
+                if ident in nodes:
+                    raise DeckError(f"node {ident} is defined again (first at "
+                                    f"{nodes[ident].where})", data.path, data.number)
+                nodes[ident] = data
+        elif card.keyword == "ELEMENT":
+            kind = card.params.get("TYPE", "").upper()
+            if kind.startswith("C3D") and kind not in _INP_HEXAHEDRA:
+                raise card.error(f"*ELEMENT, TYPE={kind}: the blank takes 8-node hexahedra "
+                                 f"({', '.join(_INP_HEXAHEDRA)})")
+            for data in card.data:
+                ident = inp_cards.integer(data, 0, "the element id")
+                for k in range(1, len(data.words)):
+                    inp_cards.integer(data, k, "a node id")
+                if kind in _INP_HEXAHEDRA and len(data.words) != 9:
+                    raise DeckError(f"element {ident} has {len(data.words) - 1} nodes: a {kind} "
+                                    "element has 8 (was its type or a node changed?)", data.path,
+                                    data.number)
+                if ident in elements:
+                    raise DeckError(f"element {ident} is defined again (first at "
+                                    f"{elements[ident].where})", data.path, data.number)
+                elements[ident] = data
+    for ident, data in elements.items():
+        for word in data.words[1:]:
+            if int(word) not in nodes:
+                raise DeckError(f"element {ident} refers to node {word}, which no *NODE "
+                                "defines", data.path, data.number)
 
 
 def _file_nodesets(data: Any) -> dict[str, NDArray[np.int64]]:

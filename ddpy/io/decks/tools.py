@@ -138,7 +138,7 @@ def _finish_tool(deck: Deck, tool: _ToolDraft) -> None:
     if path is None:
         return
     line = tool.seen["file"]
-    if not path.is_file():
+    if not path.exists():
         deck.error(line, f"tool file {path} not found")
         return
     try:

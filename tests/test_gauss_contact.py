@@ -20,9 +20,6 @@ from ddpy.model.solid import Solid
 
 #: The penalty of these tests (N/mm^3): a 4 um press gives about 200 MPa.
 PENALTY = 5e4
-#: The plain penalty law (no augmentation, multipliers zero): what most of these tests
-#: check; the augmented law's own tests set the default.
-PLAIN = NewtonSettings(penetration=None)
 
 
 def block_on_dome(friction: float, points: int = 2
@@ -37,8 +34,8 @@ def block_on_dome(friction: float, points: int = 2
     problem = FormingProblem(Solid(mesh, ELASTIC), [tool])
     problem.fix(mesh.select(z=lift + 0.5), "xyz")
     problem.fix(mesh.select(y=-0.5), "y")
-    problem.run({"dome": (0, 0, 4e-3)}, max_increment=2e-3, newton=PLAIN)
-    problem.run({"dome": (2e-3, 0, 0)}, max_increment=1e-3, newton=PLAIN)
+    problem.run({"dome": (0, 0, 4e-3)}, max_increment=2e-3)
+    problem.run({"dome": (2e-3, 0, 0)}, max_increment=1e-3)
     return problem, mesh, tool
 
 
@@ -134,7 +131,7 @@ def press_on_plane(mesh: HexMesh, slope: float, points: int
     problem = FormingProblem(Solid(mesh, ELASTIC), [tool])
     problem.fix(mesh.select(z=0.5), "xyz")
     result = problem.run({"plane": (0, 0, 1e-3 + 2 * abs(slope))}, max_increment=1e-3,
-                         newton=NewtonSettings(1e-12, 1e-9, penetration=None))
+                         newton=NewtonSettings(1e-12, 1e-9))
     return problem, tool, result
 
 
@@ -219,9 +216,9 @@ def test_an_answer_held_on_facets_stands_only_where_the_search_agrees() -> None:
                      friction=0.5)
     problem = FormingProblem(Solid(mesh, soft), [tool])
     problem.fix(mesh.select(z=0.55), "xyz")
-    problem.run({"plane": (0, 0, 0.07)}, max_increment=0.01, newton=PLAIN)
+    problem.run({"plane": (0, 0, 0.07)}, max_increment=0.01)
     result = problem.run({"plane": (0.1, 0, 0)}, max_increment=0.1,
-                         newton=NewtonSettings(max_iterations=9, penetration=None))
+                         newton=NewtonSettings(max_iterations=9))
     assert result.cuts == 0 and len(result.iterations) == 1
     equations = problem.linearization()
     free = np.linalg.norm(equations.residual[:equations.n_free])

@@ -66,7 +66,8 @@ def test_the_augmented_law_meets_the_limit_where_the_plain_penalty_does_not() ->
     stiff = ELASTIC.E / 0.5
     _, plain = pressed_block(NewtonSettings(1e-10, 1e-9), stiff)
     assert plain.penetration["plane"][-1] == pytest.approx(2e-3, rel=0.05)
-    problem, augmented = pressed_block(NewtonSettings(1e-10, 1e-9, penetration=1e-3), stiff)
+    problem, augmented = pressed_block(NewtonSettings(1e-10, 1e-9, penetration=1e-3,
+                                                      augment=True), stiff)
     assert max(augmented.penetration["plane"]) <= 0.5e-3 * (1 + 1e-9)
     assert augmented.augmentations > 0
     exact = ELASTIC.E * 4e-3 / 0.5  # MPa on 1 mm^2
@@ -84,7 +85,7 @@ def test_jacobian_with_pressure_multipliers_matches_central_differences() -> Non
     kink sits at g = p_n / eps."""
     problem, mesh, tool = block_on_dome(0.3)
     problem.run({"dome": (1e-3, 0, 1e-3)}, max_increment=1e-3,
-                newton=NewtonSettings(penetration=1e-3))
+                newton=NewtonSettings(penetration=1e-3, augment=True))
     assert problem.pressure.max() > 0.0  # multipliers to start from
     u = problem.u.copy()
     u[tool.slaves[mesh.nodes[tool.slaves, 0] < -0.4], 2] += 0.2  # open
@@ -97,10 +98,10 @@ def test_jacobian_with_pressure_multipliers_matches_central_differences() -> Non
 def test_a_run_records_the_penetration_and_warns_once_per_tool(tmp_path: Path,
                                                                caplog: pytest.LogCaptureFixture
                                                                ) -> None:
-    """The strip drawing with a limit no run can meet (1e-9 of the thickness): every tool
-    that the blank enters is named in exactly one warning, with its depth in mm and in %
-    of the thickness; the results hold the depth per increment and tool. At the default
-    limit (1 %) the same run warns about no tool it stays out of."""
+    """The strip drawing with the limit lowered to 1e-9 of the thickness (the plain
+    penalty: nothing pushes the blank out): every tool that the blank enters is named in
+    exactly one warning, with its depth in mm and in % of the thickness, and no other
+    tool; the results hold the depth per increment and tool."""
     case = tiny_case(tmp_path / "case")
     control = case / "control.dat"
     control.write_text(control.read_text().replace("max_increment  0.2",

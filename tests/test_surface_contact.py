@@ -214,7 +214,7 @@ def slide_over_dome(friction: float, force_tolerance: float = 1e-12, solid: type
                      facing=(0, 0, -1), **({"contact": "surface"} | contact))
     problem = FormingProblem(solid(mesh, ELASTIC), [tool])
     problem.fix(mesh.select(z=lift + 0.5), "xyz")
-    tight = NewtonSettings(force_tolerance, 1e-6, penetration=None)  # Gauss: the plain penalty
+    tight = NewtonSettings(force_tolerance, 1e-6)
     # Every touching node lands (DD3IMP's r_min): each increment then ends with the
     # contact set it converged with, and its last steps show the tangent's rate.
     every = IncrementLimits(touch="every")

@@ -401,7 +401,7 @@ class _Run:
         """Warn, once per tool and run, where the blank lies deeper in a tool than the
         phase's penetration_limit (a fraction of the blank's thickness)."""
         thickness = self.problem.thickness
-        limit = phase.newton.penetration_warning * thickness
+        limit = phase.newton.penetration * thickness
         for name, d in zip(self.names, depth, strict=True):
             if d > limit and name not in self.warned:
                 self.warned.add(name)
@@ -409,7 +409,7 @@ class _Run:
                     "warning: the blank lies %.3g mm (%.1f %% of its %.3g mm thickness) inside "
                     "tool %s in phase %s, deeper than penetration_limit %g; the run goes on "
                     "(docs/theory/contact.md, \"Penetration\")", d, 100.0 * d / thickness,
-                    thickness, name, phase.name, phase.newton.penetration_warning)
+                    thickness, name, phase.name, phase.newton.penetration)
 
     def _should_halt(self) -> bool:
         if self.stop is not None and self.stop():

@@ -107,17 +107,17 @@ class NewtonSettings:
     ``displacement_tolerance`` times the increment's displacement; an increment that has not
     converged in ``max_iterations`` is cut by ``cutback`` and tried again. ``penetration``
     (deck ``penetration_limit``): the deepest the blank may lie inside a tool at a
-    converged increment, as a fraction of its thickness: Gauss-point contact then carries
-    its pressures from increment to increment and augments them (Uzawa) until it holds, and
-    a run warns once per tool where it does not. None (the default, deck ``off``):
-    Gauss-point contact is the plain penalty, and runs warn at DEFAULT_PENETRATION
-    (docs/theory/contact.md, "Penetration")."""
+    converged increment, as a fraction of its thickness; a run warns once per tool where
+    it does not hold. ``augment`` (deck ``gauss_augmentation``): Gauss-point contact
+    carries its pressures from increment to increment and augments them (Uzawa) until the
+    limit holds, instead of the plain penalty (docs/theory/contact.md, "Penetration")."""
 
     force_tolerance: float = 1e-4
     displacement_tolerance: float = 1e-4
     max_iterations: int = 25
     cutback: float = 0.5
-    penetration: float | None = None
+    penetration: float = DEFAULT_PENETRATION
+    augment: bool = False
 
     def __post_init__(self) -> None:
         for name in ("force_tolerance", "displacement_tolerance"):
@@ -130,14 +130,9 @@ class NewtonSettings:
                              f"{self.max_iterations}")
         if not 0.0 < self.cutback < 1.0:
             raise ValueError(f"cutback must lie in (0, 1), got {self.cutback}")
-        if self.penetration is not None and not 0.0 < self.penetration < 1.0:
+        if not 0.0 < self.penetration < 1.0:
             raise ValueError(f"penetration must lie in (0, 1) (a fraction of the blank's "
-                             f"thickness) or be None, got {self.penetration}")
-
-    @property
-    def penetration_warning(self) -> float:
-        """The fraction of the blank's thickness past which a run warns."""
-        return DEFAULT_PENETRATION if self.penetration is None else self.penetration
+                             f"thickness), got {self.penetration}")
 
 
 def next_step(step: float, nominal: float, reason: str, strain_ratio: float,

@@ -27,7 +27,7 @@ from ddpy import _core
 from ddpy._validate import float_array, int_array
 from ddpy.core.linalg import MumpsSolver
 from ddpy.core.ordering import mesh_solver
-from ddpy.geometry.search import NONE
+from ddpy.geometry.search import INSIDE, NONE
 from ddpy.model.contact import INACTIVE
 from ddpy.model.control import IncrementLimits, NewtonSettings, next_step
 from ddpy.model.mesh import HEX_EDGES, free_rigid_modes, largest_rotation
@@ -221,8 +221,9 @@ class FormingResult:
     #: monotonicity test and took the longest that lowered the residual norm instead
     fallbacks: int = 0
     #: per tool and increment, the deepest penetration of the blank into the tool (mm, 0
-    #: when none): its slave nodes' gaps for node-to-surface and surface-to-surface
-    #: contact, its Gauss points' for Gauss-point contact
+    #: when none): the most negative signed distance of its slave nodes from it (for
+    #: node-to-surface contact their gaps; for the others the nodes projected on the tool,
+    #: which leaves out the chord of a face over a tool radius between its nodes)
     penetration: dict[str, list[float]] = field(default_factory=dict)
     #: Uzawa updates of the Gauss points' pressure multipliers (each one more solve of its
     #: increment, its iterations counted in the increment's)
@@ -501,9 +502,8 @@ class FormingProblem:
                         f"largest): {outcome.failure}", result)
                 step, reason = step * cutback, "cut"
                 continue
-            multiplier = self.pressure  # of the Gauss points' law in the outcome
-            if newton.penetration is not None:
-                outcome, multiplier = self._augmented(
+            if newton.augment:
+                outcome = self._augmented(
                     outcome, newton.penetration * self.thickness, layout, positions, on,
                     tol_force, tol_disp, max_iterations, result, touching)
             u, state, force, in_contact, gap = (outcome.u, outcome.state, outcome.force,
@@ -545,9 +545,9 @@ class FormingProblem:
             last_du = (u - self.u) / (target - factor)
             normal = gap[1]
             last_dp = np.einsum("ij,ij->i", force - self.force, normal) / (target - factor)
-            depth = self._penetration(layout, outcome, multiplier, on)
+            depth = self._penetration(layout, outcome, on, positions)
             self._take(outcome)
-            if newton.penetration is None:  # the plain penalty: no multipliers
+            if not newton.augment:  # the plain penalty: no multipliers
                 self.pressure = np.zeros_like(self.pressure)
             self.position = positions
             result.sizes.append(target - factor)
@@ -628,60 +628,50 @@ class FormingProblem:
         self.traction, self._status = outcome.traction, outcome.in_contact
         self.pressure = outcome.pressure
 
-    def _point_depth(self, pressure: NDArray[np.float64], multiplier: NDArray[np.float64]
-                     ) -> list[float]:
-        """Per tool, the deepest of its Gauss points in it (mm, 0 when none; 0 for a tool
-        without Gauss-point contact), from their pressures p = max(0, p_n - eps g) at the
-        multipliers p_n: a point that carries pressure lies (p - p_n) / eps deep."""
-        first = self._pack.point_first
-        depth = []
-        for i, eps in enumerate(self.penalty):
-            points = slice(first[i], first[i + 1])
-            p, p_n = pressure[points], multiplier[points]
-            inside = p > 0.0
-            depth.append(float(np.max((p[inside] - p_n[inside]) / eps, initial=0.0))
-                         if eps > 0.0 else 0.0)
-        return depth
-
-    def _penetration(self, layout: Layout, outcome: Trial, multiplier: NDArray[np.float64],
-                     on: NDArray[np.bool_]) -> list[float]:
+    def _penetration(self, layout: Layout, outcome: Trial, on: NDArray[np.bool_],
+                     positions: Mapping[str, NDArray[np.float64]]) -> list[float]:
         """Per tool, the deepest penetration of the blank at a converged ``outcome`` of
-        an increment (mm, >= 0): the Gauss points' (whose law had the pressure
-        ``multiplier``) for Gauss-point contact, the slave nodes' gaps otherwise
+        an increment with the tools at ``positions`` (mm, >= 0): its slave nodes' most
+        negative gap for node-to-surface contact; for surface-to-surface and Gauss-point
+        contact, whose pairs' gaps are averages over faces, the slave nodes projected on
+        the tool within the search's reach (those inside a patch count)
         (FormingResult.penetration)."""
-        assert outcome.pressure is not None and outcome.gap is not None
-        points = self._point_depth(outcome.pressure, multiplier)
-        gap = np.where(on & np.isfinite(outcome.gap[0]), outcome.gap[0], np.inf)
+        assert outcome.gap is not None and outcome.u is not None
+        x = self.solid.mesh.nodes + outcome.u
         depth = []
         for i, t in enumerate(self.tools):
-            if t.contact == "gauss":
-                depth.append(points[i])
+            pairs = slice(layout.first[i], layout.first[i + 1])
+            if not on[pairs].any():
+                depth.append(0.0)
                 continue
-            pairs = gap[layout.first[i]:layout.first[i + 1]]
-            depth.append(max(0.0, -float(pairs.min(initial=np.inf))))
+            if t.contact == "node":
+                gap = np.where(np.isfinite(outcome.gap[0][pairs]), outcome.gap[0][pairs], np.inf)
+            else:
+                found = t.search.project(x[t.slaves], positions[t.name], reach=self._reach)
+                gap = np.where(found.status == INSIDE, found.distance, np.inf)
+            depth.append(max(0.0, -float(gap.min(initial=np.inf))))
         return depth
 
     def _augmented(self, outcome: Trial, limit: float, layout: Layout,
                    positions: Mapping[str, NDArray[np.float64]], on: NDArray[np.bool_],
                    tol_force: float, tol_disp: float, max_iterations: int,
-                   result: FormingResult, touching: _Touching
-                   ) -> tuple[Trial, NDArray[np.float64]]:
-        """The converged ``outcome`` of an increment with its Gauss points at most
-        ``limit`` (mm) inside their tools: while one is deeper, the points' multipliers
-        take their pressures (an Uzawa update of the augmented Lagrangian) and the
-        increment is solved again from there, at most MAX_AUGMENTATIONS times. The
-        residual histories of the solves are joined, as the release's are. A solve that
-        fails leaves the last converged answer (its depth is recorded, and the run warns).
-        Returns the answer and the multipliers of its law."""
-        multiplier = self.pressure
+                   result: FormingResult, touching: _Touching) -> Trial:
+        """The converged ``outcome`` of an increment with the slave nodes of its
+        Gauss-point tools at most ``limit`` (mm) inside them: while one is deeper, the
+        points' multipliers take their pressures (an Uzawa update of the augmented
+        Lagrangian) and the increment is solved again from there, at most
+        MAX_AUGMENTATIONS times. The residual histories of the solves are joined, as the
+        release's are. A solve that fails leaves the last converged answer (its depth is
+        recorded, and the run warns)."""
+        gauss = [i for i, t in enumerate(self.tools) if t.contact == "gauss"]
         for _ in range(MAX_AUGMENTATIONS):
             assert outcome.pressure is not None
-            if max(self._point_depth(outcome.pressure, multiplier), default=0.0) <= limit:
+            depth = self._penetration(layout, outcome, on, positions)
+            if max((depth[i] for i in gauss), default=0.0) <= limit:
                 break
-            multiplier = outcome.pressure
             again = self._increment(layout, positions, on, tol_force, tol_disp,
                                     max_iterations, result, touching=touching,
-                                    guess=outcome.u, pressure=multiplier)
+                                    guess=outcome.u, pressure=outcome.pressure)
             if again.failure or again.landing < 1.0:
                 _log.info("an augmentation of the Gauss points' pressures failed: %s",
                           again.failure or "a yield landing")
@@ -690,7 +680,7 @@ class FormingProblem:
             again.residuals = list(outcome.residuals) + list(again.residuals)[1:]
             again.relative = list(outcome.relative) + list(again.relative)[1:]
             outcome = again
-        return outcome, multiplier
+        return outcome
 
     def _gap_offsets(self, gaps: Mapping[str, tuple[str, float, ArrayLike]],
                      moves: Mapping[str, NDArray[np.float64]],

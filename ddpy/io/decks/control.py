@@ -51,10 +51,6 @@ def _count_or_off(word: str, what: str) -> int | None:
     return None if word == "off" else read_int(word, what)
 
 
-def _fraction_or_off(word: str, what: str) -> float | None:
-    return None if word == "off" else read_float(word, what)
-
-
 #: Settings allowed at the top of control.dat (defaults of every phase) and inside a phase.
 _SETTINGS: dict[str, Callable[[str], Any]] = {
     "max_increment": lambda w: read_float(w, "max_increment", gt=0, le=MAX_LENGTH),
@@ -77,7 +73,8 @@ _SETTINGS: dict[str, Callable[[str], Any]] = {
                                      read_int),
     "cutback": _model_setting("cutback", NewtonSettings, "cutback", read_float),
     "penetration_limit": _model_setting("penetration_limit", NewtonSettings, "penetration",
-                                        _fraction_or_off),
+                                        read_float),
+    "gauss_augmentation": lambda w: read_choice(w, "gauss_augmentation", ("on", "off")) == "on",
     "output_every": lambda w: read_int(w, "output_every", 0, 10**9),
 }
 _PHASE_KEYS = ("type", "tools", "move", "gap", "lead", "output_at", "increments")

@@ -152,7 +152,8 @@ class _Cross:
                                   s("newton_displacement", n.displacement_tolerance),
                                   s("max_iterations", n.max_iterations),
                                   s("cutback", n.cutback),
-                                  s("penetration_limit", n.penetration)),
+                                  s("penetration_limit", n.penetration),
+                                  s("gauss_augmentation", n.augment)),
             output_every=s("output_every", DEFAULT_OUTPUT_EVERY),
             origin=self.control.where(p.line))
 

@@ -1,29 +1,32 @@
 """Fuzzing the decks: valid example decks mutated at random (lines deleted, duplicated, swapped,
 tokens replaced by random text, numbers, NaN or huge values, files truncated or replaced by
-random bytes) are either accepted or refused with a DeckError: never another exception, never
-a hang."""
+random bytes, titles and phase counts changed) are either accepted or refused with a
+DeckError: never another exception, never a hang; and ddpy check and ddpy run agree on them
+(what the check accepts the run starts, what it refuses the run refuses)."""
 
 from __future__ import annotations
 
 import contextlib
 import io
 import os
+import shutil
 import signal
 import tempfile
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import numpy as np
 import pytest
 from deckutil import EXAMPLES, install_toolfile
-from hypothesis import HealthCheck, example, given, settings
+from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from ddpy.app.cli import main
 from ddpy.app.runner import BUILT_IN_CASES
 from ddpy.io.decks import DECKS, DeckError, read_case
-from ddpy.io.decks.control import MAX_PHASES, MAX_TITLE
 
+#: The most phases and title characters a case may have (docs/input-format.md).
+MAX_PHASES = MAX_TITLE = 1000
 #: Seconds one example may take before it counts as a hang.
 HANG = 20
 #: More examples, drawn afresh each run: DDPY_FUZZ_EXAMPLES=5000 pytest tests/test_decks_fuzz.py
@@ -260,15 +263,29 @@ def check_and_run_agree(case: Path) -> tuple[int, str]:
 @settings(max_examples=EXAMPLES_RUN // 5 or 120, deadline=None, derandomize=not EXAMPLES_RUN,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(mutated_case(ALL_BASES))
-@example(("bending", {**ALL_BASES["bending"], "control.dat": with_title(
-    ALL_BASES["bending"]["control.dat"], "a\x00b")}))      # HDF5: embedded NULs
-@example(("strip_draw", {**ALL_BASES["strip_draw"], "control.dat": with_phases(
-    ALL_BASES["strip_draw"]["control.dat"], 5000)}))  # HDF5: object header message too large
-@example(("cylindrical_bending", {**ALL_BASES["cylindrical_bending"], "control.dat": with_phases(
-    ALL_BASES["cylindrical_bending"]["control.dat"], MAX_PHASES)}))
 def test_check_and_run_agree_on_mutated_decks(folder: Path, mutated) -> None:
     name, decks = mutated
     check_and_run_agree(_write(folder, name, decks))
+
+
+@pytest.mark.parametrize("name, change, checked", [
+    ("bending", lambda text: with_title(text, "a\x00b"), 2),  # HDF5: embedded NULs
+    ("strip_draw", lambda text: with_phases(text, 5000), 2),  # object header too large
+    ("cylindrical_bending", lambda text: with_phases(text, MAX_PHASES), 0),
+], ids=["NUL in the title", "5,000 phases", "1,000 phases"])
+def test_check_and_run_agree_on_what_the_results_file_refused(
+        folder: Path, name: str, change: Callable[[str], str], checked: int) -> None:
+    decks: dict[str, str | bytes] = {**ALL_BASES[name],
+                                     "control.dat": change(ALL_BASES[name]["control.dat"])}
+    assert check_and_run_agree(_write(folder, name, decks))[0] == checked
+
+
+@pytest.mark.parametrize("name", [*FOLDERS, "deep-drawing"])
+def test_check_and_run_agree_on_every_example(tmp_path: Path, name: str) -> None:
+    source = FOLDERS.get(name) or BUILT_IN_CASES[name]
+    case = tmp_path / source.name
+    shutil.copytree(source, case)
+    assert check_and_run_agree(case) == (0, "")
 
 
 def test_valid_examples_still_read(folder: Path) -> None:

@@ -133,7 +133,8 @@ def test_an_increment_too_small_for_the_travel_is_refused(tmp_path: Path) -> Non
                 if x.split()[:1] == ["max_increment"])
     edit(case, "control.dat", text.split("\n")[line - 1].split()[1], "1e-300")
     message = errors_of(case)
-    assert f"control.dat:{line}:" in message and "more than 1,000,000 increments" in message
+    assert f"control.dat:{line}:" in message and "needs at least 2.85e+301 increments; a " \
+        "phase may take at most 1,000,000" in message
     problem, _ = block_on_plane(0.0)
     with pytest.raises(ValueError, match="more than 1,000,000 increments"):
         problem.run({"plane": (0, 0, 1e-3)}, max_increment=1e-300)

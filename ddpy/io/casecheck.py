@@ -141,9 +141,9 @@ def _facing_errors(case: Case, searches: dict[str, ContactSearch]) -> list[DeckE
     """A tool none of whose patches faces the blank side it touches: the run refuses it
     (ddpy.model.tool.RigidTool), whichever phase uses it."""
     return [_error(t.origin, f"no patch of tool '{t.name}' faces the {t.contact} of the "
-                   f"blank: every normal of {t.file.name} points along "
-                   f"({_xyz(np.asarray(t.facing))}), away from it; expected a tool file "
-                   "whose normals point towards the blank")
+                   f"blank: no normal of {t.file.name} points against the blank's outward "
+                   f"normal ({_xyz(np.asarray(t.facing))}); expected a tool file whose "
+                   "normals point towards the blank")
             for t in case.tools if not faces_blank(searches[t.name], t.facing)]
 
 

@@ -24,7 +24,7 @@ from ddpy.model.material import TABLE_MAX_POINTS, HardeningTable, Hill48, Materi
 #: eps0 at most 10 (a strain: 1e300 made the yield stress infinite).
 MAX_STRESS, MAX_EPS0 = 1e5, 10.0
 #: Lowest initial yield stress (MPa): lead and soft solders yield at a few MPa; below,
-#: the hardening law is not in MPa (Swift K 1e-12 gave 4e-13 MPa, and the run went on).
+#: the hardening law is not in MPa (Swift K 1e-12, some 1e-13 MPa, was run).
 MIN_YIELD = 1.0
 #: Young's modulus (MPa): above the largest it is refused, below the smallest a warning
 #: asks whether it is in MPa (polymers to tungsten carbide lie between).

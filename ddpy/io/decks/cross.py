@@ -264,8 +264,8 @@ class _Cross:
         if min_inc < max_inc * MIN_FRACTION:
             deck.error(line, f"phase '{p.name}': min_increment {min_inc:g} mm is below "
                        f"max_increment / {1 / MIN_FRACTION:g} ({max_inc * MIN_FRACTION:g} mm): "
-                       "a failing increment would be cut more than 20 times before the run "
-                       "stops")
+                       "a failing increment would be cut more than 20 times (by half) before "
+                       "the run stops")
             return None
         if travel / max_inc > MAX_INCREMENTS:
             deck.error(self._line_of(p, control, "max_increment") or p.line,

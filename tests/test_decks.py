@@ -157,7 +157,7 @@ def test_several_errors_collected(tmp_path: Path) -> None:
     assert f"tools.dat:{line_of(case, 'tools.dat', '-0.1')}: friction must be >= 0, got -0.1" \
         in text
     assert "Poisson's ratio nu must be < 0.5, got 0.7" in text
-    assert "cutback must lie in (0, 1), got 2" in text
+    assert "cutback must lie in [0.1, 0.9], got 2" in text
     assert error.path == case / "control.dat"  # the first, in reading order
 
 
@@ -187,13 +187,13 @@ CONTROL_ERRORS = [
     ("rmin_contact         on", "rmin_contact on\nrmin_release 2",
      "rmin_release must lie in [0, 1], got 2"),
     ("rmin_rotation        1.0", "rmin_rotation 120",
-     "rmin_rotation must lie in (0, 90] (degrees)"),
+     "rmin_rotation must lie in [0.001, 90] (degrees)"),
     ("rmin_contact         on", "rmin_contact on\nrmin_release_redos -1",
      "rmin_release_redos must lie in 0..1,000,000 or be off"),
     ("rmin_contact         on", "rmin_contact on\nrmin_release_redos 1.5",
      "expected an integer for rmin_release_redos"),
     ("newton_force         1e-4", "newton_force 0",
-     "newton_force must lie in (0, 1), got 0"),
+     "newton_force must lie in [1e-14, 0.1], got 0"),
     ("max_iterations       25", "max_iterations 2.5", "expected an integer for max_iterations"),
     ("max_iterations       25", "max_iterations 0",
      "max_iterations must be an integer in 1..1000, got 0"),
@@ -415,15 +415,19 @@ def test_mesh_distorted_element_accepted(tmp_path: Path) -> None:
 
 
 def test_own_mesh_and_normal(tmp_path: Path) -> None:
-    text = OWN_MESH.replace("normal z", "normal -y\nscale 2")
+    text = OWN_MESH.replace("normal z", "normal -z\nscale 2")
     case = copy_example("bending", tmp_path, mesh=text)
     edit(case, "bc.dat", "nodeset    centre  box 0 0  0 0  -inf inf", "nodeset centre ids 1-8")
     edit(case, "control.dat", "output_at 7 14 21 28.5", "")
     c = read_case(case, geometry=False)  # the example's tools do not fit this blank
-    assert c.mesh.normal == (0.0, -1.0, 0.0) and c.mesh.node_ids.tolist() == list(range(1, 9))
+    assert c.mesh.normal == (0.0, 0.0, -1.0) and c.mesh.node_ids.tolist() == list(range(1, 9))
     assert c.mesh.element_ids.tolist() == [10] and c.mesh.nodes.max() == 2.0
-    np.testing.assert_allclose(c.mesh.nodes[c.tool("punch").contact_nodes(c.mesh), 1], 0.0)
+    np.testing.assert_allclose(c.mesh.nodes[c.tool("punch").contact_nodes(c.mesh), 2], 0.0)
     np.testing.assert_allclose(c.mesh.thickness(), 2.0)
+    # ddpy run takes the sheet normal along z only: ddpy check refuses the others at once.
+    edit(case, "mesh.dat", "normal -z", "normal -y")
+    assert f"mesh.dat:{line_of(case, 'mesh.dat', 'normal -y')}: a sheet normal along y is " \
+        "not supported yet" in str(error_of(case))
 
 
 def test_mesh_box_limits(tmp_path: Path) -> None:

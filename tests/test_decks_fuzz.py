@@ -1,19 +1,23 @@
 """Fuzzing the decks: valid example decks mutated at random (lines deleted, duplicated, swapped,
 tokens replaced by random text, numbers, NaN or huge values, files truncated or replaced by
-random bytes) are either accepted or refused with a DeckError: never another exception, never
-a hang. The blank's Gmsh file (node indices 0, -1 or beyond, element types changed, ids like
-'1_0'), STL tool meshes (scaled by 1e30 or 3e-11, a vertex at 1e308) and special files (a
-fifo, /dev/zero, /dev/urandom, a folder as a deck, mesh or tool file) are refused by the
-command line with exit code 2 and one message naming the file."""
+random bytes, titles and phase counts changed) are either accepted or refused with a
+DeckError: never another exception, never a hang; and ddpy check and ddpy run agree on them
+(what the check accepts the run starts, what it refuses the run refuses). The blank's Gmsh
+file (node indices 0, -1 or beyond, element types changed, ids like '1_0'), STL tool meshes
+(scaled by 1e30 or 3e-11, a vertex at 1e308) and special files (a fifo, /dev/zero,
+/dev/urandom, a folder as a deck, mesh or tool file) are refused by the command line with
+exit code 2 and one message naming the file."""
 
 from __future__ import annotations
 
+import contextlib
+import io
 import os
 import shutil
 import signal
 import subprocess
 import tempfile
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import numpy as np
@@ -22,18 +26,28 @@ from deckutil import EXAMPLES, install_toolfile
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from ddpy.app.cli import main
+from ddpy.app.runner import BUILT_IN_CASES
 from ddpy.io.decks import DECKS, DeckError, read_case
 
+#: The most phases and title characters a case may have (docs/input-format.md).
+MAX_PHASES = MAX_TITLE = 1000
 #: Seconds one example may take before it counts as a hang.
 HANG = 20
 #: More examples, drawn afresh each run: DDPY_FUZZ_EXAMPLES=5000 pytest tests/test_decks_fuzz.py
 EXAMPLES_RUN = int(os.environ.get("DDPY_FUZZ_EXAMPLES", "0"))
 
-BASES = {name: {deck: (EXAMPLES / name / deck).read_text() for deck in DECKS}
-         for name in ("bending", "strip_draw")}
+#: The case folders mutated: the shipped examples, and for ddpy check against ddpy run the
+#: built-in bending case too (its blank is a Gmsh file; the deep drawing's checks take
+#: seconds, so tests/test_plausibility.py takes it unchanged).
+FOLDERS = {"bending": EXAMPLES / "bending", "strip_draw": EXAMPLES / "strip_draw",
+           "cylindrical_bending": BUILT_IN_CASES["cylindrical-bending"]}
+ALL_BASES = {name: {deck: (folder / deck).read_text() for deck in DECKS}
+             for name, folder in FOLDERS.items()}
+BASES = {name: ALL_BASES[name] for name in ("bending", "strip_draw")}
 TOOL_FILES = {name: {f"tools/{p.name}": p.read_text()
-                     for p in sorted((EXAMPLES / name / "tools").glob("*.tool"))}
-              for name in BASES}
+                     for p in sorted((folder / "tools").glob("*.tool"))}
+              for name, folder in FOLDERS.items()}
 
 SPECIAL = ["nan", "NaN", "inf", "-inf", "1e308", "-1e308", "1e999", "0", "-0", "-1", "1e-320",
            "99999999999999999999", "-99999999999999999999", "0x10", "1_000", "end", "phase",
@@ -95,11 +109,43 @@ def _nudge(word: str, factor: float) -> str:
     return repr(value * factor)
 
 
+def with_title(text: str, title: str) -> str:
+    """control.dat with this title."""
+    kept = [line for line in text.split("\n") if line.split()[:1] != ["title"]]
+    return "\n".join([f"title {title}", *kept])
+
+
+def with_phases(text: str, total: int) -> str:
+    """control.dat with its first phase repeated under new names to ``total`` phases."""
+    lines = text.split("\n")
+    phases = [i for i, line in enumerate(lines) if line.split()[:1] == ["phase"]]
+    start = phases[0]
+    end = next(i for i in range(start, len(lines)) if lines[i].split()[:1] == ["end"])
+    name = lines[start].split()[1]
+    copies = [f"phase {name}_{k}" if i == start else lines[i]
+              for k in range(total - len(phases)) for i in range(start, end + 1)]
+    return "\n".join(lines[:end + 1] + copies + lines[end + 1:])
+
+
 @st.composite
-def mutated_case(draw: st.DrawFn) -> tuple[str, dict[str, str | bytes]]:
-    """An example case with one or two of its decks changed, sometimes a tool file too."""
-    name = draw(st.sampled_from(sorted(BASES)))
-    decks: dict[str, str | bytes] = dict(BASES[name])
+def control_change(draw: st.DrawFn, text: str) -> str:
+    """control.dat with another title (control characters, a NUL byte, too long) or its first
+    phase repeated, to the most phases a case may have or one more."""
+    if draw(st.booleans()):
+        return with_title(text, draw(st.one_of(st.text(max_size=20), st.sampled_from(
+            ["a\x00b", "\x1b[31mred", "tab\there", "x" * MAX_TITLE, "x" * (MAX_TITLE + 1)]))))
+    return with_phases(text, draw(st.sampled_from([4, MAX_PHASES, MAX_PHASES + 1])))
+
+
+@st.composite
+def mutated_case(draw: st.DrawFn, bases: dict[str, dict[str, str]] = BASES
+                 ) -> tuple[str, dict[str, str | bytes]]:
+    """An example case with one or two of its decks changed, sometimes a tool file too,
+    sometimes its title or its number of phases."""
+    name = draw(st.sampled_from(sorted(bases)))
+    decks: dict[str, str | bytes] = dict(bases[name])
+    if draw(st.integers(0, 9)) == 0:  # what the results file keeps: title, phase names
+        decks["control.dat"] = draw(control_change(bases[name]["control.dat"]))
     if draw(st.integers(0, 5)) == 0:  # a tool file, now and then
         tool = draw(st.sampled_from(sorted(TOOL_FILES[name])))
         decks[tool] = draw(mutation(TOOL_FILES[name][tool]))
@@ -133,7 +179,7 @@ def folder() -> Iterator[Path]:
 
 def _write(folder: Path, name: str, decks: dict[str, str | bytes]) -> Path:
     """Write the decks to a new case folder; tools/ links to the example's tool files unless
-    one of them is changed."""
+    one of them is changed, its other files (a mesh file) are linked."""
     case = Path(tempfile.mkdtemp(prefix=f"{name}-", dir=folder))
     tools = case / "tools"
     if any(deck.startswith("tools/") for deck in decks):
@@ -141,7 +187,10 @@ def _write(folder: Path, name: str, decks: dict[str, str | bytes]) -> Path:
         for deck, content in TOOL_FILES[name].items():
             (case / deck).write_text(content)
     else:
-        os.symlink(EXAMPLES / name / "tools", tools)
+        os.symlink(FOLDERS[name] / "tools", tools)
+    for other in FOLDERS[name].iterdir():
+        if other.name not in DECKS and other.name != "tools":
+            os.symlink(other, case / other.name)
     for deck, content in decks.items():
         path = case / deck
         if isinstance(content, bytes):
@@ -183,6 +232,65 @@ def test_random_lines_accepted_or_refused(folder: Path, deck: str, rows: list[li
     decks: dict[str, str | bytes] = dict(BASES["bending"])
     decks[deck] = "\n".join(" ".join(r) for r in rows) + "\n"
     _read_or_refuse(_write(folder, "bending", decks))
+
+
+def cli(argv: list[str]) -> tuple[int, str, str]:
+    """The ddpy command in this process: exit code, standard output and error."""
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main(argv)
+    return code, out.getvalue(), err.getvalue()
+
+
+def check_and_run_agree(case: Path) -> tuple[int, str]:
+    """``ddpy check`` and ``ddpy run --stop-after 0`` (all the run does before its first
+    increment) on one case folder agree: what the check accepts the run starts, what the
+    check refuses the run refuses with the same errors (exit 2). The check's exit code and
+    standard error."""
+    previous = signal.signal(signal.SIGALRM, _alarm)
+    signal.alarm(HANG)
+    try:
+        checked, _, check_err = cli(["check", str(case)])
+        ran, run_out, run_err = cli(["run", str(case), "--output", f"{case}-out",
+                                     "--stop-after", "0"])
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, previous)
+    assert "Traceback" not in check_err + run_err
+    if checked == 0:
+        assert ran == 0 and "stopped after 0 increments" in run_out, (run_out, run_err)
+    else:
+        assert (checked, ran) == (2, 2), (check_err, run_err)
+        assert check_err.splitlines()[:-1] == run_err.splitlines()[:-1]  # the same errors
+    return checked, check_err
+
+
+@settings(max_examples=EXAMPLES_RUN // 5 or 120, deadline=None, derandomize=not EXAMPLES_RUN,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+@given(mutated_case(ALL_BASES))
+def test_check_and_run_agree_on_mutated_decks(folder: Path, mutated) -> None:
+    name, decks = mutated
+    check_and_run_agree(_write(folder, name, decks))
+
+
+@pytest.mark.parametrize("name, change, checked", [
+    ("bending", lambda text: with_title(text, "a\x00b"), 2),  # HDF5: embedded NULs
+    ("strip_draw", lambda text: with_phases(text, 5000), 2),  # object header too large
+    ("cylindrical_bending", lambda text: with_phases(text, MAX_PHASES), 0),
+], ids=["NUL in the title", "5,000 phases", "1,000 phases"])
+def test_check_and_run_agree_on_what_the_results_file_refused(
+        folder: Path, name: str, change: Callable[[str], str], checked: int) -> None:
+    decks: dict[str, str | bytes] = {**ALL_BASES[name],
+                                     "control.dat": change(ALL_BASES[name]["control.dat"])}
+    assert check_and_run_agree(_write(folder, name, decks))[0] == checked
+
+
+@pytest.mark.parametrize("name", [*FOLDERS, "deep-drawing"])
+def test_check_and_run_agree_on_every_example(tmp_path: Path, name: str) -> None:
+    source = FOLDERS.get(name) or BUILT_IN_CASES[name]
+    case = tmp_path / source.name
+    shutil.copytree(source, case)
+    assert check_and_run_agree(case) == (0, "")
 
 
 def test_valid_examples_still_read(folder: Path) -> None:

@@ -7,7 +7,7 @@ import logging
 import signal
 import sys
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from types import FrameType
 from typing import TYPE_CHECKING, TextIO
@@ -191,15 +191,22 @@ def _run(args: argparse.Namespace) -> int:
     return EXIT[outcome.status]
 
 
-def _at_least_one(text: str) -> int:
-    """An argparse type: an integer >= 1."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer, got '{text}'") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
-    return value
+def _at_least(low: int) -> Callable[[str], int]:
+    """An argparse type: an integer >= ``low``."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected an integer, got '{text}'") from None
+        if value < low:
+            raise argparse.ArgumentTypeError(f"must be at least {low}, got {value}")
+        return value
+
+    return parse
+
+
+_at_least_one = _at_least(1)
 
 
 def _threads(text: str) -> int:
@@ -235,8 +242,9 @@ def add_run(commands: argparse._SubParsersAction) -> None:
     run.add_argument("--checkpoint-every", type=_at_least_one, default=10, metavar="N",
                      help="write a checkpoint every N increments (default 10; also at the "
                      "end of every phase)")
-    run.add_argument("--stop-after", type=_at_least_one, metavar="N",
-                     help="stop after N increments of the whole run (restartable)")
+    run.add_argument("--stop-after", type=_at_least(0), metavar="N",
+                     help="stop after N increments of the whole run (restartable); 0: "
+                     "before the first, once the run has checked and prepared everything")
     run.add_argument("--tools", choices=("facets", "nagata"),
                      help="with MODEL.inp: the tools as given (facets, the default) or Nagata "
                      "patches over them")

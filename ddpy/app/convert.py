@@ -22,6 +22,7 @@ from ddpy.cad.mesh_tools import build_surface_tool_models
 from ddpy.cad.surface_mesh import SurfaceMesh
 from ddpy.io.decks import DECKS
 from ddpy.io.inp_model import InpModel, InpTool, read_inp
+from ddpy.model.control import MIN_FRACTION
 
 __all__ = ["TOOL_MODELS", "Conversion", "convert_command", "convert_inp", "deck_texts"]
 
@@ -112,7 +113,12 @@ def deck_texts(model: InpModel, tools: str = "facets", element: str | None = Non
             control.append(f"  max_increment  {_number(largest)}    # *STATIC's largest "
                            "increment")
             if p.min_fraction is not None and p.min_fraction <= p.max_fraction:
-                control.append(f"  min_increment  {_number(travel * p.min_fraction)}")
+                # Abaqus takes 1e-8 of the period and less; the decks, a millionth of the
+                # largest increment at least.
+                smallest = max(travel * p.min_fraction, largest * MIN_FRACTION)
+                raised = "    # raised to max_increment / 1e6" \
+                    if smallest > travel * p.min_fraction else ""
+                control.append(f"  min_increment  {_number(smallest)}{raised}")
         control += ["end", ""]
     return {"mesh.dat": "\n".join(mesh) + "\n", "bc.dat": "\n".join(bc) + "\n",
             "material.dat": "\n".join(material) + "\n", "tools.dat": "\n".join(tool_lines),

@@ -509,6 +509,8 @@ class _Run:
 
     def run(self) -> None:
         phases = self.case.phases
+        if self._should_halt():  # max_increments 0: all that comes before the numerics
+            return
         while self.phase_index < len(phases):
             phase = phases[self.phase_index]
             self.constrain(phase)
@@ -565,12 +567,16 @@ def run_case(case: Case, output: str | os.PathLike[str], restart: bool = False,
     ``restart``: continue from the folder's checkpoint. ``progress`` is called after every
     increment; ``stop`` is polled after every increment and a true return stops the run
     there (status interrupted, a checkpoint written: restart continues). ``max_increments``
-    stops after that many increments of the whole run (status stopped). ``overwrite``
+    stops after that many increments of the whole run (status stopped); 0 stops before the
+    first increment, once the run has checked and written all it does before its numerics
+    (the problem built, the results file with the initial frame, a checkpoint). ``overwrite``
     replaces earlier results; without it an existing results file is an error. ``threads``:
     OpenMP threads of the core. A failed increment (no convergence after the cuts allowed)
     ends with status failed; the results so far and the last checkpoint stay."""
     if checkpoint_every < 1:
         raise ValueError(f"checkpoint_every must be >= 1, got {checkpoint_every}")
+    if max_increments is not None and max_increments < 0:
+        raise ValueError(f"max_increments must be >= 0 or None, got {max_increments}")
     try:
         output = check_output_folder(output, _bytes_to_start(case))
     except OutputFolderError as error:

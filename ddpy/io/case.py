@@ -33,7 +33,7 @@ if TYPE_CHECKING:
 
 __all__ = ["AXES", "BlankMaterial", "BoundaryConditions", "Case", "Constraint", "Control",
            "DeckError", "HoldGap", "Move", "NodeSet", "Phase",
-           "Tool", "HEX_FACES", "blank_thickness"]
+           "Tool", "HEX_FACES", "blank_thickness", "longest_travel", "summarize_alike"]
 
 #: Axis names and their index.
 AXES = {"x": 0, "y": 1, "z": 2}
@@ -79,6 +79,32 @@ class DeckError(ValueError):
             return errors[0]
         first = errors[0]
         return cls(first.message, first.path, first.line, tuple(errors))
+
+
+#: Longest travel of a tool in a phase, in extents of the model along the motion (the box
+#: around the blank and every tool where they start): a punch moved by 1,000 mm over a
+#: model 45 mm high ran 8,772 increments.
+MAX_TRAVEL_EXTENTS = 10.0
+
+
+def longest_travel(displacement: ArrayLike, low: ArrayLike, high: ArrayLike) -> float:
+    """The longest travel (mm) allowed a tool moving along ``displacement`` in a model whose
+    box is ``low`` to ``high`` (the blank and the tools where they start):
+    MAX_TRAVEL_EXTENTS times the box's extent along the motion."""
+    d = np.asarray(displacement, dtype=float)
+    direction = d / np.linalg.norm(d)
+    extent = float(np.abs(direction) @ (np.asarray(high, float) - np.asarray(low, float)))
+    return MAX_TRAVEL_EXTENTS * extent
+
+
+def summarize_alike(warnings: list[str], alike: str, keep: int = 3) -> list[str]:
+    """Warnings of one kind (one per phase, say) as the user reads them: the first ``keep``
+    as they are, the rest in one line that counts them (``alike`` says what they share), so
+    that a case of many phases does not print as many lines."""
+    if len(warnings) <= keep + 1:
+        return list(warnings)
+    return [*warnings[:keep], f"{warnings[keep]} (and {len(warnings) - keep - 1:,} more "
+            f"{alike})"]
 
 
 # ------------------------------------------------------------------------- boundary conditions

@@ -16,8 +16,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import NDArray
 
-from ddpy.io.case import DeckError
+from ddpy.io.case import MAX_TRAVEL_EXTENTS, DeckError, longest_travel
 from ddpy.io.inp_cards import Card, DataLine, integer, read_cards
 from ddpy.io.inp_read import BLANK_TYPES, TOOL_TYPES, Reader
 
@@ -160,6 +161,11 @@ class _Mapper:
         coords = np.array([r.nodes[n][0] for e in blank for n in r.elements[e][1]])
         extent = coords.max(axis=0) - coords.min(axis=0)
         normal = "xyz"[int(np.argmin(extent))]
+        if normal != "z":  # mesh.dat refuses it: the run takes the sheet normal along z
+            r.fail(r.sections[0][2].error(f"the blank is thinnest along {normal}: ddpy takes "
+                                          "the sheet normal along z only for now (expected "
+                                          "the blank turned to lie in the x-y plane)"))
+            return None
         blank_nodes = {n for e in blank for n in r.elements[e][1]}
         tools = self.tools(refs, tool_nodes, blank, normal)
         nodesets: dict[str, list[int]] = {}
@@ -355,6 +361,7 @@ class _Mapper:
                 if master <= {n for f in t.faces for n in f if n >= 0}:
                     pair_tool[(pair.slave, pair.master)] = t.name
         position = {t.name: [None, None, None] for t in tools}   # prescribed totals
+        low, high = self._model_box(tools, blank_nodes)
         active = {t.name for t in tools}
         phases = []
         names: set[str] = set()
@@ -364,6 +371,7 @@ class _Mapper:
         for step, card in enumerate([None, *r.steps]):
             index = step - 1
             before = {k: list(v) for k, v in position.items()}
+            set_at: dict[str, DataLine] = {}  # the last line that moves each tool
             for bc in [b for b in r.bcs if b.step == (None if card is None else index)]:
                 try:
                     ids = self.node_set(bc.node_or_set, bc.line)
@@ -391,6 +399,7 @@ class _Mapper:
                             position[tool.name][dof - 1] = before[tool.name][dof - 1] or 0.0
                         else:
                             position[tool.name][dof - 1] = bc.value
+                            set_at[tool.name] = bc.line
             if card is None:
                 continue
             name = ddpy_name(card.params.get("NAME", f"step{step}").strip('"'), "step")
@@ -418,6 +427,15 @@ class _Mapper:
                         r.fail(card.error(f"tool {t.name} moves in a step where its contact "
                                           "pair is removed: ddpy moves active tools only"))
                     moves[t.name] = delta
+                    longest = longest_travel(delta, low, high)
+                    travel = float(np.linalg.norm(delta))
+                    if travel > longest and t.name in set_at:
+                        line = set_at[t.name]
+                        r.fail(DeckError(
+                            f"tool {t.name} moves {travel:.4g} mm in this step, more than "
+                            f"{MAX_TRAVEL_EXTENTS:g} times the extent of the model (the "
+                            "blank and the tools) along its motion: expected at most "
+                            f"{longest:.4g} mm", line.path, line.number))
             static = r.static.get(index, ())
             if not active:
                 period = static[1] if len(static) > 1 else 1.0
@@ -439,6 +457,13 @@ class _Mapper:
             r.fail(r.steps[0].error("the first step removes every contact pair: the first "
                                     "phase must form"))
         return phases
+
+    def _model_box(self, tools: list[InpTool], blank_nodes: set[int]
+                   ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The box around the blank and the tools' surfaces where they start."""
+        points = np.array([self.r.nodes[n][0] for n in blank_nodes]
+                          + [x for t in tools for x in t.points.values()])
+        return points.min(axis=0), points.max(axis=0)
 
     def constraints(self, blank_nodes: set[int], nodesets: dict[str, list[int]],
                     phases: list[InpPhase] | None, refs: dict[int, tuple[int, int, str, Card]]

@@ -226,11 +226,12 @@ class ResultsWriter:
                 normal: NDArray, title: str, case: str, element: str) -> None:
         """The groups and columns of a new file, and frame 0."""
         f = self._file
-        f.attrs.update({"format": FORMAT, "version": VERSION, "title": title, "case": case,
-                        "element": element,
-                        "units": "mm N MPa s", "tools": list(self.tools),
-                        "phases": list(self.phases), "ddpy": __version__,
-                        "created": datetime.datetime.now().isoformat(timespec="seconds")})
+        f.attrs.update(_storable({"format": FORMAT, "version": VERSION, "title": title,
+                                  "case": case, "element": element,
+                                  "units": "mm N MPa s", "tools": list(self.tools),
+                                  "phases": list(self.phases), "ddpy": __version__,
+                                  "created": datetime.datetime.now().isoformat(
+                                      timespec="seconds")}))
         g = f.create_group("mesh")
         for name, data, units in (("nodes", nodes, "mm"), ("elements", elements, "1"),
                                   ("node_ids", ids, "1"), ("element_ids", eids, "1")):
@@ -415,7 +416,7 @@ class ResultsWriter:
     def annotate(self, **attrs: Any) -> None:
         """Set root attributes (e.g. the run's status) and flush."""
         with self._writing(frame=False):
-            self._file.attrs.update(attrs)
+            self._file.attrs.update(_storable(attrs))
             self._file.flush()
 
     @staticmethod
@@ -613,6 +614,37 @@ class ResultsWriter:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+#: Most names in one list attribute (tools, phases, leads): HDF5 keeps an attribute in its
+#: object's header, 64 KiB at most, 16 bytes a name (5,000 names ended a run with "object
+#: header message is too large"). The decks take at most 1,000 phases and tools.
+MAX_NAMES = 4000
+
+
+def _storable(attrs: dict[str, Any]) -> dict[str, Any]:
+    """Attributes as HDF5 stores them: text as UTF-8 without NUL bytes (HDF5 refuses them)
+    and without lone surrogates (a file name's undecodable bytes, which UTF-8 cannot hold),
+    each written as a backslash escape; a list of names refused beyond MAX_NAMES."""
+
+    def text(value: str) -> str:
+        try:  # a file name's bytes as they were
+            data = value.encode("utf-8", "surrogateescape")
+        except UnicodeEncodeError:  # other lone surrogates
+            data = value.encode("utf-8", "surrogatepass")
+        return data.decode("utf-8", "backslashreplace").replace("\0", "\\x00")
+
+    out: dict[str, Any] = {}
+    for name, value in attrs.items():
+        if isinstance(value, str):
+            value = text(value)
+        elif isinstance(value, (list, tuple)) and all(isinstance(v, str) for v in value):
+            if len(value) > MAX_NAMES:
+                raise ValueError(f"the attribute {name} lists {len(value):,} names; HDF5 "
+                                 f"holds at most about {MAX_NAMES:,}")
+            value = [text(v) for v in value]
+        out[name] = value
+    return out
 
 
 def _shaped(value: ArrayLike, shape: tuple[int, ...], name: str) -> NDArray:

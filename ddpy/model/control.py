@@ -15,6 +15,18 @@ __all__ = ["IncrementLimits", "NewtonSettings", "next_step"]
 MAX_ITERATIONS, MAX_REDOS = 1000, 10**6
 #: Which free nodes first touch lands (IncrementLimits.touch).
 TOUCH_RULES = ("new", "every")
+#: Ranges of the Newton loop's settings (docs/input-format.md). The relative tolerances:
+#: below the lowest the rounding of the sums (1e-16 a term) is all that is left to reduce,
+#: above the highest an increment is accepted far from equilibrium. Cut-back factors: below
+#: the lowest a cut throws the increment away (1e-300 made the first cut the last), above
+#: the highest a failing increment is tried again almost as it was.
+TOLERANCE_RANGE = (1e-14, 0.1)
+CUTBACK_RANGE = (0.1, 0.9)
+#: Lowest r_min strain and rotation limits (rmin_strain, rmin_rotation in degrees): below,
+#: every increment is cut to the smallest one. Lowest smallest increment as a share of the
+#: largest (min_increment / max_increment): below, a failing increment is cut 20 times and
+#: more before the run gives up.
+MIN_STRAIN, MIN_ROTATION, MIN_FRACTION = 1e-4, 1e-3, 1e-6
 
 
 @dataclass(frozen=True)
@@ -66,13 +78,14 @@ class IncrementLimits:
     min_fraction: float = 1e-3
 
     def __post_init__(self) -> None:
-        if not 0.0 < self.strain < 1.0:
-            raise ValueError(f"strain must lie in (0, 1), got {self.strain}")
-        if not 0.0 < self.rotation_deg <= 90.0:
-            raise ValueError(f"rotation_deg must lie in (0, 90] (degrees), got "
+        if not MIN_STRAIN <= self.strain < 1.0:
+            raise ValueError(f"strain must lie in [{MIN_STRAIN:g}, 1), got {self.strain}")
+        if not MIN_ROTATION <= self.rotation_deg <= 90.0:
+            raise ValueError(f"rotation_deg must lie in [{MIN_ROTATION:g}, 90] (degrees), got "
                              f"{self.rotation_deg}")
-        if not 0.0 < self.min_fraction <= 1.0 or not self.touch_gap >= 0.0:
-            raise ValueError("min_fraction must lie in (0, 1] and touch_gap be >= 0")
+        if not MIN_FRACTION <= self.min_fraction <= 1.0 or not self.touch_gap >= 0.0:
+            raise ValueError(f"min_fraction must lie in [{MIN_FRACTION:g}, 1] and touch_gap be "
+                             ">= 0")
         if self.touch not in TOUCH_RULES:
             raise ValueError(f"touch must be one of {', '.join(TOUCH_RULES)}, got "
                              f"{self.touch!r}")
@@ -120,16 +133,18 @@ class NewtonSettings:
     augment: bool = False
 
     def __post_init__(self) -> None:
+        low, high = TOLERANCE_RANGE
         for name in ("force_tolerance", "displacement_tolerance"):
             value = getattr(self, name)
-            if not 0.0 < value < 1.0:
-                raise ValueError(f"{name} must lie in (0, 1), got {value}")
+            if not low <= value <= high:
+                raise ValueError(f"{name} must lie in [{low:g}, {high:g}], got {value}")
         if not (isinstance(self.max_iterations, int)
                 and 1 <= self.max_iterations <= MAX_ITERATIONS):
             raise ValueError(f"max_iterations must be an integer in 1..{MAX_ITERATIONS}, got "
                              f"{self.max_iterations}")
-        if not 0.0 < self.cutback < 1.0:
-            raise ValueError(f"cutback must lie in (0, 1), got {self.cutback}")
+        low, high = CUTBACK_RANGE
+        if not low <= self.cutback <= high:
+            raise ValueError(f"cutback must lie in [{low:g}, {high:g}], got {self.cutback}")
         if not 0.0 < self.penetration < 1.0:
             raise ValueError(f"penetration must lie in (0, 1) (a fraction of the blank's "
                              f"thickness), got {self.penetration}")

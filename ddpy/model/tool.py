@@ -11,7 +11,7 @@ from ddpy._validate import float_array, int_array
 from ddpy.geometry.search import ContactSearch
 from ddpy.geometry.surfaces import BezierSurface, NagataSurface
 
-__all__ = ["RigidTool", "CONTACT_DISCRETIZATIONS", "FACE_POINTS", "MAX_POINTS"]
+__all__ = ["RigidTool", "CONTACT_DISCRETIZATIONS", "FACE_POINTS", "MAX_POINTS", "faces_blank"]
 
 #: How a tool's contact is discretized on the blank: "node" (node-to-surface, DD3IMP's: each
 #: slave node's own gap, normal and slip) or "surface" (surface-to-surface: each slave's
@@ -26,6 +26,13 @@ CONTACT_DISCRETIZATIONS = ("node", "surface", "gauss")
 #: weighted gaps of surface-to-surface contact do not change with more points.
 FACE_POINTS = {"node": 2, "surface": 2, "gauss": 4}
 MAX_POINTS = 8
+
+
+def faces_blank(search: ContactSearch, facing: ArrayLike) -> bool:
+    """Whether a patch of the tool of ``search`` faces blank faces whose outward normal is
+    ``facing``: some normal of its search grid points against it. Without one no node can
+    touch the tool (the run refuses such a tool, and so does ``ddpy check``)."""
+    return bool((search.grid_normals @ np.asarray(facing, dtype=float) < 0.0).any())
 
 
 @dataclass
@@ -87,7 +94,7 @@ class RigidTool:
                 raise ValueError(f"tool {self.name}: facing must not be zero")
             self.facing = facing / np.linalg.norm(facing)
         self.search = ContactSearch(self.surface)
-        if self.facing is not None and not (self.search.grid_normals @ self.facing < 0.0).any():
+        if self.facing is not None and not faces_blank(self.search, self.facing):
             raise ValueError(f"tool {self.name}: no patch faces its slave nodes (every normal "
                              f"points along facing {self.facing.tolist()}, away from the "
                              "blank): nothing can touch it; check the normals or facing")

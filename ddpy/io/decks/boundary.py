@@ -24,6 +24,10 @@ from ddpy.io.decks.lines import (
 )
 from ddpy.model.mesh import HexMesh
 
+#: Smallest selection tolerance (mm): coordinates written with 10 digits (ddpy convert)
+#: are off by up to 1e-7 mm in a blank a metre long.
+MIN_TOLERANCE = 1e-6
+
 
 @dataclass
 class _BcDraft:
@@ -42,7 +46,12 @@ def _parse_bc(deck: Deck) -> _BcDraft:
             if key == "tolerance":
                 check_arity(line, "tolerance VALUE", 1)
                 if first_time(deck, seen, line):
-                    draft.tolerance = (read_float(w[1], "the tolerance", gt=0), line.number)
+                    tolerance = read_float(w[1], "the tolerance", gt=0)
+                    if tolerance < MIN_TOLERANCE:
+                        raise BadValue(f"tolerance {w[1]} mm is below {MIN_TOLERANCE:g} mm: "
+                                       "a node off a plane by the rounding of its "
+                                       "coordinates would not be selected")
+                    draft.tolerance = (tolerance, line.number)
             elif key == "nodeset":
                 check_arity(line, "nodeset NAME ids|box|plane ...", 2, -1)
                 name = read_name(w[1], "the node set")

@@ -4,6 +4,7 @@ its type, active tools, motions (move, gap), lead tool, output travels and incre
 
 from __future__ import annotations
 
+import unicodedata
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -81,6 +82,12 @@ _PHASE_KEYS = ("type", "tools", "move", "gap", "lead", "output_at", "increments"
 #: Default largest increment: this fraction of the lead tool's travel.
 DEFAULT_INCREMENT_FRACTION = 0.01
 DEFAULT_OUTPUT_EVERY = 10
+#: Most phases of a case: the results file names each phase and its lead tool in an HDF5
+#: attribute, which holds about 4,000 names at most (20,000 phases ended a run with "object
+#: header message is too large"), and a forming process has a handful.
+MAX_PHASES = 1000
+#: Longest title (characters): it is written to the results and shown by ParaView.
+MAX_TITLE = 1000
 
 
 @dataclass
@@ -129,9 +136,7 @@ def _parse_control(deck: Deck) -> _ControlDraft:
                 if phase is not None:
                     raise BadValue("'title' belongs at the top of control.dat, not in a phase")
                 if first_time(deck, seen, line):
-                    draft.title = line.text[len("title"):].strip() or None
-                    if draft.title is None:
-                        raise BadValue("expected 'title TEXT'")
+                    draft.title = _title(line.text[len("title"):].strip())
             elif key in _SETTINGS:
                 check_arity(line, f"{key} VALUE", 1)
                 target = phase.settings if phase is not None else draft.settings
@@ -156,7 +161,26 @@ def _parse_control(deck: Deck) -> _ControlDraft:
                    "the end of the file")
     if not draft.phases and not deck.errors:
         deck.error(None, "no phase: expected at least one 'phase NAME' ... 'end' block")
+    if len(draft.phases) > MAX_PHASES:
+        deck.error(draft.phases[MAX_PHASES].line, f"phase {MAX_PHASES + 1:,} of "
+                   f"{len(draft.phases):,}: a case has at most {MAX_PHASES:,} phases")
     return draft
+
+
+def _title(text: str) -> str:
+    """The title as the results keep it: text without control characters (HDF5 refuses a
+    NUL byte in a string), of at most MAX_TITLE characters."""
+    if not text:
+        raise BadValue("expected 'title TEXT'")
+    control = next((c for c in text if unicodedata.category(c) == "Cc" and c != "\t"), None)
+    if control is not None:
+        what = "a NUL byte" if control == "\0" else f"U+{ord(control):04X}"
+        raise BadValue(f"the title holds a control character ({what}): expected printable "
+                       "text")
+    if len(text) > MAX_TITLE:
+        raise BadValue(f"the title has {len(text):,} characters: expected at most "
+                       f"{MAX_TITLE:,}")
+    return text
 
 
 def _phase_line(deck: Deck, phase: _PhaseDraft, line: Line) -> None:

@@ -25,6 +25,7 @@ from ddpy.io.case import (
     Tool,
     blank_thickness,
     rigid_body_modes_free,
+    summarize_alike,
 )
 from ddpy.io.decks.boundary import _BcDraft, _select
 from ddpy.io.decks.control import (
@@ -35,7 +36,7 @@ from ddpy.io.decks.control import (
 )
 from ddpy.io.decks.lines import NAME_PATTERN, Deck, guard
 from ddpy.io.decks.tools import _ToolDraft
-from ddpy.model.control import IncrementLimits, NewtonSettings
+from ddpy.model.control import MIN_FRACTION, IncrementLimits, NewtonSettings
 from ddpy.model.forming import MAX_INCREMENTS, blank_stiffness
 from ddpy.model.mesh import HEX_EDGES, HexMesh
 
@@ -50,6 +51,9 @@ class _Cross:
         self.bc = decks["bc.dat"]
         self.tools_deck = decks["tools.dat"]
         self.mesh_deck = decks["mesh.dat"]
+        #: Forming phases whose max_increment exceeds the lead tool's travel: (line of
+        #: max_increment, phase, max_increment, travel, lead tool), warned about together.
+        self.long_increments: list[tuple[int | None, str, float, float, str]] = []
 
     def build(self, control: _ControlDraft, mesh: HexMesh, mesh_sets: dict[str, NDArray[np.int64]],
               bc: _BcDraft, material: BlankMaterial, tool_drafts: list[_ToolDraft]
@@ -119,7 +123,9 @@ class _Cross:
                            f"{names[p.name]})")
                 continue
             names[p.name] = p.line
-            if not phases and p.kind == "springback":
+            # The first phase of the deck, not the first one read without an error: a
+            # forming phase with an error is not followed by a second one about springback.
+            if p is control.phases[0] and p.kind == "springback":
                 deck.error(p.line, f"the first phase '{p.name}' is a springback phase: there is "
                            "nothing to release yet (expected a forming phase first)")
                 continue
@@ -127,6 +133,11 @@ class _Cross:
                      else self._forming(p, control, tools, thickness))
             if phase is not None:
                 phases.append(phase)
+        deck.warnings += summarize_alike(
+            [f"{deck.where(line)}: phase '{name}': max_increment {largest:g} mm exceeds the "
+             f"travel {travel:g} mm of the lead tool '{lead}'"
+             for line, name, largest, travel, lead in self.long_increments],
+            "phases whose max_increment exceeds their lead tool's travel")
         return phases
 
     def _setting(self, p: _PhaseDraft, control: _ControlDraft, key: str, default: Any) -> Any:
@@ -252,16 +263,23 @@ class _Cross:
             deck.error(line, f"phase '{p.name}': min_increment {min_inc:g} mm exceeds "
                        f"max_increment {max_inc:g} mm")
             return None
+        if min_inc < max_inc * MIN_FRACTION:
+            deck.error(line, f"phase '{p.name}': min_increment {min_inc:g} mm is below "
+                       f"max_increment / {1 / MIN_FRACTION:g} ({max_inc * MIN_FRACTION:g} mm): "
+                       "a failing increment would be cut more than 20 times (by half) before "
+                       "the run stops")
+            return None
         if travel / max_inc > MAX_INCREMENTS:
             deck.error(self._line_of(p, control, "max_increment") or p.line,
-                       f"phase '{p.name}': max_increment {max_inc:g} mm would take more than "
-                       f"{MAX_INCREMENTS:,} increments over the travel {travel:g} mm of the "
-                       f"lead tool '{lead}'")
+                       f"phase '{p.name}': the travel {travel:g} mm of the lead tool '{lead}' "
+                       f"in increments of at most {max_inc:g} mm needs at least "
+                       f"{travel / max_inc:,.3g} increments; a phase may take at most "
+                       f"{MAX_INCREMENTS:,} (expected a larger max_increment or a shorter "
+                       "travel)")
             return None
         if max_inc > travel:
-            deck.warn(self._line_of(p, control, "max_increment"), f"phase '{p.name}': "
-                      f"max_increment {max_inc:g} mm exceeds the travel {travel:g} mm of the "
-                      f"lead tool '{lead}'")
+            self.long_increments.append((self._line_of(p, control, "max_increment"), p.name,
+                                         max_inc, travel, lead))
         output_at: tuple[float, ...] = ()
         if p.output_at is not None:
             values, line = p.output_at

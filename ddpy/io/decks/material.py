@@ -23,6 +23,9 @@ from ddpy.model.material import TABLE_MAX_POINTS, HardeningTable, Hill48, Materi
 #: initial yield stress, at most 1e5 MPa (a hundred times the strongest steels); Swift's
 #: eps0 at most 10 (a strain: 1e300 made the yield stress infinite).
 MAX_STRESS, MAX_EPS0 = 1e5, 10.0
+#: Lowest initial yield stress (MPa): lead and soft solders yield at a few MPa; below,
+#: the hardening law is not in MPa (Swift K 1e-12, some 1e-13 MPa, was run).
+MIN_YIELD = 1.0
 #: Young's modulus (MPa): above the largest it is refused, below the smallest a warning
 #: asks whether it is in MPa (polymers to tungsten carbide lie between).
 MIN_MODULUS, MAX_MODULUS = 1e3, 1e6
@@ -82,6 +85,11 @@ def _parse_material(deck: Deck) -> BlankMaterial | None:
         if key not in seen:
             deck.error(None, f"no '{key}' line: expected '{form}'")
     if deck.errors or elastic is None or criterion is None or hardening is None:
+        return None
+    initial = hardening.initial_yield_stress
+    if initial < MIN_YIELD:
+        deck.error(seen["hardening"], f"the initial yield stress {initial:.3g} MPa is below "
+                   f"{MIN_YIELD:g} MPa: expected the hardening law in MPa")
         return None
     try:
         material = Material(elastic[0], elastic[1], criterion[0], hardening)

@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 
 from ddpy._validate import MESH_LIMIT, InputFileError, check_input_file, read_input_file
 from ddpy.io import inp_cards
-from ddpy.io.case import AXES, DeckError
+from ddpy.io.case import DeckError
 from ddpy.io.decks.lines import (
     INT_PATTERN,
     MAX_LENGTH,
@@ -86,9 +86,13 @@ def _parse_mesh(deck: Deck) -> tuple[HexMesh, dict[str, NDArray[np.int64]], str]
                 if first_time(deck, seen, line):
                     word = read_choice(line.words[1], "the sheet normal",
                                    ("x", "y", "z", "+x", "+y", "+z", "-x", "-y", "-z"))
-                    vector = [0.0, 0.0, 0.0]
-                    vector[AXES[word[-1]]] = -1.0 if word.startswith("-") else 1.0
-                    normal = (vector[0], vector[1], vector[2])
+                    if word[-1] != "z":
+                        # ddpy run refuses it (the Solid turns the material axes about z).
+                        raise BadValue(f"a sheet normal along {word[-1]} is not supported yet "
+                                       "(the solid takes the rolling direction as an angle "
+                                       "about z): expected 'normal z' or 'normal -z', the "
+                                       "mesh turned to match")
+                    normal = (0.0, 0.0, -1.0 if word.startswith("-") else 1.0)
             elif key == "element":
                 check_arity(line, "element " + " | ".join(ELEMENTS), 1)
                 if first_time(deck, seen, line):

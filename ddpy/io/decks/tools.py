@@ -37,6 +37,9 @@ _TOOL_KEYS = ("description", "file", "friction", "contact", "augmentation", "dis
               "penalty", "points")
 _TOOL_REQUIRED = ("description", "file", "friction", "contact")
 _DESCRIPTIONS = ("bezier", "nagata", "facets")
+#: Most tools of a case: the results file names them in an HDF5 attribute, which holds about
+#: 4,000 names at most, and each tool is searched at every Newton iteration.
+MAX_TOOLS = 1000
 #: ddpy.model.tool.CONTACT_DISCRETIZATIONS (node-to-surface, surface-to-surface, Gauss-point)
 _DISCRETIZATIONS = ("node", "surface", "gauss")
 
@@ -121,6 +124,9 @@ def _parse_tools(deck: Deck) -> list[_ToolDraft]:
                    "end of the file")
     if not tools and not deck.errors:
         deck.error(None, "no tool: expected at least one 'tool NAME' ... 'end' block")
+    if len(tools) > MAX_TOOLS:
+        deck.error(tools[MAX_TOOLS].line, f"tool {MAX_TOOLS + 1:,} of {len(tools):,}: a case "
+                   f"has at most {MAX_TOOLS:,} tools")
     return tools
 
 

@@ -370,7 +370,8 @@ class _Run:
         increment's share of the COUNTERS of a FormingResult."""
         assert self.writer is not None
         # The measures convergence is judged on (FormingResult.relative): the residual over
-        # the force scale and the correction over the increment's displacement.
+        # the force scale and the correction over the increment's displacement, scaled up
+        # to a whole increment's when the increment is smaller.
         history = np.asarray(result.relative[-1], dtype=float).reshape(-1, 2)
         depth = [result.penetration[k][-1] if result.penetration.get(k) else 0.0
                  for k in self.names]

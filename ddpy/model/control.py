@@ -117,7 +117,9 @@ class NewtonSettings:
     """Convergence of the Newton loop (deck ``newton_force``, ``newton_displacement``,
     ``max_iterations``, ``cutback``, ``penetration_limit``): converged when the residual is
     below ``force_tolerance`` times the force scale and the correction below
-    ``displacement_tolerance`` times the increment's displacement; an increment that has not
+    ``displacement_tolerance`` times the increment's displacement, scaled up to that of an
+    increment of the phase's largest size when it is smaller (cut or limited: a scale that
+    does not vanish, docs/theory/contact.md, "The convergence test"); an increment that has not
     converged in ``max_iterations`` is cut by ``cutback`` and tried again. ``penetration``
     (deck ``penetration_limit``): the deepest the blank may lie inside a tool at a
     converged increment, as a fraction of its thickness; a run warns once per tool where

@@ -201,8 +201,8 @@ class FormingResult:
     status: dict[str, list[NDArray[np.int32]]] = field(default_factory=dict)
     residuals: list[list[float]] = field(default_factory=list)
     #: per increment and Newton iteration, what convergence is judged on: the residual norm
-    #: over the force scale and the correction over the increment's displacement (inf
-    #: before the first correction)
+    #: over the force scale and the correction over the increment's displacement, scaled up
+    #: to a whole increment's when the increment is smaller (inf before the first correction)
     relative: list[list[tuple[float, float]]] = field(default_factory=list)
     displacements: list[NDArray[np.float64]] = field(default_factory=list)
     #: increment trials that failed: each was cut and tried again, but for the last one of a
@@ -362,7 +362,9 @@ class FormingProblem:
         moving) tool per increment, in mm. ``newton``: convergence (default
         NewtonSettings()): the free residual and the contact law below its force tolerance
         times the force scale and the correction below its displacement tolerance times the
-        increment; an increment that fails is cut by its ``cutback`` and retried, until a
+        increment's motion, scaled up to an increment of size ``max_increment`` when it is
+        smaller (a cut does not tighten the test); an increment that fails is cut by its
+        ``cutback`` and retried, until a
         cut would go below ``limits.min_fraction``. ``limits``: the r_min control (default
         IncrementLimits()). Both defaults are those of a deck that sets nothing. ``gaps``:
         tools held at a fixed gap from another, e.g. ``{"holder": ("die", 1.13, (0, 0, 1))}``:
@@ -463,9 +465,10 @@ class FormingProblem:
             guess = _extrapolated(self.u, target - factor, last_du)
             careful = careful and last_du is None
             touching = _Touching(TOUCHING * self.size, resting=not careful)
+            size_ratio = nominal / (target - factor)
             outcome = self._increment(layout, positions, on, tol_force, tol_disp,
                                       max_iterations, result, landing, touching, guess,
-                                      careful=careful)
+                                      careful=careful, size_ratio=size_ratio)
             if outcome.failure and last_du is None and not careful:
                 # The first increment of a phase starts with the blank lying on its tools:
                 # a second start keeps open the touching pairs of the tools at rest that
@@ -479,7 +482,8 @@ class FormingProblem:
                 touching = _Touching(TOUCHING * self.size, resting=False)
                 outcome = self._increment(layout, positions, on, tol_force,
                                           tol_disp, max_iterations, result, landing,
-                                          touching, guess, careful=True)
+                                          touching, guess, careful=True,
+                                          size_ratio=size_ratio)
             if outcome.landing < 1.0:  # an elastic point would overshoot the yield stress
                 step = max(step * outcome.landing, limits.min_fraction * nominal)
                 reason = "yield"
@@ -505,7 +509,7 @@ class FormingProblem:
             if newton.augment:
                 outcome = self._augmented(
                     outcome, newton.penetration * self.thickness, layout, positions, on,
-                    tol_force, tol_disp, max_iterations, result, touching)
+                    tol_force, tol_disp, max_iterations, result, touching, size_ratio)
             u, state, force, in_contact, gap = (outcome.u, outcome.state, outcome.force,
                                                 outcome.in_contact, outcome.gap)
             residuals, relative = outcome.residuals, outcome.relative
@@ -601,7 +605,8 @@ class FormingProblem:
                 outcome = self._increment(layout, positions, on, tol_force, tol_disp,
                                           max_iterations, result,
                                           touching=_Touching(TOUCHING * self.size, True),
-                                          guess=guess, exact=True)
+                                          guess=guess, exact=True,
+                                          size_ratio=1.0 / (RELEASE_STEPS * size))
                 if outcome.failure:
                     if size / 2.0 < RELEASE_SMALLEST:
                         raise FormingError(f"release of the lifted tools at {done:.4g} of "
@@ -655,7 +660,8 @@ class FormingProblem:
     def _augmented(self, outcome: Trial, limit: float, layout: Layout,
                    positions: Mapping[str, NDArray[np.float64]], on: NDArray[np.bool_],
                    tol_force: float, tol_disp: float, max_iterations: int,
-                   result: FormingResult, touching: _Touching) -> Trial:
+                   result: FormingResult, touching: _Touching, size_ratio: float = 1.0
+                   ) -> Trial:
         """The converged ``outcome`` of an increment with the slave nodes of its
         Gauss-point tools at most ``limit`` (mm) inside them: while one is deeper, the
         points' multipliers take their pressures (an Uzawa update of the augmented
@@ -671,7 +677,8 @@ class FormingProblem:
                 break
             again = self._increment(layout, positions, on, tol_force, tol_disp,
                                     max_iterations, result, touching=touching,
-                                    guess=outcome.u, pressure=outcome.pressure)
+                                    guess=outcome.u, pressure=outcome.pressure,
+                                    size_ratio=size_ratio)
             if again.failure or again.landing < 1.0:
                 _log.info("an augmentation of the Gauss points' pressures failed: %s",
                           again.failure or "a yield landing")
@@ -987,7 +994,8 @@ class FormingProblem:
                    touching: _Touching | None = None,
                    guess: NDArray[np.float64] | None = None,
                    careful: bool = False, exact: bool = False,
-                   pressure: NDArray[np.float64] | None = None) -> Trial:
+                   pressure: NDArray[np.float64] | None = None,
+                   size_ratio: float = 1.0) -> Trial:
         """One increment trial, the Newton iterations run by the core (forming_increment,
         fortran/solver/ddpy_forming_newton.f90): the new state, or (with
         ``yield_tolerance``) the fraction of the increment at which the first elastic Gauss
@@ -1002,7 +1010,9 @@ class FormingProblem:
         semi-smooth Newton on a degenerate contact set (pairs at g = 0, p = 0) needs exact
         active-set steps (docs/theory/contact.md). ``exact``: exact solves only, the line
         search kept (springback). ``pressure``: the Gauss points' pressure multipliers
-        (default: the last converged pressures).
+        (default: the last converged pressures). ``size_ratio``: the largest increment over
+        this one's size; the correction is judged against the increment's motion scaled up
+        by it, the motion of a whole increment (Loop.size_ratio).
 
         The semi-smooth Newton step is globalized by backtracking until Deuflhard's natural
         monotonicity test holds (the simplified correction at the trial point, solved with
@@ -1021,7 +1031,7 @@ class FormingProblem:
                     KRYLOV_KEEP, touching=0.0 if touching is None else touching.distance,
                     resting=touching is None or touching.resting,
                     search=SEARCH_NONE if careful else SEARCH_MONOTONICITY,
-                    whole_step=WHOLE_STEP)
+                    whole_step=WHOLE_STEP, size_ratio=max(1.0, size_ratio))
         pairs = Pairs(self._tool_arguments(positions), on, self.r, self.mu, self.force,
                       self.traction, self.pressure if pressure is None else pressure)
         trial = increment(self.solid, layout, self._factors, self.state, self.u,

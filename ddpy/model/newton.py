@@ -251,8 +251,10 @@ class Loop:
     solver (reuse of older factors by GMRES: its tolerance bounds, iterations at most and
     after which the next correction factorizes), the line search (SEARCH_*) with the
     residual ratio under which a whole step that changed contact states stands although
-    it fails the monotonicity test (0: off), and the touching predictor's gap and resting
-    flag."""
+    it fails the monotonicity test (0: off), the touching predictor's gap and resting
+    flag, and the size ratio: the largest increment over this one's size (at least 1), by
+    which the convergence test scales the increment's motion up, so that a cut does not
+    tighten it (docs/theory/contact.md, "The convergence test")."""
 
     force_tolerance: float
     displacement_tolerance: float
@@ -270,6 +272,7 @@ class Loop:
     whole_step: float = 0.0
     touching: float = 0.0
     resting: bool = True
+    size_ratio: float = 1.0
 
 
 @dataclass
@@ -342,7 +345,7 @@ def increment(solid: Solid, layout: Layout, factors: Factors, state: SolidState,
     settings = np.array([loop.force_tolerance, loop.displacement_tolerance,
                          -1.0 if loop.yield_tolerance is None else loop.yield_tolerance,
                          loop.penetration, loop.min_step, loop.krylov_loose, loop.krylov_tight,
-                         loop.floor, loop.whole_step])
+                         loop.floor, loop.whole_step, loop.size_ratio])
     isettings = np.array([loop.max_iterations, loop.krylov_max, loop.krylov_keep, loop.reuse,
                           factors.handle, guess is not None, loop.resting, layout.symmetric,
                           loop.search], dtype=np.int32)

@@ -226,7 +226,8 @@ class StaticProblem:
         increment yet).
         ``newton`` (default NewtonSettings(), as in a deck): it has converged when
         ||r_free|| <= force_tolerance max(||f_ext||, ||reactions||, floor) and
-        ||correction|| <= displacement_tolerance ||increment of u||; on divergence, an
+        ||correction|| <= displacement_tolerance ||increment of u|| (scaled up to a whole
+        increment's, ``1 / increments``, when a cut made it smaller); on divergence, an
         inverted element or a failed return mapping the increment is cut by ``cutback`` and
         retried from the converged state, at most ``max_cuts`` times in a row.
         ``line_search``: the energy line search, a secant on s(alpha) = du . r(u + alpha du)
@@ -270,7 +271,8 @@ class StaticProblem:
             # The force scale's ||f_ext|| is constant over the increment: part of the floor.
             loop = Loop(newton.force_tolerance, newton.displacement_tolerance,
                         newton.max_iterations, max(floor, float(np.linalg.norm(external))),
-                        search=SEARCH_ENERGY if line_search else SEARCH_NONE)
+                        search=SEARCH_ENERGY if line_search else SEARCH_NONE,
+                        size_ratio=max(1.0, nominal / delta))
             trial = increment(solid, layout, self._factors, state, u, external, prescribed,
                               guess, loop)
             evaluations, corrections, factorizations, _, _ = trial.counters

@@ -28,8 +28,10 @@ module ddpy_forming_newton
   !> tolerance (< 0: off), the penetration limit (element sizes) and the shortest step it
   !> may leave, the bounds of the Krylov tolerance, the force scale's floor, the whole-step
   !> ratio (a whole step that fails the monotonicity test is taken where pairs changed
-  !> state in it and its residual norm is at most this times the last; <= 0: off).
-  integer, parameter :: newton_settings = 9
+  !> state in it and its residual norm is at most this times the last; <= 0: off), and the
+  !> size ratio: the largest increment of the phase over this one's size (>= 1), by which
+  !> the convergence test scales the increment's motion up (measure).
+  integer, parameter :: newton_settings = 10
   !> Entries of the integer settings: iterations, GMRES iterations at most, GMRES
   !> iterations after which the next correction factorizes, reuse of older factors (0/1),
   !> the MUMPS handle, a guess given (0/1), the touching predictor's resting flag, the
@@ -144,7 +146,7 @@ contains
     integer :: tool, pair, comp, entry
     real(wp) :: tol_force, tol_disp, yield_tol, floor, norm, scale, moved, correction, rel, &
                 forcing, alpha, step_size, du_norm, landing, t_norm, t_scale, t_moved, &
-                alpha_fallback, whole_step
+                alpha_fallback, whole_step, size_ratio
     integer :: max_iterations, cur, trial, fallback, buffer, iteration, ls, n, status, &
                element, handle, last_status, last_element, hold_after, holds
     logical :: converged, have_previous, have_hint, accepted, t_converged, symmetric, &
@@ -158,6 +160,7 @@ contains
     yield_tol = settings(3)
     floor = settings(8)
     whole_step = settings(9)
+    size_ratio = max(settings(10), 1.0_wp)
     max_iterations = isettings(1)
     hold_after = max(2, max_iterations/hold_fraction)
     handle = isettings(5)
@@ -535,7 +538,14 @@ contains
       history(3, niter) = correction/moved
     end subroutine record
 
-    !> Residual norm, force scale, motion, and whether converged with this correction.
+    !> Residual norm, force scale, motion, and whether converged with this correction:
+    !> the residual below tol_force times the force scale and the correction below
+    !> tol_disp times the motion. The motion is the increment's, |u - u_n|, scaled up to an
+    !> increment of the phase's largest size (size_ratio): a scale that does not vanish as
+    !> an increment is cut. Measured against its own motion, an increment cut to 1/500
+    !> was held to 500 times the accuracy of a whole one, and examples/strip_draw stopped
+    !> with its residual at 1.6e-6 of the force scale and a correction of 1.6e-7 mm
+    !> (docs/theory/contact.md, "The convergence test").
     subroutine measure(s, correction, norm, scale, moved, converged)
       type(evaluation), intent(in) :: s
       real(wp), intent(in) :: correction
@@ -543,7 +553,7 @@ contains
       logical, intent(out) :: converged
       norm = sqrt(dot_product(s%residual, s%residual))
       scale = max(sqrt(sum(s%force**2)), sqrt(sum(s%fint**2, mask=fixed /= 0)), floor)
-      moved = max(sqrt(sum((s%u - u_n)**2)), 1.0e-9_wp*size)
+      moved = max(size_ratio*sqrt(sum((s%u - u_n)**2)), 1.0e-9_wp*size)
       converged = norm <= tol_force*scale .and. correction <= tol_disp*moved .and. &
                   .not. s%moving
     end subroutine measure

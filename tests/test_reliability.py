@@ -75,8 +75,8 @@ def test_numbers_follow_the_documented_grammar(tmp_path: Path, word: str) -> Non
 
 def test_numbers_in_mesh_blocks_follow_the_grammar_too(tmp_path: Path) -> None:
     case = copy_example("strip_draw", tmp_path)
-    edit(case, "mesh.dat", "\n  1   0  0 0\n", "\n  1   1_0  0 0\n")
-    assert "mesh.dat:4: expected numbers X Y Z, got '1_0 0 0'" in errors_of(case)
+    edit(case, "mesh.dat", "\n   1     0 0 0\n", "\n   1     1_0 0 0\n")
+    assert "mesh.dat:7: expected numbers X Y Z, got '1_0 0 0'" in errors_of(case)
 
 
 @pytest.mark.parametrize("version", ["2", "4"])

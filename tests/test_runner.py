@@ -35,10 +35,15 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def tiny_case(folder: Path, draw: float = 2.05, max_increment: float = 0.2) -> Path:
-    """examples/strip_draw with short strokes: three phases, a gap-held holder switched off
-    in the second, output_at, springback in 4 steps. The draw is no multiple of the
-    largest increment, so that its last increment lands on the phase end."""
+    """examples/strip_draw with short strokes and 2 x 1 x 2 elements (the example has 10
+    along the strip): three phases, a gap-held holder switched off in the second,
+    output_at, springback in 4 steps. The draw is no multiple of the largest increment, so
+    that its last increment lands on the phase end. (The run in full is
+    tests/test_examples.py's.)"""
     shutil.copytree(ROOT / "examples" / "strip_draw", folder)
+    (folder / "mesh.dat").write_text("normal z\nbox 50 4 1  2 1 2\n")
+    bc = folder / "bc.dat"
+    bc.write_text(re.sub(r"ids [\d ]+", "ids 1 4 7 10 13 16 ", bc.read_text()))
     control = folder / "control.dat"
     text = control.read_text()
     text = text.replace("move   punch  0 0 -10", f"move   punch  0 0 -{draw}\n  output_at 0.5 1")

@@ -31,6 +31,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+from test_examples import assert_converged_within_tolerances
 
 from ddpy.app.runner import BUILT_IN_CASES, run_case
 from ddpy.io.decks import read_case
@@ -167,6 +168,13 @@ def test_the_cli_knows_the_case_by_name() -> None:
 def test_both_stages_complete(numbers: dict[str, Any]) -> None:
     assert numbers["status"] == "completed", numbers["message"]
     assert all(n > 10 for n in numbers["increments"])
+
+
+def test_every_increment_converged_within_its_phase_tolerances(numbers: dict[str, Any]
+                                                               ) -> None:
+    with ResultsReader(numbers["results"]) as r:
+        history = r.history()
+    assert_converged_within_tolerances(history, read_case(CASE).phases)
 
 
 def test_the_tools_balance_along_z(numbers: dict[str, Any]) -> None:

@@ -120,3 +120,24 @@ def test_a_run_records_the_penetration_and_warns_once_per_tool(tmp_path: Path,
         named = [w for w in warnings if f"inside tool {tool} " in w]
         assert len(named) == (1 if tool in entered else 0), (tool, warnings)
     assert all(" mm (" in w and "% of its" in w for w in warnings)
+
+
+def test_the_plain_penalty_carries_no_multiplier_through_a_release() -> None:
+    """With the plain penalty (the default) no Gauss point keeps a pressure multiplier:
+    not after an increment, and not after the release steps of a tool lifted off while
+    another keeps its contact (where they were once carried by mistake, changing the
+    answers of phases that lift a tool)."""
+    mesh = HexMesh.box(1.0, 1.0, 0.5, 2, 2, 2)
+    below = RigidTool("plane", PLANE, mesh.select(z=0.0), facing=(0, 0, -1),
+                      contact="gauss", penalty=PENALTY)
+    wall = NagataSurface([[0, -5, -5], [0, 5, -5], [0, 5, 5], [0, -5, 5]], [[1, 0, 0]] * 4,
+                         [[0, 1, 2, 3]])
+    side = RigidTool("side", wall, mesh.select(x=0.0), facing=(-1, 0, 0), contact="gauss",
+                     penalty=PENALTY)
+    problem = FormingProblem(Solid(mesh, ELASTIC), [below, side])
+    problem.fix(mesh.select(z=0.5), "xyz")
+    problem.run({"plane": (0, 0, 4e-3), "side": (1e-3, 0, 0)}, max_increment=1e-3)
+    assert not problem.pressure.any()
+    problem.run({"plane": (0, 0, 1e-3)}, max_increment=1e-3, active=["plane"])
+    assert np.abs(problem.force).max() > 0.0  # the plane still carries the block
+    assert not problem.pressure.any()

@@ -291,6 +291,9 @@ class FormingProblem:
         #: the pressure of every Gauss point at the last converged increment (points,): the
         #: multiplier of its augmented Lagrangian law p = max(0, p_n - eps g)
         self.pressure = np.zeros(self._pack.n_points)
+        #: whether the Gauss points' law is augmented (NewtonSettings.augment of the run):
+        #: else a converged increment leaves their multipliers at zero, the plain penalty
+        self._augment = False
         #: the blank's thickness (mm), the scale of NewtonSettings.penetration
         self.thickness = mesh.initial_thickness()
         self._gap = (np.full(npair, np.inf), np.zeros((npair, 3)))
@@ -376,6 +379,7 @@ class FormingProblem:
         progress such a call received."""
         limits = IncrementLimits() if limits is None else limits
         newton = NewtonSettings() if newton is None else newton
+        self._augment = newton.augment
         tol_force, tol_disp = newton.force_tolerance, newton.displacement_tolerance
         max_iterations, cutback = newton.max_iterations, newton.cutback
         max_cuts = limits.max_cuts(cutback)
@@ -551,8 +555,6 @@ class FormingProblem:
             last_dp = np.einsum("ij,ij->i", force - self.force, normal) / (target - factor)
             depth = self._penetration(layout, outcome, on, positions)
             self._take(outcome)
-            if not newton.augment:  # the plain penalty: no multipliers
-                self.pressure = np.zeros_like(self.pressure)
             self.position = positions
             result.sizes.append(target - factor)
             result.limited_by.append(reason)
@@ -626,12 +628,14 @@ class FormingProblem:
         return spent, relative
 
     def _take(self, outcome: Trial) -> None:
-        """A converged increment's state as the problem's (its Gauss points' pressures the
-        multipliers of the next increment)."""
+        """A converged increment's state as the problem's (with the augmented law its Gauss
+        points' pressures the multipliers of the next increment; with the plain penalty
+        zero)."""
         self.u, self.state, self.force, self._gap = (outcome.u, outcome.state, outcome.force,
                                                      outcome.gap)
         self.traction, self._status = outcome.traction, outcome.in_contact
-        self.pressure = outcome.pressure
+        assert outcome.pressure is not None
+        self.pressure = outcome.pressure if self._augment else np.zeros_like(outcome.pressure)
 
     def _penetration(self, layout: Layout, outcome: Trial, on: NDArray[np.bool_],
                      positions: Mapping[str, NDArray[np.float64]]) -> list[float]:

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import pytest
 from deckutil import EXAMPLES
+from test_reliability import mounted
 
 from ddpy.app.cli import main
 from ddpy.app.runner import RunError, run_case
@@ -185,20 +186,6 @@ def test_a_pseudo_filesystem_is_not_a_place_for_results(folder: str, kind: str) 
     assert err.splitlines() == [f"ddpy run: error: {folder}/ddpy-out/x: {folder} is a {kind} "
                                 "pseudo-filesystem, not a place for results; choose another "
                                 "--output"]
-
-
-@contextlib.contextmanager
-def mounted(folder: Path, options: str) -> Iterator[Path]:
-    """A tmpfs mounted on ``folder`` with ``options`` while the block runs (needs root)."""
-    folder.mkdir()
-    done = subprocess.run(["mount", "-t", "tmpfs", "-o", options, "tmpfs", str(folder)],
-                          capture_output=True)
-    if done.returncode != 0:
-        pytest.skip("cannot mount a file system here (needs root)")
-    try:
-        yield folder
-    finally:
-        subprocess.run(["umount", str(folder)], capture_output=True)
 
 
 def test_a_folder_that_cannot_be_written_is_refused(tmp_path: Path) -> None:

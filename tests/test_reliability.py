@@ -26,17 +26,23 @@ BUILT_IN = Path(__file__).resolve().parents[1] / "ddpy" / "cases" / "cylindrical
 
 
 @contextlib.contextmanager
-def small_disk(folder: Path, size: str) -> Iterator[Path]:
-    """A tmpfs of ``size`` mounted on ``folder`` while the block runs (skips without root)."""
+def mounted(folder: Path, options: str) -> Iterator[Path]:
+    """A tmpfs mounted on ``folder`` with ``options`` (e.g. "ro,size=1m") while the block
+    runs (skips without root)."""
     folder.mkdir()
-    mounted = subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size}", "tmpfs",
-                              str(folder)], capture_output=True)
-    if mounted.returncode != 0:
-        pytest.skip("cannot mount a small file system here (needs root)")
+    done = subprocess.run(["mount", "-t", "tmpfs", "-o", options, "tmpfs", str(folder)],
+                          capture_output=True)
+    if done.returncode != 0:
+        pytest.skip("cannot mount a file system here (needs root)")
     try:
         yield folder
     finally:
         subprocess.run(["umount", str(folder)], capture_output=True)
+
+
+def small_disk(folder: Path, size: str) -> contextlib.AbstractContextManager[Path]:
+    """A tmpfs of ``size`` mounted on ``folder`` while the block runs."""
+    return mounted(folder, f"size={size}")
 
 
 def errors_of(case: Path) -> str:

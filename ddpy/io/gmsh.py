@@ -309,11 +309,17 @@ def _rows(lines: _Lines, width: int, form: str, integers: bool) -> NDArray:
     return values.reshape(-1, width)
 
 
-def _nodes_v2(path: Path, lines: _Lines) -> _Nodes:
-    (count,) = _counts(lines, 0, 1, "the number of nodes")
+def _entries_v2(lines: _Lines, name: str, what: str) -> _Lines:
+    """The entry lines of a format-2 section whose first line gives their count."""
+    (count,) = _counts(lines, 0, 1, what)
     entries = lines.part(1, len(lines))
     if len(entries) != count:
-        raise _mismatch(lines, "Nodes", count, len(entries))
+        raise _mismatch(lines, name, count, len(entries))
+    return entries
+
+
+def _nodes_v2(path: Path, lines: _Lines) -> _Nodes:
+    entries = _entries_v2(lines, "Nodes", "the number of nodes")
     form = "'TAG X Y Z' (a node tag >= 1 and 3 numbers)"
     values = _rows(entries, 4, form, integers=False)
     tags = values[:, 0]
@@ -324,10 +330,7 @@ def _nodes_v2(path: Path, lines: _Lines) -> _Nodes:
 
 
 def _elements_v2(path: Path, lines: _Lines) -> _Elements:
-    (count,) = _counts(lines, 0, 1, "the number of elements")
-    entries = lines.part(1, len(lines))
-    if len(entries) != count:
-        raise _mismatch(lines, "Elements", count, len(entries))
+    entries = _entries_v2(lines, "Elements", "the number of elements")
     form = "'TAG TYPE NTAGS TAGS... NODES...' (integers)"
     flat, lengths = _words(entries, True, form)
     short = np.flatnonzero(lengths < 3)

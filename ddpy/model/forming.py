@@ -102,7 +102,7 @@ REACH_SIZES, REACH_TRAVELS = 2.0, 4.0
 #: halved while it fails, down to RELEASE_SMALLEST of the whole release).
 RELEASE_STEPS, RELEASE_SMALLEST = 4, 1.0 / 1024.0
 #: Most Uzawa updates of the Gauss points' pressure multipliers within one increment
-#: (NewtonSettings.penetration; docs/theory/contact.md, "The augmented Lagrangian").
+#: (NewtonSettings.augment; docs/theory/contact.md, "Penetration").
 MAX_AUGMENTATIONS = 6
 
 
@@ -510,10 +510,11 @@ class FormingProblem:
                         f"largest): {outcome.failure}", result)
                 step, reason = step * cutback, "cut"
                 continue
+            depth = self._penetration(layout, outcome, on, positions)
             if newton.augment:
-                outcome = self._augmented(
-                    outcome, newton.penetration * self.thickness, layout, positions, on,
-                    tol_force, tol_disp, max_iterations, result, touching, size_ratio)
+                outcome, depth = self._augmented(
+                    outcome, depth, newton.penetration * self.thickness, layout, positions,
+                    on, tol_force, tol_disp, max_iterations, result, touching, size_ratio)
             u, state, force, in_contact, gap = (outcome.u, outcome.state, outcome.force,
                                                 outcome.in_contact, outcome.gap)
             residuals, relative = outcome.residuals, outcome.relative
@@ -553,7 +554,6 @@ class FormingProblem:
             last_du = (u - self.u) / (target - factor)
             normal = gap[1]
             last_dp = np.einsum("ij,ij->i", force - self.force, normal) / (target - factor)
-            depth = self._penetration(layout, outcome, on, positions)
             self._take(outcome)
             self.position = positions
             result.sizes.append(target - factor)
@@ -661,22 +661,21 @@ class FormingProblem:
             depth.append(max(0.0, -float(gap.min(initial=np.inf))))
         return depth
 
-    def _augmented(self, outcome: Trial, limit: float, layout: Layout,
+    def _augmented(self, outcome: Trial, depth: list[float], limit: float, layout: Layout,
                    positions: Mapping[str, NDArray[np.float64]], on: NDArray[np.bool_],
                    tol_force: float, tol_disp: float, max_iterations: int,
                    result: FormingResult, touching: _Touching, size_ratio: float = 1.0
-                   ) -> Trial:
-        """The converged ``outcome`` of an increment with the slave nodes of its
-        Gauss-point tools at most ``limit`` (mm) inside them: while one is deeper, the
-        points' multipliers take their pressures (an Uzawa update of the augmented
-        Lagrangian) and the increment is solved again from there, at most
-        MAX_AUGMENTATIONS times. The residual histories of the solves are joined, as the
-        release's are. A solve that fails leaves the last converged answer (its depth is
-        recorded, and the run warns)."""
+                   ) -> tuple[Trial, list[float]]:
+        """The converged ``outcome`` of an increment, whose penetration per tool is
+        ``depth`` (``_penetration``), with the slave nodes of its Gauss-point tools at most
+        ``limit`` (mm) inside them: while one is deeper, the points' multipliers take their
+        pressures (an Uzawa update of the augmented Lagrangian) and the increment is solved
+        again from there, at most MAX_AUGMENTATIONS times. The residual histories of the
+        solves are joined, as the release's are. A solve that fails leaves the last
+        converged answer (its depth is recorded, and the run warns). Returns the answer
+        and its depth."""
         gauss = [i for i, t in enumerate(self.tools) if t.contact == "gauss"]
         for _ in range(MAX_AUGMENTATIONS):
-            assert outcome.pressure is not None
-            depth = self._penetration(layout, outcome, on, positions)
             if max((depth[i] for i in gauss), default=0.0) <= limit:
                 break
             again = self._increment(layout, positions, on, tol_force, tol_disp,
@@ -691,7 +690,8 @@ class FormingProblem:
             again.residuals = list(outcome.residuals) + list(again.residuals)[1:]
             again.relative = list(outcome.relative) + list(again.relative)[1:]
             outcome = again
-        return outcome
+            depth = self._penetration(layout, outcome, on, positions)
+        return outcome, depth
 
     def _gap_offsets(self, gaps: Mapping[str, tuple[str, float, ArrayLike]],
                      moves: Mapping[str, NDArray[np.float64]],

@@ -183,7 +183,6 @@ class ToolPack:
         table = np.zeros((len(tools), 13), dtype=np.int32)
         offsets = np.zeros(4, dtype=np.int64)  # coef, patch, tree, grid
         first_point = 0
-        point_first = [0]
         for i, (tool, s) in enumerate(zip(tools, searches, strict=True)):
             n = s.surface.n_patches
             table[i] = (s.kind, s.stride, n, s.mode, s.max_iterations, *offsets,
@@ -191,7 +190,6 @@ class ToolPack:
                         first_point)
             offsets += (s.surface.coefficients.size, n, 2 * n - 1, s.grid_params.shape[0])
             first_point += tool.points**2 * faces[i].shape[0]
-            point_first.append(first_point)
         self.names = [t.name for t in tools]
         self.table = table.ravel()
         self.tol = np.array([s.tol for s in searches], dtype=float)
@@ -227,8 +225,6 @@ class ToolPack:
                                  np.asarray(penalty, dtype=float), 2)
         #: Gauss points of all faces: their tangential tractions are (3,) each
         self.n_points = first_point if len(tools) else 0
-        #: the Gauss points of tool i are point_first[i]:point_first[i + 1]
-        self.point_first = np.array(point_first, dtype=np.int64)
 
     def arguments(self, positions: dict[str, NDArray[np.float64]],
                   positions_n: dict[str, NDArray[np.float64]], reach: float, size: float

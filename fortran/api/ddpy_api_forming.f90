@@ -151,7 +151,6 @@ contains
     real(c_double), intent(out) :: gap(npair), normal(3, npair), traction(3, npoint), &
                                    pressure(npoint)
     integer, allocatable :: lock(:), found(:)
-    real(wp), allocatable :: point_gap(:)
     state = 0
     gap = 0.0_wp
     normal = 0.0_wp
@@ -163,7 +162,7 @@ contains
                         tool_first, pair_node, npatch, patch_first, patch_node, eqn, &
                         k_slots, nvalues)) return
     status = 0
-    allocate(lock(npair + npoint), found(npair + npoint), point_gap(npoint))
+    allocate(lock(npair + npoint), found(npair + npoint))
     lock = 0  ! no pair held: a plain search
     call forming_contact(nnode, x, x_n, fixed, ntool, table, tol, coef, degrees, triangle, &
                          tree_lower, tree_upper, tree_child, frame, frame_lower, frame_upper, &
@@ -172,7 +171,7 @@ contains
                          positions, positions_n, reach, size, touching, resting, npair, tool_first, &
                          pair_node, npatch, patch_first, patch_node, on, force, r, mu, held, &
                          traction_n, pressure_n, lock, eqn, nf, k_slots, nvalues, residual, &
-                         values, state, gap, normal, traction, pressure, found, point_gap)
+                         values, state, gap, normal, traction, pressure, found)
   end subroutine api_forming_contact
 
   !> Newton iterations of one increment: see forming_increment. Connectivity arrives 0-based.

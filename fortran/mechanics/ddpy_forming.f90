@@ -88,8 +88,7 @@ contains
   !> no search, the patch's plane continued past its edges), lock(npair + i) Gauss point i
   !> of a surface-to-surface or Gauss-point tool; found gives the patch each of them took
   !> where it lies less than hold_band element sizes outside the tool (0 elsewhere: none,
-  !> farther, or not that kind of contact), the ones worth holding; point_gap the signed
-  !> distance of each Gauss point of those tools (huge where it found no patch).
+  !> farther, or not that kind of contact), the ones worth holding.
   subroutine forming_contact(nnode, x, x_n, fixed, ntool, table, tol, coef, degrees, &
                              triangle, tree_lower, tree_upper, tree_child, frame, &
                              frame_lower, frame_upper, grid_start, grid_params, &
@@ -99,7 +98,7 @@ contains
                              npair, tool_first, pair_node, npatch, patch_first, patch_node, &
                              on, force, r, mu, held, traction_n, pressure_n, lock, eqn, nf, &
                              k_slots, nvalues, residual, values, state, gap, normal, traction, &
-                             pressure, found, point_gap)
+                             pressure, found)
     integer, intent(in) :: nnode, ntool, nface, npoint, npair, npatch, nf, k_slots, nvalues, &
                            resting
     real(wp), intent(in) :: x(3, nnode), x_n(3, nnode), tol(ntool), coef(*), tree_lower(*), &
@@ -118,7 +117,7 @@ contains
     real(wp), intent(inout) :: residual(nf + 3*npair), values(nvalues)
     integer, intent(out) :: state(npair), found(npair + npoint)
     real(wp), intent(out) :: gap(npair), normal(3, npair), traction(3, npoint), &
-                             pressure(npoint), point_gap(npoint)
+                             pressure(npoint)
     real(wp), allocatable :: nodes(:, :), node_normals(:, :), params(:, :), points(:, :), &
                              tangents(:, :, :), distance(:), p_aug(:), c(:, :), &
                              dc_dlambda(:, :, :), dc_dx(:, :, :), slip(:, :), &
@@ -150,7 +149,6 @@ contains
     status = contact_none
     patch = 0
     found = 0
-    point_gap = huge(1.0_wp)
     shut = .false.
     p_aug = 0.0_wp
     ! Search each tool that has an active pair.
@@ -580,8 +578,6 @@ contains
       call search_tool(t, kg, gx, gn, lock(first_point + 1:first_point + kg), gpatch, &
                        gparams, gpoints, gnormal, gtangents, gdistance, gstatus, gits, gcand)
       found(first_point + 1:first_point + kg) = merge(gpatch, 0, gdistance < hold_band*size)
-      point_gap(table(f_point, t) + 1:table(f_point, t) + kg) = &
-        merge(gdistance, huge(1.0_wp), gstatus /= contact_none)
     end subroutine search_points
 
     !> Global and local search of the k slaves of tool t.

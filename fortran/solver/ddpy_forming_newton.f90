@@ -131,7 +131,7 @@ contains
       real(wp), allocatable :: u(:, :), force(:, :), residual(:), values(:), fint(:, :), &
                                stress(:, :, :), ep(:, :), strain(:, :, :), axes(:, :, :, :), &
                                alpha(:, :), gap(:), normal(:, :), simplified(:), &
-                               traction(:, :), pressure(:), point_gap(:)
+                               traction(:, :), pressure(:)
       integer, allocatable :: state(:), patch(:)
       logical :: moving  ! some fixed dof short of its prescribed value
       real(wp) :: rest   ! how far short: the norm over the fixed dofs
@@ -209,7 +209,7 @@ contains
                slot(cur)%axes(3, 3, 8, ne), slot(cur)%alpha(shell_modes, ne), &
                slot(cur)%gap(npair), slot(cur)%normal(3, npair), &
                slot(cur)%simplified(n), slot(cur)%state(npair), &
-               slot(cur)%patch(npair + npoint), slot(cur)%point_gap(npoint), &
+               slot(cur)%patch(npair + npoint), &
                slot(cur)%traction(3, npoint), slot(cur)%pressure(npoint))
       slot(cur)%values(k_slots + 1:k_slots + n_coupling) = coupling
     end do
@@ -517,7 +517,7 @@ contains
                            npair, tool_first, pair_node, npatch, patch_first, patch_node, on, &
                            s%force, r, mu, held, traction_n, pressure_n, lock, eqn, nf, &
                            k_slots, nvalues, s%residual, s%values, s%state, s%gap, s%normal, &
-                           s%traction, s%pressure, s%patch, s%point_gap)
+                           s%traction, s%pressure, s%patch)
       ! A Gauss-point pair's multiplier is eliminated: lambda = F(x), C = 0.
       do p = 1, npair
         if (.not. eliminated(p)) cycle

@@ -128,8 +128,9 @@ def test_nagata_tools_name_the_nagata_files(deck: Path, tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize(("file", "old", "new", "message", "below"), [
-    ("bending.inp", "*MATERIAL, NAME=STEEL", "*AMPLITUDE, NAME=A\n0., 0.\n*MATERIAL, NAME=STEEL",
-     "keyword *AMPLITUDE is not supported: expected one of *HEADING", 0),
+    ("bending.inp", "*MATERIAL, NAME=STEEL", "*ORIENTATION, NAME=O\n1., 0., 0., 0., 1., 0.\n"
+     "*MATERIAL, NAME=STEEL", "keyword *ORIENTATION is not supported: write the rolling "
+     "direction in material.dat", 0),
     ("blank.inp", "*ELEMENT, TYPE=C3D8I", "*ELEMENT, TYPE=C3D20R",
      "element type C3D20R is not supported: expected TYPE= C3D8, C3D8R, C3D8I", 0),
     ("blank.inp", "1, 1, 2, 33, 32, 63, 64, 95, 94", "1, 1, 2, 33, 32, 63, 64, 95, 9999",
@@ -157,12 +158,12 @@ def test_malformed_decks_are_refused_at_their_line(deck: Path, file: str, old: s
 
 
 def test_every_defect_is_reported(deck: Path) -> None:
-    _edit(deck, "*MATERIAL, NAME=STEEL", "*AMPLITUDE, NAME=A\n*MATERIAL, NAME=STEEL")
+    _edit(deck, "*MATERIAL, NAME=STEEL", "*ORIENTATION, NAME=O\n*MATERIAL, NAME=STEEL")
     _edit(deck, "*STEP, NLGEOM, INC=1000", "*STEP, NLGEOM, INC=1000, PERTURBATION")
     with pytest.raises(DeckError) as caught:
         read_inp(deck)
     assert len(caught.value.errors) == 2
-    assert "*AMPLITUDE" in str(caught.value) and "PERTURBATION" in str(caught.value)
+    assert "*ORIENTATION" in str(caught.value) and "PERTURBATION" in str(caught.value)
 
 
 def test_include(deck: Path, tmp_path: Path) -> None:
@@ -314,10 +315,10 @@ def test_convert_command(deck: Path, tmp_path: Path, capsys: pytest.CaptureFixtu
     assert "not empty" in capsys.readouterr().err
     assert main(["convert", str(deck), str(tmp_path / "case"), "--force", "--tools",
                  "nagata"]) == 0
-    _edit(deck, "*MATERIAL, NAME=STEEL", "*AMPLITUDE, NAME=A\n*MATERIAL, NAME=STEEL")
+    _edit(deck, "*MATERIAL, NAME=STEEL", "*ORIENTATION, NAME=O\n*MATERIAL, NAME=STEEL")
     assert main(["convert", str(deck), str(tmp_path / "other")]) == 2
     err = capsys.readouterr().err
-    assert f"{deck}:26: keyword *AMPLITUDE is not supported" in err
+    assert f"{deck}:26: keyword *ORIENTATION is not supported" in err
     assert not (tmp_path / "other").exists()
 
 

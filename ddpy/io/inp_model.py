@@ -19,6 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ddpy.io.case import MAX_TRAVEL_EXTENTS, DeckError, longest_travel
+from ddpy.io.inp_assembly import flatten_assembly
 from ddpy.io.inp_cards import Card, DataLine, integer, read_cards
 from ddpy.io.inp_read import BLANK_TYPES, TOOL_TYPES, Reader
 
@@ -67,6 +68,8 @@ class InpPhase:
     min_fraction: float | None
     increments: int
     where: str
+    #: The *STEP it comes from (from 0): a step may make several phases.
+    step: int = 0
 
 
 @dataclass
@@ -87,6 +90,19 @@ class InpModel:
     tools: list[InpTool]
     phases: list[InpPhase]
     ignored: list[str] = field(default_factory=list)
+    #: The input file and the files it includes.
+    sources: list[Path] = field(default_factory=list)
+
+def _proportional(a: dict[str, NDArray[np.float64]], b: dict[str, NDArray[np.float64]]
+                  ) -> bool:
+    """Whether every tool's displacement in ``b`` is that in ``a`` times one factor > 0: the
+    two stretches are one straight stretch of the phase."""
+    scale = max(float(np.linalg.norm(v)) for v in a.values())
+    lead = max(a, key=lambda n: float(np.linalg.norm(a[n])))
+    factor = float(a[lead] @ b[lead]) / scale**2
+    return factor > 0 and all(np.linalg.norm(b[n] - factor * a[n]) <= 1e-9 * scale * (
+        1.0 + factor) for n in a)
+
 
 class _Mapper:
     """Turns the definitions of a Reader into an InpModel, collecting errors."""
@@ -94,27 +110,11 @@ class _Mapper:
     def __init__(self, r: Reader) -> None:
         self.r = r
 
-    def node_set(self, name: str, line: DataLine, seen: tuple[str, ...] = ()) -> list[int]:
-        r = self.r
-        if name.isdigit():
-            return [int(name)]
-        if name not in r.nsets or name in seen:
-            raise DeckError(f"no node set named {name}", line.path, line.number)
-        ids: list[int] = []
-        for item, at in r.nsets[name]:
-            ids += self.node_set(item, at, (*seen, name))
-        return ids
+    def node_set(self, name: str, line: DataLine) -> list[int]:
+        return self.r.node_set(name, line)
 
-    def element_set(self, name: str, line: DataLine, seen: tuple[str, ...] = ()) -> list[int]:
-        r = self.r
-        if name.isdigit():
-            return [int(name)]
-        if name not in r.elsets or name in seen:
-            raise DeckError(f"no element set named {name}", line.path, line.number)
-        ids: list[int] = []
-        for item, at in r.elsets[name]:
-            ids += self.element_set(item, at, (*seen, name))
-        return ids
+    def element_set(self, name: str, line: DataLine) -> list[int]:
+        return self.r.element_set(name, line)
 
     def faces(self, name: str, line: DataLine) -> list[tuple[list[int], DataLine]]:
         """The faces of a *SURFACE as node id lists (as HEX_FACES for solids, SPOS for R3D)."""
@@ -167,6 +167,12 @@ class _Mapper:
                                           "the blank turned to lie in the x-y plane)"))
             return None
         blank_nodes = {n for e in blank for n in r.elements[e][1]}
+        for kind, ids, line in r.stabilizers:
+            if len(set(ids) & blank_nodes) > 1:
+                r.fail(DeckError(f"a {kind} element between blank nodes "
+                                 f"{', '.join(map(str, ids))}: it would carry load in the "
+                                 "forming, and ddpy has no springs or dashpots (those skipped "
+                                 "hold a blank node to the ground)", line.path, line.number))
         tools = self.tools(refs, tool_nodes, blank, normal)
         nodesets: dict[str, list[int]] = {}
         phases = self.phases(tools, refs, blank_nodes, nodesets)
@@ -341,6 +347,9 @@ class _Mapper:
 
     def phases(self, tools: list[InpTool] | None, refs: dict[int, tuple[int, int, str, Card]],
                blank_nodes: set[int], nodesets: dict[str, list[int]]) -> list[InpPhase] | None:
+        """One phase per step, or one per stretch of a step in which every tool moves in a
+        straight line at proportional speeds (a step whose motions follow *AMPLITUDE tables
+        that bend the path or change the tools' relative speeds)."""
         r = self.r
         if not r.steps:
             r.fail(DeckError("no *STEP: expected at least one step moving a tool", r.path))
@@ -360,18 +369,22 @@ class _Mapper:
             for t in tools:
                 if master <= {n for f in t.faces for n in f if n >= 0}:
                     pair_tool[(pair.slave, pair.master)] = t.name
-        position = {t.name: [None, None, None] for t in tools}   # prescribed totals
+        spring_nodes = {n for _, ns, _ in r.stabilizers for n in ns} - blank_nodes
+        position: dict[str, list[float | None]] = {t.name: [None, None, None] for t in tools}
         low, high = self._model_box(tools, blank_nodes)
         active = {t.name for t in tools}
-        phases = []
+        phases: list[InpPhase] = []
         names: set[str] = set()
         if r.steps[0].params.get("NLGEOM", None) not in ("", "YES"):
             r.fail(r.steps[0].error("the first *STEP without NLGEOM: ddpy's forming is "
                                     "geometrically nonlinear, expected *STEP, NLGEOM"))
+        start_time = 0.0                       # total time at the start of the step
         for step, card in enumerate([None, *r.steps]):
             index = step - 1
             before = {k: list(v) for k, v in position.items()}
-            set_at: dict[str, DataLine] = {}  # the last line that moves each tool
+            # Per tool and dof: the value, its amplitude ('' for a ramp) and its line.
+            given: dict[str, dict[int, tuple[float, str, DataLine]]] = {t.name: {}
+                                                                         for t in tools}
             for bc in [b for b in r.bcs if b.step == (None if card is None else index)]:
                 try:
                     ids = self.node_set(bc.node_or_set, bc.line)
@@ -382,6 +395,10 @@ class _Mapper:
                     tool = by_ref.get(node) or by_ref.get(rot_of.get(node, -1))
                     rotation = node in rot_of
                     if tool is None:
+                        if node in spring_nodes:
+                            r.ignored.append(f"{bc.line.where}: *BOUNDARY on node {node} of a "
+                                             "skipped spring or dashpot")
+                            break
                         if node not in blank_nodes:
                             r.fail(DeckError(f"node {node} of the *BOUNDARY is neither a node "
                                              "of the blank nor a tool's REF NODE or ROT NODE",
@@ -395,12 +412,13 @@ class _Mapper:
                                                  "): ddpy's tools translate only", bc.line.path,
                                                  bc.line.number))
                             continue
-                        if bc.fixed:
-                            position[tool.name][dof - 1] = before[tool.name][dof - 1] or 0.0
-                        else:
-                            position[tool.name][dof - 1] = bc.value
-                            set_at[tool.name] = bc.line
+                        held = before[tool.name][dof - 1] or 0.0
+                        given[tool.name][dof - 1] = (held, "", bc.line) if bc.fixed else \
+                            (bc.value, bc.amplitude, bc.line)
             if card is None:
+                for tool_name, dofs in given.items():
+                    for dof, (value, _, _) in dofs.items():
+                        position[tool_name][dof] = value
                 continue
             name = ddpy_name(card.params.get("NAME", f"step{step}").strip('"'), "step")
             if name in names:
@@ -412,51 +430,125 @@ class _Mapper:
             for pair in added:
                 active.add(pair_tool.get(pair, ""))
             active.discard("")
-            moves = {}
+            static = r.static.get(index, ())
+            period = static[1] if len(static) > 1 else 1.0
             for t in tools:
-                now, old = position[t.name], before[t.name]
-                if t.name in active and None in now:
-                    free = ", ".join(str(i + 1) for i, v in enumerate(now) if v is None)
+                for dof, (value, amplitude, _) in given[t.name].items():
+                    position[t.name][dof] = value * self._amplitude(
+                        amplitude, period, start_time) if amplitude else value
+            step_start = start_time
+            start_time += period
+            if not active:
+                increments = max(1, min(1000, round(period / static[0]))) if static else 1
+                phases.append(InpPhase(name, "springback", [], {}, None, None, increments,
+                                       card.where, index))
+                continue
+            for t in tools:
+                if t.name in active and None in position[t.name]:
+                    free = ", ".join(str(i + 1) for i, v in enumerate(position[t.name])
+                                     if v is None)
                     r.fail(card.error(f"tool {t.name} (REF NODE {t.ref_node}) has no *BOUNDARY "
                                       f"on dof {free} in this step: ddpy's tools move as "
                                       "prescribed, give all three translations"))
-                    continue
-                delta = tuple((a or 0.0) - (b or 0.0) for a, b in zip(now, old, strict=True))
-                if any(delta):
-                    if t.name not in active:
-                        r.fail(card.error(f"tool {t.name} moves in a step where its contact "
-                                          "pair is removed: ddpy moves active tools only"))
-                    moves[t.name] = delta
-                    longest = longest_travel(delta, low, high)
-                    travel = float(np.linalg.norm(delta))
-                    if travel > longest and t.name in set_at:
-                        line = set_at[t.name]
-                        r.fail(DeckError(
-                            f"tool {t.name} moves {travel:.4g} mm in this step, more than "
-                            f"{MAX_TRAVEL_EXTENTS:g} times the extent of the model (the "
-                            "blank and the tools) along its motion: expected at most "
-                            f"{longest:.4g} mm", line.path, line.number))
-            static = r.static.get(index, ())
-            if not active:
-                period = static[1] if len(static) > 1 else 1.0
-                increments = max(1, min(1000, round(period / static[0]))) if static else 1
-                phases.append(InpPhase(name, "springback", [], {}, None, None, increments,
-                                       card.where))
+            segments = self._segments(tools, given, before, period, step_start)
+            if segments is None:
                 continue
-            if not moves:
+            if not segments:
                 r.fail(card.error("the step moves no tool: a forming step must move one (the "
                                   "tools drive ddpy's phases), or remove every contact pair "
                                   "(*MODEL CHANGE, TYPE=CONTACT PAIR, REMOVE: springback)"))
                 continue
-            period = static[1] if len(static) > 1 else 1.0
-            max_fraction = static[3] / period if len(static) > 3 else None
-            min_fraction = static[2] / period if len(static) > 2 else None
-            phases.append(InpPhase(name, "forming", [t.name for t in tools if t.name in active],
-                                   moves, max_fraction, min_fraction, 1, card.where))
+            for k, (t0, t1, deltas) in enumerate(segments):
+                moves: dict[str, tuple[float, float, float]] = {}
+                for t in tools:
+                    delta = deltas[t.name]
+                    if not np.any(delta):
+                        continue
+                    lines = [at for _, _, at in given[t.name].values()]
+                    if t.name not in active:
+                        r.fail(card.error(f"tool {t.name} moves in a step where its contact "
+                                          "pair is removed: ddpy moves active tools only"))
+                    moves[t.name] = tuple(float(v) for v in delta)  # type: ignore[assignment]
+                    longest = longest_travel(delta, low, high)
+                    travel = float(np.linalg.norm(delta))
+                    if travel > longest and lines:
+                        r.fail(DeckError(
+                            f"tool {t.name} moves {travel:.4g} mm in this step, more than "
+                            f"{MAX_TRAVEL_EXTENTS:g} times the extent of the model (the "
+                            "blank and the tools) along its motion: expected at most "
+                            f"{longest:.4g} mm", lines[-1].path, lines[-1].number))
+                duration = t1 - t0
+                max_fraction = static[3] / duration if len(static) > 3 else None
+                min_fraction = static[2] / duration if len(static) > 2 else None
+                label = name if len(segments) == 1 else f"{name}_{k + 1}"
+                where = card.where if len(segments) == 1 else \
+                    f"{card.where}, step time {t0:g} to {t1:g}"
+                phases.append(InpPhase(label, "forming",
+                                       [t.name for t in tools if t.name in active], moves,
+                                       max_fraction, min_fraction, 1, where, index))
         if phases and phases[0].kind == "springback":
             r.fail(r.steps[0].error("the first step removes every contact pair: the first "
                                     "phase must form"))
         return phases
+
+    def _amplitude(self, name: str, time: float, start: float) -> float:
+        """The value of an amplitude at step time ``time`` of a step starting at ``start``."""
+        amplitude = self.r.amplitudes[name]
+        return amplitude.at(time + start if amplitude.total_time else time)
+
+    def _segments(self, tools: list[InpTool],
+                  given: dict[str, dict[int, tuple[float, str, DataLine]]],
+                  before: dict[str, list[float | None]], period: float, start: float
+                  ) -> list[tuple[float, float, dict[str, NDArray[np.float64]]]] | None:
+        """The step's path as straight stretches (step time from, to, each tool's
+        displacement); a ramp moves a tool from where it was, an amplitude a(t) puts it at
+        a(t) x value (as Abaqus). None after an error."""
+        r = self.r
+        times = {0.0, period}
+        for dofs in given.values():
+            for _, amplitude, _ in dofs.values():
+                if amplitude:
+                    shift = start if r.amplitudes[amplitude].total_time else 0.0
+                    times |= {t - shift for t, _ in r.amplitudes[amplitude].points
+                              if 0.0 < t - shift < period}
+        ordered = sorted(times)
+
+        def at(tool: str, dof: int, time: float) -> float:
+            was = before[tool][dof] or 0.0
+            if dof not in given[tool]:
+                return was
+            value, amplitude, _ = given[tool][dof]
+            if amplitude:
+                return value * self._amplitude(amplitude, time, start)
+            return was + (value - was) * time / period
+
+        ok = True
+        for t in tools:
+            for dof, (_, amplitude, line) in given[t.name].items():
+                was, first = before[t.name][dof] or 0.0, at(t.name, dof, 0.0)
+                if amplitude and abs(first - was) > 1e-9 * (1.0 + abs(was)):
+                    r.fail(DeckError(
+                        f"AMPLITUDE={amplitude} puts tool {t.name} at {first:g} mm along "
+                        f"{'xyz'[dof]} at the start of the step, where it is at {was:g} mm: "
+                        "expected the amplitude to start from the tool's position (ddpy's "
+                        "tools do not jump)", line.path, line.number))
+                    ok = False
+        if not ok:
+            return None
+        points = [{t.name: np.array([at(t.name, d, time) for d in range(3)]) for t in tools}
+                  for time in ordered]
+        segments: list[tuple[float, float, dict[str, NDArray[np.float64]]]] = []
+        for k in range(len(ordered) - 1):
+            deltas = {n: points[k + 1][n] - points[k][n] for n in points[k]}
+            if not any(np.any(d) for d in deltas.values()):
+                continue                        # a dwell: nothing moves, nothing to do
+            if segments and _proportional(segments[-1][2], deltas):
+                t0, _, previous = segments[-1]
+                segments[-1] = (t0, ordered[k + 1],
+                                {n: previous[n] + deltas[n] for n in deltas})
+            else:
+                segments.append((ordered[k], ordered[k + 1], deltas))
+        return segments
 
     def _model_box(self, tools: list[InpTool], blank_nodes: set[int]
                    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -472,7 +564,6 @@ class _Mapper:
         its phase on (as Abaqus keeps them)."""
         r = self.r
         result = []
-        names = [p.name for p in phases or []]
         for bc in r.bcs:
             try:
                 ids = [n for n in self.node_set(bc.node_or_set, bc.line) if n in blank_nodes]
@@ -500,7 +591,8 @@ class _Mapper:
                 continue
             label = ddpy_name(bc.node_or_set, "node")
             nodesets[label] = sorted(set(ids))
-            steps = () if bc.step is None else tuple(names[bc.step:])
+            steps = () if bc.step is None else tuple(p.name for p in phases or []
+                                                     if p.step >= bc.step)
             result.append((label, components, steps))
         return result
 
@@ -508,9 +600,14 @@ class _Mapper:
 def read_inp(path: str | Path) -> InpModel:
     """Read and check an Abaqus / CalculiX forming model; DeckError lists every defect."""
     path = Path(path)
+    cards = read_cards(path)
+    flat, _, errors = flatten_assembly(cards)
     reader = Reader(path)
-    reader.read(read_cards(path))
+    reader.errors += errors
+    reader.read(flat)
     model = _Mapper(reader).model(path)
+    if model is not None:
+        model.sources = sorted({card.path for card in cards})
     if reader.errors or model is None:
         raise DeckError.collect(reader.errors or [DeckError("invalid model", path)])
     return model

@@ -10,11 +10,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 from ddpy.io.case import DeckError
 from ddpy.io.inp_cards import Card, DataLine, integer, number
+from ddpy.io.inp_mesh import STABILIZING_TYPES, MeshReader
 
-__all__ = ["BLANK_TYPES", "BOUNDARY_TYPES", "IGNORED", "SUPPORTED", "TOOL_TYPES", "Boundary",
-           "Pair", "Reader"]
+__all__ = ["BLANK_TYPES", "BOUNDARY_TYPES", "IGNORED", "SUPPORTED", "TOOL_TYPES", "Amplitude",
+           "Boundary", "Pair", "Reader"]
 
 #: Element types of the blank, and of rigid tools (besides bricks of a *RIGID BODY).
 BLANK_TYPES = ("C3D8", "C3D8R", "C3D8I")
@@ -24,19 +27,22 @@ SUPPORTED: dict[str, dict[str, tuple[str, ...] | None]] = {
     "HEADING": {},
     "NODE": {"NSET": None},
     "ELEMENT": {"TYPE": None, "ELSET": None},
-    "NSET": {"NSET": None, "GENERATE": ("",)},
-    "ELSET": {"ELSET": None, "GENERATE": ("",)},
+    "NSET": {"NSET": None, "GENERATE": ("",), "INTERNAL": ("",)},
+    "ELSET": {"ELSET": None, "GENERATE": ("",), "INTERNAL": ("",)},
     "MATERIAL": {"NAME": None},
     "ELASTIC": {"TYPE": ("ISOTROPIC",)},
     "PLASTIC": {"HARDENING": ("ISOTROPIC",)},
     "SOLID SECTION": {"ELSET": None, "MATERIAL": None},
     "RIGID BODY": {"ELSET": None, "NSET": None, "REF NODE": None, "ROT NODE": None},
-    "SURFACE": {"NAME": None, "TYPE": ("ELEMENT",)},
+    "SURFACE": {"NAME": None, "TYPE": ("ELEMENT",), "INTERNAL": ("",)},
     "CONTACT PAIR": {"INTERACTION": None, "TYPE": ("SURFACE TO SURFACE", "NODE TO SURFACE")},
     "SURFACE INTERACTION": {"NAME": None},
     "SURFACE BEHAVIOR": {"PRESSURE-OVERCLOSURE": ("HARD", "LINEAR")},
     "FRICTION": {},
-    "BOUNDARY": {"OP": ("MOD",), "TYPE": ("DISPLACEMENT",), "FIXED": ("", "YES")},
+    "BOUNDARY": {"OP": ("MOD",), "TYPE": ("DISPLACEMENT",), "FIXED": ("", "YES"),
+                 "AMPLITUDE": None},
+    "AMPLITUDE": {"NAME": None, "DEFINITION": ("TABULAR",),
+                  "TIME": ("STEP TIME", "TOTAL TIME"), "VALUE": ("RELATIVE",)},
     "STEP": {"NAME": None, "NLGEOM": ("", "YES"), "INC": None},
     "STATIC": {},
     "MODEL CHANGE": {"TYPE": ("CONTACT PAIR",), "REMOVE": ("",), "ADD": ("",)},
@@ -47,6 +53,19 @@ SUPPORTED: dict[str, dict[str, tuple[str, ...] | None]] = {
 IGNORED = ("PREPRINT", "NODE PRINT", "EL PRINT", "NODE FILE", "EL FILE", "OUTPUT",
            "NODE OUTPUT", "ELEMENT OUTPUT", "CONTACT OUTPUT", "CONTACT PRINT", "CONTACT FILE",
            "RESTART", "MONITOR", "DENSITY")
+#: Cards of the springs and dashpots skipped with their elements (inp_mesh.STABILIZING_TYPES).
+STABILIZER_CARDS = ("SPRING", "DASHPOT")
+#: What to do instead, for keywords users meet most.
+_HINTS = {
+    "ORIENTATION": "write the rolling direction in material.dat (rolling_direction)",
+    "POTENTIAL": "write Hill'48 in material.dat by hand (yield hill48)",
+    "CLOAD": "ddpy's tools drive the forming: move a tool instead",
+    "DLOAD": "ddpy's tools drive the forming: move a tool instead",
+    "DYNAMIC": "ddpy's forming is quasi-static: use *STATIC",
+    "ANALYTICAL SURFACE": "mesh the tool surface (R3D4/R3D3 elements) in a *RIGID BODY",
+    "EQUATION": "ddpy has no multi-point constraints",
+    "COUPLING": "ddpy has no multi-point constraints",
+}
 #: Degrees of freedom of the *BOUNDARY types.
 BOUNDARY_TYPES = {"XSYMM": (1, 5, 6), "YSYMM": (2, 4, 6), "ZSYMM": (3, 4, 5),
                   "ENCASTRE": (1, 2, 3, 4, 5, 6), "PINNED": (1, 2, 3)}
@@ -68,25 +87,37 @@ class Boundary:
     step: int | None
     line: DataLine
     fixed: bool = False
+    amplitude: str = ""
 
-class Reader:
+
+@dataclass
+class Amplitude:
+    """A tabular *AMPLITUDE: (time, value) points, times in step time or total time."""
+
+    name: str
+    points: list[tuple[float, float]]
+    total_time: bool
+    card: Card
+
+    def at(self, time: float) -> float:
+        """The value at ``time``, linear between the points, constant beyond them."""
+        times = [t for t, _ in self.points]
+        values = [v for _, v in self.points]
+        return float(np.interp(time, times, values))
+
+
+class Reader(MeshReader):
     """Walks the cards once, recording definitions; then maps them, collecting errors."""
 
     def __init__(self, path: Path) -> None:
-        self.path = path
-        self.errors: list[DeckError] = []
-        self.ignored: list[str] = []
+        super().__init__(path)
         self.title = ""
-        self.nodes: dict[int, tuple[tuple[float, float, float], DataLine]] = {}
-        self.elements: dict[int, tuple[str, list[int], DataLine]] = {}
-        self.nsets: dict[str, list[tuple[str, DataLine]]] = {}
-        self.elsets: dict[str, list[tuple[str, DataLine]]] = {}
+        self.amplitudes: dict[str, Amplitude] = {}
         self.materials: dict[str, Card] = {}
         self.elastic: dict[str, tuple[float, float]] = {}
         self.plastic: dict[str, list[tuple[float, float]]] = {}
         self.sections: list[tuple[str, str, Card]] = []
         self.rigid: list[Card] = []
-        self.surfaces: dict[str, tuple[list[tuple[str, str, DataLine]], Card]] = {}
         self.pairs: list[Pair] = []
         self.interactions: dict[str, Card] = {}
         self.friction: dict[str, float] = {}
@@ -97,22 +128,20 @@ class Reader:
 
     # ----------------------------------------------------------------------- reading cards
 
-    def fail(self, error: DeckError) -> None:
-        self.errors.append(error)
-
     def read(self, cards: list[Card]) -> None:
         material = interaction = ""
         step: int | None = None
+        unsupported: dict[str, list[Card]] = {}
         for card in cards:
             key = card.keyword
             if key in IGNORED:
                 self.ignored.append(f"{card.where}: *{key}")
                 continue
+            if key in STABILIZER_CARDS:
+                self.ignored.append(f"{card.where}: *{key} (its elements are skipped)")
+                continue
             if key not in SUPPORTED:
-                self.fail(card.error(f"keyword *{key} is not supported: expected one of "
-                                     + ", ".join(f"*{k}" for k in (*SUPPORTED, "INCLUDE"))
-                                     + " (or, ignored, " + ", ".join(f"*{k}" for k in IGNORED)
-                                     + "); see docs/abaqus-import.md"))
+                unsupported.setdefault(key, []).append(card)
                 continue
             if not self._params(card) and key not in ("STEP", "END STEP"):
                 continue                # a step is still opened: no errors follow from it
@@ -144,7 +173,9 @@ class Reader:
                 elif key == "SURFACE INTERACTION":
                     interaction = self._name(card, "NAME")
                     self.interactions[interaction] = card
-                    self._no_data(card)
+                    if any(line.words for line in card.data):
+                        self.ignored.append(f"{card.data[0].where}: the out-of-plane "
+                                            "thickness of *SURFACE INTERACTION (2D models)")
                 else:
                     getattr(self, "_" + key.lower().replace(" ", "_"))(card, material,
                                                                        interaction, step)
@@ -156,6 +187,13 @@ class Reader:
                 interaction = ""
         if step is not None:
             self.fail(self.steps[step].error("the step has no *END STEP"))
+        for key, where in unsupported.items():
+            more = f" (also at {', '.join(c.where for c in where[1:4])}" + \
+                (f" and {len(where) - 4} more)" if len(where) > 4 else ")") \
+                if len(where) > 1 else ""
+            hint = _HINTS.get(key, "the keywords ddpy reads are listed in "
+                              "docs/abaqus-import.md")
+            self.fail(where[0].error(f"keyword *{key} is not supported{more}: {hint}"))
 
     def _params(self, card: Card) -> bool:
         allowed = SUPPORTED[card.keyword]
@@ -174,87 +212,39 @@ class Reader:
         return True
 
     @staticmethod
-    def _name(card: Card, key: str) -> str:
-        name = card.params.get(key, "").strip('"').upper()
-        if not name:
-            raise card.error(f"*{card.keyword} without {key}=<name>")
-        return name
-
-    @staticmethod
     def _no_data(card: Card) -> None:
-        if card.data:
+        if any(line.words for line in card.data):  # CAE writes a ',' after a section
             raise card.error(f"*{card.keyword} takes no data lines, got "
                              f"'{', '.join(card.data[0].words)[:60]}'", card.data[0])
 
-    def _heading(self, card: Card, *_: object) -> None:
-        self.title = " ".join(", ".join(d.words) for d in card.data[:1])
-
-    def _node(self, card: Card, *_: object) -> None:
-        nset = card.params.get("NSET", "").upper()
-        for line in card.data:
-            try:
-                ident = integer(line, 0, "the node id")
-                if not 3 <= len(line.words) <= 4:
-                    raise DeckError(f"expected '<node id>, <x>, <y>, <z>', got "
-                                    f"'{', '.join(line.words)[:60]}'", line.path, line.number)
-                xyz = tuple(number(line, i, "a coordinate") if i < len(line.words) else 0.0
-                            for i in (1, 2, 3))
-                if ident in self.nodes:
-                    raise DeckError(f"node {ident} is defined again (first at "
-                                    f"{self.nodes[ident][1].where})", line.path, line.number)
-                self.nodes[ident] = (xyz, line)  # type: ignore[assignment]
-                if nset:
-                    self.nsets.setdefault(nset, []).append((str(ident), line))
-            except DeckError as error:
-                self.fail(error)
-
     def _element(self, card: Card, *_: object) -> None:
         kind = card.params.get("TYPE", "").upper()
-        if kind not in BLANK_TYPES + TOOL_TYPES + ("C3D8",):
+        if kind not in BLANK_TYPES + TOOL_TYPES + STABILIZING_TYPES:
             raise card.error(f"element type {kind or '(none)'} is not supported: expected "
                              f"TYPE= {', '.join(BLANK_TYPES)} (the blank, and bricks of a "
-                             f"*RIGID BODY) or {', '.join(TOOL_TYPES)} (rigid tools)")
-        count = {"R3D4": 4, "R3D3": 3}.get(kind, 8)
-        elset = card.params.get("ELSET", "").upper()
-        for line in card.data:
-            try:
-                ident = integer(line, 0, "the element id")
-                if len(line.words) != count + 1:
-                    raise DeckError(f"expected '<element id>, <{count} node ids>' for a {kind} "
-                                    f"element, got {len(line.words) - 1} nodes", line.path,
-                                    line.number)
-                nodes = [integer(line, i, "a node id") for i in range(1, count + 1)]
-                if ident in self.elements:
-                    raise DeckError(f"element {ident} is defined again (first at "
-                                    f"{self.elements[ident][2].where})", line.path, line.number)
-                self.elements[ident] = (kind, nodes, line)
-                if elset:
-                    self.elsets.setdefault(elset, []).append((str(ident), line))
-            except DeckError as error:
-                self.fail(error)
+                             f"*RIGID BODY) or {', '.join(TOOL_TYPES)} (rigid tools); springs "
+                             "and dashpots are skipped")
+        super()._element(card)
 
-    def _set(self, card: Card, sets: dict[str, list[tuple[str, DataLine]]], key: str) -> None:
-        name = self._name(card, key)
-        items = sets.setdefault(name, [])
-        for line in card.data:
-            if "GENERATE" in card.params:
-                if not 2 <= len(line.words) <= 3:
-                    raise DeckError("expected '<first>, <last>[, <step>]' (GENERATE)",
-                                    line.path, line.number)
-                first, last = integer(line, 0, "the first id"), integer(line, 1, "the last id")
-                inc = integer(line, 2, "the step") if len(line.words) == 3 else 1
-                if last < first:
-                    raise DeckError(f"GENERATE from {first} to {last}: the last id is below "
-                                    "the first", line.path, line.number)
-                items += [(str(i), line) for i in range(first, last + 1, inc)]
-            else:
-                items += [(w.upper(), line) for w in line.words if w]
+    def _amplitude(self, card: Card, *_: object) -> None:
+        name = self._name(card, "NAME")
+        values = [(line, i) for line in card.data for i in range(len(line.words))]
+        if not values or len(values) % 2:
+            raise card.error("expected data lines of 'time, value' pairs (up to four a line)",
+                             card.data[-1] if card.data else None)
+        points: list[tuple[float, float]] = []
+        for k in range(0, len(values), 2):
+            (line, i), (line2, j) = values[k], values[k + 1]
+            time, value = number(line, i, "a time"), number(line2, j, "an amplitude value")
+            if points and time <= points[-1][0]:
+                raise DeckError(f"time {time:g} is not after the one before ({points[-1][0]:g}):"
+                                " expected increasing times", line.path, line.number)
+            points.append((time, value))
+        self.amplitudes[name] = Amplitude(name, points, card.params.get("TIME", "").upper()
+                                          == "TOTAL TIME", card)
 
-    def _nset(self, card: Card, *_: object) -> None:
-        self._set(card, self.nsets, "NSET")
-
-    def _elset(self, card: Card, *_: object) -> None:
-        self._set(card, self.elsets, "ELSET")
+    def _heading(self, card: Card, *_: object) -> None:
+        self.title = " ".join(", ".join(d.words) for d in card.data[:1])
 
     def _elastic(self, card: Card, material: str, *_: object) -> None:
         if len(card.data) != 1 or len(card.data[0].words) != 2:
@@ -304,17 +294,6 @@ class Reader:
                              "reference node")
         self.rigid.append(card)
 
-    def _surface(self, card: Card, *_: object) -> None:
-        name = self._name(card, "NAME")
-        items = []
-        for line in card.data:
-            if not 1 <= len(line.words) <= 2:
-                raise DeckError("expected '<element or element set>[, <face>]'", line.path,
-                                line.number)
-            face = line.words[1].upper() if len(line.words) == 2 else ""
-            items.append((line.words[0].upper(), face, line))
-        self.surfaces[name] = (items, card)
-
     def _contact_pair(self, card: Card, *_: object) -> None:
         interaction = self._name(card, "INTERACTION")
         kind = card.params.get("TYPE", "NODE TO SURFACE").upper()
@@ -347,11 +326,18 @@ class Reader:
 
     def _boundary(self, card: Card, material: str, interaction: str, step: int | None) -> None:
         fixed = "FIXED" in card.params
+        amplitude = card.params.get("AMPLITUDE", "").strip('"').upper()
+        if amplitude and amplitude not in self.amplitudes:
+            raise card.error(f"AMPLITUDE={amplitude}: no *AMPLITUDE of that name before this "
+                             "card")
+        if amplitude and step is None:
+            raise card.error("AMPLITUDE= on a *BOUNDARY before the first step: give the "
+                             "motion in a step")
         for line in card.data:
             target = line.words[0].upper() if line.words else ""
             if len(line.words) == 2 and line.words[1].upper() in BOUNDARY_TYPES:
                 self.bcs.append(Boundary(target, BOUNDARY_TYPES[line.words[1].upper()], 0.0, step,
-                                    line, fixed))
+                                         line, fixed, amplitude))
                 continue
             if not 2 <= len(line.words) <= 4:
                 raise DeckError("expected '<node or node set>, <first dof>[, <last dof>[, "
@@ -368,7 +354,7 @@ class Reader:
                 raise DeckError("*BOUNDARY, FIXED holds the nodes where they are: expected no "
                                 "value", line.path, line.number)
             self.bcs.append(Boundary(target, tuple(range(first, last + 1)), value, step, line,
-                                fixed))
+                                     fixed, amplitude))
 
     def _static(self, card: Card, material: str, interaction: str, step: int | None) -> None:
         assert step is not None

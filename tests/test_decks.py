@@ -521,12 +521,12 @@ def test_abaqus_blank_checked_at_the_element_line(tmp_path: Path, old: str, new:
                                  f"{message}"), str(error)
 
 
-def test_abaqus_blank_of_other_solids_refused_at_its_element_card(tmp_path: Path) -> None:
+def test_abaqus_blank_of_other_solids_refused_at_the_element_line(tmp_path: Path) -> None:
     case = copy_example("bending", tmp_path)
     (case / "blank.inp").write_text("*NODE\n1, 0, 0, 0\n2, 1, 0, 0\n3, 0, 1, 0\n4, 0, 0, 1\n"
                                     "*ELEMENT, TYPE=C3D4\n1, 1, 2, 3, 4\n")
     (case / "mesh.dat").write_text("file blank.inp\n")
-    assert str(error_of(case)).endswith("blank.inp:6: *ELEMENT, TYPE=C3D4: the blank takes "
+    assert str(error_of(case)).endswith("blank.inp:7: element 1 is a C3D4: the blank takes "
                                         "8-node hexahedra (C3D8, C3D8H, C3D8I, C3D8IH, C3D8R, "
                                         "C3D8RH)")
 

@@ -481,8 +481,9 @@ INP_REFUSALS = {
     "no surface": ("*NODE\n1, 0, 0, 0\n*ELEMENT, TYPE=C3D4\n1, 1, 1, 1, 1\n",
                    ".inp: the Abaqus file holds elements of type C3D4 and no element-based "
                    "*SURFACE: nothing to model"),
-    "bad number": ("*NODE\n1, 0, zero, 0\n", ".inp:2: expected '<node id>, <x>, <y>[, <z>]'"),
-    "include": ("*INCLUDE, INPUT=other.inp\n", ".inp:1: *INCLUDE is not read"),
+    "bad number": ("*NODE\n1, 0, zero, 0\n", ".inp:2: expected a number for a coordinate, got "
+                   "'zero'"),
+    "include": ("*INCLUDE, INPUT=other.inp\n", ".inp:1: *INCLUDE: no such file"),
     "huge node": ("*NODE\n1, 0, 0, 0\n2, 1e308, 0, 0\n", ".inp:3: expected 2 or 3 finite "
                   "coordinates within +-1e+06 mm for node 2"),
 }

@@ -32,7 +32,9 @@ from ddpy._validate import (
 )
 from ddpy.cad.mesh import point_text
 from ddpy.cad.read import CadError
+from ddpy.io.case import DeckError
 from ddpy.io.gmsh import GmshFileError, check_gmsh
+from ddpy.io.inp_mesh import read_inp_mesh
 
 __all__ = ["DEFAULT_MERGE_TOL", "MESH_FORMATS", "MeshFileError", "SurfaceMesh",
            "prepare_surface_mesh", "read_surface_mesh"]
@@ -290,125 +292,25 @@ class _Element:
     block: int
 
 
-def _inp_lines(path: Path) -> list[tuple[int, str]]:
-    """The lines of an input file with their numbers; comments and blank lines dropped, a
-    data line ending in a comma joined to the next (long element lines)."""
-    result: list[tuple[int, str]] = []
-    text = read_input_file(path, "a tool mesh", TOOL_LIMIT).decode("latin-1")
-    pending: tuple[int, str] | None = None
-    for number, raw in enumerate(text.replace("\r\n", "\n").replace("\r", "\n").split("\n"),
-                                 start=1):
-        line = raw.strip()
-        if not line or line.startswith("**"):
-            continue
-        if pending is not None:
-            line = pending[1] + line
-            number = pending[0]
-            pending = None
-        if not line.startswith("*") and line.endswith(","):
-            pending = (number, line)
-            continue
-        result.append((number, line))
-    if pending is not None:
-        result.append(pending)
-    return result
-
-
-def _parameters(line: str) -> tuple[str, dict[str, str]]:
-    parts = [p.strip() for p in line[1:].split(",")]
-    params = {}
-    for p in parts[1:]:
-        if not p:
-            continue
-        key, _, value = p.partition("=")
-        params[key.strip().upper()] = value.strip()
-    return parts[0].upper(), params
-
-
 def _read_inp(path: Path, groups: Sequence[str] | None) -> SurfaceMesh:
+    """The faces of an input file, read by ddpy's .inp reader (:mod:`ddpy.io.inp_mesh`, the
+    one of ``ddpy convert``: includes followed, an assembly made flat, Abaqus ids kept)."""
+    try:
+        mesh = read_inp_mesh(path)
+    except DeckError as error:
+        raise MeshFileError(str(error.errors[0])) from None
     nodes: dict[int, tuple[list[float], int]] = {}
-    elements: dict[int, _Element] = {}
-    elsets: dict[str, list[tuple[str, int]]] = {}       # name -> (item, line)
-    surfaces: dict[str, tuple[list[tuple[str, str, int]], int]] = {}
-    keyword, params, block, where = "", {}, 0, 0
-    current_elset: str | None = None
-    surface_name = ""
-    for number, line in _inp_lines(path):
-        if line.startswith("*"):
-            keyword, params = _parameters(line)
-            where = number
-            if keyword == "INCLUDE":
-                raise MeshFileError(f"{path}:{number}: *INCLUDE is not read: put the included "
-                                    "file's lines in its place")
-            if keyword == "ELEMENT":
-                block += 1
-                if "TYPE" not in params:
-                    raise MeshFileError(f"{path}:{number}: *ELEMENT without TYPE=")
-                current_elset = params.get("ELSET")
-                if current_elset:
-                    elsets.setdefault(current_elset.upper(), [])
-            elif keyword == "ELSET":
-                if "ELSET" not in params:
-                    raise MeshFileError(f"{path}:{number}: *ELSET without ELSET=<name>")
-                elsets.setdefault(params["ELSET"].upper(), [])
-            elif keyword == "SURFACE":
-                surface_name = params.get("NAME", "").upper()
-                if not surface_name:
-                    raise MeshFileError(f"{path}:{number}: *SURFACE without NAME=<name>")
-                surfaces[surface_name] = ([], number)
-            continue
-        words = [w.strip() for w in line.split(",")]
-        if words and words[-1] == "":
-            words.pop()
-        if keyword == "NODE":
-            try:
-                ident = int(words[0])
-                xyz = [float(w) for w in words[1:4]]
-            except (ValueError, IndexError):
-                raise MeshFileError(f"{path}:{number}: expected '<node id>, <x>, <y>[, <z>]', "
-                                    f"got '{line[:60]}'") from None
-            if len(xyz) < 2 or not _within_limits(np.array(xyz)).all():
-                raise MeshFileError(f"{path}:{number}: expected 2 or 3 finite coordinates "
-                                    f"within +-{MAX_LENGTH:g} mm for node {ident}")
-            if ident in nodes:
-                raise MeshFileError(f"{path}:{number}: node {ident} is defined again (first on "
-                                    f"line {nodes[ident][1]})")
-            nodes[ident] = (xyz + [0.0] * (3 - len(xyz)), number)
-        elif keyword == "ELEMENT":
-            try:
-                values = [int(w) for w in words]
-            except ValueError:
-                raise MeshFileError(f"{path}:{number}: expected '<element id>, <node ids>...', "
-                                    f"got '{line[:60]}'") from None
-            if len(values) < 2:
-                raise MeshFileError(f"{path}:{number}: expected an element id and its nodes")
-            if values[0] in elements:
-                raise MeshFileError(f"{path}:{number}: element {values[0]} is defined again "
-                                    f"(first on line {elements[values[0]].line})")
-            elements[values[0]] = _Element(params["TYPE"].upper(), values[1:], number, block)
-            if current_elset:
-                elsets[current_elset.upper()].append((words[0], number))
-        elif keyword == "ELSET":
-            name = params["ELSET"].upper()
-            if "GENERATE" in params:
-                try:
-                    a, b, *step = (int(w) for w in words)
-                except ValueError:
-                    raise MeshFileError(f"{path}:{number}: expected '<first>, <last>[, "
-                                        f"<step>]' (GENERATE), got '{line[:60]}'") from None
-                elsets[name] += [(str(i), number) for i in range(a, b + 1, step[0] if step
-                                                                   else 1)]
-            else:
-                elsets[name] += [(w, number) for w in words if w]
-        elif keyword == "SURFACE":
-            if params.get("TYPE", "ELEMENT").upper() != "ELEMENT":
-                continue   # node-based surfaces: refused if selected (below)
-            item = words[0].upper() if words else ""
-            face = words[1].upper() if len(words) > 1 else "SPOS"
-            surfaces[surface_name][0].append((item, face, number))
-        elif keyword == "INSTANCE":
-            raise MeshFileError(f"{path}:{number}: *INSTANCE with a translation or rotation "
-                                f"(line {where}) is not read: export the assembly flat")
+    for ident, (xyz, line) in mesh.nodes.items():
+        if not _within_limits(np.array(xyz)).all():
+            raise MeshFileError(f"{line.where}: expected 2 or 3 finite coordinates within "
+                                f"+-{MAX_LENGTH:g} mm for node {ident}")
+        nodes[ident] = (list(xyz), line.number)
+    elements = {ident: _Element(kind, ids, line.number, mesh.blocks[ident])
+                for ident, (kind, ids, line) in mesh.elements.items()}
+    elsets = {name: [(item, at.number) for item, at in items]
+              for name, items in mesh.elsets.items()}
+    surfaces = {name: ([(item, face or "SPOS", at.number) for item, face, at in items],
+                       card.number) for name, (items, card) in mesh.surfaces.items()}
     return _inp_faces(path, nodes, elements, elsets, surfaces, groups)
 
 
@@ -422,11 +324,12 @@ def _inp_faces(path: Path, nodes: dict[int, tuple[list[float], int]],
     names: dict[int, str] = {}
 
     def lookup(name: str) -> str | None:
-        """A set or surface name, also without an instance prefix ('Part-1-1.Name')."""
-        for candidate in (name, name.split(".")[-1]):
-            if candidate in elsets or candidate in surfaces:
-                return candidate
-        return None
+        """A set or surface name, also without its instance ('Name' for 'PART-1-1.NAME',
+        when one instance has it)."""
+        if name in elsets or name in surfaces:
+            return name
+        qualified = {n for n in (*elsets, *surfaces) if n.endswith("." + name)}
+        return qualified.pop() if len(qualified) == 1 else None
 
     def members(name: str, seen: tuple[str, ...] = ()) -> list[tuple[int, int]]:
         found = []

@@ -18,7 +18,8 @@ from ddpy.io.case import DeckError
 from ddpy.io.inp_assembly import flatten_assembly
 from ddpy.io.inp_cards import Card, DataLine, integer, number, read_cards
 
-__all__ = ["NODE_COUNTS", "STABILIZING_TYPES", "MeshReader", "element_nodes", "read_inp_mesh"]
+__all__ = ["NODE_COUNTS", "STABILIZING_TYPES", "MeshReader", "ddpy_name", "element_nodes",
+           "read_inp_mesh"]
 
 #: Nodes of the element types whose count ddpy checks (others: any count).
 NODE_COUNTS = {"C3D8": 8, "C3D8R": 8, "C3D8I": 8, "C3D8H": 8, "C3D8IH": 8, "C3D8RH": 8,
@@ -29,6 +30,16 @@ NODE_COUNTS = {"C3D8": 8, "C3D8R": 8, "C3D8I": 8, "C3D8H": 8, "C3D8IH": 8, "C3D8
 #: Elements that only hold rigid-body modes of a static model (springs and dashpots): ddpy
 #: skips them (the blank is held by its constraints and its contact with the tools).
 STABILIZING_TYPES = ("SPRING1", "SPRING2", "SPRINGA", "DASHPOT1", "DASHPOT2", "DASHPOTA")
+
+
+_NAME = re.compile(r"[^A-Za-z0-9_.\-]")
+
+
+def ddpy_name(name: str, prefix: str = "s") -> str:
+    """An Abaqus name as a ddpy name (lower case, other characters '_', a letter first):
+    how a set is named in bc.dat, by ``ddpy convert`` and mesh.dat's ``file X.inp`` alike."""
+    text = _NAME.sub("_", name).lower()[:64]
+    return text if text[:1].isalpha() else f"{prefix}_{text}"[:64]
 
 
 def element_nodes(kind: str) -> int | None:
@@ -49,6 +60,9 @@ class MeshReader:
         self.elements: dict[int, tuple[str, list[int], DataLine]] = {}
         #: Springs and dashpots skipped: (type, node ids, line).
         self.stabilizers: list[tuple[str, list[int], DataLine]] = []
+        #: Each element's *ELEMENT card, numbered from 1 in the file's order.
+        self.blocks: dict[int, int] = {}
+        self._block = 0
         self.nsets: dict[str, list[tuple[str, DataLine]]] = {}
         self.elsets: dict[str, list[tuple[str, DataLine]]] = {}
         self.surfaces: dict[str, tuple[list[tuple[str, str, DataLine]], Card]] = {}
@@ -98,13 +112,14 @@ class MeshReader:
         count = element_nodes(kind)
         elset = card.params.get("ELSET", "").strip('"').upper()
         stabilizing = kind in STABILIZING_TYPES
+        self._block += 1
         for line in card.data:
             try:
                 ident = integer(line, 0, "the element id")
                 if count is not None and len(line.words) != count + 1:
-                    raise DeckError(f"expected '<element id>, <{count} node ids>' for a {kind} "
-                                    f"element, got {len(line.words) - 1} nodes", line.path,
-                                    line.number)
+                    raise DeckError(f"element {line.words[0]} has {len(line.words) - 1} nodes:"
+                                    f" a {kind} element has {count} (was its type or a node "
+                                    "changed?)", line.path, line.number)
                 if len(line.words) < 2:
                     raise DeckError("expected '<element id>, <node ids>'", line.path,
                                     line.number)
@@ -116,6 +131,7 @@ class MeshReader:
                     raise DeckError(f"element {ident} is defined again (first at "
                                     f"{self.elements[ident][2].where})", line.path, line.number)
                 self.elements[ident] = (kind, nodes, line)
+                self.blocks[ident] = self._block
                 if elset:
                     self.elsets.setdefault(elset, []).append((str(ident), line))
             except DeckError as error:
@@ -150,6 +166,9 @@ class MeshReader:
 
     def _surface(self, card: Card, *_: object) -> None:
         name = self._name(card, "NAME")
+        if card.params.get("TYPE", "ELEMENT").upper() != "ELEMENT":
+            self.surfaces[name] = ([], card)     # node-based: no faces
+            return
         items = []
         for line in card.data:
             if not 1 <= len(line.words) <= 2:

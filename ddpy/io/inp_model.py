@@ -21,6 +21,7 @@ from numpy.typing import NDArray
 from ddpy.io.case import MAX_TRAVEL_EXTENTS, DeckError, longest_travel
 from ddpy.io.inp_assembly import flatten_assembly
 from ddpy.io.inp_cards import Card, DataLine, integer, read_cards
+from ddpy.io.inp_mesh import ddpy_name
 from ddpy.io.inp_read import BLANK_TYPES, TOOL_TYPES, Reader
 
 __all__ = ["InpModel", "InpPhase", "InpTool", "ddpy_name", "read_inp"]
@@ -28,13 +29,6 @@ __all__ = ["InpModel", "InpPhase", "InpTool", "ddpy_name", "read_inp"]
 #: Faces S1..S6 of a hexahedron (corner nodes, from 1); by the right-hand rule their
 #: normals point into the element.
 HEX_FACES = ((1, 2, 3, 4), (5, 8, 7, 6), (1, 5, 6, 2), (2, 6, 7, 3), (3, 7, 8, 4), (4, 8, 5, 1))
-_NAME = re.compile(r"[^A-Za-z0-9_.\-]")
-
-def ddpy_name(name: str, prefix: str = "s") -> str:
-    """An Abaqus name as a ddpy name (lower case, other characters '_', a letter first)."""
-    text = _NAME.sub("_", name).lower()[:64]
-    return text if text[:1].isalpha() else f"{prefix}_{text}"[:64]
-
 
 @dataclass
 class InpTool:

@@ -1,5 +1,6 @@
 """mesh.dat: the blank, as own 'nodes' and 'hexahedra' blocks, a generated 'box' or a mesh file
-(Abaqus input or Gmsh, checked entry by entry at their lines, then read through meshio), with
+(Abaqus input, read by ddpy's .inp reader with its ids kept, or Gmsh, checked entry by entry
+at its lines, then read through meshio), with
 its sheet normal, scale and origin, and the element it is discretized with. The nodes are
 checked to belong to an element here, the elements by HexMesh (ddpy.model.mesh,
 find_bad_elements), whose findings are reported at the elements' lines.
@@ -16,7 +17,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ddpy._validate import MESH_LIMIT, InputFileError, check_input_file, read_input_file
-from ddpy.io import inp_cards
 from ddpy.io.case import DeckError
 from ddpy.io.decks.lines import (
     INT_PATTERN,
@@ -34,6 +34,7 @@ from ddpy.io.decks.lines import (
     show,
 )
 from ddpy.io.gmsh import GmshFileError, check_gmsh
+from ddpy.io.inp_mesh import ddpy_name, read_inp_mesh
 from ddpy.model.mesh import (
     MAX_ELEMENTS,
     HexMesh,
@@ -43,7 +44,7 @@ from ddpy.model.mesh import (
 )
 from ddpy.model.solid import DEFAULT_ELEMENT, ELEMENTS
 
-#: Mesh files read through meshio.
+#: Mesh files: Abaqus input (ddpy's reader), Gmsh (through meshio).
 MESH_SUFFIXES = (".inp", ".msh")
 #: Largest node or element id.
 MAX_ID = 2**31 - 1
@@ -309,15 +310,13 @@ def _mesh_file(deck: Deck, line: Line) -> _RawMesh:
                    f"or Gmsh), got {show(line.words[1])}")
     if not path.exists():
         raise BadValue(f"mesh file {path} not found")
+    if suffix == ".inp":
+        return _inp_file(path)
     # meshio loses the lines and takes what does not fit its counts: the file is checked
     # entry by entry first, each defect named at its line.
     try:
-        if suffix == ".msh":
-            check_gmsh(path, read_input_file(path, "a mesh file", MESH_LIMIT), hexahedra=True)
-        else:
-            check_input_file(path, "a mesh file", MESH_LIMIT)
-            _check_inp(path)
-    except (InputFileError, GmshFileError, DeckError) as error:
+        check_gmsh(path, read_input_file(path, "a mesh file", MESH_LIMIT), hexahedra=True)
+    except (InputFileError, GmshFileError) as error:
         raise BadValue(f"mesh file {error}") from None
     except OSError as error:
         raise BadValue(f"cannot read mesh file {path}: {error.strerror or error}") from None
@@ -326,10 +325,9 @@ def _mesh_file(deck: Deck, line: Line) -> _RawMesh:
 
         data = meshio.read(path)
     except Exception as error:  # meshio raises many types for a bad file
-        expected = ("a Gmsh file of format 2.2 or 4.1" if suffix == ".msh" else
-                    "an Abaqus input file of *NODE and *ELEMENT cards")
         raise BadValue(f"mesh file {path}: meshio cannot read it ({type(error).__name__}: "
-                       f"{error}): expected {expected} (docs/input-format.md)") from None
+                       f"{error}): expected a Gmsh file of format 2.2 or 4.1 "
+                       "(docs/input-format.md)") from None
     solids = {"tetra", "hexahedron", "wedge", "pyramid"}
     other = {}
     hexes = []
@@ -365,53 +363,50 @@ def _mesh_file(deck: Deck, line: Line) -> _RawMesh:
                     np.arange(1, len(elements) + 1), None, nodesets, path.name)
 
 
-#: Abaqus element types meshio reads as 8-node hexahedra.
+#: Abaqus element types of 8-node hexahedra.
 _INP_HEXAHEDRA = ("C3D8", "C3D8H", "C3D8I", "C3D8IH", "C3D8R", "C3D8RH")
 
 
-def _check_inp(path: Path) -> None:
-    """An Abaqus input file as the blank's mesh, checked card by card before meshio reads it
-    (meshio joins the element lines of a block into one stream, takes any word int() takes
-    and fails on a missing node with a bare KeyError): node and element ids positive
-    integers, each once; every element's nodes defined; a line of a hexahedron block holds
-    8 nodes; other solid elements refused. Raises DeckError at the line."""
-    nodes: dict[int, inp_cards.DataLine] = {}
-    elements: dict[int, inp_cards.DataLine] = {}
-    for card in inp_cards.read_cards(path):
-        if card.keyword == "NODE":
-            for data in card.data:
-                ident = inp_cards.integer(data, 0, "the node id")
-                if len(data.words) < 3:
-                    raise DeckError(f"expected '<node id>, <x>, <y>, <z>', got "
-                                    f"'{', '.join(data.words)[:60]}'", data.path, data.number)
-                for k in range(1, len(data.words)):
-                    inp_cards.number(data, k, "a coordinate")
-                if ident in nodes:
-                    raise DeckError(f"node {ident} is defined again (first at "
-                                    f"{nodes[ident].where})", data.path, data.number)
-                nodes[ident] = data
-        elif card.keyword == "ELEMENT":
-            kind = card.params.get("TYPE", "").upper()
+def _inp_file(path: Path) -> _RawMesh:
+    """An Abaqus input file as the blank's mesh, read by ddpy's .inp reader (the one of
+    ``ddpy convert``, :mod:`ddpy.io.inp_mesh`): its hexahedra with their Abaqus node and
+    element ids, its node sets (names as bc.dat's, :func:`ddpy.io.inp_mesh.ddpy_name`);
+    nodes outside the hexahedra dropped, other solid elements refused at their line."""
+    try:
+        check_input_file(path, "a mesh file", MESH_LIMIT)
+        mesh = read_inp_mesh(path)
+        hexes = []
+        for ident, (kind, nodes, line) in mesh.elements.items():
             if kind.startswith("C3D") and kind not in _INP_HEXAHEDRA:
-                raise card.error(f"*ELEMENT, TYPE={kind}: the blank takes 8-node hexahedra "
-                                 f"({', '.join(_INP_HEXAHEDRA)})")
-            for data in card.data:
-                ident = inp_cards.integer(data, 0, "the element id")
-                for k in range(1, len(data.words)):
-                    inp_cards.integer(data, k, "a node id")
-                if kind in _INP_HEXAHEDRA and len(data.words) != 9:
-                    raise DeckError(f"element {ident} has {len(data.words) - 1} nodes: a {kind} "
-                                    "element has 8 (was its type or a node changed?)", data.path,
-                                    data.number)
-                if ident in elements:
-                    raise DeckError(f"element {ident} is defined again (first at "
-                                    f"{elements[ident].where})", data.path, data.number)
-                elements[ident] = data
-    for ident, data in elements.items():
-        for word in data.words[1:]:
-            if int(word) not in nodes:
-                raise DeckError(f"element {ident} refers to node {word}, which no *NODE "
-                                "defines", data.path, data.number)
+                raise DeckError(f"element {ident} is a {kind}: the blank takes 8-node "
+                                f"hexahedra ({', '.join(_INP_HEXAHEDRA)})", line.path,
+                                line.number)
+            if kind in _INP_HEXAHEDRA:
+                for n in nodes:
+                    if n not in mesh.nodes:
+                        raise DeckError(f"element {ident} refers to node {n}, which no *NODE "
+                                        "defines", line.path, line.number)
+                hexes.append((ident, nodes))
+    except (InputFileError, DeckError) as error:
+        raise BadValue(f"mesh file {error}") from None
+    except OSError as error:
+        raise BadValue(f"cannot read mesh file {path}: {error.strerror or error}") from None
+    if not hexes:
+        raise BadValue(f"mesh file {path.name} holds no hexahedra")
+    if len(hexes) > MAX_ELEMENTS:
+        raise BadValue(f"mesh file {path.name} has {len(hexes)} elements: at most "
+                       f"{MAX_ELEMENTS}")
+    node_ids = np.unique([n for _, nodes in hexes for n in nodes]).astype(np.int64)
+    connectivity = np.searchsorted(node_ids, np.array([nodes for _, nodes in hexes]))
+    nodesets = {}
+    for name in mesh.nsets:
+        ids = np.array(mesh.node_set(name, mesh.nsets[name][0][1]) if mesh.nsets[name] else [],
+                       dtype=np.int64)
+        ids = ids[np.isin(ids, node_ids)]
+        nodesets[ddpy_name(name, "set")] = np.unique(np.searchsorted(node_ids, ids))
+    coords = np.array([mesh.nodes[int(n)][0] for n in node_ids], dtype=float)
+    return _RawMesh(coords, connectivity.astype(np.int64), node_ids,
+                    np.array([e for e, _ in hexes], dtype=np.int64), None, nodesets, path.name)
 
 
 def _file_nodesets(data: Any) -> dict[str, NDArray[np.int64]]:

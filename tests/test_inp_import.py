@@ -330,6 +330,30 @@ def test_run_converts_beside_the_file(deck: Path, tmp_path: Path, monkeypatch:
     assert (tmp_path / "results" / "bending_case" / "results.h5").is_file()
 
 
+def test_run_reuses_the_case_only_while_the_input_file_is_unchanged(
+        deck: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    case = tmp_path / "bending_case"
+    assert main(["convert", str(deck), str(case)]) == 0
+    # An edit of the case is the user's: ddpy run MODEL.inp runs the case as it is.
+    control = case / "control.dat"
+    control.write_text(control.read_text() + "# edited by hand\n")
+    capsys.readouterr()
+    run = ["run", str(deck), "--threads", "1", "--stop-after", "1"]
+    assert main([*run, "--output", str(tmp_path / "r1")]) == 0
+    assert "as it is now: running it" in capsys.readouterr().out
+    assert control.read_text().endswith("# edited by hand\n")
+    # Other options than the conversion's: refused, the case left alone.
+    assert main([*run, "--tools", "nagata", "--output", str(tmp_path / "r2")]) == 2
+    assert "was converted with --tools facets" in capsys.readouterr().err
+    # An included file changed: refused as ddpy convert refuses an occupied folder.
+    _edit(deck.parent / "die.inp", "** The die", "** The die, edited")
+    assert main([*run, "--output", str(tmp_path / "r3")]) == 2
+    err = capsys.readouterr().err
+    assert f"{deck} changed since {case} was converted from it" in err and "--force" in err
+    assert control.read_text().endswith("# edited by hand\n")
+    assert not (tmp_path / "r3").exists()
+
+
 MATERIAL = """elastic E 210000 nu 0.3
 yield vonmises
 hardening table 3   # plastic strain, yield stress

@@ -126,7 +126,7 @@ def _run(args: argparse.Namespace) -> int:
         from ddpy.app.convert import convert_command
 
         converted = convert_command(str(args.case), None, args.tools or "facets", args.element,
-                                    True, "run")
+                                    False, "run")
         if converted is None:
             return 2
         folder = converted

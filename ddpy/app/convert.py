@@ -10,6 +10,8 @@ Nagata patches smoothed over them.
 
 from __future__ import annotations
 
+import hashlib
+import json
 import os
 import sys
 from collections.abc import Sequence
@@ -24,7 +26,13 @@ from ddpy.io.decks import DECKS
 from ddpy.io.inp_model import InpModel, InpTool, read_inp
 from ddpy.model.control import MIN_FRACTION
 
-__all__ = ["TOOL_MODELS", "Conversion", "convert_command", "convert_inp", "deck_texts"]
+__all__ = ["STAMP", "TOOL_MODELS", "Conversion", "convert_command", "convert_inp", "deck_texts",
+           "source_digest"]
+
+#: The file in a converted case that records what it was converted from: the input file's
+#: digest (with its includes) and the options; ``ddpy run MODEL.inp`` reuses the case only
+#: when both are unchanged.
+STAMP = ".ddpy-converted.json"
 
 #: What tools.dat may name: the faces as given, or Nagata patches over them.
 TOOL_MODELS = ("facets", "nagata")
@@ -169,7 +177,40 @@ def convert_inp(inp: str | os.PathLike[str], folder: str | os.PathLike[str],
                                   blank_side=_blank_side(t, model.normal))
     for name in DECKS:
         (out / name).write_text(texts[name])
+    stamp = {"source": str(Path(inp).name), "sha256": source_digest(model.sources),
+             "tools": tools, "element": element}
+    (out / STAMP).write_text(json.dumps(stamp, indent=1) + "\n")
     return Conversion(out, model, list(model.ignored))
+
+
+def source_digest(paths: Sequence[Path]) -> str:
+    """The SHA-256 of an input file and the files it includes (names and contents)."""
+    digest = hashlib.sha256()
+    for path in sorted(set(paths)):
+        digest.update(path.name.encode() + b"\0" + path.read_bytes() + b"\0")
+    return digest.hexdigest()
+
+
+def _reuse(inp: str, out: Path, tools: str, element: str | None) -> str | None:
+    """Why the converted case ``out`` cannot serve ``ddpy run inp`` (None: it can)."""
+    from ddpy.io.inp_cards import read_cards
+
+    again = f"convert again with 'ddpy convert {inp} {out} --force' (which overwrites any " \
+        "edits in the case)"
+    try:
+        stamp = json.loads((out / STAMP).read_text())
+        recorded = (stamp["sha256"], stamp["tools"], stamp["element"])
+    except (OSError, ValueError, KeyError, TypeError):
+        return f"{out} holds something else than a case converted by ddpy: move it away, " \
+            "or convert into another folder with 'ddpy convert'"
+    sources = [Path(inp)] + [card.path for card in read_cards(inp)]
+    if recorded[0] != source_digest(sources):
+        return f"{inp} changed since {out} was converted from it: {again}"
+    if recorded[1:] != (tools, element):
+        return f"{out} was converted with --tools {recorded[1]}" + (
+            f" --element {recorded[2]}" if recorded[2] else "") + f": {again}, or run it " \
+            f"as it is with 'ddpy run {out}'"
+    return None
 
 
 def convert_command(inp: str, folder: str | None, tools: str, element: str | None,
@@ -180,14 +221,16 @@ def convert_command(inp: str, folder: str | None, tools: str, element: str | Non
     from ddpy.io.decks import DeckError, read_case
 
     out = Path(folder) if folder else Path(inp).with_name(Path(inp).stem + "_case")
-    control = out / "control.dat"
-    if overwrite and command == "run" and out.is_dir() and any(out.iterdir()) and not (
-            control.is_file() and control.read_text(errors="replace").startswith(
-                "# ddpy control deck, converted from")):
-        print(f"ddpy {command}: error: {out} holds something else than a case converted by "
-              "ddpy: move it away, or convert into another folder with 'ddpy convert'",
-              file=sys.stderr)
-        return None
+    if command == "run" and out.is_dir() and any(out.iterdir()):
+        try:
+            refusal = _reuse(inp, out, tools, element)
+        except DeckError as error:
+            refusal = str(error)
+        if refusal is not None:
+            print(f"ddpy {command}: error: {refusal}", file=sys.stderr)
+            return None
+        print(f"ddpy {command}: {out} was converted from {inp} as it is now: running it")
+        return out
     try:
         done = convert_inp(inp, out, tools, element, overwrite)
         case = read_case(out)

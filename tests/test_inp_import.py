@@ -441,3 +441,88 @@ def test_rigid_body_by_node_set(tmp_path: Path) -> None:
     model = read_inp(path)
     assert [t.name for t in model.tools] == ["punch_n", "die"]
     assert model.phases[0].moves == {"punch_n": (0.0, 0.0, -0.1)}
+
+
+CAE_DECK = Path(__file__).parent / "data" / "cae_bending.inp"
+
+
+def _tool_points(path: Path) -> np.ndarray:
+    lines = path.read_text().splitlines()
+    at = next(i for i, line in enumerate(lines) if line.startswith("vertices"))
+    count = int(lines[at].split()[1])
+    return np.array([[float(v) for v in line.split()] for line in lines[at + 1:at + 1 + count]])
+
+
+def test_cae_deck_of_parts_and_instances_converts_and_runs(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """tests/data/cae_bending.inp, as Abaqus/CAE writes a model: two parts, a punch and a die
+    that are two instances of one rigid part (the die's turned over by its rotation line),
+    sets named through their instance, tabular amplitudes on the tools' motions."""
+    case = tmp_path / "case"
+    assert main(["convert", str(CAE_DECK), str(case)]) == 0
+    capsys.readouterr()
+    # The strip is the first instance: its node k is 1000 + k (docs/abaqus-import.md).
+    mesh = (case / "mesh.dat").read_text()
+    assert "\n  1001 0 0 0\n" in mesh and "\n  1078 12 2 1\n" in mesh
+    assert "nodeset  strip-1.xsym  ids 1001 1014 1027 1040 1053 1066" in \
+        (case / "bc.dat").read_text()
+    # The die: the roller translated by (-8, 0, 0), then turned 180 degrees about y: its
+    # nose up at x = 8, z = 0, the rest of it below and to either side.
+    die = _tool_points(case / "tools" / "die.facets.tool")
+    assert np.isclose(die[:, 2].max(), 0.0, atol=1e-9)
+    np.testing.assert_allclose(die[np.argmax(die[:, 2]), [0, 2]], [8.0, 0.0], atol=1e-9)
+    assert die[:, 2].min() == pytest.approx(-3.0) and die[:, 0].min() == pytest.approx(5.0)
+    punch = _tool_points(case / "tools" / "punch.facets.tool")
+    assert punch[:, 2].min() == pytest.approx(1.0) and punch[:, 0].max() == pytest.approx(3.0)
+    # The die's amplitude starts at half the step: two phases, the die rising in the second.
+    control = (case / "control.dat").read_text()
+    assert "phase bend_1" in control and "phase bend_2" in control
+    first, second = control.split("phase bend_2")
+    assert "move   punch  0 0 -1\n" in first and "move   die" not in first.split("bend_1")[1]
+    assert "move   punch  0 0 -1\n" in second and "move   die  0 0 0.5\n" in second
+    assert main(["run", str(case), "--threads", "1", "--output", str(tmp_path / "out")]) == 0
+    assert "completed" in capsys.readouterr().out
+
+
+def test_an_unsupported_keyword_is_reported_once_with_its_lines(tmp_path: Path) -> None:
+    deck = tmp_path / "cae.inp"
+    text = CAE_DECK.read_text().replace(
+        "*End Part", "*Orientation, name=Ori-1\n1., 0., 0., 0., 1., 0.\n*End Part")
+    deck.write_text(text)
+    lines = [i + 1 for i, line in enumerate(text.splitlines()) if line.startswith("*Orient")]
+    with pytest.raises(DeckError) as caught:
+        read_inp(deck)
+    assert len(caught.value.errors) == 1, str(caught.value)
+    error = caught.value.errors[0]
+    assert (error.path, error.line) == (deck, lines[0])
+    assert f"keyword *ORIENTATION is not supported (also at {deck}:{lines[1]}): write the " \
+        "rolling direction in material.dat" in error.message
+    assert "*HEADING" not in error.message
+
+
+@pytest.mark.parametrize(("old", "new", "message"), [
+    ("          0.,           0.,           0.,           0.,           1.,           0., 180.",
+     "          0.,           0.,           0.,           0.,           0.,           0., 180.",
+     "the rotation axis of *INSTANCE goes through two equal points"),
+    ("*Instance, name=Die-1, part=Roller", "*Instance, name=Die-1, part=Wheel",
+     "no *PART named WHEEL before this *INSTANCE"),
+    ("*Rigid Body, ref node=Die-1.Roller-RefPt_", "*Rigid Body, ref node=Die-2.Roller-RefPt_",
+     "no node set named DIE-2.ROLLER-REFPT_"),
+    ("*Boundary, amplitude=Late", "*Boundary, amplitude=Later",
+     "AMPLITUDE=LATER: no *AMPLITUDE of that name before this card"),
+    ("0.,              0.,             0.5,              0.,              1.,              1.",
+     "0.,              1.,             0.5,              0.,              1.,              1.",
+     "AMPLITUDE=LATE puts tool die at 0.5 mm along z at the start of the step, where it is at"),
+])
+def test_cae_deck_defects_are_refused_at_their_line(tmp_path: Path, old: str, new: str,
+                                                    message: str) -> None:
+    deck = tmp_path / "cae.inp"
+    deck.write_text(CAE_DECK.read_text())
+    line = _edit(deck, old, new)
+    with pytest.raises(DeckError) as caught:
+        read_inp(deck)
+    error = caught.value.errors[0]
+    assert message in error.message, str(caught.value)
+    assert error.path == deck
+    if "AMPLITUDE=LATE " not in message:
+        assert error.line == line, str(caught.value)

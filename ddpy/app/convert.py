@@ -76,7 +76,8 @@ def deck_texts(model: InpModel, tools: str = "facets", element: str | None = Non
     source = model.path.name
     head = f"# ddpy {{}} deck, converted from {source} by ddpy convert.  Units mm, N, MPa.\n"
     element = element or ELEMENTS[model.element_type]
-    mesh = [head.format("mesh"), f"# The blank's {model.element_type} elements, ids kept.",
+    mesh = [head.format("mesh"),
+            f"# The blank's {model.element_type} elements, Abaqus ids (docs/abaqus-import.md).",
             f"normal   {model.normal}", f"element  {element}", f"nodes {len(model.nodes)}"]
     mesh += [f"  {n} " + " ".join(_number(c) for c in xyz) for n, xyz in model.nodes.items()]
     mesh += [f"hexahedra {len(model.elements)}"]

@@ -187,13 +187,15 @@ class Reader(MeshReader):
                 interaction = ""
         if step is not None:
             self.fail(self.steps[step].error("the step has no *END STEP"))
-        for key, where in unsupported.items():
-            more = f" (also at {', '.join(c.where for c in where[1:4])}" + \
+        for key, found in unsupported.items():
+            # An instanced part repeats its cards: each line is named once.
+            where = list(dict.fromkeys(c.where for c in found))
+            more = f" (also at {', '.join(where[1:4])}" + \
                 (f" and {len(where) - 4} more)" if len(where) > 4 else ")") \
                 if len(where) > 1 else ""
             hint = _HINTS.get(key, "the keywords ddpy reads are listed in "
                               "docs/abaqus-import.md")
-            self.fail(where[0].error(f"keyword *{key} is not supported{more}: {hint}"))
+            self.fail(found[0].error(f"keyword *{key} is not supported{more}: {hint}"))
 
     def _params(self, card: Card) -> bool:
         allowed = SUPPORTED[card.keyword]

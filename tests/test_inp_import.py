@@ -526,3 +526,38 @@ def test_cae_deck_defects_are_refused_at_their_line(tmp_path: Path, old: str, ne
     assert error.path == deck
     if "AMPLITUDE=LATE " not in message:
         assert error.line == line, str(caught.value)
+
+
+NUMISHEET = Path(__file__).resolve().parents[1] / "examples" / "numisheet2002_bending"
+
+
+def test_numisheet_2002_calculix_deck_with_springs_converts_and_runs(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """examples/numisheet2002_bending/bending.inp: the benchmark's CalculiX deck, whose
+    SPRING2 elements hold the blank's rigid-body mode along z until the tools grip it."""
+    deck = tmp_path / "bending.inp"
+    shutil.copy(NUMISHEET / "bending.inp", deck)
+    spring = deck.read_text().splitlines().index("*ELEMENT, TYPE=SPRING2, ELSET=HOLD") + 1
+    case = tmp_path / "case"
+    assert main(["convert", str(deck), str(case)]) == 0
+    out = capsys.readouterr().out
+    assert f"ignored: {deck}:{spring}: 4 SPRING2 element(s), skipped" in out
+    assert f"ignored: {deck}:{spring + 5}: *SPRING (its elements are skipped)" in out
+    # The ground nodes are not the blank's; the blank is the 30 x 3 x 2 hexahedra.
+    mesh = (case / "mesh.dat").read_text()
+    assert "nodes 372\n" in mesh and "hexahedra 180\n" in mesh and "\n  9100 " not in mesh
+    assert "move   punch  0 0 -28.5" in (case / "control.dat").read_text()
+    assert main(["run", str(case), "--threads", "1", "--stop-after", "3", "--output",
+                 str(tmp_path / "out")]) == 0
+    assert "stopped after 3 increments" in capsys.readouterr().out
+
+
+def test_a_spring_between_blank_nodes_is_refused(tmp_path: Path) -> None:
+    deck = tmp_path / "bending.inp"
+    shutil.copy(NUMISHEET / "bending.inp", deck)
+    line = _edit(deck, "9100, 1, 9100", "9100, 1, 2")
+    with pytest.raises(DeckError) as caught:
+        read_inp(deck)
+    error = caught.value.errors[0]
+    assert (error.path, error.line) == (deck, line)
+    assert "a SPRING2 element between blank nodes 1, 2: it would carry load" in error.message

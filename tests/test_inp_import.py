@@ -561,3 +561,29 @@ def test_a_spring_between_blank_nodes_is_refused(tmp_path: Path) -> None:
     error = caught.value.errors[0]
     assert (error.path, error.line) == (deck, line)
     assert "a SPRING2 element between blank nodes 1, 2: it would carry load" in error.message
+
+
+@pytest.mark.parametrize(("model", "mesh_file", "names"), [
+    ("bending.inp", "blank.inp", ("xsym", "ysym", "centre")),
+    ("cae", "cae", ("strip-1.xsym", "strip-1.ysym", "strip-1.centre"))])
+def test_mesh_file_and_convert_keep_the_same_ids_and_set_names(
+        deck: Path, tmp_path: Path, model: str, mesh_file: str, names: tuple[str, ...]) -> None:
+    """mesh.dat's 'file X.inp' reads the blank as ddpy convert does: Abaqus node and
+    element ids (an assembly's numbered by instance), node sets named as bc.dat names them."""
+    source = CAE_DECK if model == "cae" else deck
+    converted = read_case(convert_inp(source, tmp_path / "converted").folder)
+    case = tmp_path / "file"
+    shutil.copytree(tmp_path / "converted", case)
+    text = (case / "mesh.dat").read_text()
+    path = CAE_DECK if mesh_file == "cae" else deck.parent / mesh_file
+    (case / "mesh.dat").write_text(text[:text.index("nodes ")] + f"file {path}\n")
+    bc = (case / "bc.dat").read_text().splitlines()
+    # The file's node sets stand for the converted ones: same names, same nodes.
+    (case / "bc.dat").write_text("\n".join(x for x in bc if not x.startswith("nodeset")) + "\n")
+    from_file = read_case(case)
+    np.testing.assert_array_equal(from_file.mesh.node_ids, converted.mesh.node_ids)
+    np.testing.assert_array_equal(from_file.mesh.element_ids, converted.mesh.element_ids)
+    np.testing.assert_allclose(from_file.mesh.nodes, converted.mesh.nodes)
+    for name in names:
+        np.testing.assert_array_equal(from_file.boundary.nodesets[name].nodes,
+                                      converted.boundary.nodesets[name].nodes)

@@ -28,25 +28,43 @@ class ProgressDisplay:
     otherwise (a log file, a pipe, and under mpirun, which hands rank 0 a terminal of its
     own whatever mpirun's output is)."""
 
-    def __init__(self, stream: TextIO, width: int = 24) -> None:
-        self.stream, self.width = stream, width
+    def __init__(self, stream: TextIO, width: int = 24,
+                 clock: Callable[[], float] = time.perf_counter) -> None:
+        self.stream, self.width, self.clock = stream, width, clock
         self.tty = stream.isatty() and mpi.launched_size() == 1
-        self.start = time.perf_counter()
+        self.start = clock()
         self._open = False
+        # Where the rate of progress is measured from: the first increment shown (a
+        # restart starts part-way).
+        self._origin: tuple[float, float] | None = None
+
+    def eta(self, fraction: float) -> str:
+        """The time left at this pace, from the share of the run done since the first
+        increment shown ('--' before there is a pace)."""
+        now = self.clock()
+        if self._origin is None:
+            self._origin = (now, fraction)
+            return "--"
+        t0, f0 = self._origin
+        if fraction <= f0 or now <= t0:
+            return "--"
+        return _duration((now - t0) / (fraction - f0) * (1.0 - fraction))
 
     def __call__(self, p: Progress) -> None:
-        elapsed = time.perf_counter() - self.start
+        elapsed = self.clock() - self.start
+        run = min(max(p.run_fraction, 0.0), 1.0)
+        eta = self.eta(run)
         lead = f"{p.lead} {p.travel:.4f}/{p.phase_travel:g} mm" if p.lead else "tools off"
         if not self.tty:
             print(f"increment {p.increment} phase {p.phase} ({p.phase_index + 1}/{p.phases}) "
                   f"{lead} step {p.step:.4g} iterations {p.iterations} limit {p.limit} "
-                  f"{elapsed:.1f} s", file=self.stream, flush=True)
+                  f"{elapsed:.1f} s, run {100 * run:.1f} % done, ETA {eta}", file=self.stream,
+                  flush=True)
             return
-        done = p.travel / p.phase_travel if p.phase_travel > 0 else 1.0
-        filled = int(round(self.width * min(max(done, 0.0), 1.0)))
+        filled = int(round(self.width * run))
         bar = "#" * filled + "-" * (self.width - filled)
-        line = (f"\r{p.phase} ({p.phase_index + 1}/{p.phases}) [{bar}] {100 * done:5.1f}% "
-                f"inc {p.increment}  {lead}  it {p.iterations}  {elapsed:.0f} s")
+        line = (f"\r[{bar}] {100 * run:5.1f}% ETA {eta}  {p.phase} ({p.phase_index + 1}/"
+                f"{p.phases})  inc {p.increment}  {lead}  it {p.iterations}  {elapsed:.0f} s")
         self.stream.write(line + "\033[K")
         self.stream.flush()
         self._open = True
@@ -56,6 +74,18 @@ class ProgressDisplay:
             self.stream.write("\n")
             self.stream.flush()
             self._open = False
+
+
+def _duration(seconds: float) -> str:
+    """'42 s', '3 min 05 s', '2 h 07 min'."""
+    seconds = max(0.0, seconds)
+    if seconds < 60:
+        return f"{seconds:.0f} s"
+    minutes, rest = divmod(round(seconds), 60)
+    if minutes < 60:
+        return f"{minutes} min {rest:02d} s"
+    hours, minutes = divmod(minutes, 60)
+    return f"{hours} h {minutes:02d} min"
 
 
 class _Interrupt:

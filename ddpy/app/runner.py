@@ -119,6 +119,16 @@ class Progress:
     step: float
     iterations: int
     limit: str
+    #: The share of the whole run done, in [0, 1]: the phases weighed by their increments
+    #: (a forming phase's travel over its largest increment, a springback's increments).
+    run_fraction: float = 0.0
+
+
+def _phase_weight(phase: Phase) -> float:
+    """A phase's expected increments, its weight in the run's progress."""
+    if phase.is_springback:
+        return float(max(phase.increments, 1))
+    return max(phase.travel / phase.max_increment, 1.0) if phase.max_increment else 1.0
 
 
 @dataclass(frozen=True)
@@ -394,9 +404,14 @@ class _Run:
         self.phase_increments += 1
         self._since_checkpoint += 1
         if self.progress is not None:
+            weights = [_phase_weight(q) for q in self.case.phases]
+            done = self.phase_increments / weights[self.phase_index] if phase.is_springback \
+                else travel / phase.travel if phase.travel > 0 else 1.0
+            fraction = (sum(weights[:self.phase_index]) + weights[self.phase_index]
+                        * min(max(done, 0.0), 1.0)) / sum(weights)
             self.progress(Progress(phase.name, self.phase_index, len(self.case.phases),
                                    self.writer.increments, phase.lead, travel, phase.travel,
-                                   step, len(history) - 1, limit))
+                                   step, len(history) - 1, limit, fraction))
 
     def _warn_penetration(self, phase: Phase, depth: list[float]) -> None:
         """Warn, once per tool and run, where the blank lies deeper in a tool than the

@@ -187,7 +187,8 @@ def test_a_stalled_increment_says_how_many_pairs_changed_state(caplog, monkeypat
                 r"\(tolerance 1e-08\)")
 
     whole, half = stalled("1.00e+00"), stalled("5.00e-01")
-    with pytest.raises(FormingError, match=rf"failed after 1 cuts: {half}$") as failed:
+    with pytest.raises(FormingError, match=rf"failed after 1 cuts: {half} \(hint: lower "
+                       r"max_increment or raise max_iterations \(control.dat\)\)$") as failed:
         problem.run({"die": (0, 0, 0)}, max_increment=1.0, limits=ONE_CUT,
                     newton=NewtonSettings(1e-10, 1e-8, max_iterations=1))
     assert failed.value.result.cuts == 2 and not failed.value.result.factors
@@ -237,7 +238,10 @@ def test_an_element_failing_at_the_converged_state_fails_the_trial(caplog) -> No
     why = f"element {element} is inverted (det F <= 0 or det J0 <= 0 at a Gauss point)"
     with pytest.raises(FormingError) as failed:
         problem.run({"plane": (0, 0, 1e-3)}, max_increment=1e-3, limits=ONE_CUT)
-    assert str(failed.value) == f"increment to phase factor 0.5 failed after 1 cuts: {why}"
+    hint = "(hint: an element turns inside out: lower max_increment, or refine the blank " \
+        "where it bends)"
+    assert str(failed.value) == f"increment to 0.0005 mm of the 0.001 mm stroke failed " \
+        f"after 1 cuts: {why} {hint}"
     result = failed.value.result
     assert result.cuts == 2 and not result.factors
     # Once the default start of a phase's first increment failed, its retries take the
@@ -245,10 +249,10 @@ def test_an_element_failing_at_the_converged_state_fails_the_trial(caplog) -> No
     assert result.evaluations == 3 and result.newton_iterations == 0
     assert result.factorizations == 0
     assert messages(caplog) == [
-        f"increment to phase factor 1 (step 1) starts again with the resting tools' "
-        f"touching pairs open: {why}",
-        f"increment to phase factor 1 (step 1) cut: {why}",
-        f"increment to phase factor 0.5 (step 0.5) cut: {why}"]
+        f"increment to 0.001 mm of the 0.001 mm stroke (step 0.001 mm) starts again with "
+        f"the resting tools' touching pairs open: {why}",
+        f"increment to 0.001 mm of the 0.001 mm stroke (step 0.001 mm) cut: {why} {hint}",
+        f"increment to 0.0005 mm of the 0.001 mm stroke (step 0.0005 mm) cut: {why} {hint}"]
 
 
 def compressed_cube(load: float) -> tuple[FormingProblem, np.ndarray]:
@@ -305,16 +309,18 @@ def test_a_residual_that_is_not_finite_fails_the_trial(caplog) -> None:
     caplog.set_level(logging.INFO, logger="ddpy.model.forming")
     problem, mesh = block_on_plane(0.0)
     problem.external[mesh.select(z=0.25)[0], 2] = np.nan
-    with pytest.raises(FormingError, match=r"^increment to phase factor 0.00195312 failed: "
-                       r"a cut would make it smaller than the smallest increment \(0.001 of "
-                       r"the largest\): the residual is not finite$") as failed:
+    with pytest.raises(FormingError, match=r"^increment to 1.953e-06 mm of the 0.001 mm "
+                       r"stroke failed: a cut would make it smaller than the smallest "
+                       r"increment \(0.001 of the largest\): the residual is not finite "
+                       r"\(hint: a load or a material value is not a number\)$") as failed:
         problem.run({"plane": (0, 0, 1e-3)}, max_increment=1e-3,
                     limits=IncrementLimits(min_fraction=1e-3), newton=NewtonSettings(cutback=0.5))
     result = failed.value.result
     assert result.cuts == 10 and result.evaluations == 2 + 9
     assert result.newton_iterations == 0 and not result.factors
     cuts = [m for m in messages(caplog) if " cut: " in m]
-    assert len(cuts) == 10 and all(m.endswith(" cut: the residual is not finite")
+    assert len(cuts) == 10 and all(m.endswith(" cut: the residual is not finite (hint: a "
+                                              "load or a material value is not a number)")
                                    for m in cuts)
 
 
@@ -330,7 +336,8 @@ def test_a_jacobian_mumps_cannot_factorize_fails_the_trial() -> None:
     problem.external[mesh.select(x=1.0), 0] = 1.0
     with pytest.raises(FormingError, match=r"failed after 1 cuts: MUMPS factorization or "
                        r"solve failed with code -(6|10): the matrix is (structurally|"
-                       r"numerically) singular$") as failed:
+                       r"numerically) singular \(hint: a part of the model is free to "
+                       r"move") as failed:
         problem.run({"far": (0, 0, 0)}, max_increment=1.0, limits=ONE_CUT)
     result = failed.value.result
     assert result.newton_iterations == result.evaluations == 3

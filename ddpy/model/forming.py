@@ -50,7 +50,8 @@ from ddpy.model.tool import RigidTool
 _log = logging.getLogger(__name__)
 
 __all__ = ["RigidTool", "FormingProblem", "FormingResult", "FormingError", "Linearization",
-           "PhaseProgress", "default_augmentation", "default_penalty", "start_depth_limit"]
+           "PhaseProgress", "cut_hint", "default_augmentation", "default_penalty",
+           "start_depth_limit"]
 
 #: Most increments a phase may take at its largest increment: a max_increment smaller than
 #: the travel over this would only keep the process busy (1e-300 mm ran for ever).
@@ -104,6 +105,35 @@ RELEASE_STEPS, RELEASE_SMALLEST = 4, 1.0 / 1024.0
 #: Most Uzawa updates of the Gauss points' pressure multipliers within one increment
 #: (NewtonSettings.augment; docs/theory/contact.md, "Penetration").
 MAX_AUGMENTATIONS = 6
+
+
+def _trial(target: float, step: float | None, travel: float) -> str:
+    """An increment trial as messages name it: the lead tool's stroke in mm it goes to (and
+    its size), or its phase factor in a phase that moves no tool."""
+    if travel > 0.0:
+        where = f"increment to {target * travel:.4g} mm of the {travel:.4g} mm stroke"
+        return where if step is None else f"{where} (step {step * travel:.3g} mm)"
+    where = f"increment to phase factor {target:.6g}"
+    return where if step is None else f"{where} (step {step:.3g})"
+
+
+def cut_hint(failure: str) -> str:
+    """One thing to try when increments fail for ``failure`` (docs/running.md)."""
+    if "changed state" in failure:
+        return "contact pairs still open and close at the end: a smaller max_increment where " \
+            "the blank first touches a tool, or Gauss-point contact (tools.dat: " \
+            "discretization gauss)"
+    if failure.startswith("no convergence"):
+        return "lower max_increment or raise max_iterations (control.dat)"
+    if "inverted" in failure:
+        return "an element turns inside out: lower max_increment, or refine the blank where " \
+            "it bends"
+    if "singular" in failure:
+        return "a part of the model is free to move: check the constraints (bc.dat) and that " \
+            "every node belongs to an element"
+    if "not finite" in failure:
+        return "a load or a material value is not a number"
+    return "lower max_increment (control.dat)"
 
 
 def _extrapolated(u: NDArray[np.float64], step: float, rate: NDArray[np.float64] | None,
@@ -479,9 +509,8 @@ class FormingProblem:
                 # the blank does not need, with exact solves and full steps (a careful
                 # start, docs/theory/contact.md), before cutting; so do the retries of
                 # this increment.
-                _log.info("increment to phase factor %.6g (step %.3g) starts again with the "
-                          "resting tools' touching pairs open: %s", target, step,
-                          outcome.failure)
+                _log.info("%s starts again with the resting tools' touching pairs open: %s",
+                          _trial(target, step, travel), outcome.failure)
                 careful = True
                 touching = _Touching(TOUCHING * self.size, resting=False)
                 outcome = self._increment(layout, positions, on, tol_force,
@@ -493,21 +522,23 @@ class FormingProblem:
                 reason = "yield"
                 continue
             if outcome.failure:
-                _log.info("increment to phase factor %.6g (step %.3g) cut: %s", target, step,
-                          outcome.failure)
+                _log.info("%s cut: %s (hint: %s)", _trial(target, step, travel),
+                          outcome.failure, cut_hint(outcome.failure))
                 cuts_in_row += 1
                 result.cuts += 1
                 if cuts_in_row > max_cuts:
-                    raise FormingError(f"increment to phase factor {target:.6g} failed after "
-                                       f"{max_cuts} cuts: {outcome.failure}", result)
+                    raise FormingError(f"{_trial(target, None, travel)} failed after "
+                                       f"{max_cuts} cuts: {outcome.failure} (hint: "
+                                       f"{cut_hint(outcome.failure)})", result)
                 if step * cutback < limits.min_fraction * nominal and \
                         1.0 - factor > limits.min_fraction * nominal:
                     # Below the smallest increment a run only crawls: cut after cut, each
                     # tiny step converging and the next, larger one failing again.
                     raise FormingError(
-                        f"increment to phase factor {target:.6g} failed: a cut would make it "
-                        f"smaller than the smallest increment ({limits.min_fraction:g} of the "
-                        f"largest): {outcome.failure}", result)
+                        f"{_trial(target, None, travel)} failed: a cut would make it smaller "
+                        f"than the smallest increment ({limits.min_fraction:g} of the "
+                        f"largest): {outcome.failure} (hint: {cut_hint(outcome.failure)})",
+                        result)
                 step, reason = step * cutback, "cut"
                 continue
             depth = self._penetration(layout, outcome, on, positions)

@@ -6,6 +6,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
 from deckutil import EXAMPLES, copy_example, edit, row_mesh_deck
 
 
@@ -46,3 +47,21 @@ def test_check_reports_every_bad_element(tmp_path: Path) -> None:
                         "18, 18]"
     assert errors[2].startswith(f"{mesh}:{lines[3]}: element 14 is inverted at its corner 0")
     assert errors[3] == f"{case}: 3 errors"
+
+
+@pytest.mark.parametrize(("element", "discretization", "said"), [
+    ("solid-shell", "node", "contact discretization node (node-to-surface)"),
+    ("hexahedron", "surface", "contact discretization surface (surface-to-surface, 2 x 2 "
+     "points per blank face)")])
+def test_check_names_the_element_and_the_contact_discretization(
+        tmp_path: Path, element: str, discretization: str, said: str) -> None:
+    case = copy_example("bending", tmp_path)
+    mesh = case / "mesh.dat"
+    mesh.write_text(mesh.read_text() + f"element {element}\n")
+    edit(case, "tools.dat", "  contact      top", f"  discretization {discretization}\n"
+         "  contact      top")
+    result = check(str(case))
+    assert result.returncode == 0, result.stderr
+    assert f", element {element} (8-node " in result.stdout
+    assert "tool punch: nagata, punch.tool, friction 0.148, contacts the top of the blank, " \
+        f"{said}" in result.stdout

@@ -768,12 +768,13 @@ def test_contact_discretization(tmp_path: Path) -> None:
     assert (read.tool("punch").discretization, read.tool("die").discretization) == (
         "gauss", "surface")
     assert "die: nagata, die.tool, friction 0.148, contacts the bottom of the blank, " \
-        "surface-to-surface" in read.summary()
+        "contact discretization surface (surface-to-surface" in read.summary()
     problem = build_problem(read)
     assert [t.contact for t in problem.tools] == ["gauss", "surface"]
     edit(case, "tools.dat", "contact      top", "contact      top\n  discretization node")
     assert [t.contact for t in build_problem(read_case(case)).tools] == ["node", "surface"]
-    assert "contacts the top of the blank, node-to-surface" in read_case(case).summary()
+    assert "contacts the top of the blank, contact discretization node (node-to-surface)" \
+        in read_case(case).summary()
     edit(case, "tools.dat", "discretization surface", "discretization edges")
     number = line_of(case, "tools.dat", "discretization edges")
     assert str(error_of(case)).startswith(f"{case / 'tools.dat'}:{number}: ")
@@ -789,8 +790,8 @@ def test_gauss_contact_its_penalty_and_points(tmp_path: Path) -> None:
                 "contact      bottom\n  discretization gauss\n  penalty 150\n  points 3")
     read = read_case(case)
     assert (read.tool("die").discretization, read.tool("die").penalty) == ("gauss", 150.0)
-    assert "contacts the bottom of the blank, Gauss-point contact, penalty 150 N/mm^3, " \
-        "3 x 3 points per face" in read.summary()
+    assert "contacts the bottom of the blank, contact discretization gauss (Gauss-point " \
+        "contact, 3 x 3 points per blank face), penalty 150 N/mm^3" in read.summary()
     problem = build_problem(read)
     assert [t.contact for t in problem.tools] == ["gauss", "gauss"]
     assert [t.points for t in problem.tools] == [4, 3]

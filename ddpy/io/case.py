@@ -424,7 +424,8 @@ class Case:
             hard = f"tabulated ({len(mat.hardening.strains)} points)"
         lines = [
             f"case {self.folder}: {self.title}",
-            f"  blank: {m.n_nodes} nodes, {m.n_elements} hexahedra, {size} mm, normal "
+            f"  blank: {m.n_nodes} nodes, {m.n_elements} hexahedra, element {self.element} "
+            f"({_ELEMENT_NAMES.get(self.element, self.element)}), {size} mm, normal "
             f"{_axis_name(m.normal)} ({m.source})",
             f"  material: E = {mat.E:g} MPa, nu = {mat.nu:g}, {self.material.yield_input}, "
             f"{hard} hardening, initial yield {mat.hardening.initial_yield_stress:.4g} MPa, "
@@ -434,13 +435,14 @@ class Case:
         ]
         for t in self.tools:
             lines.append(f"  tool {t.name}: {t.description}, {t.file.name}, friction "
-                         f"{t.friction:g}, contacts the {t.contact} of the blank"
-                         + {"surface": ", surface-to-surface",
-                            "gauss": ", Gauss-point contact",
-                            "node": ", node-to-surface"}[t.discretization]
-                         + (f", penalty {t.penalty:g} N/mm^3" if t.penalty is not None else "")
-                         + (f", {t.face_points} x {t.face_points} points per face"
-                            if t.face_points else ""))
+                         f"{t.friction:g}, contacts the {t.contact} of the blank, contact "
+                         f"discretization {t.discretization} ("
+                         + {"surface": "surface-to-surface",
+                            "gauss": "Gauss-point contact",
+                            "node": "node-to-surface"}[t.discretization]
+                         + (f", {t.face_points} x {t.face_points} points per blank face"
+                            if t.face_points else "") + ")"
+                         + (f", penalty {t.penalty:g} N/mm^3" if t.penalty is not None else ""))
         for p in self.phases:
             if p.is_springback:
                 lines.append(f"  phase {p.name}: springback in {p.increments} step(s)")
@@ -455,6 +457,12 @@ class Case:
                          "increments)")
         lines += [f"  warning: {w}" for w in self.warnings]
         return "\n".join(lines)
+
+
+#: What the blank's elements are, for the case summary (docs/theory/element_choice.md).
+_ELEMENT_NAMES = {"solid-shell": "8-node solid-shell, enhanced strains, free of locking in "
+                                 "bending",
+                  "hexahedron": "8-node mean-dilatation hexahedron"}
 
 
 def _axis_name(normal: tuple[float, float, float]) -> str:

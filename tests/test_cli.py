@@ -54,3 +54,17 @@ def test_bad_arguments() -> None:
     result = subprocess.run([sys.executable, "-m", "ddpy", "nosuchcommand"],
                             capture_output=True, text=True)
     assert result.returncode == 2 and "invalid choice" in result.stderr
+
+
+def test_compare_usage_errors_exit_2(tmp_path) -> None:
+    """Labels that do not match the runs are a usage error, refused before any run is read
+    (the runs here do not exist); so is a missing RUN, argparse's own."""
+    labels = subprocess.run([sys.executable, "-m", "ddpy", "compare", str(tmp_path / "a"),
+                             str(tmp_path / "b"), "--labels", "one", "--output",
+                             str(tmp_path / "out")], capture_output=True, text=True)
+    assert labels.returncode == 2
+    assert "--labels gives 1 labels for 2 runs: expected one per RUN" in labels.stderr
+    assert not (tmp_path / "out").exists()
+    bare = subprocess.run([sys.executable, "-m", "ddpy", "compare"], capture_output=True,
+                          text=True)
+    assert bare.returncode == 2 and "RUN" in bare.stderr

@@ -97,7 +97,7 @@ def test_compare_overlays_runs_and_tabulates_them(runs: tuple[Path, Path, Path],
     assert [r["run"] for r in rows] == ["full", "part"]
     assert int(rows[0]["increments"]) > int(rows[1]["increments"]) == 12
     bad = cli("compare", str(full), "--labels", "a,b", "--output", str(tmp_path))
-    assert bad.returncode == 1 and "2 labels for 1 runs" in bad.stderr
+    assert bad.returncode == 2 and "2 labels for 1 runs" in bad.stderr
 
 
 def test_plastic_strain_map_fills_its_frame(tmp_path: Path) -> None:

@@ -302,7 +302,13 @@ def _post(args: argparse.Namespace) -> int:
 def _compare(args: argparse.Namespace) -> int:
     from ddpy.app.post import compare_runs
 
-    labels = args.labels.split(",") if args.labels else None
+    labels = [x.strip() for x in args.labels.split(",")] if args.labels else None
+    # A usage error exits 2, as argparse's do; a RUN without results or a results file
+    # that cannot be read exits 1, as in ddpy post.
+    if labels is not None and len(labels) != len(args.runs):
+        print(f"ddpy compare: error: --labels gives {len(labels)} labels for "
+              f"{len(args.runs)} runs: expected one per RUN, in order", file=sys.stderr)
+        return 2
     try:
         paths, table = compare_runs(args.runs, args.output, labels)
     except (FileNotFoundError, ValueError, KeyError) as error:

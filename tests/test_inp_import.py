@@ -587,3 +587,17 @@ def test_mesh_file_and_convert_keep_the_same_ids_and_set_names(
     for name in names:
         np.testing.assert_array_equal(from_file.boundary.nodesets[name].nodes,
                                       converted.boundary.nodesets[name].nodes)
+
+
+def test_tool_mesh_of_an_assembly_is_the_tool_convert_writes(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """ddpy tools build reads an .inp file as ddpy convert does: the die instance of the CAE
+    deck, turned over by its rotation, gives the same faces on both paths."""
+    assert main(["convert", str(CAE_DECK), str(tmp_path / "case")]) == 0
+    assert main(["tools", "build", str(CAE_DECK), "--groups", "Die-1.Face", "--out",
+                 str(tmp_path / "built")]) == 0
+    capsys.readouterr()
+    converted = _tool_points(tmp_path / "case" / "tools" / "die.facets.tool")
+    built = _tool_points(tmp_path / "built" / "cae_bending.facets.tool")
+    np.testing.assert_allclose(np.unique(built, axis=0), np.unique(converted, axis=0),
+                               atol=1e-9)

@@ -390,9 +390,11 @@ class _Mapper:
                     rotation = node in rot_of
                     if tool is None:
                         if node in spring_nodes:
-                            r.ignored.append(f"{bc.line.where}: *BOUNDARY on node {node} of a "
-                                             "skipped spring or dashpot")
-                            break
+                            note = f"{bc.line.where}: *BOUNDARY on {bc.node_or_set}: on the " \
+                                "nodes of skipped springs or dashpots"
+                            if note not in r.ignored:
+                                r.ignored.append(note)
+                            continue
                         if node not in blank_nodes:
                             r.fail(DeckError(f"node {node} of the *BOUNDARY is neither a node "
                                              "of the blank nor a tool's REF NODE or ROT NODE",

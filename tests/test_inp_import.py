@@ -601,3 +601,28 @@ def test_tool_mesh_of_an_assembly_is_the_tool_convert_writes(
     built = _tool_points(tmp_path / "built" / "cae_bending.facets.tool")
     np.testing.assert_allclose(np.unique(built, axis=0), np.unique(converted, axis=0),
                                atol=1e-9)
+
+
+@pytest.mark.parametrize(("ramp", "moves"), [
+    # Down 2.5 mm by half the step, then back up 0.5 mm while the die rises.
+    ("0., 0., 0.5, 1.25, 1., 1.", [{"punch": (0, 0, -2.5)},
+                                   {"punch": (0, 0, 0.5), "die": (0, 0, 0.5)}]),
+    # The punch's speed changes at 0.25 (no new phase for that) and it dwells from 0.5.
+    ("0., 0., 0.25, 0.75, 0.5, 1., 1., 1.", [{"punch": (0, 0, -2.0)}, {"die": (0, 0, 0.5)}]),
+    # In total time (one step of period 1 before nothing: the same as step time).
+    ("0., 0., 1., 1.", [{"punch": (0, 0, -1.0)},
+                        {"punch": (0, 0, -1.0), "die": (0, 0, 0.5)}]),
+])
+def test_amplitudes_make_one_phase_per_straight_stretch(tmp_path: Path, ramp: str,
+                                                        moves: list[dict]) -> None:
+    deck = tmp_path / "cae.inp"
+    text = CAE_DECK.read_text().replace(
+        "*Amplitude, name=Ramp\n             0.,              0.,              1.,"
+        "              1.", f"*Amplitude, name=Ramp\n{ramp}")
+    if ramp == "0., 0., 1., 1.":
+        text = text.replace("*Amplitude, name=Ramp", "*Amplitude, name=Ramp, time=TOTAL TIME")
+    deck.write_text(text)
+    model = read_inp(deck)
+    forming = [p for p in model.phases if p.kind == "forming"]
+    assert [p.moves for p in forming] == moves
+    assert [p.name for p in forming] == ["bend_1", "bend_2"]

@@ -141,6 +141,15 @@ def test_run_writes_every_phase_and_the_outputs(reference: tuple[Path, Path]) ->
         assert np.all(np.isinf(r.iterations()["residual_displacement"][first]))
 
 
+def test_every_output_file_is_readable_by_all(reference: tuple[Path, Path]) -> None:
+    """results.xdmf was 0600 (the temporary file of its atomic rewrite kept mkstemp's
+    mode): every file of the output folder is 0644, whatever the umask."""
+    _, out = reference
+    names = {p.name: p.stat().st_mode & 0o777 for p in out.iterdir() if p.is_file()}
+    assert {RESULTS, "results.xdmf", CHECKPOINT, "status.json"} <= set(names)
+    assert names == dict.fromkeys(names, 0o644)
+
+
 def test_an_output_frame_leaves_the_path_of_increments_unchanged(tmp_path: Path) -> None:
     """An output_at travel the run reaches anyway (its first increment ends at 0.2 mm)
     splits the phase there; the next segment goes on with the phase's rate and step, so

@@ -21,7 +21,6 @@ import logging
 import math
 import os
 import resource
-import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -39,7 +38,12 @@ from ddpy.io.checkpoint import (
     state_from_arrays,
     write_checkpoint,
 )
-from ddpy.io.output_folder import FolderLock, OutputFolderError, check_output_folder
+from ddpy.io.output_folder import (
+    FolderLock,
+    OutputFolderError,
+    check_output_folder,
+    temporary_beside,
+)
 from ddpy.io.results import MIN_FREE, ResultsWriteError, ResultsWriter, Timings, frame_bytes
 from ddpy.model.forming import (
     FormingError,
@@ -188,11 +192,10 @@ def build_problem(case: Case) -> FormingProblem:
 
 
 def _write_atomic(path: Path, text: str) -> None:
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".status-")
+    fd, tmp = temporary_beside(path, ".status-")
     try:
         with os.fdopen(fd, "w") as out:
             out.write(text)
-        os.chmod(tmp, 0o644)
         os.replace(tmp, path)
     except BaseException:  # a full disk: no empty temporary left behind
         Path(tmp).unlink(missing_ok=True)

@@ -27,7 +27,6 @@ import functools
 import os
 import re
 import shutil
-import tempfile
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -38,6 +37,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ddpy import __version__
+from ddpy.io.output_folder import RESULT_MODE, temporary_beside
 from ddpy.model.mesh import through_thickness_columns
 
 __all__ = ["CONTACT_STATUS", "FORMAT", "LIMITS", "TENSOR6", "VOIGT", "Frame", "ResultsReader",
@@ -218,6 +218,7 @@ class ResultsWriter:
             # Removed, not truncated: a process that has the old file open keeps it whole.
             self.path.unlink(missing_ok=True)
         self._file = h5py.File(self.path, "w-")
+        os.chmod(self.path, RESULT_MODE)  # as the XDMF file beside it, whatever the umask
         self.failed = ""  # why a write failed; the file is closed then
         with self._writing():
             self._create(nodes, elements, ids, eids, normal, title, case, element)
@@ -586,7 +587,7 @@ class ResultsWriter:
     def _write_xdmf(self) -> None:
         text = xdmf_text(self.path.name, self._file)
         try:
-            fd, tmp = tempfile.mkstemp(dir=self.xdmf_path.parent, prefix=".xdmf-")
+            fd, tmp = temporary_beside(self.xdmf_path, ".xdmf-")
         except OSError as error:
             raise OSError(error.errno, error.strerror, str(self.xdmf_path)) from error
         try:

@@ -99,7 +99,9 @@ _LIMITS = {"max": "max_increment", "touch": "contact_touch", "strain": "strain",
 
 #: Arrays of FormingProblem carried from one increment to the next (besides the solid state
 #: and the tool positions): a checkpoint stores them. Add here any new state of the loop.
-_CARRIED = ("u", "force", "_status", "traction", "pressure")
+_CARRIED = ("u", "force", "_contact_state", "traction", "pressure")
+#: Names checkpoints of earlier versions gave carried arrays: new name -> old.
+_CARRIED_BEFORE = {"_contact_state": "_status"}
 #: Of those, the ones a checkpoint written before they existed lacks (then zero): the
 #: tangential tractions and the pressures of Gauss-point contact.
 _SINCE = ("traction", "pressure")
@@ -320,6 +322,9 @@ class _Run:
                 f"{self.discretization} (a default changed); run again without --restart, "
                 "or name the element and contact in the decks")
         p = self.problem
+        for new, old in _CARRIED_BEFORE.items():
+            if new not in arrays and old in arrays:
+                arrays[new] = arrays[old]
         carried = {k: arrays[k] for k in _CARRIED if k in arrays or k not in _SINCE}
         positions = {k: arrays[f"position/{k}"] for k in self.names}
         for name, value in carried.items():
@@ -353,18 +358,20 @@ class _Run:
         if self.writer.increments == self.last_frame:
             return
         n = p.u.shape[0]
-        status = np.zeros(n, np.int8)
+        node_state = np.zeros(n, np.int8)
         tool = np.full(n, -1, np.int16)
-        if result is not None and result.status and all(result.status[k] for k in self.names):
-            states = np.concatenate([result.status[k][-1] for k in self.names])
+        states_of = None if result is None else result.contact_states
+        if states_of and all(states_of[k] for k in self.names):
+            states = np.concatenate([states_of[k][-1] for k in self.names])
             touching = states != 0
-            status[self.slaves[touching]] = states[touching]
+            node_state[self.slaves[touching]] = states[touching]
             tool[self.slaves[touching]] = self.tool_of[touching]
         contact = np.zeros((n, 3))
         np.add.at(contact, self.slaves, p.force)
         cauchy = p.solid.stresses(p.u, p.state)[1]
         self.writer.fields(displacement=p.u, stress=cauchy, plastic_strain=p.state.ep,
-                           contact_status=status, contact_force=contact, contact_tool=tool)
+                           contact_state=node_state, contact_force=contact, contact_tool=tool,
+                           contact_pressure=p.contact_pressure())
         self.last_frame = self.writer.increments
 
     def record(self, phase: Phase, result: FormingResult, step: float, travel: float,
@@ -484,7 +491,7 @@ class _Run:
             resume, self.resume = self.resume, None
             p.run(motion, phase.max_increment * ratio, active=phase.tools,
                   newton=phase.newton, limits=phase.limits, gaps=gaps, result=result,
-                  on_increment=hook, resume=resume)
+                  on_increment=hook, resume=resume, phase=phase.name, frames=False)
             if self.halt:
                 self.fields(result)
                 return
@@ -496,7 +503,7 @@ class _Run:
     def springback(self, phase: Phase) -> None:
         result = FormingResult()
         start = time.perf_counter()
-        self.problem.springback(phase.increments, phase.newton, result=result)
+        self.problem.springback(phase.increments, phase.newton, result=result, frames=False)
         share = (time.perf_counter() - start) / phase.increments
         t = result.timings
         for k in range(len(result.residuals)):
@@ -623,7 +630,8 @@ def _run_locked(case: Case, output: Path, restart: bool,
                            "with --overwrite")
         (output / CHECKPOINT).unlink(missing_ok=True)
         # A new file, not the old one truncated: a reader of the old results keeps them.
-        run.writer = ResultsWriter.for_case(results, case, overwrite=True)
+        run.writer = ResultsWriter.for_case(results, case, overwrite=True,
+                                            surfaces=[t.surface for t in run.problem.tools])
         run.save(None)
     assert run.writer is not None
     leads = [p.lead or "" for p in case.phases]

@@ -27,7 +27,7 @@ from ddpy.app.runner import (
     read_status,
     run_case,
 )
-from ddpy.io.checkpoint import CheckpointError, read_checkpoint
+from ddpy.io.checkpoint import CheckpointError, read_checkpoint, write_checkpoint
 from ddpy.io.decks import read_case
 from ddpy.io.results import ResultsReader
 
@@ -213,6 +213,27 @@ def test_restart_after_a_stop_ends_as_the_uninterrupted_run(
     last = run_case(loaded, tmp_path, restart=True)
     assert last.status == "completed"
     compare(ref, tmp_path)
+
+
+def test_restart_from_a_checkpoint_of_the_earlier_names_ends_as_the_uninterrupted_run(
+        reference: tuple[Path, Path], tmp_path: Path) -> None:
+    """Checkpoints written before the contact states were renamed hold them as _status:
+    a restart from one takes them (the release control reads them) and ends as the run
+    without a stop; the outcome gives the blank's fields of every frame."""
+    case, ref = reference
+    loaded = read_case(case)
+    assert run_case(loaded, tmp_path, max_increments=7).status == "stopped"
+    meta, arrays = read_checkpoint(tmp_path / CHECKPOINT)
+    states = arrays.pop("_contact_state")
+    assert (states != 0).any()  # (in contact at the stop: the test can tell)
+    write_checkpoint(tmp_path / CHECKPOINT, meta, {**arrays, "_status": states})
+    last = run_case(loaded, tmp_path, restart=True)
+    assert last.status == "completed"
+    compare(ref, tmp_path)
+    frames = last.field_frames()
+    assert [f.increment for f in frames] == [f.increment for f in ResultsReader(
+        tmp_path / RESULTS).frames]
+    assert frames[-1].thinning is not None and frames[-1].to_meshio().points.shape[1] == 3
 
 
 def test_restart_after_every_increment_ends_as_the_uninterrupted_run(

@@ -44,8 +44,16 @@ from ddpy.io.output_folder import (
     check_output_folder,
     temporary_beside,
 )
-from ddpy.io.results import MIN_FREE, ResultsWriteError, ResultsWriter, Timings, frame_bytes
+from ddpy.io.results import (
+    MIN_FREE,
+    ResultsReader,
+    ResultsWriteError,
+    ResultsWriter,
+    Timings,
+    frame_bytes,
+)
 from ddpy.model.forming import (
+    FieldFrame,
     FormingError,
     FormingProblem,
     FormingResult,
@@ -142,6 +150,13 @@ class RunOutcome:
     @property
     def results(self) -> Path:
         return self.output / RESULTS
+
+    def field_frames(self) -> list[FieldFrame]:
+        """The blank's fields at every frame of the results (displacement, stress, plastic
+        strain, thickness and thinning, contact pressure, surface strains; each frame's
+        ``to_meshio()`` gives a meshio mesh), frame 0 the initial state."""
+        with ResultsReader(self.results) as r:
+            return [r.field_frame(k) for k in range(len(r.frames))]
 
 
 def read_status(output: str | os.PathLike[str]) -> dict[str, Any]:

@@ -306,7 +306,10 @@ def forming_summary(run: Run) -> str:
             k = int(np.argmin(t))
             lines.append(f"- smallest thickness: {t[k]:.4g} mm (node {node_ids[k]}; "
                          f"{t0[k]:.4g} mm at the start)")
-            thinning = np.divide(100.0 * (t0 - t), t0, out=np.zeros_like(t0), where=t0 > 0)
+            thinning = last.get("thinning")
+            if thinning is None:  # (files written before thinning was)
+                thinning = np.divide(100.0 * (t0 - t), t0, out=np.zeros_like(t0),
+                                     where=t0 > 0)
             k = int(np.argmax(thinning))
             lines.append(f"- largest thinning: {thinning[k]:.3g} % (node {node_ids[k]})")
         springback = [p for p, lead in enumerate(run.leads) if not lead]

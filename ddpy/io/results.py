@@ -610,9 +610,7 @@ class ResultsWriter:
         if self._measures is not None:
             if thickness is None:
                 thickness = self._measures.thickness(u)
-            t0 = self._measures.initial_thickness
-            data["thinning"] = np.divide(100.0 * (t0 - thickness), t0,
-                                         out=np.zeros_like(t0), where=t0 > 0)
+            data["thinning"] = self._measures.thinning(thickness=thickness)
             for key, value in self._measures.surface_strains(u).items():
                 which, surface = key.split("_")
                 data[f"{which}_strain_{surface}"] = value

@@ -96,12 +96,14 @@ class SheetMeasures:
         x = self._positions(u)
         return np.linalg.norm(x[self.top] - x[self.bottom], axis=1)
 
-    def thinning(self, u: ArrayLike) -> NDArray[np.float64]:
+    def thinning(self, u: ArrayLike | None = None, thickness: ArrayLike | None = None
+                 ) -> NDArray[np.float64]:
         """Per node, 100 (t0 - t) / t0: the loss of thickness in % of the initial one
-        (negative where the sheet got thicker)."""
+        (negative where the sheet got thicker), t at displacements ``u`` or as given
+        (``thickness``, (n,))."""
         t0 = self.initial_thickness
-        return np.divide(100.0 * (t0 - self.thickness(u)), t0, out=np.zeros_like(t0),
-                         where=t0 > 0)
+        t = self.thickness(u) if thickness is None else np.asarray(thickness, dtype=float)
+        return np.divide(100.0 * (t0 - t), t0, out=np.zeros_like(t0), where=t0 > 0)
 
     def surface_strains(self, u: ArrayLike) -> dict[str, NDArray[np.float64]]:
         """Per element, the major and minor in-plane logarithmic strains of its column's

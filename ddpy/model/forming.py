@@ -43,6 +43,7 @@ from ddpy.model.newton import (
     ToolPack,
     Trial,
     contact_faces,
+    face_basis,
     gauss_face_weights,
     increment,
 )
@@ -954,13 +955,13 @@ class FormingProblem:
                 first_point += count
                 continue
             if tool.contact == "gauss":
-                basis = _face_basis(tool.points)                              # (npf, 4)
+                basis = face_basis(tool.points)                              # (npf, 4)
                 area = gauss_face_weights(x, faces, tool.points)              # (f, npf)
                 force = (self.point_pressure[first_point:first_point + count].reshape(-1, npf)
                          * gauss_face_weights(mesh.nodes, faces, tool.points))
                 node_force = np.bincount(faces.ravel(), (force @ basis).ravel(), minlength=n)
             else:
-                basis = _face_basis(2)
+                basis = face_basis(2)
                 area = gauss_face_weights(x, faces, 2)
                 node_force = np.zeros(n)
                 node_force[tool.slaves] = np.maximum(
@@ -1155,15 +1156,6 @@ class FormingProblem:
     def close(self) -> None:
         """Free the MUMPS instance."""
         self._reset()
-
-
-def _face_basis(order: int) -> NDArray[np.float64]:
-    """The 4 shape functions of a quadrilateral face at its order x order Gauss points
-    (order^2, 4), in the order of gauss_face_weights."""
-    corner = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
-    points = np.polynomial.legendre.leggauss(order)[0]
-    xi, eta = np.tile(points, order), np.repeat(points, order)
-    return 0.25 * (1.0 + np.outer(xi, corner[:, 0])) * (1.0 + np.outer(eta, corner[:, 1]))
 
 
 def _neighbour_pairs(elements: NDArray[np.int_], tools: list[RigidTool],

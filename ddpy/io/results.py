@@ -42,7 +42,8 @@ from ddpy.io.output_folder import RESULT_MODE, temporary_beside
 from ddpy.model.forming_quantities import SURFACES, FieldFrame, SheetMeasures, nodal_average
 
 __all__ = ["CONTACT_STATES", "FORMAT", "LIMITS", "TENSOR6", "VOIGT", "Frame", "ResultsReader",
-           "ResultsWriteError", "ResultsWriter", "Timings", "frame_bytes", "xdmf_text"]
+           "ResultsWriteError", "ResultsWriter", "Timings", "frame_bytes", "xdmf_frame",
+           "xdmf_text"]
 
 FORMAT = "ddpy-results"
 VERSION = 1
@@ -290,6 +291,7 @@ class ResultsWriter:
         self._count = 0
         self._iterations = 0
         self._frames: list[Frame] = []
+        self._grids: list[list[str]] = []  # each frame's XDMF grids (xdmf_frame)
         self._phase = 0
         self._travel = 0.0
         self._stroke = 0.0
@@ -431,6 +433,7 @@ class ResultsWriter:
         self._count, self._iterations = increments, iterations
         self._stroke = float(inc["step"][:increments].sum())
         self._frames = []
+        self._grids = []
         for index in range(frames):
             a = fields[f"{index:06d}"].attrs
             self._frames.append(Frame(index, int(a["increment"]), int(a["phase"]),
@@ -677,7 +680,12 @@ class ResultsWriter:
         return paths
 
     def _write_xdmf(self) -> None:
-        text = xdmf_text(self.path.name, self._file)
+        """Rewrite the XDMF file (atomically) with the frames' grids, each read from the
+        file once (``_grids``): rebuilding every frame's at every frame grew as the
+        square of the frames."""
+        while len(self._grids) < len(self._frames):
+            self._grids.append(xdmf_frame(self.path.name, self._file, len(self._grids)))
+        text = xdmf_text(self.path.name, self._file, self._grids)
         try:
             fd, tmp = temporary_beside(self.xdmf_path, ".xdmf-")
         except OSError as error:
@@ -823,60 +831,63 @@ def _item(h5name: str, dataset: Any) -> str:
             f'Dimensions="{dims}" Format="HDF">{escape(h5name)}:{dataset.name}</DataItem>')
 
 
-def xdmf_text(h5name: str, f: Any) -> str:
+def xdmf_frame(h5name: str, f: Any, index: int) -> list[str]:
+    """The XDMF grids of frame ``index`` of a results file, one per collection of
+    xdmf_text (each drawn tool's, then the blank's; "" where a tool has no grid). A frame
+    never changes once written: the writer keeps these and writes the document from them."""
+    mesh = f["mesh"]
+    group = f["fields"][f"{index:06d}"]
+    time = f'<Time Value="{float(group.attrs["time"])!r}"/>'
+    tools = f["tools"] if "tools" in f else {}
+    paths = group.attrs.get("tool_geometry")
+    out = []
+    for t, name in enumerate(str(t) for t in f.attrs["tools"]):
+        if name not in tools:
+            continue
+        if paths is None or not str(paths[t]):
+            out.append("")
+            continue
+        cells = tools[name]["cells"]
+        out.append("\n        ".join([
+            f'<Grid Name={quoteattr(f"{name} {index}")} GridType="Uniform">', time,
+            f'<Topology TopologyType="{cells.attrs["topology"]}" NumberOfElements='
+            f'"{int(cells.attrs["count"])}">{_item(h5name, cells)}</Topology>',
+            f'<Geometry GeometryType="XYZ">{_item(h5name, f[str(paths[t])])}</Geometry>',
+            "</Grid>"]))
+    geometry = mesh["nodes"] if index == 0 else group["coordinates"]
+    parts = [f'<Grid Name="frame {index}" GridType="Uniform">', time,
+             f'<Topology TopologyType="Hexahedron" NumberOfElements='
+             f'"{mesh["elements"].shape[0]}">{_item(h5name, mesh["elements"])}</Topology>',
+             f'<Geometry GeometryType="XYZ">{_item(h5name, geometry)}</Geometry>']
+    for name, ds in group.items():
+        if name == "coordinates":
+            continue
+        centre = str(ds.attrs.get("centre", "Node"))
+        width = ds.shape[1] if ds.ndim == 2 else 1
+        kind = {1: "Scalar", 3: "Vector", 6: "Tensor6", 9: "Tensor"}.get(width, "Matrix")
+        parts.append(f'<Attribute Name={quoteattr(name)} AttributeType="{kind}" '
+                     f'Center="{centre}">{_item(h5name, ds)}</Attribute>')
+    parts.append("</Grid>")
+    out.append("\n        ".join(parts))
+    return out
+
+
+def xdmf_text(h5name: str, f: Any, frames: Sequence[list[str]] | None = None) -> str:
     """The XDMF 3 document of a results file: per drawn tool a temporal collection of its
     tessellated surface placed at each frame, then the blank's, each frame with the current
     coordinates as geometry and its fields as attributes (the HDF5 datasets). The blank's
-    comes last: meshio's TimeSeriesReader reads the last temporal collection."""
-    mesh = f["mesh"]
-    title = str(f.attrs.get("title", ""))
-    topology = (f'<Topology TopologyType="Hexahedron" NumberOfElements='
-                f'"{mesh["elements"].shape[0]}">{_item(h5name, mesh["elements"])}</Topology>')
-    count = int(f["fields"].attrs["count"])
-    frames = [f["fields"][f"{index:06d}"] for index in range(count)]
-    collections = []
+    comes last: meshio's TimeSeriesReader reads the last temporal collection. ``frames``:
+    the frames' grids as xdmf_frame gives them (default: read from the file)."""
+    if frames is None:
+        frames = [xdmf_frame(h5name, f, k) for k in range(int(f["fields"].attrs["count"]))]
     tools = f["tools"] if "tools" in f else {}
-    names = [str(t) for t in f.attrs["tools"]]
-    for t, name in enumerate(names):
-        if name not in tools:
-            continue
-        cells = tools[name]["cells"]
-        kind = str(cells.attrs["topology"])
-        cell_count = int(cells.attrs["count"])
-        tool_topology = (f'<Topology TopologyType="{kind}" NumberOfElements="{cell_count}">'
-                         f'{_item(h5name, cells)}</Topology>')
-        grids = []
-        for index, group in enumerate(frames):
-            paths = group.attrs.get("tool_geometry")
-            if paths is None or not str(paths[t]):
-                continue
-            grids.append("\n        ".join([
-                f'<Grid Name={quoteattr(f"{name} {index}")} GridType="Uniform">',
-                f'<Time Value="{float(group.attrs["time"])!r}"/>', tool_topology,
-                f'<Geometry GeometryType="XYZ">{_item(h5name, f[str(paths[t])])}</Geometry>',
-                "</Grid>"]))
-        collections.append((name, grids))
-    grids = []
-    for index, group in enumerate(frames):
-        geometry = mesh["nodes"] if index == 0 else group["coordinates"]
-        parts = [f'<Grid Name="frame {index}" GridType="Uniform">',
-                 f'<Time Value="{float(group.attrs["time"])!r}"/>', topology,
-                 f'<Geometry GeometryType="XYZ">{_item(h5name, geometry)}</Geometry>']
-        for name, ds in group.items():
-            if name == "coordinates":
-                continue
-            centre = str(ds.attrs.get("centre", "Node"))
-            width = ds.shape[1] if ds.ndim == 2 else 1
-            kind = {1: "Scalar", 3: "Vector", 6: "Tensor6", 9: "Tensor"}.get(width, "Matrix")
-            parts.append(f'<Attribute Name={quoteattr(name)} AttributeType="{kind}" '
-                         f'Center="{centre}">{_item(h5name, ds)}</Attribute>')
-        parts.append("</Grid>")
-        grids.append("\n        ".join(parts))
-    collections.append((title or "ddpy", grids))
+    names = [str(t) for t in f.attrs["tools"] if str(t) in tools]
+    names.append(str(f.attrs.get("title", "")) or "ddpy")
     body = "".join(
         f"    <Grid Name={quoteattr(name)} GridType=\"Collection\" "
-        "CollectionType=\"Temporal\">\n      " + "\n      ".join(grids) + "\n    </Grid>\n"
-        for name, grids in collections if grids)
+        "CollectionType=\"Temporal\">\n      "
+        + "\n      ".join(grids[c] for grids in frames if grids[c]) + "\n    </Grid>\n"
+        for c, name in enumerate(names) if any(grids[c] for grids in frames))
     return ("<?xml version=\"1.0\"?>\n<Xdmf Version=\"3.0\">\n  <Domain>\n"
             f"{body}  </Domain>\n</Xdmf>\n")
 

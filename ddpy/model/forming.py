@@ -943,10 +943,11 @@ class FormingProblem:
         x = mesh.nodes + self.u
         n = mesh.n_nodes
         out = np.zeros(n)
-        faces_of = contact_faces(self.tools, mesh)
+        pack = self._pack  # the blank faces facing each tool, as the contact uses them
         first_point, first_pair = 0, 0
         normal = self._gap[1]
-        for tool, faces in zip(self.tools, faces_of, strict=True):
+        for i, tool in enumerate(self.tools):
+            faces = pack.faces[4 * pack.face_first[i]:4 * pack.face_first[i + 1]].reshape(-1, 4)
             npf = tool.points**2
             count = npf * faces.shape[0]
             pairs = slice(first_pair, first_pair + tool.slaves.size)
@@ -957,8 +958,8 @@ class FormingProblem:
             if tool.contact == "gauss":
                 basis = face_basis(tool.points)                              # (npf, 4)
                 area = gauss_face_weights(x, faces, tool.points)              # (f, npf)
-                force = (self.point_pressure[first_point:first_point + count].reshape(-1, npf)
-                         * gauss_face_weights(mesh.nodes, faces, tool.points))
+                points = slice(first_point, first_point + count)
+                force = (self.point_pressure[points] * pack.face_weight[points]).reshape(-1, npf)
                 node_force = np.bincount(faces.ravel(), (force @ basis).ravel(), minlength=n)
             else:
                 basis = face_basis(2)

@@ -8,9 +8,11 @@ Layout (docs/results-format.md; units in each dataset's ``units`` attribute, mm,
     /mesh/node_ids        (n,)     labels of the mesh deck;  /mesh/element_ids (m,)
     /increments/<name>    one row per converged increment (attrs count: rows complete)
     /iterations/<name>    one row per Newton iteration: increment, iteration, residuals
+    /tools/<tool>         the tool's surface tessellated (points, cells) and placed at the
+                          frames (coordinates/<frame>)
     /fields/<frame>       the fields at chosen increments, frame 000000 the initial state
                           (attrs count: frames complete; each frame attrs increment, phase,
-                          travel, time)
+                          travel, time: the lead tools' travel over the run)
 
 Every increment and every frame is flushed to disk as soon as it is written, the row counts
 last: a run killed at any moment leaves a file that reads back up to the last complete

@@ -65,12 +65,12 @@ def test_block_sticks_below_and_slips_above_coulomb() -> None:
     tangential = abs(result.tool_forces["plane"][-1][0])
     assert 0.0 < tangential < mu * normal
     np.testing.assert_allclose(problem.u[bottom, 0], 2e-5, rtol=1e-9)
-    assert (result.status["plane"][-1] == STICK).all()
+    assert (result.contact_states["plane"][-1] == STICK).all()
     # A large one: every node slips and the friction force is mu N exactly.
     result = problem.run({"plane": (2e-3, 0, 0)}, max_increment=5e-4, result=result,
                          newton=NewtonSettings(1e-11, 1e-6))
     force = result.tool_forces["plane"][-1]
-    assert (result.status["plane"][-1] == SLIP).all()
+    assert (result.contact_states["plane"][-1] == SLIP).all()
     # Every node slips: its tangential force is mu times its normal force...
     node = problem.force
     np.testing.assert_allclose(np.hypot(node[:, 0], node[:, 1]), mu * node[:, 2], rtol=1e-9)
@@ -98,7 +98,7 @@ def test_friction_on_the_blank_follows_a_sliding_tool(contact: str) -> None:
     motion = np.array([4e-3, -2e-3, 0.0])
     result = problem.run({"plane": tuple(motion)}, max_increment=1e-3, result=result,
                          newton=NewtonSettings(1e-11, 1e-6))
-    assert (result.status["plane"][-1] == SLIP).all()
+    assert (result.contact_states["plane"][-1] == SLIP).all()
     on_blank = -result.tool_forces["plane"][-1]
     assert on_blank[2] > 1.0  # pressed: the tool pushes the blank up
     tangential = on_blank[:2]
@@ -515,7 +515,7 @@ def test_quadratic_convergence_sliding_with_friction_over_a_curved_tool(kind: st
     result = problem.run({"cylinder": (0, 0, 0.02)}, max_increment=0.02)
     result = problem.run({"cylinder": (0.2, 0, 0)}, max_increment=0.05, result=result,
                          newton=NewtonSettings(1e-12, 1e-6))
-    assert (result.status["cylinder"][-1] == SLIP).sum() >= 3
+    assert (result.contact_states["cylinder"][-1] == SLIP).sum() >= 3
     rates = []
     for history in result.residuals[-3:]:
         tail = [r for r in history if r > 1e-13 * history[0]]

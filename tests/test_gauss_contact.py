@@ -172,7 +172,7 @@ def test_every_face_rule_integrates_a_linear_pressure_exactly() -> None:
 def test_quadratic_convergence_sliding_with_friction_over_a_curved_tool() -> None:
     """mu = 0.15: the last Newton step of each increment about squares the residual."""
     result = slide_over_dome(0.15, 1e-10, Solid, contact="gauss", penalty=PENALTY)
-    assert (result.status["dome"][-1] != INACTIVE).any()
+    assert (result.contact_states["dome"][-1] != INACTIVE).any()
     rates = last_rates(result.residuals)
     assert len(rates) >= 4 and np.median(rates) >= 1.6, rates
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -114,3 +115,32 @@ def test_plastic_strain_map_fills_its_frame(tmp_path: Path) -> None:
     used = np.flatnonzero(inked)
     assert (used[-1] - used[0]) / image.shape[1] > 0.8
     assert (~inked[used[0]:used[-1]]).sum() < 0.15 * image.shape[1]  # no wide empty band
+
+
+def test_summary_gives_the_forming_quantities_and_the_springback(
+        runs: tuple[Path, Path, Path], tmp_path: Path) -> None:
+    """summary.md: the largest plastic strain, the smallest thickness and largest thinning
+    of the last frame, and the largest nodal displacement over the springback (from the
+    free draw's last frame to the springback's), each as the results file has it."""
+    _, full, part = runs
+    assert cli("post", str(full), "--output", str(tmp_path)).returncode == 0
+    summary = (tmp_path / "summary.md").read_text()
+    with ResultsReader(full / RESULTS) as r:
+        ep, t, t0 = r.field("plastic_strain"), r.field("thickness"), r.field("thickness", 0)
+        frames = r.frames
+        before = [f for f in frames if f.phase == 1][-1]
+        moved = np.linalg.norm(r.field("displacement") - r.field("displacement", before.index),
+                               axis=1)
+    def number(label: str) -> float:
+        return float(re.search(label + r": ([-0-9.e+]+)", summary).group(1))
+
+    assert number("largest equivalent plastic strain") == pytest.approx(ep.max(), rel=1e-3)
+    assert number("smallest thickness") == pytest.approx(t.min(), rel=1e-3)
+    assert number("largest thinning") == pytest.approx(100 * ((t0 - t) / t0).max(), rel=1e-2)
+    assert number(r"springback \(springback\), largest displacement of a node") == \
+        pytest.approx(moved.max(), rel=1e-3)
+    assert moved.max() > 0.0
+    # A run stopped before its springback has no springback line.
+    assert cli("post", str(part), "--output", str(tmp_path / "part")).returncode == 0
+    text = (tmp_path / "part" / "summary.md").read_text()
+    assert "largest thinning" in text and "springback (" not in text

@@ -27,7 +27,7 @@ from ddpy.app.runner import (
     read_status,
     run_case,
 )
-from ddpy.io.checkpoint import CheckpointError, read_checkpoint
+from ddpy.io.checkpoint import CheckpointError, read_checkpoint, write_checkpoint
 from ddpy.io.decks import read_case
 from ddpy.io.results import ResultsReader
 
@@ -141,6 +141,15 @@ def test_run_writes_every_phase_and_the_outputs(reference: tuple[Path, Path]) ->
         assert np.all(np.isinf(r.iterations()["residual_displacement"][first]))
 
 
+def test_every_output_file_is_readable_by_all(reference: tuple[Path, Path]) -> None:
+    """results.xdmf was 0600 (the temporary file of its atomic rewrite kept mkstemp's
+    mode): every file of the output folder is 0644, whatever the umask."""
+    _, out = reference
+    names = {p.name: p.stat().st_mode & 0o777 for p in out.iterdir() if p.is_file()}
+    assert {RESULTS, "results.xdmf", CHECKPOINT, "status.json"} <= set(names)
+    assert names == dict.fromkeys(names, 0o644)
+
+
 def test_an_output_frame_leaves_the_path_of_increments_unchanged(tmp_path: Path) -> None:
     """An output_at travel the run reaches anyway (its first increment ends at 0.2 mm)
     splits the phase there; the next segment goes on with the phase's rate and step, so
@@ -204,6 +213,27 @@ def test_restart_after_a_stop_ends_as_the_uninterrupted_run(
     last = run_case(loaded, tmp_path, restart=True)
     assert last.status == "completed"
     compare(ref, tmp_path)
+
+
+def test_restart_from_a_checkpoint_of_the_earlier_names_ends_as_the_uninterrupted_run(
+        reference: tuple[Path, Path], tmp_path: Path) -> None:
+    """Checkpoints written before the contact states were renamed hold them as _status:
+    a restart from one takes them (the release control reads them) and ends as the run
+    without a stop; the outcome gives the blank's fields of every frame."""
+    case, ref = reference
+    loaded = read_case(case)
+    assert run_case(loaded, tmp_path, max_increments=7).status == "stopped"
+    meta, arrays = read_checkpoint(tmp_path / CHECKPOINT)
+    states = arrays.pop("_contact_state")
+    assert (states != 0).any()  # (in contact at the stop: the test can tell)
+    write_checkpoint(tmp_path / CHECKPOINT, meta, {**arrays, "_status": states})
+    last = run_case(loaded, tmp_path, restart=True)
+    assert last.status == "completed"
+    compare(ref, tmp_path)
+    frames = last.field_frames()
+    assert [f.increment for f in frames] == [f.increment for f in ResultsReader(
+        tmp_path / RESULTS).frames]
+    assert frames[-1].thinning is not None and frames[-1].to_meshio().points.shape[1] == 3
 
 
 def test_restart_after_every_increment_ends_as_the_uninterrupted_run(

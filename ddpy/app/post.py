@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 
 from ddpy.io.results import LIMITS, ResultsReader
 
-__all__ = ["Run", "compare_runs", "find_results", "load_run", "post_run"]
+__all__ = ["Run", "compare_runs", "find_results", "forming_summary", "load_run", "post_run"]
 
 
 @dataclass(frozen=True)
@@ -271,10 +271,60 @@ def post_run(target: str | os.PathLike[str], output: str | os.PathLike[str] | No
     paths.append(write_csv(out / "increments.csv", increment_rows(run)))
     paths.append(write_csv(out / "phases.csv", phases))
     summary = (f"# {run.title}\n\nResults: `{run.path}`, status {run.status}, "
-               f"{len(run.phase)} increments.\n\n" + markdown(phases))
+               f"{len(run.phase)} increments.\n\n" + markdown(phases)
+               + forming_summary(run))
     (out / "summary.md").write_text(summary)
     paths.append(out / "summary.md")
     return paths
+
+
+def forming_summary(run: Run) -> str:
+    """The forming quantities of summary.md (docs/running.md): at the last frame the
+    largest equivalent plastic strain, the thinnest node and the largest thinning, each
+    with its label; and, when the run has a springback phase with a frame before it and
+    one at its end, the largest displacement of a node over the springback. Empty for a
+    run without frames past the initial state."""
+    with ResultsReader(run.path) as r:
+        frames = r.frames
+        if len(frames) < 2:
+            return ""
+        last = r.frame(-1)
+        node_ids, element_ids = r.node_ids, r.element_ids
+        lines = [f"\n## Forming quantities (frame {frames[-1].index}, increment "
+                 f"{frames[-1].increment})\n"]
+        ep = last["plastic_strain"]
+        e = int(np.argmax(ep))
+        lines.append(f"- largest equivalent plastic strain: {ep[e]:.4g} (element "
+                     f"{element_ids[e]}, mean of its Gauss points)")
+        if "plastic_strain_nodal" in last:
+            nodal = last["plastic_strain_nodal"]
+            k = int(np.argmax(nodal))
+            lines.append(f"- largest nodal equivalent plastic strain: {nodal[k]:.4g} (node "
+                         f"{node_ids[k]})")
+        if "thickness" in last:
+            t, t0 = last["thickness"], r.field("thickness", 0)
+            k = int(np.argmin(t))
+            lines.append(f"- smallest thickness: {t[k]:.4g} mm (node {node_ids[k]}; "
+                         f"{t0[k]:.4g} mm at the start)")
+            thinning = last.get("thinning")
+            if thinning is None:  # (files written before thinning was)
+                thinning = np.divide(100.0 * (t0 - t), t0, out=np.zeros_like(t0),
+                                     where=t0 > 0)
+            k = int(np.argmax(thinning))
+            lines.append(f"- largest thinning: {thinning[k]:.3g} % (node {node_ids[k]})")
+        springback = [p for p, lead in enumerate(run.leads) if not lead]
+        for p in springback:
+            after = [f for f in frames if f.phase == p and f.increment > 0]
+            before = [f for f in frames if f.phase < p]
+            if not after or not before:
+                continue
+            moved = np.linalg.norm(r.field("displacement", after[-1].index)
+                                   - r.field("displacement", before[-1].index), axis=1)
+            k = int(np.argmax(moved))
+            lines.append(f"- springback ({run.phases[p]}), largest displacement of a node: "
+                         f"{moved[k]:.4g} mm (node {node_ids[k]}), from frame "
+                         f"{before[-1].index} to frame {after[-1].index}")
+    return "\n".join(lines) + "\n"
 
 
 def compare_runs(targets: Sequence[str | os.PathLike[str]],

@@ -21,7 +21,6 @@ import logging
 import math
 import os
 import resource
-import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -39,9 +38,22 @@ from ddpy.io.checkpoint import (
     state_from_arrays,
     write_checkpoint,
 )
-from ddpy.io.output_folder import FolderLock, OutputFolderError, check_output_folder
-from ddpy.io.results import MIN_FREE, ResultsWriteError, ResultsWriter, Timings, frame_bytes
+from ddpy.io.output_folder import (
+    FolderLock,
+    OutputFolderError,
+    check_output_folder,
+    temporary_beside,
+)
+from ddpy.io.results import (
+    MIN_FREE,
+    ResultsReader,
+    ResultsWriteError,
+    ResultsWriter,
+    Timings,
+    frame_bytes,
+)
 from ddpy.model.forming import (
+    FieldFrame,
     FormingError,
     FormingProblem,
     FormingResult,
@@ -95,7 +107,9 @@ _LIMITS = {"max": "max_increment", "touch": "contact_touch", "strain": "strain",
 
 #: Arrays of FormingProblem carried from one increment to the next (besides the solid state
 #: and the tool positions): a checkpoint stores them. Add here any new state of the loop.
-_CARRIED = ("u", "force", "_status", "traction", "pressure")
+_CARRIED = ("u", "force", "_contact_state", "traction", "pressure")
+#: Names checkpoints of earlier versions gave carried arrays: new name -> old.
+_CARRIED_BEFORE = {"_contact_state": "_status"}
 #: Of those, the ones a checkpoint written before they existed lacks (then zero): the
 #: tangential tractions and the pressures of Gauss-point contact.
 _SINCE = ("traction", "pressure")
@@ -146,6 +160,13 @@ class RunOutcome:
     @property
     def results(self) -> Path:
         return self.output / RESULTS
+
+    def field_frames(self) -> list[FieldFrame]:
+        """The blank's fields at every frame of the results (displacement, stress, plastic
+        strain, thickness and thinning, contact pressure, surface strains; each frame's
+        ``to_meshio()`` gives a meshio mesh), frame 0 the initial state."""
+        with ResultsReader(self.results) as r:
+            return [r.field_frame(k) for k in range(len(r.frames))]
 
 
 def read_status(output: str | os.PathLike[str]) -> dict[str, Any]:
@@ -198,11 +219,10 @@ def build_problem(case: Case) -> FormingProblem:
 
 
 def _write_atomic(path: Path, text: str) -> None:
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".status-")
+    fd, tmp = temporary_beside(path, ".status-")
     try:
         with os.fdopen(fd, "w") as out:
             out.write(text)
-        os.chmod(tmp, 0o644)
         os.replace(tmp, path)
     except BaseException:  # a full disk: no empty temporary left behind
         Path(tmp).unlink(missing_ok=True)
@@ -327,6 +347,9 @@ class _Run:
                 f"{self.discretization} (a default changed); run again without --restart, "
                 "or name the element and contact in the decks")
         p = self.problem
+        for new, old in _CARRIED_BEFORE.items():
+            if new not in arrays and old in arrays:
+                arrays[new] = arrays[old]
         carried = {k: arrays[k] for k in _CARRIED if k in arrays or k not in _SINCE}
         positions = {k: arrays[f"position/{k}"] for k in self.names}
         for name, value in carried.items():
@@ -360,18 +383,20 @@ class _Run:
         if self.writer.increments == self.last_frame:
             return
         n = p.u.shape[0]
-        status = np.zeros(n, np.int8)
+        node_state = np.zeros(n, np.int8)
         tool = np.full(n, -1, np.int16)
-        if result is not None and result.status and all(result.status[k] for k in self.names):
-            states = np.concatenate([result.status[k][-1] for k in self.names])
+        states_of = None if result is None else result.contact_states
+        if states_of and all(states_of[k] for k in self.names):
+            states = np.concatenate([states_of[k][-1] for k in self.names])
             touching = states != 0
-            status[self.slaves[touching]] = states[touching]
+            node_state[self.slaves[touching]] = states[touching]
             tool[self.slaves[touching]] = self.tool_of[touching]
         contact = np.zeros((n, 3))
         np.add.at(contact, self.slaves, p.force)
         cauchy = p.solid.stresses(p.u, p.state)[1]
         self.writer.fields(displacement=p.u, stress=cauchy, plastic_strain=p.state.ep,
-                           contact_status=status, contact_force=contact, contact_tool=tool)
+                           contact_state=node_state, contact_force=contact, contact_tool=tool,
+                           contact_pressure=p.contact_pressure())
         self.last_frame = self.writer.increments
 
     def record(self, phase: Phase, result: FormingResult, step: float, travel: float,
@@ -496,7 +521,7 @@ class _Run:
             resume, self.resume = self.resume, None
             p.run(motion, phase.max_increment * ratio, active=phase.tools,
                   newton=phase.newton, limits=phase.limits, gaps=gaps, result=result,
-                  on_increment=hook, resume=resume)
+                  on_increment=hook, resume=resume, phase=phase.name, frames=False)
             if self.halt:
                 self.fields(result)
                 return
@@ -508,7 +533,7 @@ class _Run:
     def springback(self, phase: Phase) -> None:
         result = FormingResult()
         start = time.perf_counter()
-        self.problem.springback(phase.increments, phase.newton, result=result)
+        self.problem.springback(phase.increments, phase.newton, result=result, frames=False)
         share = (time.perf_counter() - start) / phase.increments
         t = result.timings
         for k in range(len(result.residuals)):
@@ -635,7 +660,8 @@ def _run_locked(case: Case, output: Path, restart: bool,
                            "with --overwrite")
         (output / CHECKPOINT).unlink(missing_ok=True)
         # A new file, not the old one truncated: a reader of the old results keeps them.
-        run.writer = ResultsWriter.for_case(results, case, overwrite=True)
+        run.writer = ResultsWriter.for_case(results, case, overwrite=True,
+                                            surfaces=[t.surface for t in run.problem.tools])
         run.save(None)
     assert run.writer is not None
     leads = [p.lead or "" for p in case.phases]

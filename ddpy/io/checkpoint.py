@@ -12,7 +12,6 @@ from __future__ import annotations
 import dataclasses
 import json
 import os
-import tempfile
 import zipfile
 from collections.abc import Mapping
 from pathlib import Path
@@ -20,6 +19,8 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+
+from ddpy.io.output_folder import temporary_beside
 
 __all__ = ["CheckpointError", "read_checkpoint", "state_arrays", "state_from_arrays",
            "write_checkpoint"]
@@ -40,13 +41,12 @@ def write_checkpoint(path: str | os.PathLike[str], meta: Mapping[str, Any],
     if _META in arrays:
         raise ValueError(f"array name {_META!r} is reserved")
     document = json.dumps({"version": VERSION, **meta})
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".checkpoint-", suffix=".npz")
+    fd, tmp = temporary_beside(path, ".checkpoint-", ".npz")
     try:
         with os.fdopen(fd, "wb") as out:
             np.savez(out, **{_META: np.array(document)}, **dict(arrays))
             out.flush()
             os.fsync(out.fileno())
-        os.chmod(tmp, 0o644)
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)

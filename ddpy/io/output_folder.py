@@ -18,10 +18,15 @@ import fcntl
 import os
 import re
 import shutil
+import tempfile
 from pathlib import Path
 
-__all__ = ["LOCK", "PSEUDO_FILESYSTEMS", "FolderInUse", "FolderLock", "OutputFolderError",
-           "check_output_folder", "output_path"]
+__all__ = ["LOCK", "PSEUDO_FILESYSTEMS", "RESULT_MODE", "FolderInUse", "FolderLock",
+           "OutputFolderError", "check_output_folder", "output_path", "temporary_beside"]
+
+#: Permissions of every file a run writes (results, XDMF, checkpoint, status): readable by
+#: all, so that a colleague can open them.
+RESULT_MODE = 0o644
 
 #: The lock file in an output folder.
 LOCK = ".ddpy.lock"
@@ -31,6 +36,20 @@ PSEUDO_FILESYSTEMS = frozenset({
     "autofs", "binfmt_misc", "bpf", "cgroup", "cgroup2", "configfs", "debugfs", "devpts",
     "devtmpfs", "efivarfs", "fusectl", "hugetlbfs", "mqueue", "nsfs", "proc", "pstore",
     "rpc_pipefs", "securityfs", "selinuxfs", "sysfs", "tracefs"})
+
+
+def temporary_beside(path: Path, prefix: str, suffix: str = "") -> tuple[int, str]:
+    """A new temporary file in ``path``'s folder, to be renamed over ``path`` once written
+    (an atomic replacement): its descriptor and name, with RESULT_MODE. mkstemp makes it
+    0600, which the rename would pass on to ``path``."""
+    fd, name = tempfile.mkstemp(dir=path.parent, prefix=prefix, suffix=suffix)
+    try:
+        os.fchmod(fd, RESULT_MODE)
+    except OSError:
+        os.close(fd)
+        Path(name).unlink(missing_ok=True)
+        raise
+    return fd, name
 
 
 class OutputFolderError(RuntimeError):

@@ -8,9 +8,11 @@ Layout (docs/results-format.md; units in each dataset's ``units`` attribute, mm,
     /mesh/node_ids        (n,)     labels of the mesh deck;  /mesh/element_ids (m,)
     /increments/<name>    one row per converged increment (attrs count: rows complete)
     /iterations/<name>    one row per Newton iteration: increment, iteration, residuals
+    /tools/<tool>         the tool's surface tessellated (points, cells) and placed at the
+                          frames (coordinates/<frame>)
     /fields/<frame>       the fields at chosen increments, frame 000000 the initial state
                           (attrs count: frames complete; each frame attrs increment, phase,
-                          travel, time)
+                          travel, time: the lead tools' travel over the run)
 
 Every increment and every frame is flushed to disk as soon as it is written, the row counts
 last: a run killed at any moment leaves a file that reads back up to the last complete
@@ -27,7 +29,6 @@ import functools
 import os
 import re
 import shutil
-import tempfile
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -38,10 +39,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ddpy import __version__
-from ddpy.model.mesh import through_thickness_columns
+from ddpy.geometry.tessellation import TRIANGLE, tessellate
+from ddpy.io.output_folder import RESULT_MODE, temporary_beside
+from ddpy.model.forming_quantities import SURFACES, FieldFrame, SheetMeasures, nodal_average
 
-__all__ = ["CONTACT_STATUS", "FORMAT", "LIMITS", "TENSOR6", "VOIGT", "Frame", "ResultsReader",
-           "ResultsWriteError", "ResultsWriter", "Timings", "frame_bytes", "xdmf_text"]
+__all__ = ["CONTACT_STATES", "FORMAT", "LIMITS", "TENSOR6", "VOIGT", "Frame", "ResultsReader",
+           "ResultsWriteError", "ResultsWriter", "Timings", "frame_bytes", "xdmf_frame",
+           "xdmf_text"]
 
 FORMAT = "ddpy-results"
 VERSION = 1
@@ -51,8 +55,13 @@ VERSION = 1
 MIN_FREE = 1 << 20
 #: fallocate(2)'s flag: allocate blocks beyond the end of the file, its size unchanged.
 _KEEP_SIZE = 1
-#: Contact status of a node in the fields.
-CONTACT_STATUS = {0: "free", 1: "stick", 2: "slip"}
+#: Contact state of a node in the fields (``contact_state``).
+CONTACT_STATES = {0: "free", 1: "stick", 2: "slip"}
+#: Field names of files written before a rename: old name -> new (the reader takes both).
+RENAMED = {"contact_status": "contact_state"}
+#: The XDMF time of a frame is the lead tools' travel summed over the run (mm); a frame
+#: without travel since the last one (springback) comes this much later.
+TIME_WITHOUT_TRAVEL = 1e-3
 #: What limited an increment (the ``limit`` column): codes and meanings.
 LIMITS = {0: "max_increment", 1: "yield", 2: "strain", 3: "rotation", 4: "contact_touch",
           5: "contact_release", 6: "phase_end", 7: "output", 8: "cutback"}
@@ -136,7 +145,9 @@ _FIELDS: dict[str, tuple[str, int, str, str, str]] = {
     "coordinates": ("Node", 3, "f8", "mm", "current nodal coordinates"),
     "thickness": ("Node", 1, "f8", "mm", "distance between the top and bottom node of the "
                   "node's through-thickness column"),
-    "contact_status": ("Node", 1, "i1", "1", "0 free, 1 stick, 2 slip"),
+    "thinning": ("Node", 1, "f8", "%", "100 (t0 - t) / t0: the loss of the node's column "
+                 "thickness t from its initial t0, in %"),
+    "contact_state": ("Node", 1, "i1", "1", "0 free, 1 stick, 2 slip"),
     "contact_tool": ("Node", 1, "i2", "1", "index of the tool in contact, -1 none"),
     "contact_force": ("Node", 3, "f8", "N", "contact force on the node (from the tool)"),
     "stress": ("Cell", 6, "f8", "MPa", "Cauchy stress averaged over the Gauss points, "
@@ -144,6 +155,17 @@ _FIELDS: dict[str, tuple[str, int, str, str, str]] = {
     "von_mises": ("Cell", 1, "f8", "MPa", "von Mises equivalent of the averaged stress"),
     "plastic_strain": ("Cell", 1, "f8", "1", "equivalent plastic strain averaged over the "
                        "Gauss points"),
+    "plastic_strain_nodal": ("Node", 1, "f8", "1", "equivalent plastic strain at the node: "
+                             "each element's Gauss points extrapolated to its nodes, "
+                             "averaged over the elements around the node"),
+    "contact_pressure": ("Node", 1, "f8", "MPa", "normal contact force on the node over the "
+                         "area of the blank's contact faces it stands for"),
+    **{f"{which}_strain_{surface}": (
+        "Cell", 1, "f8", "1", f"{which} in-plane logarithmic strain of the {surface} face "
+        "of the element's column through the thickness")
+       for surface in SURFACES for which in ("major", "minor")},
+    "increment": ("Cell", 1, "i4", "1", "the frame's increment number (the same in every "
+                  "element: the XDMF time is the lead tools' travel)"),
 }
 
 
@@ -169,11 +191,12 @@ def _mesh_arrays(mesh: Any) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray
     return nodes, elements.astype(np.int32), ids, eids, np.asarray(normal, dtype=float)
 
 
-def frame_bytes(n_nodes: int, n_elements: int) -> int:
-    """Bytes one frame of fields takes in results.h5: 8 a number, 16 numbers per node
-    (displacement, contact force and status, thickness...) and 10 per element (stress,
-    plastic strain...)."""
-    return 8 * (16 * n_nodes + 10 * n_elements)
+def frame_bytes(n_nodes: int, n_elements: int, tool_points: int = 0) -> int:
+    """Bytes one frame of fields takes in results.h5: 8 a number, 19 numbers per node
+    (displacement, contact force and state, thickness, thinning, pressure...), 17 per
+    element (stress, plastic strain, surface strains...) and 3 per tool point (the tools'
+    placed surfaces)."""
+    return 8 * (19 * n_nodes + 17 * n_elements + 3 * tool_points)
 
 
 class ResultsWriteError(OSError):
@@ -193,12 +216,16 @@ class ResultsWriter:
     indices. Frame 0, the initial state, is written at once. Use as a context manager or call
     :meth:`close`; a writer never closed still leaves a readable file. An existing file at
     ``path`` is an error, or with ``overwrite`` removed for a new one (never truncated: a
-    process that has it open keeps reading it whole).
+    process that has it open keeps reading it whole). ``surfaces``: each tool's surface
+    (BezierSurface or NagataSurface, in the order of ``tools``; None: no tool drawn),
+    written once tessellated (ddpy.geometry.tessellation) and placed at every frame by the
+    tool's displacement.
     """
 
     def __init__(self, path: str | os.PathLike[str], mesh: Any, tools: Sequence[str],
                  phases: Sequence[str] = (), *, title: str = "", case: str = "",
-                 element: str = "hexahedron", overwrite: bool = False) -> None:
+                 element: str = "hexahedron", overwrite: bool = False,
+                 surfaces: Sequence[Any] | None = None) -> None:
         import h5py
 
         self.path = Path(path)
@@ -209,21 +236,23 @@ class ResultsWriter:
         self.phases = tuple(str(p) for p in phases)
         if not self.tools:
             raise ValueError("tools must name at least one tool")
-        try:
-            self._columns: tuple[NDArray, NDArray] | None = through_thickness_columns(
-                nodes, elements, normal)
-        except ValueError:
-            self._columns = None  # not layered: no thickness unless given
+        self._measures = _measures(nodes, elements, normal)
+        if surfaces is not None and len(surfaces) != len(self.tools):
+            raise ValueError(f"{len(surfaces)} tool surfaces for {len(self.tools)} tools")
+        self._tool_points = 0
         if overwrite:
             # Removed, not truncated: a process that has the old file open keeps it whole.
             self.path.unlink(missing_ok=True)
         self._file = h5py.File(self.path, "w-")
+        os.chmod(self.path, RESULT_MODE)  # as the XDMF file beside it, whatever the umask
         self.failed = ""  # why a write failed; the file is closed then
         with self._writing():
-            self._create(nodes, elements, ids, eids, normal, title, case, element)
+            self._create(nodes, elements, ids, eids, normal, title, case, element,
+                         surfaces or [None] * len(self.tools))
 
     def _create(self, nodes: NDArray, elements: NDArray, ids: NDArray, eids: NDArray,
-                normal: NDArray, title: str, case: str, element: str) -> None:
+                normal: NDArray, title: str, case: str, element: str,
+                surfaces: Sequence[Any]) -> None:
         """The groups and columns of a new file, and frame 0."""
         f = self._file
         f.attrs.update(_storable({"format": FORMAT, "version": VERSION, "title": title,
@@ -254,17 +283,24 @@ class ResultsWriter:
         for name, (dtype, units, meaning) in _ITERATION_COLUMNS.items():
             self._column(it, name, dtype, (), units, meaning)
         it.attrs["count"] = 0
+        tools = f.create_group("tools")
+        for name, surface in zip(self.tools, surfaces, strict=True):
+            if surface is not None:
+                _write_tool(tools.create_group(name), surface)
+        self._tool_points = _tool_points(tools)
         fields = f.create_group("fields")
         fields.attrs["count"] = 0
         self._count = 0
         self._iterations = 0
         self._frames: list[Frame] = []
+        self._grids: list[list[str]] = []  # each frame's XDMF grids (xdmf_frame)
         self._phase = 0
         self._travel = 0.0
+        self._stroke = 0.0
         self._write_frame(0, np.zeros_like(nodes), np.zeros((len(elements), 6)),
                           np.zeros(len(elements)), np.zeros(len(nodes), np.int8),
                           np.zeros_like(nodes), np.full(len(nodes), -1, np.int16), None, 0.0,
-                          {})
+                          np.zeros(len(nodes)), {})
 
     @contextlib.contextmanager
     def _writing(self, frame: bool = True) -> Iterator[None]:
@@ -335,15 +371,19 @@ class ResultsWriter:
             xdmf = self.xdmf_path.stat().st_size
         except OSError:
             xdmf = 0
-        return frame_bytes(len(self.nodes), len(self.elements)) + xdmf + MIN_FREE
+        return (frame_bytes(len(self.nodes), len(self.elements), self._tool_points) + xdmf
+                + MIN_FREE)
 
     @classmethod
-    def for_case(cls, path: str | os.PathLike[str], case: Any, overwrite: bool = False
-                 ) -> ResultsWriter:
-        """A writer for a :class:`ddpy.io.case.Case`: its mesh, tools, phases and title."""
+    def for_case(cls, path: str | os.PathLike[str], case: Any, overwrite: bool = False,
+                 surfaces: Sequence[Any] | None = None) -> ResultsWriter:
+        """A writer for a :class:`ddpy.io.case.Case`: its mesh, tools (their surfaces:
+        ``surfaces``, or else read from the case's tool files), phases and title."""
+        if surfaces is None:
+            surfaces = [t.model().surface for t in case.tools]
         return cls(path, case.mesh, case.tool_names, [p.name for p in case.phases],
                    title=case.title, case=str(case.folder), element=case.element,
-                   overwrite=overwrite)
+                   overwrite=overwrite, surfaces=surfaces)
 
     @classmethod
     def reopen(cls, path: str | os.PathLike[str], increments: int, iterations: int,
@@ -381,17 +421,21 @@ class ResultsWriter:
         fields.attrs["count"] = frames
         for index in range(frames, have[2]):
             del fields[f"{index:06d}"]
+        tools = f.require_group("tools")  # (files of earlier versions have no tools)
+        for group in tools.values():
+            for index in range(frames, have[2]):
+                if f"{index:06d}" in group["coordinates"]:
+                    del group[f"coordinates/{index:06d}"]
         self._file = f
         self.nodes, self.elements = f["mesh/nodes"][()], f["mesh/elements"][()]
         self.tools = tuple(str(t) for t in f.attrs["tools"])
         self.phases = tuple(str(p) for p in f.attrs["phases"])
-        try:
-            self._columns = through_thickness_columns(self.nodes, self.elements,
-                                                      f["mesh"].attrs["normal"])
-        except ValueError:
-            self._columns = None
+        self._measures = _measures(self.nodes, self.elements, f["mesh"].attrs["normal"])
+        self._tool_points = _tool_points(tools)
         self._count, self._iterations = increments, iterations
+        self._stroke = float(inc["step"][:increments].sum())
         self._frames = []
+        self._grids = []
         for index in range(frames):
             a = fields[f"{index:06d}"].attrs
             self._frames.append(Frame(index, int(a["increment"]), int(a["phase"]),
@@ -499,6 +543,7 @@ class ResultsWriter:
                 it.attrs["count"] = self._iterations
             self._count = k + 1
             self._phase, self._travel = int(phase), float(travel)
+            self._stroke += float(step)
             inc.attrs["count"] = self._count  # last: the row is complete
             self._file.flush()
             return self._count
@@ -506,18 +551,21 @@ class ResultsWriter:
     # --------------------------------------------------------------------------- fields
 
     def fields(self, *, displacement: ArrayLike, stress: ArrayLike, plastic_strain: ArrayLike,
-               contact_status: ArrayLike, contact_force: ArrayLike,
+               contact_state: ArrayLike, contact_force: ArrayLike,
                contact_tool: ArrayLike | None = None, thickness: ArrayLike | None = None,
-               time: float | None = None, extra: Mapping[str, ArrayLike] | None = None
-               ) -> Frame:
+               contact_pressure: ArrayLike | None = None, time: float | None = None,
+               extra: Mapping[str, ArrayLike] | None = None) -> Frame:
         """Write the fields of the last increment as a new frame (also visible in the XDMF).
 
         displacement (n, 3); stress (m, 6) or per Gauss point (m, g, 6), Voigt xx yy zz xy
         yz zx, averaged per element (stored in the XDMF order xx xy xz yy yz zz);
-        plastic_strain (m,) or (m, g); contact_status (n,) 0/1/2; contact_force (n, 3);
-        contact_tool (n,) tool index or -1; thickness (n,)
-        (computed from the displacement when the mesh is layered); ``time`` for the XDMF
-        (default: the increment number); ``extra`` more arrays, (n, ...) or (m, ...)."""
+        plastic_strain (m,) or per Gauss point (m, 8) (averaged per element, and
+        extrapolated to the nodes: plastic_strain_nodal); contact_state (n,) 0/1/2;
+        contact_force (n, 3); contact_tool (n,) tool index or -1; contact_pressure (n,) MPa
+        (default zero); thickness (n,) (computed from the displacement when the mesh is
+        layered, with the thinning and the surface strains); ``time`` for the XDMF
+        (default: the lead tools' travel over the run, TIME_WITHOUT_TRAVEL more than the
+        last frame's when there was none); ``extra`` more arrays, (n, ...) or (m, ...)."""
         n, m = len(self.nodes), len(self.elements)
         u = _shaped(displacement, (n, 3), "displacement")
         s = np.asarray(stress, dtype=float)
@@ -525,44 +573,62 @@ class ResultsWriter:
             s = s.mean(axis=1)
         s = _shaped(s, (m, 6), "stress")
         ep = np.asarray(plastic_strain, dtype=float)
-        if ep.ndim == 2:
-            ep = ep.mean(axis=1)
-        ep = _shaped(ep, (m,), "plastic_strain")
-        status = _shaped(contact_status, (n,), "contact_status").astype(np.int8)
+        if ep.ndim == 2 and ep.shape[1] != 8:
+            ep = ep.mean(axis=1)  # (Gauss points of another rule: no extrapolation)
+        if ep.shape not in ((m,), (m, 8)):
+            raise ValueError(f"plastic_strain must have shape {(m,)} or {(m, 8)}, got "
+                             f"{ep.shape}")
+        state = _shaped(contact_state, (n,), "contact_state").astype(np.int8)
         cf = _shaped(contact_force, (n, 3), "contact_force")
         tool = (np.full(n, -1, np.int16) if contact_tool is None
                 else _shaped(contact_tool, (n,), "contact_tool").astype(np.int16))
         th = None if thickness is None else _shaped(thickness, (n,), "thickness")
+        pressure = (np.zeros(n) if contact_pressure is None
+                    else _shaped(contact_pressure, (n,), "contact_pressure"))
         index = len(self._frames)
-        frame_time = float(self._count if time is None else time)
+        if time is None:
+            frame_time = self._stroke
+            if self._frames and frame_time <= self._frames[-1].time:
+                frame_time = self._frames[-1].time + TIME_WITHOUT_TRAVEL
+        else:
+            frame_time = float(time)
         if self._frames and frame_time <= self._frames[-1].time:
             raise ValueError(f"frame time {frame_time} must exceed the previous frame's "
                              f"{self._frames[-1].time}")
         with self._writing():
-            return self._write_frame(index, u, s, ep, status, cf, tool, th, frame_time,
-                                     dict(extra or {}))
+            return self._write_frame(index, u, s, ep, state, cf, tool, th, frame_time,
+                                     pressure, dict(extra or {}))
 
-    def _write_frame(self, index: int, u: NDArray, s: NDArray, ep: NDArray, status: NDArray,
+    def _write_frame(self, index: int, u: NDArray, s: NDArray, ep: NDArray, state: NDArray,
                      cf: NDArray, tool: NDArray, thickness: NDArray | None, time: float,
-                     extra: dict[str, ArrayLike]) -> Frame:
+                     pressure: NDArray, extra: dict[str, ArrayLike]) -> Frame:
         n, m = len(self.nodes), len(self.elements)
         x = self.nodes + u
-        if thickness is None and self._columns is not None:
-            bottom, top = self._columns
-            thickness = np.linalg.norm(x[top] - x[bottom], axis=1)
         d = s[:, :3] - s[:, :3].mean(axis=1, keepdims=True)
         mises = np.sqrt(1.5 * ((d**2).sum(axis=1) + 2 * (s[:, 3:] ** 2).sum(axis=1)))
-        data = {"displacement": u, "coordinates": x, "contact_status": status,
-                "contact_tool": tool, "contact_force": cf, "stress": s[:, TENSOR6],
-                "von_mises": mises,
-                "plastic_strain": ep}
+        data = {"displacement": u, "coordinates": x, "contact_state": state,
+                "contact_tool": tool, "contact_force": cf, "contact_pressure": pressure,
+                "stress": s[:, TENSOR6], "von_mises": mises,
+                "plastic_strain": ep.mean(axis=1) if ep.ndim == 2 else ep,
+                "plastic_strain_nodal": nodal_average(self.elements, ep, n),
+                "increment": np.full(m, self._count, dtype=np.int32)}
+        if self._measures is not None:
+            if thickness is None:
+                thickness = self._measures.thickness(u)
+            data["thinning"] = self._measures.thinning(thickness=thickness)
+            for key, value in self._measures.surface_strains(u).items():
+                which, surface = key.split("_")
+                data[f"{which}_strain_{surface}"] = value
         if thickness is not None:
             data["thickness"] = thickness
         fields = self._file["fields"]
         group = fields.create_group(f"{index:06d}")
         frame = Frame(index, self._count, self._phase, self._travel, time)
+        placed = self._place_tools(index)
         group.attrs.update({"increment": frame.increment, "phase": frame.phase,
-                            "travel": frame.travel, "time": frame.time})
+                            "travel": frame.travel, "time": frame.time,
+                            "tool_displacement": self._tool_displacement(),
+                            "tool_geometry": placed})
         for name, array in data.items():
             centre, _, dtype, units, meaning = _FIELDS[name]
             ds = group.create_dataset(name, data=np.asarray(array, dtype=dtype))
@@ -583,10 +649,47 @@ class ResultsWriter:
         self._write_xdmf()
         return frame
 
+    def _tool_displacement(self) -> NDArray[np.float64]:
+        """Each tool's displacement at the last increment (t, 3) (zero before the first)."""
+        if not self._count:
+            return np.zeros((len(self.tools), 3))
+        return self._file["increments/tool_displacement"][self._count - 1]
+
+    def _place_tools(self, index: int) -> list[str]:
+        """Each drawn tool's surface where it is at frame ``index``: the path of its
+        coordinates, written as /tools/NAME/coordinates/<index> unless the tool has not
+        moved since the frame whose coordinates the last frame used ("" for a tool not
+        drawn)."""
+        tools = self._file["tools"]
+        moved = self._tool_displacement()
+        last = (self._file["fields"][f"{index - 1:06d}"].attrs.get("tool_geometry")
+                if index else None)
+        paths = []
+        for t, name in enumerate(self.tools):
+            if name not in tools:
+                paths.append("")
+                continue
+            group = tools[name]
+            if last is not None and str(last[t]):
+                before = self._file[str(last[t])]
+                if np.array_equal(before.attrs["displacement"], moved[t]):
+                    paths.append(str(last[t]))
+                    continue
+            ds = group["coordinates"].create_dataset(f"{index:06d}",
+                                                     data=group["points"][()] + moved[t])
+            ds.attrs.update({"units": "mm", "displacement": moved[t]})
+            paths.append(ds.name)
+        return paths
+
     def _write_xdmf(self) -> None:
-        text = xdmf_text(self.path.name, self._file)
+        """Rewrite the XDMF file (atomically) with the frames' grids, each read from the
+        file once (``_grids``): rebuilding every frame's at every frame grew as the
+        square of the frames."""
+        while len(self._grids) < len(self._frames):
+            self._grids.append(xdmf_frame(self.path.name, self._file, len(self._grids)))
+        text = xdmf_text(self.path.name, self._file, self._grids)
         try:
-            fd, tmp = tempfile.mkstemp(dir=self.xdmf_path.parent, prefix=".xdmf-")
+            fd, tmp = temporary_beside(self.xdmf_path, ".xdmf-")
         except OSError as error:
             raise OSError(error.errno, error.strerror, str(self.xdmf_path)) from error
         try:
@@ -647,6 +750,46 @@ def _storable(attrs: dict[str, Any]) -> dict[str, Any]:
     return out
 
 
+def _measures(nodes: NDArray, elements: NDArray, normal: ArrayLike) -> SheetMeasures | None:
+    """The thickness and surface strains of a blank meshed in layers; None otherwise."""
+    try:
+        return SheetMeasures(nodes, elements, normal)
+    except ValueError:
+        return None
+
+
+#: XDMF's codes of the cells of a Mixed topology.
+_XDMF_MIXED = {3: 4, 4: 5}
+
+
+def _write_tool(group: Any, surface: Any) -> None:
+    """A tool's surface tessellated (ddpy.geometry.tessellation) into ``group``: its
+    points at rest and cells, in the XDMF topology they take (Triangle, Quadrilateral, or
+    Mixed: each cell's XDMF code before its corners)."""
+    points, cells, kinds = tessellate(surface)
+    if (kinds == kinds[0]).all():
+        topology = "Triangle" if kinds[0] == TRIANGLE else "Quadrilateral"
+        connectivity = cells.reshape(-1, int(kinds[0]))
+    else:
+        topology = "Mixed"
+        starts = np.concatenate([[0], np.cumsum(kinds)[:-1]])
+        connectivity = np.concatenate([np.concatenate([[_XDMF_MIXED[int(k)]],
+                                                       cells[a:a + k]])
+                                       for a, k in zip(starts, kinds, strict=True)])
+    group.create_dataset("points", data=points).attrs["units"] = "mm"
+    ds = group.create_dataset("cells", data=connectivity.astype(np.int32))
+    ds.attrs.update({"topology": topology, "count": len(kinds),
+                     "description": "0-based point indices of the tessellated surface "
+                                    "(Mixed: each cell's XDMF code, 4 triangle, 5 "
+                                    "quadrilateral, then its corners)"})
+    group.create_group("coordinates")
+
+
+def _tool_points(tools: Any) -> int:
+    """Points of every drawn tool (the bytes of a frame that places them)."""
+    return sum(int(g["points"].shape[0]) for g in tools.values())
+
+
 def _shaped(value: ArrayLike, shape: tuple[int, ...], name: str) -> NDArray:
     a = np.asarray(value)
     if a.dtype.kind not in "iuf" and a.dtype != bool:
@@ -690,36 +833,65 @@ def _item(h5name: str, dataset: Any) -> str:
             f'Dimensions="{dims}" Format="HDF">{escape(h5name)}:{dataset.name}</DataItem>')
 
 
-def xdmf_text(h5name: str, f: Any) -> str:
-    """The XDMF 3 document of a results file: a temporal collection of the frames, each with
-    the current coordinates as geometry and its fields as attributes (the HDF5 datasets)."""
+def xdmf_frame(h5name: str, f: Any, index: int) -> list[str]:
+    """The XDMF grids of frame ``index`` of a results file, one per collection of
+    xdmf_text (each drawn tool's, then the blank's; "" where a tool has no grid). A frame
+    never changes once written: the writer keeps these and writes the document from them."""
     mesh = f["mesh"]
-    title = str(f.attrs.get("title", ""))
-    topology = (f'<Topology TopologyType="Hexahedron" NumberOfElements='
-                f'"{mesh["elements"].shape[0]}">{_item(h5name, mesh["elements"])}</Topology>')
-    grids = []
-    count = int(f["fields"].attrs["count"])
-    for index in range(count):
-        group = f["fields"][f"{index:06d}"]
-        geometry = mesh["nodes"] if index == 0 else group["coordinates"]
-        parts = [f'<Grid Name="frame {index}" GridType="Uniform">',
-                 f'<Time Value="{float(group.attrs["time"])!r}"/>', topology,
-                 f'<Geometry GeometryType="XYZ">{_item(h5name, geometry)}</Geometry>']
-        for name, ds in group.items():
-            if name == "coordinates":
-                continue
-            centre = str(ds.attrs.get("centre", "Node"))
-            width = ds.shape[1] if ds.ndim == 2 else 1
-            kind = {1: "Scalar", 3: "Vector", 6: "Tensor6", 9: "Tensor"}.get(width, "Matrix")
-            parts.append(f'<Attribute Name={quoteattr(name)} AttributeType="{kind}" '
-                         f'Center="{centre}">{_item(h5name, ds)}</Attribute>')
-        parts.append("</Grid>")
-        grids.append("\n        ".join(parts))
-    body = "\n      ".join(grids)
+    group = f["fields"][f"{index:06d}"]
+    time = f'<Time Value="{float(group.attrs["time"])!r}"/>'
+    tools = f["tools"] if "tools" in f else {}
+    paths = group.attrs.get("tool_geometry")
+    out = []
+    for t, name in enumerate(str(t) for t in f.attrs["tools"]):
+        if name not in tools:
+            continue
+        if paths is None or not str(paths[t]):
+            out.append("")
+            continue
+        cells = tools[name]["cells"]
+        out.append("\n        ".join([
+            f'<Grid Name={quoteattr(f"{name} {index}")} GridType="Uniform">', time,
+            f'<Topology TopologyType="{cells.attrs["topology"]}" NumberOfElements='
+            f'"{int(cells.attrs["count"])}">{_item(h5name, cells)}</Topology>',
+            f'<Geometry GeometryType="XYZ">{_item(h5name, f[str(paths[t])])}</Geometry>',
+            "</Grid>"]))
+    geometry = mesh["nodes"] if index == 0 else group["coordinates"]
+    parts = [f'<Grid Name="frame {index}" GridType="Uniform">', time,
+             f'<Topology TopologyType="Hexahedron" NumberOfElements='
+             f'"{mesh["elements"].shape[0]}">{_item(h5name, mesh["elements"])}</Topology>',
+             f'<Geometry GeometryType="XYZ">{_item(h5name, geometry)}</Geometry>']
+    for name, ds in group.items():
+        if name == "coordinates":
+            continue
+        centre = str(ds.attrs.get("centre", "Node"))
+        width = ds.shape[1] if ds.ndim == 2 else 1
+        kind = {1: "Scalar", 3: "Vector", 6: "Tensor6", 9: "Tensor"}.get(width, "Matrix")
+        parts.append(f'<Attribute Name={quoteattr(name)} AttributeType="{kind}" '
+                     f'Center="{centre}">{_item(h5name, ds)}</Attribute>')
+    parts.append("</Grid>")
+    out.append("\n        ".join(parts))
+    return out
+
+
+def xdmf_text(h5name: str, f: Any, frames: Sequence[list[str]] | None = None) -> str:
+    """The XDMF 3 document of a results file: per drawn tool a temporal collection of its
+    tessellated surface placed at each frame, then the blank's, each frame with the current
+    coordinates as geometry and its fields as attributes (the HDF5 datasets). The blank's
+    comes last: meshio's TimeSeriesReader reads the last temporal collection. ``frames``:
+    the frames' grids as xdmf_frame gives them (default: read from the file)."""
+    if frames is None:
+        frames = [xdmf_frame(h5name, f, k) for k in range(int(f["fields"].attrs["count"]))]
+    tools = f["tools"] if "tools" in f else {}
+    names = [str(t) for t in f.attrs["tools"] if str(t) in tools]
+    names.append(str(f.attrs.get("title", "")) or "ddpy")
+    body = "".join(
+        f"    <Grid Name={quoteattr(name)} GridType=\"Collection\" "
+        "CollectionType=\"Temporal\">\n      "
+        + "\n      ".join(grids[c] for grids in frames if grids[c]) + "\n    </Grid>\n"
+        for c, name in enumerate(names) if any(grids[c] for grids in frames))
     return ("<?xml version=\"1.0\"?>\n<Xdmf Version=\"3.0\">\n  <Domain>\n"
-            f"    <Grid Name={quoteattr(title or 'ddpy')} GridType=\"Collection\" "
-            "CollectionType=\"Temporal\">\n"
-            f"      {body}\n    </Grid>\n  </Domain>\n</Xdmf>\n")
+            f"{body}  </Domain>\n</Xdmf>\n")
 
 
 class ResultsReader:
@@ -758,6 +930,16 @@ class ResultsReader:
     @property
     def elements(self) -> NDArray[np.int32]:
         return self._file["mesh/elements"][()]
+
+    @property
+    def node_ids(self) -> NDArray[np.int64]:
+        """The nodes' labels (the mesh deck's)."""
+        return self._file["mesh/node_ids"][()]
+
+    @property
+    def element_ids(self) -> NDArray[np.int64]:
+        """The elements' labels (the mesh deck's)."""
+        return self._file["mesh/element_ids"][()]
 
     @property
     def n_increments(self) -> int:
@@ -806,8 +988,12 @@ class ResultsReader:
         return out
 
     def field(self, name: str, frame: int = -1) -> NDArray:
-        """One field of a frame (default the last)."""
+        """One field of a frame (default the last); files written before a field was
+        renamed (RENAMED) answer to the new name."""
         group = self._frame_group(frame)
+        old = {new: old for old, new in RENAMED.items()}.get(name)
+        if name not in group and old in group:
+            name = old
         if name not in group:
             raise KeyError(f"no field {name!r} in frame: fields are {list(group)}")
         return group[name][()]
@@ -817,8 +1003,39 @@ class ResultsReader:
         return self.field("stress", frame)[:, VOIGT]
 
     def frame(self, frame: int = -1) -> dict[str, NDArray]:
-        """All fields of a frame (default the last)."""
-        return {name: d[()] for name, d in self._frame_group(frame).items()}
+        """All fields of a frame (default the last), by their present names (RENAMED)."""
+        return {RENAMED.get(name, name): d[()]
+                for name, d in self._frame_group(frame).items()}
+
+    def field_frame(self, frame: int = -1) -> FieldFrame:
+        """The blank's fields of a frame (default the last) as a FieldFrame (its
+        ``to_meshio()`` gives a meshio mesh), stress in ddpy's Voigt order."""
+        data = self.frame(frame)
+        info = self.frames[frame]
+        n = len(self.nodes)
+        strains = {f"{which}_{surface}": data[f"{which}_strain_{surface}"]
+                   for surface in SURFACES for which in ("major", "minor")
+                   if f"{which}_strain_{surface}" in data}
+        return FieldFrame(self.nodes, self.elements, info.increment,
+                          self.phases[info.phase] if info.phase < len(self.phases) else "",
+                          info.travel, data["displacement"], data["stress"][:, VOIGT],
+                          data["plastic_strain"],
+                          data.get("plastic_strain_nodal", np.zeros(n)),
+                          data.get("contact_pressure", np.zeros(n)), data.get("thickness"),
+                          data.get("thinning"), strains)
+
+    def tool_surface(self, tool: str, frame: int = -1
+                     ) -> tuple[NDArray[np.float64], NDArray[np.int32], str] | None:
+        """A drawn tool's tessellated surface where it was at a frame (default the last):
+        its points (p, 3), its cells and their XDMF topology (Triangle, Quadrilateral or
+        Mixed); None for a tool not drawn (or a file written before tools were)."""
+        self._tool(tool)
+        paths = self._frame_group(frame).attrs.get("tool_geometry")
+        if paths is None or "tools" not in self._file or tool not in self._file["tools"]:
+            return None
+        cells = self._file["tools"][tool]["cells"]
+        path = str(paths[self.tools.index(tool)])
+        return self._file[path][()], cells[()], str(cells.attrs["topology"])
 
     def _frame_group(self, frame: int) -> Any:
         count = int(self._file["fields"].attrs["count"])

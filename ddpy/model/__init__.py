@@ -9,11 +9,13 @@ Example::
 
 from ddpy.model.control import IncrementLimits, NewtonSettings
 from ddpy.model.forming import FormingError, FormingProblem, FormingResult, RigidTool
+from ddpy.model.forming_quantities import FieldFrame
 from ddpy.model.material import HardeningTable, Hill48, Material, Swift, Voce
 from ddpy.model.mesh import HexMesh
 from ddpy.model.solid import Solid
 from ddpy.model.static import StaticProblem
 
-__all__ = ["FormingError", "FormingProblem", "FormingResult", "HardeningTable", "Hill48", "HexMesh",
-           "IncrementLimits", "Material", "NewtonSettings", "RigidTool", "Solid",
+__all__ = ["FieldFrame", "FormingError", "FormingProblem", "FormingResult", "HardeningTable",
+           "Hill48", "HexMesh", "IncrementLimits", "Material", "NewtonSettings", "RigidTool",
+           "Solid",
            "StaticProblem", "Swift", "Voce"]

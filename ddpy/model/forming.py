@@ -18,6 +18,7 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 import scipy.sparse as sp
@@ -30,6 +31,7 @@ from ddpy.core.ordering import mesh_solver
 from ddpy.geometry.search import INSIDE, NONE
 from ddpy.model.contact import INACTIVE
 from ddpy.model.control import IncrementLimits, NewtonSettings, next_step
+from ddpy.model.forming_quantities import FieldFrame, SheetMeasures, nodal_average
 from ddpy.model.mesh import HEX_EDGES, free_rigid_modes, largest_rotation
 from ddpy.model.newton import (
     SEARCH_MONOTONICITY,
@@ -41,6 +43,7 @@ from ddpy.model.newton import (
     ToolPack,
     Trial,
     contact_faces,
+    face_basis,
     gauss_face_weights,
     increment,
 )
@@ -49,8 +52,9 @@ from ddpy.model.tool import RigidTool
 
 _log = logging.getLogger(__name__)
 
-__all__ = ["RigidTool", "FormingProblem", "FormingResult", "FormingError", "Linearization",
-           "PhaseProgress", "cut_hint", "default_augmentation", "default_penalty",
+__all__ = ["RigidTool", "FieldFrame", "FormingProblem", "FormingResult", "FormingError",
+           "Linearization", "PhaseProgress", "cut_hint", "default_augmentation",
+           "default_penalty",
            "start_depth_limit"]
 
 #: Most increments a phase may take at its largest increment: a max_increment smaller than
@@ -200,6 +204,11 @@ class PhaseProgress:
     reason: str
     last_du: NDArray[np.float64] | None
     last_dp: NDArray[np.float64] | None = None
+    #: the increment's number (counted over the FormingResult), the phase's name given to
+    #: run, and the leading tool's travel since the start of the run's motion (mm)
+    increment: int = 0
+    phase: str = ""
+    travel: float = 0.0
 
 
 class FormingError(RuntimeError):
@@ -227,8 +236,8 @@ class FormingResult:
     tool_displacements: dict[str, list[NDArray[np.float64]]] = field(default_factory=dict)
     tool_forces: dict[str, list[NDArray[np.float64]]] = field(default_factory=dict)
     contacts: dict[str, list[int]] = field(default_factory=dict)
-    #: per tool and increment, the state of every slave: 0 open, 1 stick, 2 slip
-    status: dict[str, list[NDArray[np.int32]]] = field(default_factory=dict)
+    #: per tool and increment, the contact state of every slave: 0 open, 1 stick, 2 slip
+    contact_states: dict[str, list[NDArray[np.int32]]] = field(default_factory=dict)
     residuals: list[list[float]] = field(default_factory=list)
     #: per increment and Newton iteration, what convergence is judged on: the residual norm
     #: over the force scale and the correction over the increment's displacement, scaled up
@@ -260,6 +269,9 @@ class FormingResult:
     augmentations: int = 0
     timings: dict[str, float] = field(default_factory=lambda: {
         "assembly": 0.0, "contact": 0.0, "factorization": 0.0, "solve": 0.0})
+    #: the blank's fields at the end of each run and springback (FieldFrame: displacement,
+    #: stress, plastic strain, thickness, contact pressure...; ``frame.to_meshio()``)
+    frames: list[FieldFrame] = field(default_factory=list)
 
     @property
     def iterations(self) -> list[int]:
@@ -321,6 +333,10 @@ class FormingProblem:
         #: the pressure of every Gauss point at the last converged increment (points,): the
         #: multiplier of its augmented Lagrangian law p = max(0, p_n - eps g)
         self.pressure = np.zeros(self._pack.n_points)
+        #: the pressure of every Gauss point of Gauss-point contact at the last converged
+        #: increment (points,), MPa of the undeformed blank face: what contact_pressure
+        #: reads (not carried: with the plain penalty ``pressure`` stays zero)
+        self.point_pressure = np.zeros(self._pack.n_points)
         #: whether the Gauss points' law is augmented (NewtonSettings.augment of the run):
         #: else a converged increment leaves their multipliers at zero, the plain penalty
         self._augment = False
@@ -329,7 +345,7 @@ class FormingProblem:
         self._gap = (np.full(npair, np.inf), np.zeros((npair, 3)))
         #: reach of the contact search (mm): see REACH_SIZES; run() adds its tool travel
         self._reach = REACH_SIZES * self.size
-        self._status = np.zeros(npair, dtype=np.int32)  # of the law, last increment
+        self._contact_state = np.zeros(npair, dtype=np.int32)  # of the law, last increment
         self.external = np.zeros((n, 3))
         self._layout: Layout | None = None
         self._solver: MumpsSolver | None = None
@@ -388,6 +404,8 @@ class FormingProblem:
         result: FormingResult | None = None,
         on_increment: Callable[[PhaseProgress], bool | None] | None = None,
         resume: PhaseProgress | None = None,
+        phase: str = "",
+        frames: bool = True,
     ) -> FormingResult:
         """Move each tool of ``motion`` by its displacement (3,) over the phase, linearly in
         the phase factor; tools not in ``active`` (default: all) are lifted off (their
@@ -405,8 +423,12 @@ class FormingProblem:
         distance between their surfaces) in the first increment and then follows the die
         (a position-controlled blank-holder).
         ``on_increment`` is called after every converged increment (the result holds its
-        data); a true return stops the run there. ``resume`` continues a run from the
-        progress such a call received."""
+        data) with a PhaseProgress that also says which increment it was (counted over
+        ``result``), the phase (``phase``, a name for it) and the leading tool's travel
+        since the start of the run's motion (mm); a true return stops the run there.
+        ``resume`` continues a run from the progress such a call received. ``frames``:
+        append the blank's fields at the end of the run to ``result.frames``
+        (``fields``)."""
         limits = IncrementLimits() if limits is None else limits
         newton = NewtonSettings() if newton is None else newton
         self._augment = newton.augment
@@ -433,7 +455,7 @@ class FormingProblem:
             result.tool_displacements.setdefault(t.name, [])
             result.tool_forces.setdefault(t.name, [])
             result.contacts.setdefault(t.name, [])
-            result.status.setdefault(t.name, [])
+            result.contact_states.setdefault(t.name, [])
             result.penetration.setdefault(t.name, [])
         layout = self._prepare()
         on = np.concatenate([np.full(t.slaves.size, t.name in active_set) for t in self.tools])
@@ -599,14 +621,18 @@ class FormingProblem:
                 result.tool_displacements[t.name].append(positions[t.name].copy())
                 result.tool_forces[t.name].append(-force[pairs].sum(axis=0))
                 result.contacts[t.name].append(int((in_contact[pairs] != INACTIVE).sum()))
-                result.status[t.name].append(in_contact[pairs].copy())
+                result.contact_states[t.name].append(in_contact[pairs].copy())
                 result.penetration[t.name].append(depth[i])
             cuts_in_row = redos = 0
             step, reason = next_step(step, nominal, reason, strain / limits.strain,
                                       rotation / limit)
             if on_increment is not None and on_increment(
-                    PhaseProgress(start, offsets, factor, step, reason, last_du, last_dp)):
+                    PhaseProgress(start, offsets, factor, step, reason, last_du, last_dp,
+                                  increment=len(result.factors), phase=phase,
+                                  travel=factor * travel)):
                 break
+        if frames:
+            result.frames.append(self.fields(len(result.factors), phase, factor * travel))
         return result
 
     def _release(self, layout: Layout, on: NDArray[np.bool_],
@@ -664,9 +690,10 @@ class FormingProblem:
         zero)."""
         self.u, self.state, self.force, self._gap = (outcome.u, outcome.state, outcome.force,
                                                      outcome.gap)
-        self.traction, self._status = outcome.traction, outcome.in_contact
+        self.traction, self._contact_state = outcome.traction, outcome.in_contact
         assert outcome.pressure is not None
         self.pressure = outcome.pressure if self._augment else np.zeros_like(outcome.pressure)
+        self.point_pressure = outcome.pressure.copy()
 
     def _penetration(self, layout: Layout, outcome: Trial, on: NDArray[np.bool_],
                      positions: Mapping[str, NDArray[np.float64]]) -> list[float]:
@@ -788,7 +815,8 @@ class FormingProblem:
         return added
 
     def springback(self, increments: int = 5, newton: NewtonSettings | None = None,
-                   result: FormingResult | None = None) -> FormingResult:
+                   result: FormingResult | None = None, frames: bool = True
+                   ) -> FormingResult:
         """Remove the tools and let the blank unload. The forces that held it at the end of
         forming (contact forces, reactions of released clamps) become nodal loads, brought
         to zero in ``increments`` steps (unloading is elastic unless it yields in reverse),
@@ -796,7 +824,8 @@ class FormingProblem:
         only the constraints that stop rigid-body motion: ``release`` clamps first; if the
         remaining constraints leave rigid motions free, ``support_rigid_modes`` adds a
         3-2-1 set of supports (docs/theory/contact.md). ``newton``: convergence of each
-        step (default NewtonSettings(); a step that fails stops the springback)."""
+        step (default NewtonSettings(); a step that fails stops the springback).
+        ``frames``: append the blank's fields at its end to ``result.frames``."""
         newton = NewtonSettings() if newton is None else newton
         if int(increments) < 1:
             raise ValueError(f"increments must be at least 1, got {increments}")
@@ -812,6 +841,7 @@ class FormingProblem:
         self.force = np.zeros_like(self.force)
         self.traction = np.zeros_like(self.traction)
         self.pressure = np.zeros_like(self.pressure)
+        self.point_pressure = np.zeros_like(self.point_pressure)
         off = np.zeros(layout.node.size, dtype=bool)
         last_du: NDArray[np.float64] | None = None
         try:
@@ -843,6 +873,8 @@ class FormingProblem:
                 result.displacements.append(self.u.copy())
         finally:
             self.external = np.zeros_like(self.u)
+        if frames:
+            result.frames.append(self.fields(len(result.factors), "springback"))
         return result
 
     def _touch_factor(self, layout: Layout, on: NDArray[np.bool_],
@@ -881,7 +913,7 @@ class FormingProblem:
         their tool's: released inside an increment, they change the tool's force by less
         than that (IncrementLimits.release_share)."""
         pressure = np.einsum("ij,ij->i", self.force, self._gap[1])
-        pressure = np.where(self._status != INACTIVE, np.maximum(pressure, 0.0), 0.0)
+        pressure = np.where(self._contact_state != INACTIVE, np.maximum(pressure, 0.0), 0.0)
         total = np.add.reduceat(pressure, layout.first[:-1]) if pressure.size else pressure
         return pressure <= share * total[layout.tool_of]
 
@@ -891,7 +923,7 @@ class FormingProblem:
         its pressure extrapolated at the rate of the last increment (``rate``, per unit
         phase factor), plus ``margin / 2`` so that it is free at the end."""
         pressure = np.einsum("ij,ij->i", self.force, self._gap[1])
-        falling = (self._status != INACTIVE) & (pressure > 0.0) & (rate < 0.0) & ~minor
+        falling = (self._contact_state != INACTIVE) & (pressure > 0.0) & (rate < 0.0) & ~minor
         falling &= ~self._gauss
         ahead = np.full(pressure.size, np.inf)
         ahead[falling] = pressure[falling] / (-rate[falling] * step)
@@ -913,7 +945,7 @@ class FormingProblem:
         distance, normal = gap
         pressure = np.einsum("ij,ij->i", self.force, normal)
         after = np.einsum("ij,ij->i", force, normal) - self.r * distance
-        released = (self._status != INACTIVE) & (state == INACTIVE) & (pressure > 0.0)
+        released = (self._contact_state != INACTIVE) & (state == INACTIVE) & (pressure > 0.0)
         released &= np.isfinite(distance) & (after < 0.0) & ~minor & ~self._gauss
         if not released.any():
             return 1.0
@@ -929,6 +961,73 @@ class FormingProblem:
             trend = np.divide(p, drop, out=np.full(p.size, np.inf), where=drop > 0.0)
             fraction = np.where(trend < 1.0, trend, fraction)
         return float(fraction.min())
+
+    def contact_pressure(self) -> NDArray[np.float64]:
+        """The contact pressure at every blank node at the last converged increment (n,),
+        MPa: the normal force the tools press the node with over the area it stands for,
+        both spread from the blank's contact faces by the faces' shape functions (each
+        node's share of the present face area). For Gauss-point contact the force is that
+        of the faces' Gauss points (their pressures times the undeformed areas they stand
+        for); for node-to-surface and surface-to-surface contact the node's own normal
+        force. Zero away from contact; where several tools press a node, the sum."""
+        mesh = self.solid.mesh
+        x = mesh.nodes + self.u
+        n = mesh.n_nodes
+        out = np.zeros(n)
+        pack = self._pack  # the blank faces facing each tool, as the contact uses them
+        first_point, first_pair = 0, 0
+        normal = self._gap[1]
+        for i, tool in enumerate(self.tools):
+            faces = pack.faces[4 * pack.face_first[i]:4 * pack.face_first[i + 1]].reshape(-1, 4)
+            npf = tool.points**2
+            count = npf * faces.shape[0]
+            pairs = slice(first_pair, first_pair + tool.slaves.size)
+            first_pair += tool.slaves.size
+            if not faces.shape[0]:
+                first_point += count
+                continue
+            if tool.contact == "gauss":
+                basis = face_basis(tool.points)                              # (npf, 4)
+                area = gauss_face_weights(x, faces, tool.points)              # (f, npf)
+                points = slice(first_point, first_point + count)
+                force = (self.point_pressure[points] * pack.face_weight[points]).reshape(-1, npf)
+                node_force = np.bincount(faces.ravel(), (force @ basis).ravel(), minlength=n)
+            else:
+                basis = face_basis(2)
+                area = gauss_face_weights(x, faces, 2)
+                node_force = np.zeros(n)
+                node_force[tool.slaves] = np.maximum(
+                    np.einsum("ij,ij->i", self.force[pairs], normal[pairs]), 0.0)
+            first_point += count
+            node_area = np.bincount(faces.ravel(), (area @ basis).ravel(), minlength=n)
+            out += np.divide(node_force, node_area, out=np.zeros(n), where=node_area > 0.0)
+        return out
+
+    def fields(self, increment: int = 0, phase: str = "", travel: float = 0.0) -> FieldFrame:
+        """The blank's fields at the present state (a snapshot: FieldFrame), labelled with
+        ``increment``, ``phase`` and ``travel``."""
+        mesh = self.solid.mesh
+        cauchy = self.solid.stresses(self.u, self.state)[1].mean(axis=1)
+        thickness = thinning = None
+        strains: dict[str, NDArray[np.float64]] = {}
+        measures = self.sheet_measures
+        if measures is not None:
+            thickness, thinning = measures.thickness(self.u), measures.thinning(self.u)
+            strains = measures.surface_strains(self.u)
+        return FieldFrame(mesh.nodes, mesh.elements, int(increment), str(phase), float(travel),
+                          self.u.copy(), cauchy, self.state.ep.mean(axis=1),
+                          nodal_average(mesh.elements, self.state.ep, mesh.n_nodes),
+                          self.contact_pressure(), thickness, thinning, strains)
+
+    @cached_property
+    def sheet_measures(self) -> SheetMeasures | None:
+        """Thickness and surface strains of the blank (None when it is not meshed in layers
+        through its thickness)."""
+        mesh = self.solid.mesh
+        try:
+            return SheetMeasures(mesh.nodes, mesh.elements, mesh.normal)
+        except ValueError:
+            return None
 
     def contact_state(self, u: ArrayLike | None = None,
                       positions: Mapping[str, ArrayLike] | None = None,

@@ -61,17 +61,35 @@ def gauss_face_weights(nodes: NDArray[np.float64], faces: NDArray[np.integer],
     for (f, order^2): the Gauss weights times |dX/dxi x dX/deta| at the point, in the order
     of the core's points (xi runs fastest, each from -1 to 1), the corners (xi, eta) =
     (-1, -1), (1, -1), (1, 1), (-1, 1). They sum to each face's area."""
-    corner = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
-    points, weights_1d = np.polynomial.legendre.leggauss(order)
     x = nodes[faces]                                              # (f, 4, 3)
+    points_xi, points_eta, gauss = face_gauss_points(order)
     weights = np.empty((faces.shape[0], order * order), dtype=float)
-    for g in range(order * order):
-        xi, eta = points[g % order], points[g // order]
-        dxi = 0.25 * corner[:, 0] * (1.0 + corner[:, 1] * eta)    # dN_q/dxi
-        deta = 0.25 * corner[:, 1] * (1.0 + corner[:, 0] * xi)
-        weights[:, g] = weights_1d[g % order] * weights_1d[g // order] * np.linalg.norm(
+    for g, (xi, eta) in enumerate(zip(points_xi, points_eta, strict=True)):
+        dxi = 0.25 * FACE_CORNERS[:, 0] * (1.0 + FACE_CORNERS[:, 1] * eta)    # dN_q/dxi
+        deta = 0.25 * FACE_CORNERS[:, 1] * (1.0 + FACE_CORNERS[:, 0] * xi)
+        weights[:, g] = gauss[g] * np.linalg.norm(
             np.cross(np.einsum("q,fqk->fk", dxi, x), np.einsum("q,fqk->fk", deta, x)), axis=1)
     return weights
+
+
+#: The corners (xi, eta) of a quadrilateral face, in the order of its nodes.
+FACE_CORNERS = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
+
+
+def face_gauss_points(order: int
+                      ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """The order x order Gauss points of a quadrilateral face in the core's order (xi runs
+    fastest, each from -1 to 1): xi, eta and weight of each (order^2,)."""
+    points, weights = np.polynomial.legendre.leggauss(order)
+    return (np.tile(points, order), np.repeat(points, order),
+            np.tile(weights, order) * np.repeat(weights, order))
+
+
+def face_basis(order: int) -> NDArray[np.float64]:
+    """The 4 shape functions of a quadrilateral face at its Gauss points (order^2, 4)."""
+    xi, eta, _ = face_gauss_points(order)
+    return 0.25 * (1.0 + np.outer(xi, FACE_CORNERS[:, 0])) * (
+        1.0 + np.outer(eta, FACE_CORNERS[:, 1]))
 
 
 class Layout:

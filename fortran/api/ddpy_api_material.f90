@@ -5,7 +5,8 @@ module ddpy_api_material
   use ddpy_kinds, only: wp
   use ddpy_material, only: material_prop_count, material_update, material_hardening, &
                            material_check, hill48_from_r_values, yield_landing, &
-                           material_update_mixed, material_yield_stress, material_bad_props
+                           material_yield_stress, material_bad_props
+  use ddpy_material_mixed, only: material_update_mixed
   implicit none
   private
   public :: api_material_update, api_material_update_mixed, api_material_hardening, api_material_check, &
@@ -39,8 +40,8 @@ contains
   end subroutine api_material_update
 
   !> Return mapping with mixed isotropic-kinematic hardening at k points of one material
-  !> (material_update_mixed; with C_X or X_sat zero the backstress stays as it is and the
-  !> update is the isotropic one): api_material_update's arguments and the backstress
+  !> (material_update_mixed; with C_X zero the backstress stays as given, a shifted yield
+  !> surface): api_material_update's arguments and the backstress
   !> back_old(:, i) in, back(:, i) out (Voigt, deviatoric).
   subroutine api_material_update_mixed(props, k, stress_old, back_old, ep_old, &
                                        strain_increment, stress, back, ep, tangent, plastic, &

@@ -359,6 +359,15 @@ class _Run:
             setattr(p, name, value.copy())
         p.position = positions
         p.state = state_from_arrays(SolidState, arrays, where=str(path))
+        if p.solid.mixed and p.state.backstress is None:
+            # No guess of the backstress: zero would restart a hardened sheet as fresh.
+            raise CheckpointError(f"{path}: has no backstress, which the case's mixed "
+                                  "hardening needs (written by another version of ddpy); run "
+                                  "again without --restart")
+        if p.state.backstress is not None and (
+                not p.solid.mixed or p.state.backstress.shape != p.state.stress.shape):
+            raise CheckpointError(f"{path}: written for another material or mesh (backstress "
+                                  f"{p.state.backstress.shape}); run again without --restart")
         self.phase_index, self.segment = int(meta["phase_index"]), int(meta["segment"])
         self.phase_increments, self.last_frame = (int(meta["phase_increments"]),
                                                   int(meta["last_frame"]))

@@ -422,6 +422,9 @@ class Case:
         hard = type(mat.hardening).__name__
         if hasattr(mat.hardening, "strains"):
             hard = f"tabulated ({len(mat.hardening.strains)} points)"
+        if mat.kinematic is not None:
+            hard += (f" and Armstrong-Frederick kinematic (C {mat.kinematic.C:g}, Xsat "
+                     f"{mat.kinematic.X_sat:g} MPa)")
         lines = [
             f"case {self.folder}: {self.title}",
             f"  blank: {m.n_nodes} nodes, {m.n_elements} hexahedra, element {self.element} "

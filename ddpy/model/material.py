@@ -1,5 +1,7 @@
-"""Elastoplastic material of the blank: isotropic elasticity, Hill'48 anisotropy, Swift or Voce
-hardening, integrated by the core's backward-Euler return mapping (docs/theory/material.md).
+"""Elastoplastic material of the blank: isotropic elasticity, Hill'48 anisotropy, Swift, Voce
+or tabulated isotropic hardening, optionally with an Armstrong-Frederick backstress (mixed
+isotropic-kinematic hardening), integrated by the core's backward-Euler return mapping
+(docs/theory/material.md).
 
 Material axes: 1 = rolling direction (RD), 2 = transverse direction (TD), 3 = normal direction
 (ND). Voigt order (11, 22, 33, 12, 23, 31); strains carry engineering shears (gamma = 2 eps),
@@ -22,13 +24,15 @@ from numpy.typing import ArrayLike, NDArray
 from ddpy import _core
 from ddpy._validate import float_array
 
-__all__ = ["HardeningTable", "Hill48", "Material", "PROP_COUNT", "ReturnMappingError", "Swift",
-           "TABLE_MAX_POINTS", "Voce", "yield_landing"]
+__all__ = ["ArmstrongFrederick", "HardeningTable", "Hill48", "Material", "PROP_COUNT",
+           "ReturnMappingError", "Swift", "TABLE_MAX_POINTS", "Voce", "yield_landing"]
 
 #: Points a hardening table may hold, and where they start in the property vector.
 TABLE_MAX_POINTS, _TABLE_START = 100, 16
 #: Length of the property vector the core takes (``Material.props()``).
 PROP_COUNT = _TABLE_START + 2 * TABLE_MAX_POINTS
+#: Where C_X and X_sat of the kinematic hardening sit in the property vector (0-based).
+_KINEMATIC = 12
 
 _STATUS = {1: "the return mapping did not converge", 2: "invalid material properties",
            3: "non-finite or negative input"}
@@ -148,6 +152,35 @@ class HardeningTable:
         return (float(len(self.strains)), 0.0, 0.0)
 
 
+@dataclass(frozen=True)
+class ArmstrongFrederick:
+    """Armstrong-Frederick kinematic hardening with saturation, Lemaitre and Chaboche's form as
+    DD3IMP has it: the backstress X (Voigt, deviatoric) evolves as
+
+        dX = C_X (X_sat (s' - X) / sigma(s - X) - X) dep,
+
+    sigma the Hill'48 equivalent stress of the relative stress, ep the equivalent plastic
+    strain. C_X >= 0 (rate), X_sat >= 0 (stress; the backstress's Hill norm saturates there,
+    and it must stay below the initial yield stress, checked by ``Material``). In uniaxial
+    tension X = X_sat (1 - exp(-C_X ep)) adds to the isotropic Y(ep)."""
+
+    C: float
+    X_sat: float
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "C", _real(self.C, "kinematic hardening C_X"))
+        object.__setattr__(self, "X_sat", _real(self.X_sat, "kinematic hardening X_sat"))
+        if self.C < 0:
+            raise ValueError(f"kinematic hardening C_X must be non-negative, got {self.C}")
+        if self.X_sat < 0:
+            raise ValueError(f"kinematic hardening X_sat must be non-negative, got {self.X_sat}")
+
+    @property
+    def active(self) -> bool:
+        """The backstress can grow (both parameters positive)."""
+        return self.C > 0 and self.X_sat > 0
+
+
 @dataclass(frozen=True, kw_only=True)
 class Hill48:
     """Hill'48 yield function in the material axes (1 = RD, 2 = TD, 3 = ND):
@@ -258,12 +291,15 @@ class ReturnMappingError(RuntimeError):
 @dataclass(frozen=True)
 class Material:
     """Isotropic elasticity (E > 0, -1 < nu < 1/2), a Hill48 yield criterion in the material
-    axes and Swift, Voce or tabulated hardening of the equivalent plastic strain."""
+    axes and Swift, Voce or tabulated hardening of the equivalent plastic strain; with
+    ``kinematic`` (an ArmstrongFrederick) mixed hardening, Hill48 then acting on the stress
+    minus the backstress. X_sat must lie below the initial yield stress."""
 
     E: float
     nu: float
     yield_criterion: Hill48
     hardening: Swift | Voce | HardeningTable
+    kinematic: ArmstrongFrederick | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "E", _real(self.E, "Young's modulus E"))
@@ -278,9 +314,25 @@ class Material:
         if not isinstance(self.hardening, Swift | Voce | HardeningTable):
             raise TypeError(f"hardening must be Swift, Voce or HardeningTable, got "
                             f"{type(self.hardening).__name__}")
+        if self.kinematic is not None:
+            if not isinstance(self.kinematic, ArmstrongFrederick):
+                raise TypeError(f"kinematic must be an ArmstrongFrederick or None, got "
+                                f"{type(self.kinematic).__name__}")
+            y0 = self.hardening.initial_yield_stress
+            if self.kinematic.X_sat >= y0:
+                raise ValueError(
+                    f"kinematic hardening X_sat = {self.kinematic.X_sat:g} must lie below the "
+                    f"initial yield stress {y0:g}: the backstress grows towards X_sat, and "
+                    "from X_sat = Y0 on the stress-free state leaves the yield surface "
+                    "(unloading alone would yield the material)")
         info = int(_core.material_check(self.props()))
         if info != 0:  # the Python checks above should have caught it
             raise ValueError(f"material property {info} (1-based) rejected by the core")
+
+    @property
+    def mixed(self) -> bool:
+        """Mixed isotropic-kinematic hardening: a backstress that can grow."""
+        return self.kinematic is not None and self.kinematic.active
 
     @property
     def shear_modulus(self) -> float:
@@ -293,7 +345,8 @@ class Material:
     def props(self) -> NDArray[np.float64]:
         """The core's property vector: E, nu, F, G, H, L, M, N, law (1 Swift, 2 Voce, 3 table),
         the three hardening parameters (K, eps0, n or Y0, Q, b, or the table's point count, 0,
-        0), 4 reserved zeros, then the table's points as pairs (ep, Y), zero-padded."""
+        0), C_X and X_sat of the kinematic hardening (zero without it), 2 reserved zeros,
+        then the table's points as pairs (ep, Y), zero-padded."""
         props = np.zeros(PROP_COUNT)
         props[0:2] = self.E, self.nu
         props[2:8] = self.yield_criterion.coefficients
@@ -303,6 +356,8 @@ class Material:
             n = len(self.hardening.strains)
             props[_TABLE_START:_TABLE_START + 2 * n:2] = self.hardening.strains
             props[_TABLE_START + 1:_TABLE_START + 2 * n:2] = self.hardening.stresses
+        if self.kinematic is not None:
+            props[_KINEMATIC:_KINEMATIC + 2] = self.kinematic.C, self.kinematic.X_sat
         return props
 
     def elastic_tangent(self) -> NDArray[np.float64]:
@@ -333,7 +388,11 @@ class Material:
         (k, 6) (or one point: (6,), scalar, (6,)). Returns the stress (k, 6), the equivalent
         plastic strain (k,), the consistent tangent d stress / d strain_increment (k, 6, 6)
         and whether each point yielded (k,). Raises ReturnMappingError when the return
-        mapping fails at a point (the caller cuts the increment)."""
+        mapping fails at a point (the caller cuts the increment). For mixed hardening use
+        ``update_mixed``, which carries the backstress."""
+        if self.mixed:
+            raise ValueError("this material has a backstress (mixed hardening): use "
+                             "update_mixed, which carries it")
         single = np.ndim(stress_old) == 1
         s = float_array(np.atleast_2d(stress_old), "stress_old", (None, 6))
         k = s.shape[0]
@@ -353,6 +412,37 @@ class Material:
         if single:
             return stress[0], ep_new[0], tangent[0], plastic[0]
         return stress, ep_new, tangent, plastic
+
+    def update_mixed(
+        self, stress_old: ArrayLike, backstress_old: ArrayLike, ep_old: ArrayLike,
+        strain_increment: ArrayLike,
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64],
+               NDArray[np.float64], NDArray[np.bool_]]:
+        """``update`` carrying the backstress: stress_old, backstress_old (k, 6), ep_old (k,),
+        strain_increment (k, 6) (or one point). Returns the stress, the backstress (k, 6),
+        ep (k,), the consistent tangent (k, 6, 6; not symmetric where the backstress is not
+        along the relative stress) and whether each point yielded. Without a kinematic law
+        (or with C_X or X_sat zero) the backstress stays as given and the rest is
+        ``update``'s answer."""
+        single = np.ndim(stress_old) == 1
+        s = float_array(np.atleast_2d(stress_old), "stress_old", (None, 6))
+        k = s.shape[0]
+        back = float_array(np.atleast_2d(backstress_old), "backstress_old", (k, 6))
+        ep = float_array(np.atleast_1d(ep_old), "ep_old", (k,))
+        de = float_array(np.atleast_2d(strain_increment), "strain_increment", (k, 6))
+        if np.any(ep < 0):
+            raise ValueError("ep_old must be non-negative")
+        stress, back_new, ep_new, tangent, plastic, status = _core.material_update_mixed(
+            self.props(), s.reshape(-1), back.reshape(-1), ep, de.reshape(-1))
+        failed = np.flatnonzero(status)
+        if failed.size:
+            raise ReturnMappingError(failed, status[failed])
+        tangent = tangent.reshape(k, 6, 6).transpose(0, 2, 1)
+        stress, back_new = stress.reshape(k, 6), back_new.reshape(k, 6)
+        plastic = plastic.astype(bool)
+        if single:
+            return stress[0], back_new[0], ep_new[0], tangent[0], plastic[0]
+        return stress, back_new, ep_new, tangent, plastic
 
 
 def yield_landing(props: ArrayLike, stress_old: ArrayLike, ep_old: ArrayLike,

@@ -368,16 +368,18 @@ def increment(solid: Solid, layout: Layout, factors: Factors, state: SolidState,
     out = solid.state_buffer()
     solid_state = (solid._x, solid._conn, solid._kind, solid.props, _flat(state.displacement),
                    _flat(state.axes.transpose(0, 1, 3, 2)), _flat(state.stress),
-                   _flat(state.ep), _flat(state.strain), layout.eqn, layout.pattern.offsets,
+                   _flat(state.ep), _flat(state.strain), solid.backstress_in(state), layout.eqn,
+                   layout.pattern.offsets,
                    layout.fixed_flags, layout.nf, layout.k_slots)
     start = (u_n if guess is None else guess).ravel()
     buffers = (out.stress.ravel(), out.ep.ravel(), out.strain.ravel(),
-               out.axes.transpose(0, 1, 3, 2).ravel(), loop.max_iterations + 1)
+               out.axes.transpose(0, 1, 3, 2).ravel(), solid.backstress_out(out),
+               loop.max_iterations + 1)
     if pairs is None:
         if layout.node.size:
             raise ValueError("a layout with contact pairs needs their Pairs")
-        (factored, u, fint, stress, ep, strain, axes, niter, history, counters, spent, outcome,
-         info, detail) = _core.static_increment(
+        (factored, u, fint, stress, ep, strain, axes, back, niter, history, counters, spent,
+         outcome, info, detail) = _core.static_increment(
             *solid_state, layout.rows.size, layout.by_rows.row_start, layout.by_rows.col,
             layout.by_rows.sources, layout.by_rows.source_start, solid.mesh.element_size(),
             u_n.ravel(),
@@ -385,7 +387,7 @@ def increment(solid: Solid, layout: Layout, factors: Factors, state: SolidState,
             *buffers)
         force = pair_state = gap = normal = traction = pressure = np.zeros(0)
     else:
-        (factored, reuse_next, u, force, fint, stress, ep, strain, axes, pair_state, gap,
+        (factored, reuse_next, u, force, fint, stress, ep, strain, axes, back, pair_state, gap,
          normal, traction, pressure, niter, history, counters, spent, outcome, info,
          detail) = \
             _core.forming_increment(
@@ -410,7 +412,7 @@ def increment(solid: Solid, layout: Layout, factors: Factors, state: SolidState,
         converged = SolidState(stress.reshape(m, 8, 6), ep.reshape(m, 8),
                                strain.reshape(m, 8, 6),
                                axes.reshape(m, 8, 3, 3).transpose(0, 1, 3, 2),
-                               u.reshape(-1, 3))
+                               u.reshape(-1, 3), back.reshape(m, 8, 6) if solid.mixed else None)
         return Trial(u=u.reshape(-1, 3), state=converged, force=force.reshape(-1, 3),
                      fint=fint.reshape(-1, 3), in_contact=pair_state,
                      gap=(gap, normal.reshape(-1, 3)), traction=traction.reshape(-1, 3),

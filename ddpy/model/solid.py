@@ -46,7 +46,8 @@ SHELL_MODES = 13
 _STATUS = {1: "is inverted (det F <= 0 or det J0 <= 0 at a Gauss point)",
            2: "failed in the material update (return mapping)",
            3: "has a node index out of range", 4: "has inconsistent tangent slots",
-           5: "did not converge in its enhanced strains (the solid-shell's local iteration)"}
+           5: "did not converge in its enhanced strains (the solid-shell's local iteration)",
+           7: "has no backstress in the state (mixed hardening needs one per Gauss point)"}
 _COMPONENTS = {"x": 0, "y": 1, "z": 2}
 
 
@@ -64,8 +65,9 @@ def material_props(material: Any) -> NDArray[np.float64]:
     with positive parameters.
 
     Layout: (0) E, (1) nu, (2:8) Hill F, G, H, L, M, N, (8) hardening (1 Swift, 2 Voce,
-    3 table), (9:12) Swift K, eps0, n or Voce Y0, Q, b or the table's point count; (16:)
-    the table's (ep, Y) pairs; the rest is reserved (zero).
+    3 table), (9:12) Swift K, eps0, n or Voce Y0, Q, b or the table's point count; (12:14)
+    C_X, X_sat of the kinematic hardening (zero: none); (16:) the table's (ep, Y) pairs;
+    the rest is reserved (zero).
     """
     props = material.props() if hasattr(material, "props") else material
     props = float_array(props, "material properties", (PROP_COUNT,))
@@ -90,6 +92,14 @@ def material_props(material: Any) -> NDArray[np.float64]:
             raise ValueError(f"Voce Y0 must be positive and Q, b >= 0, got {y0}, {q}, {b}")
     elif law != 3.0:
         raise ValueError(f"hardening must be 1 (Swift), 2 (Voce) or 3 (table), got {law}")
+    c_x, x_sat = props[12:14]
+    if not (c_x >= 0.0 and x_sat >= 0.0):
+        raise ValueError(f"kinematic hardening C_X and X_sat must be non-negative, got {c_x}, "
+                         f"{x_sat}")
+    y0 = float(_core.material_hardening(props, np.zeros(1))[0][0])
+    if x_sat >= y0:
+        raise ValueError(f"kinematic hardening X_sat = {x_sat:g} must lie below the initial "
+                         f"yield stress {y0:g}")
     info = int(_core.material_check(props))
     if info:
         raise ValueError(f"material property {info - 1} (0-based) is out of range "
@@ -103,13 +113,15 @@ class SolidState:
     (updated Lagrangian): per Gauss point the rotated Kirchhoff stress in material axes
     (m, 8, 6), the equivalent plastic strain (m, 8), the accumulated logarithmic strain in
     material axes (m, 8, 6) and the material axes as columns (m, 8, 3, 3); per node the
-    displacements (n, 3)."""
+    displacements (n, 3); with mixed hardening the backstress in material axes (m, 8, 6),
+    carried like the stress (None without it)."""
 
     stress: NDArray[np.float64]
     ep: NDArray[np.float64]
     strain: NDArray[np.float64]
     axes: NDArray[np.float64]
     displacement: NDArray[np.float64]
+    backstress: NDArray[np.float64] | None = None
 
     @classmethod
     def zeros(cls, n_elements: int, n_nodes: int) -> SolidState:
@@ -122,12 +134,18 @@ class SolidState:
         # order="K" keeps the layout of axes (a transposed view when written by assemble),
         # so that the copy goes back to the core without another copy.
         return SolidState(self.stress.copy(), self.ep.copy(), self.strain.copy(),
-                          self.axes.copy(order="K"), self.displacement.copy())
+                          self.axes.copy(order="K"), self.displacement.copy(),
+                          None if self.backstress is None else self.backstress.copy())
 
 
 def _flat(a: NDArray[np.float64]) -> NDArray[np.float64]:
     """C-ordered flat float64 view (or copy) for the core."""
     return np.ascontiguousarray(a, dtype=np.float64).ravel()
+
+
+#: What the core reads for the backstress of a material without one (f2py passes no empty
+#: array; the core does not read it then).
+_NO_BACKSTRESS = np.zeros(48)
 
 
 class Assembly(NamedTuple):
@@ -179,6 +197,8 @@ class Solid:
         self._kind = ELEMENTS[element]
         self.mesh = mesh
         self.props = material_props(material)
+        #: mixed hardening: a backstress per Gauss point in the state
+        self.mixed = bool(self.props[12] > 0.0 and self.props[13] > 0.0)
         #: the initial yield stress (MPa, of the hardening curve at ep = 0: Swift K eps0^n,
         #: Voce Y0): the scale of Gauss-point contact's default penalty
         self.yield_stress = float(self.props[9] * self.props[10] ** self.props[11]
@@ -211,13 +231,37 @@ class Solid:
         axes[:, 0, 1], axes[:, 1, 1] = -s, c
         axes[:, 2, 2] = 1.0
         state.axes[:] = axes[:, None, :, :]
+        if self.mixed:
+            state.backstress = np.zeros((self.mesh.n_elements, 8, 6))
         return state
+
+    def backstress_in(self, state: SolidState) -> NDArray[np.float64]:
+        """The flat backstress of ``state`` for the core, checked: (m, 8, 6) with mixed
+        hardening (ValueError when missing), the stand-in the core ignores without it."""
+        if not self.mixed:
+            return _NO_BACKSTRESS
+        m = self.mesh.n_elements
+        if state.backstress is None or np.shape(state.backstress) != (m, 8, 6):
+            raise ValueError(f"the state has no backstress of shape ({m}, 8, 6), which this "
+                             "solid's mixed hardening needs (got "
+                             f"{None if state.backstress is None else np.shape(state.backstress)})")
+        return _flat(state.backstress)
 
     def state_buffer(self) -> SolidState:
         """Uninitialized arrays of a state, in the layout ``assemble`` writes (``out``)."""
         m, n = self.mesh.n_elements, self.mesh.n_nodes
         return SolidState(np.empty((m, 8, 6)), np.empty((m, 8)), np.empty((m, 8, 6)),
-                          np.empty((m, 8, 3, 3)).transpose(0, 1, 3, 2), np.empty((n, 3)))
+                          np.empty((m, 8, 3, 3)).transpose(0, 1, 3, 2), np.empty((n, 3)),
+                          np.empty((m, 8, 6)) if self.mixed else None)
+
+    def backstress_out(self, out: SolidState) -> NDArray[np.float64]:
+        """The flat buffer the core writes the trial backstress into (a scratch copy of the
+        stand-in without mixed hardening)."""
+        if not self.mixed:
+            return _NO_BACKSTRESS.copy()
+        if out.backstress is None:
+            out.backstress = np.empty((self.mesh.n_elements, 8, 6))
+        return out.backstress.ravel()
 
     def pattern(self, eqn: ArrayLike | None = None, symmetric: bool = True) -> _Pattern:
         """Coordinate structure of the tangent for equation numbers ``eqn`` (n, 3) (0-based,
@@ -280,20 +324,23 @@ class Solid:
                 if any(np.may_share_memory(array, held) for held in (
                         state.stress, state.ep, state.strain, state.axes)):
                     raise ValueError("out shares memory with state")
+        back_old = self.backstress_in(state)
+        back_out = self.backstress_out(out)
         start = np.zeros(SHELL_MODES * m) if alpha is None else \
             float_array(alpha, "alpha", (m, SHELL_MODES)).ravel()
-        values, fint, kdu, stress, ep, strain, axes, alpha_out, status, element = \
+        values, fint, kdu, stress, ep, strain, axes, back, alpha_out, status, element = \
             _core.solid_assemble(
                 self._x, self._conn, self._kind, _flat(state.displacement), u.ravel(),
                 self.props, _flat(state.axes.transpose(0, 1, 3, 2)), _flat(state.stress),
-                _flat(state.ep), _flat(state.strain), start, pattern.eqn,
+                _flat(state.ep), _flat(state.strain), back_old, start, pattern.eqn,
                 int(pattern.symmetric), int(tangent), pattern.offsets, values, int(product),
                 dp, out.stress.ravel(), out.ep.ravel(), out.strain.ravel(),
-                out.axes.transpose(0, 1, 3, 2).ravel())
+                out.axes.transpose(0, 1, 3, 2).ravel(), back_out)
         if status:
             raise ElementError(int(status), int(element) - 1)
         trial = SolidState(stress.reshape(m, 8, 6), ep.reshape(m, 8), strain.reshape(m, 8, 6),
-                           axes.reshape(m, 8, 3, 3).transpose(0, 1, 3, 2), u.copy())
+                           axes.reshape(m, 8, 3, 3).transpose(0, 1, 3, 2), u.copy(),
+                           back.reshape(m, 8, 6) if self.mixed else None)
         return Assembly(fint.reshape(-1, 3), values, trial,
                         kdu.reshape(-1, 3) if product else None,
                         alpha_out.reshape(m, SHELL_MODES) if self._kind else None)

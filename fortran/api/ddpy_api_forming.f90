@@ -176,7 +176,8 @@ contains
 
   !> Newton iterations of one increment: see forming_increment. Connectivity arrives 0-based.
   subroutine api_forming_increment(nnode, x0, ne, conn, kind, props, u_ref, axes_old, &
-                                   stress_old, ep_old, strain_old, eqn, offsets, fixed, nf, &
+                                   stress_old, ep_old, strain_old, nback, back_old, eqn, &
+                                   offsets, fixed, nf, &
                                    k_slots, n_coupling, nvalues, nrow, row_start, ncsr, col, &
                                    nsrc, sources, source_start, ntool, table, tol, ncoef, &
                                    coef, ndeg, degrees, ntri, triangle, ntree, tree_lower, &
@@ -188,14 +189,14 @@ contains
                                    pair_node, npatch, patch_first, patch_node, on, r, mu, held, &
                                    traction_n, pressure_n, u_n, force_n, external, &
                                    prescribed, guess, settings, isettings, factored, &
-                                   reuse_next, u, force, fint, stress, ep, strain, axes, state, &
-                                   gap, normal, traction, pressure, nhistory, niter, history, &
-                                   counters, timings, outcome, info, detail) &
+                                   reuse_next, u, force, fint, stress, ep, strain, axes, back, &
+                                   state, gap, normal, traction, pressure, nhistory, niter, &
+                                   history, counters, timings, outcome, info, detail) &
     bind(C, name="ddpy_forming_increment")
     integer(c_int), value, intent(in) :: nnode, ne, kind, nf, k_slots, n_coupling, nvalues, &
                                          nrow, ncsr, nsrc, ntool, ncoef, ndeg, ntri, ntree, &
                                          nframe, nstart, ngrid, nface, npoint, npair, npatch, &
-                                         nhistory
+                                         nhistory, nback
     real(c_double), value, intent(in) :: reach, size, touching
     integer(c_int), intent(in) :: conn(8, ne), eqn(3, nnode), offsets(ne + 1), &
                                   fixed(3, nnode), row_start(nrow + 1), col(ncsr), &
@@ -209,6 +210,7 @@ contains
     real(c_double), intent(in) :: x0(3, nnode), props(material_prop_count), &
                                   u_ref(3, nnode), axes_old(3, 3, 8, ne), &
                                   stress_old(6, 8, ne), ep_old(8, ne), strain_old(6, 8, ne), &
+                                  back_old(6, 8, nback), &
                                   tol(ntool), coef(ncoef), tree_lower(3*ntree), &
                                   tree_upper(3*ntree), frame(9*nframe), &
                                   frame_lower(3*nframe), frame_upper(3*nframe), &
@@ -223,7 +225,8 @@ contains
     integer(c_int), intent(inout) :: factored, reuse_next
     real(c_double), intent(out) :: u(3, nnode), force(3, npair), fint(3, nnode), &
                                    stress(6, 8, ne), ep(8, ne), &
-                                   strain(6, 8, ne), axes(3, 3, 8, ne), gap(npair), &
+                                   strain(6, 8, ne), axes(3, 3, 8, ne), back(6, 8, nback), &
+                                   gap(npair), &
                                    normal(3, npair), traction(3, npoint), pressure(npoint), &
                                    history(4, nhistory), timings(4), detail(2)
     integer(c_int), intent(out) :: state(npair), niter, counters(5), outcome, info(4)
@@ -238,7 +241,8 @@ contains
                         tool_first, pair_node, npatch, patch_first, patch_node, eqn, &
                         k_slots, nvalues)) return
     call forming_increment(nnode, x0, ne, conn + 1, kind, props, u_ref, axes_old, stress_old, &
-                           ep_old, strain_old, eqn, offsets, fixed, nf, k_slots, n_coupling, &
+                           ep_old, strain_old, nback, back_old, eqn, offsets, fixed, nf, &
+                           k_slots, n_coupling, &
                            nvalues, row_start, ncsr, col, sources, source_start, ntool, &
                            table, tol, coef, degrees, triangle, &
                            tree_lower, tree_upper, tree_child, frame, frame_lower, &
@@ -248,7 +252,8 @@ contains
                            pair_node, npatch, patch_first, patch_node, on, r, mu, held, &
                            traction_n, pressure_n, u_n, force_n, external, prescribed, guess, &
                            settings, isettings, factored, reuse_next, u, force, fint, stress, &
-                           ep, strain, axes, state, gap, normal, traction, pressure, niter, &
+                           ep, strain, axes, back, state, gap, normal, traction, pressure, &
+                           niter, &
                            history, counters, timings, outcome, info, detail)
   end subroutine api_forming_increment
 
@@ -256,14 +261,15 @@ contains
   !> forming_increment, called with no tools and no pairs, whose empty arrays f2py cannot
   !> pass (it takes a zero length for one). Connectivity arrives 0-based.
   subroutine api_static_increment(nnode, x0, ne, conn, kind, props, u_ref, axes_old, &
-                                  stress_old, ep_old, strain_old, eqn, offsets, fixed, nf, &
+                                  stress_old, ep_old, strain_old, nback, back_old, eqn, &
+                                  offsets, fixed, nf, &
                                   k_slots, nvalues, ncsr, row_start, col, nsrc, sources, &
                                   source_start, size, u_n, external, prescribed, guess, &
                                   settings, isettings, factored, u, fint, stress, ep, strain, &
-                                  axes, nhistory, niter, history, counters, timings, outcome, &
-                                  info, detail) bind(C, name="ddpy_static_increment")
+                                  axes, back, nhistory, niter, history, counters, timings, &
+                                  outcome, info, detail) bind(C, name="ddpy_static_increment")
     integer(c_int), value, intent(in) :: nnode, ne, kind, nf, k_slots, nvalues, ncsr, nsrc, &
-                                         nhistory
+                                         nhistory, nback
     real(c_double), value, intent(in) :: size
     integer(c_int), intent(in) :: conn(8, ne), eqn(3, nnode), offsets(ne + 1), &
                                   fixed(3, nnode), row_start(nf + 1), col(ncsr), &
@@ -273,10 +279,12 @@ contains
                                   u_ref(3, nnode), axes_old(3, 3, 8, ne), &
                                   stress_old(6, 8, ne), ep_old(8, ne), strain_old(6, 8, ne), &
                                   u_n(3, nnode), external(3, nnode), prescribed(3, nnode), &
-                                  guess(3, nnode), settings(newton_settings)
+                                  guess(3, nnode), settings(newton_settings), &
+                                  back_old(6, 8, nback)
     integer(c_int), intent(inout) :: factored
     real(c_double), intent(out) :: u(3, nnode), fint(3, nnode), stress(6, 8, ne), ep(8, ne), &
-                                   strain(6, 8, ne), axes(3, 3, 8, ne), history(4, nhistory), &
+                                   strain(6, 8, ne), axes(3, 3, 8, ne), back(6, 8, nback), &
+                                   history(4, nhistory), &
                                    timings(4), detail(2)
     integer(c_int), intent(out) :: niter, counters(5), outcome, info(4)
     integer :: table(tool_fields, 0), ints(0), faces(4, 0), first(1), pairs(0), held(3, 0), &
@@ -294,7 +302,8 @@ contains
     first = 0
     reuse_next = 0
     call forming_increment(nnode, x0, ne, conn + 1, kind, props, u_ref, axes_old, stress_old, &
-                           ep_old, strain_old, eqn, offsets, fixed, nf, k_slots, 0, nvalues, &
+                           ep_old, strain_old, nback, back_old, eqn, offsets, fixed, nf, &
+                           k_slots, 0, nvalues, &
                            row_start, ncsr, col, sources, source_start, 0, table, reals, &
                            reals, ints, ints, reals, reals, ints, &
                            reals, reals, reals, ints, reals, reals, reals, tools, first, 0, &
@@ -303,8 +312,8 @@ contains
                            0, first, pairs, 0, first, pairs, pairs, reals, reals, held, &
                            tractions, pressures, u_n, forces, external, prescribed, &
                            guess, settings, isettings, factored, reuse_next, u, force, fint, &
-                           stress, ep, strain, axes, state, gap, normal, traction, pressure, &
-                           niter, &
+                           stress, ep, strain, axes, back, state, gap, normal, traction, &
+                           pressure, niter, &
                            history, &
                            counters, timings, outcome, info, detail)
   end subroutine api_static_increment

@@ -4,10 +4,12 @@ module ddpy_api_material
   use, intrinsic :: iso_c_binding, only: c_int, c_double
   use ddpy_kinds, only: wp
   use ddpy_material, only: material_prop_count, material_update, material_hardening, &
-                           material_check, hill48_from_r_values, yield_landing
+                           material_check, hill48_from_r_values, yield_landing, &
+                           material_yield_stress, material_bad_props
+  use ddpy_material_mixed, only: material_update_mixed
   implicit none
   private
-  public :: api_material_update, api_material_hardening, api_material_check, &
+  public :: api_material_update, api_material_update_mixed, api_material_hardening, api_material_check, &
             api_hill48_from_r_values, api_yield_landing
 
   integer, parameter :: np = material_prop_count
@@ -36,6 +38,42 @@ contains
     end do
     !$omp end parallel do
   end subroutine api_material_update
+
+  !> Return mapping with mixed isotropic-kinematic hardening at k points of one material
+  !> (material_update_mixed; with C_X zero the backstress stays as given, a shifted yield
+  !> surface): api_material_update's arguments and the backstress
+  !> back_old(:, i) in, back(:, i) out (Voigt, deviatoric).
+  subroutine api_material_update_mixed(props, k, stress_old, back_old, ep_old, &
+                                       strain_increment, stress, back, ep, tangent, plastic, &
+                                       status) bind(C, name="ddpy_material_update_mixed")
+    integer(c_int), value, intent(in) :: k
+    real(c_double), intent(in) :: props(np), stress_old(6, k), back_old(6, k), ep_old(k), &
+                                  strain_increment(6, k)
+    real(c_double), intent(out) :: stress(6, k), back(6, k), ep(k), tangent(6, 6, k)
+    integer(c_int), intent(out) :: plastic(k), status(k)
+    integer :: i, point_status
+    logical :: yielded
+    real(wp) :: floor
+    if (material_check(props) /= 0) then
+      stress = stress_old
+      back = back_old
+      ep = ep_old
+      tangent = 0.0_wp
+      plastic = 0
+      status = material_bad_props
+      return
+    end if
+    floor = material_yield_stress(props, 0.0_wp)
+    !$omp parallel do schedule(static) private(yielded, point_status) if(k > 256)
+    do i = 1, k
+      call material_update_mixed(props, floor, stress_old(:, i), back_old(:, i), ep_old(i), &
+                                 strain_increment(:, i), stress(:, i), back(:, i), ep(i), &
+                                 tangent(:, :, i), yielded, point_status)
+      plastic(i) = merge(1_c_int, 0_c_int, yielded)
+      status(i) = point_status
+    end do
+    !$omp end parallel do
+  end subroutine api_material_update_mixed
 
   !> Yield stress Y(ep) and hardening slope dY/dep at k equivalent plastic strains.
   subroutine api_material_hardening(props, k, ep, y, slope) &

@@ -102,19 +102,21 @@ contains
   !> converged state at displacements u_ref, for elements of the given kind (0
   !> hexahedron, 1 solid-shell, whose enhanced parameters start at alpha_in and end at
   !> alpha); with product /= 0 also kdu = K dp (K over all dofs, dp the increment of
-  !> prescribed displacements).
+  !> prescribed displacements). back_old, back (6, 8, nback): the backstress of mixed
+  !> hardening (nback = ne), else not read (any nback; f2py passes one element's worth).
   subroutine api_solid_assemble(nn, x, ne, conn, kind, u_ref, u, props, axes_old, &
-                                stress_old, ep_old, strain_old, alpha_in, eqn, symmetric, &
-                                tangent, offsets, nz, values, product, dp, fint, kdu, stress, &
-                                ep, strain, axes, alpha, status, element) &
+                                stress_old, ep_old, strain_old, nback, back_old, alpha_in, &
+                                eqn, symmetric, tangent, offsets, nz, values, product, dp, &
+                                fint, kdu, stress, ep, strain, axes, back, alpha, status, &
+                                element) &
     bind(C, name="ddpy_solid_assemble")
-    integer(c_int), value, intent(in) :: nn, ne, kind, symmetric, tangent, nz, product
+    integer(c_int), value, intent(in) :: nn, ne, kind, symmetric, tangent, nz, product, nback
     real(c_double), intent(in) :: x(3, nn), u_ref(3, nn), u(3, nn), props(np), dp(3, nn)
     integer(c_int), intent(in) :: conn(8, ne), eqn(3, nn), offsets(ne + 1)
     real(c_double), intent(in) :: axes_old(3, 3, 8, ne), stress_old(6, 8, ne), &
                                   ep_old(8, ne), strain_old(6, 8, ne), &
-                                  alpha_in(shell_modes, ne)
-    real(c_double), intent(inout) :: values(nz)
+                                  back_old(6, 8, nback), alpha_in(shell_modes, ne)
+    real(c_double), intent(inout) :: values(nz), back(6, 8, nback)
     real(c_double), intent(out) :: fint(3, nn), kdu(3, nn), stress(6, 8, ne), ep(8, ne), &
                                    strain(6, 8, ne), axes(3, 3, 8, ne), &
                                    alpha(shell_modes, ne)
@@ -138,9 +140,9 @@ contains
       return
     end if
     call solid_assemble(nn, x, ne, conn + 1, kind, u_ref, u, props, axes_old, stress_old, &
-                        ep_old, strain_old, alpha_in, eqn, symmetric /= 0, tangent /= 0, &
-                        offsets, nz, values, product /= 0, dp, fint, kdu, stress, ep, strain, &
-                        axes, alpha, status, element)
+                        ep_old, strain_old, nback, back_old, alpha_in, eqn, symmetric /= 0, &
+                        tangent /= 0, offsets, nz, values, product /= 0, dp, fint, kdu, &
+                        stress, ep, strain, axes, back, alpha, status, element)
   end subroutine api_solid_assemble
 
   !> Second Piola-Kirchhoff (global axes), Cauchy stresses and current Gauss point positions

@@ -22,13 +22,14 @@
 module ddpy_hex8
   use ddpy_kinds, only: wp
   use ddpy_material, only: material_update_checked, material_check, material_yield_stress, &
-                           material_prop_count
+                           material_prop_count, material_kinematic
+  use ddpy_material_mixed, only: material_update_mixed
   use ddpy_element_products, only: lower_product, add_congruence, add_congruence_t
   use ddpy_log_strain, only: hencky_type, hencky_evaluate, hencky_first, hencky_second, &
                              hencky_stretch, tensor_from_stress, stress_from_tensor
   implicit none
   private
-  public :: hex8_element, hex8_jacobians, hex8_stresses, strain_rotation
+  public :: hex8_element, hex8_jacobians, hex8_stresses, strain_rotation, pushed_stress
 
   !> Status values of hex8_element.
   integer, parameter, public :: hex8_ok = 0, hex8_inverted = 1, hex8_material_failed = 2
@@ -165,16 +166,23 @@ contains
   !> x0: initial coordinates; xn: coordinates at the last converged increment (the
   !> reference of the increment); du: displacement increment from xn. State per Gauss point
   !> at xn: axes_old (material axes as columns), stress_old (tau_hat in material axes),
-  !> ep_old, strain_old (accumulated logarithmic strain in material axes).
+  !> ep_old, strain_old (accumulated logarithmic strain in material axes), back_old (the
+  !> backstress in material axes, read only for mixed hardening).
   !> Out: f = sum W0 dEbar/du^T T, k = d f / d du (24 x 24, symmetric; only when
-  !> want_tangent), the trial state (stress, ep, strain, axes) and status hex8_ok,
-  !> hex8_inverted (det J or det dF <= 0 at a Gauss point) or hex8_material_failed.
+  !> want_tangent), the trial state (stress, ep, strain, axes, back: pushed forward and
+  !> turned like the stress, back_old where there is no kinematic hardening) and status
+  !> hex8_ok, hex8_inverted (det J or det dF <= 0 at a Gauss point) or
+  !> hex8_material_failed. With mixed hardening the material's tangent enters by its
+  !> symmetric part (the element's tangent is symmetric; docs/theory/material.md).
   pure subroutine hex8_element(x0, xn, du, props, axes_old, stress_old, ep_old, strain_old, &
-                               want_tangent, f, k, stress, ep, strain, axes, status)
+                               back_old, want_tangent, f, k, stress, ep, strain, axes, back, &
+                               status)
     real(wp), intent(in) :: x0(3, 8), xn(3, 8), du(3, 8), props(material_prop_count)
-    real(wp), intent(in) :: axes_old(3, 3, 8), stress_old(6, 8), ep_old(8), strain_old(6, 8)
+    real(wp), intent(in) :: axes_old(3, 3, 8), stress_old(6, 8), ep_old(8), strain_old(6, 8), &
+                            back_old(6, 8)
     logical, intent(in) :: want_tangent
-    real(wp), intent(out) :: f(24), k(24, 24), stress(6, 8), ep(8), strain(6, 8), axes(3, 3, 8)
+    real(wp), intent(out) :: f(24), k(24, 24), stress(6, 8), ep(8), strain(6, 8), &
+                             axes(3, 3, 8), back(6, 8)
     integer, intent(out) :: status
     type(hencky_type) :: hk(8)
     ! bt(:, :, p) = b^T, the derivative of E_GL (Voigt) by the 24 dofs, stored by dof so that
@@ -185,15 +193,16 @@ contains
     real(wp) :: fg(3, 3), vj, vol, mean_lnj, bbar_tr(24), kg(8, 8), n8(8), dn8(8, 3), &
                 rot(6, 6), de(6), s_mat(6), d_mat(6, 6), a_hat(6), mmat(6, 6), dm(6), &
                 u(3, 3), u_inv(3, 3), ct, dmm, s6(6), s3(3, 3), &
-                dtr(24), dv(24), yield_floor
+                dtr(24), dv(24), yield_floor, x_mat(6), x6(6), xg(6)
     integer :: p, a, c, i, j, col, mstatus
-    logical :: plastic
+    logical :: plastic, kinematic
 
     f = 0.0_wp
     stress = stress_old
     ep = ep_old
     strain = strain_old
     axes = axes_old
+    back = back_old
     status = hex8_ok
 
     ! Pass 1: gradients on xn, relative deformation, both strains and the derivatives:
@@ -253,12 +262,19 @@ contains
       return
     end if
     yield_floor = material_yield_stress(props, 0.0_wp)
+    kinematic = material_kinematic(props)
     do p = 1, 8
       de = hk(p)%strain + (mean_lnj - lnj(p))/3.0_wp*identity_voigt
       call rotation_of_strains(axes_old(:, :, p), rot)
       de = matmul(rot, de)
-      call material_update_checked(props, yield_floor, stress_old(:, p), ep_old(p), de, &
-                                   s_mat, ep(p), d_mat, plastic, mstatus)
+      if (kinematic) then
+        call material_update_mixed(props, yield_floor, stress_old(:, p), back_old(:, p), &
+                                   ep_old(p), de, s_mat, x_mat, ep(p), d_mat, plastic, mstatus)
+        d_mat = 0.5_wp*(d_mat + transpose(d_mat))
+      else
+        call material_update_checked(props, yield_floor, stress_old(:, p), ep_old(p), de, &
+                                     s_mat, ep(p), d_mat, plastic, mstatus)
+      end if
       if (mstatus > 0) then
         status = hex8_material_failed
         k = 0.0_wp
@@ -281,6 +297,16 @@ contains
       ! rotated Kirchhoff stress dU S dU, S = P^T T relative to xn per unit initial volume.
       call hencky_stretch(hk(p), u, u_inv)
       axes(:, :, p) = product3(product3(fgs(:, :, p), u_inv), axes_old(:, :, p))
+      if (kinematic) then
+        ! The backstress by the stress's own map: to global axes, P^T, dU . dU, turned.
+        do c = 1, 6
+          xg(c) = dot_product(rot(:, c), x_mat)
+        end do
+        do c = 1, 6
+          x6(c) = dot_product(xg, pm(:, c, p))
+        end do
+        back(:, p) = pushed_stress(u, x6, axes_old(:, :, p))
+      end if
       u = product3(u, product3(stress_tensor(s6), u))
       s3 = product3(u, axes_old(:, :, p))
       do j = 1, 3
@@ -340,6 +366,25 @@ contains
     end do
     call mirror(k)
   end subroutine hex8_element
+
+  !> The rotated Kirchhoff form dU S dU of a stress-like Voigt vector s6 (global axes),
+  !> in the components of the material axes axes_old (which dR turns with the body): the
+  !> map the elements apply to the stress at the end of an increment, for the backstress.
+  pure function pushed_stress(u, s6, axes_old) result(v6)
+    real(wp), intent(in) :: u(3, 3), s6(6), axes_old(3, 3)
+    real(wp) :: v6(6)
+    real(wp) :: t3(3, 3), s3(3, 3), w(3, 3)
+    integer :: i, j
+    t3 = product3(u, product3(stress_tensor(s6), u))
+    s3 = product3(t3, axes_old)
+    do j = 1, 3
+      do i = 1, 3
+        w(i, j) = dot_product(axes_old(:, i), s3(:, j))
+      end do
+    end do
+    v6 = [w(1, 1), w(2, 2), w(3, 3), 0.5_wp*(w(1, 2) + w(2, 1)), 0.5_wp*(w(2, 3) + w(3, 2)), &
+          0.5_wp*(w(3, 1) + w(1, 3))]
+  end function pushed_stress
 
   !> sum_r bt(:, r) v(r): a Voigt row vector v times b, over the 24 dofs.
   pure function by_dofs(bt, v) result(w)

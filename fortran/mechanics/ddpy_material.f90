@@ -15,17 +15,21 @@ module ddpy_material
   private
   public :: material_update, material_update_checked, material_hardening, &
             material_yield_stress, material_check, hill48_from_r_values, hill48_is_convex, &
-            hill48_equivalent_stress, yield_landing
+            hill48_equivalent_stress, yield_landing, material_kinematic
 
   !> Length of the property vector:
   !> (1) E, (2) nu, (3) F, (4) G, (5) H, (6) L, (7) M, (8) N, (9) hardening law
   !> (1 = Swift, 2 = Voce, 3 = table); Swift: (10) K, (11) eps0, (12) n; Voce: (10) Y0,
   !> (11) Q, (12) b; table: (10) the number of points n, then from (17) the points as pairs
   !> (ep_i, Y_i), i = 1..n, ep_1 = 0, ep increasing, Y non-decreasing, interpolated linearly,
-  !> Y constant beyond the last point; (13:16) and the unused rest reserved, zero.
+  !> Y constant beyond the last point; (13) C_X and (14) X_sat of the Armstrong-Frederick
+  !> backstress (mixed hardening when both are positive, see material_update_mixed);
+  !> (15:16) and the unused rest reserved, zero.
   integer, parameter, public :: table_max_points = 100
   integer, parameter, public :: table_start = 16
   integer, parameter, public :: material_prop_count = table_start + 2*table_max_points
+  !> Where C_X and X_sat of the kinematic hardening sit in props.
+  integer, parameter, public :: kinematic_rate = 13, kinematic_saturation = 14
   !> Hardening laws, props(9).
   integer, parameter, public :: hardening_swift = 1, hardening_voce = 2, hardening_table = 3
   !> Status of material_update: converged; return mapping failed (the caller cuts the
@@ -38,6 +42,7 @@ module ddpy_material
   !> Relative tolerance on |Y(ep)/sigma_eq - 1| of the return mapping.
   real(wp), parameter :: return_tol = 1.0e-13_wp
   integer, parameter :: max_iterations = 200
+  public :: yield_tol, return_tol, max_iterations
 
   !> Voigt vector of ones on the normal components, (1, 1, 1, 0, 0, 0).
   real(wp), parameter :: unit_normal(6) = [1.0_wp, 1.0_wp, 1.0_wp, 0.0_wp, 0.0_wp, 0.0_wp]
@@ -308,7 +313,25 @@ contains
         info = 9
       end select
     end if
+    ! The backstress's Hill norm stays below X_sat; below the initial yield stress too, the
+    ! stress-free state stays inside the yield surface (docs/theory/material.md).
+    if (info == 0) then
+      if (props(kinematic_rate) < 0.0_wp) then
+        info = kinematic_rate
+      else if (props(kinematic_saturation) < 0.0_wp .or. &
+               props(kinematic_saturation) >= material_yield_stress(props, 0.0_wp)) then
+        info = kinematic_saturation
+      end if
+    end if
   end function material_check
+
+  !> The properties ask for mixed hardening: an Armstrong-Frederick backstress with
+  !> C_X > 0 and X_sat > 0 (with either zero the backstress stays zero).
+  pure logical function material_kinematic(props)
+    real(wp), intent(in) :: props(material_prop_count)
+    material_kinematic = props(kinematic_rate) > 0.0_wp .and. &
+                         props(kinematic_saturation) > 0.0_wp
+  end function material_kinematic
 
   !> 0 for a valid hardening table in props, else the 1-based index of the first bad entry:
   !> 10 a count outside 1..table_max_points, the first strain when not 0, a strain not above

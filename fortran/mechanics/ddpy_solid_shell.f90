@@ -27,7 +27,10 @@
 module ddpy_solid_shell
   use ddpy_kinds, only: wp
   use ddpy_material, only: material_update_checked, material_check, material_yield_stress, &
-                           material_prop_count, material_hardening, hill48_equivalent_stress
+                           material_prop_count, material_hardening, hill48_equivalent_stress, &
+                           material_kinematic
+  use ddpy_material_mixed, only: material_update_mixed
+  use ddpy_hex8, only: pushed_stress
   use ddpy_element_products, only: lower_product, subtract_lower_gram, add_congruence, &
                                    add_pair_product
   use ddpy_log_strain, only: hencky_type, hencky_evaluate, hencky_first, hencky_second, &
@@ -251,19 +254,21 @@ contains
   !> Internal force, tangent, trial material state and enhanced parameters of one element
   !> over an increment: the arguments of hex8_element (ddpy_hex8) and alpha_in, the start
   !> of the local iteration (the previous iterate's alpha; zero at the start of an
-  !> increment), alpha its solution. Status shell_ok, shell_inverted (det J0, det J or
+  !> increment), alpha its solution; back_old, back the backstress (mixed hardening only;
+  !> back from the last evaluation of the local iteration, like ep, pushed forward as the
+  !> stress). Status shell_ok, shell_inverted (det J0, det J or
   !> det dF <= 0 at a Gauss point, or I + 2 E_as not positive definite),
   !> shell_material_failed (a return mapping failed, or K_aa is not positive definite) or
   !> shell_not_converged (the local iteration).
   pure subroutine solid_shell_element(x0, xn, du, props, axes_old, stress_old, ep_old, &
-                                      strain_old, alpha_in, want_tangent, f, k, stress, ep, &
-                                      strain, axes, alpha, status)
+                                      strain_old, back_old, alpha_in, want_tangent, f, k, &
+                                      stress, ep, strain, axes, back, alpha, status)
     real(wp), intent(in) :: x0(3, 8), xn(3, 8), du(3, 8), props(material_prop_count)
     real(wp), intent(in) :: axes_old(3, 3, 8), stress_old(6, 8), ep_old(8), strain_old(6, 8), &
-                            alpha_in(shell_modes)
+                            back_old(6, 8), alpha_in(shell_modes)
     logical, intent(in) :: want_tangent
     real(wp), intent(out) :: f(24), k(24, 24), stress(6, 8), ep(8), strain(6, 8), &
-                             axes(3, 3, 8), alpha(shell_modes)
+                             axes(3, 3, 8), back(6, 8), alpha(shell_modes)
     integer, intent(out) :: status
     type(hencky_type) :: hk(8)
     ! Per Gauss point: bt = (d E_as / d du)^T by dof; pm = d dE_as / d E_as; rot the strain
@@ -282,9 +287,9 @@ contains
                 cq(3, 3, 20), kg(8, 8), ga(8, 2), gb8(8, 2), mmat(6, 6), a_hat(6), s6(6), &
                 t_mat(6), tg(6), rp(6, 6), rdg(6, 4), bg(24, 4), a4(4), u(3, 3), u_inv(3, 3), &
                 s3(3, 3), scale, change, yield_floor, zero24(24), s_start, &
-                s_end, step, lo, hi, s_lo, s_hi
+                s_end, step, lo, hi, s_lo, s_hi, x_mat(6, 8), xg(6), x6(6)
     integer :: p, q, a, c, i, j, m, col, level, iteration, mstatus, off, search
-    logical :: ok, converged, elastic
+    logical :: ok, converged, elastic, kinematic
     ! The shape functions' natural derivatives dN_a/dxi_j (8, 3) at the fixed points of the
     ! element, constants: at the centre, at the Gauss points gauss*corner(:, p) and at the
     ! sampling points; and the enhanced modes' monomials at the Gauss points (their
@@ -308,8 +313,10 @@ contains
     ep = ep_old
     strain = strain_old
     axes = axes_old
+    back = back_old
     alpha = alpha_in
     status = shell_ok
+    kinematic = material_kinematic(props)
 
     ! The element centre of x_n: the map of the enhanced strains; W0_c of the initial one.
     gc = matmul(xn, dn_centre)
@@ -429,8 +436,8 @@ contains
       return
     end if
     yield_floor = material_yield_stress(props, 0.0_wp)
-    call local_state(props, yield_floor, stress_old, ep_old, de0, g4, mono_gauss, w0, alpha, s_mat, ep, &
-                     d_mat, dg4, strain, fa, kaa, scale, elastic, mstatus)
+    call local_state(props, kinematic, yield_floor, stress_old, back_old, ep_old, de0, g4, mono_gauss, w0, alpha, s_mat, ep, &
+                     d_mat, dg4, strain, x_mat, fa, kaa, scale, elastic, mstatus)
     if (mstatus /= shell_ok) then
       status = mstatus
       return
@@ -460,7 +467,13 @@ contains
       ! exact; evaluating the material again would only confirm it (most elements of a
       ! forming blank, in most iterations).
       if (elastic) then
-        if (stays_elastic(props, yield_floor, ep_old, s_mat, dg4, mono_gauss, dalpha)) then
+        if (kinematic) then
+          if (stays_elastic_mixed(props, yield_floor, ep_old, back_old, s_mat, dg4, &
+                                  mono_gauss, dalpha)) then
+            converged = .true.
+            exit
+          end if
+        else if (stays_elastic(props, yield_floor, ep_old, s_mat, dg4, mono_gauss, dalpha)) then
           converged = .true.
           exit
         end if
@@ -470,8 +483,8 @@ contains
       if (change > scale) dalpha = (scale/change)*dalpha
       s_start = dot_product(dalpha, fa)
       step = 1.0_wp
-      call local_state(props, yield_floor, stress_old, ep_old, de0, g4, mono_gauss, w0, alpha + dalpha, &
-                       s_mat, ep, d_mat, dg4, strain, fa, kaa, scale, elastic, mstatus)
+      call local_state(props, kinematic, yield_floor, stress_old, back_old, ep_old, de0, g4, mono_gauss, w0, alpha + dalpha, &
+                       s_mat, ep, d_mat, dg4, strain, x_mat, fa, kaa, scale, elastic, mstatus)
       if (mstatus /= shell_ok) then
         status = mstatus
         return
@@ -486,9 +499,9 @@ contains
         do search = 1, local_searches
           step = hi - s_hi*(hi - lo)/(s_hi - s_lo)
           step = min(max(step, lo + 0.1_wp*(hi - lo)), hi - 0.1_wp*(hi - lo))
-          call local_state(props, yield_floor, stress_old, ep_old, de0, g4, mono_gauss, w0, &
-                           alpha + step*dalpha, s_mat, ep, d_mat, dg4, strain, fa, kaa, &
-                           scale, elastic, mstatus)
+          call local_state(props, kinematic, yield_floor, stress_old, back_old, ep_old, de0, g4, mono_gauss, w0, &
+                           alpha + step*dalpha, s_mat, ep, d_mat, dg4, strain, x_mat, fa, &
+                           kaa, scale, elastic, mstatus)
           if (mstatus /= shell_ok) then
             status = mstatus
             return
@@ -529,6 +542,16 @@ contains
       f = f + w0(p)*by_dofs(bt(:, :, p), s6)
       call stretch(fgs(:, :, p), u, u_inv)
       axes(:, :, p) = product3(product3(fgs(:, :, p), u_inv), axes_old(:, :, p))
+      if (kinematic) then
+        ! The backstress by the stress's own map (ddpy_hex8's pushed_stress).
+        do c = 1, 6
+          xg(c) = dot_product(rot(:, c, p), x_mat(:, p))
+        end do
+        do c = 1, 6
+          x6(c) = dot_product(xg, pm(:, c, p))
+        end do
+        back(:, p) = pushed_stress(u, x6, axes_old(:, :, p))
+      end if
       u = product3(u, product3(stress_tensor(s6), u))
       s3 = product3(u, axes_old(:, :, p))
       do j = 1, 3
@@ -655,6 +678,26 @@ contains
     stays_elastic = .true.
   end function stays_elastic
 
+  !> stays_elastic for mixed hardening: the stresses relative to the backstress back_old.
+  pure logical function stays_elastic_mixed(props, yield_floor, ep_old, back_old, s_mat, dg4, &
+                                            mono, dalpha)
+    real(wp), intent(in) :: props(material_prop_count), yield_floor, ep_old(8), &
+                            back_old(6, 8), s_mat(6, 8), dg4(6, 4, 8), mono(shell_modes, 8), &
+                            dalpha(shell_modes)
+    real(wp) :: sigma, y, slope
+    integer :: p
+    stays_elastic_mixed = .false.
+    do p = 1, 8
+      sigma = hill48_equivalent_stress(props(3:8), s_mat(:, p) - back_old(:, p) &
+                                       + matmul(dg4(:, :, p), grouped(mono(:, p), dalpha)))
+      if (sigma > yield_floor*(1.0_wp + elastic_margin)) then
+        call material_hardening(props, ep_old(p), y, slope)
+        if (sigma > y*(1.0_wp + elastic_margin)) return
+      end if
+    end do
+    stays_elastic_mixed = .true.
+  end function stays_elastic_mixed
+
   !> The enhanced strain's four component amplitudes of the parameters v at a point with
   !> monomials mono: a4(c) = sum of mono(m) v(m) over the modes m of component c.
   pure function grouped(mono, v) result(a4)
@@ -673,13 +716,15 @@ contains
   !> local iteration's tolerance (the largest strain increment or stress over Young's
   !> modulus), and whether every point stayed elastic; status shell_ok or
   !> shell_material_failed.
-  pure subroutine local_state(props, yield_floor, stress_old, ep_old, de0, g4, mono, w0, at, &
-                              s_mat, ep, d_mat, dg4, de, fa, kaa, scale, elastic, status)
+  pure subroutine local_state(props, kinematic, yield_floor, stress_old, back_old, ep_old, &
+                              de0, g4, mono, w0, at, s_mat, ep, d_mat, dg4, de, back, fa, kaa, &
+                              scale, elastic, status)
     real(wp), intent(in) :: props(material_prop_count), yield_floor, stress_old(6, 8), &
-                            ep_old(8), de0(6, 8), g4(6, 4, 8), mono(shell_modes, 8), w0(8), &
-                            at(shell_modes)
+                            back_old(6, 8), ep_old(8), de0(6, 8), g4(6, 4, 8), &
+                            mono(shell_modes, 8), w0(8), at(shell_modes)
+    logical, intent(in) :: kinematic
     real(wp), intent(out) :: s_mat(6, 8), ep(8), d_mat(6, 6, 8), dg4(6, 4, 8), de(6, 8), &
-                             fa(shell_modes), kaa(shell_modes, shell_modes), scale
+                             back(6, 8), fa(shell_modes), kaa(shell_modes, shell_modes), scale
     logical, intent(out) :: elastic
     integer, intent(out) :: status
     real(wp) :: h(4, 4), gs(4), wm(shell_modes), hw(shell_modes, 4)
@@ -692,8 +737,17 @@ contains
     kaa = 0.0_wp
     do p = 1, 8
       de(:, p) = de0(:, p) + matmul(g4(:, :, p), grouped(mono(:, p), at))
-      call material_update_checked(props, yield_floor, stress_old(:, p), ep_old(p), de(:, p), &
-                                   s_mat(:, p), ep(p), d_mat(:, :, p), plastic, mstatus)
+      if (kinematic) then
+        ! The element's tangent is symmetric: the material's enters by its symmetric part.
+        call material_update_mixed(props, yield_floor, stress_old(:, p), back_old(:, p), &
+                                   ep_old(p), de(:, p), s_mat(:, p), back(:, p), ep(p), &
+                                   d_mat(:, :, p), plastic, mstatus)
+        d_mat(:, :, p) = 0.5_wp*(d_mat(:, :, p) + transpose(d_mat(:, :, p)))
+      else
+        call material_update_checked(props, yield_floor, stress_old(:, p), ep_old(p), &
+                                     de(:, p), s_mat(:, p), ep(p), d_mat(:, :, p), plastic, &
+                                     mstatus)
+      end if
       if (mstatus > 0) then
         status = shell_material_failed
         return

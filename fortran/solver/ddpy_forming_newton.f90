@@ -11,7 +11,7 @@ module ddpy_forming_newton
   use, intrinsic :: iso_fortran_env, only: int64
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite, ieee_value, ieee_positive_inf
   use ddpy_kinds, only: wp
-  use ddpy_material, only: material_prop_count, yield_landing
+  use ddpy_material, only: material_prop_count, yield_landing, material_kinematic
   use ddpy_solid_assembly, only: solid_assemble, shell_modes
   use ddpy_forming, only: forming_contact, tool_fields, surface_gauss, f_surface, f_order, &
                           f_point
@@ -78,9 +78,12 @@ contains
   !> The solid-shell's enhanced parameters live in the evaluations like the trial state:
   !> each evaluation starts its local iteration from those of the iterate the step leaves
   !> (zero at the start of the increment), so an evaluation is a function of the iterate
-  !> and its start, not of the line search's earlier trials.
+  !> and its start, not of the line search's earlier trials. back_old, back (6, 8, nback):
+  !> the backstress of mixed hardening, carried like the stress (nback = ne; without
+  !> kinematic hardening not read, and back = back_old).
   subroutine forming_increment(nnode, x0, ne, conn, kind, props, u_ref, axes_old, stress_old, &
-                               ep_old, strain_old, eqn, offsets, fixed, nf, k_slots, &
+                               ep_old, strain_old, nback, back_old, eqn, offsets, fixed, nf, &
+                               k_slots, &
                                n_coupling, nvalues, row_start, ncsr, col, sources, &
                                source_start, ntool, table, tol, coef, &
                                degrees, triangle, tree_lower, tree_upper, tree_child, frame, &
@@ -92,11 +95,11 @@ contains
                                pressure_n, u_n, &
                                force_n, external, prescribed, guess, settings, isettings, &
                                factored, reuse_next, u, force, fint, stress, ep, strain, axes, &
-                               state, gap, normal, traction, pressure, niter, history, &
+                               back, state, gap, normal, traction, pressure, niter, history, &
                                counters, &
                                timings, outcome, info, detail)
     integer, intent(in) :: nnode, ne, kind, nf, k_slots, n_coupling, nvalues, ncsr, ntool, &
-                           nface, npoint, npair, npatch
+                           nface, npoint, npair, npatch, nback
     integer, intent(in) :: conn(8, ne), eqn(3, nnode), offsets(ne + 1), fixed(3, nnode), &
                            row_start(nf + 3*npair + 1), col(ncsr), sources(*), &
                            source_start(ncsr + 1), table(tool_fields, ntool), &
@@ -107,7 +110,8 @@ contains
                            held(3, npair), isettings(newton_integer_settings)
     real(wp), intent(in) :: x0(3, nnode), props(material_prop_count), u_ref(3, nnode), &
                             axes_old(3, 3, 8, ne), stress_old(6, 8, ne), ep_old(8, ne), &
-                            strain_old(6, 8, ne), tol(ntool), coef(*), tree_lower(*), &
+                            strain_old(6, 8, ne), back_old(6, 8, nback), tol(ntool), &
+                            coef(*), tree_lower(*), &
                             tree_upper(*), frame(*), frame_lower(*), frame_upper(*), &
                             grid_params(*), grid_normals(*), grid_points(*), &
                             facing(3, ntool), positions(3, ntool), positions_n(3, ntool), &
@@ -120,9 +124,9 @@ contains
     integer, intent(inout) :: factored, reuse_next
     real(wp), intent(out) :: u(3, nnode), force(3, npair), fint(3, nnode), &
                              stress(6, 8, ne), ep(8, ne), &
-                             strain(6, 8, ne), axes(3, 3, 8, ne), gap(npair), &
-                             normal(3, npair), traction(3, npoint), pressure(npoint), &
-                             history(4, *), &
+                             strain(6, 8, ne), axes(3, 3, 8, ne), back(6, 8, nback), &
+                             gap(npair), normal(3, npair), traction(3, npoint), &
+                             pressure(npoint), history(4, *), &
                              timings(4), detail(2)
     integer, intent(out) :: state(npair), niter, counters(5), outcome, info(4)
 
@@ -130,7 +134,7 @@ contains
     type :: evaluation
       real(wp), allocatable :: u(:, :), force(:, :), residual(:), values(:), fint(:, :), &
                                stress(:, :, :), ep(:, :), strain(:, :, :), axes(:, :, :, :), &
-                               alpha(:, :), gap(:), normal(:, :), simplified(:), &
+                               back(:, :, :), alpha(:, :), gap(:), normal(:, :), simplified(:), &
                                traction(:, :), pressure(:)
       integer, allocatable :: state(:), patch(:)
       logical :: moving  ! some fixed dof short of its prescribed value
@@ -210,7 +214,9 @@ contains
                slot(cur)%gap(npair), slot(cur)%normal(3, npair), &
                slot(cur)%simplified(n), slot(cur)%state(npair), &
                slot(cur)%patch(npair + npoint), &
-               slot(cur)%traction(3, npoint), slot(cur)%pressure(npoint))
+               slot(cur)%traction(3, npoint), slot(cur)%pressure(npoint), &
+               slot(cur)%back(6, 8, nback))
+      slot(cur)%back = back_old
       slot(cur)%values(k_slots + 1:k_slots + n_coupling) = coupling
     end do
     correction = ieee_value(1.0_wp, ieee_positive_inf)
@@ -394,8 +400,14 @@ contains
         ! The elastic predictor is the first full Newton step: a step shortened by the
         ! line search or the penetration limit starts from a poor iterate, whose strains
         ! say little of where the converged path yields.
-        landing = yield_landing(props, 8*ne, stress_old, ep_old, slot(cur)%strain - strain_old, &
-                                yield_tol)
+        if (material_kinematic(props) .and. nback == ne) then
+          ! The elastic path of the relative stress: the backstress stays while elastic.
+          landing = yield_landing(props, 8*ne, stress_old - back_old, ep_old, &
+                                  slot(cur)%strain - strain_old, yield_tol)
+        else
+          landing = yield_landing(props, 8*ne, stress_old, ep_old, &
+                                  slot(cur)%strain - strain_old, yield_tol)
+        end if
         yield_tol = -1.0_wp
         if (landing < 1.0_wp) then
           outcome = outcome_landing
@@ -490,9 +502,10 @@ contains
       s%rest = 0.0_wp
       if (s%moving) s%rest = sqrt(sum(dp**2))
       call solid_assemble(nnode, x0, ne, conn, kind, u_ref, s%u, props, axes_old, &
-                          stress_old, ep_old, strain_old, alpha_cur, eqn, symmetric, .true., &
-                          offsets, k_slots, s%values(1:k_slots), s%moving, dp, s%fint, kdu, &
-                          s%stress, s%ep, s%strain, s%axes, s%alpha, status, element)
+                          stress_old, ep_old, strain_old, nback, back_old, alpha_cur, eqn, &
+                          symmetric, .true., offsets, k_slots, s%values(1:k_slots), s%moving, &
+                          dp, s%fint, kdu, s%stress, s%ep, s%strain, s%axes, s%back, s%alpha, &
+                          status, element)
       call system_clock(t1)
       timings(1) = timings(1) + real(t1 - t0, wp)/real(clock_rate, wp)
       if (status /= 0) return
@@ -721,6 +734,7 @@ contains
       ep = s%ep
       strain = s%strain
       axes = s%axes
+      back = s%back
       state = merge(s%state, contact_inactive, on /= 0)
       gap = s%gap
       normal = s%normal

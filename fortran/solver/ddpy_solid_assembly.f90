@@ -10,7 +10,7 @@
 !> too. Node indices here are 1-based; equation numbers 0-based (-1: constrained dof).
 module ddpy_solid_assembly
   use ddpy_kinds, only: wp
-  use ddpy_material, only: material_prop_count
+  use ddpy_material, only: material_prop_count, material_kinematic
   use ddpy_hex8, only: hex8_element, hex8_jacobians, hex8_stresses, hex8_ok
   use ddpy_solid_shell, only: solid_shell_element, shell_modes
   implicit none
@@ -22,6 +22,8 @@ module ddpy_solid_assembly
   !> solid-shell (ddpy_solid_shell), which carries shell_modes enhanced parameters per
   !> element through the iterations of an increment.
   integer, parameter, public :: kind_hexahedron = 0, kind_solid_shell = 1
+  !> Status of solid_assemble when the backstress arrays do not fit the mesh.
+  integer, parameter, public :: status_back_size = 7
 
 contains
 
@@ -104,28 +106,40 @@ contains
   !> alpha_in for the hexahedron). With
   !> want_product (and want_tangent), kdu = K dp, the tangent times the vector dp (the
   !> increment of the prescribed displacements: the linearized predictor of an increment),
-  !> otherwise kdu = 0. status = hex8_ok, or the status of the first failing element, whose
-  !> index is returned in element (0 when none).
+  !> otherwise kdu = 0. back_old, back (6, 8, nback): the backstress of mixed hardening
+  !> (material_kinematic(props)), nback = ne; without it nback may be anything from 0 and
+  !> they are not touched. status = hex8_ok, or the status of the first failing element,
+  !> whose index is returned in element (0 when none; status_back_size and 0 when nback
+  !> does not fit).
   subroutine solid_assemble(nn, x, ne, conn, kind, u_ref, u, props, axes_old, stress_old, &
-                            ep_old, strain_old, alpha_in, eqn, symmetric, want_tangent, &
-                            offsets, nz, values, want_product, dp, fint, kdu, stress, ep, &
-                            strain, axes, alpha, status, element)
-    integer, intent(in) :: nn, ne, nz, conn(8, ne), kind, eqn(3, nn), offsets(ne + 1)
+                            ep_old, strain_old, nback, back_old, alpha_in, eqn, symmetric, &
+                            want_tangent, offsets, nz, values, want_product, dp, fint, kdu, &
+                            stress, ep, strain, axes, back, alpha, status, element)
+    integer, intent(in) :: nn, ne, nz, conn(8, ne), kind, eqn(3, nn), offsets(ne + 1), nback
     real(wp), intent(in) :: x(3, nn), u_ref(3, nn), u(3, nn), props(material_prop_count)
     real(wp), intent(in) :: axes_old(3, 3, 8, ne), stress_old(6, 8, ne), ep_old(8, ne), &
-                            strain_old(6, 8, ne), alpha_in(shell_modes, ne)
+                            strain_old(6, 8, ne), back_old(6, 8, nback), &
+                            alpha_in(shell_modes, ne)
     real(wp), intent(in) :: dp(3, nn)
     logical, intent(in) :: symmetric, want_tangent, want_product
-    real(wp), intent(inout) :: values(nz)
+    real(wp), intent(inout) :: values(nz), back(6, 8, nback)
     real(wp), intent(out) :: fint(3, nn), kdu(3, nn), stress(6, 8, ne), ep(8, ne), &
                              strain(6, 8, ne), axes(3, 3, 8, ne), alpha(shell_modes, ne)
     integer, intent(out) :: status, element
     real(wp), allocatable :: fe(:, :), ke_dp(:, :)
     integer, allocatable :: estatus(:)
     integer :: e, a
-    logical :: product
+    logical :: product, kinematic
 
     product = want_tangent .and. want_product
+    kinematic = material_kinematic(props)
+    if (kinematic .and. nback /= ne) then
+      status = status_back_size
+      element = 0
+      fint = 0.0_wp
+      kdu = 0.0_wp
+      return
+    end if
     allocate (fe(24, ne), estatus(ne))
     if (product) then
       allocate (ke_dp(24, ne))
@@ -135,10 +149,11 @@ contains
     !$omp parallel do schedule(dynamic, 16) if(ne > 256)
     do e = 1, ne
       call assemble_element(e, nn, x, ne, conn, kind, u_ref, u, props, axes_old, &
-                            stress_old, ep_old, strain_old, alpha_in(:, e), eqn, symmetric, &
+                            stress_old, ep_old, strain_old, kinematic, nback, back_old, &
+                            alpha_in(:, e), eqn, symmetric, &
                             want_tangent, offsets, nz, values, product, dp, fe(:, e), &
                             ke_dp(:, min(e, size(ke_dp, 2))), stress(:, :, e), ep(:, e), &
-                            strain(:, :, e), axes(:, :, :, e), alpha(:, e), estatus(e))
+                            strain(:, :, e), axes(:, :, :, e), back, alpha(:, e), estatus(e))
     end do
     !$omp end parallel do
 
@@ -168,20 +183,23 @@ contains
 
   !> One element of solid_assemble: writes only its own slots and state columns.
   subroutine assemble_element(e, nn, x, ne, conn, kind, u_ref, u, props, axes_old, &
-                              stress_old, ep_old, strain_old, alpha_in, eqn, symmetric, &
+                              stress_old, ep_old, strain_old, kinematic, nback, back_old, &
+                              alpha_in, eqn, symmetric, &
                               want_tangent, offsets, nz, values, product, dp, fe, ke_dp, &
-                              stress, ep, strain, axes, alpha, status)
-    integer, intent(in) :: e, nn, ne, nz, conn(8, ne), kind, eqn(3, nn), offsets(ne + 1)
+                              stress, ep, strain, axes, back, alpha, status)
+    integer, intent(in) :: e, nn, ne, nz, conn(8, ne), kind, eqn(3, nn), offsets(ne + 1), &
+                           nback
     real(wp), intent(in) :: x(3, nn), u_ref(3, nn), u(3, nn), props(material_prop_count)
     real(wp), intent(in) :: axes_old(3, 3, 8, ne), stress_old(6, 8, ne), ep_old(8, ne), &
-                            strain_old(6, 8, ne), alpha_in(shell_modes)
+                            strain_old(6, 8, ne), back_old(6, 8, nback), alpha_in(shell_modes)
     real(wp), intent(in) :: dp(3, nn)
-    logical, intent(in) :: symmetric, want_tangent, product
-    real(wp), intent(inout) :: values(nz)
+    logical, intent(in) :: symmetric, want_tangent, product, kinematic
+    real(wp), intent(inout) :: values(nz), back(6, 8, nback)
     real(wp), intent(out) :: fe(24), ke_dp(24), stress(6, 8), ep(8), strain(6, 8), &
                              axes(3, 3, 8), alpha(shell_modes)
     integer, intent(out) :: status
-    real(wp) :: ke(24, 24), x0(3, 8), xn(3, 8), du(3, 8), de(24)
+    real(wp) :: ke(24, 24), x0(3, 8), xn(3, 8), du(3, 8), de(24), back_e(6, 8), &
+                back_in(6, 8)
     integer :: eq(24), i, j, pos, a
 
     do a = 1, 8
@@ -189,16 +207,24 @@ contains
       xn(:, a) = x0(:, a) + u_ref(:, conn(a, e))
       du(:, a) = u(:, conn(a, e)) - u_ref(:, conn(a, e))
     end do
+    ! Without kinematic hardening the elements do not read the backstress: zeros stand in.
+    if (kinematic) then
+      back_in = back_old(:, :, e)
+    else
+      back_in = 0.0_wp
+    end if
     if (kind == kind_solid_shell) then
       call solid_shell_element(x0, xn, du, props, axes_old(:, :, :, e), stress_old(:, :, e), &
-                               ep_old(:, e), strain_old(:, :, e), alpha_in, want_tangent, fe, &
-                               ke, stress, ep, strain, axes, alpha, status)
+                               ep_old(:, e), strain_old(:, :, e), back_in, alpha_in, &
+                               want_tangent, fe, ke, stress, ep, strain, axes, back_e, alpha, &
+                               status)
     else
       alpha = alpha_in
       call hex8_element(x0, xn, du, props, axes_old(:, :, :, e), stress_old(:, :, e), &
-                        ep_old(:, e), strain_old(:, :, e), want_tangent, fe, ke, stress, ep, &
-                        strain, axes, status)
+                        ep_old(:, e), strain_old(:, :, e), back_in, want_tangent, fe, ke, &
+                        stress, ep, strain, axes, back_e, status)
     end if
+    if (kinematic) back(:, :, e) = back_e
     if (.not. want_tangent .or. status /= hex8_ok) return
     if (product) then
       do a = 1, 8

@@ -1,5 +1,6 @@
 """material.dat: elasticity, the yield criterion (von Mises, Hill'48 from coefficients or
-Lankford coefficients), hardening (Swift, Voce, a table) and the rolling direction.
+Lankford coefficients), hardening (Swift, Voce, a table), an optional Armstrong-Frederick
+kinematic hardening (mixed hardening) and the rolling direction.
 """
 
 from __future__ import annotations
@@ -17,7 +18,15 @@ from ddpy.io.decks.lines import (
     read_pairs,
     show,
 )
-from ddpy.model.material import TABLE_MAX_POINTS, HardeningTable, Hill48, Material, Swift, Voce
+from ddpy.model.material import (
+    TABLE_MAX_POINTS,
+    ArmstrongFrederick,
+    HardeningTable,
+    Hill48,
+    Material,
+    Swift,
+    Voce,
+)
 
 #: Plausibility bounds of the material (docs/input-format.md): stresses, including the
 #: initial yield stress, at most 1e5 MPa (a hundred times the strongest steels); Swift's
@@ -35,6 +44,10 @@ MAX_HILL = 100.0
 #: Lankford coefficients (given, or H/G and H/F of the coefficients) outside this range are
 #: warned about: sheet metals lie between about 0.2 and 3.
 R_VALUE_RANGE = (0.1, 10.0)
+#: The kinematic hardening's rate C_X at most this (Voce's b has the same bound): the
+#: backstress saturates within a plastic strain of a few 1e-6.
+MAX_KINEMATIC_RATE = 1e6
+_KINEMATIC_FORM = "kinematic armstrong-frederick C VALUE Xsat VALUE"
 
 
 def _parse_material(deck: Deck) -> BlankMaterial | None:
@@ -42,6 +55,7 @@ def _parse_material(deck: Deck) -> BlankMaterial | None:
     elastic: tuple[float, float] | None = None
     criterion: tuple[Hill48, str] | None = None
     hardening: Swift | Voce | HardeningTable | None = None
+    kinematic: ArmstrongFrederick | None = None
     angle = 0.0
     lines = iter(deck.lines)
     for line in lines:
@@ -70,13 +84,17 @@ def _parse_material(deck: Deck) -> BlankMaterial | None:
                 check_arity(line, "hardening swift|voce|table ...", 1, -1)
                 if first_time(deck, seen, line):
                     hardening = _hardening(line)
+            elif key == "kinematic":
+                check_arity(line, _KINEMATIC_FORM, 1, -1)
+                if first_time(deck, seen, line):
+                    kinematic = _kinematic(line)
             elif key == "rolling_direction":
                 check_arity(line, "rolling_direction ANGLE", 1)
                 if first_time(deck, seen, line):
                     angle = read_float(w[1], "the rolling direction angle", ge=-360, le=360)
             else:
-                raise BadValue(f"unknown keyword {show(key)}: expected elastic, yield, hardening "
-                           "or rolling_direction")
+                raise BadValue(f"unknown keyword {show(key)}: expected elastic, yield, "
+                               "hardening, kinematic or rolling_direction")
         except BadValue as bad:
             deck.error(line.number, str(bad))
     for key, form in (("elastic", "elastic E VALUE nu VALUE"),
@@ -84,6 +102,9 @@ def _parse_material(deck: Deck) -> BlankMaterial | None:
                       ("hardening", "hardening swift ... | voce ... | table COUNT")):
         if key not in seen:
             deck.error(None, f"no '{key}' line: expected '{form}'")
+    if "kinematic" in seen and "hardening" not in seen:
+        deck.error(seen["kinematic"], "a kinematic hardening needs the isotropic one it is mixed "
+                   "with: expected a 'hardening swift ... | voce ... | table COUNT' line too")
     if deck.errors or elastic is None or criterion is None or hardening is None:
         return None
     initial = hardening.initial_yield_stress
@@ -91,8 +112,15 @@ def _parse_material(deck: Deck) -> BlankMaterial | None:
         deck.error(seen["hardening"], f"the initial yield stress {initial:.3g} MPa is below "
                    f"{MIN_YIELD:g} MPa: expected the hardening law in MPa")
         return None
+    if kinematic is not None and kinematic.X_sat >= initial:
+        deck.error(seen["kinematic"], f"Xsat {kinematic.X_sat:g} MPa is at or above the initial "
+                   f"yield stress {initial:.4g} MPa of line {seen['hardening']}: expected Xsat "
+                   "below it (in the Lemaitre-Chaboche form the backstress grows towards Xsat, "
+                   "and from there on the stress-free state would lie outside the yield "
+                   "surface: unloading alone would yield the sheet)")
+        return None
     try:
-        material = Material(elastic[0], elastic[1], criterion[0], hardening)
+        material = Material(elastic[0], elastic[1], criterion[0], hardening, kinematic)
     except (ValueError, TypeError) as error:
         deck.error(seen["elastic"], f"invalid material: {error}")
         return None
@@ -164,6 +192,16 @@ def _table(deck: Deck, line: Line, rows: list[Line | None]) -> HardeningTable | 
         strains.append(ep)
         stresses.append(y)
     return HardeningTable(tuple(strains), tuple(stresses))
+
+
+def _kinematic(line: Line) -> ArmstrongFrederick:
+    """``kinematic armstrong-frederick C VALUE Xsat VALUE``."""
+    read_choice(line.words[1], "the kinematic hardening law", ("armstrong-frederick",))
+    v = read_pairs(line, 2, ("C", "Xsat"), ("C", "Xsat"), _KINEMATIC_FORM)
+    return ArmstrongFrederick(
+        read_float(v["C"], "the kinematic hardening rate C", ge=0, le=MAX_KINEMATIC_RATE),
+        read_float(v["Xsat"], "the kinematic hardening saturation Xsat", ge=0,
+                   le=MAX_STRESS))
 
 
 def _hardening(line: Line) -> Swift | Voce:

@@ -213,7 +213,7 @@ def build_problem(case: Case) -> FormingProblem:
     tools = [RigidTool(t.name, t.model().surface, t.contact_nodes(case.mesh),
                        friction=t.friction, facing=t.facing, augmentation=t.augmentation,
                        contact=t.discretization, penalty=t.penalty,
-                       points=t.points)
+                       points=t.points, barrier=t.barrier)
              for t in case.tools]
     return FormingProblem(solid, tools)
 

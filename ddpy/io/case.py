@@ -243,7 +243,8 @@ class Tool:
     parameter r of its contact law, N/mm (None: the solver chooses it), and its contact
     discretization (``discretization``: "node", node-to-surface, "surface",
     surface-to-surface, or "gauss", Gauss-point contact) with its penalty, N/mm^3 (None:
-    the solver chooses it) and Gauss points per direction of a blank face (``points``)."""
+    the solver chooses it), Gauss points per direction of a blank face (``points``) and,
+    for "gauss", its barrier depth (a fraction of the blank's thickness, None: off)."""
 
     name: str
     description: Literal["bezier", "nagata", "facets"]
@@ -256,6 +257,7 @@ class Tool:
     discretization: str = "gauss"
     penalty: float | None = None
     points: int | None = None
+    barrier: float | None = None
 
     @property
     def face_points(self) -> int | None:
@@ -445,7 +447,9 @@ class Case:
                             "node": "node-to-surface"}[t.discretization]
                          + (f", {t.face_points} x {t.face_points} points per blank face"
                             if t.face_points else "") + ")"
-                         + (f", penalty {t.penalty:g} N/mm^3" if t.penalty is not None else ""))
+                         + (f", penalty {t.penalty:g} N/mm^3" if t.penalty is not None else "")
+                         + (f", barrier at {t.barrier:g} of the thickness"
+                            if t.discretization == "gauss" and t.barrier is not None else ""))
         for p in self.phases:
             if p.is_springback:
                 lines.append(f"  phase {p.name}: springback in {p.increments} step(s)")

@@ -48,7 +48,7 @@ from ddpy.model.newton import (
     increment,
 )
 from ddpy.model.solid import Solid, SolidState, _components
-from ddpy.model.tool import RigidTool
+from ddpy.model.tool import BARRIER_STIFFNESS, BARRIER_WIDTH, RigidTool
 
 _log = logging.getLogger(__name__)
 
@@ -314,7 +314,13 @@ class FormingProblem:
                                       else 0.0)
                         for t, faces in zip(self.tools, contact_faces(self.tools, mesh),
                                             strict=True)]
-        self._pack = ToolPack(self.tools, mesh, self.penalty)
+        self.thickness = mesh.initial_thickness()
+        stiffness = barrier_stiffness(solid, self.thickness)
+        self._pack = ToolPack(self.tools, mesh, self.penalty,
+                              [(0.0, 0.0, 0.0) if t.barrier is None or t.contact != "gauss"
+                               else (stiffness, t.barrier * self.thickness,
+                                     BARRIER_WIDTH * self.thickness)
+                               for t in self.tools])
         #: pairs of Gauss-point tools: their law is a function of the positions (a penalty),
         #: continuous at a release, which the release control leaves alone
         self._gauss = np.concatenate([np.full(t.slaves.size, t.contact == "gauss")
@@ -341,7 +347,6 @@ class FormingProblem:
         #: else a converged increment leaves their multipliers at zero, the plain penalty
         self._augment = False
         #: the blank's thickness (mm), the scale of NewtonSettings.penetration
-        self.thickness = mesh.initial_thickness()
         self._gap = (np.full(npair, np.inf), np.zeros((npair, 3)))
         #: reach of the contact search (mm): see REACH_SIZES; run() adds its tool travel
         self._reach = REACH_SIZES * self.size
@@ -1214,6 +1219,12 @@ def default_augmentation(solid: Solid) -> float:
     lambda_T - r s): a value far above the blank's stiffness decides on gaps of 1e-3 mm
     and flips contact states from iteration to iteration (docs/theory/contact.md)."""
     return blank_stiffness(solid.mesh.nodes, solid.mesh.elements, float(solid.props[0]))
+
+
+def barrier_stiffness(solid: Solid, thickness: float) -> float:
+    """The barrier's stiffness eps_b (N/mm^3): BARRIER_STIFFNESS times E / T, the blank's
+    own stiffness across its thickness per area."""
+    return BARRIER_STIFFNESS * float(solid.props[0]) / thickness
 
 
 def default_penalty(solid: Solid, faces: NDArray[np.integer]) -> float:

@@ -55,6 +55,22 @@ def contact_faces(tools: Sequence[RigidTool], mesh: HexMesh) -> list[NDArray[np.
             for tool in tools]
 
 
+def corner_areas(nodes: NDArray[np.float64], faces: NDArray[np.integer], corners:
+                 NDArray[np.integer], n_slaves: int, order: int = 2) -> NDArray[np.float64]:
+    """Each slave's share of the faces' area (n_slaves,): int N_a dA over the faces (f, 4)
+    whose corners (f, 4) name it (-1: no slave), by order x order Gauss points."""
+    corner = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
+    points, _ = np.polynomial.legendre.leggauss(order)
+    weights = gauss_face_weights(nodes, faces, order)
+    share = np.zeros((faces.shape[0], 4))
+    for g in range(order * order):
+        xi, eta = points[g % order], points[g // order]
+        share += np.outer(weights[:, g], 0.25 * (1 + corner[:, 0] * xi) * (1 + corner[:, 1] * eta))
+    area = np.zeros(n_slaves)
+    np.add.at(area, corners[corners >= 0], share[corners >= 0])
+    return area
+
+
 def gauss_face_weights(nodes: NDArray[np.float64], faces: NDArray[np.integer],
                        order: int = 2) -> NDArray[np.float64]:
     """The area each of the order x order Gauss points of quadrilateral faces (f, 4) stands
@@ -195,7 +211,8 @@ class ToolPack:
     Gauss-point tool (``penalty``, per tool; 0 for the others). Made once; empty for none."""
 
     def __init__(self, tools: Sequence[RigidTool], mesh: HexMesh,
-                 penalty: Sequence[float] | None = None) -> None:
+                 penalty: Sequence[float] | None = None,
+                 barrier: Sequence[tuple[float, float, float]] | None = None) -> None:
         searches = [t.search for t in tools]
         faces = contact_faces(tools, mesh)
         table = np.zeros((len(tools), 13), dtype=np.int32)
@@ -207,7 +224,8 @@ class ToolPack:
                         tool.facing is not None, SURFACE_CODES[tool.contact], tool.points,
                         first_point)
             offsets += (s.surface.coefficients.size, n, 2 * n - 1, s.grid_params.shape[0])
-            first_point += tool.points**2 * faces[i].shape[0]
+            first_point += tool.points**2 * faces[i].shape[0] + (
+                tool.slaves.size if tool.contact == "gauss" else 0)
         self.names = [t.name for t in tools]
         self.table = table.ravel()
         self.tol = np.array([s.tol for s in searches], dtype=float)
@@ -225,22 +243,29 @@ class ToolPack:
         # surface-to-surface or Gauss-point tool projects their Gauss points, which stand
         # for the areas face_weight of the undeformed blank (n x n per face, n the tool's
         # points).
+        # A Gauss-point tool's points are followed by one per slave, its barrier
+        # (forming_contact), which stands for the slave's share of the faces' area.
         corners, weights = [], []
         for tool, chosen in zip(tools, faces, strict=True):
             where = np.full(mesh.n_nodes, -1, dtype=np.int32)
             where[tool.slaves] = np.arange(tool.slaves.size)
             corners.append(where[chosen])
-            weights.append(gauss_face_weights(mesh.nodes, chosen, tool.points)
+            weights.append(gauss_face_weights(mesh.nodes, chosen, tool.points).ravel()
                            if tool.contact != "node"
-                           else np.zeros((chosen.shape[0], tool.points**2)))
+                           else np.zeros(chosen.shape[0] * tool.points**2))
+            if tool.contact == "gauss":
+                weights[-1] = np.concatenate([weights[-1], corner_areas(
+                    mesh.nodes, chosen, corners[-1], tool.slaves.size)])
         self.face_first = np.concatenate([[0], np.cumsum([f.shape[0] for f in faces])]
                                          ).astype(np.int32)
         self.faces = _join([f.ravel() for f in faces], np.int32)
         self.corner = _join([c.ravel() for c in corners], np.int32)
-        self.face_weight = _join([w.ravel() for w in weights], np.float64)
-        #: per tool, the normal and tangential penalty of Gauss-point contact (N/mm^3)
-        self.penalty = np.repeat(np.zeros(len(tools)) if penalty is None else
-                                 np.asarray(penalty, dtype=float), 2)
+        self.face_weight = _join(weights, np.float64)
+        #: per tool, the normal and tangential penalty of Gauss-point contact (N/mm^3) and
+        #: its barrier's stiffness (N/mm^3; 0: none), start and width (mm)
+        eps = np.zeros(len(tools)) if penalty is None else np.asarray(penalty, dtype=float)
+        bars = np.zeros((len(tools), 3)) if barrier is None else np.asarray(barrier, float)
+        self.penalty = np.column_stack([eps, eps, bars.reshape(len(tools), 3)]).ravel()
         #: Gauss points of all faces: their tangential tractions are (3,) each
         self.n_points = first_point if len(tools) else 0
 

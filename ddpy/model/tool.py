@@ -11,7 +11,9 @@ from ddpy._validate import float_array, int_array
 from ddpy.geometry.search import ContactSearch
 from ddpy.geometry.surfaces import BezierSurface, NagataSurface
 
-__all__ = ["RigidTool", "CONTACT_DISCRETIZATIONS", "FACE_POINTS", "MAX_POINTS", "faces_blank"]
+__all__ = ["RigidTool", "CONTACT_DISCRETIZATIONS", "FACE_POINTS", "MAX_POINTS", "BARRIER_DEPTH",
+           "BARRIER_WIDTH", "BARRIER_STIFFNESS",
+           "faces_blank"]
 
 #: How a tool's contact is discretized on the blank: "node" (node-to-surface, DD3IMP's: each
 #: slave node's own gap, normal and slip) or "surface" (surface-to-surface: each slave's
@@ -26,6 +28,14 @@ CONTACT_DISCRETIZATIONS = ("node", "surface", "gauss")
 #: weighted gaps of surface-to-surface contact do not change with more points.
 FACE_POINTS = {"node": 2, "surface": 2, "gauss": 4}
 MAX_POINTS = 8
+#: Depth (a fraction of the blank's thickness) past which the barrier of Gauss-point contact
+#: pushes a slave node out of the tool, with the blank's own stiffness across its thickness
+#: (docs/theory/contact.md, "The barrier").
+BARRIER_DEPTH = 0.008
+#: Width (a fraction of the thickness) over which the barrier's stiffness grows from zero.
+BARRIER_WIDTH = 0.002
+#: The barrier's stiffness in units of the blank's stiffness across its thickness, E / T.
+BARRIER_STIFFNESS = 10.0
 
 
 def faces_blank(search: ContactSearch, facing: ArrayLike) -> bool:
@@ -46,7 +56,9 @@ class RigidTool:
     where it is given, else "node") with, for "gauss", the
     penalty of its law in N/mm^3 (``penalty``, default ``default_penalty``); "surface" and
     "gauss" integrate over the blank faces with ``points`` x ``points`` Gauss points each
-    (default FACE_POINTS)."""
+    (default FACE_POINTS). A "gauss" tool's ``barrier`` (a fraction of the blank's
+    thickness; None: none) is the depth past which its slave nodes are pushed out
+    (BARRIER_DEPTH is the measured choice, not yet the default: docs/theory/contact.md)."""
 
     name: str
     surface: BezierSurface | NagataSurface
@@ -57,6 +69,7 @@ class RigidTool:
     contact: str | None = None
     penalty: float | None = None
     points: int | None = None
+    barrier: float | None = None
     search: ContactSearch = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -83,6 +96,9 @@ class RigidTool:
                              "outward normal of the blank faces that meet the tool)")
         if self.penalty is not None and not self.penalty > 0.0:
             raise ValueError(f"tool {self.name}: penalty must be > 0, got {self.penalty}")
+        if self.barrier is not None and not 0.0 <= self.barrier <= 1.0:
+            raise ValueError(f"tool {self.name}: barrier must be a fraction of the blank's "
+                             f"thickness from 0 to 1, got {self.barrier}")
         if self.points is None:
             self.points = FACE_POINTS.get(self.contact, 2)
         if not (isinstance(self.points, (int, np.integer)) and 1 <= self.points <= MAX_POINTS):

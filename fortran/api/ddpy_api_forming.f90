@@ -3,7 +3,7 @@
 module ddpy_api_forming
   use, intrinsic :: iso_c_binding, only: c_int, c_double
   use ddpy_kinds, only: wp
-  use ddpy_forming, only: forming_contact, tool_fields, max_face_order
+  use ddpy_forming, only: forming_contact, tool_fields, max_face_order, surface_gauss
   use ddpy_forming_newton, only: forming_increment, newton_settings, newton_integer_settings, &
                                  penetration_step, gmres
   use ddpy_material, only: material_prop_count
@@ -41,12 +41,14 @@ contains
     if (any(faces < 0) .or. any(faces >= nnode) .or. any(corner < -1)) return
     if (tool_first(1) /= 0 .or. tool_first(ntool + 1) /= npair) return
     if (face_first(1) /= 0 .or. face_first(ntool + 1) /= nface) return
-    ! Each tool's n x n points per face, one tool after another, fill the point arrays.
+    ! Each tool's n x n points per face, one tool after another, fill the point arrays; a
+    ! Gauss-point tool's are followed by one per slave (its barrier).
     points = 0
     do t = 1, ntool
       if (table(12, t) < 1 .or. table(12, t) > max_face_order .or. table(13, t) /= points) &
         return
       points = points + table(12, t)**2*(face_first(t + 1) - face_first(t))
+      if (table(11, t) == surface_gauss) points = points + tool_first(t + 1) - tool_first(t)
     end do
     if (points /= npoint) return
     do t = 1, ntool
@@ -138,7 +140,7 @@ contains
                                   grid_points(3*ngrid), facing(3, ntool), &
                                   positions(3, ntool), positions_n(3, ntool), &
                                   force(3, npair), r(npair), mu(npair), face_weight(npoint), &
-                                  penalty(2, ntool), traction_n(3, npoint), &
+                                  penalty(5, ntool), traction_n(3, npoint), &
                                   pressure_n(npoint)
     integer(c_int), intent(in) :: fixed(3, nnode), table(tool_fields, ntool), degrees(ndeg), &
                                   triangle(ntri), tree_child(ntree), grid_start(nstart), &
@@ -216,7 +218,7 @@ contains
                                   frame_lower(3*nframe), frame_upper(3*nframe), &
                                   grid_params(2*ngrid), grid_normals(3*ngrid), &
                                   grid_points(3*ngrid), facing(3, ntool), &
-                                  face_weight(npoint), penalty(2, ntool), &
+                                  face_weight(npoint), penalty(5, ntool), &
                                   traction_n(3, npoint), pressure_n(npoint), &
                                   positions(3, ntool), positions_n(3, ntool), r(npair), &
                                   mu(npair), u_n(3, nnode), force_n(3, npair), &
@@ -290,7 +292,7 @@ contains
     integer :: table(tool_fields, 0), ints(0), faces(4, 0), first(1), pairs(0), held(3, 0), &
                state(0), reuse_next
     real(wp) :: reals(0), tools(3, 0), forces(3, 0), force(3, 0), normal(3, 0), gap(0), &
-                weights(0), penalty(2, 0), tractions(3, 0), traction(3, 0), pressures(0), &
+                weights(0), penalty(5, 0), tractions(3, 0), traction(3, 0), pressures(0), &
                 pressure(0)
     history = 0.0_wp
     outcome = -1

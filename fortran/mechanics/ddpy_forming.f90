@@ -75,7 +75,9 @@ contains
   !>
   !> A Gauss-point tool (table f_surface = surface_gauss) puts the penalty law of
   !> gauss_traction at those Gauss points (penalty(1:2, t): normal and tangential penalty,
-  !> N/mm^3; traction_n(:, i): each point's tangential traction at the last converged
+  !> N/mm^3; penalty(3:5, t): the barrier's stiffness eps_b, N/mm^3, its start d_b and its
+  !> width w, mm: a slave deeper than d_b in the tool is pushed out by barrier_law of the
+  !> excess over its share of the faces' area, none when eps_b is 0); traction_n(:, i): each point's tangential traction at the last converged
   !> increment, traction: the new one, zero elsewhere; pressure_n(i): its pressure
   !> multiplier, pressure: its new pressure) and each slave's law is
   !> C = lambda - F(x), F its share of the points' forces by the shape functions. Its
@@ -106,7 +108,7 @@ contains
                             grid_params(*), grid_normals(*), grid_points(*), facing(3, ntool), &
                             positions(3, ntool), positions_n(3, ntool), reach, size, &
                             touching, force(3, npair), r(npair), mu(npair), &
-                            face_weight(npoint), penalty(2, ntool), &
+                            face_weight(npoint), penalty(5, ntool), &
                             traction_n(3, npoint), pressure_n(npoint)
     integer, intent(in) :: fixed(3, nnode), table(tool_fields, ntool), degrees(*), &
                            triangle(*), tree_child(*), grid_start(*), &
@@ -449,9 +451,15 @@ contains
                                gnormal(:, :), gtangents(:, :, :), gdistance(:), &
                                wsum(:), gsum(:), msum(:, :)
       integer, allocatable :: gpatch(:), gstatus(:), gits(:), gcand(:)
+      real(wp), allocatable :: node_depth(:), node_normal(:, :), node_uv(:, :), &
+                               node_tangents(:, :, :)
+      integer, allocatable :: node_patch(:)
+      logical, allocatable :: node_found(:)
       real(wp) :: basis(4, table(f_order, t)**2), vg(3), w, gpt(3), gd1(3, 2), &
-                  gd2(3, 3), dndx(3, 3), tr(3), tangential(3), dtr(3, 3), mu_t, len_m
+                  gd2(3, 3), dndx(3, 3), tr(3), tangential(3), dtr(3, 3), mu_t, len_m, &
+                  excess, p_bar, k_bar
       integer :: f, first, nfc, kg, g, q, qq, s, p, e, i, pp, lo, hi, gstate, npf, ip
+      logical :: barred
       first = face_first(t)
       nfc = face_first(t + 1) - first
       npf = table(f_order, t)**2
@@ -469,6 +477,10 @@ contains
       call face_points(t, npf, basis, gx, gn)
       call search_points(t, kg, gx, gn, gpatch, gparams, gpoints, gnormal, gtangents, &
                          gdistance, gstatus, gits, gcand)
+      barred = penalty(3, t) > 0.0_wp
+      if (barred) call node_depths(t, lo, hi, npair + table(f_point, t) + kg, node_depth, &
+                                   node_normal, node_found, node_patch, node_uv, &
+                                   node_tangents)
       allocate(wsum(lo:hi), gsum(lo:hi), msum(3, lo:hi))
       wsum = 0.0_wp
       gsum = 0.0_wp
@@ -512,13 +524,77 @@ contains
           end do
         end do
       end do
+      ! The barrier at the slaves (points kg + 1.. of the tool, face_weight their share of
+      ! the faces' area): p = eps_b (d - d_b) where a slave lies deeper than d_b in the
+      ! tool, along the tool's normal at its closest point, with friction as at the Gauss
+      ! points; the force acts on the slave alone.
+      if (barred) then
+        do i = 1, hi - lo + 1
+          ip = table(f_point, t) + kg + i
+          if (.not. node_found(i)) cycle
+          p = lo + i - 1
+          s = pair_node(p) + 1
+          pp = table(f_patch, t) + node_patch(i)
+          call patch_evaluate(table(f_kind, t), table(f_stride, t), &
+                              coef(table(f_coef, t) + (node_patch(i) - 1)*table(f_stride, t) &
+                                   + 1), degrees(2*pp - 1), node_uv(1, i), node_uv(2, i), &
+                              gpt, gd1, gd2)
+          dndx = normal_derivative(node_tangents(:, :, i), gd2, node_normal(:, i), &
+                                   -node_depth(i))
+          vg = (x(:, s) - x_n(:, s)) - (positions(:, t) - positions_n(:, t))
+          ! The law's pressure and slope at the depth past d_b, p_b + k_b (x - x_now) the
+          ! tangent line gauss_traction takes (its g = -x, its p_n = p_b - k_b x).
+          excess = node_depth(i) - penalty(4, t)
+          call barrier_law(excess, penalty(3, t), penalty(5, t), p_bar, k_bar)
+          call gauss_traction(traction_n(:, ip), p_bar - k_bar*excess, node_normal(:, i), &
+                              -excess, dndx, vg, mu_t, k_bar, penalty(2, t), tr, &
+                              tangential, pressure(ip), dtr, gstate)
+          traction(:, ip) = tangential
+          if (gstate == contact_inactive) cycle
+          w = face_weight(ip)
+          status(p) = contact_inside
+          state(p) = max(state(p), gstate)
+          gauss_force(:, p) = gauss_force(:, p) + w*tr
+          e = patch_entry(p, pair_node(p))
+          if (e > 0) patch_dc(:, :, e) = patch_dc(:, :, e) - w*dtr
+        end do
+      end if
       do p = lo, hi
         if (.not. wsum(p) > 0.0_wp) cycle
         gap(p) = gsum(p)/wsum(p)
         len_m = norm2(msum(:, p))
         if (len_m > 0.0_wp) normal(:, p) = msum(:, p)/len_m
       end do
+
     end subroutine gauss_search
+
+    !> The depth (minus the signed distance) of each slave lo..hi of tool t in it, the
+    !> tool's normal there, its patch, parameters and tangents, by the search of
+    !> node-to-surface contact, held where lock(first + 1..) says so and the patches taken
+    !> into found as for the Gauss points; inside where a slave projects inside a patch.
+    subroutine node_depths(t, lo, hi, first, depth, normals, inside, on_patch, uv, tangent)
+      integer, intent(in) :: t, lo, hi, first
+      real(wp), allocatable, intent(out) :: depth(:), normals(:, :), uv(:, :), &
+                                            tangent(:, :, :)
+      logical, allocatable, intent(out) :: inside(:)
+      integer, allocatable, intent(out) :: on_patch(:)
+      real(wp), allocatable :: at(:, :), facing_at(:, :), on_tool(:, :)
+      integer, allocatable :: how(:), its(:), candidates(:)
+      integer :: k, i
+      k = hi - lo + 1
+      allocate(depth(k), normals(3, k), inside(k), at(3, k), facing_at(3, k), uv(2, k), &
+               on_tool(3, k), tangent(3, 2, k), on_patch(k), how(k), its(k), candidates(k))
+      do i = 1, k
+        at(:, i) = x(:, pair_node(lo + i - 1) + 1)
+      end do
+      facing_at = 0.0_wp
+      if (table(f_facing, t) /= 0) call facing_normals(t, k, facing_at)
+      call search_tool(t, k, at, facing_at, lock(first + 1:first + k), on_patch, uv, on_tool, &
+                       normals, tangent, depth, how, its, candidates)
+      found(first + 1:first + k) = merge(on_patch, 0, depth < hold_band*size)
+      inside = how == contact_inside
+      depth = -depth
+    end subroutine node_depths
 
     !> Entry of node (0-based) in the patch of pair p; 0 when it is not there.
     pure integer function patch_entry(p, node) result(entry)
@@ -704,6 +780,25 @@ contains
 
   !> The six rigid modes of the blank (unit translations, rotations about its centre with
   !> the arm over the blank's size) along direction d at point y.
+  !> The barrier's pressure p and slope dp/dx at the depth x past its start: zero for
+  !> x <= 0, eps x^2 / (2 w) up to x = w and eps (x - w / 2) beyond: its stiffness grows
+  !> from zero to eps over the width w, so that a node entering it does not meet a jump
+  !> of stiffness between two Newton iterations.
+  pure subroutine barrier_law(x, eps, w, p, slope)
+    real(wp), intent(in) :: x, eps, w
+    real(wp), intent(out) :: p, slope
+    if (.not. x > 0.0_wp) then
+      p = 0.0_wp
+      slope = 0.0_wp
+    else if (x < w) then
+      p = eps*x**2/(2.0_wp*w)
+      slope = eps*x/w
+    else
+      p = eps*(x - 0.5_wp*w)
+      slope = eps
+    end if
+  end subroutine barrier_law
+
   pure function mode_row(y, d, centre, scale) result(row)
     real(wp), intent(in) :: y(3), d(3), centre(3), scale
     real(wp) :: row(6), arm(3)

@@ -115,7 +115,7 @@ contains
                             tree_upper(*), frame(*), frame_lower(*), frame_upper(*), &
                             grid_params(*), grid_normals(*), grid_points(*), &
                             facing(3, ntool), positions(3, ntool), positions_n(3, ntool), &
-                            face_weight(npoint), penalty(2, ntool), &
+                            face_weight(npoint), penalty(5, ntool), &
                             traction_n(3, npoint), pressure_n(npoint), reach, size, &
                             touching, r(npair), &
                             mu(npair), u_n(3, nnode), &
@@ -695,8 +695,11 @@ contains
       change = 0.0_wp
       do t = 1, ntool
         if (table(f_surface, t) == 0) cycle
+        ! (A Gauss-point tool's points are followed by its slaves' barrier points.)
         do i = table(f_point, t) + 1, table(f_point, t) + &
-                                      table(f_order, t)**2*(face_first(t + 1) - face_first(t))
+                                      table(f_order, t)**2*(face_first(t + 1) - face_first(t)) &
+                                      + merge(tool_first(t + 1) - tool_first(t), 0, &
+                                              table(f_surface, t) == surface_gauss)
           held_force = face_weight(i)*s%pressure(i)
           free_force = face_weight(i)*check%pressure(i)
           change = change + (held_force - free_force)**2

@@ -99,7 +99,7 @@ class _Cross:
                         "surface facing (" + ", ".join(f"{c:.3g}" for c in facing) + ")",
                         facing, d.values.get("augmentation"), self.tools_deck.where(d.line),
                         d.values.get("discretization", "gauss"), d.values.get("penalty"),
-                        d.values.get("points"))
+                        d.values.get("points"), d.values.get("barrier"))
             if d.model is not None:
                 object.__setattr__(tool, "_model", d.model)
             if tool.contact_nodes(mesh).size == 0:

@@ -34,7 +34,7 @@ class _ToolDraft:
 
 
 _TOOL_KEYS = ("description", "file", "friction", "contact", "augmentation", "discretization",
-              "penalty", "points")
+              "penalty", "points", "barrier")
 _TOOL_REQUIRED = ("description", "file", "friction", "contact")
 _DESCRIPTIONS = ("bezier", "nagata", "facets")
 #: Most tools of a case: the results file names them in an HDF5 attribute, which holds about
@@ -89,6 +89,11 @@ def _parse_tools(deck: Deck) -> list[_ToolDraft]:
                 elif key == "penalty":
                     check_arity(line, "penalty EPS", 1)
                     tool.values[key] = read_float(w[1], "the contact penalty (N/mm^3)", gt=0)
+                elif key == "barrier":
+                    check_arity(line, "barrier FRACTION|off", 1)
+                    tool.values[key] = None if w[1] == "off" else read_float(
+                        w[1], "the barrier depth (a fraction of the blank's thickness) or off",
+                        ge=0, le=1)
                 elif key == "points":
                     check_arity(line, "points N", 1)
                     tool.values[key] = read_int(w[1], "the Gauss points per direction of a "
@@ -115,7 +120,7 @@ def _parse_tools(deck: Deck) -> list[_ToolDraft]:
                 where = "in a tool" if tool is not None else "at the top of tools.dat"
                 raise BadValue(f"unknown keyword {show(key)} {where}: expected "
                            + ("description, file, friction, contact, augmentation, "
-                              "discretization, penalty, points or end" if tool
+                              "discretization, penalty, points, barrier or end" if tool
                    else "tool"))
         except BadValue as bad:
             deck.error(line.number, str(bad))

@@ -1,0 +1,137 @@
+"""The barrier of Gauss-point contact (RigidTool(barrier=...)): a slave node deeper in a tool
+than its depth d_b is pushed out by eps_b (d - d_b) over its share of the faces' area, with
+eps_b = E / T the blank's own stiffness across its thickness (docs/theory/contact.md, "The
+barrier")."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+from jacobian_check import central_difference_errors
+from test_gauss_contact import PENALTY
+from test_penetration import PLANE
+from test_surface_contact import ELASTIC, dome, nodal_areas
+
+from ddpy.io.decks import DeckError, read_case
+from ddpy.model.control import NewtonSettings
+from ddpy.model.forming import FormingProblem, RigidTool, barrier_stiffness
+from ddpy.model.mesh import HexMesh
+from ddpy.model.solid import Solid
+from ddpy.model.tool import BARRIER_DEPTH, BARRIER_WIDTH
+
+#: The built-in bending case.
+BENDING = Path(__file__).parents[1] / "ddpy" / "cases" / "cylindrical_bending"
+#: The blocks' thickness (mm).
+THICKNESS = 0.5
+
+
+def pressed_block(push: float, penalty: float, barrier: float | None = BARRIER_DEPTH
+                  ) -> tuple[FormingProblem, RigidTool, object]:
+    """A 1 x 1 x 0.5 mm elastic block clamped at its top, its bottom pushed ``push`` mm into
+    a plane in four increments (Gauss-point contact, 2 x 2 points per face)."""
+    mesh = HexMesh.box(1.0, 1.0, THICKNESS, 2, 2, 2)
+    tool = RigidTool("plane", PLANE, mesh.select(z=0.0), facing=(0, 0, -1), contact="gauss",
+                     penalty=penalty, points=2, barrier=barrier)
+    problem = FormingProblem(Solid(mesh, ELASTIC), [tool])
+    problem.fix(mesh.select(z=THICKNESS), "xyz")
+    result = problem.run({"plane": (0, 0, push)}, max_increment=push / 4,
+                         newton=NewtonSettings(1e-12, 1e-9))
+    return problem, tool, result
+
+
+def barrier_pressure(depth: float, stiffness: float) -> float:
+    """The barrier's pressure at a depth (mm) into the tool, from its definition: zero to
+    d_b, then eps_b x^2 / (2 w) over the width w, then eps_b (x - w / 2)."""
+    x = depth - BARRIER_DEPTH * THICKNESS
+    w = BARRIER_WIDTH * THICKNESS
+    if x <= 0.0:
+        return 0.0
+    return stiffness * (x * x / (2 * w) if x < w else x - w / 2)
+
+
+def test_a_soft_penalty_sinks_no_deeper_than_the_barrier_allows() -> None:
+    """A penalty 1,000 times softer than the block, pushed 6 um (1.2 % of its thickness):
+    alone it leaves nearly the whole push as depth. With the barrier every point and node
+    sinks the same d and the pressure is eps d + eps_b (d - d_b) (both laws on the same
+    area: the nodes' shares sum to the face), here about 740 MPa; the depth stays within
+    the 1 % limit (it does up to a pressure of about (0.01 - 0.005) E, far above the
+    pressures of forming)."""
+    push, eps = 6e-3, ELASTIC.E / THICKNESS / 1000
+    _, _, plain = pressed_block(push, eps, barrier=None)
+    assert plain.penetration["plane"][-1] > 0.011 * THICKNESS
+    problem, tool, result = pressed_block(push, eps)
+    depth = result.penetration["plane"][-1]
+    assert depth <= 0.01 * THICKNESS
+    eps_b = barrier_stiffness(problem.solid, THICKNESS)
+    pressure = -result.tool_forces["plane"][-1][2] / 1.0
+    assert pressure > 500.0
+    assert pressure == pytest.approx(eps * depth + barrier_pressure(depth, eps_b), rel=1e-9)
+    # each node carries the uniform pressure over its share of the bottom
+    area = nodal_areas(problem.solid.mesh, tool.slaves)[tool.slaves]
+    np.testing.assert_allclose(problem.force[:, 2], pressure * area, rtol=1e-9)
+
+
+def test_the_barrier_leaves_a_shallow_press_alone() -> None:
+    """A press shallower than d_b: the same answer with and without the barrier."""
+    push, eps = 1e-3, ELASTIC.E / THICKNESS
+    with_barrier = pressed_block(push, eps)[0].force
+    without = pressed_block(push, eps, barrier=None)[0].force
+    assert pressed_block(push, eps)[2].penetration["plane"][-1] < BARRIER_DEPTH * THICKNESS
+    np.testing.assert_array_equal(with_barrier, without)
+
+
+def test_jacobian_with_the_barrier_matches_central_differences() -> None:
+    """The barrier on a curved tool with friction, some nodes in it (stick and slip), one
+    column lifted out: dp/dx = -eps_b n at the node, the normal's change along the node
+    (the dome's curvature) and the friction's, against central differences."""
+    surface = dome()
+    lift = float(surface.evaluate([0], [[0.5, 0.5]])[0][0, 2])
+    mesh = HexMesh.box(1.0, 1.0, THICKNESS, 3, 3, 2, origin=(-0.5, -0.5, lift))
+    tool = RigidTool("dome", surface, mesh.select(z=lift), friction=0.3, facing=(0, 0, -1),
+                     contact="gauss", penalty=PENALTY / 50, points=2)
+    problem = FormingProblem(Solid(mesh, ELASTIC), [tool])
+    problem.fix(mesh.select(z=lift + THICKNESS), "xyz")
+    problem.fix(mesh.select(y=-0.5), "y")
+    problem.run({"dome": (0, 0, 8e-3)}, max_increment=2e-3)
+    result = problem.run({"dome": (2e-3, 0, 0)}, max_increment=1e-3)
+    assert result.penetration["dome"][-1] > BARRIER_DEPTH * THICKNESS  # nodes in the barrier
+    u = problem.u.copy()
+    u[tool.slaves[mesh.nodes[tool.slaves, 0] < -0.4], 2] += 0.2  # open
+    moved = {"dome": problem.position["dome"] + (3e-5, 1e-5, 2e-5)}
+    equilibrium, law, state = central_difference_errors(problem, u, problem.force, moved, 3e-5)
+    assert 0 in set(state.tolist()) and len(set(state.tolist())) > 1, state
+    assert equilibrium <= 1e-7 and law <= 1e-7, (equilibrium, law)
+
+
+@pytest.mark.parametrize("value", [-0.1, 1.5, float("nan")])
+def test_a_barrier_outside_zero_to_one_is_refused(value: float) -> None:
+    mesh = HexMesh.box(1.0, 1.0, THICKNESS, 1, 1, 1)
+    with pytest.raises(ValueError, match="barrier must be a fraction"):
+        RigidTool("plane", PLANE, mesh.select(z=0.0), facing=(0, 0, -1), barrier=value)
+
+
+@pytest.mark.parametrize("word", ["2", "-0.01", "nan", "deep"])
+def test_a_barrier_line_outside_zero_to_one_is_refused_at_its_line(tmp_path: Path,
+                                                                  word: str) -> None:
+    case = tmp_path / "case"
+    shutil.copytree(BENDING, case)
+    tools = case / "tools.dat"
+    tools.write_text(tools.read_text().replace("\nend", f"\n  barrier {word}\nend", 1))
+    line = next(k for k, text in enumerate(tools.read_text().splitlines(), start=1)
+                if text.strip().startswith("barrier"))
+    with pytest.raises(DeckError) as info:
+        read_case(case)
+    assert f"tools.dat:{line}:" in str(info.value) and "barrier" in str(info.value)
+
+
+def test_a_barrier_line_reaches_the_tool(tmp_path: Path) -> None:
+    case = tmp_path / "case"
+    shutil.copytree(BENDING, case)
+    tools = case / "tools.dat"
+    tools.write_text(tools.read_text().replace("\nend", "\n  barrier 0.008\nend", 1))
+    first = read_case(case).tools[0]
+    assert first.barrier == 0.008 and read_case(BENDING).tools[0].barrier is None
+    assert "barrier at 0.008 of the thickness" in read_case(case).summary()

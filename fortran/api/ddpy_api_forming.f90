@@ -151,6 +151,7 @@ contains
     real(c_double), intent(out) :: gap(npair), normal(3, npair), traction(3, npoint), &
                                    pressure(npoint)
     integer, allocatable :: lock(:), found(:)
+    real(wp), allocatable :: dc_dt(:, :, :)
     state = 0
     gap = 0.0_wp
     normal = 0.0_wp
@@ -162,7 +163,7 @@ contains
                         tool_first, pair_node, npatch, patch_first, patch_node, eqn, &
                         k_slots, nvalues)) return
     status = 0
-    allocate(lock(npair + npoint), found(npair + npoint))
+    allocate(lock(npair + npoint), found(npair + npoint), dc_dt(3, 3, npair))
     lock = 0  ! no pair held: a plain search
     call forming_contact(nnode, x, x_n, fixed, ntool, table, tol, coef, degrees, triangle, &
                          tree_lower, tree_upper, tree_child, frame, frame_lower, frame_upper, &
@@ -171,7 +172,7 @@ contains
                          positions, positions_n, reach, size, touching, resting, npair, tool_first, &
                          pair_node, npatch, patch_first, patch_node, on, force, r, mu, held, &
                          traction_n, pressure_n, lock, eqn, nf, k_slots, nvalues, residual, &
-                         values, state, gap, normal, traction, pressure, found)
+                         values, state, gap, normal, traction, pressure, found, dc_dt)
   end subroutine api_forming_contact
 
   !> Newton iterations of one increment: see forming_increment. Connectivity arrives 0-based.
@@ -190,13 +191,19 @@ contains
                                    prescribed, guess, settings, isettings, factored, &
                                    reuse_next, u, force, fint, stress, ep, strain, axes, state, &
                                    gap, normal, traction, pressure, nhistory, niter, history, &
-                                   counters, timings, outcome, info, detail) &
+                                   counters, timings, outcome, info, detail, nhold, &
+                                   hold_tool, hold_axis, hold_target, hold_first, nhold_src, &
+                                   hold_source, hold_coef, hold_step, shift) &
     bind(C, name="ddpy_forming_increment")
     integer(c_int), value, intent(in) :: nnode, ne, kind, nf, k_slots, n_coupling, nvalues, &
                                          nrow, ncsr, nsrc, ntool, ncoef, ndeg, ntri, ntree, &
                                          nframe, nstart, ngrid, nface, npoint, npair, npatch, &
-                                         nhistory
-    real(c_double), value, intent(in) :: reach, size, touching
+                                         nhistory, nhold, nhold_src
+    real(c_double), value, intent(in) :: reach, size, touching, hold_step
+    integer(c_int), intent(in) :: hold_tool(nhold), hold_first(nhold + 1), &
+                                  hold_source(nhold_src)
+    real(c_double), intent(in) :: hold_axis(3, nhold), hold_target(nhold), hold_coef(nhold_src)
+    real(c_double), intent(out) :: shift(nhold)
     integer(c_int), intent(in) :: conn(8, ne), eqn(3, nnode), offsets(ne + 1), &
                                   fixed(3, nnode), row_start(nrow + 1), col(ncsr), &
                                   sources(nsrc), source_start(ncsr + 1), &
@@ -227,16 +234,29 @@ contains
                                    normal(3, npair), traction(3, npoint), pressure(npoint), &
                                    history(4, nhistory), timings(4), detail(2)
     integer(c_int), intent(out) :: state(npair), niter, counters(5), outcome, info(4)
+    integer :: k, entries
     history = 0.0_wp
+    shift = 0.0_wp
     outcome = -1
     if (nhistory < isettings(1) + 1 .or. offsets(ne + 1) /= k_slots) return
     if (kind /= kind_hexahedron .and. kind /= kind_solid_shell) return
-    if (any(conn < 0) .or. any(conn >= nnode) .or. nrow /= nf + 3*npair) return
+    if (any(conn < 0) .or. any(conn >= nnode) .or. nrow /= nf + 3*npair + nhold) return
     if (.not. rows_ok(nrow, ncsr, nsrc, nvalues, row_start, col, sources, source_start)) return
+    ! The force-controlled tools: each a tool once, its row's sources in the contact
+    ! blocks, and their entries (column, row, diagonal) the last of the values.
+    if (nhold < 0 .or. any(hold_tool < 1) .or. any(hold_tool > ntool)) return
+    if (hold_first(1) /= 0 .or. hold_first(nhold + 1) /= nhold_src) return
+    if (any(hold_first(2:) < hold_first(:nhold))) return
+    entries = 0
+    do k = 1, nhold
+      if (count(hold_tool == hold_tool(k)) /= 1) return
+      entries = entries + hold_column(hold_tool(k)) + hold_first(k + 1) - hold_first(k) + 1
+    end do
+    if (any(hold_source >= nvalues - entries)) return
     if (.not. layout_ok(nnode, ntool, table, ncoef, ndeg, ntri, ntree, nframe, nstart, ngrid, &
                         grid_start, face_first, nface, faces, corner, npoint, npair, &
                         tool_first, pair_node, npatch, patch_first, patch_node, eqn, &
-                        k_slots, nvalues)) return
+                        k_slots, nvalues - entries)) return
     call forming_increment(nnode, x0, ne, conn + 1, kind, props, u_ref, axes_old, stress_old, &
                            ep_old, strain_old, eqn, offsets, fixed, nf, k_slots, n_coupling, &
                            nvalues, row_start, ncsr, col, sources, source_start, ntool, &
@@ -249,7 +269,25 @@ contains
                            traction_n, pressure_n, u_n, force_n, external, prescribed, guess, &
                            settings, isettings, factored, reuse_next, u, force, fint, stress, &
                            ep, strain, axes, state, gap, normal, traction, pressure, niter, &
-                           history, counters, timings, outcome, info, detail)
+                           history, counters, timings, outcome, info, detail, nhold, &
+                           hold_tool, hold_axis, hold_target, hold_first, nhold_src, &
+                           hold_source, hold_coef, hold_step, shift)
+
+  contains
+
+    !> The entries of tool t's column: 3 per pair, a Gauss-point pair's free components.
+    integer function hold_column(t)
+      integer, intent(in) :: t
+      integer :: p
+      hold_column = 0
+      do p = tool_first(t) + 1, tool_first(t + 1)
+        if (table(11, t) == 2) then
+          hold_column = hold_column + count(eqn(:, pair_node(p) + 1) >= 0)
+        else
+          hold_column = hold_column + 3
+        end if
+      end do
+    end function hold_column
   end subroutine api_forming_increment
 
   !> Newton iterations of one increment of a solid without tools (the static problem): see
@@ -283,7 +321,7 @@ contains
                state(0), reuse_next
     real(wp) :: reals(0), tools(3, 0), forces(3, 0), force(3, 0), normal(3, 0), gap(0), &
                 weights(0), penalty(2, 0), tractions(3, 0), traction(3, 0), pressures(0), &
-                pressure(0)
+                pressure(0), shift(0)
     history = 0.0_wp
     outcome = -1
     if (nhistory < isettings(1) + 1 .or. offsets(ne + 1) /= k_slots .or. nvalues /= k_slots) &
@@ -306,7 +344,8 @@ contains
                            stress, ep, strain, axes, state, gap, normal, traction, pressure, &
                            niter, &
                            history, &
-                           counters, timings, outcome, info, detail)
+                           counters, timings, outcome, info, detail, 0, pairs, tools, reals, &
+                           first, 0, pairs, reals, 0.0_wp, shift)
   end subroutine api_static_increment
 
   !> The step length the Newton loop's penetration limit allows (see penetration_step).

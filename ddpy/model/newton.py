@@ -219,6 +219,19 @@ class Layout:
         self.hold_source = _join(source, np.int32)
         self.hold_coef = _join(coef, np.float64)
 
+    def hold_arguments(self, force: ArrayLike | None = None) -> tuple:
+        """The force-controlled tools as the core's forming_contact and forming_increment
+        take them, pressing with ``force`` (N, per tool; default zero): their count, tools
+        (1-based), axes and forces, and their rows' sources (arrays at least one long)."""
+        force = np.zeros(self.holds.size) if force is None else np.asarray(force, dtype=float)
+        if force.shape != self.holds.shape:
+            raise ValueError(f"{self.holds.size} force-controlled tool(s) need as many "
+                             f"forces, got {force.size}")
+        return (self.holds.size, _padded(self.holds + 1, np.int32),
+                _padded(self.hold_axis, np.float64), _padded(force, np.float64),
+                self.hold_first, self.hold_source.size, _padded(self.hold_source, np.int32),
+                _padded(self.hold_coef, np.float64))
+
     @cached_property
     def by_rows(self) -> RowStructure:
         """The Jacobian's structure by rows, for the products of GMRES in the core: sorted
@@ -432,9 +445,6 @@ def increment(solid: Solid, layout: Layout, factors: Factors, state: SolidState,
             *buffers)
         force = pair_state = gap = normal = traction = pressure = shift = np.zeros(0)
     else:
-        if pairs.hold_force.size != layout.holds.size:
-            raise ValueError(f"{layout.holds.size} force-controlled tool(s) need as many "
-                             f"forces, got {pairs.hold_force.size}")
         (factored, reuse_next, u, force, fint, stress, ep, strain, axes, pair_state, gap,
          normal, traction, pressure, niter, history, counters, spent, outcome, info,
          detail, shift) = \
@@ -446,11 +456,7 @@ def increment(solid: Solid, layout: Layout, factors: Factors, state: SolidState,
                 u_n.ravel(),
                 np.where(pairs.on[:, None], pairs.force_n, 0.0).ravel(), external.ravel(),
                 prescribed.ravel(), start, settings, isettings, factored, reuse_next,
-                *buffers, layout.holds.size, _padded(layout.holds + 1, np.int32),
-                _padded(layout.hold_axis.ravel(), np.float64),
-                _padded(pairs.hold_force, np.float64), layout.hold_first,
-                layout.hold_source.size, _padded(layout.hold_source, np.int32),
-                _padded(layout.hold_coef, np.float64), pairs.hold_step,
+                *buffers, *layout.hold_arguments(pairs.hold_force), pairs.hold_step,
                 np.zeros(max(layout.holds.size, 1)))
         shift = shift[:layout.holds.size]
         factors.reuse_next = bool(reuse_next[0])

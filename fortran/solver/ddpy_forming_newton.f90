@@ -22,7 +22,7 @@ module ddpy_forming_newton
   private
   public :: forming_increment, newton_settings, newton_integer_settings, outcome_converged, &
             outcome_landing, outcome_element, outcome_not_finite, outcome_solver, &
-            outcome_stalled, outcome_hold, penetration_step, gmres
+            outcome_stalled, outcome_hold, penetration_step, gmres, hold_equations
 
   !> Entries of the real settings: force and displacement tolerances, the yield landing
   !> tolerance (< 0: off), the penetration limit (element sizes) and the shortest step it
@@ -591,51 +591,13 @@ contains
         s%force(:, p) = s%force(:, p) - s%residual(nf + 3*p - 2:nf + 3*p)
         s%residual(nf + 3*p - 2:nf + 3*p) = 0.0_wp
       end do
-      call hold_equations(s)
+      call hold_equations(nnode, ntool, npair, tool_first, pair_node, on, eqn, &
+                          eliminated, s%force, s%dc_dt, nhold, hold_tool, hold_axis, &
+                          hold_target, hold_first, nhold_src, hold_source, hold_coef, &
+                          hold_base, s%residual(nf + 3*npair + 1:), s%values, s%stiffness)
       call system_clock(t2)
       timings(2) = timings(2) + real(t2 - t1, wp)/real(clock_rate, wp)
     end subroutine evaluate
-
-    !> The rows and entries of the force-controlled tools at slot s (see forming_increment):
-    !> the residual sum a . lambda - F of each, its column a . dC/dt per pair, its row from
-    !> the sources, its diagonal -sum a . dC/dt a over its Gauss-point pairs (their force
-    !> F = lambda - C moves with the tool), and the stiffness along its axis, the sum of
-    !> |dC/dt a| over its pairs that take part.
-    subroutine hold_equations(s)
-      type(evaluation), intent(inout) :: s
-      real(wp) :: along(3), a(3), diagonal
-      integer :: k, p, i, m, slot_at, t
-      slot_at = hold_base
-      do k = 1, nhold
-        t = hold_tool(k)
-        a = hold_axis(:, k)
-        diagonal = 0.0_wp
-        s%stiffness(k) = 0.0_wp
-        s%residual(nf + 3*npair + k) = -hold_target(k)
-        do p = tool_first(t) + 1, tool_first(t + 1)
-          s%residual(nf + 3*npair + k) = s%residual(nf + 3*npair + k) + &
-                                          dot_product(a, s%force(:, p))
-          along = matmul(s%dc_dt(:, :, p), a)
-          if (on(p) /= 0) s%stiffness(k) = s%stiffness(k) + sum(abs(along))
-          do i = 1, 3
-            if (eliminated(p) .and. eqn(i, pair_node(p) + 1) < 0) cycle
-            slot_at = slot_at + 1
-            s%values(slot_at) = along(i)
-          end do
-          if (eliminated(p)) diagonal = diagonal - dot_product(a, along)
-        end do
-        do m = hold_first(k) + 1, hold_first(k + 1)
-          slot_at = slot_at + 1
-          if (hold_source(m) >= 0) then
-            s%values(slot_at) = hold_coef(m)*s%values(hold_source(m) + 1)
-          else
-            s%values(slot_at) = hold_coef(m)
-          end if
-        end do
-        slot_at = slot_at + 1
-        s%values(slot_at) = diagonal
-      end do
-    end subroutine hold_equations
 
     !> measure for slot s, as this iteration's history (residual, relative residual and
     !> correction).
@@ -840,6 +802,61 @@ contains
     end subroutine finish
 
   end subroutine forming_increment
+
+  !> The equations of the nhold force-controlled tools (see forming_increment) from the
+  !> pairs' forces (lambda; F(x) for an eliminated Gauss-point pair) and their dC/dt
+  !> (forming_contact): each tool's residual sum a . lambda - F (into hold_residual), and
+  !> from slot hold_base + 1 of values its column a . dC/dt per pair (the law rows, or an
+  !> eliminated pair's free equilibrium rows), its row (hold_coef times the value at slot
+  !> hold_source, 0-based, or hold_coef alone where hold_source < 0) and its diagonal
+  !> -sum a . dC/dt a over its eliminated pairs, whose force F = lambda - C moves with the
+  !> tool; and its stiffness along its axis, the sum of |dC/dt a| over its pairs that take
+  !> part (on).
+  subroutine hold_equations(nnode, ntool, npair, tool_first, pair_node, on, eqn, &
+                            eliminated, force, dc_dt, nhold, hold_tool, hold_axis, &
+                            hold_target, hold_first, nhold_src, hold_source, hold_coef, &
+                            hold_base, hold_residual, values, stiffness)
+    integer, intent(in) :: nnode, ntool, npair, nhold, nhold_src, hold_base
+    integer, intent(in) :: tool_first(ntool + 1), pair_node(npair), on(npair), &
+                           eqn(3, nnode), hold_tool(nhold), hold_first(nhold + 1), &
+                           hold_source(nhold_src)
+    logical, intent(in) :: eliminated(npair)
+    real(wp), intent(in) :: force(3, npair), dc_dt(3, 3, npair), hold_axis(3, nhold), &
+                            hold_target(nhold), hold_coef(nhold_src)
+    real(wp), intent(inout) :: hold_residual(nhold), values(*)
+    real(wp), intent(out) :: stiffness(nhold)
+    real(wp) :: along(3), a(3), diagonal
+    integer :: k, p, i, m, slot, t
+    slot = hold_base
+    do k = 1, nhold
+      t = hold_tool(k)
+      a = hold_axis(:, k)
+      diagonal = 0.0_wp
+      stiffness(k) = 0.0_wp
+      hold_residual(k) = -hold_target(k)
+      do p = tool_first(t) + 1, tool_first(t + 1)
+        hold_residual(k) = hold_residual(k) + dot_product(a, force(:, p))
+        along = matmul(dc_dt(:, :, p), a)
+        if (on(p) /= 0) stiffness(k) = stiffness(k) + sum(abs(along))
+        do i = 1, 3
+          if (eliminated(p) .and. eqn(i, pair_node(p) + 1) < 0) cycle
+          slot = slot + 1
+          values(slot) = along(i)
+        end do
+        if (eliminated(p)) diagonal = diagonal - dot_product(a, along)
+      end do
+      do m = hold_first(k) + 1, hold_first(k + 1)
+        slot = slot + 1
+        if (hold_source(m) >= 0) then
+          values(slot) = hold_coef(m)*values(hold_source(m) + 1)
+        else
+          values(slot) = hold_coef(m)
+        end if
+      end do
+      slot = slot + 1
+      values(slot) = diagonal
+    end do
+  end subroutine hold_equations
 
   !> Longest fraction (at most 1) of the step du (3, nnode) that leaves no free pair's node
   !> (on, open, with a gap) deeper than room_depth inside its tool, the gaps and normals

@@ -49,6 +49,11 @@ module ddpy_forming_newton
   !> patches, at most hold_limit times in an increment.
   integer, parameter :: hold_fraction = 3, hold_limit = 3
   real(wp), parameter :: hold_depth = 1.0e-4_wp
+  !> A force-controlled tool with no contact stiffness along its axis is moved onto its
+  !> nearest slave, touch_depth element sizes into it, at most hold_retouches times in an
+  !> increment (forming_increment).
+  integer, parameter :: hold_retouches = 3
+  real(wp), parameter :: touch_depth = 1.0e-3_wp
   !> What forming_increment returns.
   integer, parameter :: outcome_converged = 0, outcome_landing = 1, outcome_element = 2, &
                         outcome_not_finite = 3, outcome_solver = 4, outcome_stalled = 5, &
@@ -162,7 +167,8 @@ contains
     integer, allocatable :: previous(:), lock(:)
     logical, allocatable :: eliminated(:), averaged(:)
     real(wp), allocatable :: coupling(:)
-    integer :: tool, pair, comp, entry, k, hold_base
+    integer :: tool, pair, comp, entry, k, hold_base, retouches
+    logical :: retouched
     real(wp) :: tol_force, tol_disp, yield_tol, floor, norm, scale, moved, correction, rel, &
                 forcing, alpha, step_size, du_norm, landing, t_norm, t_scale, t_moved, &
                 alpha_fallback, whole_step, size_ratio
@@ -186,6 +192,7 @@ contains
     symmetric = isettings(8) /= 0
     search = isettings(9)
     n = nf + 3*npair + nhold
+    retouches = 0
     counters = 0
     shift = 0.0_wp
     timings = 0.0_wp
@@ -318,15 +325,29 @@ contains
       ! Inexact Newton (Eisenstat and Walker): the correction's relative error may be a
       ! tenth of the relative residual (the rate stays quadratic), or as large as leaves
       ! the next residual a tenth of the tolerance (the last iteration).
+      retouched = .false.
       do k = 1, nhold
         ! A tool that nothing holds along its axis would take a singular step, or one
-        ! that flies it off: the increment stops and says which.
-        if (.not. slot(cur)%stiffness(k) > 0.0_wp) then
-          outcome = outcome_hold
-          info(1:2) = [hold_tool(k), 1]
-          return
+        ! that flies it off: it is brought back onto the blank (its iterate moved off a
+        ! contact of a few hundredths of a micrometre), at most hold_retouches times in
+        ! an increment; else the increment stops and says which.
+        if (slot(cur)%stiffness(k) > 0.0_wp) cycle
+        if (retouches < hold_retouches) then
+          if (retouch(slot(cur), k)) then
+            retouched = .true.
+            cycle
+          end if
+          if (outcome == outcome_element) return
         end if
+        outcome = outcome_hold
+        info(1:2) = [hold_tool(k), 1]
+        return
       end do
+      if (retouched) then
+        retouches = retouches + 1
+        alpha = 0.0_wp
+        cycle
+      end if
       rel = norm/scale
       forcing = min(settings(6), max(settings(7), 0.1_wp*rel, &
                                      0.1_wp*tol_force/max(rel, 1.0e-300_wp)))
@@ -598,6 +619,33 @@ contains
       call system_clock(t2)
       timings(2) = timings(2) + real(t2 - t1, wp)/real(clock_rate, wp)
     end subroutine evaluate
+
+    !> Moves force-controlled tool k of slot s along its axis onto its nearest slave (by
+    !> the gaps along the tool's normals at the pairs' closest points), touch_depth
+    !> element sizes into it, and evaluates s there; false where no slave within the
+    !> search's reach faces it or an element fails (outcome then says so).
+    logical function retouch(s, k)
+      type(evaluation), intent(inout) :: s
+      integer, intent(in) :: k
+      real(wp) :: closing, travel
+      integer :: p, status, element
+      retouch = .false.
+      travel = huge(1.0_wp)
+      do p = tool_first(hold_tool(k)) + 1, tool_first(hold_tool(k) + 1)
+        if (on(p) == 0 .or. .not. ieee_is_finite(s%gap(p))) cycle
+        closing = dot_product(s%normal(:, p), hold_axis(:, k))
+        if (closing > 0.5_wp) travel = min(travel, s%gap(p)/closing)
+      end do
+      if (travel == huge(1.0_wp)) return
+      s%shift(k) = s%shift(k) + travel + touch_depth*size
+      call evaluate(s, 0.0_wp, status, element)
+      if (status /= 0) then
+        outcome = outcome_element
+        info(1:2) = [status, element]
+        return
+      end if
+      retouch = .true.
+    end function retouch
 
     !> measure for slot s, as this iteration's history (residual, relative residual and
     !> correction).

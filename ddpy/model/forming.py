@@ -467,7 +467,7 @@ class FormingProblem:
                           REACH_TRAVELS * min(max_increment, travel))
         if resume is None:
             for k in layout.holds:
-                self._touch_down(layout, int(k), on)
+                self._touch_down(layout, int(k))
         start = {name: p.copy() for name, p in self.position.items()}
         nominal = min(1.0, max_increment / travel) if travel > 0.0 else 1.0
         factor, step, cuts_in_row, reason = 0.0, nominal, 0, "max"
@@ -489,6 +489,8 @@ class FormingProblem:
                                   np.empty(0))[1]
         # (Gauss-point contact that carries a force sits in the tool by its penalty's depth.)
         holding = self._gauss & (np.abs(self.force).sum(axis=1) > 0.0)
+        # (A force-controlled tool was just brought onto the blank: it presses as it must.)
+        holding |= np.isin(layout.tool_of, layout.holds)
         depth = np.where(on & np.isfinite(self._gap[0]) & ~holding, -self._gap[0], -np.inf)
         worst = int(np.argmax(depth)) if depth.size else 0
         if depth.size and depth[worst] > start_depth_limit(limits.strain, self.size):
@@ -796,26 +798,26 @@ class FormingProblem:
             ramps[index[name]] = (float(pair[0]), float(pair[1]))
         return ramps
 
-    def _touch_down(self, layout: Layout, k: int, on: NDArray[np.bool_]) -> None:
+    def _touch_down(self, layout: Layout, k: int) -> None:
         """Bring force-controlled tool ``k`` onto the blank along its axis, TOUCH_DEPTH
-        element sizes into its nearest slave node (by the gaps along the tools' normals at
-        the closest points), unless its pairs already carry a force."""
+        element sizes into its nearest slave node (its slave nodes projected on it within
+        the search's reach, those inside a patch: the gaps along its normals there),
+        unless its pairs already carry a force."""
         tool = self.tools[k]
         pairs = slice(layout.first[k], layout.first[k + 1])
         if np.abs(self.force[pairs]).sum() > 0.0:
             return
         axis = layout.hold_axis[int(np.flatnonzero(layout.holds == k)[0])]
         x = self.solid.mesh.nodes + self.u
-        _, (gap, normal) = self._contact(layout, x, x, self.position, on, self.force,
-                                         np.zeros(layout.n), np.empty(0))
-        closing = normal[pairs] @ axis
-        seen = np.isfinite(gap[pairs]) & (closing > 0.5)
+        found = tool.search.project(x[tool.slaves], self.position[tool.name], reach=self._reach)
+        gap, closing = found.distance, found.normal @ axis
+        seen = (found.status == INSIDE) & (closing > 0.5)
         if not seen.any():
             raise ValueError(f"force-controlled tool {tool.name} does not reach the blank: no "
                              f"slave node lies within the contact search's reach "
                              f"({self._reach:.3g} mm) of it along its axis; place it on the "
                              "blank")
-        travel = float(np.min(gap[pairs][seen] / closing[seen])) + TOUCH_DEPTH * self.size
+        travel = float(np.min(gap[seen] / closing[seen])) + TOUCH_DEPTH * self.size
         self.position[tool.name] = self.position[tool.name] + travel * axis
 
     def _placed(self, layout: Layout, positions: Mapping[str, NDArray[np.float64]],

@@ -792,9 +792,11 @@ class FormingProblem:
                 raise ValueError(f"tool {name} has no facing direction: a force along it "
                                  "cannot be held")
             pair = (value, value) if np.ndim(value) == 0 else tuple(value)  # type: ignore[arg-type]
-            if len(pair) != 2 or not all(np.isfinite(f) and f >= 0.0 for f in pair):
-                raise ValueError(f"force of {name} must be a finite value >= 0 (N) or two, "
-                                 f"got {value!r}")
+            # (A tool pressing with nothing at the end of an increment holds nothing.)
+            if len(pair) != 2 or not all(np.isfinite(f) and f >= 0.0 for f in pair) or \
+                    not pair[1] > 0.0:
+                raise ValueError(f"force of {name} must be a finite value > 0 (N), or two "
+                                 f"(from >= 0 to > 0), got {value!r}")
             ramps[index[name]] = (float(pair[0]), float(pair[1]))
         return ramps
 

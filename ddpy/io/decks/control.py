@@ -216,7 +216,7 @@ def _phase_line(deck: Deck, phase: _PhaseDraft, line: Line) -> None:
     elif key == "force":
         check_arity(line, "force TOOL VALUE [ramp]", 2, 3)
         tool = read_name(words[1], "the tool")
-        value = read_float(words[2], "the force (N, pressing the tool on the blank)", ge=0,
+        value = read_float(words[2], "the force (N, pressing the tool on the blank)", gt=0,
                            le=MAX_FORCE)
         if len(words) == 4 and words[3] != "ramp":
             raise BadValue(f"expected 'ramp' or nothing after the force, got {show(words[3])}")

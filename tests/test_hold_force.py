@@ -277,3 +277,19 @@ def test_a_force_on_a_tool_without_a_facing_direction_is_refused() -> None:
     problem.fix(mesh.select(z=0.0), "xyz")
     with pytest.raises(ValueError, match="tool holder has no facing direction"):
         problem.run({}, max_increment=1.0, forces={"holder": 10.0})
+
+
+def test_a_ramped_force_grows_with_the_lead_tools_travel(tmp_path: Path) -> None:
+    """force holder 200 ramp: at each increment of the drawing phase (2 mm of punch travel,
+    an output at 1 mm splitting it in two runs) the holder carries 200 N times the share of
+    the travel done."""
+    case = _strip_case(tmp_path / "case", "force  holder 200 ramp")
+    outcome = run_case(read_case(case), tmp_path / "out", max_increments=16)
+    assert outcome.status == "stopped", outcome.message
+    with ResultsReader(tmp_path / "out" / RESULTS) as reader:
+        history = reader.history()
+        holder = list(reader.tools).index("holder")
+    draw = history["phase"] == 0
+    assert history["travel"][draw].max() > 1.0  # past the output at 1 mm
+    np.testing.assert_allclose(history["tool_force"][draw, holder, 2],
+                               200.0 * history["travel"][draw] / 2.0, rtol=1e-3)

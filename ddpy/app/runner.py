@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ddpy.io.case import Case, HoldGap, Move, Phase
+from ddpy.io.case import Case, HoldForce, HoldGap, Move, Phase
 from ddpy.io.checkpoint import (
     CheckpointError,
     read_checkpoint,
@@ -493,7 +493,10 @@ class _Run:
             b = ends[self.segment]
             share = (b - a) / phase.travel
             motion = {m.tool: phase.displacement(m.tool) * share for m in phase.motions
-                      if isinstance(m, Move) or self.segment > 0}
+                      if isinstance(m, Move) or (isinstance(m, HoldGap) and self.segment > 0)}
+            # A ramped force goes on over the segments as over the phase's lead travel.
+            forces = {m.tool: (m.at(a / phase.travel), m.at(b / phase.travel))
+                      for m in phase.motions if isinstance(m, HoldForce)}
             gaps = {m.tool: (m.other, m.gap, self.case.tool(m.tool).facing)
                     for m in phase.motions if isinstance(m, HoldGap)} if self.segment == 0 else {}
             result = FormingResult()
@@ -530,7 +533,8 @@ class _Run:
             resume, self.resume = self.resume, None
             p.run(motion, phase.max_increment * ratio, active=phase.tools,
                   newton=phase.newton, limits=phase.limits, gaps=gaps, result=result,
-                  on_increment=hook, resume=resume, phase=phase.name, frames=False)
+                  on_increment=hook, resume=resume, phase=phase.name, frames=False,
+                  forces=forces)
             if self.halt:
                 self.fields(result)
                 return

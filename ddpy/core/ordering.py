@@ -93,19 +93,24 @@ def nested_dissection(graph: Graph, points: ArrayLike, leaf: int = 48) -> NDArra
 
 
 def equation_order(node_order: ArrayLike, equation_nodes: ArrayLike,
-                   first: ArrayLike | None = None) -> NDArray[np.int64]:
+                   first: ArrayLike | None = None, last: ArrayLike | None = None
+                   ) -> NDArray[np.int64]:
     """Pivot position of every equation (0-based, a permutation) when the equations of each
     node (``equation_nodes[i]``: the node equation i belongs to, e.g. a displacement
     component or a contact multiplier of that node) are eliminated together, nodes in
     ``node_order``. ``first`` (bool per equation): these come before all the others (each
     group in node order), e.g. contact multipliers, which couple to their node only: in
-    the separators they would widen every front."""
+    the separators they would widen every front. ``last`` (bool per equation): these come
+    after all the others, e.g. a force-controlled tool's, which couples to every node it
+    touches."""
     node_order = np.asarray(node_order, dtype=np.int64)
     equation_nodes = np.asarray(equation_nodes, dtype=np.int64)
     rank = np.empty(node_order.size, dtype=np.int64)
     rank[node_order] = np.arange(node_order.size)
     group = (np.zeros(equation_nodes.size, dtype=np.int64) if first is None else
              np.where(np.asarray(first, dtype=bool), 0, 1))
+    if last is not None:
+        group = np.where(np.asarray(last, dtype=bool), 2, group)
     sequence = np.lexsort((np.arange(equation_nodes.size), rank[equation_nodes], group))
     position = np.empty(equation_nodes.size, dtype=np.int64)
     position[sequence] = np.arange(equation_nodes.size)
@@ -113,13 +118,15 @@ def equation_order(node_order: ArrayLike, equation_nodes: ArrayLike,
 
 
 def mesh_solver(symmetry: str, ordering: str, node_order: Callable[[], NDArray[np.int64]],
-                equation_nodes: ArrayLike, first: ArrayLike | None = None) -> MumpsSolver:
+                equation_nodes: ArrayLike, first: ArrayLike | None = None,
+                last: ArrayLike | None = None) -> MumpsSolver:
     """A MUMPS solver with the pivot order ``ordering``: "nested" for the nested dissection
     of the mesh (``node_order()``, computed only then; ``equation_nodes``: the node of every
-    equation; ``first``: equations eliminated before the others, see equation_order), or
+    equation; ``first``, ``last``: equations eliminated before and after the others, see
+    equation_order), or
     one of MUMPS's own orderings by name."""
     if ordering != "nested":
         return MumpsSolver(symmetry, ordering)
     solver = MumpsSolver(symmetry, "amd")
-    solver.set_ordering(equation_order(node_order(), equation_nodes, first))
+    solver.set_ordering(equation_order(node_order(), equation_nodes, first, last))
     return solver

@@ -32,7 +32,7 @@ if TYPE_CHECKING:
     from ddpy.io.toolfile import ToolModel
 
 __all__ = ["AXES", "BlankMaterial", "BoundaryConditions", "Case", "Constraint", "Control",
-           "DeckError", "HoldGap", "Move", "NodeSet", "Phase",
+           "DeckError", "HoldForce", "HoldGap", "Move", "NodeSet", "Phase",
            "Tool", "HEX_FACES", "blank_thickness", "longest_travel", "summarize_alike"]
 
 #: Axis names and their index.
@@ -313,11 +313,30 @@ class HoldGap:
 
 
 @dataclass(frozen=True)
+class HoldForce:
+    """``tool`` presses on the blank with ``force`` N along its axis (minus its facing
+    direction, towards the blank) instead of following a motion: a force-controlled
+    blank-holder. Its displacement along the axis is solved for; with ``ramp`` the force
+    grows from 0 at the start of the phase to ``force`` at its end, else it holds from the
+    first increment (docs/input-format.md, control.dat ``force``)."""
+
+    tool: str
+    force: float
+    ramp: bool = False
+    origin: str = ""
+
+    def at(self, fraction: float) -> float:
+        """The force at ``fraction`` of the phase (N)."""
+        return self.force * fraction if self.ramp else self.force
+
+
+@dataclass(frozen=True)
 class Phase:
     """One stage of the process.
 
     Forming: the ``tools`` listed are active (the others are switched off), each fixed unless
-    it has a :class:`Move` or a :class:`HoldGap`; increments are measured as travel of the
+    it has a :class:`Move`, a :class:`HoldGap` or a :class:`HoldForce`; increments are
+    measured as travel of the
     ``lead`` tool, at most ``max_increment`` and at least ``min_increment`` mm. Springback:
     no tool; the contact forces of the previous phase are released in ``increments`` equal
     steps. Fields are written every ``output_every`` increments (0: never), at each travel
@@ -326,7 +345,7 @@ class Phase:
     name: str
     kind: Literal["forming", "springback"]
     tools: tuple[str, ...] = ()
-    motions: tuple[Move | HoldGap, ...] = ()
+    motions: tuple[Move | HoldGap | HoldForce, ...] = ()
     lead: str | None = None
     max_increment: float = 0.0
     min_increment: float = 0.0
@@ -341,7 +360,7 @@ class Phase:
     def is_springback(self) -> bool:
         return self.kind == "springback"
 
-    def motion(self, tool: str) -> Move | HoldGap | None:
+    def motion(self, tool: str) -> Move | HoldGap | HoldForce | None:
         """The motion of an active tool (None: fixed)."""
         for m in self.motions:
             if m.tool == tool:
@@ -350,7 +369,8 @@ class Phase:
 
     def displacement(self, tool: str) -> NDArray[np.float64]:
         """Prescribed displacement of a tool over the phase (zero when fixed or inactive;
-        a gap-held tool follows its partner: the partner's displacement)."""
+        a gap-held tool follows its partner: the partner's displacement; a force-controlled
+        tool's is solved for: zero here)."""
         m = self.motion(tool)
         if isinstance(m, Move):
             return np.array(m.displacement)
@@ -454,16 +474,24 @@ class Case:
             if p.is_springback:
                 lines.append(f"  phase {p.name}: springback in {p.increments} step(s)")
                 continue
-            moves = ", ".join(
-                f"{mv.tool} by ({', '.join(f'{c:g}' for c in mv.displacement)})"
-                if isinstance(mv, Move) else f"{mv.tool} at gap {mv.gap:g} from {mv.other}"
-                for mv in p.motions)
+            moves = ", ".join(_motion_text(mv) for mv in p.motions)
             estimate = math.ceil(p.travel / p.max_increment - 1e-9) if p.max_increment else 0
             lines.append(f"  phase {p.name}: forming with {', '.join(p.tools)}; {moves}; lead "
                          f"{p.lead}, max increment {p.max_increment:g} mm (>= {estimate} "
                          "increments)")
         lines += [f"  warning: {w}" for w in self.warnings]
         return "\n".join(lines)
+
+
+def _motion_text(motion: Move | HoldGap | HoldForce) -> str:
+    """A phase's motion of a tool as the case summary says it."""
+    if isinstance(motion, Move):
+        return f"{motion.tool} by ({', '.join(f'{c:g}' for c in motion.displacement)})"
+    if isinstance(motion, HoldGap):
+        return f"{motion.tool} at gap {motion.gap:g} from {motion.other}"
+    return (f"{motion.tool} pressed on the blank with {motion.force:g} N along its axis "
+            + ("(ramped from 0 over the phase)" if motion.ramp else "(from the first "
+               "increment)") + ", its position solved for")
 
 
 #: What the blank's elements are, for the case summary (docs/theory/element_choice.md).

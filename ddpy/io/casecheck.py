@@ -23,6 +23,7 @@ from ddpy.io.case import (
     MAX_TRAVEL_EXTENTS,
     Case,
     DeckError,
+    HoldForce,
     HoldGap,
     Move,
     Phase,
@@ -150,7 +151,7 @@ def _facing_errors(case: Case, searches: dict[str, ContactSearch]) -> list[DeckE
 def _phase_starts(case: Case) -> Iterator[tuple[Phase, dict[str, NDArray[np.float64]],
                                                 list[str]]]:
     """Each forming phase, the tools' displacements at its start (from their positions in
-    the tool files) and its active tools whose position is known there: not set by a gap,
+    the tool files) and its active tools whose position is known there: not set by a gap or a force,
     in this phase or an earlier one."""
     position = {t.name: np.zeros(3) for t in case.tools}
     placed = set(position)
@@ -158,7 +159,7 @@ def _phase_starts(case: Case) -> Iterator[tuple[Phase, dict[str, NDArray[np.floa
         if phase.is_springback:
             continue
         for name in phase.tools:
-            if isinstance(phase.motion(name), HoldGap):
+            if isinstance(phase.motion(name), (HoldGap, HoldForce)):
                 placed.discard(name)
         yield phase, position, [n for n in phase.tools if n in placed]
         for name in phase.tools:
@@ -260,8 +261,8 @@ def _start_errors(case: Case, searches: dict[str, ContactSearch]) -> list[DeckEr
     size = mesh.element_size()
     allowed = start_depth_limit(first.limits.strain, size)
     for name in first.tools:
-        if isinstance(first.motion(name), HoldGap):
-            continue  # placed by its gap
+        if isinstance(first.motion(name), (HoldGap, HoldForce)):
+            continue  # placed by its gap, or brought onto the blank by its force
         tool = case.tool(name)
         nodes = tool.contact_nodes(mesh)
         found = searches[name].project(mesh.nodes[nodes])

@@ -106,6 +106,13 @@ REACH_SIZES, REACH_TRAVELS = 2.0, 4.0
 #: Steps in which the forces of tools lifted at the start of a phase are released (each
 #: halved while it fails, down to RELEASE_SMALLEST of the whole release).
 RELEASE_STEPS, RELEASE_SMALLEST = 4, 1.0 / 1024.0
+#: A force-controlled tool that does not touch the blank at the start of a phase is first
+#: brought onto it, this many element sizes into its nearest slave node (a Gauss point
+#: exactly on the tool carries no pressure, and nothing would hold the tool).
+TOUCH_DEPTH = 1e-3
+#: A force-controlled tool moves at most this share of the search's reach in one Newton
+#: step: it never leaves the blank behind in one correction (the core's hold_step).
+HOLD_STEP = 0.5
 #: Most Uzawa updates of the Gauss points' pressure multipliers within one increment
 #: (NewtonSettings.augment; docs/theory/contact.md, "Penetration").
 MAX_AUGMENTATIONS = 6
@@ -379,18 +386,26 @@ class FormingProblem:
             self._solver.close()
         self._solver, self._layout = None, None
 
-    def _prepare(self) -> Layout:
+    def _prepare(self, holds: tuple[int, ...] = ()) -> Layout:
+        """The layout and the analysed MUMPS instance of the present constraints with the
+        force-controlled tools ``holds`` (indices), made again when they change."""
+        if self._layout is not None and tuple(self._layout.holds.tolist()) != holds:
+            self._reset()
         if self._layout is None or self._solver is None:
-            layout = Layout(self.solid, self.tools, self.fixed)
+            layout = Layout(self.solid, self.tools, self.fixed, holds=holds)
             # The contact multipliers first: each couples to its own node only, and
             # eliminated with it they would widen every separator's front (the paper's
             # bending mesh: 5.8e10 flops per factorization with them, 4.4e10 first). A
             # closed stick pair has a zero pivot there (its law does not involve lambda):
             # MUMPS delays it to its node's front.
+            # A force-controlled tool's unknown couples to every node it touches: last.
             solver = mesh_solver("unsymmetric", self.ordering, self.solid.node_order,
                                  np.concatenate([np.flatnonzero(~self.fixed.ravel()) // 3,
-                                                 np.repeat(layout.node, 3)]),
-                                 first=np.arange(layout.n) >= layout.nf)
+                                                 np.repeat(layout.node, 3),
+                                                 np.zeros(layout.holds.size, np.int64)]),
+                                 first=(np.arange(layout.n) >= layout.nf)
+                                 & (np.arange(layout.n) < layout.n - layout.holds.size),
+                                 last=np.arange(layout.n) >= layout.n - layout.holds.size)
             solver.analyse(layout.n, layout.rows, layout.cols)
             self._layout, self._solver = layout, solver
             self._factors = Factors(solver.handle)
@@ -411,6 +426,7 @@ class FormingProblem:
         resume: PhaseProgress | None = None,
         phase: str = "",
         frames: bool = True,
+        forces: Mapping[str, float | tuple[float, float]] | None = None,
     ) -> FormingResult:
         """Move each tool of ``motion`` by its displacement (3,) over the phase, linearly in
         the phase factor; tools not in ``active`` (default: all) are lifted off (their
@@ -433,7 +449,14 @@ class FormingProblem:
         since the start of the run's motion (mm); a true return stops the run there.
         ``resume`` continues a run from the progress such a call received. ``frames``:
         append the blank's fields at the end of the run to ``result.frames``
-        (``fields``)."""
+        (``fields``). ``forces``: tools held under a force instead of a
+        motion, e.g. ``{"holder": 5000.0}``: the holder presses on the blank with 5000 N
+        along its axis, -``facing`` (a blank-holder force); ``(f0, f1)`` ramps it from f0
+        at the start of the phase to f1 at its end. Its displacement along the axis is one
+        more unknown of the Newton loop; at the start of the phase a tool that does not
+        touch the blank is first brought onto it (docs/theory/contact.md,
+        "Force-controlled tools"). A tool that loses the blank stops the run
+        (FormingError)."""
         limits = IncrementLimits() if limits is None else limits
         newton = NewtonSettings() if newton is None else newton
         self._augment = newton.augment
@@ -449,6 +472,7 @@ class FormingProblem:
         moves = {t.name: float_array(motion.get(t.name, (0.0, 0.0, 0.0)),
                                      f"motion of {t.name}", (3,)) for t in self.tools}
         offsets = self._gap_offsets(gaps or {}, moves) if resume is None else resume.offsets
+        ramps = self._hold_ramps(forces or {}, moves, active_set, gaps or {})
         travel = max(float(np.linalg.norm(m)) for m in moves.values())
         if not max_increment > 0.0:
             raise ValueError(f"max_increment must be > 0, got {max_increment}")
@@ -462,12 +486,17 @@ class FormingProblem:
             result.contacts.setdefault(t.name, [])
             result.contact_states.setdefault(t.name, [])
             result.penetration.setdefault(t.name, [])
-        layout = self._prepare()
+        layout = self._prepare(tuple(sorted(ramps)))
+        holders = [self.tools[k].name for k in layout.holds]
+        ramp = np.array([ramps[k] for k in layout.holds]).reshape(-1, 2)
         on = np.concatenate([np.full(t.slaves.size, t.name in active_set) for t in self.tools])
-        start = {name: p.copy() for name, p in self.position.items()}
-        nominal = min(1.0, max_increment / travel) if travel > 0.0 else 1.0
         self._reach = max(REACH_SIZES * self.size,
                           REACH_TRAVELS * min(max_increment, travel))
+        if resume is None:
+            for k in layout.holds:
+                self._touch_down(layout, int(k))
+        start = {name: p.copy() for name, p in self.position.items()}
+        nominal = min(1.0, max_increment / travel) if travel > 0.0 else 1.0
         factor, step, cuts_in_row, reason = 0.0, nominal, 0, "max"
         redos = 0  # redos at a release of the present increment
         last_du: NDArray[np.float64] | None = None
@@ -487,6 +516,8 @@ class FormingProblem:
                                   np.empty(0))[1]
         # (Gauss-point contact that carries a force sits in the tool by its penalty's depth.)
         holding = self._gauss & (np.abs(self.force).sum(axis=1) > 0.0)
+        # (A force-controlled tool was just brought onto the blank: it presses as it must.)
+        holding |= np.isin(layout.tool_of, layout.holds)
         depth = np.where(on & np.isfinite(self._gap[0]) & ~holding, -self._gap[0], -np.inf)
         worst = int(np.argmax(depth)) if depth.size else 0
         if depth.size and depth[worst] > start_depth_limit(limits.strain, self.size):
@@ -501,7 +532,7 @@ class FormingProblem:
         released: tuple[list, list] = ([], [])
         if resume is None:
             released = self._release(layout, on, initial, tol_force, tol_disp,
-                                     max_iterations, result)
+                                     max_iterations, result, ramp[:, 0])
         while factor < 1.0 - 1e-12:
             if limits.first_touch and reason != "cut":
                 touch = self._touch_factor(layout, on, moves, step, last_du, limits)
@@ -517,6 +548,9 @@ class FormingProblem:
             positions = {n: start[n] + target * moves[n] for n in start}
             for name, (other, offset) in offsets.items():
                 positions[name] = positions[other] + offset
+            for name in holders:  # from where the last increment left it
+                positions[name] = self.position[name].copy()
+            pressing = ramp[:, 0] + target * (ramp[:, 1] - ramp[:, 0])
             # A tolerance of 0 is taken as 1e-6: a point landed on the surface lies within
             # rounding of it, and at 0 it would count as elastic and be landed again.
             landing = None if (limits.yield_tolerance is None or
@@ -529,7 +563,9 @@ class FormingProblem:
             size_ratio = nominal / (target - factor)
             outcome = self._increment(layout, positions, on, tol_force, tol_disp,
                                       max_iterations, result, landing, touching, guess,
-                                      careful=careful, size_ratio=size_ratio)
+                                      careful=careful, size_ratio=size_ratio,
+                                      hold_force=pressing)
+            self._check_hold(outcome, target, travel, pressing, layout, result)
             if outcome.failure and last_du is None and not careful:
                 # The first increment of a phase starts with the blank lying on its tools:
                 # a second start keeps open the touching pairs of the tools at rest that
@@ -543,7 +579,8 @@ class FormingProblem:
                 outcome = self._increment(layout, positions, on, tol_force,
                                           tol_disp, max_iterations, result, landing,
                                           touching, guess, careful=True,
-                                          size_ratio=size_ratio)
+                                          size_ratio=size_ratio, hold_force=pressing)
+                self._check_hold(outcome, target, travel, pressing, layout, result)
             if outcome.landing < 1.0:  # an elastic point would overshoot the yield stress
                 step = max(step * outcome.landing, limits.min_fraction * nominal)
                 reason = "yield"
@@ -568,11 +605,14 @@ class FormingProblem:
                         result)
                 step, reason = step * cutback, "cut"
                 continue
-            depth = self._penetration(layout, outcome, on, positions)
+            depth = self._penetration(layout, outcome, on, self._placed(layout, positions,
+                                                                        outcome))
             if newton.augment:
                 outcome, depth = self._augmented(
                     outcome, depth, newton.penetration * self.thickness, layout, positions,
-                    on, tol_force, tol_disp, max_iterations, result, touching, size_ratio)
+                    on, tol_force, tol_disp, max_iterations, result, touching, size_ratio,
+                    pressing)
+            positions = self._placed(layout, positions, outcome)
             u, state, force, in_contact, gap = (outcome.u, outcome.state, outcome.force,
                                                 outcome.in_contact, outcome.gap)
             residuals, relative = outcome.residuals, outcome.relative
@@ -643,13 +683,15 @@ class FormingProblem:
     def _release(self, layout: Layout, on: NDArray[np.bool_],
                  positions: Mapping[str, NDArray[np.float64]], tol_force: float,
                  tol_disp: float, max_iterations: int, result: FormingResult,
-                 ) -> tuple[list, list]:
+                 hold_force: NDArray[np.float64] | None = None) -> tuple[list, list]:
         """Let go of the blank where tools that held it are lifted off (pairs not ``on``
         that carry a force): their forces become nodal loads, brought to zero in
         RELEASE_STEPS steps (halved while one fails) with the other tools at
         ``positions``, as springback does with all of them. Lifting them in one increment
         leaves the blank out of balance by their whole force, which the first increment
-        of the phase has to absorb whatever its size: a cut cannot help it. Returns the
+        of the phase has to absorb whatever its size: a cut cannot help it. The
+        force-controlled tools press with ``hold_force`` meanwhile (and move to where each
+        step leaves them). Returns the
         residual norms and the relative residuals and corrections of the steps' converged
         iterations (none when nothing is lifted)."""
         lifted = ~on & (np.abs(self.force).sum(axis=1) > 0.0)
@@ -670,7 +712,8 @@ class FormingProblem:
                                           max_iterations, result,
                                           touching=_Touching(TOUCHING * self.size, True),
                                           guess=guess, exact=True,
-                                          size_ratio=1.0 / (RELEASE_STEPS * size))
+                                          size_ratio=1.0 / (RELEASE_STEPS * size),
+                                          hold_force=hold_force)
                 if outcome.failure:
                     if size / 2.0 < RELEASE_SMALLEST:
                         raise FormingError(f"release of the lifted tools at {done:.4g} of "
@@ -683,6 +726,9 @@ class FormingProblem:
                 relative += list(outcome.relative)[skip:]
                 last_du = (outcome.u - self.u) / (target - done)
                 self._take(outcome)
+                positions = self._placed(layout, positions, outcome)
+                for k in layout.holds:
+                    self.position[self.tools[k].name] = positions[self.tools[k].name]
                 done = target
                 size = min(2.0 * size, 1.0 / RELEASE_STEPS)
         finally:
@@ -727,7 +773,8 @@ class FormingProblem:
     def _augmented(self, outcome: Trial, depth: list[float], limit: float, layout: Layout,
                    positions: Mapping[str, NDArray[np.float64]], on: NDArray[np.bool_],
                    tol_force: float, tol_disp: float, max_iterations: int,
-                   result: FormingResult, touching: _Touching, size_ratio: float = 1.0
+                   result: FormingResult, touching: _Touching, size_ratio: float = 1.0,
+                   hold_force: NDArray[np.float64] | None = None
                    ) -> tuple[Trial, list[float]]:
         """The converged ``outcome`` of an increment, whose penetration per tool is
         ``depth`` (``_penetration``), with the slave nodes of its Gauss-point tools at most
@@ -744,7 +791,7 @@ class FormingProblem:
             again = self._increment(layout, positions, on, tol_force, tol_disp,
                                     max_iterations, result, touching=touching,
                                     guess=outcome.u, pressure=outcome.pressure,
-                                    size_ratio=size_ratio)
+                                    size_ratio=size_ratio, hold_force=hold_force)
             if again.failure or again.landing < 1.0:
                 _log.info("an augmentation of the Gauss points' pressures failed: %s",
                           again.failure or "a yield landing")
@@ -753,8 +800,82 @@ class FormingProblem:
             again.residuals = list(outcome.residuals) + list(again.residuals)[1:]
             again.relative = list(outcome.relative) + list(again.relative)[1:]
             outcome = again
-            depth = self._penetration(layout, outcome, on, positions)
+            depth = self._penetration(layout, outcome, on,
+                                      self._placed(layout, positions, outcome))
         return outcome, depth
+
+    def _hold_ramps(self, forces: Mapping[str, float | tuple[float, float]],
+                    moves: Mapping[str, NDArray[np.float64]], active: set[str],
+                    gaps: Mapping[str, object]) -> dict[int, tuple[float, float]]:
+        """The force-controlled tools of a phase (their indices) with the force each presses
+        with at its start and its end (N), checked: known and active tools with a facing
+        direction, neither moved nor held at a gap, forces finite and >= 0."""
+        index = {t.name: i for i, t in enumerate(self.tools)}
+        ramps: dict[int, tuple[float, float]] = {}
+        for name, value in forces.items():
+            if name not in index:
+                raise ValueError(f"force on an unknown tool: {name}")
+            if name not in active:
+                raise ValueError(f"tool {name} is held under a force: it must be active")
+            if np.any(moves[name] != 0.0) or name in gaps:
+                raise ValueError(f"tool {name} is held under a force: it cannot also be moved "
+                                 "or held at a gap")
+            if self.tools[index[name]].facing is None:
+                raise ValueError(f"tool {name} has no facing direction: a force along it "
+                                 "cannot be held")
+            pair = (value, value) if np.ndim(value) == 0 else tuple(value)  # type: ignore[arg-type]
+            # (A tool pressing with nothing at the end of an increment holds nothing.)
+            if len(pair) != 2 or not all(np.isfinite(f) and f >= 0.0 for f in pair) or \
+                    not pair[1] > 0.0:
+                raise ValueError(f"force of {name} must be a finite value > 0 (N), or two "
+                                 f"(from >= 0 to > 0), got {value!r}")
+            ramps[index[name]] = (float(pair[0]), float(pair[1]))
+        return ramps
+
+    def _touch_down(self, layout: Layout, k: int) -> None:
+        """Bring force-controlled tool ``k`` onto the blank along its axis, TOUCH_DEPTH
+        element sizes into its nearest slave node (its slave nodes projected on it within
+        the search's reach, those inside a patch: the gaps along its normals there),
+        unless its pairs already carry a force."""
+        tool = self.tools[k]
+        pairs = slice(layout.first[k], layout.first[k + 1])
+        if np.abs(self.force[pairs]).sum() > 0.0:
+            return
+        axis = layout.hold_axis[int(np.flatnonzero(layout.holds == k)[0])]
+        x = self.solid.mesh.nodes + self.u
+        found = tool.search.project(x[tool.slaves], self.position[tool.name], reach=self._reach)
+        gap, closing = found.distance, found.normal @ axis
+        seen = (found.status == INSIDE) & (closing > 0.5)
+        if not seen.any():
+            raise ValueError(f"force-controlled tool {tool.name} does not reach the blank: no "
+                             f"slave node lies within the contact search's reach "
+                             f"({self._reach:.3g} mm) of it along its axis; place it on the "
+                             "blank")
+        travel = float(np.min(gap[seen] / closing[seen])) + TOUCH_DEPTH * self.size
+        self.position[tool.name] = self.position[tool.name] + travel * axis
+
+    def _placed(self, layout: Layout, positions: Mapping[str, NDArray[np.float64]],
+                outcome: Trial) -> dict[str, NDArray[np.float64]]:
+        """``positions`` with each force-controlled tool moved by its shift of ``outcome``."""
+        placed = dict(positions)
+        if outcome.shift is not None:
+            for h, k in enumerate(layout.holds):
+                name = self.tools[k].name
+                placed[name] = positions[name] + outcome.shift[h] * layout.hold_axis[h]
+        return placed
+
+    def _check_hold(self, outcome: Trial, target: float, travel: float,
+                    pressing: NDArray[np.float64], layout: Layout,
+                    result: FormingResult) -> None:
+        """Stop the run where a force-controlled tool lost the blank in ``outcome``: a cut
+        cannot give it back what holds it, and it must never fly off."""
+        if outcome.hold is None:
+            return
+        k, why = outcome.hold
+        force = pressing[int(np.flatnonzero(layout.holds == k)[0])]
+        raise FormingError(f"{_trial(target, None, travel)}: force-controlled tool "
+                           f"'{self.tools[k].name}' lost the blank pressing with {force:.6g} "
+                           f"N: {why}; the phase stops here", result)
 
     def _gap_offsets(self, gaps: Mapping[str, tuple[str, float, ArrayLike]],
                      moves: Mapping[str, NDArray[np.float64]],
@@ -1076,22 +1197,25 @@ class FormingProblem:
     def _contact(self, layout: Layout, x: NDArray[np.float64], x_n: NDArray[np.float64],
                  positions: Mapping[str, NDArray[np.float64]], on: NDArray[np.bool_],
                  force: NDArray[np.float64], residual: NDArray[np.float64],
-                 values: NDArray[np.float64], touching: _Touching | None = None
+                 values: NDArray[np.float64], touching: _Touching | None = None,
+                 hold_force: NDArray[np.float64] | None = None
                  ) -> tuple[NDArray[np.int32], tuple[NDArray[np.float64], NDArray[np.float64]]]:
         """Contact of every pair at positions x, in one call to the core: the search of each
         active tool (with the blank's normals at its slaves as the facing filter), the law
         and the touching predictor of the first iteration (docs/theory/contact.md). It
         writes the law's rows of ``residual`` and subtracts the pairs' forces from its
         equilibrium rows (which hold fint - external), and writes the contact entries of
-        ``values`` (none when it is empty: a look at the gaps). Returns the pairs' states,
-        and their gaps (inf: no patch) and normals."""
+        ``values`` (none when it is empty: a look at the gaps), and the rows and entries of
+        the force-controlled tools, pressing with ``hold_force``. Returns the pairs'
+        states, and their gaps (inf: no patch) and normals."""
         residual[:], values[:], state, gap, normal, _, _, status = _core.forming_contact(
             x.ravel(), x_n.ravel(), layout.fixed_flags, *self._tool_arguments(positions),
             0.0 if touching is None else touching.distance,
             1 if touching is None or touching.resting else 0, layout.first, layout.node,
             layout.patch_first, layout.patch_node, on.astype(np.int32), force.ravel(), self.r,
             self.mu, layout.held_flags, self.traction.ravel(), self.pressure,
-            layout.eqn, layout.nf, layout.k_slots, residual, values)
+            layout.eqn, layout.nf, layout.k_slots, residual, values,
+            *layout.hold_arguments(hold_force))
         if status:
             raise RuntimeError("forming_contact: the tools' packed arrays or the layout do not "
                                "fit each other (a bug in the caller)")
@@ -1099,15 +1223,23 @@ class FormingProblem:
 
     def linearization(self, u: ArrayLike | None = None, force: ArrayLike | None = None,
                       positions: Mapping[str, ArrayLike] | None = None,
-                      touching: float = 0.0) -> Linearization:
+                      touching: float = 0.0, holds: Mapping[str, float] | None = None
+                      ) -> Linearization:
         """The equations the Newton loop solves, at displacements ``u`` (n, 3) and pair
         forces ``force`` (pairs, 3) (default: the present ones) with the tools at
         ``positions`` (default: where they are), in the increment from the present
         converged state: the residual and its Jacobian (the same core calls as an
         evaluation of the loop; every pair takes part). With ``touching`` > 0 the pairs
-        within that gap count as closed, as in an increment's first iteration. Raises
-        ElementError where an element is inverted."""
-        layout = self._layout or Layout(self.solid, self.tools, self.fixed)
+        within that gap count as closed, as in an increment's first iteration. ``holds``:
+        force-controlled tools and their forces (N); their displacements along their axes
+        are the last unknowns, zero at ``positions``, their force balances the last rows.
+        Raises ElementError where an element is inverted."""
+        index = {t.name: i for i, t in enumerate(self.tools)}
+        chosen = sorted(index[name] for name in holds or {})
+        layout = self._layout if self._layout is not None and \
+            self._layout.holds.tolist() == chosen else \
+            Layout(self.solid, self.tools, self.fixed, holds=chosen)
+        hold_force = np.array([(holds or {})[self.tools[k].name] for k in chosen], dtype=float)
         n, npair = self.solid.mesh.n_nodes, layout.node.size
         u = self.u if u is None else float_array(u, "u", (n, 3))
         force = self.force if force is None else float_array(force, "force", (npair, 3))
@@ -1120,9 +1252,10 @@ class FormingProblem:
         on = np.ones(npair, dtype=bool)
         state, _ = self._contact(layout, self.solid.mesh.nodes + u,
                                  self.solid.mesh.nodes + self.u, where, on, force, residual,
-                                 values, _Touching(touching) if touching > 0.0 else None)
+                                 values, _Touching(touching) if touching > 0.0 else None,
+                                 hold_force)
         nodes = np.concatenate([np.flatnonzero(~self.fixed.ravel()) // 3,
-                                np.repeat(layout.node, 3)])
+                                np.repeat(layout.node, 3), np.full(layout.holds.size, -1)])
         return Linearization(residual, layout.rows, layout.cols, values, state, nodes,
                              layout.nf)
 
@@ -1134,7 +1267,8 @@ class FormingProblem:
                    guess: NDArray[np.float64] | None = None,
                    careful: bool = False, exact: bool = False,
                    pressure: NDArray[np.float64] | None = None,
-                   size_ratio: float = 1.0) -> Trial:
+                   size_ratio: float = 1.0,
+                   hold_force: NDArray[np.float64] | None = None) -> Trial:
         """One increment trial, the Newton iterations run by the core (forming_increment,
         fortran/solver/ddpy_forming_newton.f90): the new state, or (with
         ``yield_tolerance``) the fraction of the increment at which the first elastic Gauss
@@ -1151,7 +1285,8 @@ class FormingProblem:
         search kept (springback). ``pressure``: the Gauss points' pressure multipliers
         (default: the last converged pressures). ``size_ratio``: the largest increment over
         this one's size; the correction is judged against the increment's motion scaled up
-        by it, the motion of a whole increment (Loop.size_ratio).
+        by it, the motion of a whole increment (Loop.size_ratio). ``hold_force``: the force
+        each force-controlled tool of the layout presses with (N; default zero).
 
         The semi-smooth Newton step is globalized by backtracking until Deuflhard's natural
         monotonicity test holds (the simplified correction at the trial point, solved with
@@ -1172,7 +1307,9 @@ class FormingProblem:
                     search=SEARCH_NONE if careful else SEARCH_MONOTONICITY,
                     whole_step=WHOLE_STEP, size_ratio=max(1.0, size_ratio))
         pairs = Pairs(self._tool_arguments(positions), on, self.r, self.mu, self.force,
-                      self.traction, self.pressure if pressure is None else pressure)
+                      self.traction, self.pressure if pressure is None else pressure,
+                      np.zeros(layout.holds.size) if hold_force is None else hold_force,
+                      HOLD_STEP * self._reach)
         trial = increment(self.solid, layout, self._factors, self.state, self.u,
                           self.external, self.u, guess, loop, pairs)
         evaluations, corrections, factorizations, krylov, fallbacks = trial.counters

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from ddpy import _core
 from ddpy.core.linalg import LinearSolverError, RowStructure, row_structure
@@ -25,7 +25,7 @@ from ddpy.model.solid import ElementError, Solid, SolidState, _flat
 from ddpy.model.tool import RigidTool
 
 #: What the core's forming_increment returns.
-CONVERGED, LANDING, ELEMENT, NOT_FINITE, SOLVER, STALLED = range(6)
+CONVERGED, LANDING, ELEMENT, NOT_FINITE, SOLVER, STALLED, HOLD = range(7)
 #: Line searches of the core's loop: none (whole steps, halved only where an element
 #: fails); Deuflhard's natural monotonicity test with the residual-norm fallback (forming:
 #: the contact law has no potential); the energy line search (a problem with a potential).
@@ -39,6 +39,13 @@ PARTS = ("assembly", "contact", "factorization", "solve")
 def _join(parts: Sequence[NDArray], dtype: type) -> NDArray:
     """The arrays one after another (an empty array of dtype for none)."""
     return np.concatenate(parts).astype(dtype) if parts else np.zeros(0, dtype=dtype)
+
+
+def _padded(values: ArrayLike, dtype: type) -> NDArray:
+    """``values`` as a flat array of dtype at least one long (a zero after an empty one):
+    f2py passes no empty array."""
+    flat = np.asarray(values, dtype=dtype).ravel()
+    return flat if flat.size else np.zeros(1, dtype=dtype)
 
 
 def contact_faces(tools: Sequence[RigidTool], mesh: HexMesh) -> list[NDArray[np.int32]]:
@@ -115,10 +122,13 @@ class Layout:
     without tools, whose contact blocks are not symmetric). Each pair's law depends on the
     positions of its patch of nodes (``patch_first``, ``patch_node``): its own node for a
     node-to-surface tool, every node of the tool's contact faces at its node for a
-    surface-to-surface or Gauss-point one (its own node alone where it is on none)."""
+    surface-to-surface or Gauss-point one (its own node alone where it is on none).
+    ``holds``: the force-controlled tools (indices into ``tools``), each pressing along
+    ``-facing``: its displacement along that axis is one more unknown after the pairs'
+    forces, its equation the balance of its pairs' forces with the prescribed force."""
 
     def __init__(self, solid: Solid, tools: Sequence[RigidTool], fixed: NDArray[np.bool_],
-                 symmetric: bool = False) -> None:
+                 symmetric: bool = False, holds: Sequence[int] = ()) -> None:
         if symmetric and tools:
             raise ValueError("a symmetric layout has no tools: the contact law's Jacobian "
                              "is not symmetric")
@@ -196,6 +206,65 @@ class Layout:
         #: the coupling entries' values: -1, 0 for an eliminated multiplier
         self.coupling_values = np.where(np.broadcast_to(self.eliminated[:, None], equ.shape),
                                         0.0, -1.0)[coupling]
+        self._hold_entries(tools, holds, lam, equ, into, pi, ii)
+
+    def _hold_entries(self, tools: Sequence[RigidTool], holds: Sequence[int],
+                      lam: NDArray, equ: NDArray, into: NDArray, pi: NDArray, ii: NDArray
+                      ) -> None:
+        """The unknowns, equations and Jacobian entries of the force-controlled tools
+        ``holds``, after the contact blocks in the order the core writes them
+        (forming_increment): per tool its column (3 law rows per pair; a Gauss-point pair's
+        free equilibrium rows), its row (a . lambda_p of each pair: the constant a_j at
+        lambda_p,j, or for a Gauss-point pair -a_i times each of its -dF_i/dx entries, the
+        source), its diagonal. ``lam``, ``equ``: the pairs' law and equilibrium rows;
+        ``into``, ``pi``, ``ii``: the rows, pairs and components of the patch entries."""
+        for k in holds:
+            if tools[k].facing is None:
+                raise ValueError(f"tool {tools[k].name} has no facing direction: a force "
+                                 "along it cannot be held")
+        #: the force-controlled tools (indices) and the axes they press along (-facing)
+        self.holds = np.asarray(holds, dtype=np.int32)
+        self.hold_axis = np.array([-np.asarray(tools[k].facing, dtype=float) for k in holds]
+                                  ).reshape(-1, 3)
+        first_patch = self.k_slots + self.n_coupling  # the patch entries' first slot
+        rows, cols, source, coef, first = [], [], [], [], [0]
+        for h, k in enumerate(self.holds):
+            row = self.nf + 3 * self.node.size + h
+            pairs = np.arange(self.first[k], self.first[k + 1])
+            column = np.where(self.eliminated[pairs, None], equ[pairs], lam[pairs])
+            column = column[column >= 0]
+            rows.append(column)
+            cols.append(np.full(column.size, row))
+            a = self.hold_axis[h]
+            plain = pairs[~self.eliminated[pairs]]
+            slots = np.flatnonzero(np.isin(pi, pairs) & self.eliminated[pi])
+            src = np.concatenate([np.full(3 * plain.size, -1), first_patch + slots])
+            source.append(src)
+            coef.append(np.concatenate([np.tile(a, plain.size), -a[ii[slots]]]))
+            rows.append(np.full(src.size + 1, row))
+            cols.append(np.concatenate([lam[plain].ravel(), self.cols[first_patch + slots],
+                                        [row]]))
+            first.append(first[-1] + src.size)
+        self.n += self.holds.size
+        self.rows = np.concatenate([self.rows, *rows]).astype(np.int32)
+        self.cols = np.concatenate([self.cols, *cols]).astype(np.int32)
+        #: per force-controlled tool, its row's entries in hold_source and hold_coef
+        self.hold_first = np.asarray(first, dtype=np.int32)
+        self.hold_source = _join(source, np.int32)
+        self.hold_coef = _join(coef, np.float64)
+
+    def hold_arguments(self, force: ArrayLike | None = None) -> tuple:
+        """The force-controlled tools as the core's forming_contact and forming_increment
+        take them, pressing with ``force`` (N, per tool; default zero): their count, tools
+        (1-based), axes and forces, and their rows' sources (arrays at least one long)."""
+        force = np.zeros(self.holds.size) if force is None else np.asarray(force, dtype=float)
+        if force.shape != self.holds.shape:
+            raise ValueError(f"{self.holds.size} force-controlled tool(s) need as many "
+                             f"forces, got {force.size}")
+        return (self.holds.size, _padded(self.holds + 1, np.int32),
+                _padded(self.hold_axis, np.float64), _padded(force, np.float64),
+                self.hold_first, self.hold_source.size, _padded(self.hold_source, np.int32),
+                _padded(self.hold_coef, np.float64))
 
     @cached_property
     def by_rows(self) -> RowStructure:
@@ -341,6 +410,11 @@ class Trial:
     #: the normal pressure of every Gauss point of Gauss-point contact (points,)
     pressure: NDArray[np.float64] | None = None
     gap: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
+    #: per force-controlled tool (Layout.holds), its displacement along its axis from
+    #: where the increment took it
+    shift: NDArray[np.float64] | None = None
+    #: the force-controlled tool that lost its hold on the blank (its index), with why
+    hold: tuple[int, str] | None = None
     counters: tuple[int, ...] = (0, 0, 0, 0, 0)
     timings: dict[str, float] = field(default_factory=dict)
 
@@ -362,7 +436,9 @@ class Pairs:
     friction ``mu`` and contact forces at the converged state, and the tangential traction
     of each Gauss point of Gauss-point contact there (``traction_n``, (points, 3)) with its
     pressure multiplier (``pressure_n``, (points,): the augmented Lagrangian's, 0 for the
-    plain penalty)."""
+    plain penalty). ``hold_force``: per force-controlled tool (Layout.holds), the force
+    it presses on the blank with at the increment's end (N); ``hold_step``: the most it
+    may move in one Newton step (mm)."""
 
     tools: tuple
     on: NDArray[np.bool_]
@@ -371,6 +447,8 @@ class Pairs:
     force_n: NDArray[np.float64]
     traction_n: NDArray[np.float64]
     pressure_n: NDArray[np.float64]
+    hold_force: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
+    hold_step: float = 0.0
 
 
 def increment(solid: Solid, layout: Layout, factors: Factors, state: SolidState,
@@ -410,11 +488,11 @@ def increment(solid: Solid, layout: Layout, factors: Factors, state: SolidState,
             u_n.ravel(),
             external.ravel(), prescribed.ravel(), start, settings, isettings, factored,
             *buffers)
-        force = pair_state = gap = normal = traction = pressure = np.zeros(0)
+        force = pair_state = gap = normal = traction = pressure = shift = np.zeros(0)
     else:
         (factored, reuse_next, u, force, fint, stress, ep, strain, axes, back, pair_state, gap,
          normal, traction, pressure, niter, history, counters, spent, outcome, info,
-         detail) = \
+         detail, shift) = \
             _core.forming_increment(
                 *solid_state, layout.n_coupling, layout.rows.size, *layout.by_rows,
                 *pairs.tools, loop.touching, layout.first, layout.node, layout.patch_first,
@@ -423,7 +501,9 @@ def increment(solid: Solid, layout: Layout, factors: Factors, state: SolidState,
                 u_n.ravel(),
                 np.where(pairs.on[:, None], pairs.force_n, 0.0).ravel(), external.ravel(),
                 prescribed.ravel(), start, settings, isettings, factored, reuse_next,
-                *buffers)
+                *buffers, *layout.hold_arguments(pairs.hold_force), pairs.hold_step,
+                np.zeros(max(layout.holds.size, 1)))
+        shift = shift[:layout.holds.size]
         factors.reuse_next = bool(reuse_next[0])
     factors.factored = bool(factored[0])
     history = history.reshape(-1, 4)[:niter]
@@ -441,7 +521,7 @@ def increment(solid: Solid, layout: Layout, factors: Factors, state: SolidState,
         return Trial(u=u.reshape(-1, 3), state=converged, force=force.reshape(-1, 3),
                      fint=fint.reshape(-1, 3), in_contact=pair_state,
                      gap=(gap, normal.reshape(-1, 3)), traction=traction.reshape(-1, 3),
-                     pressure=pressure, **work)
+                     pressure=pressure, shift=shift, **work)
     if outcome == LANDING:
         return Trial(landing=float(detail[0]), **work)
     if outcome == ELEMENT:
@@ -452,6 +532,14 @@ def increment(solid: Solid, layout: Layout, factors: Factors, state: SolidState,
         factors.factored = False
         return Trial(str(LinearSolverError(int(info[2]), "factorization or solve")),
                      solver=True, **work)
+    if outcome == HOLD:
+        tool = int(info[0]) - 1  # the tool's index
+        why = ("nothing holds it along its axis: no slave node is in contact with it"
+               if int(info[1]) == 1 else
+               "it moved farther than the contact search's reach in one increment: the "
+               "blank does not carry its force")
+        return Trial(f"force-controlled tool {tool} lost the blank: {why}",
+                     hold=(tool, why), **work)
     if outcome == STALLED:
         return Trial(stalled(loop.max_iterations, float(detail[0]), float(detail[1]),
                              loop.force_tolerance, loop.displacement_tolerance,

@@ -5,7 +5,7 @@ module ddpy_api_forming
   use ddpy_kinds, only: wp
   use ddpy_forming, only: forming_contact, tool_fields, max_face_order, surface_gauss
   use ddpy_forming_newton, only: forming_increment, newton_settings, newton_integer_settings, &
-                                 penetration_step, gmres
+                                 penetration_step, gmres, hold_equations
   use ddpy_material, only: material_prop_count
   use ddpy_solid_assembly, only: kind_hexahedron, kind_solid_shell
   implicit none
@@ -127,11 +127,15 @@ contains
                                  pair_node, npatch, patch_first, patch_node, on, force, r, mu, &
                                  held, traction_n, pressure_n, eqn, nf, k_slots, nvalues, &
                                  residual, values, state, gap, normal, traction, pressure, &
-                                 status) &
+                                 status, nhold, hold_tool, hold_axis, hold_target, &
+                                 hold_first, nhold_src, hold_source, hold_coef) &
     bind(C, name="ddpy_forming_contact")
     integer(c_int), value, intent(in) :: nnode, ntool, ncoef, ndeg, ntri, ntree, nframe, &
                                          nstart, ngrid, nface, npoint, resting, npair, npatch, &
-                                         nf, k_slots, nvalues
+                                         nf, k_slots, nvalues, nhold, nhold_src
+    integer(c_int), intent(in) :: hold_tool(nhold), hold_first(nhold + 1), &
+                                  hold_source(nhold_src)
+    real(c_double), intent(in) :: hold_axis(3, nhold), hold_target(nhold), hold_coef(nhold_src)
     real(c_double), value, intent(in) :: reach, size, touching
     real(c_double), intent(in) :: x(3, nnode), x_n(3, nnode), tol(ntool), coef(ncoef), &
                                   tree_lower(3*ntree), tree_upper(3*ntree), frame(9*nframe), &
@@ -148,23 +152,33 @@ contains
                                   tool_first(ntool + 1), pair_node(npair), on(npair), &
                                   patch_first(npair + 1), patch_node(npatch), &
                                   held(3, npair), eqn(3, nnode)
-    real(c_double), intent(inout) :: residual(nf + 3*npair), values(nvalues)
+    real(c_double), intent(inout) :: residual(nf + 3*npair + nhold), values(nvalues)
     integer(c_int), intent(out) :: state(npair), status
     real(c_double), intent(out) :: gap(npair), normal(3, npair), traction(3, npoint), &
                                    pressure(npoint)
     integer, allocatable :: lock(:), found(:)
+    real(wp), allocatable :: dc_dt(:, :, :), lambda(:, :), stiffness(:)
+    logical, allocatable :: eliminated(:)
+    integer :: entries, contact_values, t, p
     state = 0
     gap = 0.0_wp
     normal = 0.0_wp
     traction = 0.0_wp
     pressure = 0.0_wp
     status = 1
+    entries = hold_entries(ntool, table, npair, tool_first, pair_node, nnode, eqn, nhold, &
+                           hold_tool, hold_first, nhold_src)
+    if (entries < 0) return
+    contact_values = 0
+    if (nvalues > 0) contact_values = nvalues - entries
+    if (any(hold_source >= contact_values) .and. nvalues > 0) return
     if (.not. layout_ok(nnode, ntool, table, ncoef, ndeg, ntri, ntree, nframe, nstart, ngrid, &
                         grid_start, face_first, nface, faces, corner, npoint, npair, &
                         tool_first, pair_node, npatch, patch_first, patch_node, eqn, &
-                        k_slots, nvalues)) return
+                        k_slots, contact_values)) return
     status = 0
-    allocate(lock(npair + npoint), found(npair + npoint))
+    allocate(lock(npair + npoint), found(npair + npoint), dc_dt(3, 3, npair), &
+             lambda(3, npair), eliminated(npair), stiffness(nhold))
     lock = 0  ! no pair held: a plain search
     call forming_contact(nnode, x, x_n, fixed, ntool, table, tol, coef, degrees, triangle, &
                          tree_lower, tree_upper, tree_child, frame, frame_lower, frame_upper, &
@@ -172,9 +186,58 @@ contains
                          face_first, nface, faces, corner, npoint, face_weight, penalty, &
                          positions, positions_n, reach, size, touching, resting, npair, tool_first, &
                          pair_node, npatch, patch_first, patch_node, on, force, r, mu, held, &
-                         traction_n, pressure_n, lock, eqn, nf, k_slots, nvalues, residual, &
-                         values, state, gap, normal, traction, pressure, found)
+                         traction_n, pressure_n, lock, eqn, nf, k_slots, contact_values, &
+                         residual(1:nf + 3*npair), values, state, gap, normal, traction, &
+                         pressure, found, dc_dt)
+    if (nhold == 0 .or. nvalues == 0) return
+    ! The tools' equations as the Newton loop has them: a Gauss-point pair's lambda is F(x)
+    ! (its law's residual is lambda - F).
+    lambda = force
+    do t = 1, ntool
+      do p = tool_first(t) + 1, tool_first(t + 1)
+        eliminated(p) = table(11, t) == 2
+        if (eliminated(p)) lambda(:, p) = force(:, p) - residual(nf + 3*p - 2:nf + 3*p)
+      end do
+    end do
+    call hold_equations(nnode, ntool, npair, tool_first, pair_node, on, eqn, eliminated, &
+                        lambda, dc_dt, nhold, hold_tool, hold_axis, hold_target, hold_first, &
+                        nhold_src, hold_source, hold_coef, contact_values, &
+                        residual(nf + 3*npair + 1:), values, stiffness)
   end subroutine api_forming_contact
+
+  !> The Jacobian entries of the force-controlled tools (forming_increment: per tool its
+  !> column, row and diagonal), or -1 where they do not fit: a tool out of range or given
+  !> twice, the rows' entries not in order.
+  integer function hold_entries(ntool, table, npair, tool_first, pair_node, nnode, eqn, &
+                                nhold, hold_tool, hold_first, nhold_src) result(entries)
+    integer(c_int), intent(in) :: ntool, npair, nnode, nhold, nhold_src
+    integer(c_int), intent(in) :: table(tool_fields, ntool), tool_first(ntool + 1), &
+                                  pair_node(npair), eqn(3, nnode), hold_tool(nhold), &
+                                  hold_first(nhold + 1)
+    integer :: k, p, t
+    entries = -1
+    if (nhold < 0 .or. any(hold_tool < 1) .or. any(hold_tool > ntool)) return
+    if (hold_first(1) /= 0 .or. hold_first(nhold + 1) /= nhold_src) return
+    if (any(hold_first(2:) < hold_first(:nhold))) return
+    if (any(tool_first(2:) < tool_first(:ntool)) .or. tool_first(ntool + 1) /= npair) return
+    if (any(pair_node < 0) .or. any(pair_node >= nnode)) return
+    entries = 0
+    do k = 1, nhold
+      t = hold_tool(k)
+      if (count(hold_tool == t) /= 1) then
+        entries = -1
+        return
+      end if
+      do p = tool_first(t) + 1, tool_first(t + 1)
+        if (table(11, t) == 2) then
+          entries = entries + count(eqn(:, pair_node(p) + 1) >= 0)
+        else
+          entries = entries + 3
+        end if
+      end do
+      entries = entries + hold_first(k + 1) - hold_first(k) + 1
+    end do
+  end function hold_entries
 
   !> Newton iterations of one increment: see forming_increment. Connectivity arrives 0-based.
   subroutine api_forming_increment(nnode, x0, ne, conn, kind, props, u_ref, axes_old, &
@@ -193,13 +256,19 @@ contains
                                    prescribed, guess, settings, isettings, factored, &
                                    reuse_next, u, force, fint, stress, ep, strain, axes, back, &
                                    state, gap, normal, traction, pressure, nhistory, niter, &
-                                   history, counters, timings, outcome, info, detail) &
+                                   history, counters, timings, outcome, info, detail, nhold, &
+                                   hold_tool, hold_axis, hold_target, hold_first, nhold_src, &
+                                   hold_source, hold_coef, hold_step, shift) &
     bind(C, name="ddpy_forming_increment")
     integer(c_int), value, intent(in) :: nnode, ne, kind, nf, k_slots, n_coupling, nvalues, &
                                          nrow, ncsr, nsrc, ntool, ncoef, ndeg, ntri, ntree, &
                                          nframe, nstart, ngrid, nface, npoint, npair, npatch, &
-                                         nhistory, nback
-    real(c_double), value, intent(in) :: reach, size, touching
+                                         nhistory, nback, nhold, nhold_src
+    real(c_double), value, intent(in) :: reach, size, touching, hold_step
+    integer(c_int), intent(in) :: hold_tool(nhold), hold_first(nhold + 1), &
+                                  hold_source(nhold_src)
+    real(c_double), intent(in) :: hold_axis(3, nhold), hold_target(nhold), hold_coef(nhold_src)
+    real(c_double), intent(out) :: shift(nhold)
     integer(c_int), intent(in) :: conn(8, ne), eqn(3, nnode), offsets(ne + 1), &
                                   fixed(3, nnode), row_start(nrow + 1), col(ncsr), &
                                   sources(nsrc), source_start(ncsr + 1), &
@@ -232,16 +301,24 @@ contains
                                    normal(3, npair), traction(3, npoint), pressure(npoint), &
                                    history(4, nhistory), timings(4), detail(2)
     integer(c_int), intent(out) :: state(npair), niter, counters(5), outcome, info(4)
+    integer :: entries
     history = 0.0_wp
+    shift = 0.0_wp
     outcome = -1
     if (nhistory < isettings(1) + 1 .or. offsets(ne + 1) /= k_slots) return
     if (kind /= kind_hexahedron .and. kind /= kind_solid_shell) return
-    if (any(conn < 0) .or. any(conn >= nnode) .or. nrow /= nf + 3*npair) return
+    if (any(conn < 0) .or. any(conn >= nnode) .or. nrow /= nf + 3*npair + nhold) return
     if (.not. rows_ok(nrow, ncsr, nsrc, nvalues, row_start, col, sources, source_start)) return
+    ! The force-controlled tools: each a tool once, its row's sources in the contact
+    ! blocks, and their entries (column, row, diagonal) the last of the values.
+    entries = hold_entries(ntool, table, npair, tool_first, pair_node, nnode, eqn, nhold, &
+                           hold_tool, hold_first, nhold_src)
+    if (entries < 0) return
+    if (any(hold_source >= nvalues - entries)) return
     if (.not. layout_ok(nnode, ntool, table, ncoef, ndeg, ntri, ntree, nframe, nstart, ngrid, &
                         grid_start, face_first, nface, faces, corner, npoint, npair, &
                         tool_first, pair_node, npatch, patch_first, patch_node, eqn, &
-                        k_slots, nvalues)) return
+                        k_slots, nvalues - entries)) return
     call forming_increment(nnode, x0, ne, conn + 1, kind, props, u_ref, axes_old, stress_old, &
                            ep_old, strain_old, nback, back_old, eqn, offsets, fixed, nf, &
                            k_slots, n_coupling, &
@@ -255,8 +332,9 @@ contains
                            traction_n, pressure_n, u_n, force_n, external, prescribed, guess, &
                            settings, isettings, factored, reuse_next, u, force, fint, stress, &
                            ep, strain, axes, back, state, gap, normal, traction, pressure, &
-                           niter, &
-                           history, counters, timings, outcome, info, detail)
+                           niter, history, counters, timings, outcome, info, detail, nhold, &
+                           hold_tool, hold_axis, hold_target, hold_first, nhold_src, &
+                           hold_source, hold_coef, hold_step, shift)
   end subroutine api_forming_increment
 
   !> Newton iterations of one increment of a solid without tools (the static problem): see
@@ -293,7 +371,7 @@ contains
                state(0), reuse_next
     real(wp) :: reals(0), tools(3, 0), forces(3, 0), force(3, 0), normal(3, 0), gap(0), &
                 weights(0), penalty(5, 0), tractions(3, 0), traction(3, 0), pressures(0), &
-                pressure(0)
+                pressure(0), shift(0)
     history = 0.0_wp
     outcome = -1
     if (nhistory < isettings(1) + 1 .or. offsets(ne + 1) /= k_slots .or. nvalues /= k_slots) &
@@ -317,7 +395,8 @@ contains
                            stress, ep, strain, axes, back, state, gap, normal, traction, &
                            pressure, niter, &
                            history, &
-                           counters, timings, outcome, info, detail)
+                           counters, timings, outcome, info, detail, 0, pairs, tools, reals, &
+                           first, 0, pairs, reals, 0.0_wp, shift)
   end subroutine api_static_increment
 
   !> The step length the Newton loop's penetration limit allows (see penetration_step).

@@ -90,7 +90,9 @@ contains
   !> no search, the patch's plane continued past its edges), lock(npair + i) Gauss point i
   !> of a surface-to-surface or Gauss-point tool; found gives the patch each of them took
   !> where it lies less than hold_band element sizes outside the tool (0 elsewhere: none,
-  !> farther, or not that kind of contact), the ones worth holding.
+  !> farther, or not that kind of contact), the ones worth holding. dc_dt(:, :, p): the
+  !> derivative of pair p's law (of C = lambda - F for a Gauss-point pair) along a
+  !> translation of its tool, zero in a held component's row.
   subroutine forming_contact(nnode, x, x_n, fixed, ntool, table, tol, coef, degrees, &
                              triangle, tree_lower, tree_upper, tree_child, frame, &
                              frame_lower, frame_upper, grid_start, grid_params, &
@@ -100,7 +102,7 @@ contains
                              npair, tool_first, pair_node, npatch, patch_first, patch_node, &
                              on, force, r, mu, held, traction_n, pressure_n, lock, eqn, nf, &
                              k_slots, nvalues, residual, values, state, gap, normal, traction, &
-                             pressure, found)
+                             pressure, found, dc_dt)
     integer, intent(in) :: nnode, ntool, nface, npoint, npair, npatch, nf, k_slots, nvalues, &
                            resting
     real(wp), intent(in) :: x(3, nnode), x_n(3, nnode), tol(ntool), coef(*), tree_lower(*), &
@@ -119,7 +121,7 @@ contains
     real(wp), intent(inout) :: residual(nf + 3*npair), values(nvalues)
     integer, intent(out) :: state(npair), found(npair + npoint)
     real(wp), intent(out) :: gap(npair), normal(3, npair), traction(3, npoint), &
-                             pressure(npoint)
+                             pressure(npoint), dc_dt(3, 3, npair)
     real(wp), allocatable :: nodes(:, :), node_normals(:, :), params(:, :), points(:, :), &
                              tangents(:, :, :), distance(:), p_aug(:), c(:, :), &
                              dc_dlambda(:, :, :), dc_dx(:, :, :), slip(:, :), &
@@ -236,6 +238,20 @@ contains
         dc_dlambda(i, :, p) = 0.0_wp
         dc_dlambda(i, i, p) = 1.0_wp
         dc_dx(i, :, p) = 0.0_wp
+      end do
+    end do
+    ! dC/dt of each pair along a translation t of its tool (for a Gauss-point pair, the
+    ! derivative of C = lambda - F): the tool enters every gap and slip as x - t, so it is
+    ! minus the sum of dC/dx over the pair's patch (a force-controlled tool's column,
+    ! forming_increment; docs/theory/contact.md, "Force-controlled tools").
+    do p = 1, npair
+      if (surface(p)) then
+        dc_dt(:, :, p) = -sum(patch_dc(:, :, patch_first(p) + 1:patch_first(p + 1)), dim=3)
+      else
+        dc_dt(:, :, p) = -dc_dx(:, :, p)
+      end if
+      do i = 1, 3
+        if (held(i, p) /= 0) dc_dt(i, :, p) = 0.0_wp
       end do
     end do
     ! Equilibrium rows: minus the forces of the tools on their slave nodes, in pair order;

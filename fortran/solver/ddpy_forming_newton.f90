@@ -22,7 +22,7 @@ module ddpy_forming_newton
   private
   public :: forming_increment, newton_settings, newton_integer_settings, outcome_converged, &
             outcome_landing, outcome_element, outcome_not_finite, outcome_solver, &
-            outcome_stalled, penetration_step, gmres
+            outcome_stalled, outcome_hold, penetration_step, gmres, hold_equations
 
   !> Entries of the real settings: force and displacement tolerances, the yield landing
   !> tolerance (< 0: off), the penetration limit (element sizes) and the shortest step it
@@ -49,9 +49,15 @@ module ddpy_forming_newton
   !> patches, at most hold_limit times in an increment.
   integer, parameter :: hold_fraction = 3, hold_limit = 3
   real(wp), parameter :: hold_depth = 1.0e-4_wp
+  !> A force-controlled tool with no contact stiffness along its axis is moved onto its
+  !> nearest slave, touch_depth element sizes into it, at most hold_retouches times in an
+  !> increment (forming_increment).
+  integer, parameter :: hold_retouches = 3
+  real(wp), parameter :: touch_depth = 1.0e-3_wp
   !> What forming_increment returns.
   integer, parameter :: outcome_converged = 0, outcome_landing = 1, outcome_element = 2, &
-                        outcome_not_finite = 3, outcome_solver = 4, outcome_stalled = 5
+                        outcome_not_finite = 3, outcome_solver = 4, outcome_stalled = 5, &
+                        outcome_hold = 6
 
 contains
 
@@ -81,6 +87,17 @@ contains
   !> and its start, not of the line search's earlier trials. back_old, back (6, 8, nback):
   !> the backstress of mixed hardening, carried like the stress (nback = ne; without
   !> kinematic hardening not read, and back = back_old).
+  !>
+  !> Force-controlled tools (nhold of them, docs/theory/contact.md): tool hold_tool(k) sits
+  !> at positions + shift(k) hold_axis(:, k), shift(k) one more unknown (after the pairs'
+  !> forces), whose equation is sum over the tool's pairs of hold_axis . lambda =
+  !> hold_target(k), the force the tool presses on the blank with. Its Jacobian entries
+  !> follow the contact blocks: per tool, its column (the rows of its pairs' laws, or a
+  !> Gauss-point pair's free equilibrium rows), its row (hold_first(k) + 1 ..
+  !> hold_first(k + 1): hold_coef times the value at slot hold_source (0-based), or
+  !> hold_coef alone where hold_source < 0), its diagonal. A step moves a tool by at most
+  !> hold_step; outcome_hold when a tool has no contact stiffness along its axis (info(2)
+  !> 1) or has moved farther than reach in the increment (info(2) 2), info(1) the tool.
   subroutine forming_increment(nnode, x0, ne, conn, kind, props, u_ref, axes_old, stress_old, &
                                ep_old, strain_old, nback, back_old, eqn, offsets, fixed, nf, &
                                k_slots, &
@@ -97,11 +114,13 @@ contains
                                factored, reuse_next, u, force, fint, stress, ep, strain, axes, &
                                back, state, gap, normal, traction, pressure, niter, history, &
                                counters, &
-                               timings, outcome, info, detail)
+                               timings, outcome, info, detail, nhold, hold_tool, hold_axis, &
+                               hold_target, hold_first, nhold_src, hold_source, hold_coef, &
+                               hold_step, shift)
     integer, intent(in) :: nnode, ne, kind, nf, k_slots, n_coupling, nvalues, ncsr, ntool, &
-                           nface, npoint, npair, npatch, nback
+                           nface, npoint, npair, npatch, nback, nhold, nhold_src
     integer, intent(in) :: conn(8, ne), eqn(3, nnode), offsets(ne + 1), fixed(3, nnode), &
-                           row_start(nf + 3*npair + 1), col(ncsr), sources(*), &
+                           row_start(nf + 3*npair + nhold + 1), col(ncsr), sources(*), &
                            source_start(ncsr + 1), table(tool_fields, ntool), &
                            degrees(*), triangle(*), tree_child(*), grid_start(*), &
                            face_first(ntool + 1), faces(4, nface), corner(4, nface), &
@@ -129,13 +148,18 @@ contains
                              pressure(npoint), history(4, *), &
                              timings(4), detail(2)
     integer, intent(out) :: state(npair), niter, counters(5), outcome, info(4)
+    integer, intent(in) :: hold_tool(nhold), hold_first(nhold + 1), hold_source(nhold_src)
+    real(wp), intent(in) :: hold_axis(3, nhold), hold_target(nhold), hold_coef(nhold_src), &
+                            hold_step
+    real(wp), intent(out) :: shift(nhold)
 
     !> One evaluation: the iterate and what was evaluated there.
     type :: evaluation
       real(wp), allocatable :: u(:, :), force(:, :), residual(:), values(:), fint(:, :), &
                                stress(:, :, :), ep(:, :), strain(:, :, :), axes(:, :, :, :), &
                                back(:, :, :), alpha(:, :), gap(:), normal(:, :), simplified(:), &
-                               traction(:, :), pressure(:)
+                               traction(:, :), pressure(:), shift(:), dc_dt(:, :, :), &
+                               stiffness(:)
       integer, allocatable :: state(:), patch(:)
       logical :: moving  ! some fixed dof short of its prescribed value
       real(wp) :: rest   ! how far short: the norm over the fixed dofs
@@ -143,11 +167,12 @@ contains
     type(evaluation) :: slot(2)
     real(wp), allocatable :: weight(:), delta(:), du(:, :), dforce(:, :), x_n(:, :), &
                              kdu(:, :), dp(:, :), u_cur(:, :), force_cur(:, :), &
-                             alpha_cur(:, :)
+                             alpha_cur(:, :), shift_cur(:), dshift(:)
     integer, allocatable :: previous(:), lock(:)
     logical, allocatable :: eliminated(:), averaged(:)
     real(wp), allocatable :: coupling(:)
-    integer :: tool, pair, comp, entry
+    integer :: tool, pair, comp, entry, k, hold_base, retouches
+    logical :: retouched
     real(wp) :: tol_force, tol_disp, yield_tol, floor, norm, scale, moved, correction, rel, &
                 forcing, alpha, step_size, du_norm, landing, t_norm, t_scale, t_moved, &
                 alpha_fallback, whole_step, size_ratio
@@ -170,8 +195,10 @@ contains
     handle = isettings(5)
     symmetric = isettings(8) /= 0
     search = isettings(9)
-    n = nf + 3*npair
+    n = nf + 3*npair + nhold
+    retouches = 0
     counters = 0
+    shift = 0.0_wp
     timings = 0.0_wp
     info = 0
     detail = 0.0_wp
@@ -179,7 +206,8 @@ contains
     outcome = outcome_stalled
     allocate(weight(n), delta(n), du(3, nnode), dforce(3, npair), x_n(3, nnode), &
              kdu(3, nnode), dp(3, nnode), previous(npair), u_cur(3, nnode), &
-             force_cur(3, npair), alpha_cur(shell_modes, ne), lock(npair + npoint))
+             force_cur(3, npair), alpha_cur(shell_modes, ne), lock(npair + npoint), &
+             shift_cur(nhold), dshift(nhold))
     alpha_cur = 0.0_wp
     lock = 0
     held_on_patches = .false.
@@ -187,7 +215,8 @@ contains
     dp = 0.0_wp
     step_size = 0.0_wp
     weight(1:nf) = 1.0_wp
-    weight(nf + 1:) = reshape(spread(1.0_wp/r, 1, 3), [3*npair])
+    weight(nf + 1:nf + 3*npair) = reshape(spread(1.0_wp/r, 1, 3), [3*npair])
+    weight(nf + 3*npair + 1:) = 1.0_wp  ! the tools' shifts are lengths
     ! The pairs of Gauss-point tools, whose multipliers are eliminated (forming_contact):
     ! their coupling entries (node's equilibrium row, multiplier) are 0, the others' -1.
     allocate(eliminated(npair), averaged(npair), coupling(n_coupling))
@@ -205,6 +234,20 @@ contains
         coupling(entry) = merge(0.0_wp, -1.0_wp, eliminated(pair))
       end do
     end do
+    ! The force-controlled tools' entries close the values: per tool its column, its row
+    ! and its diagonal.
+    hold_base = nvalues
+    do k = 1, nhold
+      tool = hold_tool(k)
+      do pair = tool_first(tool) + 1, tool_first(tool + 1)
+        if (eliminated(pair)) then
+          hold_base = hold_base - count(eqn(:, pair_node(pair) + 1) >= 0)
+        else
+          hold_base = hold_base - 3
+        end if
+      end do
+      hold_base = hold_base - (hold_first(k + 1) - hold_first(k)) - 1
+    end do
     x_n = x0 + u_n
     do cur = 1, 2
       allocate(slot(cur)%u(3, nnode), slot(cur)%force(3, npair), slot(cur)%residual(n), &
@@ -215,9 +258,11 @@ contains
                slot(cur)%simplified(n), slot(cur)%state(npair), &
                slot(cur)%patch(npair + npoint), &
                slot(cur)%traction(3, npoint), slot(cur)%pressure(npoint), &
-               slot(cur)%back(6, 8, nback))
+               slot(cur)%back(6, 8, nback), slot(cur)%shift(nhold), &
+               slot(cur)%dc_dt(3, 3, npair), slot(cur)%stiffness(nhold))
       slot(cur)%back = back_old
       slot(cur)%values(k_slots + 1:k_slots + n_coupling) = coupling
+      slot(cur)%shift = 0.0_wp
     end do
     correction = ieee_value(1.0_wp, ieee_positive_inf)
     alpha = 0.0_wp
@@ -285,6 +330,29 @@ contains
       ! Inexact Newton (Eisenstat and Walker): the correction's relative error may be a
       ! tenth of the relative residual (the rate stays quadratic), or as large as leaves
       ! the next residual a tenth of the tolerance (the last iteration).
+      retouched = .false.
+      do k = 1, nhold
+        ! A tool that nothing holds along its axis would take a singular step, or one
+        ! that flies it off: it is brought back onto the blank (its iterate moved off a
+        ! contact of a few hundredths of a micrometre), at most hold_retouches times in
+        ! an increment; else the increment stops and says which.
+        if (slot(cur)%stiffness(k) > 0.0_wp) cycle
+        if (retouches < hold_retouches) then
+          if (retouch(slot(cur), k)) then
+            retouched = .true.
+            cycle
+          end if
+          if (outcome == outcome_element) return
+        end if
+        outcome = outcome_hold
+        info(1:2) = [hold_tool(k), 1]
+        return
+      end do
+      if (retouched) then
+        retouches = retouches + 1
+        alpha = 0.0_wp
+        cycle
+      end if
       rel = norm/scale
       forcing = min(settings(6), max(settings(7), 0.1_wp*rel, &
                                      0.1_wp*tol_force/max(rel, 1.0e-300_wp)))
@@ -303,18 +371,24 @@ contains
         where (fixed /= 0) du = prescribed - slot(cur)%u
         step_size = hypot(step_size, slot(cur)%rest)
       end if
-      dforce = reshape(delta(nf + 1:), [3, npair])
-      du_norm = sqrt(dot_product(delta(1:nf), delta(1:nf)))
+      dforce = reshape(delta(nf + 1:nf + 3*npair), [3, npair])
+      dshift = delta(nf + 3*npair + 1:)
+      du_norm = sqrt(dot_product(delta(1:nf), delta(1:nf)) + dot_product(dshift, dshift))
       ! The factors hold this iteration's Jacobian from here. The first trial stops short
       ! where the step would push a free node into a tool.
       alpha = penetration_step(nnode, npair, du, pair_node, on, slot(cur)%state, &
                                slot(cur)%gap, slot(cur)%normal, settings(4)*size, &
                                settings(5))
+      if (nhold > 0) then
+        ! A force-controlled tool moves at most hold_step in a step.
+        if (maxval(abs(dshift))*alpha > hold_step) alpha = hold_step/maxval(abs(dshift))
+      end if
       previous = slot(cur)%state
       have_previous = .true.
       moving = slot(cur)%moving
       u_cur = slot(cur)%u
       force_cur = slot(cur)%force
+      shift_cur = slot(cur)%shift
       alpha_cur = slot(cur)%alpha
       fallback = 0
       buffer = 1
@@ -396,6 +470,13 @@ contains
       end if
       cur = trial
       correction = alpha*du_norm
+      do k = 1, nhold
+        if (abs(slot(cur)%shift(k)) > reach) then
+          outcome = outcome_hold
+          info(1:2) = [hold_tool(k), 2]
+          return
+        end if
+      end do
       if (yield_tol >= 0.0_wp .and. alpha == 1.0_wp) then
         ! The elastic predictor is the first full Newton step: a step shortened by the
         ! line search or the penetration limit starts from a poor iterate, whose strains
@@ -430,6 +511,7 @@ contains
         where (fixed /= 0) s%u = prescribed
       end if
       s%force = force_cur + alpha*dforce
+      s%shift = shift_cur + alpha*dshift
       call evaluate(s, 0.0_wp, status, element)
     end subroutine try_step
 
@@ -490,7 +572,8 @@ contains
       real(wp), intent(in) :: touching_gap
       integer, intent(out) :: status, element
       integer(int64) :: t0, t1, t2
-      integer :: a, c, p
+      integer :: a, c, p, k
+      real(wp) :: placed(3, ntool)
       counters(1) = counters(1) + 1
       call system_clock(t0)
       where (fixed /= 0)
@@ -522,24 +605,59 @@ contains
           end do
         end do
       end if
+      placed = positions
+      do k = 1, nhold
+        placed(:, hold_tool(k)) = placed(:, hold_tool(k)) + s%shift(k)*hold_axis(:, k)
+      end do
       call forming_contact(nnode, x0 + s%u, x_n, fixed, ntool, table, tol, coef, degrees, &
                            triangle, tree_lower, tree_upper, tree_child, frame, frame_lower, &
                            frame_upper, grid_start, grid_params, grid_normals, grid_points, &
                            facing, face_first, nface, faces, corner, npoint, face_weight, &
-                           penalty, positions, positions_n, reach, size, touching_gap, isettings(7), &
+                           penalty, placed, positions_n, reach, size, touching_gap, isettings(7), &
                            npair, tool_first, pair_node, npatch, patch_first, patch_node, on, &
                            s%force, r, mu, held, traction_n, pressure_n, lock, eqn, nf, &
                            k_slots, nvalues, s%residual, s%values, s%state, s%gap, s%normal, &
-                           s%traction, s%pressure, s%patch)
+                           s%traction, s%pressure, s%patch, s%dc_dt)
       ! A Gauss-point pair's multiplier is eliminated: lambda = F(x), C = 0.
       do p = 1, npair
         if (.not. eliminated(p)) cycle
         s%force(:, p) = s%force(:, p) - s%residual(nf + 3*p - 2:nf + 3*p)
         s%residual(nf + 3*p - 2:nf + 3*p) = 0.0_wp
       end do
+      call hold_equations(nnode, ntool, npair, tool_first, pair_node, on, eqn, &
+                          eliminated, s%force, s%dc_dt, nhold, hold_tool, hold_axis, &
+                          hold_target, hold_first, nhold_src, hold_source, hold_coef, &
+                          hold_base, s%residual(nf + 3*npair + 1:), s%values, s%stiffness)
       call system_clock(t2)
       timings(2) = timings(2) + real(t2 - t1, wp)/real(clock_rate, wp)
     end subroutine evaluate
+
+    !> Moves force-controlled tool k of slot s along its axis onto its nearest slave (by
+    !> the gaps along the tool's normals at the pairs' closest points), touch_depth
+    !> element sizes into it, and evaluates s there; false where no slave within the
+    !> search's reach faces it or an element fails (outcome then says so).
+    logical function retouch(s, k)
+      type(evaluation), intent(inout) :: s
+      integer, intent(in) :: k
+      real(wp) :: closing, travel
+      integer :: p, status, element
+      retouch = .false.
+      travel = huge(1.0_wp)
+      do p = tool_first(hold_tool(k)) + 1, tool_first(hold_tool(k) + 1)
+        if (on(p) == 0 .or. .not. ieee_is_finite(s%gap(p))) cycle
+        closing = dot_product(s%normal(:, p), hold_axis(:, k))
+        if (closing > 0.5_wp) travel = min(travel, s%gap(p)/closing)
+      end do
+      if (travel == huge(1.0_wp)) return
+      s%shift(k) = s%shift(k) + travel + touch_depth*size
+      call evaluate(s, 0.0_wp, status, element)
+      if (status /= 0) then
+        outcome = outcome_element
+        info(1:2) = [status, element]
+        return
+      end if
+      retouch = .true.
+    end function retouch
 
     !> measure for slot s, as this iteration's history (residual, relative residual and
     !> correction).
@@ -678,6 +796,7 @@ contains
       real(wp) :: change, held_force, free_force
       check%u = s%u
       check%force = s%force
+      check%shift = s%shift
       lock = 0
       call evaluate(check, 0.0_wp, status, element)
       held_ok = status == 0
@@ -743,9 +862,65 @@ contains
       normal = s%normal
       traction = s%traction
       pressure = s%pressure
+      shift = s%shift
     end subroutine finish
 
   end subroutine forming_increment
+
+  !> The equations of the nhold force-controlled tools (see forming_increment) from the
+  !> pairs' forces (lambda; F(x) for an eliminated Gauss-point pair) and their dC/dt
+  !> (forming_contact): each tool's residual sum a . lambda - F (into hold_residual), and
+  !> from slot hold_base + 1 of values its column a . dC/dt per pair (the law rows, or an
+  !> eliminated pair's free equilibrium rows), its row (hold_coef times the value at slot
+  !> hold_source, 0-based, or hold_coef alone where hold_source < 0) and its diagonal
+  !> -sum a . dC/dt a over its eliminated pairs, whose force F = lambda - C moves with the
+  !> tool; and its stiffness along its axis, the sum of |dC/dt a| over its pairs that take
+  !> part (on).
+  subroutine hold_equations(nnode, ntool, npair, tool_first, pair_node, on, eqn, &
+                            eliminated, force, dc_dt, nhold, hold_tool, hold_axis, &
+                            hold_target, hold_first, nhold_src, hold_source, hold_coef, &
+                            hold_base, hold_residual, values, stiffness)
+    integer, intent(in) :: nnode, ntool, npair, nhold, nhold_src, hold_base
+    integer, intent(in) :: tool_first(ntool + 1), pair_node(npair), on(npair), &
+                           eqn(3, nnode), hold_tool(nhold), hold_first(nhold + 1), &
+                           hold_source(nhold_src)
+    logical, intent(in) :: eliminated(npair)
+    real(wp), intent(in) :: force(3, npair), dc_dt(3, 3, npair), hold_axis(3, nhold), &
+                            hold_target(nhold), hold_coef(nhold_src)
+    real(wp), intent(inout) :: hold_residual(nhold), values(*)
+    real(wp), intent(out) :: stiffness(nhold)
+    real(wp) :: along(3), a(3), diagonal
+    integer :: k, p, i, m, slot, t
+    slot = hold_base
+    do k = 1, nhold
+      t = hold_tool(k)
+      a = hold_axis(:, k)
+      diagonal = 0.0_wp
+      stiffness(k) = 0.0_wp
+      hold_residual(k) = -hold_target(k)
+      do p = tool_first(t) + 1, tool_first(t + 1)
+        hold_residual(k) = hold_residual(k) + dot_product(a, force(:, p))
+        along = matmul(dc_dt(:, :, p), a)
+        if (on(p) /= 0) stiffness(k) = stiffness(k) + sum(abs(along))
+        do i = 1, 3
+          if (eliminated(p) .and. eqn(i, pair_node(p) + 1) < 0) cycle
+          slot = slot + 1
+          values(slot) = along(i)
+        end do
+        if (eliminated(p)) diagonal = diagonal - dot_product(a, along)
+      end do
+      do m = hold_first(k) + 1, hold_first(k + 1)
+        slot = slot + 1
+        if (hold_source(m) >= 0) then
+          values(slot) = hold_coef(m)*values(hold_source(m) + 1)
+        else
+          values(slot) = hold_coef(m)
+        end if
+      end do
+      slot = slot + 1
+      values(slot) = diagonal
+    end do
+  end subroutine hold_equations
 
   !> Longest fraction (at most 1) of the step du (3, nnode) that leaves no free pair's node
   !> (on, open, with a gap) deeper than room_depth inside its tool, the gaps and normals

@@ -78,7 +78,9 @@ _SETTINGS: dict[str, Callable[[str], Any]] = {
     "gauss_augmentation": lambda w: read_choice(w, "gauss_augmentation", ("on", "off")) == "on",
     "output_every": lambda w: read_int(w, "output_every", 0, 10**9),
 }
-_PHASE_KEYS = ("type", "tools", "move", "gap", "lead", "output_at", "increments")
+_PHASE_KEYS = ("type", "tools", "move", "gap", "force", "lead", "output_at", "increments")
+#: Largest force a tool may be held under (N): 1e9 N presses 100,000 t, far past any press.
+MAX_FORCE = 1e9
 #: Default largest increment: this fraction of the lead tool's travel.
 DEFAULT_INCREMENT_FRACTION = 0.01
 DEFAULT_OUTPUT_EVERY = 10
@@ -99,6 +101,7 @@ class _PhaseDraft:
     tools_line: int | None = None
     moves: list[tuple[str, tuple[float, float, float], int]] = field(default_factory=list)
     gaps: list[tuple[str, str, float, int]] = field(default_factory=list)
+    forces: list[tuple[str, float, bool, int]] = field(default_factory=list)
     lead: tuple[str, int] | None = None
     output_at: tuple[list[float], int] | None = None
     increments: tuple[int, int] | None = None
@@ -210,6 +213,14 @@ def _phase_line(deck: Deck, phase: _PhaseDraft, line: Line) -> None:
                        f"with two tools, got '{tool}' twice")
         gap = read_float(words[3], "the gap", gt=0, le=MAX_LENGTH)
         phase.gaps.append((tool, other, gap, line.number))
+    elif key == "force":
+        check_arity(line, "force TOOL VALUE [ramp]", 2, 3)
+        tool = read_name(words[1], "the tool")
+        value = read_float(words[2], "the force (N, pressing the tool on the blank)", gt=0,
+                           le=MAX_FORCE)
+        if len(words) == 4 and words[3] != "ramp":
+            raise BadValue(f"expected 'ramp' or nothing after the force, got {show(words[3])}")
+        phase.forces.append((tool, value, len(words) == 4, line.number))
     elif key == "lead":
         check_arity(line, "lead TOOL", 1)
         if first_time(deck, phase.seen, line):

@@ -18,6 +18,7 @@ from ddpy.io.case import (
     Case,
     Constraint,
     Control,
+    HoldForce,
     HoldGap,
     Move,
     NodeSet,
@@ -179,6 +180,9 @@ class _Cross:
         if p.gaps:
             wrong.append("gap")
             lines.append(p.gaps[0][3])
+        if p.forces:
+            wrong.append("force")
+            lines.append(p.forces[0][3])
         if wrong:
             deck.error(lines[0], f"phase '{p.name}' is a springback phase: the tools are removed,"
                        f" so '{wrong[0]}' does not apply (expected only 'increments' and solver "
@@ -202,7 +206,7 @@ class _Cross:
                 deck.error(p.tools_line, f"unknown tool '{name}' in phase '{p.name}': tools.dat "
                            f"defines {', '.join(tools) or 'none'}")
         active = set(p.tools)
-        motions: list[Move | HoldGap] = []
+        motions: list[Move | HoldGap | HoldForce] = []
         moved: dict[str, int] = {}
         for tool, vector, line in p.moves:
             if self._motion_target(p, tool, line, active, tools, moved):
@@ -225,6 +229,14 @@ class _Cross:
                            f"thickness {thickness:.4g} mm")
                 continue
             motions.append(HoldGap(tool, other, gap, deck.where(line)))
+        for tool, force, ramp, line in p.forces:
+            if not self._motion_target(p, tool, line, active, tools, moved):
+                continue
+            if not any(tools[tool].facing):
+                deck.error(line, f"phase '{p.name}': tool '{tool}' has no facing direction "
+                           "(tools.dat contact): a force needs the axis it presses along")
+                continue
+            motions.append(HoldForce(tool, force, ramp, deck.where(line)))
         gaps = {m.tool: m.other for m in motions if isinstance(m, HoldGap)}
         for start in gaps:
             seen, tool = {start}, gaps[start]
@@ -247,6 +259,11 @@ class _Cross:
             return None
         if p.lead is not None:
             lead, line = p.lead
+            if any(isinstance(m, HoldForce) and m.tool == lead for m in motions):
+                deck.error(line, f"phase '{p.name}': lead tool '{lead}' is held under a force: "
+                           "its travel is not known beforehand; expected a tool that moves "
+                           f"({', '.join(m.tool for m in moving)})")
+                return None
             if lead not in {m.tool for m in moving}:
                 deck.error(line, f"phase '{p.name}': lead tool '{lead}' must be a tool that "
                            f"moves in the phase ({', '.join(m.tool for m in moving)})")
@@ -306,7 +323,7 @@ class _Cross:
             return False
         if tool in moved:
             deck.error(line, f"phase '{p.name}': tool '{tool}' already has a motion at line "
-                       f"{moved[tool]} (expected one 'move' or 'gap' per tool)")
+                       f"{moved[tool]} (expected one 'move', 'gap' or 'force' per tool)")
             return False
         moved[tool] = line
         return True

@@ -228,3 +228,21 @@ def test_a_path_through_a_file_or_a_dangling_link_is_refused(tmp_path: Path, mak
     assert code == 1
     assert err.splitlines() == ["ddpy run: error: " + message.format(t=tmp_path)]
 
+
+
+def test_atomic_write_replaces_whole_or_keeps_the_last_version(tmp_path: Path) -> None:
+    """One writer for the status, the XDMF and the checkpoints: the new text replaces the
+    file only when the block ends; an error inside it keeps the old version and leaves no
+    temporary beside it; the file is readable by all (RESULT_MODE)."""
+    from ddpy.io.output_folder import RESULT_MODE, atomic_write
+
+    path = tmp_path / "status.json"
+    with atomic_write(path) as out:
+        out.write("first")
+    assert path.read_text() == "first"
+    assert path.stat().st_mode & 0o777 == RESULT_MODE
+    with pytest.raises(RuntimeError), atomic_write(path) as out:
+        out.write("half")
+        raise RuntimeError("disk full")
+    assert path.read_text() == "first"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["status.json"]

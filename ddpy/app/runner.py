@@ -41,8 +41,8 @@ from ddpy.io.checkpoint import (
 from ddpy.io.output_folder import (
     FolderLock,
     OutputFolderError,
+    atomic_write,
     check_output_folder,
-    temporary_beside,
 )
 from ddpy.io.results import (
     MIN_FREE,
@@ -219,14 +219,8 @@ def build_problem(case: Case) -> FormingProblem:
 
 
 def _write_atomic(path: Path, text: str) -> None:
-    fd, tmp = temporary_beside(path, ".status-")
-    try:
-        with os.fdopen(fd, "w") as out:
-            out.write(text)
-        os.replace(tmp, path)
-    except BaseException:  # a full disk: no empty temporary left behind
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with atomic_write(path) as out:
+        out.write(text)
 
 
 def _segments(phase: Phase) -> list[float]:

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ddpy.io.output_folder import temporary_beside
+from ddpy.io.output_folder import atomic_write
 
 __all__ = ["CheckpointError", "read_checkpoint", "state_arrays", "state_from_arrays",
            "write_checkpoint"]
@@ -41,16 +41,8 @@ def write_checkpoint(path: str | os.PathLike[str], meta: Mapping[str, Any],
     if _META in arrays:
         raise ValueError(f"array name {_META!r} is reserved")
     document = json.dumps({"version": VERSION, **meta})
-    fd, tmp = temporary_beside(path, ".checkpoint-", ".npz")
-    try:
-        with os.fdopen(fd, "wb") as out:
-            np.savez(out, **{_META: np.array(document)}, **dict(arrays))
-            out.flush()
-            os.fsync(out.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with atomic_write(path, binary=True) as out:
+        np.savez(out, **{_META: np.array(document)}, **dict(arrays))
 
 
 def read_checkpoint(path: str | os.PathLike[str]) -> tuple[dict[str, Any], dict[str, NDArray]]:

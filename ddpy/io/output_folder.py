@@ -19,10 +19,14 @@ import os
 import re
 import shutil
 import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
+from typing import IO, Any
 
 __all__ = ["LOCK", "PSEUDO_FILESYSTEMS", "RESULT_MODE", "FolderInUse", "FolderLock",
-           "OutputFolderError", "check_output_folder", "output_path", "temporary_beside"]
+           "OutputFolderError", "atomic_write", "check_output_folder", "output_path",
+           "temporary_beside"]
 
 #: Permissions of every file a run writes (results, XDMF, checkpoint, status): readable by
 #: all, so that a colleague can open them.
@@ -50,6 +54,31 @@ def temporary_beside(path: Path, prefix: str, suffix: str = "") -> tuple[int, st
         Path(name).unlink(missing_ok=True)
         raise
     return fd, name
+
+
+@contextmanager
+def atomic_write(path: Path, binary: bool = False) -> Iterator[IO[Any]]:
+    """A file object whose contents replace ``path`` in one step when the block ends: written
+    to a temporary beside it, flushed to the disk (fsync), renamed over it. On any failure
+    (a full disk, an interrupt) the temporary goes and ``path`` keeps its last complete
+    version; an OSError names ``path``, not the temporary."""
+    path = Path(path)
+    try:
+        fd, tmp = temporary_beside(path, f".{path.name}-")
+    except OSError as error:
+        raise OSError(error.errno, error.strerror, str(path)) from error
+    try:
+        with os.fdopen(fd, "wb" if binary else "w") as out:
+            yield out
+            out.flush()
+            os.fsync(out.fileno())
+        os.replace(tmp, path)
+    except OSError as error:
+        Path(tmp).unlink(missing_ok=True)
+        raise OSError(error.errno, error.strerror, str(path)) from error
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
 
 
 class OutputFolderError(RuntimeError):

@@ -40,7 +40,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ddpy import __version__
 from ddpy.geometry.tessellation import TRIANGLE, tessellate
-from ddpy.io.output_folder import RESULT_MODE, temporary_beside
+from ddpy.io.output_folder import RESULT_MODE, atomic_write
 from ddpy.model.forming_quantities import SURFACES, FieldFrame, SheetMeasures, nodal_average
 
 __all__ = ["CONTACT_STATES", "FORMAT", "LIMITS", "TENSOR6", "VOIGT", "Frame", "ResultsReader",
@@ -688,19 +688,8 @@ class ResultsWriter:
         while len(self._grids) < len(self._frames):
             self._grids.append(xdmf_frame(self.path.name, self._file, len(self._grids)))
         text = xdmf_text(self.path.name, self._file, self._grids)
-        try:
-            fd, tmp = temporary_beside(self.xdmf_path, ".xdmf-")
-        except OSError as error:
-            raise OSError(error.errno, error.strerror, str(self.xdmf_path)) from error
-        try:
-            with os.fdopen(fd, "w") as out:
-                out.write(text)
-                out.flush()
-                os.fsync(out.fileno())
-            os.replace(tmp, self.xdmf_path)
-        except OSError as error:  # the last complete XDMF stays; name it, not the temporary
-            Path(tmp).unlink(missing_ok=True)
-            raise OSError(error.errno, error.strerror, str(self.xdmf_path)) from error
+        with atomic_write(self.xdmf_path) as out:  # the last complete XDMF stays on failure
+            out.write(text)
 
     # --------------------------------------------------------------------------- closing
 

@@ -10,12 +10,11 @@ Writes, next to this script (all generated, git-ignored):
   reverse_drawing_tools``), surfaces of revolution with the dimensions of :class:`Dimensions`,
   a reconstruction: the benchmark's drawing is not in the paper;
 - ``tools/<tool>.<model>.tool``: the tool models built from it by
-  ``ddpy.cad.build_tool_models`` (what ``ddpy tools build`` runs): Bezier patches; Nagata with
-  3 patches per 90 degrees of arc in the radial direction (the paper's); facets 6 (coarse) and
-  12 (fine) per arc. Around the axis, where the paper gives no density, each model has
-  :data:`AROUND` elements per 90 degrees on each tool's largest circle (``arc_size``), and
-  straight edges (flat and cylindrical parts, which every model describes exactly) twice
-  that length;
+  ``ddpy.cad.build_tool_models`` (what ``ddpy tools build`` runs), meshed by the rule of
+  :data:`PER_ARC` and :data:`AROUND` (the paper's Table 5, see there):
+  Bezier patches, one per CAD face, every face split at 45 degrees; Nagata 3 patches per
+  90 degrees of arc radially, facets 6 (coarse) and 12 (fine) (the paper's text); around
+  the axis elements of 6, 3 and 1.5 degrees; one row on each straight edge (Table 5);
 - ``meshes/<mesh>.msh``: the blank, a quarter of the 170 mm disc, 0.98 mm thick, 2 layers of
   hexahedra from an unstructured quadrilateral mesh (gmsh): ``paper`` as close to the
   paper's 15,408 hexahedra as gmsh's recombination gets, ``medium`` and ``coarse``;
@@ -48,11 +47,60 @@ FRICTION, GAP1, GAP2 = 0.15, 1.13, 1.4
 TOOL_FILES = {"bezier": ("bezier", "bezier"), "nagata": ("nagata", "nagata"),
               "facets_coarse": ("facets_coarse", "facets"),
               "facets_fine": ("facets_fine", "facets")}
-#: Patches per 90 degrees of arc in the radial direction (the paper's: Nagata 3, facets 6
-#: and 12), and around the axis on each tool's largest circle (ours: the paper gives only
-#: the totals of Table 5, which these approach; see the report).
+#: The meshing rule of the tool models, the paper's as far as its text and Table 5 say it.
+#: The text gives the radial density: 3 Nagata patches per circular arc (90 degrees), 6 and
+#: 12 bilinear facets for the coarse and fine meshes (PER_ARC). Table 5's counts are
+#: multiples of structured grids whose factors give the rest: 15 / 30 / 60 elements per 90
+#: degrees around the axis (die 1: 15 x 6, 36 x 9, 60 x 16; blank-holder 1: 15 x 1, 30 x 2,
+#: 60 x 3; punch 1: 15 x 8, 30 x 18, 60 x 28), so one angle around the axis for every tool
+#: (AROUND, degrees per element), and few rows on flats and walls (one arc's rows plus 1 to
+#: 4): straight edges, exact radially in every model, get one row each. Checked by the
+#: shape error it gives (run.py, Fig. 14-16): Nagata -3.0 to +9.1 um against the paper's
+#: -6.2 to +9.6, the fine facets' largest 19 um, 2.1 times the Nagata one (the paper: about
+#: twice). Applied to our tools it brings die 1 and punch 1 within 25 % of Table 5 for all
+#: three meshes; blank-holders 1 and 2 and punch 2 have other profiles than the paper's
+#: (TABLE5_NOT_MET says how). Measured and not taken: 12 / 6 / 3 degrees around and
+#: straight edges of at most 15 / 7.5 / 3.75 mm bring blank-holder 2 and punch 2 within
+#: 25 % too, but the Nagata error becomes -15 to +26 um and the fine facets' only 1.3 times
+#: it: the counts would match by a coarser model than the paper's.
 PER_ARC = {"nagata": 3, "facets_coarse": 6, "facets_fine": 12}
-AROUND = {"nagata": 15, "facets_coarse": 24, "facets_fine": 48}
+AROUND = {"nagata": 6.0, "facets_coarse": 3.0, "facets_fine": 1.5}
+#: The Bezier model has one patch per CAD face (the fit needs no more at 1 um), and every
+#: face is split at 45 degrees: Table 5's Bezier counts (8 / 2 / 12 / 8 / 12) are all even,
+#: every face of the paper's CAD in two halves. Our tools' profiles have other pieces
+#: (see the report), so the counts follow ours: 6 / 4 / 10 / 10 / 7 (punch 2's disc end in
+#: three faces).
+SPLIT_FACES = True
+#: The paper's Table 5: patches of each tool model.
+TABLE5_PATCHES: dict[str, dict[str, int]] = {
+    "die1": {"bezier": 8, "nagata": 90, "facets_coarse": 324, "facets_fine": 960},
+    "holder1": {"bezier": 2, "nagata": 15, "facets_coarse": 60, "facets_fine": 180},
+    "punch1": {"bezier": 12, "nagata": 120, "facets_coarse": 540, "facets_fine": 1680},
+    "holder2": {"bezier": 8, "nagata": 75, "facets_coarse": 240, "facets_fine": 840},
+    "punch2": {"bezier": 12, "nagata": 86, "facets_coarse": 254, "facets_fine": 1012},
+    "total": {"bezier": 42, "nagata": 386, "facets_coarse": 1418, "facets_fine": 4672},
+}
+_HOLDER1 = ("the paper's blank-holder 1 is a flat (2 Bezier patches, one row of Nagata "
+            "patches); ours has a rounded inner edge, added after a failed run (CHANGES), "
+            "which alone takes 3 / 6 / 12 rows by the paper's patches per arc and makes two "
+            "CAD faces")
+#: The counts of Table 5 this rule does not come within 25 % of, and why (the report and
+#: tests/test_reverse_deep_drawing_tools.py read it).
+TABLE5_NOT_MET: dict[tuple[str, str], str] = {
+    **{("holder1", model): _HOLDER1 for model in MODELS},
+    **{("holder2", model): "ours has two rounded edges and two short walls besides its flat "
+                           "(9 / 15 / 27 rows), where the paper's counts (75 / 240 / 840: "
+                           "15 x 5, 30 x 8, 60 x 14) leave room for one arc and two straight "
+                           "rows" for model in ("nagata", "facets_coarse", "facets_fine")},
+    ("punch2", "bezier"): "the paper's punch 2 has 6 faces in two halves; ours, a flat end "
+                          "reaching the axis in three four-sided faces (a face reaching the "
+                          "axis cannot be one patch), a nose and a wall in two halves: 7",
+    **{("punch2", model): "our flat end reaching the axis is a structured grid (the inner "
+                          "quadrilateral alone takes the square of the elements per half), "
+                          "where the paper's counts (86 / 254 / 1012, not multiples of its "
+                          "grids) show an unstructured end" for model in
+       ("nagata", "facets_coarse", "facets_fine")},
+}
 #: The contact side of each tool on the blank (mesh normal +z: the blank's top faces punch 1).
 SIDE = {"die1": "bottom", "holder1": "top", "punch1": "top", "holder2": "bottom",
         "punch2": "bottom"}
@@ -112,13 +160,13 @@ class Dimensions:
     stage2: float = 40.0          #: punch 2's travel up from the cup's bottom (stage 2)
     approach: float = 0.5         #: punch 2's start below the cup's bottom
 
-    def cad(self) -> dict[str, float]:
+    def cad(self) -> dict[str, float | bool]:
         """Keyword arguments of ``reverse_drawing_tools``: the tools where stage 2 starts
         (punch 2 ``approach`` below the cup's bottom, blank-holder 2 at its gap)."""
         values = asdict(self)
         for key in ("stage1", "stage2", "approach"):
             values.pop(key)
-        return {**values, "thickness": THICKNESS, "holder1_gap": GAP1,
+        return {**values, "thickness": THICKNESS, "holder1_gap": GAP1, "split": SPLIT_FACES,
                 "punch2_start": -self.stage1 - self.approach,
                 "holder2_top": THICKNESS - self.stage1 - GAP2}
 
@@ -237,11 +285,13 @@ def build_tools(folder: Path = HERE / "tools", dims: Dimensions = DIMENSIONS,
                                             blank_side=BLANK_SIDE[tool], faces=faces)
                 paths[tool][model] = written["bezier"]
                 continue
-            arc_size = dims.largest_radius(tool) * math.pi / 2 / AROUND[model]
+            # AROUND's angle on the tool's largest circle: structured faces carry the
+            # division of their longest circle to every circle of the tool.
+            arc_size = dims.largest_radius(tool) * math.radians(AROUND[model])
             kind = "nagata" if model == "nagata" else "facets"
             written = build_tool_models(
                 step, folder, tool, patches_per_arc=PER_ARC[model],
-                facets_per_arc=PER_ARC[model], size=2 * arc_size, arc_size=arc_size,
+                facets_per_arc=PER_ARC[model], arc_size=arc_size,
                 blank_side=BLANK_SIDE[tool], faces=faces, models=(kind,))
             target = folder / f"{tool}.{model}.tool"
             written[kind].replace(target)

@@ -238,7 +238,8 @@ def reverse_drawing_tools(path: str | os.PathLike[str] | None = None, *, thickne
                           punch2_height: float = 50.0, punch2_start: float = -42.0,
                           holder2_inner: float = 38.0, holder2_outer: float = 48.0,
                           holder2_edge: float = 2.0, holder2_top: float = -40.42,
-                          angles: tuple[float, float] = (-3.0, 93.0)) -> dict[str, list[int]]:
+                          angles: tuple[float, float] = (-3.0, 93.0),
+                          split: bool = False) -> dict[str, list[int]]:
     """The five tools of the reverse deep drawing of a cylindrical cup (Numisheet'99
     benchmark C), quarter model, as surfaces of revolution about z. The dimensions are a
     reconstruction (docs/benchmarks/reverse_deep_drawing.md): the benchmark's drawing is not
@@ -253,11 +254,12 @@ def reverse_drawing_tools(path: str | os.PathLike[str] | None = None, *, thickne
     (below, its flat top at ``holder2_top``) holds the bottom's annulus against that ring.
 
     Faces span ``angles`` (degrees about z, a little beyond the quarter so that the blank's
-    symmetry planes lie inside them). Returns the face tags by tool: die1 (bore wall,
+    symmetry planes lie inside them); with ``split``, every face is split at the middle angle
+    into two halves (punch 2's always is). Returns the face tags by tool: die1 (bore wall,
     shoulder, flat), holder1 (inner edge, flat), punch1 (bore wall, inner edge, end ring,
     outer nose, outer wall), holder2 (inner wall, inner edge, flat, outer edge, outer
     wall), punch2 (its flat end in three four-sided faces, then nose and wall, each in two
-    halves).
+    halves); with ``split``, the other tools' faces of the first half, then the second's.
     """
     import gmsh
 
@@ -300,13 +302,12 @@ def reverse_drawing_tools(path: str | os.PathLike[str] | None = None, *, thickne
                     ("line", (h_out, holder2_top - f), (h_out, holder2_top - 2 * f))],
     }
     punch2 = profiles.pop("punch2")
-    faces = revolve_profiles(profiles, angles)
     # Punch 2's flat end reaches the axis: a disc sector in four-sided faces, the rest split
     # at the same middle angle so that the faces meet edge to edge.
-    middle = 0.5 * (angles[0] + angles[1])
-    faces["punch2"] = (_disc_sector(flat2, punch2_start, (angles[0], middle, angles[1]))
-                       + revolve_profiles({"punch2": punch2},
-                                          (angles[0], middle, angles[1]))["punch2"])
+    halves = (angles[0], 0.5 * (angles[0] + angles[1]), angles[1])
+    faces = revolve_profiles(profiles, halves if split else angles)
+    faces["punch2"] = (_disc_sector(flat2, punch2_start, halves)
+                       + revolve_profiles({"punch2": punch2}, halves)["punch2"])
     gmsh.model.occ.synchronize()
     write_cad(path)
     return faces

@@ -25,6 +25,7 @@ from solid_helpers import (
 
 from ddpy.core.parallel import threads
 from ddpy.model.control import NewtonSettings
+from ddpy.model.material import HardeningTable, Hill48, Material, Swift, Voce
 from ddpy.model.mesh import HexMesh
 from ddpy.model.solid import ElementError, material_props
 from ddpy.model.solid import Solid as _Solid
@@ -531,3 +532,17 @@ def test_assemble_into_state_buffers() -> None:
         solid.assemble(u2, first.state, pattern, out=buffers[0])
     with pytest.raises(ValueError, match="not a buffer"):
         solid.assemble(u2, first.state, pattern, out=solid.initial_state())
+
+
+@pytest.mark.parametrize("hardening, expected", [
+    (Swift(500.0, 0.01, 0.2), 500.0 * 0.01**0.2),
+    (Voce(200.0, 100.0, 10.0), 200.0),
+    (HardeningTable([0.0, 0.1], [250.0, 300.0]), 250.0),
+])
+def test_the_solid_s_yield_stress_is_its_curve_at_zero_strain(hardening: object,
+                                                              expected: float) -> None:
+    """The scale of Gauss-point contact's default penalty: a table's first stress, not its
+    point count (which it read before)."""
+    solid = Solid(HexMesh.box(1.0, 1.0, 0.5, 1, 1, 1),
+                  Material(210e3, 0.3, Hill48.von_mises(), hardening))
+    assert solid.yield_stress == pytest.approx(expected, rel=1e-14)

@@ -25,7 +25,8 @@ from ddpy import _core
 from ddpy._validate import float_array
 
 __all__ = ["ArmstrongFrederick", "HardeningTable", "Hill48", "Material", "PROP_COUNT",
-           "ReturnMappingError", "Swift", "TABLE_MAX_POINTS", "Voce", "yield_landing"]
+           "ReturnMappingError", "Swift", "TABLE_MAX_POINTS", "Voce", "initial_yield_stress",
+           "yield_landing"]
 
 #: Points a hardening table may hold, and where they start in the property vector.
 TABLE_MAX_POINTS, _TABLE_START = 100, 16
@@ -79,6 +80,17 @@ class Swift:
 
     def parameters(self) -> tuple[float, ...]:
         return (self.K, self.eps0, self.n)
+
+
+def initial_yield_stress(props: NDArray[np.float64]) -> float:
+    """The yield stress at ep = 0 (MPa) of a material's property vector (Material.props):
+    Swift K eps0^n, Voce Y0, a table's first stress."""
+    law = int(props[8])
+    if law == Swift.law:
+        return float(props[9] * props[10] ** props[11])
+    if law == HardeningTable.law:
+        return float(props[_TABLE_START + 1])
+    return float(props[9])
 
 
 @dataclass(frozen=True)

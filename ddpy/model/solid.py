@@ -26,7 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 from ddpy import _core
 from ddpy._validate import float_array, int_array
 from ddpy.core.ordering import nested_dissection, node_adjacency
-from ddpy.model.material import PROP_COUNT
+from ddpy.model.material import PROP_COUNT, initial_yield_stress
 from ddpy.model.mesh import HexMesh, zeta_off_normal
 
 __all__ = ["Assembly", "DEFAULT_ELEMENT", "ELEMENTS", "Solid", "SolidState", "ElementError",
@@ -200,9 +200,9 @@ class Solid:
         #: mixed hardening: a backstress per Gauss point in the state
         self.mixed = bool(self.props[12] > 0.0 and self.props[13] > 0.0)
         #: the initial yield stress (MPa, of the hardening curve at ep = 0: Swift K eps0^n,
-        #: Voce Y0): the scale of Gauss-point contact's default penalty
-        self.yield_stress = float(self.props[9] * self.props[10] ** self.props[11]
-                                  if self.props[8] == 1.0 else self.props[9])
+        #: Voce Y0, a table's first stress): the scale of Gauss-point contact's default
+        #: penalty
+        self.yield_stress = initial_yield_stress(self.props)
         angle = np.asarray(rolling_direction_deg, dtype=float)
         if angle.ndim == 0:
             angle = np.full(mesh.n_elements, float(angle))

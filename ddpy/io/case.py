@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ddpy.model.control import IncrementLimits, NewtonSettings
+from ddpy.model.forming_limits import FormingLimitCurve
 from ddpy.model.material import Material
 from ddpy.model.mesh import HEX_FACES, HexMesh
 from ddpy.model.solid import DEFAULT_ELEMENT
@@ -139,6 +140,7 @@ class Constraint:
     components: tuple[int, ...]
     phases: tuple[str, ...] = ()
     origin: str = ""
+    symmetry: bool = False  # a symmetry plane (bc.dat 'symmetry'), normal to its component
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "nodes", _frozen(np.unique(self.nodes), np.int32))
@@ -154,6 +156,12 @@ class BoundaryConditions:
     nodesets: Mapping[str, NodeSet] = field(default_factory=dict)
     constraints: tuple[Constraint, ...] = ()
     tolerance: float = 1e-4
+
+    @property
+    def symmetry_axes(self) -> str:
+        """The normal axis of each symmetry plane, in bc.dat's order ("xy" for a quarter
+        model with planes x = 0 and y = 0)."""
+        return "".join("xyz"[c.components[0]] for c in self.constraints if c.symmetry)
 
     def constrained(self, phase: str) -> tuple[NDArray[np.int32], NDArray[np.int32]]:
         """Nodes and components held at zero displacement in ``phase``: two arrays of equal
@@ -220,6 +228,7 @@ class BlankMaterial:
     rolling_angle: float = 0.0
     yield_input: str = "von Mises"
     origin: str = ""
+    forming_limit: FormingLimitCurve | None = None  # material.dat's table; None: Keeler-Brazier
 
     def axes(self, normal: tuple[float, float, float] = (0.0, 0.0, 1.0)) -> NDArray[np.float64]:
         """Rows RD, TD, ND of the material axes in global coordinates (a rotation matrix)."""

@@ -463,9 +463,13 @@ class Case:
             f"{_axis_name(m.normal)} ({m.source})",
             f"  material: E = {mat.E:g} MPa, nu = {mat.nu:g}, {self.material.yield_input}, "
             f"{hard} hardening, initial yield {mat.hardening.initial_yield_stress:.4g} MPa, "
-            f"rolling direction {self.material.rolling_angle:g} deg",
+            f"rolling direction {self.material.rolling_angle:g} deg"
+            + (f", forming limit {self.material.forming_limit.describe()}"
+               if self.material.forming_limit is not None else ""),
             f"  boundary: {len(self.boundary.nodesets)} node sets, "
-            f"{len(self.boundary.constraints)} constraints",
+            f"{len(self.boundary.constraints)} constraints"
+            + (f", symmetry planes normal to {' and '.join(self.boundary.symmetry_axes)}"
+               if self.boundary.symmetry_axes else ""),
         ]
         for t in self.tools:
             lines.append(f"  tool {t.name}: {t.description}, {t.file.name}, friction "

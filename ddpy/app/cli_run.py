@@ -13,6 +13,7 @@ from types import FrameType
 from typing import TYPE_CHECKING, TextIO
 
 from ddpy.core import mpi
+from ddpy.model.forming_limits import MARGINAL_BAND
 
 if TYPE_CHECKING:
     from ddpy.app.runner import Progress
@@ -290,7 +291,7 @@ def _post(args: argparse.Namespace) -> int:
     from ddpy.app.post import post_run
 
     try:
-        paths = post_run(args.target, args.output)
+        paths = post_run(args.target, args.output, args.fld_margin)
     except (FileNotFoundError, ValueError, KeyError) as error:
         print(f"ddpy post: error: {error}", file=sys.stderr)
         return 1
@@ -320,17 +321,33 @@ def _compare(args: argparse.Namespace) -> int:
     return 0
 
 
+def _margin(text: str) -> float:
+    """--fld-margin: a strain from 0 to 1."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not 0.0 <= value <= 1.0:
+        raise argparse.ArgumentTypeError(f"expected a major strain from 0 to 1, got {text!r}")
+    return value
+
+
 def add_post(commands: argparse._SubParsersAction) -> None:
     """The ``post`` and ``compare`` subcommands."""
     post = commands.add_parser(
         "post", help="figures (PNG) and tables (CSV, markdown) of a run",
         description="Write force_stroke.png, increments.png, contact.png, plastic_strain.png, "
-        "increments.csv, phases.csv and summary.md for a run.")
+        "thinning.png, fld.png (the forming limit diagram), increments.csv, phases.csv and "
+        "summary.md for a run.")
     post.add_argument("target", metavar="CASE_OR_RESULTS",
                       help="a results file, an output folder, or a case folder (its default "
                       "output results/<name>)")
     post.add_argument("--output", metavar="DIR", help="where to write (default: beside the "
                       "results file)")
+    post.add_argument("--fld-margin", type=_margin, default=MARGINAL_BAND, metavar="STRAIN",
+                      help="the forming limit diagram's marginal band: elements within this "
+                      "major strain below the forming limit curve are marginal (default "
+                      f"{MARGINAL_BAND:g})")
     post.set_defaults(handler=_post)
     compare = commands.add_parser(
         "compare", help="overlay the force-stroke curves of several runs",

@@ -3,7 +3,12 @@
 
 The punch force against stroke uses each forming phase's lead tool (root attribute
 ``leads`` written by the runner): the stroke is the lead tool's displacement along its motion
-in the phase, the force the component of its reaction against that motion.
+in the phase, the force the component of its reaction against that motion. The model's
+fraction of the part (full, half, quarter) comes from its symmetry planes (root attribute
+``symmetry``); the full part's force is the model's times the number of copies.
+
+The forming limit diagram compares each element's surface strains of the last frame with
+the run's forming limit curve (docs/theory/forming_limits.md).
 """
 
 from __future__ import annotations
@@ -17,9 +22,40 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from ddpy.io.results import LIMITS, ResultsReader
+from ddpy.io.results import LIMITS, Frame, ResultsReader
+from ddpy.model.forming_limits import (
+    FAILED,
+    MARGINAL,
+    MARGINAL_BAND,
+    SAFE,
+    FormingLimitCurve,
+)
+from ddpy.model.forming_quantities import SURFACES
 
-__all__ = ["Run", "compare_runs", "find_results", "forming_summary", "load_run", "post_run"]
+__all__ = ["FormingLimitCheck", "IncrementPanels", "Run", "compare_runs", "find_results",
+           "forming_limit_check", "forming_summary", "increment_panels", "load_run",
+           "model_fraction", "post_run"]
+
+#: The name of a model that is 1 / COPIES of the part.
+FRACTION_NAMES = {1: "full", 2: "half", 4: "quarter", 8: "eighth"}
+
+
+def model_fraction(symmetry: str | None) -> tuple[int | None, str]:
+    """How many copies of the model make the full part, and the model's name, from the
+    normal axis of each symmetry plane (``ResultsReader.symmetry``: "" a full model, "x" a
+    half, "xy" a quarter). None copies when unknown: a file that does not record the
+    planes, or two planes normal to one axis (a slice between them)."""
+    if symmetry is None:
+        return None, "model of unknown fraction (the results do not record its symmetry planes)"
+    repeated = sorted({a for a in symmetry if symmetry.count(a) > 1})
+    if repeated:
+        return None, (f"slice between symmetry planes normal to {repeated[0]} (the full "
+                      "part's force is unknown)")
+    copies = 2 ** len(symmetry)
+    planes = " and ".join(symmetry)
+    if copies == 1:
+        return 1, "full model"
+    return copies, f"{FRACTION_NAMES[copies]} model (symmetry planes normal to {planes})"
 
 
 @dataclass(frozen=True)
@@ -44,6 +80,12 @@ class Run:
     limit: NDArray[np.int8]
     contact: NDArray[np.int32]
     time: NDArray[np.float64]
+    symmetry: str | None = None
+
+    @property
+    def fraction(self) -> tuple[int | None, str]:
+        """Copies of the model in the full part and the model's name (model_fraction)."""
+        return model_fraction(self.symmetry)
 
     @property
     def forming(self) -> NDArray[np.bool_]:
@@ -74,6 +116,7 @@ def load_run(target: str | os.PathLike[str], label: str | None = None) -> Run:
         leads = tuple(str(x) for x in attrs.get("leads", [""] * len(r.phases)))
         h = r.history()
         status = str(attrs.get("status", "unknown"))
+        symmetry = r.symmetry
     k = len(h["phase"])
     phase = h["phase"].astype(np.int32)
     stroke, force = np.zeros(k), np.zeros(k)
@@ -93,7 +136,7 @@ def load_run(target: str | os.PathLike[str], label: str | None = None) -> Run:
     return Run(path, label or _label(path), r.title, status, r.tools, r.phases, leads, phase,
                stroke, force, h["step"], h["iterations"].astype(np.int32),
                h["cutbacks"].astype(np.int32), h["limit"], h["nodes_in_contact"],
-               h["time_total"])
+               h["time_total"], symmetry)
 
 
 def _label(path: Path) -> str:
@@ -104,8 +147,10 @@ def _label(path: Path) -> str:
 
 
 def phase_table(run: Run) -> list[dict[str, object]]:
-    """One row per phase: increments, iterations, cutbacks, final stroke, largest force,
-    wall time."""
+    """One row per phase: increments, iterations, cutbacks, final stroke, largest force of
+    the model and of the full part (empty when the model's fraction is unknown), wall
+    time."""
+    copies = run.fraction[0]
     rows = []
     for p, name in enumerate(run.phases):
         sel = run.phase == p
@@ -116,6 +161,8 @@ def phase_table(run: Run) -> list[dict[str, object]]:
                      "cutbacks": int(run.cutbacks[sel].sum()),
                      "stroke_mm": float(run.stroke[sel][-1]),
                      "max_force_N": float(run.force[sel].max()),
+                     "max_force_full_part_N": ("" if copies is None
+                                               else float(copies * run.force[sel].max())),
                      "time_s": float(run.time[sel].sum())})
     return rows
 
@@ -170,27 +217,118 @@ def _pyplot():
 
 
 def _force_plot(runs: Sequence[Run], path: Path) -> Path:
+    """The lead tool's force against its stroke. One run: the model's force and, for a
+    symmetric model, the full part's (dashed); several runs: each run's full part's force
+    (the model's where its fraction is unknown), so that models of different fractions
+    compare."""
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(6.4, 4.4))
-    for run in runs:
+    if len(runs) == 1:
+        run = runs[0]
         sel = run.forming
-        ax.plot(run.stroke[sel], run.force[sel], label=run.label)
-    ax.set_xlabel("stroke of the lead tool (mm)")
-    ax.set_ylabel("force on the lead tool (N)")
-    ax.grid(True, alpha=0.3)
-    if len(runs) > 1:
-        ax.legend()
+        copies, name = run.fraction
+        ax.plot(run.stroke[sel], run.force[sel], label=f"{name}, as computed")
+        if copies is not None and copies > 1:
+            ax.plot(run.stroke[sel], copies * run.force[sel], "--",
+                    label=f"full part ({copies} x the {FRACTION_NAMES[copies]} model)")
+        ax.set_ylabel("force on the lead tool (N)")
+        ax.set_title(run.title, fontsize=9)
     else:
-        ax.set_title(runs[0].title, fontsize=9)
+        for run in runs:
+            sel = run.forming
+            copies, name = run.fraction
+            label = (f"{run.label}: full part ({copies} x)" if copies is not None
+                     else f"{run.label}: {name}")
+            ax.plot(run.stroke[sel], (copies or 1) * run.force[sel], label=label)
+        ax.set_ylabel("force on the lead tool, full part (N)")
+    ax.set_xlabel("stroke of the lead tool (mm)")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return path
 
 
-def _plastic_strain_map(results: Path, path: Path) -> Path:
-    """The deformed blank of the last frame seen along its thinnest direction, boundary faces
-    facing the viewer coloured by the equivalent plastic strain of their element."""
+@dataclass(frozen=True)
+class IncrementPanels:
+    """What increments.png draws: each phase's span of increment numbers (name, first,
+    last, whether it moves a lead tool), the increments that move a lead tool with their
+    step (mm of lead travel: the log axis), the springback increments (no travel: drawn
+    apart, on a strip of their own) and every increment's Newton iterations."""
+
+    spans: tuple[tuple[str, int, int, bool], ...]
+    forming_number: NDArray[np.int64]
+    forming_step: NDArray[np.float64]
+    springback_number: NDArray[np.int64]
+    number: NDArray[np.int64]
+    iterations: NDArray[np.int32]
+
+
+def increment_panels(run: Run) -> IncrementPanels:
+    """The data of increments.png (IncrementPanels)."""
+    number = np.arange(1, len(run.phase) + 1)
+    spans = []
+    for p, name in enumerate(run.phases):
+        rows = np.flatnonzero(run.phase == p)
+        if rows.size:
+            spans.append((name, int(number[rows[0]]), int(number[rows[-1]]),
+                          bool(run.leads[p])))
+    forming = run.forming
+    return IncrementPanels(tuple(spans), number[forming], run.step[forming],
+                           number[~forming], number, run.iterations)
+
+
+def _increments_plot(run: Run, path: Path) -> Path:
+    """increments.png: the step of each increment that moves a lead tool (log axis), the
+    springback steps on a strip below it, and the Newton iterations; phases shaded and
+    named inside the axes."""
+    plt = _pyplot()
+    from matplotlib.transforms import blended_transform_factory
+
+    panels = increment_panels(run)
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(6.4, 5.2), sharex=True)
+    if panels.forming_number.size:
+        a1.semilogy(panels.forming_number, panels.forming_step, ".", markersize=3,
+                    label="increment moving the lead tool")
+        positive = panels.forming_step[panels.forming_step > 0]
+        if positive.size:
+            # Room above for the phase names and below for the springback strip.
+            lo, hi = float(positive.min()), float(positive.max())
+            decades = max(hi / lo, 10.0)
+            a1.set_ylim(lo / decades**0.3, hi * decades**0.35)
+    a1.set_ylabel("step (mm of lead travel)")
+    a2.plot(panels.number, panels.iterations, ".", markersize=3)
+    a2.set_ylabel("Newton iterations")
+    a2.set_xlabel("increment")
+    for k, (name, first, last, moves) in enumerate(panels.spans):
+        for ax in (a1, a2):
+            ax.axvspan(first - 0.5, last + 0.5, color="0.85" if k % 2 else "0.93", zorder=0)
+        on_axes = blended_transform_factory(a1.transData, a1.transAxes)
+        a1.text(0.5 * (first + last), 0.97, name + ("" if moves else "\n(no tool travel)"),
+                transform=on_axes, ha="center", va="top", fontsize=8, clip_on=True)
+    if panels.springback_number.size:
+        # Springback steps move no tool: on their own strip at the foot of the axis, not
+        # at a fake step on the log scale.
+        on_foot = blended_transform_factory(a1.transData, a1.transAxes)
+        a1.plot(panels.springback_number, np.full(panels.springback_number.size, 0.04), "s",
+                color="C3", markersize=3, transform=on_foot, clip_on=False,
+                label="springback step (no travel)")
+        a1.legend(fontsize=7, loc="lower left", bbox_to_anchor=(0.0, 0.08))
+    for ax in (a1, a2):
+        ax.grid(True, alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+def _blank_map(results: Path, path: Path, values: NDArray[np.float64], label: str,
+               title: str, cmap: str = "viridis") -> Path:
+    """The deformed blank of the last frame seen along its thinnest direction (from the
+    side its normal points to: the top view of a flat sheet), boundary faces facing the
+    viewer coloured by ``values`` (one per element, or one per node: a face takes the mean
+    of its corners), the colourbar labelled ``label``."""
     from matplotlib.collections import PolyCollection
 
     from ddpy.model.mesh import HEX_FACES
@@ -198,15 +336,15 @@ def _plastic_strain_map(results: Path, path: Path) -> Path:
     plt = _pyplot()
     with ResultsReader(results) as r:
         x = r.field("coordinates")
-        ep = r.field("plastic_strain")
         elements = r.elements
-        frame = r.frames[-1]
     view = int(np.argmin(np.ptp(x, axis=0)))
     axes = [a for a in range(3) if a != view]
     faces = elements[:, HEX_FACES]                                     # (m, 6, 4)
     normal = np.cross(x[faces[..., 2]] - x[faces[..., 0]], x[faces[..., 3]] - x[faces[..., 1]])
     facing = normal[..., view] > 0.0
     owner = np.nonzero(facing)[0]
+    face_values = (values[owner] if len(values) == len(elements)
+                   else values[faces[facing]].mean(axis=1))
     polygons = x[faces[facing]][..., axes]
     depth = x[faces[facing]][..., view].mean(axis=1)
     order = np.argsort(depth)                                          # far to near
@@ -216,45 +354,162 @@ def _plastic_strain_map(results: Path, path: Path) -> Path:
     ratio = float(np.clip(span[0] / max(span[1], 1e-12), 1.0 / 3.0, 3.0))
     height = 3.8 if ratio >= 1.0 else 5.2
     fig, ax = plt.subplots(figsize=(min(height * ratio + 1.6, 9.0), height))
-    collection = PolyCollection(polygons[order], array=ep[owner][order], cmap="viridis",
+    collection = PolyCollection(polygons[order], array=face_values[order], cmap=cmap,
                                 edgecolors="k", linewidths=0.2)
     ax.add_collection(collection)
     ax.autoscale_view()
     ax.set_aspect("equal")
     ax.set_xlabel(f"{'xyz'[axes[0]]} (mm)")
     ax.set_ylabel(f"{'xyz'[axes[1]]} (mm)")
-    ax.set_title(f"equivalent plastic strain, frame {frame.index} (increment "
-                 f"{frame.increment})", fontsize=9)
-    fig.colorbar(collection, ax=ax, shrink=0.8)
+    ax.set_title(title, fontsize=9)
+    fig.colorbar(collection, ax=ax, shrink=0.8, label=label)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return path
 
 
-def post_run(target: str | os.PathLike[str], output: str | os.PathLike[str] | None = None
-             ) -> list[Path]:
+def _frame_words(frame: Frame) -> str:
+    return f"frame {frame.index} (increment {frame.increment})"
+
+
+def _plastic_strain_map(results: Path, path: Path) -> Path:
+    """plastic_strain.png: each element's equivalent plastic strain, last frame."""
+    with ResultsReader(results) as r:
+        ep, frame = r.field("plastic_strain"), r.frames[-1]
+    return _blank_map(results, path, ep, "equivalent plastic strain (-, mean of the Gauss "
+                      "points)", f"equivalent plastic strain, {_frame_words(frame)}")
+
+
+def _thinning_map(results: Path, path: Path) -> Path | None:
+    """thinning.png: each node's thinning in %, last frame; None for a blank without
+    thickness (not meshed in layers)."""
+    with ResultsReader(results) as r:
+        fields, frame = r.frame(-1), r.frames[-1]
+    if "thinning" not in fields:
+        return None
+    return _blank_map(results, path, fields["thinning"], "thinning 100 (t0 - t) / t0 (%)",
+                      f"thinning, {_frame_words(frame)}", cmap="RdYlBu_r")
+
+
+@dataclass(frozen=True)
+class FormingLimitCheck:
+    """Each element's strain point of the last frame against the forming limit curve: of
+    the element's top, middle and bottom faces, the one closest to the curve (or furthest
+    above it); its major and minor logarithmic strains, its margin below the curve (major
+    strain; negative above it) and zone (SAFE, MARGINAL within ``band`` below the curve,
+    FAILED on or above it)."""
+
+    curve: FormingLimitCurve
+    band: float
+    frame: Frame
+    element_ids: NDArray[np.int64]
+    surface: NDArray[np.int64]
+    major: NDArray[np.float64]
+    minor: NDArray[np.float64]
+    margin: NDArray[np.float64]
+    zone: NDArray[np.int8]
+
+    @property
+    def worst(self) -> int:
+        """The index of the element with the smallest margin."""
+        return int(np.argmin(self.margin))
+
+
+def forming_limit_check(results: str | os.PathLike[str], band: float = MARGINAL_BAND
+                        ) -> FormingLimitCheck | str:
+    """The forming limit check of a results file's last frame (FormingLimitCheck), or why
+    there is none (a string)."""
+    if not band >= 0:
+        raise ValueError(f"the marginal band must be >= 0, got {band}")
+    with ResultsReader(results) as r:
+        curve = r.forming_limit()
+        fields, frame, element_ids = r.frame(-1), r.frames[-1], r.element_ids
+    if curve is None:
+        return ("no forming limit curve in the results (a blank not meshed in layers, a "
+                "hardening law without hardening, or results written before ddpy recorded "
+                "it): give one with 'forming_limit table COUNT' in material.dat")
+    names = [(f"major_strain_{s}", f"minor_strain_{s}") for s in SURFACES]
+    if any(a not in fields or b not in fields for a, b in names):
+        return "no surface strains in the results (a blank not meshed in layers)"
+    major = np.stack([fields[a] for a, _ in names], axis=1)            # (m, 3)
+    minor = np.stack([fields[b] for _, b in names], axis=1)
+    margins = curve.margin(major, minor)
+    surface = np.argmin(margins, axis=1)
+    rows = np.arange(len(surface))
+    major, minor = major[rows, surface], minor[rows, surface]
+    return FormingLimitCheck(curve, band, frame, element_ids, surface, major, minor,
+                             margins[rows, surface], curve.zone(major, minor, band))
+
+
+_ZONES = ((SAFE, "safe", "tab:green"), (MARGINAL, "marginal", "orange"),
+          (FAILED, "failed", "tab:red"))
+
+
+def _fld_plot(check: FormingLimitCheck, path: Path) -> Path:
+    """fld.png: every element's strain point coloured by its zone, the forming limit curve
+    and the marginal band's lower edge."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(6.4, 5.0))
+    low = min(-0.3, float(check.minor.min()) * 1.1)
+    high = max(0.3, float(check.minor.max()) * 1.1)
+    e2 = np.linspace(low, high, 301)
+    limit = check.curve.major_limit(e2)
+    ax.plot(e2, limit, "k-", label="forming limit curve")
+    ax.plot(e2, limit - check.band, "k--", linewidth=0.8,
+            label=f"marginal band ({check.band:g} below)")
+    for zone, name, colour in _ZONES:
+        sel = check.zone == zone
+        ax.scatter(check.minor[sel], check.major[sel], s=10, color=colour,
+                   label=f"{name}: {int(sel.sum())} elements")
+    ax.set_xlabel("minor strain (logarithmic, -)")
+    ax.set_ylabel("major strain (logarithmic, -)")
+    ax.set_ylim(bottom=min(0.0, float(check.major.min())),
+                top=max(float(limit.max()), float(check.major.max())) * 1.1)
+    ax.set_title(f"forming limit diagram, {_frame_words(check.frame)}\n"
+                 f"{check.curve.describe()}", fontsize=8)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8, loc="lower right")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+def _fld_summary(check: FormingLimitCheck | str) -> str:
+    """The forming limit section of summary.md."""
+    lines = ["\n## Forming limit diagram\n"]
+    if isinstance(check, str):
+        return "\n".join(lines + [f"- {check}"]) + "\n"
+    counts = ", ".join(f"{int((check.zone == z).sum())} {name}" for z, name, _ in _ZONES)
+    k = check.worst
+    zone = dict((z, name) for z, name, _ in _ZONES)[int(check.zone[k])]
+    where = "below" if check.margin[k] > 0 else "above"
+    lines += [f"- forming limit curve: {check.curve.describe()}",
+              f"- marginal band: {check.band:g} in major strain below the curve",
+              f"- elements ({_frame_words(check.frame)}, the most critical of each "
+              f"element's top, middle and bottom faces): {counts}",
+              f"- smallest margin to the forming limit curve: {check.margin[k]:.4g} "
+              f"({abs(check.margin[k]):.4g} {where} the curve; element "
+              f"{check.element_ids[k]}, {SURFACES[check.surface[k]]} face, major strain "
+              f"{check.major[k]:.4g}, minor strain {check.minor[k]:.4g}): {zone}"]
+    return "\n".join(lines) + "\n"
+
+
+def post_run(target: str | os.PathLike[str], output: str | os.PathLike[str] | None = None,
+             band: float = MARGINAL_BAND) -> list[Path]:
     """Figures and tables of one run into ``output`` (default: the results' folder):
     force_stroke.png, increments.png (increment size and iterations), contact.png (nodes in
-    contact per tool), plastic_strain.png, increments.csv, phases.csv and summary.md."""
+    contact per tool), plastic_strain.png, thinning.png, fld.png (the forming limit
+    diagram, marginal band ``band``), increments.csv, phases.csv and summary.md."""
     run = load_run(target)
+    check = forming_limit_check(run.path, band)
     out = Path(output) if output else run.path.parent
     out.mkdir(parents=True, exist_ok=True)
     plt = _pyplot()
-    paths = [_force_plot([run], out / "force_stroke.png")]
+    paths = [_force_plot([run], out / "force_stroke.png"),
+             _increments_plot(run, out / "increments.png")]
     number = np.arange(1, len(run.phase) + 1)
-    fig, (a1, a2) = plt.subplots(2, 1, figsize=(6.4, 5.2), sharex=True)
-    a1.semilogy(number, np.maximum(run.step, 1e-12), ".", markersize=3)
-    a1.set_ylabel("increment size (mm of lead travel)")
-    a2.plot(number, run.iterations, ".", markersize=3)
-    a2.set_ylabel("Newton iterations")
-    a2.set_xlabel("increment")
-    for ax in (a1, a2):
-        ax.grid(True, alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(out / "increments.png", dpi=120)
-    plt.close(fig)
-    paths.append(out / "increments.png")
     fig, ax = plt.subplots(figsize=(6.4, 4.0))
     for t, name in enumerate(run.tools):
         ax.plot(number, run.contact[:, t], label=name)
@@ -267,12 +522,20 @@ def post_run(target: str | os.PathLike[str], output: str | os.PathLike[str] | No
     plt.close(fig)
     paths.append(out / "contact.png")
     paths.append(_plastic_strain_map(run.path, out / "plastic_strain.png"))
+    thinning = _thinning_map(run.path, out / "thinning.png")
+    if thinning is not None:
+        paths.append(thinning)
+    if isinstance(check, FormingLimitCheck):
+        paths.append(_fld_plot(check, out / "fld.png"))
     phases = phase_table(run)
     paths.append(write_csv(out / "increments.csv", increment_rows(run)))
     paths.append(write_csv(out / "phases.csv", phases))
+    copies, name = run.fraction
     summary = (f"# {run.title}\n\nResults: `{run.path}`, status {run.status}, "
-               f"{len(run.phase)} increments.\n\n" + markdown(phases)
-               + forming_summary(run))
+               f"{len(run.phase)} increments; a {name}"
+               + (f": the full part's force is {copies} x the model's" if copies and copies > 1
+                  else "") + ".\n\n"
+               + markdown(phases) + forming_summary(run) + _fld_summary(check))
     (out / "summary.md").write_text(summary)
     paths.append(out / "summary.md")
     return paths

@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ddpy.model.control import IncrementLimits, NewtonSettings
+from ddpy.model.forming_limits import FormingLimitCurve
 from ddpy.model.material import Material
 from ddpy.model.mesh import HEX_FACES, HexMesh
 from ddpy.model.solid import DEFAULT_ELEMENT
@@ -139,6 +140,7 @@ class Constraint:
     components: tuple[int, ...]
     phases: tuple[str, ...] = ()
     origin: str = ""
+    symmetry: bool = False  # a symmetry plane (bc.dat 'symmetry'), normal to its component
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "nodes", _frozen(np.unique(self.nodes), np.int32))
@@ -154,6 +156,12 @@ class BoundaryConditions:
     nodesets: Mapping[str, NodeSet] = field(default_factory=dict)
     constraints: tuple[Constraint, ...] = ()
     tolerance: float = 1e-4
+
+    @property
+    def symmetry_axes(self) -> str:
+        """The normal axis of each symmetry plane, in bc.dat's order ("xy" for a quarter
+        model with planes x = 0 and y = 0)."""
+        return "".join("xyz"[c.components[0]] for c in self.constraints if c.symmetry)
 
     def constrained(self, phase: str) -> tuple[NDArray[np.int32], NDArray[np.int32]]:
         """Nodes and components held at zero displacement in ``phase``: two arrays of equal
@@ -220,6 +228,7 @@ class BlankMaterial:
     rolling_angle: float = 0.0
     yield_input: str = "von Mises"
     origin: str = ""
+    forming_limit: FormingLimitCurve | None = None  # material.dat's table; None: Keeler-Brazier
 
     def axes(self, normal: tuple[float, float, float] = (0.0, 0.0, 1.0)) -> NDArray[np.float64]:
         """Rows RD, TD, ND of the material axes in global coordinates (a rotation matrix)."""
@@ -454,9 +463,13 @@ class Case:
             f"{_axis_name(m.normal)} ({m.source})",
             f"  material: E = {mat.E:g} MPa, nu = {mat.nu:g}, {self.material.yield_input}, "
             f"{hard} hardening, initial yield {mat.hardening.initial_yield_stress:.4g} MPa, "
-            f"rolling direction {self.material.rolling_angle:g} deg",
+            f"rolling direction {self.material.rolling_angle:g} deg"
+            + (f", forming limit {self.material.forming_limit.describe()}"
+               if self.material.forming_limit is not None else ""),
             f"  boundary: {len(self.boundary.nodesets)} node sets, "
-            f"{len(self.boundary.constraints)} constraints",
+            f"{len(self.boundary.constraints)} constraints"
+            + (f", symmetry planes normal to {' and '.join(self.boundary.symmetry_axes)}"
+               if self.boundary.symmetry_axes else ""),
         ]
         for t in self.tools:
             lines.append(f"  tool {t.name}: {t.description}, {t.file.name}, friction "

@@ -41,6 +41,7 @@ from numpy.typing import ArrayLike, NDArray
 from ddpy import __version__
 from ddpy.geometry.tessellation import TRIANGLE, tessellate
 from ddpy.io.output_folder import RESULT_MODE, atomic_write
+from ddpy.model.forming_limits import FormingLimitCurve, hardening_exponent
 from ddpy.model.forming_quantities import SURFACES, FieldFrame, SheetMeasures, nodal_average
 
 __all__ = ["CONTACT_STATES", "FORMAT", "LIMITS", "TENSOR6", "VOIGT", "Frame", "ResultsReader",
@@ -381,9 +382,35 @@ class ResultsWriter:
         ``surfaces``, or else read from the case's tool files), phases and title."""
         if surfaces is None:
             surfaces = [t.model().surface for t in case.tools]
-        return cls(path, case.mesh, case.tool_names, [p.name for p in case.phases],
-                   title=case.title, case=str(case.folder), element=case.element,
-                   overwrite=overwrite, surfaces=surfaces)
+        writer = cls(path, case.mesh, case.tool_names, [p.name for p in case.phases],
+                     title=case.title, case=str(case.folder), element=case.element,
+                     overwrite=overwrite, surfaces=surfaces)
+        curve = case.material.forming_limit
+        if curve is None and writer._measures is not None:
+            n = hardening_exponent(case.material.material)
+            if n > 0:  # (a hardening law with no hardening has no Keeler-Brazier curve)
+                thickness = float(np.median(writer._measures.initial_thickness))
+                curve = FormingLimitCurve.keeler_brazier(n, thickness)
+        writer.describe_part(case.boundary.symmetry_axes, curve)
+        return writer
+
+    def describe_part(self, symmetry: str, forming_limit: FormingLimitCurve | None) -> None:
+        """Record what post-processing needs of the case: the normal axis of each symmetry
+        plane (``symmetry``, e.g. "xy" for a quarter model) and the forming limit curve
+        (None: none)."""
+        with self._writing(frame=False):
+            self._file.attrs["symmetry"] = symmetry
+            if "forming_limit" in self._file:
+                del self._file["forming_limit"]
+            if forming_limit is not None:
+                g = self._file.create_group("forming_limit")
+                c = forming_limit
+                g.attrs.update({"kind": c.kind, "n": c.n, "thickness": c.thickness,
+                                "origin": c.origin, "description": c.describe()})
+                if c.kind == "table":
+                    g.create_dataset("minor", data=np.array(c.minor)).attrs["units"] = "1"
+                    g.create_dataset("major", data=np.array(c.major)).attrs["units"] = "1"
+            self._file.flush()
 
     @classmethod
     def reopen(cls, path: str | os.PathLike[str], increments: int, iterations: int,
@@ -911,6 +938,25 @@ class ResultsReader:
         #: the run's peak resident memory, MB (None: not recorded, files written before)
         peak = f.attrs.get("peak_memory_mb")
         self.peak_memory_mb = None if peak is None else float(peak)
+
+    @property
+    def symmetry(self) -> str | None:
+        """The normal axis of each symmetry plane of the case ("xy": planes normal to x
+        and to y, a quarter model; "": none); None when the file does not record them
+        (written before ddpy did)."""
+        value = self._file.attrs.get("symmetry")
+        return None if value is None else str(value)
+
+    def forming_limit(self) -> FormingLimitCurve | None:
+        """The run's forming limit curve (material.dat's table, or Keeler-Brazier's from
+        the hardening exponent and the blank's thickness); None when the file holds none."""
+        g = self._file.get("forming_limit")
+        if g is None:
+            return None
+        a = g.attrs
+        if str(a["kind"]) == "table":
+            return FormingLimitCurve.table(g["minor"][()], g["major"][()], str(a["origin"]))
+        return FormingLimitCurve.keeler_brazier(float(a["n"]), float(a["thickness"]))
 
     @property
     def nodes(self) -> NDArray[np.float64]:

@@ -389,7 +389,8 @@ class _Cross:
                                f"the mesh (tolerance {tol:g} mm; the blank spans "
                                f"{x[:, axis].min():.4g} to {x[:, axis].max():.4g})")
                     continue
-            constraints.append(Constraint(label, nodes, (axis,), (), deck.where(line)))
+            constraints.append(Constraint(label, nodes, (axis,), (), deck.where(line),
+                                          symmetry=True))
         for name, comps, phases, line in bc.fixes:
             if name not in sets:
                 self._unknown_set(line, name, sets)

@@ -18,6 +18,7 @@ from ddpy.io.decks.lines import (
     read_pairs,
     show,
 )
+from ddpy.model.forming_limits import FLC_MAX_POINTS, FormingLimitCurve
 from ddpy.model.material import (
     TABLE_MAX_POINTS,
     ArmstrongFrederick,
@@ -47,6 +48,9 @@ R_VALUE_RANGE = (0.1, 10.0)
 #: The kinematic hardening's rate C_X at most this (Voce's b has the same bound): the
 #: backstress saturates within a plastic strain of a few 1e-6.
 MAX_KINEMATIC_RATE = 1e6
+#: Forming limit table bounds (logarithmic strains): minor strains within +-1, major
+#: strains above 0 and at most 2 (a sheet stretched seven times its length).
+MAX_FLC_MINOR, MAX_FLC_MAJOR = 1.0, 2.0
 _KINEMATIC_FORM = "kinematic armstrong-frederick C VALUE Xsat VALUE"
 
 
@@ -56,6 +60,7 @@ def _parse_material(deck: Deck) -> BlankMaterial | None:
     criterion: tuple[Hill48, str] | None = None
     hardening: Swift | Voce | HardeningTable | None = None
     kinematic: ArmstrongFrederick | None = None
+    forming_limit: FormingLimitCurve | None = None
     angle = 0.0
     lines = iter(deck.lines)
     for line in lines:
@@ -80,6 +85,14 @@ def _parse_material(deck: Deck) -> BlankMaterial | None:
                 rows = [next(lines, None) for _ in range(count)]
                 if first_time(deck, seen, line):
                     hardening = _table(deck, line, rows)
+            elif key == "forming_limit":
+                check_arity(line, "forming_limit table COUNT", 2)
+                read_choice(w[1], "the forming limit curve", ("table",))
+                count = read_int(w[2], "the number of points of the forming limit table", 2,
+                                 FLC_MAX_POINTS)
+                rows = [next(lines, None) for _ in range(count)]
+                if first_time(deck, seen, line):
+                    forming_limit = _forming_limit(deck, line, rows)
             elif key == "hardening":
                 check_arity(line, "hardening swift|voce|table ...", 1, -1)
                 if first_time(deck, seen, line):
@@ -94,7 +107,7 @@ def _parse_material(deck: Deck) -> BlankMaterial | None:
                     angle = read_float(w[1], "the rolling direction angle", ge=-360, le=360)
             else:
                 raise BadValue(f"unknown keyword {show(key)}: expected elastic, yield, "
-                               "hardening, kinematic or rolling_direction")
+                               "hardening, kinematic, rolling_direction or forming_limit")
         except BadValue as bad:
             deck.error(line.number, str(bad))
     for key, form in (("elastic", "elastic E VALUE nu VALUE"),
@@ -124,7 +137,8 @@ def _parse_material(deck: Deck) -> BlankMaterial | None:
     except (ValueError, TypeError) as error:
         deck.error(seen["elastic"], f"invalid material: {error}")
         return None
-    return BlankMaterial(material, angle, criterion[1], deck.where(seen["yield"]))
+    return BlankMaterial(material, angle, criterion[1], deck.where(seen["yield"]),
+                         forming_limit)
 
 
 def _yield(line: Line, deck: Deck) -> tuple[Hill48, str]:
@@ -164,15 +178,54 @@ def _yield(line: Line, deck: Deck) -> tuple[Hill48, str]:
     return hill, text
 
 
+def _table_rows(deck: Deck, line: Line, rows: list[Line | None], what: str,
+                form: str) -> list[Line] | None:
+    """The COUNT lines of a table after its line ``line``; None (an error) when the deck
+    ends inside it."""
+    if any(row is None for row in rows):
+        deck.error(None, f"the deck ends inside the {what} of line {line.number}: expected "
+                   f"{len(rows)} lines '{form}'")
+        return None
+    return [row for row in rows if row is not None]
+
+
+def _forming_limit(deck: Deck, line: Line, rows: list[Line | None]) -> FormingLimitCurve | None:
+    """The COUNT lines ``MINOR MAJOR`` after ``forming_limit table COUNT``; None after an
+    error."""
+    table = _table_rows(deck, line, rows, "forming limit table", "MINOR MAJOR")
+    if table is None:
+        return None
+    minor: list[float] = []
+    major: list[float] = []
+    for row in table:
+        try:
+            check_arity(row, "MINOR MAJOR (a point of the forming limit table, logarithmic "
+                        "strains)", 1)
+            e2 = read_float(row.words[0], "the minor strain", ge=-MAX_FLC_MINOR,
+                            le=MAX_FLC_MINOR)
+            e1 = read_float(row.words[1], "the major strain", gt=0, le=MAX_FLC_MAJOR)
+            if minor and e2 <= minor[-1]:
+                raise BadValue(f"the minor strain {row.words[0]} must be above the one before "
+                               f"({minor[-1]:g}): list the points from left to right")
+            if e1 < e2:
+                raise BadValue(f"the major strain {row.words[1]} is below the minor strain "
+                               f"{row.words[0]}: expected MINOR MAJOR with major >= minor")
+        except BadValue as bad:
+            deck.error(row.number, str(bad))
+            return None
+        minor.append(e2)
+        major.append(e1)
+    return FormingLimitCurve.table(minor, major, deck.where(line.number))
+
+
 def _table(deck: Deck, line: Line, rows: list[Line | None]) -> HardeningTable | None:
     """The COUNT lines ``EP Y`` after ``hardening table COUNT``; None after an error."""
     strains: list[float] = []
     stresses: list[float] = []
-    for row in rows:
-        if row is None:
-            deck.error(None, f"the deck ends inside the hardening table of line {line.number}: "
-                       f"expected {len(rows)} lines 'EP Y'")
-            return None
+    table = _table_rows(deck, line, rows, "hardening table", "EP Y")
+    if table is None:
+        return None
+    for row in table:
         try:
             check_arity(row, "EP Y (a point of the hardening table)", 1)
             ep = read_float(row.words[0], "the plastic strain EP", ge=0, le=MAX_EPS0)

@@ -245,9 +245,9 @@ def verdict(mixed: float, isotropic: float) -> tuple[bool, str]:
     difference = mixed - isotropic
     differs = abs(difference) > SPRINGBACK_DEGREES and \
         abs(difference) > SPRINGBACK_FRACTION * abs(isotropic)
-    relative = f" ({difference / isotropic:+.0%} of the isotropic)" if isotropic else ""
-    return differs, (f"{'differs' if differs else 'same'}: mixed minus isotropic "
-                     f"{difference:+.2f} deg{relative}")
+    relative = f", {difference / isotropic:+.1%} of the isotropic" if isotropic else ""
+    return differs, (f"{'differs' if differs else 'same'} (mixed minus isotropic "
+                     f"{difference:+.2f} deg{relative})")
 
 
 ANGLE_LABELS = {"beta": "flange to the vertical (beta_1 formed, beta_2 sprung)",
@@ -380,8 +380,8 @@ def report(numbers: dict[str, dict[str, Any]], table: HardeningTable, gap: tuple
             mixed, isotropic = numbers[f"{case}/mixed"], numbers[f"{case}/isotropic"]
             main = " (the case's main angle)" if angle == MAIN_ANGLE[case] else ""
             _, text = verdict(springback(mixed, angle), springback(isotropic, angle))
-            verdicts.append(f"- {case}, {ANGLE_LABELS[angle]}{main}: the springback {text}; "
-                            "the shape after springback " + verdict(
+            verdicts.append(f"- {case}, {ANGLE_LABELS[angle]}{main}: springback {text}; "
+                            "angle after springback " + verdict(
                                 mixed["angles_deg"][angle][1],
                                 isotropic["angles_deg"][angle][1])[1])
     lines += ["", f"Verdict (an angle differs when mixed and isotropic differ by more than "

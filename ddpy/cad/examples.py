@@ -363,23 +363,52 @@ def sweep_profile(pieces: list[Piece], centre: float, margin: float) -> list[int
 def _rounded_flat(centre: float, radius: float, z: float, margin: float) -> list[int]:
     """The flat end of a square punch in the quarter x, y >= -``margin``: the rounded square
     of half-width ``centre`` + ``radius`` (corner arc of ``radius`` about (``centre``,
-    ``centre``)) at height ``z``, in two four-sided faces split along the diagonal y = x, so
-    that each is one Bezier patch and meets the corner's two halves edge to edge."""
+    ``centre``)) at height ``z``, in eight four-sided faces of fair shape, so that each is
+    one Bezier patch and a structured mesh: the square up to ``centre``, two strips along
+    each side (split at half the radius), and the corner's quarter disc as an inner
+    quadrilateral and two pieces of the rim split at 45 degrees, meeting the corner's two
+    swept halves edge to edge (the disc sector of the reverse drawing's punch 2)."""
     import gmsh
 
     occ = gmsh.model.occ
     c, a, m = centre, radius, margin
-    middle = c + a / np.sqrt(2.0)
-    origin, diagonal = occ.addPoint(-m, -m, z), occ.addPoint(middle, middle, z)
-    arc_centre = occ.addPoint(c, c, z)
-    xa, xb = occ.addPoint(c + a, -m, z), occ.addPoint(c + a, c, z)
-    yb, ya = occ.addPoint(c, c + a, z), occ.addPoint(-m, c + a, z)
-    across = occ.addLine(origin, diagonal)
-    first = [occ.addLine(origin, xa), occ.addLine(xa, xb),
-             occ.addCircleArc(xb, arc_centre, diagonal), -across]
-    second = [across, occ.addCircleArc(diagonal, arc_centre, yb), occ.addLine(yb, ya),
-              occ.addLine(ya, origin)]
-    return [occ.addPlaneSurface([occ.addCurveLoop(loop)]) for loop in (first, second)]
+    points: dict[tuple[float, float], int] = {}
+
+    def point(x: float, y: float) -> int:
+        key = (round(float(x), 12), round(float(y), 12))
+        if key not in points:
+            points[key] = occ.addPoint(key[0], key[1], z)
+        return points[key]
+
+    lines: dict[tuple[int, int], int] = {}
+
+    def line(p: int, q: int) -> int:
+        if (q, p) in lines:
+            return -lines[(q, p)]
+        if (p, q) not in lines:
+            lines[(p, q)] = occ.addLine(p, q)
+        return lines[(p, q)]
+
+    def quad(*corners: tuple[float, float]) -> int:
+        tags = [point(*x) for x in corners]
+        loop = [line(tags[i], tags[(i + 1) % 4]) for i in range(4)]
+        return occ.addPlaneSurface([occ.addCurveLoop(loop)])
+
+    h, d = 0.5 * a, 0.6 * a / np.sqrt(2.0)
+    faces = [quad((-m, -m), (c, -m), (c, c), (-m, c)),
+             quad((c, -m), (c + h, -m), (c + h, c), (c, c)),
+             quad((c + h, -m), (c + a, -m), (c + a, c), (c + h, c)),
+             quad((-m, c), (c, c), (c, c + h), (-m, c + h)),
+             quad((-m, c + h), (c, c + h), (c, c + a), (-m, c + a)),
+             quad((c, c), (c + h, c), (c + d, c + d), (c, c + h))]
+    centre_tag = occ.addPoint(c, c, z)
+    q0, q1, q2 = point(c + a, c), point(c + a / np.sqrt(2.0), c + a / np.sqrt(2.0)), point(c, c + a)
+    p0, p1, p2 = point(c + h, c), point(c + d, c + d), point(c, c + h)
+    arcs = [occ.addCircleArc(q0, centre_tag, q1), occ.addCircleArc(q1, centre_tag, q2)]
+    for loop in ([line(p0, q0), arcs[0], line(q1, p1), line(p1, p0)],
+                 [line(p1, q1), arcs[1], line(q2, p2), line(p2, p1)]):
+        faces.append(occ.addPlaneSurface([occ.addCurveLoop(loop)]))
+    return faces
 
 
 def square_cup_tools(path: str | os.PathLike[str] | None = None, *, thickness: float = 0.81,
@@ -402,8 +431,8 @@ def square_cup_tools(path: str | os.PathLike[str] | None = None, *, thickness: f
     ``outer_half``. The blank-holder (above): a flat ``holder_gap`` above the blank from
     ``holder_half`` (its corners concentric with the die's) to ``outer_half``, its inner
     edge rounded by ``holder_edge``. Every face reaches ``margin`` beyond the symmetry
-    planes x = 0 and y = 0. Returns the face tags by tool: punch (its flat end in two
-    halves, then nose and wall swept), die (wall, profile radius, flat), holder (edge,
+    planes x = 0 and y = 0. Returns the face tags by tool: punch (its flat end in eight
+    faces, then nose and wall swept), die (wall, profile radius, flat), holder (edge,
     flat), each swept face as :func:`sweep_profile` gives them.
     """
     import gmsh

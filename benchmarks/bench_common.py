@@ -1,6 +1,7 @@
 """What the benchmark scripts share: loading a sibling script as a module, the code version
-a run records (read back, and kept when a run is continued), the cores, the kept-runs file
-and a markdown table row.
+a run records (read back, and kept when a run is continued), the cores, the kept-runs file,
+a markdown table row, and the tools' CAD model written, read back and built into the paper's
+tool models.
 
 A script puts this folder on ``sys.path`` and imports it; tests do the same to load a
 benchmark's scripts (``load_module``)."""
@@ -13,6 +14,7 @@ import json
 import os
 import subprocess
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from types import ModuleType
 from typing import Any
@@ -133,3 +135,64 @@ def runs_file(stem: str) -> Path:
 def table_row(cells: list[Any]) -> str:
     """A markdown table row."""
     return "| " + " | ".join(str(c) for c in cells) + " |"
+
+
+#: Tool file of each tool model of the paper, and the description the deck gives it.
+TOOL_FILES = {"bezier": ("bezier", "bezier"), "nagata": ("nagata", "nagata"),
+              "facets_coarse": ("facets_coarse", "facets"),
+              "facets_fine": ("facets_fine", "facets")}
+
+
+def written_tool_faces(step: Path, make: Callable[[Path], dict[str, list[int]]]
+                       ) -> dict[str, list[int]]:
+    """Write a CAD model of tools with ``make(step)`` (which adds them to the current gmsh
+    model and returns their face tags by tool) and read it back as ``ddpy tools build``
+    does (``load_cad``): the face tags of each tool in the file read back, matched to
+    those made by the point at the middle of each face. Runs in its own gmsh session."""
+    import math
+
+    import gmsh
+
+    from ddpy.cad import gmsh_session, load_cad
+
+    with gmsh_session():
+        gmsh.clear()
+        made = make(step)
+        marks = {t: _inner_point(t) for faces in made.values() for t in faces}
+        gmsh.clear()
+        loaded = load_cad(step)
+        back = {f: _inner_point(f) for f in loaded}
+        found = {t: min(loaded, key=lambda f: math.dist(back[f], x)) for t, x in marks.items()}
+        if sorted(found.values()) != sorted(loaded) or any(
+                math.dist(back[found[t]], x) > 1e-6 for t, x in marks.items()):
+            raise RuntimeError(f"{step}: the faces read back differ from those written")
+        gmsh.clear()
+    return {tool: [found[t] for t in faces] for tool, faces in made.items()}
+
+
+def _inner_point(face: int) -> list[float]:
+    """A point of a gmsh face, at the middle of its parameter range."""
+    import gmsh
+
+    lo, hi = gmsh.model.getParametrizationBounds(2, face)
+    return list(gmsh.model.getValue(2, face, [0.5 * (a + b) for a, b in zip(lo, hi, strict=True)]))
+
+
+def build_tool_model(step: Path, folder: Path, tool: str, model: str, faces: list[int],
+                     blank_side: tuple[float, float, float], per_arc: int = 0,
+                     size: float | None = None, arc_size: float | None = None) -> Path:
+    """Write ``<tool>.<model>.tool`` in ``folder`` from the faces of ``step``: ``model`` one
+    of TOOL_FILES (Bezier patches, or a mesh of ``per_arc`` patches or facets per 90 degrees
+    of arc, straight edges at most ``size`` and arcs ``arc_size`` mm long)."""
+    from ddpy.cad import build_tool_models
+
+    if model == "bezier":
+        return build_tool_models(step, folder, tool, models=("bezier",),
+                                 blank_side=blank_side, faces=faces)["bezier"]
+    kind = "nagata" if model == "nagata" else "facets"
+    written = build_tool_models(step, folder, tool, patches_per_arc=per_arc,
+                                facets_per_arc=per_arc, size=size, arc_size=arc_size,
+                                blank_side=blank_side, faces=faces, models=(kind,))
+    target = folder / f"{tool}.{model}.tool"
+    written[kind].replace(target)
+    return target

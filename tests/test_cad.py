@@ -14,6 +14,7 @@ from ddpy.cad.examples import (
     cylindrical_punch,
     die_profile,
     sphere_patch,
+    square_cup_tools,
     write_cad,
 )
 from ddpy.cad.shape_error import plot_shape_error, shape_error
@@ -537,6 +538,33 @@ def test_step_faces_the_cad_kernel_drops_are_reported(cad: dict[str, Path], tmp_
     types = {k: v for k, v in ddpy.cad.read._STEP_TYPES.items() if k != "ADVANCED_FACE"}
     monkeypatch.setattr(ddpy.cad.read, "_STEP_TYPES", types)
     with pytest.raises(CadError, match=r"the CAD kernel read \d+ of the \d+ faces"):
+        build_tool_models(bad, tmp_path, "bad", blank_side=(0.0, 0.0, 1.0))
+
+
+def test_step_swept_surfaces_are_read_and_their_references_checked(tmp_path: Path) -> None:
+    # The square cup punch's corner is a torus whose tube (the 8 mm nose) is wider than its
+    # ring (10 - 8 mm): OpenCASCADE writes it as a SURFACE_OF_REVOLUTION, which the STEP
+    # check once refused as no surface. Read, every face of the three tools is there; a
+    # SURFACE_OF_REVOLUTION whose axis is a point is refused at its line.
+    import re
+
+    step = tmp_path / "cup.step"
+    with gmsh_session():
+        gmsh.model.add("cup")
+        made = square_cup_tools(step)
+        gmsh.model.remove()
+    text = step.read_text()
+    assert "SURFACE_OF_REVOLUTION" in text
+    with gmsh_session():
+        assert len(load_cad(step)) == sum(len(faces) for faces in made.values())
+    point = re.search(r"#(\d+) ?= ?CARTESIAN_POINT", text)
+    assert point is not None
+    bad = tmp_path / "bad.step"
+    bad.write_text(re.sub(r"(SURFACE_OF_REVOLUTION\('[^']*',#\d+,)#\d+",
+                          rf"\g<1>#{point.group(1)}", text, count=1))
+    with pytest.raises(CadError, match=r"bad.step:\d+: entity #\d+ SURFACE_OF_REVOLUTION: its "
+                                       r"axis_position #\d+ is CARTESIAN_POINT, expected "
+                                       r"AXIS1_PLACEMENT"):
         build_tool_models(bad, tmp_path, "bad", blank_side=(0.0, 0.0, 1.0))
 
 

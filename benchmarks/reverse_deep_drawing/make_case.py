@@ -31,6 +31,9 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent))  # the benchmarks' shared module
+from bench_common import TOOL_FILES, build_tool_model, written_tool_faces  # noqa: E402
+
 MODELS = ("bezier", "nagata", "facets_coarse", "facets_fine")
 MESHES = ("coarse", "medium", "paper")
 TOOLS = ("die1", "holder1", "punch1", "holder2", "punch2")
@@ -43,10 +46,6 @@ ELEMENT_SIZE = {"coarse": 4.0, "medium": 2.0,
                 "paper": math.sqrt(math.pi * RADIUS**2 / 4 / (PAPER_HEXAHEDRA / LAYERS))}
 #: DDQ steel (paper Table 4), friction (benchmark), gaps of the blank-holders (paper).
 FRICTION, GAP1, GAP2 = 0.15, 1.13, 1.4
-#: Tool file of each model and the description the deck gives it.
-TOOL_FILES = {"bezier": ("bezier", "bezier"), "nagata": ("nagata", "nagata"),
-              "facets_coarse": ("facets_coarse", "facets"),
-              "facets_fine": ("facets_fine", "facets")}
 #: The meshing rule of the tool models, the paper's as far as its text and Table 5 say it.
 #: The text gives the radial density: 3 Nagata patches per circular arc (90 degrees), 6 and
 #: 12 bilinear facets for the coarse and fine meshes (PER_ARC). Table 5's counts are
@@ -255,56 +254,23 @@ CHANGES: tuple[tuple[str, str], ...] = (
 def build_tools(folder: Path = HERE / "tools", dims: Dimensions = DIMENSIONS,
                 models: tuple[str, ...] = MODELS) -> dict[str, dict[str, Path]]:
     """Write the CAD model and each tool's model files; return the paths by tool and model."""
-    import gmsh
-
-    from ddpy.cad import build_tool_models, gmsh_session, load_cad
     from ddpy.cad.examples import reverse_drawing_tools
 
     folder.mkdir(parents=True, exist_ok=True)
     step = folder / "tools.step"
-    with gmsh_session():
-        gmsh.clear()
-        made = reverse_drawing_tools(step, **dims.cad())
-        marks = {t: _inner_point(t) for faces in made.values() for t in faces}
-        gmsh.clear()
-        loaded = load_cad(step)
-        # The faces read back, matched to those made by the point at the middle of each.
-        back = {f: _inner_point(f) for f in loaded}
-        found = {t: min(loaded, key=lambda f: math.dist(back[f], x)) for t, x in marks.items()}
-        if sorted(found.values()) != sorted(loaded) or any(
-                math.dist(back[found[t]], x) > 1e-6 for t, x in marks.items()):
-            raise RuntimeError(f"{step}: the faces read back differ from those written")
-        made = {tool: [found[t] for t in faces] for tool, faces in made.items()}
-        gmsh.clear()
+    made = written_tool_faces(step, lambda path: reverse_drawing_tools(path, **dims.cad()))
     paths: dict[str, dict[str, Path]] = {}
     for tool, faces in made.items():
         paths[tool] = {}
         for model in models:
-            if model == "bezier":
-                written = build_tool_models(step, folder, tool, models=("bezier",),
-                                            blank_side=BLANK_SIDE[tool], faces=faces)
-                paths[tool][model] = written["bezier"]
-                continue
             # AROUND's angle on the tool's largest circle: structured faces carry the
             # division of their longest circle to every circle of the tool.
-            arc_size = dims.largest_radius(tool) * math.radians(AROUND[model])
-            kind = "nagata" if model == "nagata" else "facets"
-            written = build_tool_models(
-                step, folder, tool, patches_per_arc=PER_ARC[model],
-                facets_per_arc=PER_ARC[model], arc_size=arc_size,
-                blank_side=BLANK_SIDE[tool], faces=faces, models=(kind,))
-            target = folder / f"{tool}.{model}.tool"
-            written[kind].replace(target)
-            paths[tool][model] = target
+            arc_size = (dims.largest_radius(tool) * math.radians(AROUND[model])
+                        if model in AROUND else None)
+            paths[tool][model] = build_tool_model(step, folder, tool, model, faces,
+                                                  BLANK_SIDE[tool], per_arc=PER_ARC.get(model, 0),
+                                                  arc_size=arc_size)
     return paths
-
-
-def _inner_point(face: int) -> list[float]:
-    """A point of a gmsh face, at the middle of its parameter range."""
-    import gmsh
-
-    lo, hi = gmsh.model.getParametrizationBounds(2, face)
-    return list(gmsh.model.getValue(2, face, [0.5 * (a + b) for a, b in zip(lo, hi, strict=True)]))
 
 
 def disc_mesh(path: Path, size: float, target: int | None = None, tries: int = 8) -> int:

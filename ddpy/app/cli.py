@@ -283,7 +283,7 @@ def build_parser() -> argparse.ArgumentParser:
         "(exit code 2)")
     check.add_argument("case", metavar="CASE", help="the case folder (control.dat, mesh.dat, "
                        "bc.dat, material.dat, tools.dat), or a built-in case: "
-                       "cylindrical-bending, deep-drawing")
+                       "cylindrical-bending, deep-drawing, square-cup")
     check.add_argument("--no-geometry", action="store_true",
                        help="skip the checks of the tool positions against the blank")
     check.set_defaults(handler=_check)

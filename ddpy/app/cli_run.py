@@ -260,7 +260,7 @@ def add_run(commands: argparse._SubParsersAction) -> None:
         "keeps the results; --restart continues from the last checkpoint.")
     run.add_argument("case", nargs="?", metavar="CASE",
                      help="case folder, a built-in case: cylindrical-bending (the "
-                     "default) or deep-drawing, or an Abaqus / CalculiX input file "
+                     "default), deep-drawing or square-cup, or an Abaqus / CalculiX input file "
                      "MODEL.inp, converted first into MODEL_case beside it (ddpy convert)")
     run.add_argument("--output", metavar="DIR",
                      help="output folder (default: results/<case folder name>)")

@@ -73,9 +73,11 @@ __all__ = ["BUILT_IN_CASES", "CHECKPOINT", "DEFAULT_CASE", "RESULTS", "STATUS", 
 #: replace the decks and tool files in this folder (and their list in meson.build).
 DEFAULT_CASE = Path(__file__).resolve().parents[1] / "cases" / "cylindrical_bending"
 #: The cases packaged with ddpy, by the name ``ddpy run NAME`` and ``ddpy check NAME`` take:
-#: the coarse cases of the paper's two examples (benchmarks/*/make_case.py --default-case).
+#: the coarse cases of the paper's two examples and of the Numisheet'93 square cup
+#: (benchmarks/*/make_case.py --default-case).
 BUILT_IN_CASES = {"cylindrical-bending": DEFAULT_CASE,
-                  "deep-drawing": DEFAULT_CASE.parent / "reverse_deep_drawing"}
+                  "deep-drawing": DEFAULT_CASE.parent / "reverse_deep_drawing",
+                  "square-cup": DEFAULT_CASE.parent / "square_cup"}
 RESULTS = "results.h5"
 
 

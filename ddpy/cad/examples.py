@@ -7,6 +7,7 @@ and, given a path, writes them as STEP (or IGES, BREP by the suffix).
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -14,7 +15,8 @@ import numpy as np
 from ddpy.cad import quiet
 
 __all__ = ["bending_tools", "cylinder_segment", "cylindrical_punch", "die_profile",
-           "reverse_drawing_tools", "sphere_patch", "write_cad"]
+           "reverse_drawing_tools", "sphere_patch", "square_cup_tools", "sweep_profile",
+           "write_cad"]
 
 
 def write_cad(path: str | os.PathLike[str] | None) -> Path | None:
@@ -308,6 +310,162 @@ def reverse_drawing_tools(path: str | os.PathLike[str] | None = None, *, thickne
     faces = revolve_profiles(profiles, halves if split else angles)
     faces["punch2"] = (_disc_sector(flat2, punch2_start, halves)
                        + revolve_profiles({"punch2": punch2}, halves)["punch2"])
+    gmsh.model.occ.synchronize()
+    write_cad(path)
+    return faces
+
+
+def sweep_profile(pieces: list[Piece], centre: float, margin: float) -> list[int]:
+    """Sweep a profile around the quarter of a rounded square, the tools of a square cup.
+
+    The profile is drawn in the (r, z) half-plane, r measured outwards from the centre of
+    the square's corner arc at (``centre``, ``centre``) (a plan corner radius r, a
+    half-width ``centre`` + r). It is extruded along the side x = ``centre`` + r from y =
+    -``margin`` to ``centre``, revolved about the vertical axis through the corner's centre
+    from 0 to 90 degrees (in two halves, split at 45), and extruded along the side y =
+    ``centre`` + r back to x = -``margin``, beyond the symmetry planes so that they lie
+    inside the faces. Returns the face tags: side x, the two corner halves, side y."""
+    import gmsh
+
+    occ = gmsh.model.occ
+
+    def curves(place: Callable[[float, float], tuple[float, float, float]]
+               ) -> list[tuple[int, int]]:
+        points: dict[tuple[float, float], int] = {}
+
+        def point(rz: tuple[float, float]) -> int:
+            key = (round(float(rz[0]), 12), round(float(rz[1]), 12))
+            if key not in points:
+                points[key] = occ.addPoint(*place(*key))
+            return points[key]
+
+        made = []
+        for piece in pieces:
+            if piece[0] == "line":
+                made.append(occ.addLine(point(piece[1]), point(piece[2])))
+            elif piece[0] == "arc":
+                made.append(occ.addCircleArc(point(piece[1]), point(piece[2]), point(piece[3])))
+            else:
+                raise ValueError(f"profile piece must be a line or an arc, got {piece[0]!r}")
+        return [(1, c) for c in made]
+
+    c = centre
+    faces = [t for d, t in occ.extrude(curves(lambda r, z: (c + r, -margin, z)), 0, c + margin, 0)
+             if d == 2]
+    for start in (0.0, 0.25 * np.pi):
+        corner = curves(lambda r, z: (c + r, c, z))
+        occ.rotate(corner, c, c, 0, 0, 0, 1, start)
+        faces += [t for d, t in occ.revolve(corner, c, c, 0, 0, 0, 1, 0.25 * np.pi) if d == 2]
+    faces += [t for d, t in occ.extrude(curves(lambda r, z: (c, c + r, z)), -(c + margin), 0, 0)
+              if d == 2]
+    return faces
+
+
+def _rounded_flat(centre: float, radius: float, z: float, margin: float) -> list[int]:
+    """The flat end of a square punch in the quarter x, y >= -``margin``: the rounded square
+    of half-width ``centre`` + ``radius`` (corner arc of ``radius`` about (``centre``,
+    ``centre``)) at height ``z``, in eight four-sided faces of fair shape, so that each is
+    one Bezier patch and a structured mesh: the square up to ``centre``, two strips along
+    each side (split at half the radius), and the corner's quarter disc as an inner
+    quadrilateral and two pieces of the rim split at 45 degrees, meeting the corner's two
+    swept halves edge to edge (the disc sector of the reverse drawing's punch 2)."""
+    import gmsh
+
+    occ = gmsh.model.occ
+    c, a, m = centre, radius, margin
+    points: dict[tuple[float, float], int] = {}
+
+    def point(x: float, y: float) -> int:
+        key = (round(float(x), 12), round(float(y), 12))
+        if key not in points:
+            points[key] = occ.addPoint(key[0], key[1], z)
+        return points[key]
+
+    lines: dict[tuple[int, int], int] = {}
+
+    def line(p: int, q: int) -> int:
+        if (q, p) in lines:
+            return -lines[(q, p)]
+        if (p, q) not in lines:
+            lines[(p, q)] = occ.addLine(p, q)
+        return lines[(p, q)]
+
+    def quad(*corners: tuple[float, float]) -> int:
+        tags = [point(*x) for x in corners]
+        loop = [line(tags[i], tags[(i + 1) % 4]) for i in range(4)]
+        return occ.addPlaneSurface([occ.addCurveLoop(loop)])
+
+    h, d = 0.5 * a, 0.6 * a / np.sqrt(2.0)
+    faces = [quad((-m, -m), (c, -m), (c, c), (-m, c)),
+             quad((c, -m), (c + h, -m), (c + h, c), (c, c)),
+             quad((c + h, -m), (c + a, -m), (c + a, c), (c + h, c)),
+             quad((-m, c), (c, c), (c, c + h), (-m, c + h)),
+             quad((-m, c + h), (c, c + h), (c, c + a), (-m, c + a)),
+             quad((c, c), (c + h, c), (c + d, c + d), (c, c + h))]
+    centre_tag = occ.addPoint(c, c, z)
+    q0, q1, q2 = point(c + a, c), point(c + a / np.sqrt(2.0), c + a / np.sqrt(2.0)), point(c, c + a)
+    p0, p1, p2 = point(c + h, c), point(c + d, c + d), point(c, c + h)
+    arcs = [occ.addCircleArc(q0, centre_tag, q1), occ.addCircleArc(q1, centre_tag, q2)]
+    for loop in ([line(p0, q0), arcs[0], line(q1, p1), line(p1, p0)],
+                 [line(p1, q1), arcs[1], line(q2, p2), line(p2, p1)]):
+        faces.append(occ.addPlaneSurface([occ.addCurveLoop(loop)]))
+    return faces
+
+
+def square_cup_tools(path: str | os.PathLike[str] | None = None, *, thickness: float = 0.81,
+                     punch_half: float = 35.0, punch_corner: float = 10.0,
+                     punch_nose: float = 8.0, punch_height: float = 50.0,
+                     die_half: float = 37.235, die_corner: float = 12.235,
+                     die_radius: float = 5.0, die_depth: float = 50.0,
+                     holder_half: float = 44.235, holder_edge: float = 2.0,
+                     outer_half: float = 105.0, holder_gap: float = 0.0,
+                     margin: float = 3.0) -> dict[str, list[int]]:
+    """The punch, die and blank-holder of a square cup drawing (the Numisheet'93 square cup,
+    benchmarks/square_cup), quarter model, the square's sides along x and y.
+
+    The flat blank lies on 0 <= z <= ``thickness``, its corner at the origin on the cup's
+    axis. The punch (above): a square of half-width ``punch_half``, plan corner radius
+    ``punch_corner``, nose radius ``punch_nose``, its flat end at z = ``thickness``, its
+    walls ``punch_height`` high above the nose. The die (below): an opening of half-width
+    ``die_half`` with plan corner radius ``die_corner``, its profile radius ``die_radius``
+    from the flat z = 0 down to a wall ``die_depth`` deep, the flat reaching
+    ``outer_half``. The blank-holder (above): a flat ``holder_gap`` above the blank from
+    ``holder_half`` (its corners concentric with the die's) to ``outer_half``, its inner
+    edge rounded by ``holder_edge``. Every face reaches ``margin`` beyond the symmetry
+    planes x = 0 and y = 0. Returns the face tags by tool: punch (its flat end in eight
+    faces, then nose and wall swept), die (wall, profile radius, flat), holder (edge,
+    flat), each swept face as :func:`sweep_profile` gives them.
+    """
+    import gmsh
+
+    t = thickness
+    punch_c, die_c = punch_half - punch_corner, die_half - die_corner
+    flat = punch_corner - punch_nose
+    holder_r = holder_half - die_c
+    if not (t > 0.0 and 0.0 < punch_nose < punch_corner and punch_c > 0.0 and die_c > 0.0
+            and punch_half + t <= die_half and die_radius > 0.0 and punch_height > 0.0
+            and die_depth > 0.0 and 0.0 < holder_edge
+            and die_corner + die_radius <= holder_r - holder_edge
+            and holder_half < outer_half and holder_gap >= 0.0 and 0.0 < margin < punch_c):
+        raise ValueError("square cup tools: the dimensions do not fit together")
+    outer_die = outer_half - die_c
+    shoulder = die_corner + die_radius
+    lift = t + holder_gap
+    profiles: dict[str, list[Piece]] = {
+        "punch": [("arc", (flat, t), (flat, t + punch_nose), (punch_corner, t + punch_nose)),
+                  ("line", (punch_corner, t + punch_nose),
+                   (punch_corner, t + punch_nose + punch_height))],
+        "die": [("line", (die_corner, -die_radius - die_depth), (die_corner, -die_radius)),
+                ("arc", (die_corner, -die_radius), (shoulder, -die_radius), (shoulder, 0.0)),
+                ("line", (shoulder, 0.0), (outer_die, 0.0))],
+        "holder": [("arc", (holder_r - holder_edge, lift + holder_edge),
+                    (holder_r, lift + holder_edge), (holder_r, lift)),
+                   ("line", (holder_r, lift), (outer_die, lift))],
+    }
+    faces = {"punch": _rounded_flat(punch_c, flat, t, margin)
+             + sweep_profile(profiles["punch"], punch_c, margin),
+             "die": sweep_profile(profiles["die"], die_c, margin),
+             "holder": sweep_profile(profiles["holder"], die_c, margin)}
     gmsh.model.occ.synchronize()
     write_cad(path)
     return faces

@@ -155,7 +155,11 @@ _POINT, _DIRECTION, _PLACEMENT_3D = ("CARTESIAN_POINT",), ("DIRECTION",), ("AXIS
 #: Curves, surfaces and loops of ISO 10303-42; '*' stands for any start of the name.
 _CURVES = ("*_CURVE", "LINE", "CIRCLE", "ELLIPSE", "PARABOLA", "HYPERBOLA", "POLYLINE", "PCURVE",
            "*_CURVE_WITH_KNOTS")
-_SURFACES = ("*_SURFACE", "PLANE", "*_SURFACE_WITH_KNOTS")
+#: Swept surfaces among them: OpenCASCADE writes a torus whose tube is wider than its ring
+#: (a square punch's corner: nose radius above the corner's plan radius less the nose) as a
+#: SURFACE_OF_REVOLUTION.
+_SURFACES = ("*_SURFACE", "PLANE", "*_SURFACE_WITH_KNOTS", "SURFACE_OF_REVOLUTION",
+             "SURFACE_OF_LINEAR_EXTRUSION")
 _LOOPS = ("EDGE_LOOP", "VERTEX_LOOP", "POLY_LOOP")
 #: The references of entities OpenCASCADE follows without checking what they are (a VECTOR
 #: whose direction was a product definition ended gmsh in a segmentation fault): per entity,
@@ -175,6 +179,10 @@ _STEP_TYPES: dict[str, tuple[tuple[int, str, tuple[str, ...], bool], ...]] = {
     "CONICAL_SURFACE": ((1, "position", _PLACEMENT_3D, False),),
     "SPHERICAL_SURFACE": ((1, "position", _PLACEMENT_3D, False),),
     "TOROIDAL_SURFACE": ((1, "position", _PLACEMENT_3D, False),),
+    "SURFACE_OF_REVOLUTION": ((1, "swept_curve", _CURVES, False),
+                              (2, "axis_position", ("AXIS1_PLACEMENT",), False)),
+    "SURFACE_OF_LINEAR_EXTRUSION": ((1, "swept_curve", _CURVES, False),
+                                    (2, "extrusion_axis", ("VECTOR",), False)),
     "VERTEX_POINT": ((1, "vertex_geometry", _POINT, False),),
     "EDGE_CURVE": ((1, "edge_start", ("VERTEX_POINT",), False),
                    (2, "edge_end", ("VERTEX_POINT",), False),
@@ -197,9 +205,9 @@ def check_step(path: Path) -> int:
     segmentation fault, a VECTOR of magnitude nan never returned), a circle or surface
     whose radius is not positive (a cylinder of radius 0 made the kernel merge 13 of 17
     faces into 4), a VECTOR whose magnitude is not positive (0 never returned), a DIRECTION
-    of zeros, or a reference of a placement, point, vector, line, conic, elementary surface,
-    vertex or edge to an entity of the wrong type (a VECTOR whose orientation is not a
-    DIRECTION: a segmentation fault). CadError names the line and what was expected.
+    of zeros, or a reference of a placement, point, vector, line, conic, elementary or
+    swept surface, vertex or edge to an entity of the wrong type (a VECTOR whose orientation
+    is not a DIRECTION: a segmentation fault). CadError names the line and what was expected.
     Returns the number of faces the file defines.
     """
     try:

@@ -55,10 +55,9 @@ def barrier_pressure(depth: float, stiffness: float) -> float:
 def test_a_soft_penalty_sinks_no_deeper_than_the_barrier_allows() -> None:
     """A penalty 1,000 times softer than the block, pushed 6 um (1.2 % of its thickness):
     alone it leaves nearly the whole push as depth. With the barrier every point and node
-    sinks the same d and the pressure is eps d + eps_b (d - d_b) (both laws on the same
-    area: the nodes' shares sum to the face), here about 740 MPa; the depth stays within
-    the 1 % limit (it does up to a pressure of about (0.01 - 0.005) E, far above the
-    pressures of forming)."""
+    sinks the same d and the pressure is eps d + p_b(d - d_b) (both laws on the same
+    area: the nodes' shares sum to the face), here about 475 MPa; the depth stays within
+    the 1 % limit."""
     push, eps = 6e-3, ELASTIC.E / THICKNESS / 1000
     _, _, plain = pressed_block(push, eps, barrier=None)
     assert plain.penetration["plane"][-1] > 0.011 * THICKNESS
@@ -67,7 +66,7 @@ def test_a_soft_penalty_sinks_no_deeper_than_the_barrier_allows() -> None:
     assert depth <= 0.01 * THICKNESS
     eps_b = barrier_stiffness(problem.solid, THICKNESS)
     pressure = -result.tool_forces["plane"][-1][2] / 1.0
-    assert pressure > 500.0
+    assert pressure > 400.0
     assert pressure == pytest.approx(eps * depth + barrier_pressure(depth, eps_b), rel=1e-9)
     # each node carries the uniform pressure over its share of the bottom
     area = nodal_areas(problem.solid.mesh, tool.slaves)[tool.slaves]

@@ -31,11 +31,11 @@ MAX_POINTS = 8
 #: Depth (a fraction of the blank's thickness) past which the barrier of Gauss-point contact
 #: pushes a slave node out of the tool, with the blank's own stiffness across its thickness
 #: (docs/theory/contact.md, "The barrier").
-BARRIER_DEPTH = 0.008
+BARRIER_DEPTH = 0.005
 #: Width (a fraction of the thickness) over which the barrier's stiffness grows from zero.
-BARRIER_WIDTH = 0.002
+BARRIER_WIDTH = 0.005
 #: The barrier's stiffness in units of the blank's stiffness across its thickness, E / T.
-BARRIER_STIFFNESS = 10.0
+BARRIER_STIFFNESS = 1.0
 
 
 def faces_blank(search: ContactSearch, facing: ArrayLike) -> bool:

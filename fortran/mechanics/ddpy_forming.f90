@@ -541,9 +541,9 @@ contains
         end do
       end do
       ! The barrier at the slaves (points kg + 1.. of the tool, face_weight their share of
-      ! the faces' area): p = eps_b (d - d_b) where a slave lies deeper than d_b in the
-      ! tool, along the tool's normal at its closest point, with friction as at the Gauss
-      ! points; the force acts on the slave alone.
+      ! the faces' area): barrier_law of the depth past d_b where a slave lies deeper than
+      ! d_b in the tool, along the tool's normal at its closest point, with friction as at
+      ! the Gauss points; the force acts on the slave alone.
       if (barred) then
         do i = 1, hi - lo + 1
           ip = table(f_point, t) + kg + i

@@ -66,13 +66,7 @@ def corner_areas(nodes: NDArray[np.float64], faces: NDArray[np.integer], corners
                  NDArray[np.integer], n_slaves: int, order: int = 2) -> NDArray[np.float64]:
     """Each slave's share of the faces' area (n_slaves,): int N_a dA over the faces (f, 4)
     whose corners (f, 4) name it (-1: no slave), by order x order Gauss points."""
-    corner = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
-    points, _ = np.polynomial.legendre.leggauss(order)
-    weights = gauss_face_weights(nodes, faces, order)
-    share = np.zeros((faces.shape[0], 4))
-    for g in range(order * order):
-        xi, eta = points[g % order], points[g // order]
-        share += np.outer(weights[:, g], 0.25 * (1 + corner[:, 0] * xi) * (1 + corner[:, 1] * eta))
+    share = gauss_face_weights(nodes, faces, order) @ face_basis(order)  # (f, 4)
     area = np.zeros(n_slaves)
     np.add.at(area, corners[corners >= 0], share[corners >= 0])
     return area

@@ -132,5 +132,15 @@ def test_a_barrier_line_reaches_the_tool(tmp_path: Path) -> None:
     tools = case / "tools.dat"
     tools.write_text(tools.read_text().replace("\nend", "\n  barrier 0.008\nend", 1))
     first = read_case(case).tools[0]
-    assert first.barrier == 0.008 and read_case(BENDING).tools[0].barrier is None
+    assert first.barrier == 0.008 and read_case(BENDING).tools[0].barrier == BARRIER_DEPTH
     assert "barrier at 0.008 of the thickness" in read_case(case).summary()
+    tools.write_text(tools.read_text().replace("barrier 0.008", "barrier off"))
+    off = read_case(case)
+    assert off.tools[0].barrier is None
+    assert off.summary().count("barrier at") == len(off.tools) - 1
+
+
+def test_the_barrier_is_on_by_default() -> None:
+    """Every Gauss-point tool of a deck or the API carries the barrier unless it says off."""
+    assert BARRIER_DEPTH == 0.005
+    assert all(t.barrier == BARRIER_DEPTH for t in read_case(BENDING).tools)

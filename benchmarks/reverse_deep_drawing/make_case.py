@@ -19,7 +19,9 @@ Writes, next to this script (all generated, git-ignored):
   hexahedra from an unstructured quadrilateral mesh (gmsh): ``paper`` as close to the
   paper's 15,408 hexahedra as gmsh's recombination gets, ``medium`` and ``coarse``;
 - ``cases/<mesh>/<model>/``: the five decks of each case, for the models ``bezier``,
-  ``nagata``, ``facets_coarse`` and ``facets_fine``.
+  ``nagata``, ``facets_coarse`` and ``facets_fine`` at ddpy's defaults (neither the element
+  nor the contact discretization is set), and ``dd3imp`` (REFERENCE: Nagata tools, the
+  hexahedron and node-to-surface contact) on the coarse and paper blanks.
 """
 
 from __future__ import annotations
@@ -35,6 +37,11 @@ sys.path.insert(0, str(HERE.parent))  # the benchmarks' shared module
 from bench_common import TOOL_FILES, build_tool_model, written_tool_faces  # noqa: E402
 
 MODELS = ("bezier", "nagata", "facets_coarse", "facets_fine")
+#: DD3IMP's discretization (the hexahedron and node-to-surface contact) on the Nagata tools:
+#: the reports' fifth column, on the blanks of REFERENCE_MESHES, for comparison with ddpy's
+#: defaults (the solid-shell, Gauss-point contact with its barrier).
+REFERENCE = "dd3imp"
+REFERENCE_MESHES = ("coarse", "paper")
 MESHES = ("coarse", "medium", "paper")
 TOOLS = ("die1", "holder1", "punch1", "holder2", "punch2")
 #: The blank (paper): 170 mm in diameter, 0.98 mm thick, 2 layers; quarter model.
@@ -369,8 +376,7 @@ MESH = """\
 # ddpy mesh deck: the blank.  Units mm.  Written by make_case.py
 # A quarter of the 170 mm disc, 0.98 mm thick: {what}.
 normal  z
-element hexahedron     # the runs kept in docs/benchmarks were made with it (make_case.py)
-file    ../../../meshes/{mesh}.msh
+{element}file    ../../../meshes/{mesh}.msh
 """
 
 BC = """\
@@ -395,27 +401,22 @@ tool {tool}
   file         {prefix}{tool}.{file}.tool
   friction     {friction}
   contact      {side}
-  discretization {discretization}
-{augmentation}end
+{discretization}{augmentation}end
 """
 
-#: The decks keep DD3IMP's element (the hexahedron; the solid-shell cuts its stage-1
-#: increments from about 33 mm on, two elements inverting) and, on the coarse and medium
-#: blanks, DD3IMP's node-to-surface contact; the paper's blank (faces of 0.86 mm) takes
-#: Gauss-point contact, ddpy's default (docs/theory/contact.md, "The default
-#: discretization"). A bilinear face's chord stands c^2 / 8R off a tool radius R: 0.25 mm
-#: for the coarse blank's 4 mm faces on die 1's 8 mm shoulder, more than the 0.15 mm between
-#: blank and holder, so the default penalty left the coarse flange 0.68 mm deep in
-#: blank-holder 1 and a stiff one pinched it; on the paper's faces it is 0.012 mm. On the
-#: paper's blank Gauss-point contact halves the iterations of stage 1 (docs/theory/speed.md).
-#: (The coarse blank's four models with Gauss-point contact, runs of 2026-11-28, 1 thread:
-#: 640 / 640 / 640 / 641 increments and 1,933 / 1,970 / 3,579 / 2,916 iterations for
-#: Bezier / Nagata / coarse facets / fine facets, against 811 / 811 / 948 / 843 and
-#: 2,907 / 2,921 / 4,429 / 3,718 with node-to-surface contact; the coarse facets complete
-#: only since an answer the search refuses is held again on the search's patches.)
-DISCRETIZATION = {"coarse": "node", "medium": "node", "paper": "gauss"}
-#: Augmentation r of the contact law (N/mm) set in the decks of a blank, else the solver's
-#: default (E t^2 / h of the elements: 1.3e4 on the coarse blank, 2.5e4 on the medium one).
+#: The decks of the four tool models set neither the element nor the contact
+#: discretization: ddpy's defaults, the solid-shell and Gauss-point contact, whose barrier
+#: (on by default) keeps every slave node within 1 % of the thickness of every tool. Until
+#: the barrier the decks pinned DD3IMP's hexahedron (the solid-shell's flange wrinkled
+#: through die 1 and blank-holder 1 from about 33 mm of stage 1) and, on the coarse and
+#: medium blanks, node-to-surface contact (a bilinear face's chord stands c^2 / 8R off a
+#: tool radius R: 0.25 mm for the coarse blank's 4 mm faces on die 1's 8 mm shoulder, and
+#: the plain penalty left the coarse flange 0.68 mm deep in blank-holder 1);
+#: docs/theory/contact.md, "The barrier". The REFERENCE case keeps both.
+REFERENCE_ELEMENT = "element hexahedron     # DD3IMP's element (make_case.py, REFERENCE)\n"
+REFERENCE_DISCRETIZATION = "  discretization node  # DD3IMP's contact (make_case.py, REFERENCE)\n"
+#: Augmentation r of node-to-surface contact (N/mm; the REFERENCE case's) set in the decks
+#: of a blank, else the solver's default (E t^2 / h of the elements: 1.3e4 on the coarse blank, 2.5e4 on the medium one).
 #: The medium blank failed its first increment with the default (10 cuts to a step of 4e-8
 #: of the stage, 25 iterations each) and with 5e3; with 6e4 its first increment converged in
 #: 25 iterations and the next ones in 3 to 15, with 2e5 only after cuts. The blank starts
@@ -434,29 +435,34 @@ def write_case(folder: Path, model: str, mesh: str, dims: Dimensions = DIMENSION
     """Write the five decks of one case. By default the tool and mesh files are referred to
     relatively: the folder must be ``<root>/cases/<mesh>/<model>`` next to ``tools/`` and
     ``meshes/``."""
-    file, description = TOOL_FILES[model]
+    reference = model == REFERENCE
+    file, description = TOOL_FILES["nagata" if reference else model]
     folder.mkdir(parents=True, exist_ok=True)
     what = {"paper": f"unstructured, {LAYERS} layers (paper: 15,408 hexahedra)"}.get(
         mesh, f"unstructured, {LAYERS} layers, elements of about {ELEMENT_SIZE.get(mesh, 0):g} mm")
-    mesh_text = MESH.format(mesh=mesh, what=what)
+    mesh_text = MESH.format(mesh=mesh, what=what,
+                            element=REFERENCE_ELEMENT if reference else "")
     augmentation = (f"  augmentation {AUGMENTATION[mesh]:g}    # N/mm, see make_case.py\n"
-                    if mesh in AUGMENTATION else "")
+                    if reference and mesh in AUGMENTATION else "")
     if mesh_file is not None:
         mesh_text = mesh_text.replace(f"../../../meshes/{mesh}.msh", mesh_file)
     decks = {
         "control.dat": CONTROL.format(
-            model=model, mesh=mesh, stage1=dims.stage1, stage2=dims.stage2 + dims.approach,
+            model=("Nagata (DD3IMP's element and contact)" if reference else model),
+            mesh=mesh, stage1=dims.stage1, stage2=dims.stage2 + dims.approach,
             gap1=GAP1, gap2=GAP2,
             max_increment=f"{max_increment or MAX_INCREMENT.get(mesh, 0.25):g}"),
         "mesh.dat": mesh_text,
         "bc.dat": BC,
         "material.dat": MATERIAL,
         "tools.dat": "# ddpy tools deck.  Units mm.  Written by make_case.py: the "
-                     f"{model} model.\n" + "\n".join(
+                     + ("Nagata model, DD3IMP's contact" if reference else f"{model} model")
+                     + ".\n" + "\n".join(
                          TOOL.format(tool=t, description=description, file=file,
                                      prefix=tools_prefix, friction=FRICTION, side=SIDE[t],
                                      augmentation=augmentation,
-                                     discretization=DISCRETIZATION.get(mesh, "node"))
+                                     discretization=REFERENCE_DISCRETIZATION
+                                     if reference else "")
                          for t in TOOLS),
     }
     for name, text in decks.items():
@@ -512,7 +518,7 @@ def main(argv: list[str] | None = None) -> int:
     for mesh in meshes:
         count = make_mesh(mesh, root / "meshes" / f"{mesh}.msh")
         print(f"mesh {mesh}: {count} hexahedra", file=sys.stderr)
-        for model in MODELS:
+        for model in MODELS + ((REFERENCE,) if mesh in REFERENCE_MESHES else ()):
             print(write_case(root / "cases" / mesh / model, model, mesh))
     return 0
 

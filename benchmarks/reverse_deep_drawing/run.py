@@ -1648,7 +1648,10 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--mesh", choices=make_case.MESHES, default="coarse")
     parser.add_argument("--models", default=",".join(MODELS),
-                        help="comma-separated among " + ", ".join(MODELS))
+                        help="comma-separated among " + ", ".join(MODELS) + " and "
+                        f"{make_case.REFERENCE} (the Nagata tools at DD3IMP's element and "
+                        "contact, on the " + " and ".join(make_case.REFERENCE_MESHES)
+                        + " blanks)")
     parser.add_argument("--json", action="store_true", help="print the numbers only")
     parser.add_argument("--reuse", action="store_true",
                         help="report from the runs saved in results/, else kept in the "
@@ -1666,8 +1669,9 @@ def main(argv: list[str] | None = None) -> int:
     from ddpy.core.parallel import max_threads
 
     models = [m.strip() for m in args.models.split(",") if m.strip()]
-    if set(models) - set(MODELS):
-        parser.error(f"--models must be among {', '.join(MODELS)}")
+    known = MODELS + ((make_case.REFERENCE,) if args.mesh in make_case.REFERENCE_MESHES else ())
+    if set(models) - set(known):
+        parser.error(f"--models must be among {', '.join(known)} on the {args.mesh} blank")
     case_root = HERE / "cases" / args.mesh
     if not all((case_root / m / "control.dat").exists() for m in models) or \
             not (HERE / "tools" / "tools.step").exists():

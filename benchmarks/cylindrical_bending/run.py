@@ -98,6 +98,9 @@ class Run:
     effort_by_limit: dict[str, list[float]] | None = None
     #: nodes in contact with each tool, mean over the forming increments
     contact_nodes: dict[str, float] | None = None
+    #: the deepest slave node in each tool at any converged forming increment, mm (the
+    #: solver's record; None: not recorded)
+    penetration_mm: dict[str, float] | None = None
     #: wall time of the whole run (forming and springback) by part, s: assembly, contact,
     #: linear (factorizations, solves, GMRES), rest
     times: dict[str, float] | None = None
@@ -160,6 +163,7 @@ def from_results(path: Path, output_at: tuple[float, ...] = make_case.OUTPUT_AT)
                    contact_nodes={tool: round(float(np.mean(
                        history["nodes_in_contact"][forming][:, i])), 1)
                        for i, tool in enumerate(r.tools)},
+                   penetration_mm=_deepest(history, forming, r.tools),
                    times=_times(history),
                    factorizations=int(history.get("factorizations", np.zeros(1)).sum()),
                    krylov_iterations=int(history.get("krylov_iterations",
@@ -186,6 +190,23 @@ def _effort_by_limit(history: dict[str, np.ndarray], forming: np.ndarray
             _forming_sum(history, "newton_iterations", mask),
             round(float(history["time_total"][mask].sum()), 1)]
     return out
+
+
+def _depth(depths: dict[str, float] | None, tool: str) -> str:
+    """One tool's deepest node as the report gives it."""
+    if not depths or tool not in depths:
+        return "not recorded"
+    return f"{depths[tool]:.2g} ({100 * depths[tool] / make_case.THICKNESS:.2g} %)"
+
+
+def _deepest(history: dict[str, np.ndarray], forming: np.ndarray, tools: list[str]
+             ) -> dict[str, float] | None:
+    """The deepest slave node in each tool over the forming increments, mm."""
+    if "penetration" not in history:
+        return None
+    depth = history["penetration"][forming]
+    depth = np.where(np.isfinite(depth), depth, 0.0).max(axis=0, initial=0.0)
+    return {tool: float(f"{depth[i]:.4g}") for i, tool in enumerate(tools)}
 
 
 def _forming_sum(history: dict[str, np.ndarray], name: str, forming: np.ndarray) -> int:
@@ -350,6 +371,7 @@ def summary(model: str, run: Run) -> dict[str, Any]:
         "limited_by": run.limits or {},
         "effort_by_limit": run.effort_by_limit or {},
         "contact_nodes": run.contact_nodes or {},
+        "penetration_mm": run.penetration_mm,
         "end_xz_mm": [round(float(v), 2) for v in
                       run.shape_formed[run.initial[:, 0] >= make_case.LENGTH - 1e-9]
                       .mean(axis=0)[[0, 2]]],
@@ -662,6 +684,16 @@ def report(mesh: str, hexahedra: int, numbers: dict[str, dict[str, Any]],
                                                 for m in models]]),
         _row(["oscillation / mean force", *[f"{100 * numbers[m]['oscillation_rel']:.2g} %"
                                              for m in models]]),
+        "",
+        "The deepest slave node of the blank in each tool at any converged forming increment "
+        "(the solver's record, `increments/penetration` of the results; the penetration "
+        f"limit is 1 % of the {make_case.THICKNESS:g} mm thickness):",
+        "",
+        _row(["", *[LABELS[m] for m in models]]),
+        _row(["---"] * (1 + len(models))),
+        *[_row([f"deepest in the {tool} [mm] (/ thickness)",
+                *[_depth(numbers[m].get("penetration_mm"), tool) for m in models]])
+          for tool in ("punch", "die")],
         "",
         "## Shape error of the die models (Fig. 8)",
         "",

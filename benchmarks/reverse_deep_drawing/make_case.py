@@ -416,7 +416,8 @@ tool {tool}
 REFERENCE_ELEMENT = "element hexahedron     # DD3IMP's element (make_case.py, REFERENCE)\n"
 REFERENCE_DISCRETIZATION = "  discretization node  # DD3IMP's contact (make_case.py, REFERENCE)\n"
 #: Augmentation r of node-to-surface contact (N/mm; the REFERENCE case's) set in the decks
-#: of a blank, else the solver's default (E t^2 / h of the elements: 1.3e4 on the coarse blank, 2.5e4 on the medium one).
+#: of a blank, else the solver's default (E t^2 / h of the elements: 1.3e4 on the coarse
+#: blank, 2.5e4 on the medium one).
 #: The medium blank failed its first increment with the default (10 cuts to a step of 4e-8
 #: of the stage, 25 iterations each) and with 5e3; with 6e4 its first increment converged in
 #: 25 iterations and the next ones in 3 to 15, with 2e5 only after cuts. The blank starts

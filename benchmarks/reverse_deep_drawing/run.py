@@ -67,8 +67,12 @@ make_case = load_module(HERE / "make_case.py", "drawing_make_case")
 MODELS: tuple[str, ...] = make_case.MODELS
 TOOLS: tuple[str, ...] = make_case.TOOLS
 STAGES = ("stage1", "stage2")
+#: The report's columns: the four tool models at ddpy's defaults, then DD3IMP's
+#: discretization on the Nagata tools (make_case.REFERENCE) where it ran.
+COLUMNS: tuple[str, ...] = (*MODELS, make_case.REFERENCE)
 LABELS = {"bezier": "Bezier", "nagata": "Nagata", "facets_coarse": "Faceted-coarse",
-          "facets_fine": "Faceted-fine"}
+          "facets_fine": "Faceted-fine",
+          make_case.REFERENCE: "Nagata, DD3IMP's hexahedron and node-to-surface"}
 #: The die of each stage, whose nodes in contact the paper counts (Fig. 20): die 1, then
 #: punch 1's end (die 2).
 DIE = {"stage1": "die1", "stage2": "punch1"}
@@ -264,7 +268,13 @@ def from_results(path: Path, case_folder: Path) -> Run:
             marks = np.arange(1, int(np.floor(reached + 1e-9)) + 1)
             upto = np.searchsorted(travel, marks + 1e-9, side="right")
             cumulative = np.concatenate([[0], np.cumsum(h["iterations"][mask])])
+            # The deepest slave node in each tool at any converged increment of the stage
+            # (the solver's record, docs/results-format.md), mm.
+            deepest = h["penetration"][mask] if "penetration" in h else np.zeros((0, 0))
+            deepest = np.where(np.isfinite(deepest), deepest, 0.0).max(axis=0, initial=0.0)
             stage = {
+                "penetration_max_mm": {tool: float(f"{deepest[k]:.4g}")
+                                       for k, tool in enumerate(r.tools) if deepest.size},
                 "travel_mm": phase.travel, "reached_mm": round(reached, 4),
                 "by_mm": {"increments": upto.tolist(),
                           "iterations": cumulative[upto].astype(int).tolist()},
@@ -1039,7 +1049,7 @@ def report(mesh: str, numbers: dict[str, dict[str, Any]],
     """The markdown report: every number from ``numbers`` (the runs), ``shape`` (the tool
     models), make_case and PAPER; ``code``: the code version that wrote it (the runs name
     their own)."""
-    models = [m for m in MODELS if m in numbers]
+    models = [m for m in COLUMNS if m in numbers]
     dims = make_case.DIMENSIONS
     hexahedra = next((numbers[m]["hexahedra"] for m in models), 0)
     head = _row(["", *[LABELS[m] for m in models]])
@@ -1065,7 +1075,8 @@ def report(mesh: str, numbers: dict[str, dict[str, Any]],
         f"(unstructured, elements of about {make_case.ELEMENT_SIZE[mesh]:.3g} mm; the "
         f"paper: {make_case.PAPER_HEXAHEDRA} hexahedra), "
         f"{' / '.join(sorted({numbers[m].get('discretization', 'not recorded') for m in models}))}"
-        " (the decks' choice; the element is not ddpy's default: make_case.py says why). "
+        " (the four tool models at ddpy's defaults, which the decks do not set; "
+        f"the last column, where it ran, at DD3IMP's: make_case.REFERENCE). "
         f"Report written on {threads} "
         "thread(s); each run's element and contact, threads and code version are in the "
         "table of runs. Wall "
@@ -1579,9 +1590,21 @@ def checks_section(numbers: dict[str, dict[str, Any]], models: list[str]) -> lis
                     f"({e['balance_worst']})" for e in ends.values()]]),
             _row([f"{stage}: deepest penetration (tool; / thickness)",
                   *["-" if e is None else _penetration(e) for e in ends.values()]]),
+            _row([f"{stage}: deepest at any increment, per tool (solver's record; "
+                  "/ thickness)",
+                  *[_recorded_penetration(numbers[m]["stages"][stage]) for m in models]]),
         ]
     lines.append("")
     return lines
+
+
+def _recorded_penetration(stage: dict[str, Any]) -> str:
+    """The deepest node of each tool over a stage's converged increments, as recorded."""
+    depths = stage.get("penetration_max_mm")
+    if not depths:
+        return "not recorded"
+    return "; ".join(f"{tool} {depth:.2g} mm ({100 * depth / make_case.THICKNESS:.2g} %)"
+                     for tool, depth in depths.items() if depth > 0.0) or "none"
 
 
 def _penetration(end: dict[str, Any]) -> str:

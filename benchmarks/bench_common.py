@@ -25,7 +25,11 @@ DOCS = ROOT / "docs" / "benchmarks"
 #: date, the dates it was continued on (and why a run was stopped).
 CODE_FILE = "code.json"
 #: What makes a run's numbers: a change elsewhere (the reports in docs/) leaves them.
-CODE_PATHS = ("ddpy", "fortran", "meson.build", "pyproject.toml", "benchmarks")
+#: What makes a run's numbers: the package, the core, the build, and the scripts that write
+#: the benchmarks' cases and tools (git pathspecs). The report scripts (run.py) only read the
+#: results back, so a change to a report leaves the code its runs recorded.
+CODE_PATHS = ("ddpy", "fortran", "meson.build", "pyproject.toml", "benchmarks/bench_common.py",
+              "benchmarks/*/make_case.py")
 
 
 def load_module(path: Path, name: str) -> ModuleType:

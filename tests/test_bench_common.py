@@ -28,8 +28,15 @@ def test_the_code_version_is_the_last_commit_that_changed_the_code(tmp_path: Pat
     code = _git(tmp_path, "rev-parse", "--short", "HEAD")
     assert code_version(tmp_path) == code
     (tmp_path / "docs" / "report.md").write_text("numbers\n")
+    (tmp_path / "benchmarks" / "bend").mkdir(parents=True)
+    (tmp_path / "benchmarks" / "bend" / "run.py").write_text("report = 1\n")
     _git(tmp_path, "add", "-A")
     _git(tmp_path, "commit", "-qm", "report")
+    assert code_version(tmp_path) == code
+    (tmp_path / "benchmarks" / "bend" / "make_case.py").write_text("deck = 1\n")
+    _git(tmp_path, "add", "-A")
+    _git(tmp_path, "commit", "-qm", "cases")
+    code = _git(tmp_path, "rev-parse", "--short", "HEAD")
     assert code_version(tmp_path) == code
     (tmp_path / "ddpy" / "a.py").write_text("x = 2\n")
     assert code_version(tmp_path) == code + "-dirty"

@@ -123,7 +123,7 @@ def between(before: Path, after: Path) -> list[str]:
     first; empty when ``before`` is not an ancestor of ``after``."""
     commit = git(before, "rev-parse", "HEAD").stdout.strip()
     log = git(after, "log", "--reverse", "--format=%h %s", f"{commit}..HEAD", "--",
-              *(p for p in CODE_PATHS if p != "benchmarks"))
+              *(p for p in CODE_PATHS if not p.startswith("benchmarks")))
     if not commit or log.returncode != 0:
         return []
     lines = []
@@ -139,7 +139,7 @@ def code_commit(checkout: dict[str, Any]) -> str:
     stamp when its last code commit is an older one; "" when the same or unknown."""
     stamp = checkout["code"].removesuffix("-dirty")
     last = git(Path(checkout["path"]), "log", "-1", "--format=%h", stamp, "--",
-               *(p for p in CODE_PATHS if p != "benchmarks"))
+               *(p for p in CODE_PATHS if not p.startswith("benchmarks")))
     commit = last.stdout.strip()
     if last.returncode != 0 or not commit or commit.startswith(stamp) or \
             stamp.startswith(commit):

@@ -168,12 +168,13 @@ def test_newton_keeps_its_quadratic_rate_with_the_tools_unknown() -> None:
 
 
 def test_a_force_the_blank_cannot_carry_stops_the_phase_naming_the_tool() -> None:
-    """A blank on a die of a very soft penalty (1 N/mm^3): 0.4 N sinks it 0.1 mm, 400 N
-    would sink it 100 mm, beyond the contact search's reach: the holder never flies off,
-    the phase stops naming it and the increment, with the first phase's results kept."""
+    """A blank on a die of a very soft penalty (1 N/mm^3) and no barrier: 0.4 N sinks it
+    0.1 mm, 400 N would sink it 100 mm, beyond the contact search's reach: the holder never
+    flies off, the phase stops naming it and the increment, with the first phase's results
+    kept."""
     mesh = HexMesh.box(2.0, 2.0, 1.0, 2, 2, 1, origin=(0.0, 0.0, -1e-3))
     tools = [RigidTool("die", plane(0.0, up=True), mesh.select(z=-1e-3), facing=(0, 0, -1),
-                       penalty=1.0),
+                       penalty=1.0, barrier=None),
              RigidTool("holder", plane(1.2, up=False), mesh.select(z=1.0 - 1e-3),
                        facing=(0, 0, 1))]
     problem = FormingProblem(Solid(mesh, STEEL), tools)

@@ -383,6 +383,9 @@ contains
         ! A force-controlled tool moves at most hold_step in a step.
         if (maxval(abs(dshift))*alpha > hold_step) alpha = hold_step/maxval(abs(dshift))
       end if
+      alpha = min(alpha, barrier_step(nnode, ntool, npair, du, tool_first, pair_node, on, &
+                                      slot(cur)%gap, slot(cur)%normal, penalty, nhold, &
+                                      hold_tool, hold_axis, dshift, settings(5)))
       previous = slot(cur)%state
       have_previous = .true.
       moving = slot(cur)%moving
@@ -948,6 +951,42 @@ contains
       step = max(step, min_step)
     end if
   end function penetration_step
+
+  !> Longest fraction (at most 1) of the step du (3, nnode), with the force-controlled
+  !> tools' shifts dshift along hold_axis, that takes no slave node of a tool with a
+  !> barrier (penalty(3, t) > 0) from above the end of the barrier's ramp (d_b + w,
+  !> penalty(4:5, t)) to below it, the pair's depth (-gap) and normal linearized at the
+  !> present iterate; at least min_step. Where a node is not yet in the ramp the tangent
+  !> has none of the barrier's stiffness, and the full step (a holder pressed with a force
+  !> it meets with the penalty alone, 3 % of the thickness deep) lands it far inside: the
+  !> next iterate's barrier force, many times the load, throws the tool off the blank.
+  pure function barrier_step(nnode, ntool, npair, du, tool_first, pair_node, on, gap, &
+                             normal, penalty, nhold, hold_tool, hold_axis, dshift, &
+                             min_step) result(step)
+    integer, intent(in) :: nnode, ntool, npair, tool_first(ntool + 1), pair_node(npair), &
+                           on(npair), nhold, hold_tool(nhold)
+    real(wp), intent(in) :: du(3, nnode), gap(npair), normal(3, npair), penalty(5, ntool), &
+                            hold_axis(3, nhold), dshift(nhold), min_step
+    real(wp) :: step, tool_du(3), depth, ramp_end, closing
+    integer :: t, p, k
+    step = 1.0_wp
+    do t = 1, ntool
+      if (.not. penalty(3, t) > 0.0_wp) cycle
+      tool_du = 0.0_wp
+      do k = 1, nhold
+        if (hold_tool(k) == t) tool_du = tool_du + dshift(k)*hold_axis(:, k)
+      end do
+      ramp_end = penalty(4, t) + penalty(5, t)
+      do p = tool_first(t) + 1, tool_first(t + 1)
+        if (on(p) == 0 .or. .not. ieee_is_finite(gap(p))) cycle
+        depth = -gap(p)
+        if (depth >= ramp_end) cycle
+        closing = -dot_product(du(:, pair_node(p) + 1) - tool_du, normal(:, p))
+        if (depth + closing*step > ramp_end) step = (ramp_end - depth)/closing
+      end do
+    end do
+    step = max(step, min_step)
+  end function barrier_step
 
   !> GMRES from 0, without restart, on the operator v -> W M^-1 J W^-1 v (J: the
   !> coordinate values summed into the rows of the structure row_start, col, sources,

@@ -1696,9 +1696,14 @@ def main(argv: list[str] | None = None) -> int:
     if set(models) - set(known):
         parser.error(f"--models must be among {', '.join(known)} on the {args.mesh} blank")
     case_root = HERE / "cases" / args.mesh
-    if not all((case_root / m / "control.dat").exists() for m in models) or \
+    if not (HERE / "meshes" / f"{args.mesh}.msh").exists() or \
             not (HERE / "tools" / "tools.step").exists():
         make_case.main(["--mesh", args.mesh])
+    elif not args.reuse:
+        # The decks afresh from make_case (cheap; the tools and the mesh are kept): a deck
+        # left from an older make_case would run other settings than the code's.
+        for model in models:
+            make_case.write_case(case_root / model, model, args.mesh)
     stem = _stem(args.mesh)
     kept = kept_runs(runs_file(stem)) if args.reuse else {}
     saved_runs = {m: HERE / "results" / args.mesh / m / "results.h5" for m in models}

@@ -158,6 +158,24 @@ def test_built_in_case_is_the_benchmark_coarse_nagata_case(tmp_path: Path) -> No
             assert [c.data.tolist() for c in a.cells] == [c.data.tolist() for c in b.cells]
 
 
+def test_a_variant_is_the_built_in_case_on_another_blank(tmp_path: Path) -> None:
+    # make_case.py --variant writes the smaller deep drawings measured for the test suite
+    # (docs/theory/contact.md, "The barrier"): the built-in case's tool files and decks,
+    # only the blank (here one layer of 6 mm elements) and max_increment changed.
+    made = _make_case()
+    variant = made.write_variant_case(tmp_path / "variant", 6.0, layers=1, max_increment=1.0)
+    for tool in (CASE / "tools").iterdir():
+        assert (variant / "tools" / tool.name).read_bytes() == tool.read_bytes(), tool.name
+    for name in ("tools.dat", "material.dat", "bc.dat"):
+        assert made.DEFAULT_HEADER + (variant / name).read_text() == (CASE / name).read_text()
+    built, small = read_case(CASE), read_case(variant)
+    assert [(p.name, p.tools, p.travel, p.lead) for p in small.phases] == \
+        [(p.name, p.tools, p.travel, p.lead) for p in built.phases]
+    assert [p.max_increment for p in small.phases] == [1.0, 1.0]
+    assert np.unique(small.mesh.nodes[:, 2].round(9)).tolist() == [0.0, made.THICKNESS]
+    assert small.mesh.n_elements < built.mesh.n_elements / 2  # 1 layer, coarser quads
+
+
 def test_the_cli_knows_the_case_by_name() -> None:
     done = subprocess.run([sys.executable, "-m", "ddpy", "check", "deep-drawing"],
                           capture_output=True, text=True)

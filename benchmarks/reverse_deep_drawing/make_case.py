@@ -3,6 +3,7 @@
     python benchmarks/reverse_deep_drawing/make_case.py              # all meshes
     python benchmarks/reverse_deep_drawing/make_case.py --mesh coarse
     python benchmarks/reverse_deep_drawing/make_case.py --default-case   # `ddpy run deep-drawing`
+    python benchmarks/reverse_deep_drawing/make_case.py --variant DIR --size 6 --layers 1
 
 Writes, next to this script (all generated, git-ignored):
 
@@ -281,11 +282,12 @@ def build_tools(folder: Path = HERE / "tools", dims: Dimensions = DIMENSIONS,
     return paths
 
 
-def disc_mesh(path: Path, size: float, target: int | None = None, tries: int = 8) -> int:
+def disc_mesh(path: Path, size: float, target: int | None = None, tries: int = 8,
+              layers: int = LAYERS) -> int:
     """The blank: a quarter disc of radius RADIUS meshed in unstructured quadrilaterals of
     about ``size`` mm (gmsh Frontal-Delaunay for quads, Blossom recombination; with
-    ``target``, the size is tuned towards that many hexahedra), extruded in LAYERS layers
-    through THICKNESS. Writes a Gmsh file; returns the hexahedra."""
+    ``target``, the size is tuned towards that many hexahedra), extruded in ``layers``
+    layers through THICKNESS. Writes a Gmsh file; returns the hexahedra."""
     import gmsh
 
     from ddpy.cad import gmsh_session
@@ -311,7 +313,7 @@ def disc_mesh(path: Path, size: float, target: int | None = None, tries: int = 8
 
     with gmsh_session():
         if target is not None:
-            want = target // LAYERS
+            want = target // layers
             best: tuple[int, float] | None = None
             for _ in range(tries):
                 count = quads(size)
@@ -324,7 +326,7 @@ def disc_mesh(path: Path, size: float, target: int | None = None, tries: int = 8
             size = best[1]
         gmsh.clear()
         surface = quarter()
-        gmsh.model.occ.extrude([(2, surface)], 0, 0, THICKNESS, numElements=[LAYERS],
+        gmsh.model.occ.extrude([(2, surface)], 0, 0, THICKNESS, numElements=[layers],
                                recombine=True)
         gmsh.model.occ.synchronize()
         gmsh.option.setNumber("Mesh.Algorithm", 8)
@@ -436,15 +438,19 @@ MAX_INCREMENT = {"coarse": 0.5, "medium": 0.25, "paper": 0.1}
 
 def write_case(folder: Path, model: str, mesh: str, dims: Dimensions = DIMENSIONS,
                max_increment: float | None = None, tools_prefix: str = "../../../tools/",
-               mesh_file: str | None = None) -> Path:
+               mesh_file: str | None = None, layers: int = LAYERS,
+               size: float | None = None) -> Path:
     """Write the five decks of one case. By default the tool and mesh files are referred to
     relatively: the folder must be ``<root>/cases/<mesh>/<model>`` next to ``tools/`` and
-    ``meshes/``."""
+    ``meshes/``. ``layers`` and ``size`` (default: ELEMENT_SIZE's) only describe the blank
+    in the mesh deck's comment."""
     reference = model == REFERENCE
     file, description = TOOL_FILES["nagata" if reference else model]
     folder.mkdir(parents=True, exist_ok=True)
-    what = {"paper": f"unstructured, {LAYERS} layers (paper: 15,408 hexahedra)"}.get(
-        mesh, f"unstructured, {LAYERS} layers, elements of about {ELEMENT_SIZE.get(mesh, 0):g} mm")
+    size = ELEMENT_SIZE.get(mesh, 0) if size is None else size
+    what = {"paper": f"unstructured, {layers} layers (paper: 15,408 hexahedra)"}.get(
+        mesh, f"unstructured, {layers} layer{'s' if layers > 1 else ''}, elements of "
+              f"about {size:g} mm")
     mesh_text = MESH.format(mesh=mesh, what=what,
                             element=REFERENCE_ELEMENT if reference else "")
     augmentation = (f"  augmentation {AUGMENTATION[mesh]:g}    # N/mm, see make_case.py\n"
@@ -504,6 +510,24 @@ def write_default_case(folder: Path = DEFAULT_CASE) -> Path:
     return folder
 
 
+def write_variant_case(folder: Path, size: float, layers: int = LAYERS,
+                       max_increment: float | None = None) -> Path:
+    """Write a variant of the built-in case into ``folder``: its Nagata tool files (copied
+    from DEFAULT_CASE) and its decks (material, friction, gaps, travels, the solid-shell and
+    Gauss-point contact with the barrier) on a blank of quadrilaterals of about ``size`` mm
+    in ``layers`` layers (``mesh.msh``), with ``max_increment`` (default the coarse
+    blank's). What a smaller deep drawing for the test suite costs and does:
+    docs/theory/contact.md, "The barrier"."""
+    import shutil
+
+    folder.mkdir(parents=True, exist_ok=True)
+    shutil.copytree(DEFAULT_CASE / "tools", folder / "tools", dirs_exist_ok=True)
+    disc_mesh(folder / "mesh.msh", size, layers=layers)
+    return write_case(folder, "nagata", "variant", tools_prefix="tools/", mesh_file="mesh.msh",
+                      max_increment=max_increment or MAX_INCREMENT["coarse"], layers=layers,
+                      size=size)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--mesh", choices=(*MESHES, "all"), default="all")
@@ -512,7 +536,19 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--default-case", type=Path, nargs="?", const=DEFAULT_CASE,
                         metavar="FOLDER", help="write only the built-in case of `ddpy run "
                         "deep-drawing` (default folder: ddpy/cases/reverse_deep_drawing)")
+    parser.add_argument("--variant", type=Path, metavar="FOLDER",
+                        help="write only a variant of the built-in case: its tools and decks "
+                        "on a blank of --size mm elements in --layers layers")
+    parser.add_argument("--size", type=float, default=ELEMENT_SIZE["coarse"],
+                        help="with --variant: element size of the blank (mm)")
+    parser.add_argument("--layers", type=int, default=LAYERS,
+                        help="with --variant: layers through the thickness")
+    parser.add_argument("--max-increment", type=float, default=None,
+                        help="with --variant: max_increment (mm; default the coarse blank's)")
     args = parser.parse_args(argv)
+    if args.variant is not None:
+        print(write_variant_case(args.variant, args.size, args.layers, args.max_increment))
+        return 0
     if args.default_case is not None:
         print(write_default_case(args.default_case))
         return 0

@@ -1,6 +1,7 @@
 """The reverse deep drawing benchmark end to end: `ddpy run deep-drawing`, both stages.
 
-Runs the built-in case (the benchmark's coarse blank with Nagata tools,
+Runs the built-in case (the benchmark's coarse blank with Nagata tools at DD3IMP's
+hexahedron and node-to-surface contact, its ``dd3imp`` case,
 benchmarks/reverse_deep_drawing/make_case.py) through both stages with the case runner, and
 checks it twice:
 
@@ -160,14 +161,18 @@ def test_built_in_case_is_the_benchmark_coarse_nagata_case(tmp_path: Path) -> No
 
 def test_a_variant_is_the_built_in_case_on_another_blank(tmp_path: Path) -> None:
     # make_case.py --variant writes the smaller deep drawings measured for the test suite
-    # (docs/theory/contact.md, "The barrier"): the built-in case's tool files and decks,
-    # only the blank (here one layer of 6 mm elements) and max_increment changed.
+    # (docs/theory/contact.md, "The barrier"): the built-in case's tool files, the decks of
+    # the benchmark's coarse Nagata case (ddpy's element and contact with the barrier), only
+    # the blank (here one layer of 6 mm elements) and max_increment changed.
     made = _make_case()
     variant = made.write_variant_case(tmp_path / "variant", 6.0, layers=1, max_increment=1.0)
     for tool in (CASE / "tools").iterdir():
         assert (variant / "tools" / tool.name).read_bytes() == tool.read_bytes(), tool.name
+    coarse = made.write_case(tmp_path / "coarse", "nagata", "coarse", tools_prefix="tools/",
+                             mesh_file="mesh.msh")
     for name in ("tools.dat", "material.dat", "bc.dat"):
-        assert made.DEFAULT_HEADER + (variant / name).read_text() == (CASE / name).read_text()
+        assert (variant / name).read_text() == (coarse / name).read_text(), name
+    assert "barrier" in (variant / "tools.dat").read_text()
     built, small = read_case(CASE), read_case(variant)
     assert [(p.name, p.tools, p.travel, p.lead) for p in small.phases] == \
         [(p.name, p.tools, p.travel, p.lead) for p in built.phases]

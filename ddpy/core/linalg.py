@@ -18,6 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 from ddpy import _core
 from ddpy._validate import float_array, int_array
 from ddpy.core import mpi
+from ddpy.core.constants import constant
 
 __all__ = ["MumpsSolver", "LinearSolverError", "RowStructure", "row_structure", "spsolve"]
 
@@ -31,14 +32,18 @@ _MESSAGES = {
     -8: "the integer workspace is too small",
     -9: "the real workspace is too small",
     -13: "memory allocation failed",
-    -1001: "the solver handle is not valid (closed?)",
-    -1002: "analyse and factorize before solving",
-    -1003: "the size differs from the analysed structure",
-    -1004: "too many solvers open at once; close some",
-    -1005: "the processes were finished (ddpy.core.mpi.finish)",
-    -1006: "only rank 0 drives the solver; ranks > 0 serve it (ddpy.core.mpi.serve)",
-    -1007: "the matrix is not positive definite (MUMPS found negative pivots, INFOG(12)); "
-           "factorize it with symmetry='symmetric' if it is meant to be indefinite",
+    constant("solver_bad_handle"): "the solver handle is not valid (closed?)",
+    constant("solver_not_analysed"): "analyse and factorize before solving",
+    constant("solver_size_mismatch"): "the size differs from the analysed structure",
+    constant("solver_no_free_handle"): "too many solvers open at once (or the core's handle "
+                                       "table is full); close some",
+    constant("solver_finished"): "the processes were finished (ddpy.core.mpi.finish)",
+    constant("solver_not_host"): "only rank 0 drives the solver; ranks > 0 serve it "
+                                 "(ddpy.core.mpi.serve)",
+    constant("solver_not_positive_definite"): "the matrix is not positive definite (MUMPS "
+                                              "found negative pivots, INFOG(12)); factorize it "
+                                              "with symmetry='symmetric' if it is meant to be "
+                                              "indefinite",
 }
 
 

@@ -24,7 +24,6 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
 
-from ddpy import _core
 from ddpy._validate import float_array, int_array
 from ddpy.core.linalg import MumpsSolver
 from ddpy.core.ordering import mesh_solver
@@ -42,6 +41,7 @@ from ddpy.model.newton import (
     Pairs,
     ToolPack,
     Trial,
+    contact,
     contact_faces,
     face_basis,
     gauss_face_weights,
@@ -1208,18 +1208,12 @@ class FormingProblem:
         ``values`` (none when it is empty: a look at the gaps), and the rows and entries of
         the force-controlled tools, pressing with ``hold_force``. Returns the pairs'
         states, and their gaps (inf: no patch) and normals."""
-        residual[:], values[:], state, gap, normal, _, _, status = _core.forming_contact(
-            x.ravel(), x_n.ravel(), layout.fixed_flags, *self._tool_arguments(positions),
+        state, gap, normal = contact(
+            self.solid, layout, self._tool_arguments(positions), on, force, self.r, self.mu,
+            self.traction, self.pressure, x, x_n, residual, values,
             0.0 if touching is None else touching.distance,
-            1 if touching is None or touching.resting else 0, layout.first, layout.node,
-            layout.patch_first, layout.patch_node, on.astype(np.int32), force.ravel(), self.r,
-            self.mu, layout.held_flags, self.traction.ravel(), self.pressure,
-            layout.eqn, layout.nf, layout.k_slots, residual, values,
-            *layout.hold_arguments(hold_force))
-        if status:
-            raise RuntimeError("forming_contact: the tools' packed arrays or the layout do not "
-                               "fit each other (a bug in the caller)")
-        return state, (gap, normal.reshape(-1, 3))
+            touching is None or touching.resting, hold_force)
+        return state, (gap, normal)
 
     def linearization(self, u: ArrayLike | None = None, force: ArrayLike | None = None,
                       positions: Mapping[str, ArrayLike] | None = None,

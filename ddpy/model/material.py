@@ -23,17 +23,19 @@ from numpy.typing import ArrayLike, NDArray
 
 from ddpy import _core
 from ddpy._validate import float_array
+from ddpy.core.constants import constant
 
 __all__ = ["ArmstrongFrederick", "HardeningTable", "Hill48", "Material", "PROP_COUNT",
            "ReturnMappingError", "Swift", "TABLE_MAX_POINTS", "Voce", "initial_yield_stress",
            "yield_landing"]
 
 #: Points a hardening table may hold, and where they start in the property vector.
-TABLE_MAX_POINTS, _TABLE_START = 100, 16
+TABLE_MAX_POINTS, _TABLE_START = constant("material_table_max_points"), \
+    constant("material_table_offset")
 #: Length of the property vector the core takes (``Material.props()``).
-PROP_COUNT = _TABLE_START + 2 * TABLE_MAX_POINTS
+PROP_COUNT = constant("material_prop_count")
 #: Where C_X and X_sat of the kinematic hardening sit in the property vector (0-based).
-_KINEMATIC = 12
+KINEMATIC_OFFSET = constant("material_kinematic_offset")
 
 _STATUS = {1: "the return mapping did not converge", 2: "invalid material properties",
            3: "non-finite or negative input"}
@@ -59,7 +61,7 @@ class Swift:
     K: float
     eps0: float
     n: float
-    law: ClassVar[int] = 1
+    law: ClassVar[int] = constant("hardening_swift")
 
     def __post_init__(self) -> None:
         for name in ("K", "eps0", "n"):
@@ -100,7 +102,7 @@ class Voce:
     Y0: float
     Q: float
     b: float
-    law: ClassVar[int] = 2
+    law: ClassVar[int] = constant("hardening_voce")
 
     def __post_init__(self) -> None:
         for name in ("Y0", "Q", "b"):
@@ -129,7 +131,7 @@ class HardeningTable:
 
     strains: tuple[float, ...]
     stresses: tuple[float, ...]
-    law: ClassVar[int] = 3
+    law: ClassVar[int] = constant("hardening_table")
 
     def __post_init__(self) -> None:
         ep = tuple(_real(v, "tabulated plastic strain") for v in self.strains)
@@ -369,7 +371,7 @@ class Material:
             props[_TABLE_START:_TABLE_START + 2 * n:2] = self.hardening.strains
             props[_TABLE_START + 1:_TABLE_START + 2 * n:2] = self.hardening.stresses
         if self.kinematic is not None:
-            props[_KINEMATIC:_KINEMATIC + 2] = self.kinematic.C, self.kinematic.X_sat
+            props[KINEMATIC_OFFSET:KINEMATIC_OFFSET + 2] = self.kinematic.C, self.kinematic.X_sat
         return props
 
     def elastic_tangent(self) -> NDArray[np.float64]:

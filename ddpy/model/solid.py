@@ -25,8 +25,10 @@ from numpy.typing import ArrayLike, NDArray
 
 from ddpy import _core
 from ddpy._validate import float_array, int_array
+from ddpy.core.constants import constant
+from ddpy.core.handles import CoreHandle, check
 from ddpy.core.ordering import nested_dissection, node_adjacency
-from ddpy.model.material import PROP_COUNT, initial_yield_stress
+from ddpy.model.material import KINEMATIC_OFFSET, PROP_COUNT, initial_yield_stress
 from ddpy.model.mesh import HexMesh, zeta_off_normal
 
 __all__ = ["Assembly", "DEFAULT_ELEMENT", "ELEMENTS", "Solid", "SolidState", "ElementError",
@@ -36,18 +38,26 @@ __all__ = ["Assembly", "DEFAULT_ELEMENT", "ELEMENTS", "Solid", "SolidState", "El
 #: (docs/theory/solid.md) and the solid-shell with assumed natural and 13 enhanced strains
 #: (docs/theory/solid_shell.md), whose third natural direction (nodes 0-3 on one face,
 #: 4-7 on the other) must be the sheet's normal.
-ELEMENTS = {"hexahedron": 0, "solid-shell": 1}
+ELEMENTS = {"hexahedron": constant("element_hexahedron"),
+            "solid-shell": constant("element_solid_shell")}
 #: The blank's element by default: the solid-shell, which gives the converged bending of a
 #: sheet with two layers of elements several thicknesses long; the mean-dilatation
 #: hexahedron (DD3IMP's) locks there (docs/theory/solid_shell.md).
 DEFAULT_ELEMENT = "solid-shell"
 #: Enhanced parameters per solid-shell element.
-SHELL_MODES = 13
-_STATUS = {1: "is inverted (det F <= 0 or det J0 <= 0 at a Gauss point)",
-           2: "failed in the material update (return mapping)",
-           3: "has a node index out of range", 4: "has inconsistent tangent slots",
-           5: "did not converge in its enhanced strains (the solid-shell's local iteration)",
-           7: "has no backstress in the state (mixed hardening needs one per Gauss point)"}
+SHELL_MODES = constant("shell_modes")
+_STATUS = {constant("element_inverted"): "is inverted (det F <= 0 or det J0 <= 0 at a Gauss "
+                                         "point)",
+           constant("element_material_failed"): "failed in the material update (return "
+                                                "mapping)",
+           constant("element_bad_node"): "has a node index out of range",
+           constant("element_bad_offsets"): "has inconsistent tangent slots",
+           constant("element_not_converged"): "did not converge in its enhanced strains (the "
+                                              "solid-shell's local iteration)",
+           constant("element_back_size"): "has no backstress in the state (mixed hardening "
+                                          "needs one per Gauss point)",
+           constant("element_bad_blank"): "is not in the core's copy of this blank (a bug in "
+                                          "the caller)"}
 _COMPONENTS = {"x": 0, "y": 1, "z": 2}
 
 
@@ -196,9 +206,12 @@ class Solid:
         self.element = element
         self._kind = ELEMENTS[element]
         self.mesh = mesh
-        self.props = material_props(material)
+        # The core keeps its own copy (blank_handle): this one is read-only, to stay the same.
+        self.props = np.array(material_props(material))
+        self.props.flags.writeable = False
         #: mixed hardening: a backstress per Gauss point in the state
-        self.mixed = bool(self.props[12] > 0.0 and self.props[13] > 0.0)
+        self.mixed = bool(self.props[KINEMATIC_OFFSET] > 0.0
+                          and self.props[KINEMATIC_OFFSET + 1] > 0.0)
         #: the initial yield stress (MPa, of the hardening curve at ep = 0: Swift K eps0^n,
         #: Voce Y0, a table's first stress): the scale of Gauss-point contact's default
         #: penalty
@@ -209,6 +222,18 @@ class Solid:
         self.angle = np.radians(float_array(angle, "rolling_direction_deg", (mesh.n_elements,)))
         self._x = mesh.nodes.ravel()
         self._conn = mesh.elements.ravel()
+        handle, status, element = _core.blank_create(self._x, self._conn, self._kind,
+                                                     self.props)
+        if status == constant("refusal_index"):
+            raise ElementError(constant("element_bad_node"), int(element) - 1)
+        check(status, "the blank's mesh and material")
+        self._blank = CoreHandle(handle)
+
+    @property
+    def blank_handle(self) -> int:
+        """The handle of the core's copy of this solid's mesh, element kind and material
+        (fortran/mechanics/ddpy_blank.f90), which the core's assembly and problems read."""
+        return self._blank.handle
 
     @property
     def n_dofs(self) -> int:
@@ -330,8 +355,8 @@ class Solid:
             float_array(alpha, "alpha", (m, SHELL_MODES)).ravel()
         values, fint, kdu, stress, ep, strain, axes, back, alpha_out, status, element = \
             _core.solid_assemble(
-                self._x, self._conn, self._kind, _flat(state.displacement), u.ravel(),
-                self.props, _flat(state.axes.transpose(0, 1, 3, 2)), _flat(state.stress),
+                self.blank_handle, _flat(state.displacement), u.ravel(),
+                _flat(state.axes.transpose(0, 1, 3, 2)), _flat(state.stress),
                 _flat(state.ep), _flat(state.strain), back_old, start, pattern.eqn,
                 int(pattern.symmetric), int(tangent), pattern.offsets, values, int(product),
                 dp, out.stress.ravel(), out.ep.ravel(), out.strain.ravel(),

@@ -40,6 +40,7 @@ from ddpy.model.newton import (
     Loop,
     Pairs,
     ToolPack,
+    ToolPlacement,
     Trial,
     contact,
     contact_faces,
@@ -1187,11 +1188,10 @@ class FormingProblem:
             where[name] = float_array(value, f"position of {name}", (3,))
         return where
 
-    def _tool_arguments(self, positions: Mapping[str, NDArray[np.float64]]) -> tuple:
-        """The tools as the core's forming_contact and forming_increment take them, one
-        argument list for both: the table and search arrays of every tool, their facing
-        directions and faces, where they are and where they were at the last converged
-        increment, the search's reach and the element size."""
+    def _tool_arguments(self, positions: Mapping[str, NDArray[np.float64]]) -> ToolPlacement:
+        """The tools where they are (``positions``) and where they were at the last
+        converged increment, with the search's reach and the element size: what the core's
+        contact and loop take (ToolPack.arguments)."""
         return self._pack.arguments(positions, self.position, self._reach, self.size)
 
     def _contact(self, layout: Layout, x: NDArray[np.float64], x_n: NDArray[np.float64],

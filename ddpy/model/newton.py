@@ -164,7 +164,6 @@ class Layout:
         # Components of a slave whose displacement is fixed: its force there is a support
         # reaction, so that row of the law becomes lambda_k = 0.
         self.held_flags = (equ < 0).astype(np.int32).ravel()
-        self.fixed_flags = fixed.astype(np.int32).ravel()
         # The structure of the contact blocks, in the order the core writes their values:
         # the coupling entries (-1), dC/dx at the free dofs of each pair's patch (pair, row,
         # patch node, column), dC/dlambda (pair, row, column). A Gauss-point pair's

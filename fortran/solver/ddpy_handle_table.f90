@@ -3,8 +3,9 @@
 !> (ddpy_linear_solver, with its process's place among the MPI processes there), a blank
 !> (a mesh with its element kind and material, ddpy_blank), a tool surface with its
 !> search structures (ddpy_search_surface), or a forming problem with the answer of its
-!> last increment trial (ddpy_forming_problem). This module's table is the core's only
-!> state besides MPI's; every other entry point is a function of its arguments.
+!> last increment trial (ddpy_forming_problem). This module's table, with the process's
+!> place among the MPI processes, is the core's only state; every other entry point is a
+!> function of its arguments.
 module ddpy_handle_table
   use ddpy_blank, only: blank_mesh
   use ddpy_search_surface, only: search_surface
@@ -41,6 +42,14 @@ module ddpy_handle_table
   end type table_entry
 
   type(table_entry), target, save :: table(max_handles)
+
+  !> The process's place among the MPI processes (ddpy_linear_solver): MPI not started,
+  !> running, or finished (stopped for good); its rank and the number of processes.
+  integer, parameter, public :: mpi_not_started = 0, mpi_running = 1, mpi_finished = 2
+  type, public :: process_world
+    integer :: state = mpi_not_started, rank = 0, size = 1
+  end type process_world
+  type(process_world), save, public :: world
 
 contains
 

@@ -18,7 +18,8 @@ module ddpy_linear_solver
   use ddpy_kinds, only: wp
   use ddpy_build, only: parallel_mumps
   use ddpy_handle_table, only: table, max_handles, claim_handle, free_entry, entry_solver, &
-                               handle_is => valid_handle
+                               handle_is => valid_handle, world, mpi_not_started, &
+                               mpi_running, mpi_finished
   implicit none
   private
   public :: solver_create, solver_analyse, solver_factorize, solver_solve, &
@@ -46,13 +47,6 @@ module ddpy_linear_solver
                         command_factorize = 3, command_solve = 4, command_destroy = 5, &
                         command_control = 6, command_real_control = 7
 
-  !> State of MPI in this process: not started, running, finished (stopped for good).
-  integer, parameter :: mpi_not_started = 0, mpi_running = 1, mpi_finished = 2
-
-  !> The process's place in MPI_COMM_WORLD (the MUMPS instances, and what was done with
-  !> each, are in the handle table).
-  integer, save :: mpi_state = mpi_not_started
-  integer, save :: world_rank = 0, world_size = 1
 
 contains
 
@@ -64,11 +58,11 @@ contains
   !> Start MPI once (MPI_Init) and learn this process's rank and the number of processes.
   subroutine start_mpi()
     integer :: ierr
-    if (mpi_state /= mpi_not_started) return
+    if (world%state /= mpi_not_started) return
     call mpi_init(ierr)
-    call mpi_comm_rank(mpi_comm_world, world_rank, ierr)
-    call mpi_comm_size(mpi_comm_world, world_size, ierr)
-    mpi_state = mpi_running
+    call mpi_comm_rank(mpi_comm_world, world%rank, ierr)
+    call mpi_comm_size(mpi_comm_world, world%size, ierr)
+    world%state = mpi_running
   end subroutine start_mpi
 
   !> This process's rank and the number of processes (MPI started here when it was not),
@@ -77,11 +71,11 @@ contains
   subroutine solver_world(rank, size, parallel, status)
     integer, intent(out) :: rank, size, parallel, status
     call start_mpi()
-    rank = world_rank
-    size = world_size
+    rank = world%rank
+    size = world%size
     parallel = merge(1, 0, parallel_mumps)
     status = 0
-    if (mpi_state == mpi_finished) status = status_finished
+    if (world%state == mpi_finished) status = status_finished
   end subroutine solver_world
 
   !> Rank 0: send a command to the ranks > 0 (nothing to send with one process).
@@ -89,7 +83,7 @@ contains
     integer, intent(in) :: command, handle, value1, value2
     real(wp), intent(in), optional :: real_value
     integer :: message(message_size), ierr
-    if (world_size < 2) return
+    if (world%size < 2) return
     message = 0
     message(1:4) = [command, handle, value1, value2]
     if (present(real_value)) message(5:6) = transfer(real_value, message(5:6))
@@ -103,7 +97,7 @@ contains
     integer :: message(message_size), ierr, handle, ignored
     call start_mpi()
     status = status_not_host
-    if (world_rank == 0 .or. mpi_state /= mpi_running) return
+    if (world%rank == 0 .or. world%state /= mpi_running) return
     status = 0
     do
       call mpi_bcast(message, message_size, mpi_integer, 0, mpi_comm_world, ierr)
@@ -137,8 +131,8 @@ contains
     integer, intent(out) :: status
     integer :: handle, ignored
     status = 0
-    if (mpi_state /= mpi_running) return
-    if (world_rank /= 0) then
+    if (world%state /= mpi_running) return
+    if (world%rank /= 0) then
       status = status_not_host
       return
     end if
@@ -152,7 +146,7 @@ contains
   subroutine end_mpi()
     integer :: ierr
     call mpi_finalize(ierr)
-    mpi_state = mpi_finished
+    world%state = mpi_finished
   end subroutine end_mpi
 
   !> Start a MUMPS instance. sym: 0 unsymmetric, 1 symmetric positive definite,
@@ -164,9 +158,9 @@ contains
     handle = 0
     call start_mpi()
     status = status_finished
-    if (mpi_state /= mpi_running) return
+    if (world%state /= mpi_running) return
     status = status_not_host
-    if (world_rank /= 0) return
+    if (world%rank /= 0) return
     status = status_no_free_handle
     if (count([(valid_handle(h), h = 1, max_handles)]) >= max_solvers) return
     call claim_handle(entry_solver, handle)
@@ -382,7 +376,7 @@ contains
     associate (id => table(handle)%mumps)
       values = [id%infog(1), id%infog(2), id%infog(7), id%infog(29), id%infog(3), &
                 id%infog(16), id%infog(17), id%infog(18), id%infog(19), id%infog(21), &
-                id%infog(22), world_size, id%infog(12)]
+                id%infog(22), world%size, id%infog(12)]
       flops = [id%rinfog(3), id%rinfog(1)]
     end associate
     status = 0

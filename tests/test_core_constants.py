@@ -45,7 +45,11 @@ def test_the_python_modules_use_the_cores_codes() -> None:
         CORE["hardening_swift"], CORE["hardening_voce"], CORE["hardening_table"]]
     # every status the solver and the elements report has its message
     assert {CORE[name] for name in CORE if name.startswith("solver_")
-            and name != "solver_info_values"} <= set(linalg._MESSAGES)
+            and name not in ("solver_info_values", "solver_flops")} <= set(linalg._MESSAGES)
+    # every statistic of solver_info is read where the core puts it
+    assert linalg._INFO == {name[5:-7]: value for name, value in CORE.items()
+                            if name.startswith("info_") and name != "info_infog2_offset"}
+    assert sorted(linalg._FLOPS.values()) == list(range(CORE["solver_flops"]))
     assert {CORE[name] for name in CORE if name.startswith("element_")
             and name not in ("element_hexahedron", "element_solid_shell", "element_ok")
             } <= set(solid._STATUS)
@@ -72,6 +76,7 @@ def test_the_signature_files_sizes_are_the_cores() -> None:
     assert sizes("coef", "bezier_power_coefficients") == {constant("bezier_stride")}
     assert sizes("coef", "nagata_evaluate") == {constant("nagata_stride")}
     assert sizes("values", "solver_info") == {constant("solver_info_values")}
+    assert sizes("flops", "solver_info") == {constant("solver_flops")}
     assert sizes("history", "problem_history") == {constant("history_width")}
     width = sizes("names", "core_constants").pop()
     assert max(len(name) for name in CORE) < width  # no name cut to the width
@@ -79,10 +84,10 @@ def test_the_signature_files_sizes_are_the_cores() -> None:
 
 @pytest.mark.parametrize("family", ["outcome_", "line_search_", "contact_", "discretization_",
                                     "projection_", "refusal_", "solver_", "hold_",
-                                    "history_", "element_"])
+                                    "history_", "element_", "info_", "flops_"])
 def test_the_codes_of_one_kind_are_distinct(family: str) -> None:
     codes = {name: value for name, value in CORE.items() if name.startswith(family)
-             and not name.endswith(("_info_values", "_width"))
+             and not name.endswith(("_info_values", "_width", "_flops"))
              and name not in ("element_hexahedron", "element_solid_shell")}
     assert len(set(codes.values())) == len(codes), codes
 

@@ -47,6 +47,15 @@ _MESSAGES = {
 }
 
 
+#: Where solver_info puts each statistic (the core's constants), and the two flop counts.
+_INFO = {name: constant(f"info_{name}_offset") for name in (
+    "infog1", "ordering", "factor_entries", "estimated_factor_entries",
+    "estimated_memory_mb_max", "estimated_memory_mb_total", "memory_mb_max",
+    "memory_mb_total", "memory_used_mb_max", "memory_used_mb_total", "processes",
+    "negative_pivots")}
+_FLOPS = {name: constant(f"flops_{name}_offset") for name in ("elimination", "estimate")}
+
+
 class RowStructure(NamedTuple):
     """A coordinate structure (duplicates summed, as MUMPS does) by rows, for products with
     the matrix in the core: row i's entries are ``row_start[i] .. row_start[i + 1] - 1``
@@ -222,16 +231,12 @@ class MumpsSolver:
         def entries(value: int) -> int:
             return int(value) if value >= 0 else -int(value) * 1_000_000
 
-        return {"infog1": int(values[0]), "ordering": int(values[2]),
-                "factor_entries": entries(values[3]),
-                "flops": float(flops[0]),
-                "estimated_flops": float(flops[1]),
-                "estimated_factor_entries": entries(values[4]),
-                "estimated_memory_mb_max": int(values[5]),
-                "estimated_memory_mb_total": int(values[6]),
-                "memory_mb_max": int(values[7]), "memory_mb_total": int(values[8]),
-                "memory_used_mb_max": int(values[9]), "memory_used_mb_total": int(values[10]),
-                "processes": int(values[11]), "negative_pivots": int(values[12])}
+        info = {name: int(values[at]) for name, at in _INFO.items()}
+        for name in ("factor_entries", "estimated_factor_entries"):
+            info[name] = entries(info[name])
+        info.update({"flops": float(flops[_FLOPS["elimination"]]),
+                     "estimated_flops": float(flops[_FLOPS["estimate"]])})
+        return info
 
     def close(self) -> None:
         """Free the MUMPS instance (also done when the object is collected)."""

@@ -15,7 +15,14 @@ module ddpy_api
                                 solver_finish, solver_analyse_elements, status_bad_handle, &
                                 status_not_analysed, status_size_mismatch, &
                                 status_no_free_handle, status_finished, status_not_host, &
-                                status_not_positive_definite
+                                status_not_positive_definite, solver_info_values, &
+                                solver_flops, info_infog1, info_infog2, info_ordering, &
+                                info_factor_entries, info_estimated_factor_entries, &
+                                info_estimated_memory_mb_max, &
+                                info_estimated_memory_mb_total, info_memory_mb_max, &
+                                info_memory_mb_total, info_memory_used_mb_max, &
+                                info_memory_used_mb_total, info_processes, &
+                                info_negative_pivots, flops_elimination, flops_estimate
   use ddpy_handle_table, only: valid_handle, free_entry, max_handles, entry_solver, &
                                entry_blank, entry_surface, entry_problem, refusal_handle, &
                                refusal_size, refusal_index, refusal_full, refusal_value, &
@@ -52,8 +59,6 @@ module ddpy_api
 
   !> Characters of a constant's name in core_constants.
   integer, parameter :: name_length = 40
-  !> Entries of solver_info's values.
-  integer, parameter :: solver_info_values = 13
 
   integer, parameter :: nb = max_bezier_degree
   integer, parameter :: nc = nagata_coefficient_count
@@ -242,7 +247,7 @@ contains
   subroutine api_solver_info(handle, values, flops, status) bind(C, name="ddpy_solver_info")
     integer(c_int), value, intent(in) :: handle
     integer(c_int), intent(out) :: values(solver_info_values)
-    real(c_double), intent(out) :: flops(2)
+    real(c_double), intent(out) :: flops(solver_flops)
     integer(c_int), intent(out) :: status
     call solver_info(handle, values, flops, status)
   end subroutine api_solver_info
@@ -402,6 +407,22 @@ contains
     call add('refusal_value', refusal_value)
     call add('refusal_order', refusal_order)
     call add('solver_info_values', solver_info_values)
+    call add('solver_flops', solver_flops)
+    call add('info_infog1_offset', info_infog1 - 1)
+    call add('info_infog2_offset', info_infog2 - 1)
+    call add('info_ordering_offset', info_ordering - 1)
+    call add('info_factor_entries_offset', info_factor_entries - 1)
+    call add('info_estimated_factor_entries_offset', info_estimated_factor_entries - 1)
+    call add('info_estimated_memory_mb_max_offset', info_estimated_memory_mb_max - 1)
+    call add('info_estimated_memory_mb_total_offset', info_estimated_memory_mb_total - 1)
+    call add('info_memory_mb_max_offset', info_memory_mb_max - 1)
+    call add('info_memory_mb_total_offset', info_memory_mb_total - 1)
+    call add('info_memory_used_mb_max_offset', info_memory_used_mb_max - 1)
+    call add('info_memory_used_mb_total_offset', info_memory_used_mb_total - 1)
+    call add('info_processes_offset', info_processes - 1)
+    call add('info_negative_pivots_offset', info_negative_pivots - 1)
+    call add('flops_elimination_offset', flops_elimination - 1)
+    call add('flops_estimate_offset', flops_estimate - 1)
     call add('solver_bad_handle', status_bad_handle)
     call add('solver_not_analysed', status_not_analysed)
     call add('solver_size_mismatch', status_size_mismatch)

@@ -29,6 +29,19 @@ module ddpy_linear_solver
 
   include 'mpif.h'
 
+  !> The entries of solver_info's values (MUMPS's INFOG(1), INFOG(2), the ordering used, the
+  !> factor entries and their estimate, the estimated memory of the factorization on the
+  !> largest process and all, the memory allocated and used, the processes, the negative
+  !> pivots) and of its flops (the elimination's and its estimate).
+  integer, parameter, public :: info_infog1 = 1, info_infog2 = 2, info_ordering = 3, &
+                                info_factor_entries = 4, info_estimated_factor_entries = 5, &
+                                info_estimated_memory_mb_max = 6, &
+                                info_estimated_memory_mb_total = 7, info_memory_mb_max = 8, &
+                                info_memory_mb_total = 9, info_memory_used_mb_max = 10, &
+                                info_memory_used_mb_total = 11, info_processes = 12, &
+                                info_negative_pivots = 13, solver_info_values = 13
+  integer, parameter, public :: flops_elimination = 1, flops_estimate = 2, solver_flops = 2
+
   !> MUMPS instances that may live at the same time (each holds its factors: a few of them
   !> fill a machine's memory), among the handles of the table.
   integer, parameter :: max_solvers = 16
@@ -364,8 +377,8 @@ contains
   !> (RINFOG(3)) and the analysis's estimate (RINFOG(1)).
   subroutine solver_info(handle, values, flops, status)
     integer, intent(in) :: handle
-    integer, intent(out) :: values(13)
-    real(wp), intent(out) :: flops(2)
+    integer, intent(out) :: values(solver_info_values)
+    real(wp), intent(out) :: flops(solver_flops)
     integer, intent(out) :: status
     values = 0
     flops = 0.0_wp
@@ -374,10 +387,21 @@ contains
       return
     end if
     associate (id => table(handle)%mumps)
-      values = [id%infog(1), id%infog(2), id%infog(7), id%infog(29), id%infog(3), &
-                id%infog(16), id%infog(17), id%infog(18), id%infog(19), id%infog(21), &
-                id%infog(22), world%size, id%infog(12)]
-      flops = [id%rinfog(3), id%rinfog(1)]
+      values(info_infog1) = id%infog(1)
+      values(info_infog2) = id%infog(2)
+      values(info_ordering) = id%infog(7)
+      values(info_factor_entries) = id%infog(29)
+      values(info_estimated_factor_entries) = id%infog(3)
+      values(info_estimated_memory_mb_max) = id%infog(16)
+      values(info_estimated_memory_mb_total) = id%infog(17)
+      values(info_memory_mb_max) = id%infog(18)
+      values(info_memory_mb_total) = id%infog(19)
+      values(info_memory_used_mb_max) = id%infog(21)
+      values(info_memory_used_mb_total) = id%infog(22)
+      values(info_processes) = world%size
+      values(info_negative_pivots) = id%infog(12)
+      flops(flops_elimination) = id%rinfog(3)
+      flops(flops_estimate) = id%rinfog(1)
     end associate
     status = 0
   end subroutine solver_info

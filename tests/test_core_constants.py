@@ -41,6 +41,10 @@ def test_the_python_modules_use_the_cores_codes() -> None:
     assert material.PROP_COUNT == CORE["material_prop_count"]
     assert material.TABLE_MAX_POINTS == CORE["material_table_max_points"]
     assert material.KINEMATIC_OFFSET == CORE["material_kinematic_offset"]
+    assert [material.YOUNG_OFFSET, material.POISSON_OFFSET, material.HILL_OFFSET,
+            material.LAW_OFFSET, material.HARDENING_OFFSET] == [
+        CORE[f"material_{name}_offset"] for name in
+        ("young", "poisson", "hill", "law", "hardening")]
     assert [material.Swift.law, material.Voce.law, material.HardeningTable.law] == [
         CORE["hardening_swift"], CORE["hardening_voce"], CORE["hardening_table"]]
     # every status the solver and the elements report has its message

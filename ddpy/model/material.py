@@ -36,6 +36,11 @@ TABLE_MAX_POINTS, _TABLE_START = constant("material_table_max_points"), \
 PROP_COUNT = constant("material_prop_count")
 #: Where C_X and X_sat of the kinematic hardening sit in the property vector (0-based).
 KINEMATIC_OFFSET = constant("material_kinematic_offset")
+#: Where the rest sits (0-based): Young's modulus, Poisson's ratio, Hill's F, G, H, L, M, N
+#: (6 from HILL_OFFSET), the hardening law, its 3 parameters (from HARDENING_OFFSET).
+YOUNG_OFFSET, POISSON_OFFSET, HILL_OFFSET, LAW_OFFSET, HARDENING_OFFSET = (
+    constant(f"material_{name}_offset") for name in
+    ("young", "poisson", "hill", "law", "hardening"))
 
 _STATUS = {1: "the return mapping did not converge", 2: "invalid material properties",
            3: "non-finite or negative input"}
@@ -87,12 +92,13 @@ class Swift:
 def initial_yield_stress(props: NDArray[np.float64]) -> float:
     """The yield stress at ep = 0 (MPa) of a material's property vector (Material.props):
     Swift K eps0^n, Voce Y0, a table's first stress."""
-    law = int(props[8])
+    law = int(props[LAW_OFFSET])
+    k, eps0, n = props[HARDENING_OFFSET:HARDENING_OFFSET + 3]
     if law == Swift.law:
-        return float(props[9] * props[10] ** props[11])
+        return float(k * eps0 ** n)
     if law == HardeningTable.law:
         return float(props[_TABLE_START + 1])
-    return float(props[9])
+    return float(k)
 
 
 @dataclass(frozen=True)
@@ -362,10 +368,10 @@ class Material:
         0), C_X and X_sat of the kinematic hardening (zero without it), 2 reserved zeros,
         then the table's points as pairs (ep, Y), zero-padded."""
         props = np.zeros(PROP_COUNT)
-        props[0:2] = self.E, self.nu
-        props[2:8] = self.yield_criterion.coefficients
-        props[8] = self.hardening.law
-        props[9:12] = self.hardening.parameters()
+        props[YOUNG_OFFSET], props[POISSON_OFFSET] = self.E, self.nu
+        props[HILL_OFFSET:HILL_OFFSET + 6] = self.yield_criterion.coefficients
+        props[LAW_OFFSET] = self.hardening.law
+        props[HARDENING_OFFSET:HARDENING_OFFSET + 3] = self.hardening.parameters()
         if isinstance(self.hardening, HardeningTable):
             n = len(self.hardening.strains)
             props[_TABLE_START:_TABLE_START + 2 * n:2] = self.hardening.strains

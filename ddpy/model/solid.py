@@ -28,7 +28,19 @@ from ddpy._validate import float_array, int_array
 from ddpy.core.constants import constant
 from ddpy.core.handles import CoreHandle, check
 from ddpy.core.ordering import nested_dissection, node_adjacency
-from ddpy.model.material import KINEMATIC_OFFSET, PROP_COUNT, initial_yield_stress
+from ddpy.model.material import (
+    HARDENING_OFFSET,
+    HILL_OFFSET,
+    KINEMATIC_OFFSET,
+    LAW_OFFSET,
+    POISSON_OFFSET,
+    PROP_COUNT,
+    YOUNG_OFFSET,
+    HardeningTable,
+    Swift,
+    Voce,
+    initial_yield_stress,
+)
 from ddpy.model.mesh import HexMesh, zeta_off_normal
 
 __all__ = ["Assembly", "DEFAULT_ELEMENT", "ELEMENTS", "Solid", "SolidState", "ElementError",
@@ -81,28 +93,31 @@ def material_props(material: Any) -> NDArray[np.float64]:
     """
     props = material.props() if hasattr(material, "props") else material
     props = float_array(props, "material properties", (PROP_COUNT,))
-    e, nu = props[0], props[1]
+    e, nu = props[YOUNG_OFFSET], props[POISSON_OFFSET]
     if not e > 0.0:
         raise ValueError(f"Young's modulus must be positive, got {e}")
     if not -1.0 < nu < 0.5:
         raise ValueError(f"Poisson's ratio must lie in (-1, 0.5), got {nu}")
-    f, g, h, l_, m, n = props[2:8]
+    hill = props[HILL_OFFSET:HILL_OFFSET + 6]
+    f, g, h, l_, m, n = hill
     if min(l_, m, n) <= 0.0 or min(f + g, g + h, h + f) <= 0.0 or f * g + g * h + h * f <= 0.0:
         raise ValueError(
-            f"Hill'48 coefficients F, G, H, L, M, N = {props[2:8].tolist()} do not define a "
+            f"Hill'48 coefficients F, G, H, L, M, N = {hill.tolist()} do not define a "
             "convex yield surface (need L, M, N > 0, F+G, G+H, H+F > 0, FG+GH+HF > 0)")
-    law = props[8]
-    if law == 1.0:
-        k, eps0, n_ = props[9:12]
+    law = props[LAW_OFFSET]
+    parameters = props[HARDENING_OFFSET:HARDENING_OFFSET + 3]
+    if law == Swift.law:
+        k, eps0, n_ = parameters
         if not (k > 0.0 and eps0 > 0.0 and n_ >= 0.0):
             raise ValueError(f"Swift K, eps0 must be positive and n >= 0, got {k}, {eps0}, {n_}")
-    elif law == 2.0:
-        y0, q, b = props[9:12]
+    elif law == Voce.law:
+        y0, q, b = parameters
         if not (y0 > 0.0 and q >= 0.0 and b >= 0.0):
             raise ValueError(f"Voce Y0 must be positive and Q, b >= 0, got {y0}, {q}, {b}")
-    elif law != 3.0:
-        raise ValueError(f"hardening must be 1 (Swift), 2 (Voce) or 3 (table), got {law}")
-    c_x, x_sat = props[12:14]
+    elif law != HardeningTable.law:
+        raise ValueError(f"hardening must be {Swift.law} (Swift), {Voce.law} (Voce) or "
+                         f"{HardeningTable.law} (table), got {law}")
+    c_x, x_sat = props[KINEMATIC_OFFSET:KINEMATIC_OFFSET + 2]
     if not (c_x >= 0.0 and x_sat >= 0.0):
         raise ValueError(f"kinematic hardening C_X and X_sat must be non-negative, got {c_x}, "
                          f"{x_sat}")

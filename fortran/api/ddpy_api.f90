@@ -32,7 +32,8 @@ module ddpy_api
                                 contact_inside, contact_edge
   use ddpy_contact, only: contact_inactive, contact_stick, contact_slip
   use ddpy_material, only: material_prop_count, table_max_points, table_start, &
-                           kinematic_rate, hardening_swift, hardening_voce, hardening_table
+                           kinematic_rate, hardening_swift, hardening_voce, hardening_table, &
+                           prop_young, prop_poisson, prop_hill, prop_law, prop_hardening
   use ddpy_solid_assembly, only: kind_hexahedron, kind_solid_shell, shell_modes, &
                                  status_back_size
   use ddpy_hex8, only: hex8_ok, hex8_inverted, hex8_material_failed
@@ -363,6 +364,11 @@ contains
     call add('material_table_max_points', table_max_points)
     call add('material_table_offset', table_start)
     call add('material_kinematic_offset', kinematic_rate - 1)
+    call add('material_young_offset', prop_young - 1)
+    call add('material_poisson_offset', prop_poisson - 1)
+    call add('material_hill_offset', prop_hill - 1)
+    call add('material_law_offset', prop_law - 1)
+    call add('material_hardening_offset', prop_hardening - 1)
     call add('hardening_swift', hardening_swift)
     call add('hardening_voce', hardening_voce)
     call add('hardening_table', hardening_table)

@@ -205,7 +205,8 @@ class Solid:
     default, DEFAULT_ELEMENT; for sheets: free of shear, thickness and volumetric locking;
     every element's nodes 0-3 on one face of the sheet and 4-7 on the other, as
     ``HexMesh.box`` makes them for a sheet normal to z, ``zeta_along_normal`` for any mesh)
-    or "hexahedron" (the mean-dilatation hexahedron, DD3IMP's).
+    or "hexahedron" (the mean-dilatation hexahedron, DD3IMP's). The core keeps its own copy
+    of the mesh, element kind and material (``blank_handle``): ``props`` is read-only.
     """
 
     def __init__(self, mesh: HexMesh, material: Any,

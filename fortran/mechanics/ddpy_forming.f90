@@ -440,7 +440,7 @@ contains
       end do
     end subroutine surface_search
 
-    !> Gauss-point contact of tool t (table f_surface = surface_gauss): the n x n Gauss
+    !> Gauss-point contact of tool t (discretization contact_gauss): the n x n Gauss
     !> points of its faces projected on it as in surface_search, the penalty law of each
     !> (gauss_traction, its tangential traction at the last converged increment from
     !> law%traction_n, the new one into traction), and the force of the points on each slave

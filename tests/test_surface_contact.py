@@ -10,13 +10,14 @@ import numpy as np
 import pytest
 from jacobian_check import central_difference_errors
 
+from ddpy.core.handles import CoreRefusal
 from ddpy.geometry.surfaces import NagataSurface
 from ddpy.model.contact import INACTIVE, SLIP, STICK
 from ddpy.model.control import IncrementLimits, NewtonSettings
 from ddpy.model.forming import FormingProblem, FormingResult, RigidTool
 from ddpy.model.material import Hill48, Material, Swift
 from ddpy.model.mesh import HexMesh
-from ddpy.model.newton import Layout
+from ddpy.model.newton import Layout, ToolPack
 from ddpy.model.solid import Solid as _Solid
 
 #: Elastic in practice (yield stress 1e7 MPa), no Poisson effect: the analytic answers hold.
@@ -66,15 +67,17 @@ def test_the_patch_of_a_pair_is_the_nodes_of_its_faces() -> None:
 
 def test_the_core_refuses_a_patch_that_misses_a_face_node() -> None:
     problem, _, _ = block_on_dome(0.0)
-    problem.linearization()  # the layout as built fits
-    layout = problem._layout
+    mesh = problem.solid.mesh
+    pack = ToolPack(problem.tools, mesh)
+    layout = Layout(problem.solid, problem.tools, problem.fixed)
+    layout.core_problem(problem.solid, pack)  # the layout as built fits
+    layout = Layout(problem.solid, problem.tools, problem.fixed)
     first = layout.patch_first[1]
     # the first pair's patch loses one of its face nodes to another node of the blank
-    stranger = int(np.setdiff1d(np.arange(problem.solid.mesh.n_nodes),
-                                layout.patch_node[:first])[0])
+    stranger = int(np.setdiff1d(np.arange(mesh.n_nodes), layout.patch_node[:first])[0])
     layout.patch_node[first - 1] = stranger
-    with pytest.raises(RuntimeError, match="do not fit"):
-        problem.linearization()
+    with pytest.raises(CoreRefusal, match="tool dome's contact.*out of order"):
+        layout.core_problem(problem.solid, pack)
 
 
 def test_jacobian_of_frictionless_surface_contact_matches_central_differences() -> None:

@@ -18,6 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 from ddpy import _core
 from ddpy._validate import float_array, int_array
 from ddpy.core import mpi
+from ddpy.core.constants import constant
 
 __all__ = ["MumpsSolver", "LinearSolverError", "RowStructure", "row_structure", "spsolve"]
 
@@ -31,15 +32,28 @@ _MESSAGES = {
     -8: "the integer workspace is too small",
     -9: "the real workspace is too small",
     -13: "memory allocation failed",
-    -1001: "the solver handle is not valid (closed?)",
-    -1002: "analyse and factorize before solving",
-    -1003: "the size differs from the analysed structure",
-    -1004: "too many solvers open at once; close some",
-    -1005: "the processes were finished (ddpy.core.mpi.finish)",
-    -1006: "only rank 0 drives the solver; ranks > 0 serve it (ddpy.core.mpi.serve)",
-    -1007: "the matrix is not positive definite (MUMPS found negative pivots, INFOG(12)); "
-           "factorize it with symmetry='symmetric' if it is meant to be indefinite",
+    constant("solver_bad_handle"): "the solver handle is not valid (closed?)",
+    constant("solver_not_analysed"): "analyse and factorize before solving",
+    constant("solver_size_mismatch"): "the size differs from the analysed structure",
+    constant("solver_no_free_handle"): "too many solvers open at once (or the core's handle "
+                                       "table is full); close some",
+    constant("solver_finished"): "the processes were finished (ddpy.core.mpi.finish)",
+    constant("solver_not_host"): "only rank 0 drives the solver; ranks > 0 serve it "
+                                 "(ddpy.core.mpi.serve)",
+    constant("solver_not_positive_definite"): "the matrix is not positive definite (MUMPS "
+                                              "found negative pivots, INFOG(12)); factorize it "
+                                              "with symmetry='symmetric' if it is meant to be "
+                                              "indefinite",
 }
+
+
+#: Where solver_info puts each statistic (the core's constants), and the two flop counts.
+_INFO = {name: constant(f"info_{name}_offset") for name in (
+    "infog1", "ordering", "factor_entries", "estimated_factor_entries",
+    "estimated_memory_mb_max", "estimated_memory_mb_total", "memory_mb_max",
+    "memory_mb_total", "memory_used_mb_max", "memory_used_mb_total", "processes",
+    "negative_pivots")}
+_FLOPS = {name: constant(f"flops_{name}_offset") for name in ("elimination", "estimate")}
 
 
 class RowStructure(NamedTuple):
@@ -217,16 +231,12 @@ class MumpsSolver:
         def entries(value: int) -> int:
             return int(value) if value >= 0 else -int(value) * 1_000_000
 
-        return {"infog1": int(values[0]), "ordering": int(values[2]),
-                "factor_entries": entries(values[3]),
-                "flops": float(flops[0]),
-                "estimated_flops": float(flops[1]),
-                "estimated_factor_entries": entries(values[4]),
-                "estimated_memory_mb_max": int(values[5]),
-                "estimated_memory_mb_total": int(values[6]),
-                "memory_mb_max": int(values[7]), "memory_mb_total": int(values[8]),
-                "memory_used_mb_max": int(values[9]), "memory_used_mb_total": int(values[10]),
-                "processes": int(values[11]), "negative_pivots": int(values[12])}
+        info = {name: int(values[at]) for name, at in _INFO.items()}
+        for name in ("factor_entries", "estimated_factor_entries"):
+            info[name] = entries(info[name])
+        info.update({"flops": float(flops[_FLOPS["elimination"]]),
+                     "estimated_flops": float(flops[_FLOPS["estimate"]])})
+        return info
 
     def close(self) -> None:
         """Free the MUMPS instance (also done when the object is collected)."""

@@ -21,18 +21,22 @@ from numpy.typing import ArrayLike, NDArray
 
 from ddpy import _core
 from ddpy._validate import float_array
+from ddpy.core.constants import constant
+from ddpy.core.handles import CoreHandle, check
 from ddpy.geometry.surfaces import BezierSurface, NagataSurface
 
 __all__ = ["ContactSearch", "Projection", "SearchArrays", "NONE", "INSIDE", "EDGE"]
 
 #: Status of a node: no candidate patch; projection inside a patch; held on a patch boundary.
-NONE, INSIDE, EDGE = 0, 1, 2
-_KIND = {BezierSurface: 1, NagataSurface: 2}
-_MODE = {"tree": 1, "brute": 2}
+NONE, INSIDE, EDGE = (constant("projection_none"), constant("projection_inside"),
+                      constant("projection_edge"))
+_KIND = {BezierSurface: constant("surface_bezier"), NagataSurface: constant("surface_nagata")}
+_MODE = {"tree": constant("search_mode_tree"), "brute": constant("search_mode_brute")}
 
 
 class SearchArrays(NamedTuple):
-    """The flat arrays of one tool that the core's search reads, in its argument order:
+    """The flat arrays of one tool that the core's search reads, in the order of its
+    surface_create:
     coefficients, degrees and triangle flags per patch; the box tree (children 1-based);
     the patch frames and their boxes; each patch's first grid point (1-based) and the grid's
     parameters, normals and points."""
@@ -89,7 +93,9 @@ class ContactSearch:
     bounds, and the search stops at the first bound beyond the nearest projection found,
     or beyond the reach of ``project`` (docs/theory/contact.md). The grid on each patch,
     ``(n + 2) x (m + 2)`` points for a Bezier patch, 4 to 12 per direction for a Nagata
-    patch (more for a long thin one), only gives the local search its start.
+    patch (more for a long thin one), only gives the local search its start. The core keeps
+    the surface with its search structures (``handle``); ``max_iterations`` and ``tol`` are
+    fixed with it.
     """
 
     def __init__(
@@ -105,22 +111,23 @@ class ContactSearch:
             raise ValueError(f"max_iterations = {max_iterations} is out of range")
         self.surface = surface
         self.kind = _KIND[type(surface)]
-        self.max_iterations = int(max_iterations)
-        self.tol = float(tol)
+        self._max_iterations = int(max_iterations)
+        self._tol = float(tol)
         self.mode = _MODE["tree"]
         n = surface.n_patches
-        if self.kind == 1:
-            self.stride = 147
+        if self.kind == _KIND[BezierSurface]:
+            self.stride = constant("bezier_stride")
             self._degrees = surface.degrees.ravel()
             self._triangle = np.zeros(n, dtype=np.int32)
             counts = surface.degrees + 2
         else:
-            self.stride = 24
+            self.stride = constant("nagata_stride")
             self._degrees = np.zeros(2 * n, dtype=np.int32)
             self._triangle = surface.is_triangle.astype(np.int32)
             counts = np.repeat(_nagata_grid_size(surface)[:, None], 2, axis=1)
         self.grid_patch, self.grid_params, self.grid_start = _grid(
-            counts, surface.is_triangle if self.kind == 2 else np.zeros(n, bool))
+            counts, surface.is_triangle if self.kind == _KIND[NagataSurface]
+            else np.zeros(n, bool))
         self.grid_points, _, self.grid_normals = surface.evaluate(self.grid_patch,
                                                                   self.grid_params)
         tree = _core.search_tree(self.kind, self.stride, self.surface.coefficients,
@@ -131,6 +138,29 @@ class ContactSearch:
             self._triangle.astype(np.int32), *tree,
             (self.grid_start + 1).astype(np.int32), self.grid_params.ravel(),
             self.grid_normals.ravel(), self.grid_points.ravel())
+        self._surface: CoreHandle | None = None
+
+    @property
+    def handle(self) -> int:
+        """The handle of the core's copy of the surface and its search structures
+        (``arrays``, fortran/search/ddpy_search_surface.f90), made at the first use: the
+        search and the forming problem, which copies it, read that copy."""
+        if self._surface is None:
+            handle, status = _core.surface_create(self.kind, self.stride, *self.arrays,
+                                                  self.mode, self.max_iterations, self.tol)
+            check(status, "the tool surface's search structures")
+            self._surface = CoreHandle(handle)
+        return self._surface.handle
+
+    @property
+    def max_iterations(self) -> int:
+        """Newton iterations of the local search at most."""
+        return self._max_iterations
+
+    @property
+    def tol(self) -> float:
+        """The local search's tolerance."""
+        return self._tol
 
     def project(
         self,
@@ -183,14 +213,10 @@ class ContactSearch:
             return Projection(empty, np.zeros((0, 2)), np.zeros((0, 3)), np.zeros((0, 3)),
                               np.zeros((0, 2, 3)), np.zeros(0), empty, empty, empty)
         mode = _MODE["brute"] if brute_force else self.mode
-        a = self.arrays
-        out = _core.contact_search(
-            self.kind, self.stride, a.coef, a.degrees, a.triangle, mode, a.tree_lower,
-            a.tree_upper, a.tree_child, a.frame, a.frame_lower, a.frame_upper, a.grid_start,
-            a.grid_params, a.grid_normals, a.grid_points, x.ravel(), nn.ravel(), u,
-            self.max_iterations, self.tol, limit, on_patch,
-        )
-        patch, params, point, normal, tangents, distance, status, iterations, ncand_out = out
+        (patch, params, point, normal, tangents, distance, status, iterations, ncand_out,
+         refusal) = _core.contact_search(self.handle, mode, x.ravel(), nn.ravel(), u, limit,
+                                         on_patch)
+        check(refusal, "the contact search")
         return Projection(patch, params.reshape(k, 2), point.reshape(k, 3),
                           normal.reshape(k, 3), tangents.reshape(k, 2, 3), distance, status,
                           iterations, ncand_out)

@@ -15,12 +15,14 @@ from numpy.typing import ArrayLike, NDArray
 
 from ddpy import _core
 from ddpy._validate import float_array
+from ddpy.core.constants import constant
 from ddpy.geometry.search import Projection
 
 __all__ = ["ContactLaw", "contact_law", "INACTIVE", "STICK", "SLIP"]
 
 #: State of a node: no force, sticking, slipping.
-INACTIVE, STICK, SLIP = 0, 1, 2
+INACTIVE, STICK, SLIP = (constant("contact_open"), constant("contact_stick"),
+                         constant("contact_slip"))
 
 
 @dataclass(frozen=True)

@@ -24,7 +24,6 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
 
-from ddpy import _core
 from ddpy._validate import float_array, int_array
 from ddpy.core.linalg import MumpsSolver
 from ddpy.core.ordering import mesh_solver
@@ -41,7 +40,9 @@ from ddpy.model.newton import (
     Loop,
     Pairs,
     ToolPack,
+    ToolPlacement,
     Trial,
+    contact,
     contact_faces,
     face_basis,
     gauss_face_weights,
@@ -1187,11 +1188,10 @@ class FormingProblem:
             where[name] = float_array(value, f"position of {name}", (3,))
         return where
 
-    def _tool_arguments(self, positions: Mapping[str, NDArray[np.float64]]) -> tuple:
-        """The tools as the core's forming_contact and forming_increment take them, one
-        argument list for both: the table and search arrays of every tool, their facing
-        directions and faces, where they are and where they were at the last converged
-        increment, the search's reach and the element size."""
+    def _tool_arguments(self, positions: Mapping[str, NDArray[np.float64]]) -> ToolPlacement:
+        """The tools where they are (``positions``) and where they were at the last
+        converged increment, with the search's reach and the element size: what the core's
+        contact and loop take (ToolPack.arguments)."""
         return self._pack.arguments(positions, self.position, self._reach, self.size)
 
     def _contact(self, layout: Layout, x: NDArray[np.float64], x_n: NDArray[np.float64],
@@ -1208,18 +1208,12 @@ class FormingProblem:
         ``values`` (none when it is empty: a look at the gaps), and the rows and entries of
         the force-controlled tools, pressing with ``hold_force``. Returns the pairs'
         states, and their gaps (inf: no patch) and normals."""
-        residual[:], values[:], state, gap, normal, _, _, status = _core.forming_contact(
-            x.ravel(), x_n.ravel(), layout.fixed_flags, *self._tool_arguments(positions),
+        state, gap, normal = contact(
+            self.solid, layout, self._tool_arguments(positions), on, force, self.r, self.mu,
+            self.traction, self.pressure, x, x_n, residual, values,
             0.0 if touching is None else touching.distance,
-            1 if touching is None or touching.resting else 0, layout.first, layout.node,
-            layout.patch_first, layout.patch_node, on.astype(np.int32), force.ravel(), self.r,
-            self.mu, layout.held_flags, self.traction.ravel(), self.pressure,
-            layout.eqn, layout.nf, layout.k_slots, residual, values,
-            *layout.hold_arguments(hold_force))
-        if status:
-            raise RuntimeError("forming_contact: the tools' packed arrays or the layout do not "
-                               "fit each other (a bug in the caller)")
-        return state, (gap, normal.reshape(-1, 3))
+            touching is None or touching.resting, hold_force)
+        return state, (gap, normal)
 
     def linearization(self, u: ArrayLike | None = None, force: ArrayLike | None = None,
                       positions: Mapping[str, ArrayLike] | None = None,

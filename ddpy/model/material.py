@@ -23,17 +23,24 @@ from numpy.typing import ArrayLike, NDArray
 
 from ddpy import _core
 from ddpy._validate import float_array
+from ddpy.core.constants import constant
 
 __all__ = ["ArmstrongFrederick", "HardeningTable", "Hill48", "Material", "PROP_COUNT",
            "ReturnMappingError", "Swift", "TABLE_MAX_POINTS", "Voce", "initial_yield_stress",
            "yield_landing"]
 
 #: Points a hardening table may hold, and where they start in the property vector.
-TABLE_MAX_POINTS, _TABLE_START = 100, 16
+TABLE_MAX_POINTS, _TABLE_START = constant("material_table_max_points"), \
+    constant("material_table_offset")
 #: Length of the property vector the core takes (``Material.props()``).
-PROP_COUNT = _TABLE_START + 2 * TABLE_MAX_POINTS
+PROP_COUNT = constant("material_prop_count")
 #: Where C_X and X_sat of the kinematic hardening sit in the property vector (0-based).
-_KINEMATIC = 12
+KINEMATIC_OFFSET = constant("material_kinematic_offset")
+#: Where the rest sits (0-based): Young's modulus, Poisson's ratio, Hill's F, G, H, L, M, N
+#: (6 from HILL_OFFSET), the hardening law, its 3 parameters (from HARDENING_OFFSET).
+YOUNG_OFFSET, POISSON_OFFSET, HILL_OFFSET, LAW_OFFSET, HARDENING_OFFSET = (
+    constant(f"material_{name}_offset") for name in
+    ("young", "poisson", "hill", "law", "hardening"))
 
 _STATUS = {1: "the return mapping did not converge", 2: "invalid material properties",
            3: "non-finite or negative input"}
@@ -59,7 +66,7 @@ class Swift:
     K: float
     eps0: float
     n: float
-    law: ClassVar[int] = 1
+    law: ClassVar[int] = constant("hardening_swift")
 
     def __post_init__(self) -> None:
         for name in ("K", "eps0", "n"):
@@ -85,12 +92,13 @@ class Swift:
 def initial_yield_stress(props: NDArray[np.float64]) -> float:
     """The yield stress at ep = 0 (MPa) of a material's property vector (Material.props):
     Swift K eps0^n, Voce Y0, a table's first stress."""
-    law = int(props[8])
+    law = int(props[LAW_OFFSET])
+    k, eps0, n = props[HARDENING_OFFSET:HARDENING_OFFSET + 3]
     if law == Swift.law:
-        return float(props[9] * props[10] ** props[11])
+        return float(k * eps0 ** n)
     if law == HardeningTable.law:
         return float(props[_TABLE_START + 1])
-    return float(props[9])
+    return float(k)
 
 
 @dataclass(frozen=True)
@@ -100,7 +108,7 @@ class Voce:
     Y0: float
     Q: float
     b: float
-    law: ClassVar[int] = 2
+    law: ClassVar[int] = constant("hardening_voce")
 
     def __post_init__(self) -> None:
         for name in ("Y0", "Q", "b"):
@@ -129,7 +137,7 @@ class HardeningTable:
 
     strains: tuple[float, ...]
     stresses: tuple[float, ...]
-    law: ClassVar[int] = 3
+    law: ClassVar[int] = constant("hardening_table")
 
     def __post_init__(self) -> None:
         ep = tuple(_real(v, "tabulated plastic strain") for v in self.strains)
@@ -360,16 +368,16 @@ class Material:
         0), C_X and X_sat of the kinematic hardening (zero without it), 2 reserved zeros,
         then the table's points as pairs (ep, Y), zero-padded."""
         props = np.zeros(PROP_COUNT)
-        props[0:2] = self.E, self.nu
-        props[2:8] = self.yield_criterion.coefficients
-        props[8] = self.hardening.law
-        props[9:12] = self.hardening.parameters()
+        props[YOUNG_OFFSET], props[POISSON_OFFSET] = self.E, self.nu
+        props[HILL_OFFSET:HILL_OFFSET + 6] = self.yield_criterion.coefficients
+        props[LAW_OFFSET] = self.hardening.law
+        props[HARDENING_OFFSET:HARDENING_OFFSET + 3] = self.hardening.parameters()
         if isinstance(self.hardening, HardeningTable):
             n = len(self.hardening.strains)
             props[_TABLE_START:_TABLE_START + 2 * n:2] = self.hardening.strains
             props[_TABLE_START + 1:_TABLE_START + 2 * n:2] = self.hardening.stresses
         if self.kinematic is not None:
-            props[_KINEMATIC:_KINEMATIC + 2] = self.kinematic.C, self.kinematic.X_sat
+            props[KINEMATIC_OFFSET:KINEMATIC_OFFSET + 2] = self.kinematic.C, self.kinematic.X_sat
         return props
 
     def elastic_tangent(self) -> NDArray[np.float64]:

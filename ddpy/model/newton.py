@@ -3,13 +3,15 @@ call it (fortran/solver/ddpy_forming_newton.f90, ``forming_increment``).
 
 One loop serves both: the static problem is the forming problem without tools, whose fixed
 dofs move to prescribed values. ``Layout`` numbers the unknowns and fixes the Jacobian's
-coordinate structure, ``ToolPack`` packs the tools' surfaces and search structures,
-``Loop`` says how the loop runs, and ``increment`` makes the call and says what came of
-it (``Trial``).
+coordinate structure, ``ToolPack`` gathers the tools' contact (the blank faces that face
+each, their Gauss points' areas, the penalties), ``CoreProblem`` hands the core a problem's
+fixed data once (its handle), ``Loop`` says how the loop runs, ``increment`` makes a trial
+and says what came of it (``Trial``), and ``contact`` looks at the contact alone.
 """
 
 from __future__ import annotations
 
+import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -18,34 +20,35 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ddpy import _core
+from ddpy.core.constants import constant
+from ddpy.core.handles import CoreHandle, check
 from ddpy.core.linalg import LinearSolverError, RowStructure, row_structure
-from ddpy.geometry.search import SearchArrays
 from ddpy.model.mesh import HexMesh, boundary_faces, face_area_vectors
 from ddpy.model.solid import ElementError, Solid, SolidState, _flat
 from ddpy.model.tool import RigidTool
 
 #: What the core's forming_increment returns.
-CONVERGED, LANDING, ELEMENT, NOT_FINITE, SOLVER, STALLED, HOLD = range(7)
+CONVERGED, LANDING, ELEMENT, NOT_FINITE, SOLVER, STALLED, HOLD = (
+    constant(f"outcome_{name}") for name in
+    ("converged", "landing", "element", "not_finite", "solver", "stalled", "hold"))
 #: Line searches of the core's loop: none (whole steps, halved only where an element
 #: fails); Deuflhard's natural monotonicity test with the residual-norm fallback (forming:
 #: the contact law has no potential); the energy line search (a problem with a potential).
-SEARCH_NONE, SEARCH_MONOTONICITY, SEARCH_ENERGY = range(3)
-#: The table's code of each contact discretization (ddpy_forming's f_surface column).
-SURFACE_CODES = {"node": 0, "surface": 1, "gauss": 2}
+SEARCH_NONE, SEARCH_MONOTONICITY, SEARCH_ENERGY = (
+    constant(f"line_search_{name}") for name in ("none", "monotonicity", "energy"))
+#: The core's code of each contact discretization.
+SURFACE_CODES = {name: constant(f"discretization_{name}")
+                 for name in ("node", "surface", "gauss")}
 #: The parts of a trial's time, as the core measures them.
 PARTS = ("assembly", "contact", "factorization", "solve")
+#: The columns of the core's iteration history.
+_HISTORY = {name: constant(f"history_{name}_offset")
+            for name in ("residual", "relative_residual", "relative_correction", "step")}
 
 
 def _join(parts: Sequence[NDArray], dtype: type) -> NDArray:
     """The arrays one after another (an empty array of dtype for none)."""
     return np.concatenate(parts).astype(dtype) if parts else np.zeros(0, dtype=dtype)
-
-
-def _padded(values: ArrayLike, dtype: type) -> NDArray:
-    """``values`` as a flat array of dtype at least one long (a zero after an empty one):
-    f2py passes no empty array."""
-    flat = np.asarray(values, dtype=dtype).ravel()
-    return flat if flat.size else np.zeros(1, dtype=dtype)
 
 
 def contact_faces(tools: Sequence[RigidTool], mesh: HexMesh) -> list[NDArray[np.int32]]:
@@ -161,7 +164,6 @@ class Layout:
         # Components of a slave whose displacement is fixed: its force there is a support
         # reaction, so that row of the law becomes lambda_k = 0.
         self.held_flags = (equ < 0).astype(np.int32).ravel()
-        self.fixed_flags = fixed.astype(np.int32).ravel()
         # The structure of the contact blocks, in the order the core writes their values:
         # the coupling entries (-1), dC/dx at the free dofs of each pair's patch (pair, row,
         # patch node, column), dC/dlambda (pair, row, column). A Gauss-point pair's
@@ -247,59 +249,37 @@ class Layout:
         self.hold_source = _join(source, np.int32)
         self.hold_coef = _join(coef, np.float64)
 
-    def hold_arguments(self, force: ArrayLike | None = None) -> tuple:
-        """The force-controlled tools as the core's forming_contact and forming_increment
-        take them, pressing with ``force`` (N, per tool; default zero): their count, tools
-        (1-based), axes and forces, and their rows' sources (arrays at least one long)."""
-        force = np.zeros(self.holds.size) if force is None else np.asarray(force, dtype=float)
-        if force.shape != self.holds.shape:
-            raise ValueError(f"{self.holds.size} force-controlled tool(s) need as many "
-                             f"forces, got {force.size}")
-        return (self.holds.size, _padded(self.holds + 1, np.int32),
-                _padded(self.hold_axis, np.float64), _padded(force, np.float64),
-                self.hold_first, self.hold_source.size, _padded(self.hold_source, np.int32),
-                _padded(self.hold_coef, np.float64))
-
     @cached_property
     def by_rows(self) -> RowStructure:
         """The Jacobian's structure by rows, for the products of GMRES in the core: sorted
         once, at the first increment (a layout made for a look at the contact needs none)."""
         return row_structure(self.n, self.rows, self.cols, self.symmetric)
 
+    def core_problem(self, solid: Solid, pack: ToolPack | None) -> CoreProblem:
+        """The core's copy of the problem of this layout, ``solid`` and the tools of
+        ``pack`` (none: the static problem): made at the first call, kept while the layout
+        lives."""
+        cache: dict[int, CoreProblem] = self.__dict__.setdefault("_core_problems", {})
+        key = id(pack)
+        if key not in cache:
+            cache[key] = CoreProblem(solid, self, pack)
+        return cache[key]
+
 
 class ToolPack:
-    """Every tool's surface and search structures packed one after another in flat arrays,
-    with a table of their offsets, and the blank faces that face each tool: what the core's
-    forming_contact reads (fortran/mechanics/ddpy_forming.f90), with the penalty of each
-    Gauss-point tool (``penalty``, per tool; 0 for the others). Made once; empty for none."""
+    """Every tool's contact with the blank: its search (the core's copy of its surface,
+    ``RigidTool.search``), its facing direction and discretization, the blank faces that
+    face it with the area each of their Gauss points stands for, and the penalty of each
+    Gauss-point tool (``penalty``, per tool; 0 for the others) with its barrier: what the
+    core's contact reads (fortran/mechanics/ddpy_forming.f90), per tool (``tool_faces``)
+    and, for contact_pressure, one tool after another. Made once; empty for none."""
 
     def __init__(self, tools: Sequence[RigidTool], mesh: HexMesh,
                  penalty: Sequence[float] | None = None,
                  barrier: Sequence[tuple[float, float, float]] | None = None) -> None:
-        searches = [t.search for t in tools]
-        faces = contact_faces(tools, mesh)
-        table = np.zeros((len(tools), 13), dtype=np.int32)
-        offsets = np.zeros(4, dtype=np.int64)  # coef, patch, tree, grid
-        first_point = 0
-        for i, (tool, s) in enumerate(zip(tools, searches, strict=True)):
-            n = s.surface.n_patches
-            table[i] = (s.kind, s.stride, n, s.mode, s.max_iterations, *offsets,
-                        tool.facing is not None, SURFACE_CODES[tool.contact], tool.points,
-                        first_point)
-            offsets += (s.surface.coefficients.size, n, 2 * n - 1, s.grid_params.shape[0])
-            first_point += tool.points**2 * faces[i].shape[0] + (
-                tool.slaves.size if tool.contact == "gauss" else 0)
+        self.tools = list(tools)
         self.names = [t.name for t in tools]
-        self.table = table.ravel()
-        self.tol = np.array([s.tol for s in searches], dtype=float)
-        integers = {"degrees", "triangle", "tree_child", "grid_start"}
-        #: every tool's search arrays, one after another, in the core's argument order
-        self.arrays = SearchArrays(*(
-            _join([getattr(s.arrays, name) for s in searches],
-                  np.int32 if name in integers else np.float64)
-            for name in SearchArrays._fields))
-        self.facing = _join([np.zeros(3) if t.facing is None else t.facing for t in tools],
-                            np.float64)
+        faces = contact_faces(tools, mesh)
         # Per tool with a facing direction, the blank's boundary faces that face it (normal
         # within 60 degrees) and the slave index of their corners (-1: not a slave): the
         # search keeps only patches opposing the blank's normal at each slave; a
@@ -319,30 +299,135 @@ class ToolPack:
             if tool.contact == "gauss":
                 weights[-1] = np.concatenate([weights[-1], corner_areas(
                     mesh.nodes, chosen, corners[-1], tool.slaves.size)])
+        #: per tool, its faces (f, 4), their corners' slave indices (f, 4) and the area of
+        #: each of its points (the core's face_weight)
+        self.tool_faces = [(f.astype(np.int32), c.astype(np.int32), w.astype(np.float64))
+                           for f, c, w in zip(faces, corners, weights, strict=True)]
         self.face_first = np.concatenate([[0], np.cumsum([f.shape[0] for f in faces])]
                                          ).astype(np.int32)
         self.faces = _join([f.ravel() for f in faces], np.int32)
-        self.corner = _join([c.ravel() for c in corners], np.int32)
         self.face_weight = _join(weights, np.float64)
-        #: per tool, the normal and tangential penalty of Gauss-point contact (N/mm^3) and
+        #: per tool, the normal (= tangential) penalty of Gauss-point contact (N/mm^3) and
         #: its barrier's stiffness (N/mm^3; 0: none), start and width (mm)
-        eps = np.zeros(len(tools)) if penalty is None else np.asarray(penalty, dtype=float)
-        bars = np.zeros((len(tools), 3)) if barrier is None else np.asarray(barrier, float)
-        self.penalty = np.column_stack([eps, eps, bars.reshape(len(tools), 3)]).ravel()
+        self.penalty = np.zeros(len(tools)) if penalty is None else \
+            np.asarray(penalty, dtype=float).reshape(len(tools))
+        self.barrier = np.zeros((len(tools), 3)) if barrier is None else \
+            np.asarray(barrier, dtype=float).reshape(len(tools), 3)
         #: Gauss points of all faces: their tangential tractions are (3,) each
-        self.n_points = first_point if len(tools) else 0
+        self.n_points = int(self.face_weight.size)
 
     def arguments(self, positions: dict[str, NDArray[np.float64]],
                   positions_n: dict[str, NDArray[np.float64]], reach: float, size: float
-                  ) -> tuple:
-        """The tools as the core's forming_contact and forming_increment take them: the
-        table and search arrays of every tool, their facing directions and faces, where
-        they are and where they were at the last converged increment, the search's reach
-        and the element size."""
-        return (self.table, self.tol, *self.arrays, self.facing, self.face_first, self.faces,
-                self.corner, self.face_weight, self.penalty,
-                _join([positions[n] for n in self.names], np.float64),
-                _join([positions_n[n] for n in self.names], np.float64), reach, size)
+                  ) -> ToolPlacement:
+        """The tools where they are (``positions``) and where they were at the last
+        converged increment (``positions_n``), with the search's reach and the element
+        size, as the core's contact and loop take them."""
+        return ToolPlacement(self, _join([positions[n] for n in self.names], np.float64),
+                             _join([positions_n[n] for n in self.names], np.float64),
+                             float(reach), float(size))
+
+
+@dataclass(frozen=True)
+class ToolPlacement:
+    """The tools of ``pack`` at ``positions`` (3 per tool), at ``positions_n`` at the last
+    converged increment, with the contact search's ``reach`` and the blank's element
+    ``size`` (mm)."""
+
+    pack: ToolPack
+    positions: NDArray[np.float64]
+    positions_n: NDArray[np.float64]
+    reach: float
+    size: float
+
+
+class CoreProblem:
+    """A problem's fixed data handed to the core once (fortran/api/ddpy_api_forming.f90),
+    held behind a handle of its table: the blank of ``solid`` with the unknowns of
+    ``layout``, the tools of ``pack`` one by one with their pairs, the force-controlled
+    tools and, before the first trial, the Jacobian's structure by rows. Each trial then
+    gives the core what changes: settings, limits, state, tools' positions, pairs' law."""
+
+    def __init__(self, solid: Solid, layout: Layout, pack: ToolPack | None) -> None:
+        tools = [] if pack is None else pack.tools
+        if layout.first.size != len(tools) + 1:
+            raise ValueError(f"the layout has {layout.first.size - 1} tool(s), the pack "
+                             f"{len(tools)}")
+        self.pack, self.solid = pack, solid
+        handle, status = _core.problem_create(solid.blank_handle, layout.eqn,
+                                              layout.pattern.offsets, int(layout.symmetric))
+        check(status, "the problem's blank and unknowns")
+        self._handle = CoreHandle(handle)
+        self._rows = False
+        for k, tool in enumerate(tools):
+            assert pack is not None
+            faces, corners, weights = pack.tool_faces[k]
+            pairs = slice(layout.first[k], layout.first[k + 1])
+            patch_first = layout.patch_first[layout.first[k]:layout.first[k + 1] + 1]
+            stiffness, start, width = pack.barrier[k]
+            check(_core.problem_add_tool(
+                handle, tool.search.handle, faced=int(tool.facing is not None),
+                facing=np.zeros(3) if tool.facing is None else tool.facing,
+                discretization=SURFACE_CODES[tool.contact], order=tool.points,
+                normal_penalty=pack.penalty[k], tangential_penalty=pack.penalty[k],
+                barrier_stiffness=stiffness, barrier_start=start, barrier_width=width,
+                faces=faces.ravel(), corner=corners.ravel(), face_weight=weights,
+                slaves=layout.node[pairs], patch_first=patch_first - patch_first[0],
+                patch_node=layout.patch_node[patch_first[0]:patch_first[-1]]),
+                f"tool {tool.name}'s contact")
+        if layout.holds.size:
+            check(_core.problem_set_holds(handle, layout.holds, layout.hold_axis.ravel(),
+                                          layout.hold_first, layout.hold_source,
+                                          layout.hold_coef), "the force-controlled tools")
+        self._layout = weakref.ref(layout)
+
+    @property
+    def handle(self) -> int:
+        return self._handle.handle
+
+    def ensure_rows(self) -> None:
+        """Give the core the Jacobian's structure by rows (sorted once, at the first trial:
+        a problem made for a look at the contact needs none)."""
+        if self._rows:
+            return
+        layout = self._layout()
+        assert layout is not None
+        rows = layout.by_rows
+        check(_core.problem_set_rows(self.handle, rows.row_start, rows.col, rows.sources,
+                                     rows.source_start, layout.rows.size),
+              "the Jacobian's structure")
+        self._rows = True
+
+    def set_tools(self, placement: ToolPlacement, hold_force: ArrayLike | None,
+                  holds: int) -> None:
+        """Where the tools are, and the forces of the ``holds`` force-controlled tools (N;
+        default zero)."""
+        force = np.zeros(holds) if hold_force is None else np.asarray(hold_force, float)
+        if force.shape != (holds,):
+            raise ValueError(f"{holds} force-controlled tool(s) need as many forces, got "
+                             f"{force.size}")
+        check(_core.problem_set_tools(self.handle, placement.positions, placement.positions_n,
+                                      force), "the tools")
+
+    def set_law(self, on: NDArray[np.bool_], r: ArrayLike, mu: ArrayLike,
+                traction_n: ArrayLike, pressure_n: ArrayLike) -> None:
+        """The pairs' law: which take part, their augmentation and friction, the Gauss
+        points' tangential tractions (points, 3) and pressure multipliers at the last
+        converged increment."""
+        check(_core.problem_set_law(self.handle, on.astype(np.int32), r, mu,
+                                    np.asarray(traction_n, float).ravel(), pressure_n),
+              "the pairs' law")
+
+    def set_limits(self, *, reach: float, element_size: float, touching: float = 0.0,
+                   resting: bool = True, penetration: float = 0.0, min_step: float = 1.0,
+                   yield_tolerance: float | None = None, size_ratio: float = 1.0,
+                   hold_step: float = 0.0) -> None:
+        """The limits of the next trials and looks (fortran/mechanics/ddpy_forming_data.f90,
+        increment_limits)."""
+        check(_core.problem_set_limits(
+            self.handle, reach=reach, element_size=element_size, touching=touching,
+            resting=int(resting), penetration=penetration, min_step=min_step,
+            yield_tolerance=-1.0 if yield_tolerance is None else yield_tolerance,
+            size_ratio=size_ratio, hold_step=hold_step), "the increment's limits")
 
 
 @dataclass(frozen=True)
@@ -425,8 +510,8 @@ class Factors:
 
 @dataclass(frozen=True)
 class Pairs:
-    """The (tool, slave) pairs of an increment: the tools (``ToolPack.arguments``) where
-    the increment takes them, the pairs that take part (``on``), their augmentation ``r``,
+    """The (tool, slave) pairs of an increment: the tools where the increment takes them
+    (``ToolPack.arguments``), the pairs that take part (``on``), their augmentation ``r``,
     friction ``mu`` and contact forces at the converged state, and the tangential traction
     of each Gauss point of Gauss-point contact there (``traction_n``, (points, 3)) with its
     pressure multiplier (``pressure_n``, (points,): the augmented Lagrangian's, 0 for the
@@ -434,7 +519,7 @@ class Pairs:
     it presses on the blank with at the increment's end (N); ``hold_step``: the most it
     may move in one Newton step (mm)."""
 
-    tools: tuple
+    tools: ToolPlacement
     on: NDArray[np.bool_]
     r: NDArray[np.float64]
     mu: NDArray[np.float64]
@@ -453,93 +538,134 @@ def increment(solid: Solid, layout: Layout, factors: Factors, state: SolidState,
     ``external`` (n, 3), the fixed dofs to ``prescribed`` (n, 3; u_n there for supports
     that hold), starting at ``guess`` (unless an element fails there) or at u_n, with the
     contact ``pairs`` of the tools (none: the static problem). ``factors`` is updated."""
-    settings = np.array([loop.force_tolerance, loop.displacement_tolerance,
-                         -1.0 if loop.yield_tolerance is None else loop.yield_tolerance,
-                         loop.penetration, loop.min_step, loop.krylov_loose, loop.krylov_tight,
-                         loop.floor, loop.whole_step, loop.size_ratio])
-    isettings = np.array([loop.max_iterations, loop.krylov_max, loop.krylov_keep, loop.reuse,
-                          factors.handle, guess is not None, loop.resting, layout.symmetric,
-                          loop.search], dtype=np.int32)
-    factored = np.array([factors.factored], dtype=np.int32)
-    reuse_next = np.array([factors.reuse_next], dtype=np.int32)
-    out = solid.state_buffer()
-    solid_state = (solid._x, solid._conn, solid._kind, solid.props, _flat(state.displacement),
-                   _flat(state.axes.transpose(0, 1, 3, 2)), _flat(state.stress),
-                   _flat(state.ep), _flat(state.strain), solid.backstress_in(state), layout.eqn,
-                   layout.pattern.offsets,
-                   layout.fixed_flags, layout.nf, layout.k_slots)
-    start = (u_n if guess is None else guess).ravel()
-    buffers = (out.stress.ravel(), out.ep.ravel(), out.strain.ravel(),
-               out.axes.transpose(0, 1, 3, 2).ravel(), solid.backstress_out(out),
-               loop.max_iterations + 1)
-    if pairs is None:
-        if layout.node.size:
-            raise ValueError("a layout with contact pairs needs their Pairs")
-        (factored, u, fint, stress, ep, strain, axes, back, niter, history, counters, spent,
-         outcome, info, detail) = _core.static_increment(
-            *solid_state, layout.rows.size, layout.by_rows.row_start, layout.by_rows.col,
-            layout.by_rows.sources, layout.by_rows.source_start, solid.mesh.element_size(),
-            u_n.ravel(),
-            external.ravel(), prescribed.ravel(), start, settings, isettings, factored,
-            *buffers)
-        force = pair_state = gap = normal = traction = pressure = shift = np.zeros(0)
-    else:
-        (factored, reuse_next, u, force, fint, stress, ep, strain, axes, back, pair_state, gap,
-         normal, traction, pressure, niter, history, counters, spent, outcome, info,
-         detail, shift) = \
-            _core.forming_increment(
-                *solid_state, layout.n_coupling, layout.rows.size, *layout.by_rows,
-                *pairs.tools, loop.touching, layout.first, layout.node, layout.patch_first,
-                layout.patch_node, pairs.on.astype(np.int32), pairs.r,
-                pairs.mu, layout.held_flags, pairs.traction_n.ravel(), pairs.pressure_n,
-                u_n.ravel(),
-                np.where(pairs.on[:, None], pairs.force_n, 0.0).ravel(), external.ravel(),
-                prescribed.ravel(), start, settings, isettings, factored, reuse_next,
-                *buffers, *layout.hold_arguments(pairs.hold_force), pairs.hold_step,
-                np.zeros(max(layout.holds.size, 1)))
-        shift = shift[:layout.holds.size]
-        factors.reuse_next = bool(reuse_next[0])
-    factors.factored = bool(factored[0])
-    history = history.reshape(-1, 4)[:niter]
-    work = {"counters": tuple(int(c) for c in counters),
-            "timings": {key: float(s) for key, s in zip(PARTS, spent, strict=True)},
-            "residuals": history[:, 0].tolist(),
-            "relative": [(float(a), float(b)) for a, b in history[:, 1:3]],
-            "steps": history[1:, 3].tolist()}
+    if pairs is None and layout.node.size:
+        raise ValueError("a layout with contact pairs needs their Pairs")
+    placement = None if pairs is None else pairs.tools
+    problem = layout.core_problem(solid, None if placement is None else placement.pack)
+    problem.ensure_rows()
+    handle = problem.handle
+    check(_core.problem_set_newton(
+        handle, force_tolerance=loop.force_tolerance,
+        displacement_tolerance=loop.displacement_tolerance,
+        max_iterations=loop.max_iterations, floor=loop.floor, reuse=int(loop.reuse),
+        krylov_loose=loop.krylov_loose, krylov_tight=loop.krylov_tight,
+        krylov_max=loop.krylov_max, krylov_keep=loop.krylov_keep, line_search=loop.search,
+        whole_step=loop.whole_step), "the Newton loop's settings")
+    problem.set_limits(
+        reach=0.0 if placement is None else placement.reach,
+        element_size=solid.mesh.element_size() if placement is None else placement.size,
+        touching=loop.touching, resting=loop.resting, penetration=loop.penetration,
+        min_step=loop.min_step, yield_tolerance=loop.yield_tolerance,
+        size_ratio=loop.size_ratio, hold_step=0.0 if pairs is None else pairs.hold_step)
+    check(_core.problem_set_state(
+        handle, _flat(state.displacement), _flat(state.axes.transpose(0, 1, 3, 2)),
+        _flat(state.stress), _flat(state.ep), _flat(state.strain),
+        solid.backstress_in(state)), "the blank's converged state")
+    force_n = np.zeros(0) if pairs is None else \
+        np.where(pairs.on[:, None], pairs.force_n, 0.0).ravel()
+    check(_core.problem_set_start(
+        handle, u_n.ravel(), external.ravel(), prescribed.ravel(),
+        (u_n if guess is None else guess).ravel(), int(guess is not None), force_n),
+        "the increment's start")
+    if pairs is not None:  # (the static problem has no tools and no pairs)
+        problem.set_tools(placement, pairs.hold_force, layout.holds.size)
+        problem.set_law(pairs.on, pairs.r, pairs.mu, pairs.traction_n, pairs.pressure_n)
+    # The static problem never reuses older factors (its loop has no Krylov solves).
+    factored, reuse_next, outcome, status = _core.problem_increment(
+        handle, factors.handle, int(factors.factored),
+        int(factors.reuse_next) if pairs is not None else 0)
+    check(status, "the increment trial")
+    factors.factored = bool(factored)
+    if pairs is not None:
+        factors.reuse_next = bool(reuse_next)
+    (_, niter, evaluations, corrections, factorizations, krylov, fallbacks, *spent,
+     element_status, element, solver_status, flipped, hold_tool, hold_reason, landing,
+     residual, correction, status) = _core.problem_report(handle)
+    check(status, "the increment's report")
+    history, status = _core.problem_history(handle, niter)
+    check(status, "the increment's history")
+    history = history.reshape(-1, constant("history_width"))
+    work = {"counters": (evaluations, corrections, factorizations, krylov, fallbacks),
+            "timings": {key: float(t) for key, t in zip(PARTS, spent, strict=True)},
+            "residuals": history[:, _HISTORY["residual"]].tolist(),
+            "relative": [(float(a), float(b)) for a, b in
+                         history[:, [_HISTORY["relative_residual"],
+                                     _HISTORY["relative_correction"]]]],
+            "steps": history[1:, _HISTORY["step"]].tolist()}
     if outcome == CONVERGED:
-        m = solid.mesh.n_elements
-        converged = SolidState(stress.reshape(m, 8, 6), ep.reshape(m, 8),
-                               strain.reshape(m, 8, 6),
-                               axes.reshape(m, 8, 3, 3).transpose(0, 1, 3, 2),
-                               u.reshape(-1, 3), back.reshape(m, 8, 6) if solid.mixed else None)
-        return Trial(u=u.reshape(-1, 3), state=converged, force=force.reshape(-1, 3),
-                     fint=fint.reshape(-1, 3), in_contact=pair_state,
-                     gap=(gap, normal.reshape(-1, 3)), traction=traction.reshape(-1, 3),
-                     pressure=pressure, shift=shift, **work)
+        return _converged(solid, layout, problem, work)
     if outcome == LANDING:
-        return Trial(landing=float(detail[0]), **work)
+        return Trial(landing=float(landing), **work)
     if outcome == ELEMENT:
-        return Trial(str(ElementError(int(info[0]), int(info[1]) - 1)), **work)
+        return Trial(str(ElementError(int(element_status), int(element) - 1)), **work)
     if outcome == NOT_FINITE:
         return Trial("the residual is not finite", **work)
     if outcome == SOLVER:
         factors.factored = False
-        return Trial(str(LinearSolverError(int(info[2]), "factorization or solve")),
+        return Trial(str(LinearSolverError(int(solver_status), "factorization or solve")),
                      solver=True, **work)
     if outcome == HOLD:
-        tool = int(info[0]) - 1  # the tool's index
         why = ("nothing holds it along its axis: no slave node is in contact with it"
-               if int(info[1]) == 1 else
+               if hold_reason == constant("hold_no_stiffness") else
                "it moved farther than the contact search's reach in one increment: the "
                "blank does not carry its force")
-        return Trial(f"force-controlled tool {tool} lost the blank: {why}",
-                     hold=(tool, why), **work)
+        return Trial(f"force-controlled tool {hold_tool} lost the blank: {why}",
+                     hold=(int(hold_tool), why), **work)
     if outcome == STALLED:
-        return Trial(stalled(loop.max_iterations, float(detail[0]), float(detail[1]),
+        return Trial(stalled(loop.max_iterations, float(residual), float(correction),
                              loop.force_tolerance, loop.displacement_tolerance,
-                             int(info[3])), **work)
-    raise RuntimeError(f"forming_increment refused its input (outcome {outcome}): the "
-                       "layout, the tools' packed arrays or the history do not fit")
+                             int(flipped)), **work)
+    raise RuntimeError(f"forming_increment ended with an unknown outcome {outcome}")
+
+
+def _converged(solid: Solid, layout: Layout, problem: CoreProblem, work: dict) -> Trial:
+    """The converged trial's answer, read from the core into new arrays."""
+    out = solid.state_buffer()
+    n = solid.mesh.n_nodes
+    u, fint = np.empty(3 * n), np.empty(3 * n)
+    check(_core.problem_blank_answer(
+        problem.handle, u, fint, out.stress.ravel(), out.ep.ravel(), out.strain.ravel(),
+        out.axes.transpose(0, 1, 3, 2).ravel(), solid.backstress_out(out))[-1],
+        "the increment's answer")
+    npoint = 0 if problem.pack is None else problem.pack.n_points
+    force, state, gap, normal, traction, pressure, shift, status = _core.problem_pair_answer(
+        problem.handle, layout.node.size, npoint, layout.holds.size)
+    check(status, "the increment's answer")
+    converged = SolidState(out.stress, out.ep, out.strain, out.axes, u.reshape(n, 3),
+                           out.backstress if solid.mixed else None)
+    return Trial(u=u.reshape(n, 3), state=converged, force=force.reshape(-1, 3),
+                 fint=fint.reshape(n, 3), in_contact=state, gap=(gap, normal.reshape(-1, 3)),
+                 traction=traction.reshape(-1, 3), pressure=pressure, shift=shift, **work)
+
+
+def contact(solid: Solid, layout: Layout, placement: ToolPlacement, on: NDArray[np.bool_],
+            force: NDArray[np.float64], r: ArrayLike, mu: ArrayLike, traction_n: ArrayLike,
+            pressure_n: ArrayLike, x: NDArray[np.float64], x_n: NDArray[np.float64],
+            residual: NDArray[np.float64], values: NDArray[np.float64],
+            touching: float = 0.0, resting: bool = True,
+            hold_force: ArrayLike | None = None
+            ) -> tuple[NDArray[np.int32], NDArray[np.float64], NDArray[np.float64]]:
+    """Contact of every pair at positions x (n, 3), from the converged x_n, in one call to
+    the core, the same as an evaluation of the loop: the search of each tool with a pair
+    that takes part (``on``), the law (augmentation ``r``, friction ``mu``, the Gauss
+    points' tractions and pressures at the last converged increment) at the pairs' forces
+    ``force`` (pairs, 3), with the touching predictor of the first iteration for pairs
+    within ``touching`` (docs/theory/contact.md). It writes the law's rows of ``residual``
+    and subtracts the pairs' forces from its equilibrium rows (which hold fint -
+    external), and writes the contact entries of ``values`` (none when it is empty: a look
+    at the gaps), and the rows and entries of the force-controlled tools, pressing with
+    ``hold_force``. Returns the pairs' states, gaps (inf: no patch) and normals (pairs,
+    3)."""
+    problem = layout.core_problem(solid, placement.pack)
+    problem.set_limits(reach=placement.reach, element_size=placement.size, touching=touching,
+                       resting=resting)
+    problem.set_tools(placement, hold_force, layout.holds.size)
+    problem.set_law(on, r, mu, traction_n, pressure_n)
+    residual[:], values[:], state, gap, normal, _, _, status = _core.problem_contact(
+        problem.handle, np.asarray(x, float).ravel(), np.asarray(x_n, float).ravel(),
+        np.asarray(force, float).ravel(), residual, values, placement.pack.n_points)
+    check(status, "the contact of the pairs")
+    return state, gap, normal.reshape(-1, 3)
 
 
 def stalled(iterations: int, residual: float, correction: float, tol_force: float,

@@ -25,8 +25,22 @@ from numpy.typing import ArrayLike, NDArray
 
 from ddpy import _core
 from ddpy._validate import float_array, int_array
+from ddpy.core.constants import constant
+from ddpy.core.handles import CoreHandle, check
 from ddpy.core.ordering import nested_dissection, node_adjacency
-from ddpy.model.material import PROP_COUNT, initial_yield_stress
+from ddpy.model.material import (
+    HARDENING_OFFSET,
+    HILL_OFFSET,
+    KINEMATIC_OFFSET,
+    LAW_OFFSET,
+    POISSON_OFFSET,
+    PROP_COUNT,
+    YOUNG_OFFSET,
+    HardeningTable,
+    Swift,
+    Voce,
+    initial_yield_stress,
+)
 from ddpy.model.mesh import HexMesh, zeta_off_normal
 
 __all__ = ["Assembly", "DEFAULT_ELEMENT", "ELEMENTS", "Solid", "SolidState", "ElementError",
@@ -36,18 +50,26 @@ __all__ = ["Assembly", "DEFAULT_ELEMENT", "ELEMENTS", "Solid", "SolidState", "El
 #: (docs/theory/solid.md) and the solid-shell with assumed natural and 13 enhanced strains
 #: (docs/theory/solid_shell.md), whose third natural direction (nodes 0-3 on one face,
 #: 4-7 on the other) must be the sheet's normal.
-ELEMENTS = {"hexahedron": 0, "solid-shell": 1}
+ELEMENTS = {"hexahedron": constant("element_hexahedron"),
+            "solid-shell": constant("element_solid_shell")}
 #: The blank's element by default: the solid-shell, which gives the converged bending of a
 #: sheet with two layers of elements several thicknesses long; the mean-dilatation
 #: hexahedron (DD3IMP's) locks there (docs/theory/solid_shell.md).
 DEFAULT_ELEMENT = "solid-shell"
 #: Enhanced parameters per solid-shell element.
-SHELL_MODES = 13
-_STATUS = {1: "is inverted (det F <= 0 or det J0 <= 0 at a Gauss point)",
-           2: "failed in the material update (return mapping)",
-           3: "has a node index out of range", 4: "has inconsistent tangent slots",
-           5: "did not converge in its enhanced strains (the solid-shell's local iteration)",
-           7: "has no backstress in the state (mixed hardening needs one per Gauss point)"}
+SHELL_MODES = constant("shell_modes")
+_STATUS = {constant("element_inverted"): "is inverted (det F <= 0 or det J0 <= 0 at a Gauss "
+                                         "point)",
+           constant("element_material_failed"): "failed in the material update (return "
+                                                "mapping)",
+           constant("element_bad_node"): "has a node index out of range",
+           constant("element_bad_offsets"): "has inconsistent tangent slots",
+           constant("element_not_converged"): "did not converge in its enhanced strains (the "
+                                              "solid-shell's local iteration)",
+           constant("element_back_size"): "has no backstress in the state (mixed hardening "
+                                          "needs one per Gauss point)",
+           constant("element_bad_blank"): "is not in the core's copy of this blank (a bug in "
+                                          "the caller)"}
 _COMPONENTS = {"x": 0, "y": 1, "z": 2}
 
 
@@ -71,28 +93,31 @@ def material_props(material: Any) -> NDArray[np.float64]:
     """
     props = material.props() if hasattr(material, "props") else material
     props = float_array(props, "material properties", (PROP_COUNT,))
-    e, nu = props[0], props[1]
+    e, nu = props[YOUNG_OFFSET], props[POISSON_OFFSET]
     if not e > 0.0:
         raise ValueError(f"Young's modulus must be positive, got {e}")
     if not -1.0 < nu < 0.5:
         raise ValueError(f"Poisson's ratio must lie in (-1, 0.5), got {nu}")
-    f, g, h, l_, m, n = props[2:8]
+    hill = props[HILL_OFFSET:HILL_OFFSET + 6]
+    f, g, h, l_, m, n = hill
     if min(l_, m, n) <= 0.0 or min(f + g, g + h, h + f) <= 0.0 or f * g + g * h + h * f <= 0.0:
         raise ValueError(
-            f"Hill'48 coefficients F, G, H, L, M, N = {props[2:8].tolist()} do not define a "
+            f"Hill'48 coefficients F, G, H, L, M, N = {hill.tolist()} do not define a "
             "convex yield surface (need L, M, N > 0, F+G, G+H, H+F > 0, FG+GH+HF > 0)")
-    law = props[8]
-    if law == 1.0:
-        k, eps0, n_ = props[9:12]
+    law = props[LAW_OFFSET]
+    parameters = props[HARDENING_OFFSET:HARDENING_OFFSET + 3]
+    if law == Swift.law:
+        k, eps0, n_ = parameters
         if not (k > 0.0 and eps0 > 0.0 and n_ >= 0.0):
             raise ValueError(f"Swift K, eps0 must be positive and n >= 0, got {k}, {eps0}, {n_}")
-    elif law == 2.0:
-        y0, q, b = props[9:12]
+    elif law == Voce.law:
+        y0, q, b = parameters
         if not (y0 > 0.0 and q >= 0.0 and b >= 0.0):
             raise ValueError(f"Voce Y0 must be positive and Q, b >= 0, got {y0}, {q}, {b}")
-    elif law != 3.0:
-        raise ValueError(f"hardening must be 1 (Swift), 2 (Voce) or 3 (table), got {law}")
-    c_x, x_sat = props[12:14]
+    elif law != HardeningTable.law:
+        raise ValueError(f"hardening must be {Swift.law} (Swift), {Voce.law} (Voce) or "
+                         f"{HardeningTable.law} (table), got {law}")
+    c_x, x_sat = props[KINEMATIC_OFFSET:KINEMATIC_OFFSET + 2]
     if not (c_x >= 0.0 and x_sat >= 0.0):
         raise ValueError(f"kinematic hardening C_X and X_sat must be non-negative, got {c_x}, "
                          f"{x_sat}")
@@ -180,7 +205,8 @@ class Solid:
     default, DEFAULT_ELEMENT; for sheets: free of shear, thickness and volumetric locking;
     every element's nodes 0-3 on one face of the sheet and 4-7 on the other, as
     ``HexMesh.box`` makes them for a sheet normal to z, ``zeta_along_normal`` for any mesh)
-    or "hexahedron" (the mean-dilatation hexahedron, DD3IMP's).
+    or "hexahedron" (the mean-dilatation hexahedron, DD3IMP's). The core keeps its own copy
+    of the mesh, element kind and material (``blank_handle``): ``props`` is read-only.
     """
 
     def __init__(self, mesh: HexMesh, material: Any,
@@ -196,9 +222,12 @@ class Solid:
         self.element = element
         self._kind = ELEMENTS[element]
         self.mesh = mesh
-        self.props = material_props(material)
+        # The core keeps its own copy (blank_handle): this one is read-only, to stay the same.
+        self.props = np.array(material_props(material))
+        self.props.flags.writeable = False
         #: mixed hardening: a backstress per Gauss point in the state
-        self.mixed = bool(self.props[12] > 0.0 and self.props[13] > 0.0)
+        self.mixed = bool(self.props[KINEMATIC_OFFSET] > 0.0
+                          and self.props[KINEMATIC_OFFSET + 1] > 0.0)
         #: the initial yield stress (MPa, of the hardening curve at ep = 0: Swift K eps0^n,
         #: Voce Y0, a table's first stress): the scale of Gauss-point contact's default
         #: penalty
@@ -209,6 +238,18 @@ class Solid:
         self.angle = np.radians(float_array(angle, "rolling_direction_deg", (mesh.n_elements,)))
         self._x = mesh.nodes.ravel()
         self._conn = mesh.elements.ravel()
+        handle, status, element = _core.blank_create(self._x, self._conn, self._kind,
+                                                     self.props)
+        if status == constant("refusal_index"):
+            raise ElementError(constant("element_bad_node"), int(element) - 1)
+        check(status, "the blank's mesh and material")
+        self._blank = CoreHandle(handle)
+
+    @property
+    def blank_handle(self) -> int:
+        """The handle of the core's copy of this solid's mesh, element kind and material
+        (fortran/mechanics/ddpy_blank.f90), which the core's assembly and problems read."""
+        return self._blank.handle
 
     @property
     def n_dofs(self) -> int:
@@ -330,8 +371,8 @@ class Solid:
             float_array(alpha, "alpha", (m, SHELL_MODES)).ravel()
         values, fint, kdu, stress, ep, strain, axes, back, alpha_out, status, element = \
             _core.solid_assemble(
-                self._x, self._conn, self._kind, _flat(state.displacement), u.ravel(),
-                self.props, _flat(state.axes.transpose(0, 1, 3, 2)), _flat(state.stress),
+                self.blank_handle, _flat(state.displacement), u.ravel(),
+                _flat(state.axes.transpose(0, 1, 3, 2)), _flat(state.stress),
                 _flat(state.ep), _flat(state.strain), back_old, start, pattern.eqn,
                 int(pattern.symmetric), int(tangent), pattern.offsets, values, int(product),
                 dp, out.stress.ravel(), out.ep.ravel(), out.strain.ravel(),

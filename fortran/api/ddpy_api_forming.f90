@@ -1,403 +1,678 @@
-!> f2py doorway of the forming problem's contact (see ddpy_api.f90 for the conventions and
-!> ddpy_forming for the arguments). Node indices arrive 0-based.
+!> f2py doorway of the forming problem (and of the static problem, a forming problem without
+!> tools): one handle per problem in the core's handle table, made from the blank and its
+!> constraints, given its tools one by one, its force-controlled tools and the Jacobian's
+!> row structure; then, per increment trial, its settings, limits and start, where the
+!> tools are and the pairs' law, by name; the trial itself; and what came of it. Node and
+!> tool indices arrive 0-based (see ddpy_api.f90 for the conventions). Every call checks
+!> what it is given against the problem before it stores it (the core writes where the
+!> layout says), and refuses with a status of ddpy_handle_table (refusal_*) otherwise.
 module ddpy_api_forming
   use, intrinsic :: iso_c_binding, only: c_int, c_double
   use ddpy_kinds, only: wp
-  use ddpy_forming, only: forming_contact, tool_fields, max_face_order, surface_gauss
-  use ddpy_forming_newton, only: forming_increment, newton_settings, newton_integer_settings, &
-                                 penetration_step, gmres, hold_equations
-  use ddpy_material, only: material_prop_count
-  use ddpy_solid_assembly, only: kind_hexahedron, kind_solid_shell
+  use ddpy_handle_table, only: table, claim_handle, valid_handle, entry_blank, &
+                               entry_surface, entry_problem, refusal_handle, refusal_size, &
+                               refusal_index, refusal_full, refusal_value, refusal_order
+  use ddpy_blank, only: blank_dofs
+  use ddpy_forming_data, only: contact_tool, tool_set, pair_set, force_holds, contact_node, &
+                               contact_gauss, max_face_order
+  use ddpy_forming_problem, only: forming_problem, increment_answer, search_none, &
+                                  search_energy, history_width
+  use ddpy_forming, only: forming_contact
+  use ddpy_forming_newton, only: forming_increment, penetration_step, gmres, &
+                                 hold_equations, hold_entries
+  use ddpy_sparse, only: rows_fit
   implicit none
   private
-  public :: api_forming_contact, api_forming_increment, api_static_increment, &
-            api_penetration_step, api_krylov_solve
+  public :: api_problem_create, api_problem_add_tool, api_problem_set_holds, &
+            api_problem_set_rows, api_problem_set_newton, api_problem_set_limits, &
+            api_problem_set_state, api_problem_set_start, api_problem_set_tools, &
+            api_problem_set_law, api_problem_increment, api_problem_report, &
+            api_problem_history, api_problem_blank_answer, api_problem_pair_answer, &
+            api_problem_contact, api_penetration_step, api_krylov_solve
 
 contains
 
-  !> Whether the packed tools, the pairs and the Jacobian layout fit the arrays they index
-  !> (the core writes where they say): node indices in range, tool and face ranges
-  !> increasing, each tool's patches, tree and grid within the packed arrays, each pair's
-  !> patch its own node (node-to-surface) or holding every node of the tool's faces at
-  !> its node (surface-to-surface), and nvalues the solid's k_slots plus the contact
-  !> blocks of the layout (or 0: no Jacobian).
-  pure logical function layout_ok(nnode, ntool, table, ncoef, ndeg, ntri, ntree, nframe, &
-                                  nstart, ngrid, grid_start, face_first, nface, faces, &
-                                  corner, npoint, npair, tool_first, pair_node, npatch, &
-                                  patch_first, patch_node, eqn, k_slots, nvalues) result(ok)
-    integer(c_int), intent(in) :: nnode, ntool, ncoef, ndeg, ntri, ntree, nframe, nstart, &
-                                  ngrid, nface, npoint, npair, npatch, k_slots, nvalues
-    integer(c_int), intent(in) :: table(tool_fields, ntool), grid_start(nstart), &
-                                  face_first(ntool + 1), faces(4, nface), corner(4, nface), &
-                                  tool_first(ntool + 1), pair_node(npair), &
-                                  patch_first(npair + 1), patch_node(npatch), eqn(3, nnode)
-    integer :: t, np_, po, first, last, coupled, p, f, q, qq, e, entries, points, rows
+  !> A problem of the blank behind handle blank (ddpy_api_solid) with the equation numbers
+  !> eqn (0-based, -1 where a dof is fixed: the free ones numbered 0..nf - 1) and the
+  !> solid's tangent slots offsets (ddpy.model.solid's pattern, its lower triangle when
+  !> symmetric /= 0); no tools yet.
+  subroutine api_problem_create(blank, nnode, eqn, ne, offsets, symmetric, handle, status) &
+    bind(C, name="ddpy_problem_create")
+    integer(c_int), value, intent(in) :: blank, nnode, ne, symmetric
+    integer(c_int), intent(in) :: eqn(3, nnode), offsets(ne + 1)
+    integer(c_int), intent(out) :: handle, status
+    integer :: nf
+    handle = 0
+    status = refusal_handle
+    if (.not. valid_handle(blank, entry_blank)) return
+    status = refusal_size
+    if (nnode /= table(blank)%blank%nnode .or. ne /= table(blank)%blank%ne) return
+    nf = count(eqn >= 0)
+    status = refusal_index
+    if (any(eqn < -1) .or. any(eqn >= nf)) return
+    if (offsets(1) /= 0 .or. any(offsets(2:) < offsets(:ne))) return
+    status = refusal_full
+    call claim_handle(entry_problem, handle)
+    if (handle == 0) return
+    allocate(table(handle)%problem, table(handle)%answer, table(handle)%report)
+    associate (p => table(handle)%problem)
+      p%blank = table(blank)%blank
+      p%dofs%nf = nf
+      p%dofs%k_slots = offsets(ne + 1)
+      p%dofs%symmetric = symmetric /= 0
+      p%dofs%eqn = eqn
+      p%dofs%fixed = eqn < 0
+      p%dofs%offsets = offsets
+      allocate(p%tools%tool(0), p%tools%faces(4, 0), p%tools%corner(4, 0), &
+               p%tools%face_weight(0))
+      p%tools%face_first = [0]
+      allocate(p%pairs%node(0), p%pairs%patch_node(0), p%pairs%held(3, 0))
+      p%pairs%tool_first = [0]
+      p%pairs%patch_first = [0]
+      allocate(p%holds%tool(0), p%holds%axis(3, 0), p%holds%source(0), p%holds%coef(0))
+      p%holds%first = [0]
+      ! No tools and no pairs: where the tools are and the pairs' law are set (empty).
+      allocate(p%placement%positions(3, 0), p%placement%positions_n(3, 0), &
+               p%placement%hold_force(0), p%law%on(0), p%law%r(0), p%law%mu(0), &
+               p%law%traction_n(3, 0), p%law%pressure_n(0))
+      p%contact_values = p%dofs%k_slots
+      p%nvalues = p%dofs%k_slots
+    end associate
+    status = 0
+  end subroutine api_problem_create
+
+  !> The problem behind handle, or refusal_handle in status.
+  logical function problem_ok(handle, status)
+    integer(c_int), intent(in) :: handle
+    integer(c_int), intent(out) :: status
+    problem_ok = valid_handle(handle, entry_problem)
+    status = merge(0, refusal_handle, problem_ok)
+  end function problem_ok
+
+  !> One more tool, after those given: the surface behind handle surface (ddpy_api_search)
+  !> with its contact (discretization: contact_node, contact_surface or contact_gauss;
+  !> order: Gauss points per direction of its faces), its facing direction (faced /= 0:
+  !> it has one), its Gauss-point penalties and barrier (see contact_tool), the blank's
+  !> faces that face it (their nodes, 0-based; corner: each corner's slave index, -1 where
+  !> not a slave; face_weight: the area each point stands for, order^2 per face, then one
+  !> per slave for a Gauss-point tool), and its slaves (0-based nodes) with the nodes each
+  !> one's law depends on (patch_first, 0-based starts; patch_node): its own node for
+  !> node-to-surface contact, else every node of the faces around it. Refused after the
+  !> force-controlled tools were set, or where the faces, slaves and patches do not fit.
+  subroutine api_problem_add_tool(handle, surface, faced, facing, discretization, order, &
+                                  normal_penalty, tangential_penalty, barrier_stiffness, &
+                                  barrier_start, barrier_width, nface, faces, ncorner, corner, &
+                                  npoint, face_weight, nslave, slaves, patch_first, npatch, &
+                                  patch_node, status) bind(C, name="ddpy_problem_add_tool")
+    integer(c_int), value, intent(in) :: handle, surface, faced, discretization, order, &
+                                         nface, ncorner, npoint, nslave, npatch
+    real(c_double), value, intent(in) :: normal_penalty, tangential_penalty, &
+                                         barrier_stiffness, barrier_start, barrier_width
+    real(c_double), intent(in) :: facing(3), face_weight(npoint)
+    integer(c_int), intent(in) :: faces(4, nface), corner(4, ncorner), slaves(nslave), &
+                                  patch_first(nslave + 1), patch_node(npatch)
+    integer(c_int), intent(out) :: status
+    type(contact_tool) :: tool
+    integer :: points, nnode, coupled, entries, rows, p, f, q, qq, e
     logical :: found
-    ok = .false.
-    if (any(pair_node < 0) .or. any(pair_node >= nnode)) return
-    if (any(patch_node < 0) .or. any(patch_node >= nnode)) return
-    if (patch_first(1) /= 0 .or. patch_first(npair + 1) /= npatch) return
-    if (any(patch_first(2:) <= patch_first(:npair))) return
-    if (any(faces < 0) .or. any(faces >= nnode) .or. any(corner < -1)) return
-    if (tool_first(1) /= 0 .or. tool_first(ntool + 1) /= npair) return
-    if (face_first(1) /= 0 .or. face_first(ntool + 1) /= nface) return
-    ! Each tool's n x n points per face, one tool after another, fill the point arrays; a
-    ! Gauss-point tool's are followed by one per slave (its barrier).
-    points = 0
-    do t = 1, ntool
-      if (table(12, t) < 1 .or. table(12, t) > max_face_order .or. table(13, t) /= points) &
-        return
-      points = points + table(12, t)**2*(face_first(t + 1) - face_first(t))
-      if (table(11, t) == surface_gauss) points = points + tool_first(t + 1) - tool_first(t)
-    end do
-    if (points /= npoint) return
-    do t = 1, ntool
-      if (tool_first(t + 1) < tool_first(t) .or. face_first(t + 1) < face_first(t)) return
-      if (any(corner(:, face_first(t) + 1:face_first(t + 1)) >= &
-              tool_first(t + 1) - tool_first(t))) return
-      np_ = table(3, t)
-      po = table(7, t)
-      if (np_ < 1 .or. po < 0 .or. table(6, t) < 0 .or. table(8, t) < 0 .or. &
-          table(9, t) < 0) return
-      if (table(6, t) + table(2, t)*np_ > ncoef .or. po + np_ > ntri .or. &
-          2*(po + np_) > ndeg .or. po + np_ > nframe .or. &
-          table(8, t) + 2*np_ - 1 > ntree .or. po + t + np_ > nstart) return
-      first = grid_start(po + t)
-      last = grid_start(po + t + np_)
-      if (first /= 1 .or. last < first .or. table(9, t) + last - 1 > ngrid) return
-      if (table(11, t) < 0 .or. table(11, t) > 2) return
-      if (table(11, t) == 0) then
-        do p = tool_first(t) + 1, tool_first(t + 1)
+    if (.not. problem_ok(handle, status)) return
+    status = refusal_handle
+    if (.not. valid_handle(surface, entry_surface)) return
+    status = refusal_order
+    if (table(handle)%problem%holds%nhold > 0) return
+    status = refusal_value
+    if (discretization < contact_node .or. discretization > contact_gauss .or. &
+        order < 1 .or. order > max_face_order) return
+    status = refusal_size
+    points = order**2*nface
+    if (discretization == contact_gauss) points = points + nslave
+    if (npoint /= points .or. ncorner /= nface .or. patch_first(nslave + 1) /= npatch) return
+    associate (p_ => table(handle)%problem)
+      nnode = p_%blank%nnode
+      status = refusal_index
+      if (any(faces < 0) .or. any(faces >= nnode) .or. any(corner < -1) .or. &
+          any(corner >= nslave)) return
+      if (any(slaves < 0) .or. any(slaves >= nnode) .or. any(patch_node < 0) .or. &
+          any(patch_node >= nnode)) return
+      if (patch_first(1) /= 0 .or. any(patch_first(2:) <= patch_first(:nslave))) return
+      if (discretization == contact_node) then
+        ! A node-to-surface pair's law depends on its own node alone.
+        do p = 1, nslave
           if (patch_first(p + 1) - patch_first(p) /= 1) return
-          if (patch_node(patch_first(p + 1)) /= pair_node(p)) return
+          if (patch_node(patch_first(p + 1)) /= slaves(p)) return
         end do
-        cycle
-      end if
-      do f = face_first(t) + 1, face_first(t + 1)
-        do q = 1, 4
-          if (corner(q, f) < 0) cycle
-          p = tool_first(t) + corner(q, f) + 1
-          if (faces(q, f) /= pair_node(p)) return
-          do qq = 1, 4
-            found = .false.
-            do e = patch_first(p) + 1, patch_first(p + 1)
-              if (patch_node(e) == faces(qq, f)) found = .true.
+      else
+        ! The patch of a corner's slave holds every node of the face.
+        do f = 1, nface
+          do q = 1, 4
+            if (corner(q, f) < 0) cycle
+            p = corner(q, f) + 1
+            if (faces(q, f) /= slaves(p)) return
+            do qq = 1, 4
+              found = .false.
+              do e = patch_first(p) + 1, patch_first(p + 1)
+                if (patch_node(e) == faces(qq, f)) found = .true.
+              end do
+              if (.not. found) return
             end do
-            if (.not. found) return
           end do
         end do
-      end do
-    end do
-    coupled = count(eqn(:, pair_node + 1) >= 0)
-    ! dC/dx: 3 rows per pair over its patch's free dofs; a surface-to-surface or
-    ! Gauss-point pair has no row for a held component (its law is lambda_k = 0).
-    entries = 0
-    do t = 1, ntool
-      do p = tool_first(t) + 1, tool_first(t + 1)
+      end if
+      tool%surface = table(surface)%surface
+      tool%faced = faced /= 0
+      tool%facing = facing
+      tool%discretization = discretization
+      tool%order = order
+      tool%first_point = p_%tools%npoint
+      tool%npoint = npoint
+      tool%normal_penalty = normal_penalty
+      tool%tangential_penalty = tangential_penalty
+      tool%barrier_stiffness = barrier_stiffness
+      tool%barrier_start = barrier_start
+      tool%barrier_width = barrier_width
+      ! The Jacobian's contact slots of these pairs: coupling entries, dC/dx over the free
+      ! dofs of each pair's patch (a surface-to-surface or Gauss-point pair has no row for
+      ! a held component), dC/dlambda.
+      coupled = count(p_%dofs%eqn(:, slaves + 1) >= 0)
+      entries = 0
+      do p = 1, nslave
         rows = 3
-        if (table(11, t) /= 0) rows = count(eqn(:, pair_node(p) + 1) >= 0)
-        entries = entries + rows*count(eqn(:, patch_node(patch_first(p) + 1: &
-                                                         patch_first(p + 1)) + 1) >= 0)
+        if (discretization /= contact_node) rows = count(p_%dofs%eqn(:, slaves(p) + 1) >= 0)
+        entries = entries + rows*count(p_%dofs%eqn(:, patch_node(patch_first(p) + 1: &
+                                                                 patch_first(p + 1)) + 1) >= 0)
       end do
-    end do
-    ok = k_slots >= 0 .and. &
-         (nvalues == k_slots + coupled + entries + 9*npair .or. nvalues == 0)
-  end function layout_ok
+      call append_tool(p_%tools, tool, faces, corner, face_weight)
+      call append_pairs(p_%pairs, p_%dofs, slaves, patch_first, patch_node)
+      p_%contact_values = p_%contact_values + coupled + entries + 9*nslave
+      p_%nvalues = p_%contact_values
+      ! The per-increment parts sized for the old tools are set again.
+      if (allocated(p_%placement%positions)) deallocate(p_%placement%positions)
+      if (allocated(p_%law%on)) deallocate(p_%law%on)
+      if (allocated(p_%start%force_n)) deallocate(p_%start%force_n)
+    end associate
+    status = 0
+  end subroutine api_problem_add_tool
 
-  !> Whether a row structure (ddpy.core.linalg.row_structure) fits: rows and sources in
-  !> order from 0 to their counts, columns in 0..n-1, sources in 0..nvalues-1.
-  pure logical function rows_ok(n, ncsr, nsrc, nvalues, row_start, col, sources, &
-                                source_start) result(ok)
-    integer(c_int), intent(in) :: n, ncsr, nsrc, nvalues, row_start(n + 1), col(ncsr), &
-                                  sources(nsrc), source_start(ncsr + 1)
-    ok = row_start(1) == 0 .and. row_start(n + 1) == ncsr .and. &
-         all(row_start(2:) >= row_start(:n)) .and. source_start(1) == 0 .and. &
-         source_start(ncsr + 1) == nsrc .and. all(source_start(2:) >= source_start(:ncsr)) &
-         .and. all(col >= 0 .and. col < n) .and. all(sources >= 0 .and. sources < nvalues)
-  end function rows_ok
+  !> tools with tool appended, and its faces, corners and points.
+  pure subroutine append_tool(tools, tool, faces, corner, face_weight)
+    type(tool_set), intent(inout) :: tools
+    type(contact_tool), intent(in) :: tool
+    integer, intent(in) :: faces(:, :), corner(:, :)
+    real(wp), intent(in) :: face_weight(:)
+    tools%tool = [tools%tool, tool]
+    tools%ntool = tools%ntool + 1
+    tools%faces = reshape([tools%faces, faces], [4, tools%nface + size(faces, 2)])
+    tools%corner = reshape([tools%corner, corner], [4, tools%nface + size(faces, 2)])
+    tools%nface = tools%nface + size(faces, 2)
+    tools%face_first = [tools%face_first, tools%nface]
+    tools%face_weight = [tools%face_weight, face_weight]
+    tools%npoint = tools%npoint + size(face_weight)
+  end subroutine append_tool
 
-  !> Contact of every (tool, slave) pair: see forming_contact.
-  subroutine api_forming_contact(nnode, x, x_n, fixed, ntool, table, tol, ncoef, coef, &
-                                 ndeg, degrees, ntri, triangle, ntree, tree_lower, &
-                                 tree_upper, tree_child, nframe, frame, frame_lower, &
-                                 frame_upper, nstart, grid_start, ngrid, grid_params, &
-                                 grid_normals, grid_points, facing, face_first, nface, &
-                                 faces, corner, npoint, face_weight, penalty, positions, &
-                                 positions_n, reach, size, touching, resting, npair, tool_first, &
-                                 pair_node, npatch, patch_first, patch_node, on, force, r, mu, &
-                                 held, traction_n, pressure_n, eqn, nf, k_slots, nvalues, &
-                                 residual, values, state, gap, normal, traction, pressure, &
-                                 status, nhold, hold_tool, hold_axis, hold_target, &
-                                 hold_first, nhold_src, hold_source, hold_coef) &
-    bind(C, name="ddpy_forming_contact")
-    integer(c_int), value, intent(in) :: nnode, ntool, ncoef, ndeg, ntri, ntree, nframe, &
-                                         nstart, ngrid, nface, npoint, resting, npair, npatch, &
-                                         nf, k_slots, nvalues, nhold, nhold_src
-    integer(c_int), intent(in) :: hold_tool(nhold), hold_first(nhold + 1), &
-                                  hold_source(nhold_src)
-    real(c_double), intent(in) :: hold_axis(3, nhold), hold_target(nhold), hold_coef(nhold_src)
-    real(c_double), value, intent(in) :: reach, size, touching
-    real(c_double), intent(in) :: x(3, nnode), x_n(3, nnode), tol(ntool), coef(ncoef), &
-                                  tree_lower(3*ntree), tree_upper(3*ntree), frame(9*nframe), &
-                                  frame_lower(3*nframe), frame_upper(3*nframe), &
-                                  grid_params(2*ngrid), grid_normals(3*ngrid), &
-                                  grid_points(3*ngrid), facing(3, ntool), &
-                                  positions(3, ntool), positions_n(3, ntool), &
-                                  force(3, npair), r(npair), mu(npair), face_weight(npoint), &
-                                  penalty(5, ntool), traction_n(3, npoint), &
+  !> pairs with a tool's slaves and their patches appended; a component of a slave that
+  !> dofs fixes is held (its law lambda_c = 0).
+  pure subroutine append_pairs(pairs, dofs, slaves, patch_first, patch_node)
+    type(pair_set), intent(inout) :: pairs
+    type(blank_dofs), intent(in) :: dofs
+    integer, intent(in) :: slaves(:), patch_first(:), patch_node(:)
+    integer :: k
+    k = size(slaves)
+    pairs%node = [pairs%node, slaves]
+    pairs%patch_first = [pairs%patch_first, pairs%npatch + patch_first(2:)]
+    pairs%patch_node = [pairs%patch_node, patch_node]
+    pairs%held = reshape([pairs%held, merge(1, 0, dofs%eqn(:, slaves + 1) < 0)], &
+                         [3, pairs%npair + k])
+    pairs%npair = pairs%npair + k
+    pairs%npatch = pairs%npatch + size(patch_node)
+    pairs%tool_first = [pairs%tool_first, pairs%npair]
+  end subroutine append_pairs
+
+  !> The force-controlled tools, after the tools: tool(k) (0-based) presses along axis(:, k);
+  !> its row's entries are first(k) + 1 .. first(k + 1) of source (0-based slots of the
+  !> contact blocks, -1: the constant coef alone) and coef (see forming_increment). Each
+  !> tool at most once.
+  subroutine api_problem_set_holds(handle, nhold, tool, axis, first, nsource, source, ncoef, &
+                                   coef, status) bind(C, name="ddpy_problem_set_holds")
+    integer(c_int), value, intent(in) :: handle, nhold, nsource, ncoef
+    integer(c_int), intent(in) :: tool(nhold), first(nhold + 1), source(nsource)
+    real(c_double), intent(in) :: axis(3, nhold), coef(ncoef)
+    integer(c_int), intent(out) :: status
+    integer :: k
+    if (.not. problem_ok(handle, status)) return
+    associate (p => table(handle)%problem)
+      status = refusal_size
+      if (ncoef /= nsource) return
+      status = refusal_index
+      if (any(tool < 0) .or. any(tool >= p%tools%ntool)) return
+      do k = 1, nhold
+        if (count(tool == tool(k)) /= 1) return
+      end do
+      if (first(1) /= 0 .or. first(nhold + 1) /= nsource .or. &
+          any(first(2:) < first(:nhold))) return
+      if (any(source >= p%contact_values) .or. any(source < -1)) return
+      p%holds%nhold = nhold
+      p%holds%nsource = nsource
+      p%holds%tool = tool + 1
+      p%holds%axis = axis
+      p%holds%first = first
+      p%holds%source = source
+      p%holds%coef = coef
+      p%nvalues = p%contact_values + hold_entries(p%dofs, p%tools, p%pairs, p%holds)
+      if (allocated(p%placement%positions)) deallocate(p%placement%positions)
+    end associate
+    status = 0
+  end subroutine api_problem_set_holds
+
+  !> The Jacobian's structure by rows (ddpy.core.linalg.row_structure, 0-based), for the
+  !> Krylov products, over its nvalues coordinate values: needed before an increment.
+  subroutine api_problem_set_rows(handle, nrow, row_start, ncsr, col, nsrc, sources, &
+                                  source_start, nvalues, status) &
+    bind(C, name="ddpy_problem_set_rows")
+    integer(c_int), value, intent(in) :: handle, nrow, ncsr, nsrc, nvalues
+    integer(c_int), intent(in) :: row_start(nrow + 1), col(ncsr), sources(nsrc), &
+                                  source_start(ncsr + 1)
+    integer(c_int), intent(out) :: status
+    if (.not. problem_ok(handle, status)) return
+    associate (p => table(handle)%problem)
+      status = refusal_size
+      if (nrow /= p%dofs%nf + 3*p%pairs%npair + p%holds%nhold .or. nvalues /= p%nvalues) &
+        return
+      status = refusal_index
+      if (.not. rows_fit(nrow, ncsr, nsrc, nvalues, row_start, col, sources, source_start)) &
+        return
+      p%rows%n = nrow
+      p%rows%row_start = row_start
+      p%rows%col = col
+      p%rows%sources = sources
+      p%rows%source_start = source_start
+    end associate
+    status = 0
+  end subroutine api_problem_set_rows
+
+  !> How the Newton loop runs the next trials (newton_settings, by name; reuse and the
+  !> line search search_*).
+  subroutine api_problem_set_newton(handle, force_tolerance, displacement_tolerance, &
+                                    max_iterations, floor, reuse, krylov_loose, &
+                                    krylov_tight, krylov_max, krylov_keep, line_search, &
+                                    whole_step, status) &
+    bind(C, name="ddpy_problem_set_newton")
+    integer(c_int), value, intent(in) :: handle, max_iterations, reuse, krylov_max, &
+                                         krylov_keep, line_search
+    real(c_double), value, intent(in) :: force_tolerance, displacement_tolerance, floor, &
+                                         krylov_loose, krylov_tight, whole_step
+    integer(c_int), intent(out) :: status
+    if (.not. problem_ok(handle, status)) return
+    status = refusal_value
+    if (max_iterations < 0 .or. krylov_max < 1 .or. line_search < search_none .or. &
+        line_search > search_energy) return
+    associate (n => table(handle)%problem%newton)
+      n%force_tolerance = force_tolerance
+      n%displacement_tolerance = displacement_tolerance
+      n%max_iterations = max_iterations
+      n%floor = floor
+      n%reuse = reuse /= 0
+      n%krylov_loose = krylov_loose
+      n%krylov_tight = krylov_tight
+      n%krylov_max = krylov_max
+      n%krylov_keep = krylov_keep
+      n%line_search = line_search
+      n%whole_step = whole_step
+    end associate
+    table(handle)%problem%has_newton = .true.
+    status = 0
+  end subroutine api_problem_set_newton
+
+  !> The limits of the next trials and contact looks (increment_limits, by name; resting
+  !> /= 0: the touching predictor closes the touching pairs of tools at rest).
+  subroutine api_problem_set_limits(handle, reach, element_size, touching, resting, &
+                                    penetration, min_step, yield_tolerance, size_ratio, &
+                                    hold_step, status) bind(C, name="ddpy_problem_set_limits")
+    integer(c_int), value, intent(in) :: handle, resting
+    real(c_double), value, intent(in) :: reach, element_size, touching, penetration, &
+                                         min_step, yield_tolerance, size_ratio, hold_step
+    integer(c_int), intent(out) :: status
+    if (.not. problem_ok(handle, status)) return
+    status = refusal_value
+    if (.not. (reach >= 0.0_wp .and. element_size > 0.0_wp)) return
+    associate (l => table(handle)%problem%limits)
+      l%reach = reach
+      l%element_size = element_size
+      l%touching = touching
+      l%resting = resting /= 0
+      l%penetration = penetration
+      l%min_step = min_step
+      l%yield_tolerance = yield_tolerance
+      l%size_ratio = size_ratio
+      l%hold_step = hold_step
+    end associate
+    table(handle)%problem%has_limits = .true.
+    status = 0
+  end subroutine api_problem_set_limits
+
+  !> The converged state of the blank the next trials start from: its displacements u_ref
+  !> and, per Gauss point, its material axes, stress, plastic strain, strain and
+  !> backstress (nback = ne with mixed hardening, else any: not read).
+  subroutine api_problem_set_state(handle, nnode, u_ref, ne, axes_old, stress_old, ep_old, &
+                                   strain_old, nback, back_old, status) &
+    bind(C, name="ddpy_problem_set_state")
+    integer(c_int), value, intent(in) :: handle, nnode, ne, nback
+    real(c_double), intent(in) :: u_ref(3, nnode), axes_old(3, 3, 8, ne), &
+                                  stress_old(6, 8, ne), ep_old(8, ne), strain_old(6, 8, ne), &
+                                  back_old(6, 8, nback)
+    integer(c_int), intent(out) :: status
+    if (.not. problem_ok(handle, status)) return
+    associate (p => table(handle)%problem)
+      status = refusal_size
+      if (nnode /= p%blank%nnode .or. ne /= p%blank%ne) return
+      p%start%u_ref = u_ref
+      p%start%axes_old = axes_old
+      p%start%stress_old = stress_old
+      p%start%ep_old = ep_old
+      p%start%strain_old = strain_old
+      p%start%back_old = back_old
+    end associate
+    status = 0
+  end subroutine api_problem_set_state
+
+  !> Where the next trials start and what drives them: the converged displacements u_n
+  !> and pair forces force_n, the nodal loads, the fixed dofs' values, and the start of
+  !> the iterations (guess, where has_guess /= 0).
+  subroutine api_problem_set_start(handle, nnode, u_n, external, prescribed, guess, &
+                                   has_guess, npair, force_n, status) &
+    bind(C, name="ddpy_problem_set_start")
+    integer(c_int), value, intent(in) :: handle, nnode, has_guess, npair
+    real(c_double), intent(in) :: u_n(3, nnode), external(3, nnode), prescribed(3, nnode), &
+                                  guess(3, nnode), force_n(3, npair)
+    integer(c_int), intent(out) :: status
+    if (.not. problem_ok(handle, status)) return
+    associate (p => table(handle)%problem)
+      status = refusal_size
+      if (nnode /= p%blank%nnode .or. npair /= p%pairs%npair) return
+      p%start%u_n = u_n
+      p%start%external = external
+      p%start%prescribed = prescribed
+      p%start%guess = guess
+      p%start%has_guess = has_guess /= 0
+      p%start%force_n = force_n
+    end associate
+    status = 0
+  end subroutine api_problem_set_start
+
+  !> Where the tools are in the next trials and looks (positions), where they were at the
+  !> last converged increment (positions_n), and the force each force-controlled tool
+  !> presses with (N).
+  subroutine api_problem_set_tools(handle, ntool, positions, positions_n, nhold, hold_force, &
+                                   status) bind(C, name="ddpy_problem_set_tools")
+    integer(c_int), value, intent(in) :: handle, ntool, nhold
+    real(c_double), intent(in) :: positions(3, ntool), positions_n(3, ntool), &
+                                  hold_force(nhold)
+    integer(c_int), intent(out) :: status
+    if (.not. problem_ok(handle, status)) return
+    associate (p => table(handle)%problem)
+      status = refusal_size
+      if (ntool /= p%tools%ntool .or. nhold /= p%holds%nhold) return
+      p%placement%positions = positions
+      p%placement%positions_n = positions_n
+      p%placement%hold_force = hold_force
+    end associate
+    status = 0
+  end subroutine api_problem_set_tools
+
+  !> The pairs' law in the next trials and looks: which take part (on /= 0), their
+  !> augmentation and friction, and each Gauss point's tangential traction and pressure
+  !> multiplier at the last converged increment.
+  subroutine api_problem_set_law(handle, npair, on, r, mu, ntraction, traction_n, npoint, &
+                                 pressure_n, status) bind(C, name="ddpy_problem_set_law")
+    integer(c_int), value, intent(in) :: handle, npair, ntraction, npoint
+    integer(c_int), intent(in) :: on(npair)
+    real(c_double), intent(in) :: r(npair), mu(npair), traction_n(3, ntraction), &
                                   pressure_n(npoint)
-    integer(c_int), intent(in) :: fixed(3, nnode), table(tool_fields, ntool), degrees(ndeg), &
-                                  triangle(ntri), tree_child(ntree), grid_start(nstart), &
-                                  face_first(ntool + 1), faces(4, nface), corner(4, nface), &
-                                  tool_first(ntool + 1), pair_node(npair), on(npair), &
-                                  patch_first(npair + 1), patch_node(npatch), &
-                                  held(3, npair), eqn(3, nnode)
-    real(c_double), intent(inout) :: residual(nf + 3*npair + nhold), values(nvalues)
+    integer(c_int), intent(out) :: status
+    if (.not. problem_ok(handle, status)) return
+    associate (p => table(handle)%problem)
+      status = refusal_size
+      if (npair /= p%pairs%npair .or. npoint /= p%tools%npoint .or. ntraction /= npoint) &
+        return
+      p%law%on = on
+      p%law%r = r
+      p%law%mu = mu
+      p%law%traction_n = traction_n
+      p%law%pressure_n = pressure_n
+    end associate
+    status = 0
+  end subroutine api_problem_set_law
+
+  !> Whether every part a contact look needs was set for the present tools and pairs.
+  pure logical function ready_for_contact(p)
+    type(forming_problem), intent(in) :: p
+    ready_for_contact = p%has_limits .and. allocated(p%placement%positions) .and. &
+                        allocated(p%law%on)
+  end function ready_for_contact
+
+  !> One increment trial of the problem (forming_increment) with the MUMPS instance behind
+  !> solver (analysed for the problem's Jacobian): factored and reuse_next, the state of
+  !> its factors, are updated; outcome says what came of it (problem_report,
+  !> problem_history and, when converged, problem_blank_answer and problem_pair_answer
+  !> give the rest). Refused (refusal_order) before the rows, settings, limits, state,
+  !> start, tools and law are set.
+  subroutine api_problem_increment(handle, solver, factored, reuse_next, outcome, status) &
+    bind(C, name="ddpy_problem_increment")
+    integer(c_int), value, intent(in) :: handle, solver
+    integer(c_int), intent(inout) :: factored, reuse_next
+    integer(c_int), intent(out) :: outcome, status
+    outcome = -1
+    if (.not. problem_ok(handle, status)) return
+    associate (p => table(handle)%problem, a => table(handle)%answer)
+      status = refusal_order
+      if (.not. (p%has_newton .and. ready_for_contact(p) .and. allocated(p%start%u_ref) .and. &
+                 allocated(p%start%force_n))) return
+      if (p%rows%n /= p%dofs%nf + 3*p%pairs%npair + p%holds%nhold) return
+      call size_answer(p, a)
+      call forming_increment(p%blank, p%dofs, p%rows, p%nvalues, p%tools, p%pairs, p%holds, &
+                             p%newton, p%limits, p%start, p%placement, p%law, solver, &
+                             factored, reuse_next, a, table(handle)%report)
+      outcome = table(handle)%report%outcome
+    end associate
+    status = 0
+  end subroutine api_problem_increment
+
+  !> The answer's arrays sized for problem p.
+  pure subroutine size_answer(p, a)
+    type(forming_problem), intent(in) :: p
+    type(increment_answer), intent(inout) :: a
+    integer :: nnode, ne, npair, npoint
+    nnode = p%blank%nnode
+    ne = p%blank%ne
+    npair = p%pairs%npair
+    npoint = p%tools%npoint
+    if (allocated(a%u)) then
+      if (size(a%back, 3) == size(p%start%back_old, 3) .and. size(a%force, 2) == npair .and. &
+          size(a%traction, 2) == npoint .and. size(a%shift) == p%holds%nhold) return
+      deallocate(a%u, a%force, a%fint, a%stress, a%ep, a%strain, a%axes, a%back, a%state, &
+                 a%gap, a%normal, a%traction, a%pressure, a%shift)
+    end if
+    allocate(a%u(3, nnode), a%force(3, npair), a%fint(3, nnode), a%stress(6, 8, ne), &
+             a%ep(8, ne), a%strain(6, 8, ne), a%axes(3, 3, 8, ne), &
+             a%back(6, 8, size(p%start%back_old, 3)), a%state(npair), a%gap(npair), &
+             a%normal(3, npair), a%traction(3, npoint), a%pressure(npoint), &
+             a%shift(p%holds%nhold))
+  end subroutine size_answer
+
+  !> What the last trial did (increment_report, by name): the element status and the
+  !> element (1-based), the tool (0-based) that lost the blank, and so on.
+  subroutine api_problem_report(handle, outcome, niter, evaluations, corrections, &
+                                factorizations, krylov_iterations, fallbacks, assembly_time, &
+                                contact_time, factorization_time, solve_time, &
+                                element_status, element, solver_status, flipped, hold_tool, &
+                                hold_reason, landing, residual, correction, status) &
+    bind(C, name="ddpy_problem_report")
+    integer(c_int), value, intent(in) :: handle
+    integer(c_int), intent(out) :: outcome, niter, evaluations, corrections, factorizations, &
+                                   krylov_iterations, fallbacks, element_status, element, &
+                                   solver_status, flipped, hold_tool, hold_reason, status
+    real(c_double), intent(out) :: assembly_time, contact_time, factorization_time, &
+                                   solve_time, landing, residual, correction
+    if (.not. problem_ok(handle, status)) return
+    associate (r => table(handle)%report)
+      outcome = r%outcome
+      niter = r%niter
+      evaluations = r%evaluations
+      corrections = r%corrections
+      factorizations = r%factorizations
+      krylov_iterations = r%krylov_iterations
+      fallbacks = r%fallbacks
+      assembly_time = r%assembly_time
+      contact_time = r%contact_time
+      factorization_time = r%factorization_time
+      solve_time = r%solve_time
+      element_status = r%element_status
+      element = r%element
+      solver_status = r%solver_status
+      flipped = r%flipped
+      hold_tool = r%hold_tool - 1
+      hold_reason = r%hold_reason
+      landing = r%landing
+      residual = r%residual
+      correction = r%correction
+    end associate
+  end subroutine api_problem_report
+
+  !> The last trial's first nhistory iterations (nhistory at most its niter): per iteration
+  !> its residual norm, relative residual, relative correction and step length.
+  subroutine api_problem_history(handle, nhistory, history, status) &
+    bind(C, name="ddpy_problem_history")
+    integer(c_int), value, intent(in) :: handle, nhistory
+    real(c_double), intent(out) :: history(history_width, nhistory)
+    integer(c_int), intent(out) :: status
+    history = 0.0_wp
+    if (.not. problem_ok(handle, status)) return
+    status = refusal_size
+    if (.not. allocated(table(handle)%report%history)) return
+    if (nhistory < 0 .or. nhistory > table(handle)%report%niter) return
+    history = table(handle)%report%history(:, 1:nhistory)
+    status = 0
+  end subroutine api_problem_history
+
+  !> The blank's part of the last converged trial's answer, into the given arrays.
+  subroutine api_problem_blank_answer(handle, nnode, u, fint, ne, stress, ep, strain, axes, &
+                                      nback, back, status) &
+    bind(C, name="ddpy_problem_blank_answer")
+    integer(c_int), value, intent(in) :: handle, nnode, ne, nback
+    real(c_double), intent(inout) :: u(3, nnode), fint(3, nnode), stress(6, 8, ne), &
+                                     ep(8, ne), strain(6, 8, ne), axes(3, 3, 8, ne), &
+                                     back(6, 8, nback)
+    integer(c_int), intent(out) :: status
+    if (.not. problem_ok(handle, status)) return
+    associate (a => table(handle)%answer)
+      status = refusal_order
+      if (.not. allocated(a%u)) return
+      status = refusal_size
+      if (nnode /= size(a%u, 2) .or. ne /= size(a%ep, 2) .or. nback /= size(a%back, 3)) &
+        return
+      u = a%u
+      fint = a%fint
+      stress = a%stress
+      ep = a%ep
+      strain = a%strain
+      axes = a%axes
+      back = a%back
+    end associate
+    status = 0
+  end subroutine api_problem_blank_answer
+
+  !> The pairs' part of the last converged trial's answer (npair pairs, npoint Gauss points
+  !> and nhold force-controlled tools, as the problem has them): forces,
+  !> contact states, gaps, normals, the Gauss points' tractions and pressures, and the
+  !> force-controlled tools' displacements along their axes.
+  subroutine api_problem_pair_answer(handle, npair, force, state, gap, normal, npoint, &
+                                     traction, pressure, nhold, shift, status) &
+    bind(C, name="ddpy_problem_pair_answer")
+    integer(c_int), value, intent(in) :: handle, npair, npoint, nhold
+    real(c_double), intent(out) :: force(3, npair), gap(npair), normal(3, npair), &
+                                   traction(3, npoint), pressure(npoint), shift(nhold)
+    integer(c_int), intent(out) :: state(npair), status
+    force = 0.0_wp
+    state = 0
+    gap = 0.0_wp
+    normal = 0.0_wp
+    traction = 0.0_wp
+    pressure = 0.0_wp
+    shift = 0.0_wp
+    if (.not. problem_ok(handle, status)) return
+    associate (a => table(handle)%answer)
+      status = refusal_order
+      if (.not. allocated(a%u)) return
+      status = refusal_size
+      if (npair /= size(a%gap) .or. npoint /= size(a%pressure) .or. nhold /= size(a%shift)) &
+        return
+      force = a%force
+      state = a%state
+      gap = a%gap
+      normal = a%normal
+      traction = a%traction
+      pressure = a%pressure
+      shift = a%shift
+    end associate
+    status = 0
+  end subroutine api_problem_pair_answer
+
+  !> Contact of every pair at positions x, from the converged x_n, for the pair forces
+  !> force, with the problem's tools, law and limits (see forming_contact): the law's rows
+  !> and the pairs' forces in the equilibrium rows of residual (which hold fint -
+  !> external), the contact entries of values (none when it is empty: a look at the
+  !> gaps) and, with values, the rows and entries of the force-controlled tools; the
+  !> pairs' states, gaps and normals, and the Gauss points' tractions and pressures.
+  subroutine api_problem_contact(handle, nnode, x, x_n, npair, force, nrow, residual, &
+                                 nvalues, values, state, gap, normal, npoint, traction, &
+                                 pressure, status) bind(C, name="ddpy_problem_contact")
+    integer(c_int), value, intent(in) :: handle, nnode, npair, nrow, nvalues, npoint
+    real(c_double), intent(in) :: x(3, nnode), x_n(3, nnode), force(3, npair)
+    real(c_double), intent(inout) :: residual(nrow), values(nvalues)
     integer(c_int), intent(out) :: state(npair), status
     real(c_double), intent(out) :: gap(npair), normal(3, npair), traction(3, npoint), &
                                    pressure(npoint)
     integer, allocatable :: lock(:), found(:)
     real(wp), allocatable :: dc_dt(:, :, :), lambda(:, :), stiffness(:)
     logical, allocatable :: eliminated(:)
-    integer :: entries, contact_values, t, p
+    integer :: t, p, nf
     state = 0
     gap = 0.0_wp
     normal = 0.0_wp
     traction = 0.0_wp
     pressure = 0.0_wp
-    status = 1
-    entries = hold_entries(ntool, table, npair, tool_first, pair_node, nnode, eqn, nhold, &
-                           hold_tool, hold_first, nhold_src)
-    if (entries < 0) return
-    contact_values = 0
-    if (nvalues > 0) contact_values = nvalues - entries
-    if (any(hold_source >= contact_values) .and. nvalues > 0) return
-    if (.not. layout_ok(nnode, ntool, table, ncoef, ndeg, ntri, ntree, nframe, nstart, ngrid, &
-                        grid_start, face_first, nface, faces, corner, npoint, npair, &
-                        tool_first, pair_node, npatch, patch_first, patch_node, eqn, &
-                        k_slots, contact_values)) return
-    status = 0
-    allocate(lock(npair + npoint), found(npair + npoint), dc_dt(3, 3, npair), &
-             lambda(3, npair), eliminated(npair), stiffness(nhold))
-    lock = 0  ! no pair held: a plain search
-    call forming_contact(nnode, x, x_n, fixed, ntool, table, tol, coef, degrees, triangle, &
-                         tree_lower, tree_upper, tree_child, frame, frame_lower, frame_upper, &
-                         grid_start, grid_params, grid_normals, grid_points, facing, &
-                         face_first, nface, faces, corner, npoint, face_weight, penalty, &
-                         positions, positions_n, reach, size, touching, resting, npair, tool_first, &
-                         pair_node, npatch, patch_first, patch_node, on, force, r, mu, held, &
-                         traction_n, pressure_n, lock, eqn, nf, k_slots, contact_values, &
-                         residual(1:nf + 3*npair), values, state, gap, normal, traction, &
-                         pressure, found, dc_dt)
-    if (nhold == 0 .or. nvalues == 0) return
-    ! The tools' equations as the Newton loop has them: a Gauss-point pair's lambda is F(x)
-    ! (its law's residual is lambda - F).
-    lambda = force
-    do t = 1, ntool
-      do p = tool_first(t) + 1, tool_first(t + 1)
-        eliminated(p) = table(11, t) == 2
-        if (eliminated(p)) lambda(:, p) = force(:, p) - residual(nf + 3*p - 2:nf + 3*p)
+    if (.not. problem_ok(handle, status)) return
+    associate (pb => table(handle)%problem)
+      status = refusal_order
+      if (.not. ready_for_contact(pb)) return
+      status = refusal_size
+      nf = pb%dofs%nf
+      if (nnode /= pb%blank%nnode .or. npair /= pb%pairs%npair .or. &
+          npoint /= pb%tools%npoint .or. nrow /= nf + 3*npair + pb%holds%nhold .or. &
+          (nvalues /= pb%nvalues .and. nvalues /= 0)) return
+      allocate(lock(npair + npoint), found(npair + npoint), dc_dt(3, 3, npair), &
+               lambda(3, npair), eliminated(npair), stiffness(pb%holds%nhold))
+      lock = 0  ! no pair held: a plain search
+      call forming_contact(x, x_n, pb%dofs, pb%tools, pb%pairs, pb%law, &
+                           pb%placement%positions, pb%placement%positions_n, pb%limits, &
+                           pb%limits%touching, force, lock, min(nvalues, pb%contact_values), &
+                           residual(1:nf + 3*npair), values, state, gap, normal, traction, &
+                           pressure, found, dc_dt)
+      status = 0
+      if (pb%holds%nhold == 0 .or. nvalues == 0) return
+      ! The tools' equations as the Newton loop has them: a Gauss-point pair's lambda is
+      ! F(x) (its law's residual is lambda - F).
+      lambda = force
+      do t = 1, pb%tools%ntool
+        do p = pb%pairs%tool_first(t) + 1, pb%pairs%tool_first(t + 1)
+          eliminated(p) = pb%tools%tool(t)%discretization == contact_gauss
+          if (eliminated(p)) lambda(:, p) = force(:, p) - residual(nf + 3*p - 2:nf + 3*p)
+        end do
       end do
-    end do
-    call hold_equations(nnode, ntool, npair, tool_first, pair_node, on, eqn, eliminated, &
-                        lambda, dc_dt, nhold, hold_tool, hold_axis, hold_target, hold_first, &
-                        nhold_src, hold_source, hold_coef, contact_values, &
-                        residual(nf + 3*npair + 1:), values, stiffness)
-  end subroutine api_forming_contact
-
-  !> The Jacobian entries of the force-controlled tools (forming_increment: per tool its
-  !> column, row and diagonal), or -1 where they do not fit: a tool out of range or given
-  !> twice, the rows' entries not in order.
-  integer function hold_entries(ntool, table, npair, tool_first, pair_node, nnode, eqn, &
-                                nhold, hold_tool, hold_first, nhold_src) result(entries)
-    integer(c_int), intent(in) :: ntool, npair, nnode, nhold, nhold_src
-    integer(c_int), intent(in) :: table(tool_fields, ntool), tool_first(ntool + 1), &
-                                  pair_node(npair), eqn(3, nnode), hold_tool(nhold), &
-                                  hold_first(nhold + 1)
-    integer :: k, p, t
-    entries = -1
-    if (nhold < 0 .or. any(hold_tool < 1) .or. any(hold_tool > ntool)) return
-    if (hold_first(1) /= 0 .or. hold_first(nhold + 1) /= nhold_src) return
-    if (any(hold_first(2:) < hold_first(:nhold))) return
-    if (any(tool_first(2:) < tool_first(:ntool)) .or. tool_first(ntool + 1) /= npair) return
-    if (any(pair_node < 0) .or. any(pair_node >= nnode)) return
-    entries = 0
-    do k = 1, nhold
-      t = hold_tool(k)
-      if (count(hold_tool == t) /= 1) then
-        entries = -1
-        return
-      end if
-      do p = tool_first(t) + 1, tool_first(t + 1)
-        if (table(11, t) == 2) then
-          entries = entries + count(eqn(:, pair_node(p) + 1) >= 0)
-        else
-          entries = entries + 3
-        end if
-      end do
-      entries = entries + hold_first(k + 1) - hold_first(k) + 1
-    end do
-  end function hold_entries
-
-  !> Newton iterations of one increment: see forming_increment. Connectivity arrives 0-based.
-  subroutine api_forming_increment(nnode, x0, ne, conn, kind, props, u_ref, axes_old, &
-                                   stress_old, ep_old, strain_old, nback, back_old, eqn, &
-                                   offsets, fixed, nf, &
-                                   k_slots, n_coupling, nvalues, nrow, row_start, ncsr, col, &
-                                   nsrc, sources, source_start, ntool, table, tol, ncoef, &
-                                   coef, ndeg, degrees, ntri, triangle, ntree, tree_lower, &
-                                   tree_upper, tree_child, nframe, frame, frame_lower, &
-                                   frame_upper, nstart, grid_start, ngrid, grid_params, &
-                                   grid_normals, grid_points, facing, face_first, nface, &
-                                   faces, corner, npoint, face_weight, penalty, positions, &
-                                   positions_n, reach, size, touching, npair, tool_first, &
-                                   pair_node, npatch, patch_first, patch_node, on, r, mu, held, &
-                                   traction_n, pressure_n, u_n, force_n, external, &
-                                   prescribed, guess, settings, isettings, factored, &
-                                   reuse_next, u, force, fint, stress, ep, strain, axes, back, &
-                                   state, gap, normal, traction, pressure, nhistory, niter, &
-                                   history, counters, timings, outcome, info, detail, nhold, &
-                                   hold_tool, hold_axis, hold_target, hold_first, nhold_src, &
-                                   hold_source, hold_coef, hold_step, shift) &
-    bind(C, name="ddpy_forming_increment")
-    integer(c_int), value, intent(in) :: nnode, ne, kind, nf, k_slots, n_coupling, nvalues, &
-                                         nrow, ncsr, nsrc, ntool, ncoef, ndeg, ntri, ntree, &
-                                         nframe, nstart, ngrid, nface, npoint, npair, npatch, &
-                                         nhistory, nback, nhold, nhold_src
-    real(c_double), value, intent(in) :: reach, size, touching, hold_step
-    integer(c_int), intent(in) :: hold_tool(nhold), hold_first(nhold + 1), &
-                                  hold_source(nhold_src)
-    real(c_double), intent(in) :: hold_axis(3, nhold), hold_target(nhold), hold_coef(nhold_src)
-    real(c_double), intent(out) :: shift(nhold)
-    integer(c_int), intent(in) :: conn(8, ne), eqn(3, nnode), offsets(ne + 1), &
-                                  fixed(3, nnode), row_start(nrow + 1), col(ncsr), &
-                                  sources(nsrc), source_start(ncsr + 1), &
-                                  table(tool_fields, ntool), degrees(ndeg), triangle(ntri), &
-                                  tree_child(ntree), grid_start(nstart), &
-                                  face_first(ntool + 1), faces(4, nface), corner(4, nface), &
-                                  tool_first(ntool + 1), pair_node(npair), on(npair), &
-                                  patch_first(npair + 1), patch_node(npatch), &
-                                  held(3, npair), isettings(newton_integer_settings)
-    real(c_double), intent(in) :: x0(3, nnode), props(material_prop_count), &
-                                  u_ref(3, nnode), axes_old(3, 3, 8, ne), &
-                                  stress_old(6, 8, ne), ep_old(8, ne), strain_old(6, 8, ne), &
-                                  back_old(6, 8, nback), &
-                                  tol(ntool), coef(ncoef), tree_lower(3*ntree), &
-                                  tree_upper(3*ntree), frame(9*nframe), &
-                                  frame_lower(3*nframe), frame_upper(3*nframe), &
-                                  grid_params(2*ngrid), grid_normals(3*ngrid), &
-                                  grid_points(3*ngrid), facing(3, ntool), &
-                                  face_weight(npoint), penalty(5, ntool), &
-                                  traction_n(3, npoint), pressure_n(npoint), &
-                                  positions(3, ntool), positions_n(3, ntool), r(npair), &
-                                  mu(npair), u_n(3, nnode), force_n(3, npair), &
-                                  external(3, nnode), prescribed(3, nnode), &
-                                  guess(3, nnode), settings(newton_settings)
-    integer(c_int), intent(inout) :: factored, reuse_next
-    real(c_double), intent(out) :: u(3, nnode), force(3, npair), fint(3, nnode), &
-                                   stress(6, 8, ne), ep(8, ne), &
-                                   strain(6, 8, ne), axes(3, 3, 8, ne), back(6, 8, nback), &
-                                   gap(npair), &
-                                   normal(3, npair), traction(3, npoint), pressure(npoint), &
-                                   history(4, nhistory), timings(4), detail(2)
-    integer(c_int), intent(out) :: state(npair), niter, counters(5), outcome, info(4)
-    integer :: entries
-    history = 0.0_wp
-    shift = 0.0_wp
-    outcome = -1
-    if (nhistory < isettings(1) + 1 .or. offsets(ne + 1) /= k_slots) return
-    if (kind /= kind_hexahedron .and. kind /= kind_solid_shell) return
-    if (any(conn < 0) .or. any(conn >= nnode) .or. nrow /= nf + 3*npair + nhold) return
-    if (.not. rows_ok(nrow, ncsr, nsrc, nvalues, row_start, col, sources, source_start)) return
-    ! The force-controlled tools: each a tool once, its row's sources in the contact
-    ! blocks, and their entries (column, row, diagonal) the last of the values.
-    entries = hold_entries(ntool, table, npair, tool_first, pair_node, nnode, eqn, nhold, &
-                           hold_tool, hold_first, nhold_src)
-    if (entries < 0) return
-    if (any(hold_source >= nvalues - entries)) return
-    if (.not. layout_ok(nnode, ntool, table, ncoef, ndeg, ntri, ntree, nframe, nstart, ngrid, &
-                        grid_start, face_first, nface, faces, corner, npoint, npair, &
-                        tool_first, pair_node, npatch, patch_first, patch_node, eqn, &
-                        k_slots, nvalues - entries)) return
-    call forming_increment(nnode, x0, ne, conn + 1, kind, props, u_ref, axes_old, stress_old, &
-                           ep_old, strain_old, nback, back_old, eqn, offsets, fixed, nf, &
-                           k_slots, n_coupling, &
-                           nvalues, row_start, ncsr, col, sources, source_start, ntool, &
-                           table, tol, coef, degrees, triangle, &
-                           tree_lower, tree_upper, tree_child, frame, frame_lower, &
-                           frame_upper, grid_start, grid_params, grid_normals, grid_points, &
-                           facing, face_first, nface, faces, corner, npoint, face_weight, &
-                           penalty, positions, positions_n, reach, size, touching, npair, tool_first, &
-                           pair_node, npatch, patch_first, patch_node, on, r, mu, held, &
-                           traction_n, pressure_n, u_n, force_n, external, prescribed, guess, &
-                           settings, isettings, factored, reuse_next, u, force, fint, stress, &
-                           ep, strain, axes, back, state, gap, normal, traction, pressure, &
-                           niter, history, counters, timings, outcome, info, detail, nhold, &
-                           hold_tool, hold_axis, hold_target, hold_first, nhold_src, &
-                           hold_source, hold_coef, hold_step, shift)
-  end subroutine api_forming_increment
-
-  !> Newton iterations of one increment of a solid without tools (the static problem): see
-  !> forming_increment, called with no tools and no pairs, whose empty arrays f2py cannot
-  !> pass (it takes a zero length for one). Connectivity arrives 0-based.
-  subroutine api_static_increment(nnode, x0, ne, conn, kind, props, u_ref, axes_old, &
-                                  stress_old, ep_old, strain_old, nback, back_old, eqn, &
-                                  offsets, fixed, nf, &
-                                  k_slots, nvalues, ncsr, row_start, col, nsrc, sources, &
-                                  source_start, size, u_n, external, prescribed, guess, &
-                                  settings, isettings, factored, u, fint, stress, ep, strain, &
-                                  axes, back, nhistory, niter, history, counters, timings, &
-                                  outcome, info, detail) bind(C, name="ddpy_static_increment")
-    integer(c_int), value, intent(in) :: nnode, ne, kind, nf, k_slots, nvalues, ncsr, nsrc, &
-                                         nhistory, nback
-    real(c_double), value, intent(in) :: size
-    integer(c_int), intent(in) :: conn(8, ne), eqn(3, nnode), offsets(ne + 1), &
-                                  fixed(3, nnode), row_start(nf + 1), col(ncsr), &
-                                  sources(nsrc), source_start(ncsr + 1), &
-                                  isettings(newton_integer_settings)
-    real(c_double), intent(in) :: x0(3, nnode), props(material_prop_count), &
-                                  u_ref(3, nnode), axes_old(3, 3, 8, ne), &
-                                  stress_old(6, 8, ne), ep_old(8, ne), strain_old(6, 8, ne), &
-                                  u_n(3, nnode), external(3, nnode), prescribed(3, nnode), &
-                                  guess(3, nnode), settings(newton_settings), &
-                                  back_old(6, 8, nback)
-    integer(c_int), intent(inout) :: factored
-    real(c_double), intent(out) :: u(3, nnode), fint(3, nnode), stress(6, 8, ne), ep(8, ne), &
-                                   strain(6, 8, ne), axes(3, 3, 8, ne), back(6, 8, nback), &
-                                   history(4, nhistory), &
-                                   timings(4), detail(2)
-    integer(c_int), intent(out) :: niter, counters(5), outcome, info(4)
-    integer :: table(tool_fields, 0), ints(0), faces(4, 0), first(1), pairs(0), held(3, 0), &
-               state(0), reuse_next
-    real(wp) :: reals(0), tools(3, 0), forces(3, 0), force(3, 0), normal(3, 0), gap(0), &
-                weights(0), penalty(5, 0), tractions(3, 0), traction(3, 0), pressures(0), &
-                pressure(0), shift(0)
-    history = 0.0_wp
-    outcome = -1
-    if (nhistory < isettings(1) + 1 .or. offsets(ne + 1) /= k_slots .or. nvalues /= k_slots) &
-      return
-    if (kind /= kind_hexahedron .and. kind /= kind_solid_shell) return
-    if (any(conn < 0) .or. any(conn >= nnode)) return
-    if (.not. rows_ok(nf, ncsr, nsrc, nvalues, row_start, col, sources, source_start)) return
-    first = 0
-    reuse_next = 0
-    call forming_increment(nnode, x0, ne, conn + 1, kind, props, u_ref, axes_old, stress_old, &
-                           ep_old, strain_old, nback, back_old, eqn, offsets, fixed, nf, &
-                           k_slots, 0, nvalues, &
-                           row_start, ncsr, col, sources, source_start, 0, table, reals, &
-                           reals, ints, ints, reals, reals, ints, &
-                           reals, reals, reals, ints, reals, reals, reals, tools, first, 0, &
-                           faces, faces, 0, weights, penalty, tools, tools, 0.0_wp, size, &
-                           0.0_wp, &
-                           0, first, pairs, 0, first, pairs, pairs, reals, reals, held, &
-                           tractions, pressures, u_n, forces, external, prescribed, &
-                           guess, settings, isettings, factored, reuse_next, u, force, fint, &
-                           stress, ep, strain, axes, back, state, gap, normal, traction, &
-                           pressure, niter, &
-                           history, &
-                           counters, timings, outcome, info, detail, 0, pairs, tools, reals, &
-                           first, 0, pairs, reals, 0.0_wp, shift)
-  end subroutine api_static_increment
+      call hold_equations(pb%dofs, pb%pairs, pb%law%on, pb%holds, pb%placement%hold_force, &
+                          eliminated, lambda, dc_dt, pb%contact_values, &
+                          residual(nf + 3*npair + 1:), values, stiffness)
+    end associate
+  end subroutine api_problem_contact
 
   !> The step length the Newton loop's penetration limit allows (see penetration_step).
   subroutine api_penetration_step(nnode, npair, du, pair_node, on, state, gap, normal, &
@@ -433,7 +708,7 @@ contains
     k = 0
     converged = 0
     status = 1
-    if (.not. rows_ok(n, ncsr, nsrc, nvalues, row_start, col, sources, source_start) .or. &
+    if (.not. rows_fit(n, ncsr, nsrc, nvalues, row_start, col, sources, source_start) .or. &
         m < 1 .or. any(weight <= 0.0_wp)) return
     call gmres(n, nvalues, values, row_start, ncsr, col, sources, source_start, weight, &
                handle, b, tol, m, z, k, done, status)

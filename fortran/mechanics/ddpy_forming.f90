@@ -10,36 +10,23 @@
 !> patch (patch_first, patch_node): its own node for node-to-surface contact, every node of
 !> the blank faces around it for surface-to-surface and Gauss-point contact (row, patch
 !> node, column).
-!> Tools are packed one after another in flat arrays (see forming_contact); a tool's own
-!> indices (tree children, grid starts) stay local to it, 1-based.
+!> The tools, the pairs and their law arrive packed in the derived types of
+!> ddpy_forming_data, built once by the api layer.
 module ddpy_forming
   use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_positive_inf
   use ddpy_kinds, only: wp
   use ddpy_surface, only: patch_evaluate
-  use ddpy_global_search, only: contact_search, contact_none, contact_inside
+  use ddpy_global_search, only: contact_none, contact_inside
+  use ddpy_search_surface, only: surface_contact_search
   use ddpy_contact, only: contact_residual, contact_law, normal_derivative, contact_inactive, &
                           gauss_traction
+  use ddpy_blank, only: blank_dofs
+  use ddpy_forming_data, only: tool_set, pair_set, pair_law, increment_limits, contact_node, &
+                               contact_gauss, max_face_order
   implicit none
   private
-  public :: forming_contact, tool_fields, f_surface, f_order, f_point, rank_of_rows, &
-            gauss_legendre
+  public :: forming_contact, rank_of_rows, gauss_legendre
 
-  !> Columns of a tool's row in the tool table: surface kind, reals per patch, patches,
-  !> search mode, local search iterations, offsets (0-based) into the packed coefficient,
-  !> patch, tree and grid arrays, 1 when it has a facing direction (its faces are
-  !> face_first(t) + 1 .. face_first(t + 1)), 1 for surface-to-surface contact (0:
-  !> node-to-surface, surface_gauss: Gauss-point contact), the Gauss points per direction
-  !> of its faces (n: n x n per face) and the offset (0-based) of its first point in the
-  !> flat point arrays (face_weight, traction_n, traction).
-  integer, parameter :: tool_fields = 13
-  integer, parameter :: f_kind = 1, f_stride = 2, f_npatch = 3, f_mode = 4, f_iterations = 5, &
-                        f_coef = 6, f_patch = 7, f_tree = 8, f_grid = 9, f_facing = 10, &
-                        f_surface = 11, f_order = 12, f_point = 13
-  !> The table's f_surface value of Gauss-point contact (a penalty law at the Gauss points
-  !> of the blank's faces; 0 is node-to-surface, 1 surface-to-surface with weighted gaps).
-  integer, parameter, public :: surface_gauss = 2
-  !> The most Gauss points per direction of a blank face.
-  integer, parameter, public :: max_face_order = 8
   !> The corners of a blank face in its parameters (xi, eta).
   real(wp), parameter :: corner_xi(4) = [-1.0_wp, 1.0_wp, 1.0_wp, -1.0_wp], &
                          corner_eta(4) = [-1.0_wp, -1.0_wp, 1.0_wp, 1.0_wp]
@@ -54,32 +41,34 @@ module ddpy_forming
 
 contains
 
-  !> Contact of npair pairs at positions x (3, nnode), from the converged x_n, with each
-  !> tool at positions(:, t) (at positions_n(:, t) when converged); writes the contact part
+  !> Contact of the pairs at positions x (3, nnode), from the converged x_n, with each
+  !> tool at positions(:, t) (at positions_n(:, t) when converged), the pairs that take
+  !> part (law%on) with their law, the search within limits%reach; writes the contact part
   !> of the residual (the law's rows, and the pairs' forces in the equilibrium rows, which
   !> the caller has filled with fint - external) and of the Jacobian values (none when
   !> nvalues is 0).
   !>
   !> touching > 0: the predictor of an increment's first iteration (see
   !> ddpy.model.forming): a pair the law leaves open within that gap takes the closed
-  !> branch; with resting = 0 those of a tool at rest only when the blank needs them
+  !> branch; unless limits%resting, those of a tool at rest only when the blank needs them
   !> (the supports, the pairs the law closes and the touching pairs of the moving tools
   !> leave a rigid motion free). A pair that found no patch (or whose tool is off) keeps
   !> C = lambda, state 0 and an infinite gap.
   !>
-  !> A surface-to-surface tool (table f_surface) projects the n x n Gauss points of its
-  !> faces instead of its slaves: each slave's gap, normal and slip are the averages over
+  !> A surface-to-surface tool (discretization contact_surface) projects the n x n Gauss
+  !> points of its faces instead of its slaves: each slave's gap, normal and slip are the averages over
   !> the faces around it weighted by its shape function and face_weight (the Gauss weight
   !> times the face's area element in the undeformed blank), and its law's derivatives
   !> along x run over the nodes of those faces (docs/theory/contact.md).
   !>
-  !> A Gauss-point tool (table f_surface = surface_gauss) puts the penalty law of
-  !> gauss_traction at those Gauss points (penalty(1:2, t): normal and tangential penalty,
-  !> N/mm^3; penalty(3:5, t): the barrier's stiffness eps_b, N/mm^3, its start d_b and its
-  !> width w, mm: a slave deeper than d_b in the tool is pushed out by barrier_law of the
-  !> excess over its share of the faces' area, none when eps_b is 0); traction_n(:, i): each point's tangential traction at the last converged
-  !> increment, traction: the new one, zero elsewhere; pressure_n(i): its pressure
-  !> multiplier, pressure: its new pressure) and each slave's law is
+  !> A Gauss-point tool (discretization contact_gauss) puts the penalty law of
+  !> gauss_traction at those Gauss points (its normal and tangential penalty, N/mm^3; its
+  !> barrier's stiffness eps_b, N/mm^3, start d_b and width w, mm: a slave deeper than d_b
+  !> in the tool is pushed out by barrier_law of the excess over its share of the faces'
+  !> area, none when eps_b is 0); law%traction_n(:, i): each point's tangential traction
+  !> at the last converged increment, traction: the new one, zero elsewhere;
+  !> law%pressure_n(i): its pressure multiplier, pressure: its new pressure) and each
+  !> slave's law is
   !> C = lambda - F(x), F its share of the points' forces by the shape functions. Its
   !> multiplier is eliminated: the equilibrium rows take F(x) and its derivative dF/dx
   !> (the layout puts a Gauss-point pair's patch entries in its node's equilibrium rows),
@@ -93,35 +82,23 @@ contains
   !> farther, or not that kind of contact), the ones worth holding. dc_dt(:, :, p): the
   !> derivative of pair p's law (of C = lambda - F for a Gauss-point pair) along a
   !> translation of its tool, zero in a held component's row.
-  subroutine forming_contact(nnode, x, x_n, fixed, ntool, table, tol, coef, degrees, &
-                             triangle, tree_lower, tree_upper, tree_child, frame, &
-                             frame_lower, frame_upper, grid_start, grid_params, &
-                             grid_normals, grid_points, facing, face_first, nface, faces, &
-                             corner, npoint, face_weight, penalty, &
-                             positions, positions_n, reach, size, touching, resting, &
-                             npair, tool_first, pair_node, npatch, patch_first, patch_node, &
-                             on, force, r, mu, held, traction_n, pressure_n, lock, eqn, nf, &
-                             k_slots, nvalues, residual, values, state, gap, normal, traction, &
-                             pressure, found, dc_dt)
-    integer, intent(in) :: nnode, ntool, nface, npoint, npair, npatch, nf, k_slots, nvalues, &
-                           resting
-    real(wp), intent(in) :: x(3, nnode), x_n(3, nnode), tol(ntool), coef(*), tree_lower(*), &
-                            tree_upper(*), frame(*), frame_lower(*), frame_upper(*), &
-                            grid_params(*), grid_normals(*), grid_points(*), facing(3, ntool), &
-                            positions(3, ntool), positions_n(3, ntool), reach, size, &
-                            touching, force(3, npair), r(npair), mu(npair), &
-                            face_weight(npoint), penalty(5, ntool), &
-                            traction_n(3, npoint), pressure_n(npoint)
-    integer, intent(in) :: fixed(3, nnode), table(tool_fields, ntool), degrees(*), &
-                           triangle(*), tree_child(*), grid_start(*), &
-                           face_first(ntool + 1), faces(4, nface), corner(4, nface), &
-                           tool_first(ntool + 1), pair_node(npair), &
-                           patch_first(npair + 1), patch_node(npatch), &
-                           on(npair), held(3, npair), eqn(3, nnode), lock(npair + npoint)
-    real(wp), intent(inout) :: residual(nf + 3*npair), values(nvalues)
-    integer, intent(out) :: state(npair), found(npair + npoint)
-    real(wp), intent(out) :: gap(npair), normal(3, npair), traction(3, npoint), &
-                             pressure(npoint), dc_dt(3, 3, npair)
+  subroutine forming_contact(x, x_n, dofs, tools, pairs, law, positions, positions_n, limits, &
+                             touching, force, lock, nvalues, residual, values, state, gap, &
+                             normal, traction, pressure, found, dc_dt)
+    real(wp), intent(in) :: x(:, :), x_n(:, :)
+    type(blank_dofs), intent(in) :: dofs
+    type(tool_set), intent(in) :: tools
+    type(pair_set), intent(in) :: pairs
+    type(pair_law), intent(in) :: law
+    real(wp), intent(in) :: positions(3, tools%ntool), positions_n(3, tools%ntool)
+    type(increment_limits), intent(in) :: limits
+    real(wp), intent(in) :: touching, force(3, pairs%npair)
+    integer, intent(in) :: lock(pairs%npair + tools%npoint), nvalues
+    real(wp), intent(inout) :: residual(dofs%nf + 3*pairs%npair), values(nvalues)
+    integer, intent(out) :: state(pairs%npair), found(pairs%npair + tools%npoint)
+    real(wp), intent(out) :: gap(pairs%npair), normal(3, pairs%npair), &
+                             traction(3, tools%npoint), pressure(tools%npoint), &
+                             dc_dt(3, 3, pairs%npair)
     real(wp), allocatable :: nodes(:, :), node_normals(:, :), params(:, :), points(:, :), &
                              tangents(:, :, :), distance(:), p_aug(:), c(:, :), &
                              dc_dlambda(:, :, :), dc_dx(:, :, :), slip(:, :), &
@@ -129,9 +106,17 @@ contains
                              patch_dc(:, :, :), gauss_force(:, :)
     integer, allocatable :: patch(:), status(:), iterations(:), ncandidates(:)
     logical, allocatable :: searched(:), shut(:), surface(:)
-    integer :: t, p, a, b, k, i, j, e, pp, slot
-    real(wp) :: d2(3, 3), point(3), d1(3, 2), lam(3), v(3), dndx(3, 3), lift
+    integer :: t, p, a, b, k, i, j, e, slot, nnode, ntool, npair, npatch, npoint, nf, k_slots
+    real(wp) :: d2(3, 3), point(3), d1(3, 2), lam(3), v(3), dndx(3, 3), lift, element_size
 
+    nnode = size(x, 2)
+    ntool = tools%ntool
+    npair = pairs%npair
+    npatch = pairs%npatch
+    npoint = tools%npoint
+    nf = dofs%nf
+    k_slots = dofs%k_slots
+    element_size = limits%element_size
     allocate(searched(ntool), shut(npair), p_aug(npair), tangents(3, 2, npair), &
              params(2, npair), patch(npair), status(npair), surface(npair))
     allocate(c(3, npair), dc_dlambda(3, 3, npair), dc_dx(3, 3, npair))
@@ -140,7 +125,8 @@ contains
     allocate(slip(3, npair), patch_gap(3, npatch), patch_normal(3, 3, npatch), &
              patch_weight(npatch), patch_dc(3, 3, npatch))
     do t = 1, ntool
-      surface(tool_first(t) + 1:tool_first(t + 1)) = table(f_surface, t) /= 0
+      surface(pairs%tool_first(t) + 1:pairs%tool_first(t + 1)) = &
+        tools%tool(t)%discretization /= contact_node
     end do
     allocate(gauss_force(3, npair))
     gauss_force = 0.0_wp
@@ -157,15 +143,15 @@ contains
     p_aug = 0.0_wp
     ! Search each tool that has an active pair.
     do t = 1, ntool
-      a = tool_first(t) + 1
-      b = tool_first(t + 1)
-      searched(t) = b >= a .and. any(on(a:b) /= 0)
+      a = pairs%tool_first(t) + 1
+      b = pairs%tool_first(t + 1)
+      searched(t) = b >= a .and. any(law%on(a:b) /= 0)
       if (.not. searched(t)) cycle
-      if (table(f_surface, t) == surface_gauss) then
+      if (tools%tool(t)%discretization == contact_gauss) then
         call gauss_search(t)
         cycle
       end if
-      if (table(f_surface, t) /= 0) then
+      if (tools%tool(t)%discretization /= contact_node) then
         call surface_search(t)
         cycle
       end if
@@ -173,14 +159,14 @@ contains
       allocate(nodes(3, k), node_normals(3, k), points(3, k), distance(k), iterations(k), &
                ncandidates(k))
       do i = 1, k
-        nodes(:, i) = x(:, pair_node(a + i - 1) + 1)
+        nodes(:, i) = x(:, pairs%node(a + i - 1) + 1)
       end do
       node_normals = 0.0_wp
-      if (table(f_facing, t) /= 0) call facing_normals(t, k, node_normals)
+      if (tools%tool(t)%faced) call facing_normals(t, k, node_normals)
       call search_tool(t, k, nodes, node_normals, lock(a:b), patch(a:b), params(:, a:b), &
                        points, normal(:, a:b), tangents(:, :, a:b), distance, status(a:b), &
                        iterations, ncandidates)
-      found(a:b) = merge(patch(a:b), 0, distance < hold_band*size)
+      found(a:b) = merge(patch(a:b), 0, distance < hold_band*element_size)
       do i = 1, k
         if (status(a + i - 1) /= contact_none) gap(a + i - 1) = distance(i)
       end do
@@ -196,36 +182,36 @@ contains
     dc_dx = 0.0_wp
     do t = 1, ntool
       if (.not. searched(t)) cycle
-      if (table(f_surface, t) == surface_gauss) then
+      if (tools%tool(t)%discretization == contact_gauss) then
         ! C = lambda - F(x): the pair's force is the lumped force of the Gauss points.
-        do p = tool_first(t) + 1, tool_first(t + 1)
+        do p = pairs%tool_first(t) + 1, pairs%tool_first(t + 1)
           if (status(p) /= contact_none) c(:, p) = force(:, p) - gauss_force(:, p)
         end do
         cycle
       end if
-      if (table(f_surface, t) /= 0) then
+      if (tools%tool(t)%discretization /= contact_node) then
         call surface_law(t)
         cycle
       end if
-      !$omp parallel do schedule(static) private(pp, point, d1, d2, lam, v, dndx, lift) &
-      !$omp   if(tool_first(t + 1) - tool_first(t) > 256)
-      do p = tool_first(t) + 1, tool_first(t + 1)
+      !$omp parallel do schedule(static) private(point, d1, d2, lam, v, dndx, lift) &
+      !$omp   if(pairs%tool_first(t + 1) - pairs%tool_first(t) > 256)
+      do p = pairs%tool_first(t) + 1, pairs%tool_first(t + 1)
         if (status(p) == contact_none) cycle
-        pp = table(f_patch, t) + patch(p)
-        call patch_evaluate(table(f_kind, t), table(f_stride, t), &
-                            coef(table(f_coef, t) + (patch(p) - 1)*table(f_stride, t) + 1), &
-                            degrees(2*pp - 1), params(1, p), params(2, p), point, d1, d2)
-        v = (x(:, pair_node(p) + 1) - x_n(:, pair_node(p) + 1)) - &
+        call patch_evaluate(tools%tool(t)%surface%kind, tools%tool(t)%surface%stride, &
+                            tools%tool(t)%surface%coef(:, patch(p)), &
+                            tools%tool(t)%surface%degrees(:, patch(p)), params(1, p), &
+                            params(2, p), point, d1, d2)
+        v = (x(:, pairs%node(p) + 1) - x_n(:, pairs%node(p) + 1)) - &
             (positions(:, t) - positions_n(:, t))
         lam = force(:, p)
         if (shut(p)) then
           ! A normal force that lifts p_aug just above zero: the law then gives its
           ! closed branch (stick, C = r g n + r s, when nothing slides yet).
-          lift = -p_aug(p) + lift_fraction*r(p)*size
+          lift = -p_aug(p) + lift_fraction*law%r(p)*element_size
           lam = lam + lift*normal(:, p)
         end if
         dndx = normal_derivative(tangents(:, :, p), d2, normal(:, p), gap(p))
-        call contact_residual(lam, normal(:, p), gap(p), dndx, v, mu(p), r(p), c(:, p), &
+        call contact_residual(lam, normal(:, p), gap(p), dndx, v, law%mu(p), law%r(p), c(:, p), &
                               dc_dlambda(:, :, p), dc_dx(:, :, p), state(p))
       end do
       !$omp end parallel do
@@ -233,7 +219,7 @@ contains
     ! Components held by a support: lambda_k = 0.
     do p = 1, npair
       do i = 1, 3
-        if (held(i, p) == 0) cycle
+        if (pairs%held(i, p) == 0) cycle
         c(i, p) = force(i, p)
         dc_dlambda(i, :, p) = 0.0_wp
         dc_dlambda(i, i, p) = 1.0_wp
@@ -246,23 +232,24 @@ contains
     ! forming_increment; docs/theory/contact.md, "Force-controlled tools").
     do p = 1, npair
       if (surface(p)) then
-        dc_dt(:, :, p) = -sum(patch_dc(:, :, patch_first(p) + 1:patch_first(p + 1)), dim=3)
+        dc_dt(:, :, p) = -sum(patch_dc(:, :, pairs%patch_first(p) + 1: &
+                                          pairs%patch_first(p + 1)), dim=3)
       else
         dc_dt(:, :, p) = -dc_dx(:, :, p)
       end if
       do i = 1, 3
-        if (held(i, p) /= 0) dc_dt(i, :, p) = 0.0_wp
+        if (pairs%held(i, p) /= 0) dc_dt(i, :, p) = 0.0_wp
       end do
     end do
     ! Equilibrium rows: minus the forces of the tools on their slave nodes, in pair order;
     ! a Gauss-point pair's is the points' force F(x) itself (its multiplier is eliminated:
     ! its dF/dx goes into the equilibrium rows, see forming_increment).
     do t = 1, ntool
-      do p = tool_first(t) + 1, tool_first(t + 1)
+      do p = pairs%tool_first(t) + 1, pairs%tool_first(t + 1)
         do i = 1, 3
-          j = eqn(i, pair_node(p) + 1)
+          j = dofs%eqn(i, pairs%node(p) + 1)
           if (j < 0) cycle
-          if (table(f_surface, t) == surface_gauss) then
+          if (tools%tool(t)%discretization == contact_gauss) then
             residual(j + 1) = residual(j + 1) - gauss_force(i, p)
           else
             residual(j + 1) = residual(j + 1) - force(i, p)
@@ -273,16 +260,16 @@ contains
     residual(nf + 1:) = reshape(c, [3*npair])
     if (nvalues == 0) return  ! a look at the gaps: no Jacobian wanted
     ! Jacobian: dC/dx at the free dofs of each pair's node, then dC/dlambda.
-    slot = k_slots + count(eqn(:, pair_node + 1) >= 0)
+    slot = k_slots + count(dofs%eqn(:, pairs%node + 1) >= 0)
     do p = 1, npair
       if (surface(p)) then
         do i = 1, 3
           ! A held component's row is lambda_k = 0 (above): no patch entries in the
           ! structure (ddpy.model.newton.Layout), which would join the patch's nodes.
-          if (held(i, p) /= 0) cycle
-          do e = patch_first(p) + 1, patch_first(p + 1)
+          if (pairs%held(i, p) /= 0) cycle
+          do e = pairs%patch_first(p) + 1, pairs%patch_first(p + 1)
             do j = 1, 3
-              if (eqn(j, patch_node(e) + 1) < 0) cycle
+              if (dofs%eqn(j, pairs%patch_node(e) + 1) < 0) cycle
               slot = slot + 1
               values(slot) = patch_dc(i, j, e)
             end do
@@ -292,7 +279,7 @@ contains
       end if
       do i = 1, 3
         do j = 1, 3
-          if (eqn(j, pair_node(p) + 1) < 0) cycle
+          if (dofs%eqn(j, pairs%node(p) + 1) < 0) cycle
           slot = slot + 1
           values(slot) = dc_dx(i, j, p)
         end do
@@ -318,7 +305,7 @@ contains
       real(wp), intent(out) :: basis(4, npf), gx(:, :), gn(:, :)
       real(wp) :: area(3), e1(3), e2(3), xi(max_face_order)
       integer :: f, first, g, q, i, n
-      n = table(f_order, t)
+      n = tools%tool(t)%order
       call gauss_legendre(n, xi(:n))
       do g = 1, npf
         do q = 1, 4
@@ -326,10 +313,10 @@ contains
                         (1.0_wp + corner_eta(q)*xi((g - 1)/n + 1))
         end do
       end do
-      first = face_first(t)
-      do f = 1, face_first(t + 1) - first
-        e1 = x(:, faces(3, first + f) + 1) - x(:, faces(1, first + f) + 1)
-        e2 = x(:, faces(4, first + f) + 1) - x(:, faces(2, first + f) + 1)
+      first = tools%face_first(t)
+      do f = 1, tools%face_first(t + 1) - first
+        e1 = x(:, tools%faces(3, first + f) + 1) - x(:, tools%faces(1, first + f) + 1)
+        e2 = x(:, tools%faces(4, first + f) + 1) - x(:, tools%faces(2, first + f) + 1)
         area = [e1(2)*e2(3) - e1(3)*e2(2), e1(3)*e2(1) - e1(1)*e2(3), &
                 e1(1)*e2(2) - e1(2)*e2(1)]
         if (norm2(area) > 0.0_wp) area = area/norm2(area)
@@ -337,7 +324,7 @@ contains
           i = npf*(f - 1) + g
           gx(:, i) = 0.0_wp
           do q = 1, 4
-            gx(:, i) = gx(:, i) + basis(q, g)*x(:, faces(q, first + f) + 1)
+            gx(:, i) = gx(:, i) + basis(q, g)*x(:, tools%faces(q, first + f) + 1)
           end do
           gn(:, i) = area
         end do
@@ -357,17 +344,17 @@ contains
                                gnormal(:, :), gtangents(:, :, :), gdistance(:), gdn(:, :, :), &
                                wsum(:), gsum(:), msum(:, :)
       integer, allocatable :: gpatch(:), gstatus(:), gits(:), gcand(:)
-      real(wp) :: basis(4, table(f_order, t)**2), vg(3), w, wn, len_m, keep(3), &
+      real(wp) :: basis(4, tools%tool(t)%order**2), vg(3), w, wn, len_m, keep(3), &
                   m(3), eye(3, 3), proj(3, 3), gpt(3), gd1(3, 2), gd2(3, 3)
-      integer :: f, first, nfc, kg, g, q, qq, s, p, e, i, pp, lo, hi, npf, ip
-      first = face_first(t)
-      nfc = face_first(t + 1) - first
-      npf = table(f_order, t)**2
+      integer :: f, first, nfc, kg, g, q, qq, s, p, e, i, lo, hi, npf, ip
+      first = tools%face_first(t)
+      nfc = tools%face_first(t + 1) - first
+      npf = tools%tool(t)%order**2
       kg = npf*nfc
-      do p = tool_first(t) + 1, tool_first(t + 1)
-        patch_gap(:, patch_first(p) + 1:patch_first(p + 1)) = 0.0_wp
-        patch_normal(:, :, patch_first(p) + 1:patch_first(p + 1)) = 0.0_wp
-        patch_weight(patch_first(p) + 1:patch_first(p + 1)) = 0.0_wp
+      do p = pairs%tool_first(t) + 1, pairs%tool_first(t + 1)
+        patch_gap(:, pairs%patch_first(p) + 1:pairs%patch_first(p + 1)) = 0.0_wp
+        patch_normal(:, :, pairs%patch_first(p) + 1:pairs%patch_first(p + 1)) = 0.0_wp
+        patch_weight(pairs%patch_first(p) + 1:pairs%patch_first(p + 1)) = 0.0_wp
         slip(:, p) = 0.0_wp
       end do
       if (kg == 0) return
@@ -379,19 +366,19 @@ contains
                          gdistance, gstatus, gits, gcand)
       ! The derivative of the tool's normal along each point (its curvature).
       gdn = 0.0_wp
-      !$omp parallel do schedule(static) private(pp, gpt, gd1, gd2) if(kg > 256)
+      !$omp parallel do schedule(static) private(gpt, gd1, gd2) if(kg > 256)
       do i = 1, kg
         if (gstatus(i) == contact_none) cycle
-        pp = table(f_patch, t) + gpatch(i)
-        call patch_evaluate(table(f_kind, t), table(f_stride, t), &
-                            coef(table(f_coef, t) + (gpatch(i) - 1)*table(f_stride, t) + 1), &
-                            degrees(2*pp - 1), gparams(1, i), gparams(2, i), gpt, gd1, gd2)
+        call patch_evaluate(tools%tool(t)%surface%kind, tools%tool(t)%surface%stride, &
+                            tools%tool(t)%surface%coef(:, gpatch(i)), &
+                            tools%tool(t)%surface%degrees(:, gpatch(i)), gparams(1, i), &
+                            gparams(2, i), gpt, gd1, gd2)
         gdn(:, :, i) = normal_derivative(gtangents(:, :, i), gd2, gnormal(:, i), gdistance(i))
       end do
       !$omp end parallel do
       ! The sums over the points around each slave.
-      lo = tool_first(t) + 1
-      hi = tool_first(t + 1)
+      lo = pairs%tool_first(t) + 1
+      hi = pairs%tool_first(t + 1)
       allocate(wsum(lo:hi), gsum(lo:hi), msum(3, lo:hi))
       wsum = 0.0_wp
       gsum = 0.0_wp
@@ -399,24 +386,24 @@ contains
       do f = 1, nfc
         do g = 1, npf
           i = npf*(f - 1) + g
-          ip = table(f_point, t) + i
+          ip = tools%tool(t)%first_point + i
           if (gstatus(i) == contact_none) cycle
           vg = -(positions(:, t) - positions_n(:, t))
           do q = 1, 4
-            s = faces(q, first + f) + 1
+            s = tools%faces(q, first + f) + 1
             vg = vg + basis(q, g)*(x(:, s) - x_n(:, s))
           end do
           do q = 1, 4
-            s = corner(q, first + f)
+            s = tools%corner(q, first + f)
             if (s < 0) cycle
-            p = tool_first(t) + s + 1
-            w = basis(q, g)*face_weight(ip)
+            p = pairs%tool_first(t) + s + 1
+            w = basis(q, g)*tools%face_weight(ip)
             wsum(p) = wsum(p) + w
             gsum(p) = gsum(p) + w*gdistance(i)
             msum(:, p) = msum(:, p) + w*gnormal(:, i)
             slip(:, p) = slip(:, p) + w*vg
             do qq = 1, 4
-              e = patch_entry(p, faces(qq, first + f))
+              e = patch_entry(p, tools%faces(qq, first + f))
               if (e == 0) cycle
               wn = w*basis(qq, g)
               patch_gap(:, e) = patch_gap(:, e) + wn*gnormal(:, i)
@@ -430,9 +417,9 @@ contains
       do i = 1, 3
         eye(i, i) = 1.0_wp
       end do
-      do p = tool_first(t) + 1, tool_first(t + 1)
+      do p = pairs%tool_first(t) + 1, pairs%tool_first(t + 1)
         if (.not. wsum(p) > 0.0_wp) cycle
-        keep = merge(0.0_wp, 1.0_wp, held(:, p) /= 0)
+        keep = merge(0.0_wp, 1.0_wp, pairs%held(:, p) /= 0)
         m = keep*msum(:, p)/wsum(p)
         len_m = norm2(m)
         if (.not. len_m > 0.0_wp) cycle
@@ -442,7 +429,7 @@ contains
         slip(:, p) = keep*slip(:, p)/wsum(p)
         ! d(m / |m|) = (I - n n) dm / |m|.
         proj = (eye - spread(normal(:, p), 2, 3)*spread(normal(:, p), 1, 3))/len_m
-        do e = patch_first(p) + 1, patch_first(p + 1)
+        do e = pairs%patch_first(p) + 1, pairs%patch_first(p + 1)
           patch_gap(:, e) = patch_gap(:, e)/wsum(p)
           do i = 1, 3
             patch_normal(i, :, e) = keep(i)*patch_normal(i, :, e)/wsum(p)
@@ -453,11 +440,11 @@ contains
       end do
     end subroutine surface_search
 
-    !> Gauss-point contact of tool t (table f_surface = surface_gauss): the n x n Gauss
+    !> Gauss-point contact of tool t (discretization contact_gauss): the n x n Gauss
     !> points of its faces projected on it as in surface_search, the penalty law of each
     !> (gauss_traction, its tangential traction at the last converged increment from
-    !> traction_n, the new one into traction), and the force of the points on each slave
-    !> a, F_a = sum N_a(xi_g) A_g t_g (A_g = face_weight, the undeformed area), into
+    !> law%traction_n, the new one into traction), and the force of the points on each slave
+    !> a, F_a = sum N_a(xi_g) A_g t_g (A_g = tools%face_weight, the undeformed area), into
     !> gauss_force, with -dF_a/dx_b into patch_dc (the pair's law is C = lambda - F). The
     !> pair's gap and normal (for the increment control) are the averages of its points'
     !> weighted by N_a A_g; its state the highest of its points' (slip over stick over open).
@@ -471,30 +458,30 @@ contains
                                node_tangents(:, :, :)
       integer, allocatable :: node_patch(:)
       logical, allocatable :: node_found(:)
-      real(wp) :: basis(4, table(f_order, t)**2), vg(3), w, gpt(3), gd1(3, 2), &
+      real(wp) :: basis(4, tools%tool(t)%order**2), vg(3), w, gpt(3), gd1(3, 2), &
                   gd2(3, 3), dndx(3, 3), tr(3), tangential(3), dtr(3, 3), mu_t, len_m, &
                   excess, p_bar, k_bar
-      integer :: f, first, nfc, kg, g, q, qq, s, p, e, i, pp, lo, hi, gstate, npf, ip
+      integer :: f, first, nfc, kg, g, q, qq, s, p, e, i, lo, hi, gstate, npf, ip
       logical :: barred
-      first = face_first(t)
-      nfc = face_first(t + 1) - first
-      npf = table(f_order, t)**2
+      first = tools%face_first(t)
+      nfc = tools%face_first(t + 1) - first
+      npf = tools%tool(t)%order**2
       kg = npf*nfc
-      lo = tool_first(t) + 1
-      hi = tool_first(t + 1)
+      lo = pairs%tool_first(t) + 1
+      hi = pairs%tool_first(t + 1)
       do p = lo, hi
-        patch_dc(:, :, patch_first(p) + 1:patch_first(p + 1)) = 0.0_wp
+        patch_dc(:, :, pairs%patch_first(p) + 1:pairs%patch_first(p + 1)) = 0.0_wp
       end do
       if (kg == 0 .or. hi < lo) return
-      mu_t = mu(lo)
+      mu_t = law%mu(lo)
       allocate(gx(3, kg), gn(3, kg), gparams(2, kg), gpoints(3, kg), gnormal(3, kg), &
                gtangents(3, 2, kg), gdistance(kg), gpatch(kg), gstatus(kg), gits(kg), &
                gcand(kg))
       call face_points(t, npf, basis, gx, gn)
       call search_points(t, kg, gx, gn, gpatch, gparams, gpoints, gnormal, gtangents, &
                          gdistance, gstatus, gits, gcand)
-      barred = penalty(3, t) > 0.0_wp
-      if (barred) call node_depths(t, lo, hi, npair + table(f_point, t) + kg, node_depth, &
+      barred = tools%tool(t)%barrier_stiffness > 0.0_wp
+      if (barred) call node_depths(t, lo, hi, npair + tools%tool(t)%first_point + kg, node_depth, &
                                    node_normal, node_found, node_patch, node_uv, &
                                    node_tangents)
       allocate(wsum(lo:hi), gsum(lo:hi), msum(3, lo:hi))
@@ -504,27 +491,28 @@ contains
       do f = 1, nfc
         do g = 1, npf
           i = npf*(f - 1) + g
-          ip = table(f_point, t) + i
+          ip = tools%tool(t)%first_point + i
           if (gstatus(i) == contact_none) cycle
-          pp = table(f_patch, t) + gpatch(i)
-          call patch_evaluate(table(f_kind, t), table(f_stride, t), &
-                              coef(table(f_coef, t) + (gpatch(i) - 1)*table(f_stride, t) + 1), &
-                              degrees(2*pp - 1), gparams(1, i), gparams(2, i), gpt, gd1, gd2)
+          call patch_evaluate(tools%tool(t)%surface%kind, tools%tool(t)%surface%stride, &
+                              tools%tool(t)%surface%coef(:, gpatch(i)), &
+                              tools%tool(t)%surface%degrees(:, gpatch(i)), gparams(1, i), &
+                              gparams(2, i), gpt, gd1, gd2)
           dndx = normal_derivative(gtangents(:, :, i), gd2, gnormal(:, i), gdistance(i))
           vg = -(positions(:, t) - positions_n(:, t))
           do q = 1, 4
-            s = faces(q, first + f) + 1
+            s = tools%faces(q, first + f) + 1
             vg = vg + basis(q, g)*(x(:, s) - x_n(:, s))
           end do
-          call gauss_traction(traction_n(:, ip), pressure_n(ip), gnormal(:, i), &
-                              gdistance(i), dndx, vg, mu_t, penalty(1, t), penalty(2, t), tr, &
-                              tangential, pressure(ip), dtr, gstate)
+          call gauss_traction(law%traction_n(:, ip), law%pressure_n(ip), gnormal(:, i), &
+                              gdistance(i), dndx, vg, mu_t, tools%tool(t)%normal_penalty, &
+                              tools%tool(t)%tangential_penalty, tr, tangential, &
+                              pressure(ip), dtr, gstate)
           traction(:, ip) = tangential
           do q = 1, 4
-            s = corner(q, first + f)
+            s = tools%corner(q, first + f)
             if (s < 0) cycle
             p = lo + s
-            w = basis(q, g)*face_weight(ip)
+            w = basis(q, g)*tools%face_weight(ip)
             wsum(p) = wsum(p) + w
             gsum(p) = gsum(p) + w*gdistance(i)
             msum(:, p) = msum(:, p) + w*gnormal(:, i)
@@ -533,45 +521,46 @@ contains
             if (gstate == contact_inactive) cycle
             gauss_force(:, p) = gauss_force(:, p) + w*tr
             do qq = 1, 4
-              e = patch_entry(p, faces(qq, first + f))
+              e = patch_entry(p, tools%faces(qq, first + f))
               if (e == 0) cycle
               patch_dc(:, :, e) = patch_dc(:, :, e) - w*basis(qq, g)*dtr
             end do
           end do
         end do
       end do
-      ! The barrier at the slaves (points kg + 1.. of the tool, face_weight their share of
+      ! The barrier at the slaves (points kg + 1.. of the tool, tools%face_weight their share of
       ! the faces' area): barrier_law of the depth past d_b where a slave lies deeper than
       ! d_b in the tool, along the tool's normal at its closest point, with friction as at
       ! the Gauss points; the force acts on the slave alone.
       if (barred) then
         do i = 1, hi - lo + 1
-          ip = table(f_point, t) + kg + i
+          ip = tools%tool(t)%first_point + kg + i
           if (.not. node_found(i)) cycle
           p = lo + i - 1
-          s = pair_node(p) + 1
-          pp = table(f_patch, t) + node_patch(i)
-          call patch_evaluate(table(f_kind, t), table(f_stride, t), &
-                              coef(table(f_coef, t) + (node_patch(i) - 1)*table(f_stride, t) &
-                                   + 1), degrees(2*pp - 1), node_uv(1, i), node_uv(2, i), &
-                              gpt, gd1, gd2)
+          s = pairs%node(p) + 1
+          call patch_evaluate(tools%tool(t)%surface%kind, tools%tool(t)%surface%stride, &
+                              tools%tool(t)%surface%coef(:, node_patch(i)), &
+                              tools%tool(t)%surface%degrees(:, node_patch(i)), &
+                              node_uv(1, i), node_uv(2, i), gpt, gd1, gd2)
           dndx = normal_derivative(node_tangents(:, :, i), gd2, node_normal(:, i), &
                                    -node_depth(i))
           vg = (x(:, s) - x_n(:, s)) - (positions(:, t) - positions_n(:, t))
           ! The law's pressure and slope at the depth past d_b, p_b + k_b (x - x_now) the
           ! tangent line gauss_traction takes (its g = -x, its p_n = p_b - k_b x).
-          excess = node_depth(i) - penalty(4, t)
-          call barrier_law(excess, penalty(3, t), penalty(5, t), p_bar, k_bar)
-          call gauss_traction(traction_n(:, ip), p_bar - k_bar*excess, node_normal(:, i), &
-                              -excess, dndx, vg, mu_t, k_bar, penalty(2, t), tr, &
-                              tangential, pressure(ip), dtr, gstate)
+          excess = node_depth(i) - tools%tool(t)%barrier_start
+          call barrier_law(excess, tools%tool(t)%barrier_stiffness, &
+                           tools%tool(t)%barrier_width, p_bar, k_bar)
+          call gauss_traction(law%traction_n(:, ip), p_bar - k_bar*excess, node_normal(:, i), &
+                              -excess, dndx, vg, mu_t, k_bar, &
+                              tools%tool(t)%tangential_penalty, tr, tangential, &
+                              pressure(ip), dtr, gstate)
           traction(:, ip) = tangential
           if (gstate == contact_inactive) cycle
-          w = face_weight(ip)
+          w = tools%face_weight(ip)
           status(p) = contact_inside
           state(p) = max(state(p), gstate)
           gauss_force(:, p) = gauss_force(:, p) + w*tr
-          e = patch_entry(p, pair_node(p))
+          e = patch_entry(p, pairs%node(p))
           if (e > 0) patch_dc(:, :, e) = patch_dc(:, :, e) - w*dtr
         end do
       end if
@@ -601,13 +590,13 @@ contains
       allocate(depth(k), normals(3, k), inside(k), at(3, k), facing_at(3, k), uv(2, k), &
                on_tool(3, k), tangent(3, 2, k), on_patch(k), how(k), its(k), candidates(k))
       do i = 1, k
-        at(:, i) = x(:, pair_node(lo + i - 1) + 1)
+        at(:, i) = x(:, pairs%node(lo + i - 1) + 1)
       end do
       facing_at = 0.0_wp
-      if (table(f_facing, t) /= 0) call facing_normals(t, k, facing_at)
+      if (tools%tool(t)%faced) call facing_normals(t, k, facing_at)
       call search_tool(t, k, at, facing_at, lock(first + 1:first + k), on_patch, uv, on_tool, &
                        normals, tangent, depth, how, its, candidates)
-      found(first + 1:first + k) = merge(on_patch, 0, depth < hold_band*size)
+      found(first + 1:first + k) = merge(on_patch, 0, depth < hold_band*element_size)
       inside = how == contact_inside
       depth = -depth
     end subroutine node_depths
@@ -617,8 +606,8 @@ contains
       integer, intent(in) :: p, node
       integer :: e
       entry = 0
-      do e = patch_first(p) + 1, patch_first(p + 1)
-        if (patch_node(e) == node) then
+      do e = pairs%patch_first(p) + 1, pairs%patch_first(p + 1)
+        if (pairs%patch_node(e) == node) then
           entry = e
           return
         end if
@@ -634,18 +623,18 @@ contains
       real(wp) :: lam(3), lift, dc_dg(3), dc_dn(3, 3), dc_dv(3, 3), keep(3)
       integer :: p, e, j
       !$omp parallel do schedule(static) private(lam, lift, dc_dg, dc_dn, dc_dv, keep, e, j) &
-      !$omp   if(tool_first(t + 1) - tool_first(t) > 256)
-      do p = tool_first(t) + 1, tool_first(t + 1)
+      !$omp   if(pairs%tool_first(t + 1) - pairs%tool_first(t) > 256)
+      do p = pairs%tool_first(t) + 1, pairs%tool_first(t + 1)
         if (status(p) == contact_none) cycle
         lam = force(:, p)
         if (shut(p)) then
-          lift = -p_aug(p) + lift_fraction*r(p)*size
+          lift = -p_aug(p) + lift_fraction*law%r(p)*element_size
           lam = lam + lift*normal(:, p)
         end if
-        call contact_law(lam, normal(:, p), gap(p), slip(:, p), mu(p), r(p), c(:, p), &
+        call contact_law(lam, normal(:, p), gap(p), slip(:, p), law%mu(p), law%r(p), c(:, p), &
                          dc_dlambda(:, :, p), dc_dg, dc_dn, dc_dv, state(p))
-        keep = merge(0.0_wp, 1.0_wp, held(:, p) /= 0)
-        do e = patch_first(p) + 1, patch_first(p + 1)
+        keep = merge(0.0_wp, 1.0_wp, pairs%held(:, p) /= 0)
+        do e = pairs%patch_first(p) + 1, pairs%patch_first(p + 1)
           patch_dc(:, :, e) = matmul(dc_dn, patch_normal(:, :, e))
           do j = 1, 3
             patch_dc(:, j, e) = patch_dc(:, j, e) + dc_dg*patch_gap(j, e) + &
@@ -666,10 +655,10 @@ contains
       real(wp), intent(out) :: gparams(2, kg), gpoints(3, kg), gnormal(3, kg), &
                                gtangents(3, 2, kg), gdistance(kg)
       integer :: first_point
-      first_point = npair + table(f_point, t)
+      first_point = npair + tools%tool(t)%first_point
       call search_tool(t, kg, gx, gn, lock(first_point + 1:first_point + kg), gpatch, &
                        gparams, gpoints, gnormal, gtangents, gdistance, gstatus, gits, gcand)
-      found(first_point + 1:first_point + kg) = merge(gpatch, 0, gdistance < hold_band*size)
+      found(first_point + 1:first_point + kg) = merge(gpatch, 0, gdistance < hold_band*element_size)
     end subroutine search_points
 
     !> Global and local search of the k slaves of tool t.
@@ -680,23 +669,10 @@ contains
       integer, intent(out) :: patch(k), status(k), iterations(k), ncandidates(k)
       real(wp), intent(out) :: params(2, k), points(3, k), normals(3, k), tangents(3, 2, k), &
                                distance(k)
-      integer :: np_, po, to, go, ntree, ngrid
-      np_ = table(f_npatch, t)
-      po = table(f_patch, t)
-      to = table(f_tree, t)
-      go = table(f_grid, t)
-      ntree = 2*np_ - 1
-      ngrid = grid_start(po + t + np_) - 1
-      call contact_search(table(f_kind, t), np_, table(f_stride, t), &
-                          coef(table(f_coef, t) + 1), degrees(2*po + 1), triangle(po + 1), &
-                          table(f_mode, t), ntree, tree_lower(3*to + 1), &
-                          tree_upper(3*to + 1), tree_child(to + 1), frame(9*po + 1), &
-                          frame_lower(3*po + 1), frame_upper(3*po + 1), ngrid, &
-                          grid_start(po + t), grid_params(2*go + 1), grid_normals(3*go + 1), &
-                          grid_points(3*go + 1), k, nodes, node_normals, positions(:, t), &
-                          table(f_iterations, t), tol(t), reach, lock, patch, params, &
-                          points, normals, tangents, distance, status, iterations, &
-                          ncandidates)
+      call surface_contact_search(tools%tool(t)%surface, tools%tool(t)%surface%mode, k, &
+                                  nodes, node_normals, positions(:, t), limits%reach, lock, &
+                                  patch, params, points, normals, tangents, distance, status, &
+                                  iterations, ncandidates)
     end subroutine search_tool
 
     !> Outward normals of the blank at the k slaves of tool t (pairs a..): the sum of the
@@ -709,13 +685,13 @@ contains
       real(wp) :: area(3), e1(3), e2(3), length
       integer :: f, q, s, pass
       out = 0.0_wp
-      do f = face_first(t) + 1, face_first(t + 1)
-        e1 = x(:, faces(3, f) + 1) - x(:, faces(1, f) + 1)
-        e2 = x(:, faces(4, f) + 1) - x(:, faces(2, f) + 1)
+      do f = tools%face_first(t) + 1, tools%face_first(t + 1)
+        e1 = x(:, tools%faces(3, f) + 1) - x(:, tools%faces(1, f) + 1)
+        e2 = x(:, tools%faces(4, f) + 1) - x(:, tools%faces(2, f) + 1)
         area = 0.5_wp*[e1(2)*e2(3) - e1(3)*e2(2), e1(3)*e2(1) - e1(1)*e2(3), &
                        e1(1)*e2(2) - e1(2)*e2(1)]
         do q = 1, 4
-          s = corner(q, f)
+          s = tools%corner(q, f)
           if (s >= 0) out(:, s + 1) = out(:, s + 1) + area
         end do
       end do
@@ -725,7 +701,7 @@ contains
           if (length > 0.0_wp) then
             out(:, s) = out(:, s)/length
           else
-            out(:, s) = facing(:, t)
+            out(:, s) = tools%tool(t)%facing
           end if
         end do
       end do
@@ -743,28 +719,28 @@ contains
       do u = 1, ntool
         at_rest(u) = searched(u) .and. all(positions(:, u) == positions_n(:, u))
         if (.not. searched(u)) cycle
-        do p = tool_first(u) + 1, tool_first(u + 1)
+        do p = pairs%tool_first(u) + 1, pairs%tool_first(u + 1)
           d = 0.0_wp
           if (status(p) /= contact_none) d = gap(p)
           p_aug(p) = force(1, p)*normal(1, p) + force(2, p)*normal(2, p) + &
-                     force(3, p)*normal(3, p) - r(p)*d
+                     force(3, p)*normal(3, p) - law%r(p)*d
           shut(p) = status(p) /= contact_none .and. p_aug(p) <= 0.0_wp .and. &
-                    abs(d) <= touching .and. table(f_surface, u) /= surface_gauss
+                    abs(d) <= touching .and. tools%tool(u)%discretization /= contact_gauss
           if (at_rest(u) .and. shut(p)) any_resting = .true.
         end do
       end do
-      if (resting /= 0 .or. .not. any_resting) return
+      if (limits%resting .or. .not. any_resting) return
       ! The rigid modes the supports and the holding pairs stop: if all six, the
       ! touching pairs of the resting tools stay open.
       n = nnode
       centre = sum(x_n, dim=2)/real(n, wp)
       scale = max(maxval(maxval(x_n, dim=2) - minval(x_n, dim=2)), 1.0e-300_wp)
-      nrow = count(fixed /= 0) + npair
+      nrow = count(dofs%fixed) + npair
       allocate(rows(6, max(nrow, 1)))
       nrow = 0
       do i = 1, nnode
         do j = 1, 3
-          if (fixed(j, i) == 0) cycle
+          if (.not. dofs%fixed(j, i)) cycle
           nrow = nrow + 1
           axis = 0.0_wp
           axis(j) = 1.0_wp
@@ -773,11 +749,11 @@ contains
       end do
       do u = 1, ntool
         if (.not. searched(u)) cycle
-        do p = tool_first(u) + 1, tool_first(u + 1)
+        do p = pairs%tool_first(u) + 1, pairs%tool_first(u + 1)
           if (status(p) == contact_none) cycle
           if (p_aug(p) > 0.0_wp .or. (.not. at_rest(u) .and. shut(p))) then
             nrow = nrow + 1
-            rows(:, nrow) = mode_row(x(:, pair_node(p) + 1), normal(:, p), centre, scale)
+            rows(:, nrow) = mode_row(x(:, pairs%node(p) + 1), normal(:, p), centre, scale)
           end if
         end do
       end do
@@ -787,7 +763,7 @@ contains
       end if
       if (rank_of_rows(nrow, rows(:, 1:nrow)) == 6) then
         do u = 1, ntool
-          if (at_rest(u)) shut(tool_first(u) + 1:tool_first(u + 1)) = .false.
+          if (at_rest(u)) shut(pairs%tool_first(u) + 1:pairs%tool_first(u + 1)) = .false.
         end do
       end if
     end subroutine touching_pairs

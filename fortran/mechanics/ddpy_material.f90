@@ -28,9 +28,14 @@ module ddpy_material
   integer, parameter, public :: table_max_points = 100
   integer, parameter, public :: table_start = 16
   integer, parameter, public :: material_prop_count = table_start + 2*table_max_points
+  !> Where the properties sit in props: Young's modulus, Poisson's ratio, Hill's F, G, H,
+  !> L, M, N from prop_hill, the hardening law and its three parameters from
+  !> prop_hardening.
+  integer, parameter, public :: prop_young = 1, prop_poisson = 2, prop_hill = 3, &
+                                prop_law = 9, prop_hardening = 10
   !> Where C_X and X_sat of the kinematic hardening sit in props.
   integer, parameter, public :: kinematic_rate = 13, kinematic_saturation = 14
-  !> Hardening laws, props(9).
+  !> Hardening laws, props(prop_law).
   integer, parameter, public :: hardening_swift = 1, hardening_voce = 2, hardening_table = 3
   !> Status of material_update: converged; return mapping failed (the caller cuts the
   !> increment); properties invalid (see material_check); non-finite input.
@@ -110,7 +115,7 @@ contains
     status = material_ok
 
     trial = stress_old + matmul(tangent, strain_increment)
-    sigma_trial = hill48_equivalent_stress(props(3:8), trial)
+    sigma_trial = hill48_equivalent_stress(props(prop_hill:prop_hill + 5), trial)
     ! Y(ep_old) >= yield_floor: below the floor the test below is passed whatever Y is.
     if (sigma_trial <= yield_floor*(1.0_wp + yield_tol)) then
       stress = trial
@@ -122,7 +127,7 @@ contains
       return
     end if
     plastic = .true.
-    call hill48_modes(props(3:8), shear, modes, q, c, mu)
+    call hill48_modes(props(prop_hill:prop_hill + 5), shear, modes, q, c, mu)
     a = matmul(trial, modes)
     pressure = sum(trial(1:3))/3.0_wp
 
@@ -210,20 +215,21 @@ contains
 
   end subroutine material_update_checked
 
-  !> Yield stress Y(ep) and hardening slope dY/dep of the law in props(9:12).
+  !> Yield stress Y(ep) and hardening slope dY/dep of the law in props(prop_law) and its
+  !> parameters.
   pure subroutine material_hardening(props, ep, y, slope)
     real(wp), intent(in) :: props(material_prop_count), ep
     real(wp), intent(out) :: y, slope
     real(wp) :: base, decay
-    select case (nint(props(9)))
+    select case (nint(props(prop_law)))
     case (hardening_swift)
-      base = props(11) + max(ep, 0.0_wp)
-      y = props(10)*base**props(12)
-      slope = props(12)*y/base
+      base = props(prop_hardening + 1) + max(ep, 0.0_wp)
+      y = props(prop_hardening)*base**props(prop_hardening + 2)
+      slope = props(prop_hardening + 2)*y/base
     case (hardening_voce)
-      decay = exp(-props(12)*max(ep, 0.0_wp))
-      y = props(10) + props(11)*(1.0_wp - decay)
-      slope = props(11)*props(12)*decay
+      decay = exp(-props(prop_hardening + 2)*max(ep, 0.0_wp))
+      y = props(prop_hardening) + props(prop_hardening + 1)*(1.0_wp - decay)
+      slope = props(prop_hardening + 1)*props(prop_hardening + 2)*decay
     case (hardening_table)
       call table_hardening(props, ep, y, slope)
     case default
@@ -240,7 +246,7 @@ contains
     real(wp), intent(out) :: y, slope
     integer :: n, i
     real(wp) :: e, e0, e1, y0, y1
-    n = nint(props(10))
+    n = nint(props(prop_hardening))
     e = max(ep, 0.0_wp)
     y = props(table_start + 2*n)
     slope = 0.0_wp
@@ -280,37 +286,37 @@ contains
         return
       end if
     end do
-    if (props(1) <= 0.0_wp) then
-      info = 1
-    else if (props(2) <= -1.0_wp .or. props(2) >= 0.5_wp) then
-      info = 2
-    else if (.not. hill48_is_convex(props(3:8))) then
-      info = 3
-      do i = 6, 8
+    if (props(prop_young) <= 0.0_wp) then
+      info = prop_young
+    else if (props(prop_poisson) <= -1.0_wp .or. props(prop_poisson) >= 0.5_wp) then
+      info = prop_poisson
+    else if (.not. hill48_is_convex(props(prop_hill:prop_hill + 5))) then
+      info = prop_hill
+      do i = prop_hill + 3, prop_hill + 5
         if (props(i) <= 0.0_wp) info = i
       end do
     else
-      select case (nint(props(9)))
+      select case (nint(props(prop_law)))
       case (hardening_swift)
-        if (props(10) <= 0.0_wp) then
-          info = 10
-        else if (props(11) <= 0.0_wp) then
-          info = 11
-        else if (props(12) < 0.0_wp .or. props(12) > 1.0_wp) then
-          info = 12
+        if (props(prop_hardening) <= 0.0_wp) then
+          info = prop_hardening
+        else if (props(prop_hardening + 1) <= 0.0_wp) then
+          info = prop_hardening + 1
+        else if (props(prop_hardening + 2) < 0.0_wp .or. props(prop_hardening + 2) > 1.0_wp) then
+          info = prop_hardening + 2
         end if
       case (hardening_voce)
-        if (props(10) <= 0.0_wp) then
-          info = 10
-        else if (props(11) < 0.0_wp) then
-          info = 11
-        else if (props(12) < 0.0_wp) then
-          info = 12
+        if (props(prop_hardening) <= 0.0_wp) then
+          info = prop_hardening
+        else if (props(prop_hardening + 1) < 0.0_wp) then
+          info = prop_hardening + 1
+        else if (props(prop_hardening + 2) < 0.0_wp) then
+          info = prop_hardening + 2
         end if
       case (hardening_table)
         info = table_check(props)
       case default
-        info = 9
+        info = prop_law
       end select
     end if
     ! The backstress's Hill norm stays below X_sat; below the initial yield stress too, the
@@ -341,12 +347,12 @@ contains
     integer :: info
     integer :: n, i, at
     info = 0
-    if (props(10) < 1.0_wp .or. props(10) > real(table_max_points, wp) .or. &
-        props(10) /= real(nint(props(10)), wp)) then
-      info = 10
+    if (props(prop_hardening) < 1.0_wp .or. props(prop_hardening) > real(table_max_points, wp) .or. &
+        props(prop_hardening) /= real(nint(props(prop_hardening)), wp)) then
+      info = prop_hardening
       return
     end if
-    n = nint(props(10))
+    n = nint(props(prop_hardening))
     if (props(table_start + 1) /= 0.0_wp) then
       info = table_start + 1
       return
@@ -421,18 +427,18 @@ contains
     integer, intent(in) :: k
     real(wp) :: fraction, lam, shear, ds(6), y, qa, qab, qb, disc, s, smallest
     integer :: i
-    lam = props(1)*props(2)/((1.0_wp + props(2))*(1.0_wp - 2.0_wp*props(2)))
-    shear = props(1)/(2.0_wp*(1.0_wp + props(2)))
+    lam = props(prop_young)*props(prop_poisson)/((1.0_wp + props(prop_poisson))*(1.0_wp - 2.0_wp*props(prop_poisson)))
+    shear = props(prop_young)/(2.0_wp*(1.0_wp + props(prop_poisson)))
     smallest = huge(1.0_wp)
     do i = 1, k
       associate (a => stress_old(:, i), de => strain_increment(:, i))
         ds(1:3) = lam*(de(1) + de(2) + de(3)) + 2.0_wp*shear*de(1:3)
         ds(4:6) = shear*de(4:6)
         y = material_yield_stress(props, ep_old(i))
-        qa = hill48_form(props(3:8), a, a)
+        qa = hill48_form(props(prop_hill:prop_hill + 5), a, a)
         if (.not. qa < (y*(1.0_wp - tolerance))**2) cycle  ! yielding already
-        qab = hill48_form(props(3:8), a, ds)
-        qb = hill48_form(props(3:8), ds, ds)
+        qab = hill48_form(props(prop_hill:prop_hill + 5), a, ds)
+        qb = hill48_form(props(prop_hill:prop_hill + 5), ds, ds)
         if (.not. (qa + 2.0_wp*qab + qb > (y*(1.0_wp + tolerance))**2 .and. qb > 0.0_wp)) &
           cycle
         disc = max(qab**2 - qb*(qa - y**2), 0.0_wp)
@@ -461,8 +467,8 @@ contains
   pure subroutine elastic_moduli(props, shear, bulk)
     real(wp), intent(in) :: props(material_prop_count)
     real(wp), intent(out) :: shear, bulk
-    shear = props(1)/(2.0_wp*(1.0_wp + props(2)))
-    bulk = props(1)/(3.0_wp*(1.0_wp - 2.0_wp*props(2)))
+    shear = props(prop_young)/(2.0_wp*(1.0_wp + props(prop_poisson)))
+    bulk = props(prop_young)/(3.0_wp*(1.0_wp - 2.0_wp*props(prop_poisson)))
   end subroutine elastic_moduli
 
   !> Isotropic elasticity C (engineering shears): stress = C strain.

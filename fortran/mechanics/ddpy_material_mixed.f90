@@ -9,7 +9,8 @@ module ddpy_material_mixed
   use ddpy_material, only: material_prop_count, material_hardening, hill48_equivalent_stress, &
                            yield_tol, &
                            return_tol, max_iterations, kinematic_rate, kinematic_saturation, &
-                           material_ok, material_not_converged, material_bad_input
+                           material_ok, material_not_converged, material_bad_input, &
+                           prop_young, prop_poisson, prop_hill
   implicit none
   private
   public :: material_update_mixed
@@ -61,7 +62,7 @@ contains
     status = material_ok
 
     trial = stress_old + matmul(tangent, strain_increment)
-    sigma_trial = hill48_equivalent_stress(props(3:8), trial - back_old)
+    sigma_trial = hill48_equivalent_stress(props(prop_hill:prop_hill + 5), trial - back_old)
     if (sigma_trial <= yield_floor*(1.0_wp + yield_tol)) then
       stress = trial
       return
@@ -74,7 +75,7 @@ contains
     plastic = .true.
     cx = props(kinematic_rate)
     xsat = props(kinematic_saturation)
-    call hill48_modes(props(3:8), shear, modes, q, c, mu)
+    call hill48_modes(props(prop_hill:prop_hill + 5), shear, modes, q, c, mu)
     t = matmul(trial, modes)
     xn = matmul(back_old, modes)
     pressure = sum(trial(1:3))/3.0_wp
@@ -83,8 +84,8 @@ contains
     ! since every denominator of psi exceeds Y(ep_old) + 2 G min(q) d and the numerator's
     ! Hill norm is at most sigma_trial + sigma(back_old).
     d_lo = 0.0_wp
-    d_hi = (sigma_trial + hill48_equivalent_stress(props(3:8), back_old) - y_old) &
-           /(2.0_wp*shear*minval(q))
+    d_hi = (sigma_trial + hill48_equivalent_stress(props(prop_hill:prop_hill + 5), back_old) &
+            - y_old)/(2.0_wp*shear*minval(q))
     d = 0.0_wp
     converged = .false.
     do iter = 1, max_iterations
@@ -183,8 +184,8 @@ contains
   pure subroutine elastic_moduli(props, shear, bulk)
     real(wp), intent(in) :: props(material_prop_count)
     real(wp), intent(out) :: shear, bulk
-    shear = props(1)/(2.0_wp*(1.0_wp + props(2)))
-    bulk = props(1)/(3.0_wp*(1.0_wp - 2.0_wp*props(2)))
+    shear = props(prop_young)/(2.0_wp*(1.0_wp + props(prop_poisson)))
+    bulk = props(prop_young)/(3.0_wp*(1.0_wp - 2.0_wp*props(prop_poisson)))
   end subroutine elastic_moduli
 
   !> Isotropic elasticity C (engineering shears): stress = C strain.

@@ -28,7 +28,7 @@ module ddpy_solid_shell
   use ddpy_kinds, only: wp
   use ddpy_material, only: material_update_checked, material_check, material_yield_stress, &
                            material_prop_count, material_hardening, hill48_equivalent_stress, &
-                           material_kinematic
+                           material_kinematic, prop_young, prop_hill
   use ddpy_material_mixed, only: material_update_mixed
   use ddpy_hex8, only: pushed_stress
   use ddpy_element_products, only: lower_product, subtract_lower_gram, add_congruence, &
@@ -668,7 +668,7 @@ contains
     integer :: p
     stays_elastic = .false.
     do p = 1, 8
-      sigma = hill48_equivalent_stress(props(3:8), &
+      sigma = hill48_equivalent_stress(props(prop_hill:prop_hill + 5), &
                                        s_mat(:, p) + matmul(dg4(:, :, p), grouped(mono(:, p), dalpha)))
       if (sigma > yield_floor*(1.0_wp + elastic_margin)) then
         call material_hardening(props, ep_old(p), y, slope)
@@ -688,7 +688,8 @@ contains
     integer :: p
     stays_elastic_mixed = .false.
     do p = 1, 8
-      sigma = hill48_equivalent_stress(props(3:8), s_mat(:, p) - back_old(:, p) &
+      sigma = hill48_equivalent_stress(props(prop_hill:prop_hill + 5), &
+                                       s_mat(:, p) - back_old(:, p) &
                                        + matmul(dg4(:, :, p), grouped(mono(:, p), dalpha)))
       if (sigma > yield_floor*(1.0_wp + elastic_margin)) then
         call material_hardening(props, ep_old(p), y, slope)
@@ -753,7 +754,7 @@ contains
         return
       end if
       elastic = elastic .and. .not. plastic
-      scale = max(scale, maxval(abs(de(:, p))), maxval(abs(s_mat(:, p)))/props(1))
+      scale = max(scale, maxval(abs(de(:, p))), maxval(abs(s_mat(:, p)))/props(prop_young))
       do c = 1, 4
         dg4(:, c, p) = d_mat(:, 1, p)*g4(1, c, p) + d_mat(:, 2, p)*g4(2, c, p) &
                        + d_mat(:, 3, p)*g4(3, c, p) + d_mat(:, 4, p)*g4(4, c, p) &

@@ -1,9 +1,11 @@
 !> The Newton loop of one increment: the blank's displacements and the contact forces of
 !> every (tool, slave) pair solved together, DD3IMP's single loop (docs/theory/contact.md);
-!> with no tools, the static problem of a solid under prescribed displacements and loads. Each evaluation assembles the blank (ddpy_solid_assembly) and
-!> the contact of every tool (ddpy_forming); each correction is solved with MUMPS, or by
-!> GMRES on older factors while they serve; the step is limited where free nodes would
-!> enter a tool and globalized by Deuflhard's natural monotonicity test.
+!> with no tools, the static problem of a solid under prescribed displacements and loads.
+!> Each evaluation assembles the blank (ddpy_solid_assembly) and the contact of every tool
+!> (ddpy_forming); each correction is solved with MUMPS, or by GMRES on older factors while
+!> they serve; the step is limited where free nodes would enter a tool and globalized by
+!> Deuflhard's natural monotonicity test. The problem arrives in the derived types of
+!> ddpy_forming_problem, built by the api layer.
 !>
 !> Unknowns: the free displacement dofs (eqn), then 3 force components per pair. Weights
 !> make them all lengths: 1 for displacements, 1 / r for the forces.
@@ -11,38 +13,26 @@ module ddpy_forming_newton
   use, intrinsic :: iso_fortran_env, only: int64
   use, intrinsic :: ieee_arithmetic, only: ieee_is_finite, ieee_value, ieee_positive_inf
   use ddpy_kinds, only: wp
-  use ddpy_material, only: material_prop_count, yield_landing, material_kinematic
+  use ddpy_material, only: yield_landing, material_kinematic
   use ddpy_solid_assembly, only: solid_assemble, shell_modes
-  use ddpy_forming, only: forming_contact, tool_fields, surface_gauss, f_surface, f_order, &
-                          f_point
+  use ddpy_blank, only: blank_mesh, blank_dofs
+  use ddpy_forming_data, only: tool_set, pair_set, force_holds, tool_placement, pair_law, &
+                               increment_limits, contact_node, contact_gauss
+  use ddpy_forming_problem, only: newton_settings, increment_start, increment_answer, &
+                                  increment_report, search_none, search_energy, &
+                                  outcome_converged, outcome_landing, outcome_element, &
+                                  outcome_not_finite, outcome_solver, outcome_stalled, &
+                                  outcome_hold, hold_no_stiffness, hold_too_far, &
+                                  history_width, history_residual, history_relative_residual, &
+                                  history_relative_correction, history_step
+  use ddpy_forming, only: forming_contact
   use ddpy_contact, only: contact_inactive
   use ddpy_linear_solver, only: solver_factorize, solver_solve
-  use ddpy_sparse, only: sum_duplicates
+  use ddpy_sparse, only: sum_duplicates, row_structure
   implicit none
   private
-  public :: forming_increment, newton_settings, newton_integer_settings, outcome_converged, &
-            outcome_landing, outcome_element, outcome_not_finite, outcome_solver, &
-            outcome_stalled, outcome_hold, penetration_step, gmres, hold_equations
+  public :: forming_increment, penetration_step, gmres, hold_equations, hold_entries
 
-  !> Entries of the real settings: force and displacement tolerances, the yield landing
-  !> tolerance (< 0: off), the penetration limit (element sizes) and the shortest step it
-  !> may leave, the bounds of the Krylov tolerance, the force scale's floor, the whole-step
-  !> ratio (a whole step that fails the monotonicity test is taken where pairs changed
-  !> state in it and its residual norm is at most this times the last; <= 0: off), and the
-  !> size ratio: the largest increment of the phase over this one's size (>= 1), by which
-  !> the convergence test scales the increment's motion up (measure).
-  integer, parameter :: newton_settings = 10
-  !> Entries of the integer settings: iterations, GMRES iterations at most, GMRES
-  !> iterations after which the next correction factorizes, reuse of older factors (0/1),
-  !> the MUMPS handle, a guess given (0/1), the touching predictor's resting flag, the
-  !> Jacobian stored as its lower triangle (0/1: a symmetric MUMPS instance), the line
-  !> search (search_*).
-  integer, parameter :: newton_integer_settings = 9
-  !> Line searches: none (every step whole, halved only where an element fails);
-  !> Deuflhard's natural monotonicity test with the residual-norm fallback (the forming
-  !> problem's: the contact law has no potential); the energy line search, a secant on
-  !> s(alpha) = du . r(u + alpha du) (a problem with a potential and a symmetric tangent).
-  integer, parameter, public :: search_none = 0, search_monotonicity = 1, search_energy = 2
   !> Pairs are held on their patches after 1/hold_fraction of the iterations
   !> (forming_increment); the answer's gaps may then differ from the search's by
   !> hold_depth element sizes. An answer the search refuses is held again on the search's
@@ -54,104 +44,58 @@ module ddpy_forming_newton
   !> increment (forming_increment).
   integer, parameter :: hold_retouches = 3
   real(wp), parameter :: touch_depth = 1.0e-3_wp
-  !> What forming_increment returns.
-  integer, parameter :: outcome_converged = 0, outcome_landing = 1, outcome_element = 2, &
-                        outcome_not_finite = 3, outcome_solver = 4, outcome_stalled = 5, &
-                        outcome_hold = 6
 
 contains
 
-  !> Newton iterations of one increment from the converged state (u_n, force_n, the solid
-  !> state *_old of a mesh of elements of the given kind, see solid_assemble) to the tools at positions and the fixed dofs at prescribed (forming holds
-  !> them at u_n). A prescribed motion not yet reached enters each evaluation through the
-  !> tangent, K_fp dp added to the free rows, and each step takes it whole (scaled by the
-  !> step length like the rest): the linearized predictor, not a jump of the boundary
-  !> nodes, which would invert the elements next to them. See the arguments of
-  !> forming_contact for the tools and pairs (and the Gauss points' tangential tractions
-  !> traction_n and pressure multipliers pressure_n of Gauss-point contact). Returns
-  !> outcome with, as it says: u, force, the solid state, the internal forces fint, the
-  !> contact states (inactive where off), gaps, normals and the Gauss points' tractions and
-  !> pressures when converged; the landing
-  !> fraction in detail(1); the element status and element in info(1:2); the MUMPS code in
-  !> info(3); the last relative residual and correction in detail(1:2) and the pairs that
-  !> changed state in the last iteration in info(4) when stalled. history(1:4, 1:niter):
-  !> every iteration's residual norm, (relative residual, relative correction) and the
-  !> length of the step that led to it (0 for the start). counters: evaluations,
-  !> corrections, factorizations, Krylov iterations, line searches that ended on the
-  !> residual-norm fallback;
-  !> timings (s): assembly, contact, factorization, solve. factored, reuse_next: the
-  !> solver's factors are this layout's, the last GMRES converged fast.
+  !> Newton iterations of one increment from the converged state (start: u_n, force_n, the
+  !> solid state *_old of the blank's mesh, see solid_assemble) to the tools at
+  !> placement%positions and the fixed dofs at start%prescribed (forming holds them at
+  !> u_n), in the loop's settings (newton) and the increment's limits, the Jacobian's
+  !> structure by rows (rows, for GMRES) and its nvalues coordinate values. A prescribed
+  !> motion not yet reached enters each evaluation through the tangent, K_fp dp added to
+  !> the free rows, and each step takes it whole (scaled by the step length like the
+  !> rest): the linearized predictor, not a jump of the boundary nodes, which would invert
+  !> the elements next to them. See forming_contact for the tools and pairs. Returns the
+  !> report (outcome, history, work, and why it failed) and, when converged, the answer:
+  !> u, force, the solid state, the internal forces fint, the contact states (inactive
+  !> where off), gaps, normals and the Gauss points' tractions and pressures.
+  !> factored, reuse_next: the solver's factors are this layout's, the last GMRES
+  !> converged fast (solver: the MUMPS handle, analysed for the structure).
   !> The solid-shell's enhanced parameters live in the evaluations like the trial state:
   !> each evaluation starts its local iteration from those of the iterate the step leaves
   !> (zero at the start of the increment), so an evaluation is a function of the iterate
-  !> and its start, not of the line search's earlier trials. back_old, back (6, 8, nback):
-  !> the backstress of mixed hardening, carried like the stress (nback = ne; without
-  !> kinematic hardening not read, and back = back_old).
+  !> and its start, not of the line search's earlier trials. The backstress of mixed
+  !> hardening (nback = ne; without kinematic hardening not read, and back = back_old)
+  !> is carried like the stress.
   !>
-  !> Force-controlled tools (nhold of them, docs/theory/contact.md): tool hold_tool(k) sits
-  !> at positions + shift(k) hold_axis(:, k), shift(k) one more unknown (after the pairs'
-  !> forces), whose equation is sum over the tool's pairs of hold_axis . lambda =
-  !> hold_target(k), the force the tool presses on the blank with. Its Jacobian entries
-  !> follow the contact blocks: per tool, its column (the rows of its pairs' laws, or a
-  !> Gauss-point pair's free equilibrium rows), its row (hold_first(k) + 1 ..
-  !> hold_first(k + 1): hold_coef times the value at slot hold_source (0-based), or
-  !> hold_coef alone where hold_source < 0), its diagonal. A step moves a tool by at most
-  !> hold_step; outcome_hold when a tool has no contact stiffness along its axis (info(2)
-  !> 1) or has moved farther than reach in the increment (info(2) 2), info(1) the tool.
-  subroutine forming_increment(nnode, x0, ne, conn, kind, props, u_ref, axes_old, stress_old, &
-                               ep_old, strain_old, nback, back_old, eqn, offsets, fixed, nf, &
-                               k_slots, &
-                               n_coupling, nvalues, row_start, ncsr, col, sources, &
-                               source_start, ntool, table, tol, coef, &
-                               degrees, triangle, tree_lower, tree_upper, tree_child, frame, &
-                               frame_lower, frame_upper, grid_start, grid_params, &
-                               grid_normals, grid_points, facing, face_first, nface, faces, &
-                               corner, npoint, face_weight, penalty, positions, positions_n, &
-                               reach, size, touching, npair, tool_first, pair_node, npatch, &
-                               patch_first, patch_node, on, r, mu, held, traction_n, &
-                               pressure_n, u_n, &
-                               force_n, external, prescribed, guess, settings, isettings, &
-                               factored, reuse_next, u, force, fint, stress, ep, strain, axes, &
-                               back, state, gap, normal, traction, pressure, niter, history, &
-                               counters, &
-                               timings, outcome, info, detail, nhold, hold_tool, hold_axis, &
-                               hold_target, hold_first, nhold_src, hold_source, hold_coef, &
-                               hold_step, shift)
-    integer, intent(in) :: nnode, ne, kind, nf, k_slots, n_coupling, nvalues, ncsr, ntool, &
-                           nface, npoint, npair, npatch, nback, nhold, nhold_src
-    integer, intent(in) :: conn(8, ne), eqn(3, nnode), offsets(ne + 1), fixed(3, nnode), &
-                           row_start(nf + 3*npair + nhold + 1), col(ncsr), sources(*), &
-                           source_start(ncsr + 1), table(tool_fields, ntool), &
-                           degrees(*), triangle(*), tree_child(*), grid_start(*), &
-                           face_first(ntool + 1), faces(4, nface), corner(4, nface), &
-                           tool_first(ntool + 1), pair_node(npair), on(npair), &
-                           patch_first(npair + 1), patch_node(npatch), &
-                           held(3, npair), isettings(newton_integer_settings)
-    real(wp), intent(in) :: x0(3, nnode), props(material_prop_count), u_ref(3, nnode), &
-                            axes_old(3, 3, 8, ne), stress_old(6, 8, ne), ep_old(8, ne), &
-                            strain_old(6, 8, ne), back_old(6, 8, nback), tol(ntool), &
-                            coef(*), tree_lower(*), &
-                            tree_upper(*), frame(*), frame_lower(*), frame_upper(*), &
-                            grid_params(*), grid_normals(*), grid_points(*), &
-                            facing(3, ntool), positions(3, ntool), positions_n(3, ntool), &
-                            face_weight(npoint), penalty(5, ntool), &
-                            traction_n(3, npoint), pressure_n(npoint), reach, size, &
-                            touching, r(npair), &
-                            mu(npair), u_n(3, nnode), &
-                            force_n(3, npair), external(3, nnode), prescribed(3, nnode), &
-                            guess(3, nnode), settings(newton_settings)
+  !> Force-controlled tools (holds, docs/theory/contact.md): tool holds%tool(k) sits at
+  !> positions + shift(k) holds%axis(:, k), shift(k) one more unknown (after the pairs'
+  !> forces), whose equation is sum over the tool's pairs of axis . lambda =
+  !> placement%hold_force(k), the force the tool presses on the blank with. Its Jacobian
+  !> entries follow the contact blocks: per tool, its column (the rows of its pairs' laws,
+  !> or a Gauss-point pair's free equilibrium rows), its row (holds%first(k) + 1 ..
+  !> holds%first(k + 1): holds%coef times the value at slot holds%source (0-based), or
+  !> holds%coef alone where the source < 0), its diagonal. A step moves a tool by at most
+  !> limits%hold_step; outcome_hold when a tool has no contact stiffness along its axis or
+  !> has moved farther than the reach in the increment.
+  subroutine forming_increment(blank, dofs, rows, nvalues, tools, pairs, holds, newton, &
+                               limits, start, placement, law, solver, factored, reuse_next, &
+                               answer, report)
+    type(blank_mesh), intent(in) :: blank
+    type(blank_dofs), intent(in) :: dofs
+    type(row_structure), intent(in) :: rows
+    integer, intent(in) :: nvalues, solver
+    type(tool_set), intent(in) :: tools
+    type(pair_set), intent(in) :: pairs
+    type(force_holds), intent(in) :: holds
+    type(newton_settings), intent(in) :: newton
+    type(increment_limits), intent(in) :: limits
+    type(increment_start), intent(in) :: start
+    type(tool_placement), intent(in) :: placement
+    type(pair_law), intent(in) :: law
     integer, intent(inout) :: factored, reuse_next
-    real(wp), intent(out) :: u(3, nnode), force(3, npair), fint(3, nnode), &
-                             stress(6, 8, ne), ep(8, ne), &
-                             strain(6, 8, ne), axes(3, 3, 8, ne), back(6, 8, nback), &
-                             gap(npair), normal(3, npair), traction(3, npoint), &
-                             pressure(npoint), history(4, *), &
-                             timings(4), detail(2)
-    integer, intent(out) :: state(npair), niter, counters(5), outcome, info(4)
-    integer, intent(in) :: hold_tool(nhold), hold_first(nhold + 1), hold_source(nhold_src)
-    real(wp), intent(in) :: hold_axis(3, nhold), hold_target(nhold), hold_coef(nhold_src), &
-                            hold_step
-    real(wp), intent(out) :: shift(nhold)
+    type(increment_answer), intent(inout) :: answer
+    type(increment_report), intent(out) :: report
 
     !> One evaluation: the iterate and what was evaluated there.
     type :: evaluation
@@ -175,35 +119,48 @@ contains
     logical :: retouched
     real(wp) :: tol_force, tol_disp, yield_tol, floor, norm, scale, moved, correction, rel, &
                 forcing, alpha, step_size, du_norm, landing, t_norm, t_scale, t_moved, &
-                alpha_fallback, whole_step, size_ratio
+                alpha_fallback, whole_step, size_ratio, element_size
     integer :: max_iterations, cur, trial, fallback, buffer, iteration, ls, n, status, &
-               element, handle, last_status, last_element, hold_after, holds
-    logical :: converged, have_previous, have_hint, accepted, t_converged, symmetric, &
-               moving, held_on_patches
-    integer :: search
+               element, last_status, last_element, hold_after, hold_count
+    logical :: converged, have_previous, have_hint, accepted, t_converged, moving, &
+               held_on_patches
+    integer :: search, nnode, ne, nback, nf, k_slots, n_coupling, ntool, npair, npoint, nhold
     integer(int64) :: clock_rate
+    ! An explicit-shape copy of u_n: the motion's norm (measure) is then summed by the same
+    ! compiled loop as when u_n was an argument of its own; over the component, the
+    ! compiler fuses other terms into multiply-adds, and the correction's ratio to the
+    ! motion moved in its last bit.
+    real(wp) :: u_n(3, blank%nnode)
 
+    u_n = start%u_n
+    nnode = blank%nnode
+    ne = blank%ne
+    nback = size(start%back_old, 3)
+    nf = dofs%nf
+    k_slots = dofs%k_slots
+    ntool = tools%ntool
+    npair = pairs%npair
+    npoint = tools%npoint
+    nhold = holds%nhold
+    n_coupling = count(dofs%eqn(:, pairs%node + 1) >= 0)
+    element_size = limits%element_size
     call system_clock(count_rate=clock_rate)
-    tol_force = settings(1)
-    tol_disp = settings(2)
-    yield_tol = settings(3)
-    floor = settings(8)
-    whole_step = settings(9)
-    size_ratio = max(settings(10), 1.0_wp)
-    max_iterations = isettings(1)
+    tol_force = newton%force_tolerance
+    tol_disp = newton%displacement_tolerance
+    yield_tol = limits%yield_tolerance
+    floor = newton%floor
+    whole_step = newton%whole_step
+    size_ratio = max(limits%size_ratio, 1.0_wp)
+    max_iterations = newton%max_iterations
     hold_after = max(2, max_iterations/hold_fraction)
-    handle = isettings(5)
-    symmetric = isettings(8) /= 0
-    search = isettings(9)
+    search = newton%line_search
     n = nf + 3*npair + nhold
     retouches = 0
-    counters = 0
-    shift = 0.0_wp
-    timings = 0.0_wp
-    info = 0
-    detail = 0.0_wp
-    niter = 0
-    outcome = outcome_stalled
+    report = increment_report()
+    allocate(report%history(history_width, max_iterations + 1))
+    report%history = 0.0_wp
+    report%outcome = outcome_stalled
+    answer%shift = 0.0_wp
     allocate(weight(n), delta(n), du(3, nnode), dforce(3, npair), x_n(3, nnode), &
              kdu(3, nnode), dp(3, nnode), previous(npair), u_cur(3, nnode), &
              force_cur(3, npair), alpha_cur(shell_modes, ne), lock(npair + npoint), &
@@ -211,44 +168,33 @@ contains
     alpha_cur = 0.0_wp
     lock = 0
     held_on_patches = .false.
-    holds = 0
+    hold_count = 0
     dp = 0.0_wp
     step_size = 0.0_wp
     weight(1:nf) = 1.0_wp
-    weight(nf + 1:nf + 3*npair) = reshape(spread(1.0_wp/r, 1, 3), [3*npair])
+    weight(nf + 1:nf + 3*npair) = reshape(spread(1.0_wp/law%r, 1, 3), [3*npair])
     weight(nf + 3*npair + 1:) = 1.0_wp  ! the tools' shifts are lengths
     ! The pairs of Gauss-point tools, whose multipliers are eliminated (forming_contact):
     ! their coupling entries (node's equilibrium row, multiplier) are 0, the others' -1.
     allocate(eliminated(npair), averaged(npair), coupling(n_coupling))
     do tool = 1, ntool
-      eliminated(tool_first(tool) + 1:tool_first(tool + 1)) = &
-        table(f_surface, tool) == surface_gauss
+      eliminated(pairs%tool_first(tool) + 1:pairs%tool_first(tool + 1)) = &
+        tools%tool(tool)%discretization == contact_gauss
       ! Pairs whose gap averages Gauss points' (held_ok checks the points instead).
-      averaged(tool_first(tool) + 1:tool_first(tool + 1)) = table(f_surface, tool) /= 0
+      averaged(pairs%tool_first(tool) + 1:pairs%tool_first(tool + 1)) = &
+        tools%tool(tool)%discretization /= contact_node
     end do
     entry = 0
     do pair = 1, npair
       do comp = 1, 3
-        if (eqn(comp, pair_node(pair) + 1) < 0) cycle
+        if (dofs%eqn(comp, pairs%node(pair) + 1) < 0) cycle
         entry = entry + 1
         coupling(entry) = merge(0.0_wp, -1.0_wp, eliminated(pair))
       end do
     end do
-    ! The force-controlled tools' entries close the values: per tool its column, its row
-    ! and its diagonal.
-    hold_base = nvalues
-    do k = 1, nhold
-      tool = hold_tool(k)
-      do pair = tool_first(tool) + 1, tool_first(tool + 1)
-        if (eliminated(pair)) then
-          hold_base = hold_base - count(eqn(:, pair_node(pair) + 1) >= 0)
-        else
-          hold_base = hold_base - 3
-        end if
-      end do
-      hold_base = hold_base - (hold_first(k + 1) - hold_first(k)) - 1
-    end do
-    x_n = x0 + u_n
+    ! The force-controlled tools' entries close the values.
+    hold_base = nvalues - hold_entries(dofs, tools, pairs, holds)
+    x_n = blank%x0 + start%u_n
     do cur = 1, 2
       allocate(slot(cur)%u(3, nnode), slot(cur)%force(3, npair), slot(cur)%residual(n), &
                slot(cur)%values(nvalues), slot(cur)%fint(3, nnode), &
@@ -260,7 +206,7 @@ contains
                slot(cur)%traction(3, npoint), slot(cur)%pressure(npoint), &
                slot(cur)%back(6, 8, nback), slot(cur)%shift(nhold), &
                slot(cur)%dc_dt(3, 3, npair), slot(cur)%stiffness(nhold))
-      slot(cur)%back = back_old
+      slot(cur)%back = start%back_old
       slot(cur)%values(k_slots + 1:k_slots + n_coupling) = coupling
       slot(cur)%shift = 0.0_wp
     end do
@@ -271,27 +217,28 @@ contains
     ! The extrapolated start, unless an element fails there; else the converged state.
     cur = 1
     status = 1
-    if (isettings(6) /= 0) then
-      slot(cur)%u = guess
-      slot(cur)%force = force_n
-      call evaluate(slot(cur), touching, status, element)
+    if (start%has_guess) then
+      slot(cur)%u = start%guess
+      slot(cur)%force = start%force_n
+      call evaluate(slot(cur), limits%touching, status, element)
     end if
     if (status /= 0) then
-      slot(cur)%u = u_n
-      slot(cur)%force = force_n
-      call evaluate(slot(cur), touching, status, element)
+      slot(cur)%u = start%u_n
+      slot(cur)%force = start%force_n
+      call evaluate(slot(cur), limits%touching, status, element)
       if (status /= 0) then
-        outcome = outcome_element
-        info(1:2) = [status, element]
+        report%outcome = outcome_element
+        report%element_status = status
+        report%element = element
         return
       end if
     end if
     do iteration = 0, max_iterations
-      niter = niter + 1
+      report%niter = report%niter + 1
       call record(slot(cur))
-      history(4, niter) = alpha
+      report%history(history_step, report%niter) = alpha
       if (.not. ieee_is_finite(norm)) then
-        outcome = outcome_not_finite
+        report%outcome = outcome_not_finite
         return
       end if
       do while (converged .and. held_on_patches)
@@ -303,9 +250,9 @@ contains
           ! search's patches there, which the next answer is checked against in turn.
           cur = 3 - cur
           call record(slot(cur))
-          if (.not. converged .and. holds < hold_limit .and. iteration < max_iterations) then
+          if (.not. converged .and. hold_count < hold_limit .and. iteration < max_iterations) then
             call hold(slot(cur))
-            if (outcome == outcome_element) return
+            if (report%outcome == outcome_element) return
           end if
         end if
       end do
@@ -318,13 +265,14 @@ contains
         ! increment from converging: from here each stays on the patch it has
         ! (docs/theory/contact.md), and the answer is checked against the search.
         call hold(slot(cur))
-        if (outcome == outcome_element) return
+        if (report%outcome == outcome_element) return
       end if
       if (iteration == max_iterations) then
-        outcome = outcome_stalled
-        detail = [norm/scale, correction/moved]
-        info(4) = -1
-        if (have_previous) info(4) = count(on /= 0 .and. slot(cur)%state /= previous)
+        report%outcome = outcome_stalled
+        report%residual = norm/scale
+        report%correction = correction/moved
+        report%flipped = -1
+        if (have_previous) report%flipped = count(law%on /= 0 .and. slot(cur)%state /= previous)
         return
       end if
       ! Inexact Newton (Eisenstat and Walker): the correction's relative error may be a
@@ -342,10 +290,11 @@ contains
             retouched = .true.
             cycle
           end if
-          if (outcome == outcome_element) return
+          if (report%outcome == outcome_element) return
         end if
-        outcome = outcome_hold
-        info(1:2) = [hold_tool(k), 1]
+        report%outcome = outcome_hold
+        report%hold_tool = holds%tool(k)
+        report%hold_reason = hold_no_stiffness
         return
       end do
       if (retouched) then
@@ -354,13 +303,13 @@ contains
         cycle
       end if
       rel = norm/scale
-      forcing = min(settings(6), max(settings(7), 0.1_wp*rel, &
+      forcing = min(newton%krylov_loose, max(newton%krylov_tight, 0.1_wp*rel, &
                                      0.1_wp*tol_force/max(rel, 1.0e-300_wp)))
-      counters(2) = counters(2) + 1
+      report%corrections = report%corrections + 1
       call direction(slot(cur), forcing, step_size, status)
       if (status < 0) then
-        outcome = outcome_solver
-        info(3) = status
+        report%outcome = outcome_solver
+        report%solver_status = status
         return
       end if
       du = 0.0_wp
@@ -368,7 +317,7 @@ contains
       if (slot(cur)%moving) then
         ! The prescribed rest is part of the step (its constraint rows are solved exactly),
         ! and of the step's length that the line search compares against.
-        where (fixed /= 0) du = prescribed - slot(cur)%u
+        where (dofs%fixed) du = start%prescribed - slot(cur)%u
         step_size = hypot(step_size, slot(cur)%rest)
       end if
       dforce = reshape(delta(nf + 1:nf + 3*npair), [3, npair])
@@ -376,12 +325,13 @@ contains
       du_norm = sqrt(dot_product(delta(1:nf), delta(1:nf)) + dot_product(dshift, dshift))
       ! The factors hold this iteration's Jacobian from here. The first trial stops short
       ! where the step would push a free node into a tool.
-      alpha = penetration_step(nnode, npair, du, pair_node, on, slot(cur)%state, &
-                               slot(cur)%gap, slot(cur)%normal, settings(4)*size, &
-                               settings(5))
+      alpha = penetration_step(nnode, npair, du, pairs%node, law%on, slot(cur)%state, &
+                               slot(cur)%gap, slot(cur)%normal, limits%penetration*element_size, &
+                               limits%min_step)
       if (nhold > 0) then
-        ! A force-controlled tool moves at most hold_step in a step.
-        if (maxval(abs(dshift))*alpha > hold_step) alpha = hold_step/maxval(abs(dshift))
+        ! A force-controlled tool moves at most limits%hold_step in a step.
+        if (maxval(abs(dshift))*alpha > limits%hold_step) &
+          alpha = limits%hold_step/maxval(abs(dshift))
       end if
       alpha = min(alpha, barrier_step(nnode, ntool, npair, du, tool_first, pair_node, on, &
                                       slot(cur)%gap, slot(cur)%normal, penalty, nhold, &
@@ -423,8 +373,8 @@ contains
           ! the trial, with this iteration's factors, must be shorter than the step's.
           call timed_solve(-slot(trial)%residual, slot(trial)%simplified, status)
           if (status < 0) then
-            outcome = outcome_solver
-            info(3) = status
+            report%outcome = outcome_solver
+            report%solver_status = status
             return
           end if
           if (hypot(weighted_norm(slot(trial)%simplified), slot(trial)%rest) <= &
@@ -438,7 +388,7 @@ contains
           ! pair that changes state in the step makes it long however good the step: a
           ! whole step that changed some pairs and cut the residual enough stands.
           if (alpha == 1.0_wp .and. t_norm <= whole_step*norm) then
-            if (any(on /= 0 .and. slot(trial)%state /= slot(cur)%state)) then
+            if (any(law%on /= 0 .and. slot(trial)%state /= slot(cur)%state)) then
               accepted = .true.
               have_hint = .true.
               exit
@@ -460,23 +410,25 @@ contains
           trial = fallback
           alpha = alpha_fallback
           last_status = 0
-          counters(5) = counters(5) + 1
+          report%fallbacks = report%fallbacks + 1
         else
           alpha = 2.0_wp*alpha
         end if
         have_hint = .true.
       end if
       if (last_status /= 0) then
-        outcome = outcome_element
-        info(1:2) = [last_status, last_element]
+        report%outcome = outcome_element
+        report%element_status = last_status
+      report%element = last_element
         return
       end if
       cur = trial
       correction = alpha*du_norm
       do k = 1, nhold
-        if (abs(slot(cur)%shift(k)) > reach) then
-          outcome = outcome_hold
-          info(1:2) = [hold_tool(k), 2]
+        if (abs(slot(cur)%shift(k)) > limits%reach) then
+          report%outcome = outcome_hold
+          report%hold_tool = holds%tool(k)
+          report%hold_reason = hold_too_far
           return
         end if
       end do
@@ -484,18 +436,19 @@ contains
         ! The elastic predictor is the first full Newton step: a step shortened by the
         ! line search or the penetration limit starts from a poor iterate, whose strains
         ! say little of where the converged path yields.
-        if (material_kinematic(props) .and. nback == ne) then
+        if (material_kinematic(blank%props) .and. nback == ne) then
           ! The elastic path of the relative stress: the backstress stays while elastic.
-          landing = yield_landing(props, 8*ne, stress_old - back_old, ep_old, &
-                                  slot(cur)%strain - strain_old, yield_tol)
+          landing = yield_landing(blank%props, 8*ne, start%stress_old - start%back_old, &
+                                  start%ep_old, slot(cur)%strain - start%strain_old, &
+                                  yield_tol)
         else
-          landing = yield_landing(props, 8*ne, stress_old, ep_old, &
-                                  slot(cur)%strain - strain_old, yield_tol)
+          landing = yield_landing(blank%props, 8*ne, start%stress_old, start%ep_old, &
+                                  slot(cur)%strain - start%strain_old, yield_tol)
         end if
         yield_tol = -1.0_wp
         if (landing < 1.0_wp) then
-          outcome = outcome_landing
-          detail(1) = landing
+          report%outcome = outcome_landing
+          report%landing = landing
           return
         end if
       end if
@@ -511,7 +464,7 @@ contains
       integer, intent(out) :: status, element
       s%u = u_cur + alpha*du
       if (alpha == 1.0_wp .and. moving) then
-        where (fixed /= 0) s%u = prescribed
+        where (dofs%fixed) s%u = start%prescribed
       end if
       s%force = force_cur + alpha*dforce
       s%shift = shift_cur + alpha*dshift
@@ -577,49 +530,46 @@ contains
       integer(int64) :: t0, t1, t2
       integer :: a, c, p, k
       real(wp) :: placed(3, ntool)
-      counters(1) = counters(1) + 1
+      report%evaluations = report%evaluations + 1
       call system_clock(t0)
-      where (fixed /= 0)
-        dp = prescribed - s%u
+      where (dofs%fixed)
+        dp = start%prescribed - s%u
       elsewhere
         dp = 0.0_wp
       end where
       s%moving = any(dp /= 0.0_wp)
       s%rest = 0.0_wp
       if (s%moving) s%rest = sqrt(sum(dp**2))
-      call solid_assemble(nnode, x0, ne, conn, kind, u_ref, s%u, props, axes_old, &
-                          stress_old, ep_old, strain_old, nback, back_old, alpha_cur, eqn, &
-                          symmetric, .true., offsets, k_slots, s%values(1:k_slots), s%moving, &
-                          dp, s%fint, kdu, s%stress, s%ep, s%strain, s%axes, s%back, s%alpha, &
-                          status, element)
+      call solid_assemble(nnode, blank%x0, ne, blank%conn, blank%kind, start%u_ref, s%u, &
+                          blank%props, start%axes_old, start%stress_old, start%ep_old, &
+                          start%strain_old, nback, start%back_old, alpha_cur, dofs%eqn, &
+                          dofs%symmetric, .true., dofs%offsets, k_slots, s%values(1:k_slots), &
+                          s%moving, dp, s%fint, kdu, s%stress, s%ep, s%strain, s%axes, &
+                          s%back, s%alpha, status, element)
       call system_clock(t1)
-      timings(1) = timings(1) + real(t1 - t0, wp)/real(clock_rate, wp)
+      report%assembly_time = report%assembly_time + real(t1 - t0, wp)/real(clock_rate, wp)
       if (status /= 0) return
       do a = 1, nnode
         do c = 1, 3
-          if (eqn(c, a) >= 0) s%residual(eqn(c, a) + 1) = s%fint(c, a) - external(c, a)
+          if (dofs%eqn(c, a) >= 0) s%residual(dofs%eqn(c, a) + 1) = s%fint(c, a) - &
+                                                                 start%external(c, a)
         end do
       end do
       if (s%moving) then  ! the linearized rest of the prescribed motion
         do a = 1, nnode
           do c = 1, 3
-            if (eqn(c, a) >= 0) s%residual(eqn(c, a) + 1) = s%residual(eqn(c, a) + 1) + &
-                                                            kdu(c, a)
+            if (dofs%eqn(c, a) >= 0) s%residual(dofs%eqn(c, a) + 1) = &
+              s%residual(dofs%eqn(c, a) + 1) + kdu(c, a)
           end do
         end do
       end if
-      placed = positions
+      placed = placement%positions
       do k = 1, nhold
-        placed(:, hold_tool(k)) = placed(:, hold_tool(k)) + s%shift(k)*hold_axis(:, k)
+        placed(:, holds%tool(k)) = placed(:, holds%tool(k)) + s%shift(k)*holds%axis(:, k)
       end do
-      call forming_contact(nnode, x0 + s%u, x_n, fixed, ntool, table, tol, coef, degrees, &
-                           triangle, tree_lower, tree_upper, tree_child, frame, frame_lower, &
-                           frame_upper, grid_start, grid_params, grid_normals, grid_points, &
-                           facing, face_first, nface, faces, corner, npoint, face_weight, &
-                           penalty, placed, positions_n, reach, size, touching_gap, isettings(7), &
-                           npair, tool_first, pair_node, npatch, patch_first, patch_node, on, &
-                           s%force, r, mu, held, traction_n, pressure_n, lock, eqn, nf, &
-                           k_slots, nvalues, s%residual, s%values, s%state, s%gap, s%normal, &
+      call forming_contact(blank%x0 + s%u, x_n, dofs, tools, pairs, law, placed, &
+                           placement%positions_n, limits, touching_gap, s%force, lock, &
+                           nvalues, s%residual, s%values, s%state, s%gap, s%normal, &
                            s%traction, s%pressure, s%patch, s%dc_dt)
       ! A Gauss-point pair's multiplier is eliminated: lambda = F(x), C = 0.
       do p = 1, npair
@@ -627,18 +577,17 @@ contains
         s%force(:, p) = s%force(:, p) - s%residual(nf + 3*p - 2:nf + 3*p)
         s%residual(nf + 3*p - 2:nf + 3*p) = 0.0_wp
       end do
-      call hold_equations(nnode, ntool, npair, tool_first, pair_node, on, eqn, &
-                          eliminated, s%force, s%dc_dt, nhold, hold_tool, hold_axis, &
-                          hold_target, hold_first, nhold_src, hold_source, hold_coef, &
-                          hold_base, s%residual(nf + 3*npair + 1:), s%values, s%stiffness)
+      call hold_equations(dofs, pairs, law%on, holds, placement%hold_force, eliminated, &
+                          s%force, s%dc_dt, hold_base, s%residual(nf + 3*npair + 1:), &
+                          s%values, s%stiffness)
       call system_clock(t2)
-      timings(2) = timings(2) + real(t2 - t1, wp)/real(clock_rate, wp)
+      report%contact_time = report%contact_time + real(t2 - t1, wp)/real(clock_rate, wp)
     end subroutine evaluate
 
     !> Moves force-controlled tool k of slot s along its axis onto its nearest slave (by
     !> the gaps along the tool's normals at the pairs' closest points), touch_depth
     !> element sizes into it, and evaluates s there; false where no slave within the
-    !> search's reach faces it or an element fails (outcome then says so).
+    !> search's reach faces it or an element fails (the report then says so).
     logical function retouch(s, k)
       type(evaluation), intent(inout) :: s
       integer, intent(in) :: k
@@ -646,17 +595,18 @@ contains
       integer :: p, status, element
       retouch = .false.
       travel = huge(1.0_wp)
-      do p = tool_first(hold_tool(k)) + 1, tool_first(hold_tool(k) + 1)
-        if (on(p) == 0 .or. .not. ieee_is_finite(s%gap(p))) cycle
-        closing = dot_product(s%normal(:, p), hold_axis(:, k))
+      do p = pairs%tool_first(holds%tool(k)) + 1, pairs%tool_first(holds%tool(k) + 1)
+        if (law%on(p) == 0 .or. .not. ieee_is_finite(s%gap(p))) cycle
+        closing = dot_product(s%normal(:, p), holds%axis(:, k))
         if (closing > 0.5_wp) travel = min(travel, s%gap(p)/closing)
       end do
       if (travel == huge(1.0_wp)) return
-      s%shift(k) = s%shift(k) + travel + touch_depth*size
+      s%shift(k) = s%shift(k) + travel + touch_depth*element_size
       call evaluate(s, 0.0_wp, status, element)
       if (status /= 0) then
-        outcome = outcome_element
-        info(1:2) = [status, element]
+        report%outcome = outcome_element
+        report%element_status = status
+        report%element = element
         return
       end if
       retouch = .true.
@@ -667,9 +617,9 @@ contains
     subroutine record(s)
       type(evaluation), intent(in) :: s
       call measure(s, correction, norm, scale, moved, converged)
-      history(1, niter) = norm
-      history(2, niter) = norm/scale
-      history(3, niter) = correction/moved
+      report%history(history_residual, report%niter) = norm
+      report%history(history_relative_residual, report%niter) = norm/scale
+      report%history(history_relative_correction, report%niter) = correction/moved
     end subroutine record
 
     !> Residual norm, force scale, motion, and whether converged with this correction:
@@ -686,8 +636,8 @@ contains
       real(wp), intent(out) :: norm, scale, moved
       logical, intent(out) :: converged
       norm = sqrt(dot_product(s%residual, s%residual))
-      scale = max(sqrt(sum(s%force**2)), sqrt(sum(s%fint**2, mask=fixed /= 0)), floor)
-      moved = max(size_ratio*sqrt(sum((s%u - u_n)**2)), 1.0e-9_wp*size)
+      scale = max(sqrt(sum(s%force**2)), sqrt(sum(s%fint**2, mask=dofs%fixed)), floor)
+      moved = max(size_ratio*sqrt(sum((s%u - u_n)**2)), 1.0e-9_wp*element_size)
       converged = norm <= tol_force*scale .and. correction <= tol_disp*moved .and. &
                   .not. s%moving
     end subroutine measure
@@ -699,7 +649,7 @@ contains
       integer :: a, c
       do a = 1, nnode
         do c = 1, 3
-          if (eqn(c, a) >= 0) field(c, a) = v(eqn(c, a) + 1)
+          if (dofs%eqn(c, a) >= 0) field(c, a) = v(dofs%eqn(c, a) + 1)
         end do
       end do
     end subroutine scatter
@@ -719,7 +669,7 @@ contains
       integer :: count
       logical :: gmres_converged
       status = 0
-      if (isettings(4) /= 0 .and. factored /= 0 .and. reuse_next /= 0) then
+      if (newton%reuse .and. factored /= 0 .and. reuse_next /= 0) then
         allocate(preconditioned(n), z(n))
         call system_clock(t0)
         if (have_hint) then
@@ -729,14 +679,15 @@ contains
           if (status < 0) return
           preconditioned = weight*preconditioned
         end if
-        call gmres(n, nvalues, s%values, row_start, ncsr, col, sources, source_start, &
-                   weight, handle, preconditioned, forcing, isettings(2), z, count, &
+        call gmres(n, nvalues, s%values, rows%row_start, size(rows%col), rows%col, rows%sources, &
+                   rows%source_start, &
+                   weight, solver, preconditioned, forcing, newton%krylov_max, z, count, &
                    gmres_converged, status)
         call system_clock(t1)
-        timings(4) = timings(4) + real(t1 - t0, wp)/real(clock_rate, wp)
+        report%solve_time = report%solve_time + real(t1 - t0, wp)/real(clock_rate, wp)
         if (status < 0) return
-        counters(4) = counters(4) + count
-        reuse_next = merge(1, 0, count <= isettings(3))
+        report%krylov_iterations = report%krylov_iterations + count
+        reuse_next = merge(1, 0, count <= newton%krylov_keep)
         if (gmres_converged) then
           delta = z/weight
           step_size = sqrt(dot_product(preconditioned, preconditioned))
@@ -744,14 +695,14 @@ contains
         end if
       end if
       call system_clock(t0)
-      call solver_factorize(handle, nvalues, s%values, status)
+      call solver_factorize(solver, nvalues, s%values, status)
       call system_clock(t1)
       if (status < 0) then
         factored = 0
         return
       end if
-      timings(3) = timings(3) + real(t1 - t0, wp)/real(clock_rate, wp)
-      counters(3) = counters(3) + 1
+      report%factorization_time = report%factorization_time + real(t1 - t0, wp)/real(clock_rate, wp)
+      report%factorizations = report%factorizations + 1
       factored = 1
       reuse_next = 1
       call timed_solve(-s%residual, delta, status)
@@ -764,7 +715,7 @@ contains
       real(wp), intent(in) :: b(n)
       real(wp), intent(out) :: x(n)
       integer, intent(out) :: status
-      call solver_solve(handle, n, b, x, status)
+      call solver_solve(solver, n, b, x, status)
     end subroutine mumps_solve
 
     !> mumps_solve, its time counted as solves.
@@ -776,7 +727,7 @@ contains
       call system_clock(t0)
       call mumps_solve(b, x, status)
       call system_clock(t1)
-      timings(4) = timings(4) + real(t1 - t0, wp)/real(clock_rate, wp)
+      report%solve_time = report%solve_time + real(t1 - t0, wp)/real(clock_rate, wp)
     end subroutine timed_solve
 
     !> ||W v||.
@@ -805,25 +756,22 @@ contains
       held_ok = status == 0
       do p = 1, npair
         if (.not. held_ok) exit
-        if (on(p) == 0 .or. averaged(p)) cycle
+        if (law%on(p) == 0 .or. averaged(p)) cycle
         if (.not. (ieee_is_finite(check%gap(p)) .and. ieee_is_finite(s%gap(p)))) then
           held_ok = s%state(p) == contact_inactive  ! the search finds it beyond the reach
           cycle
         end if
         if (s%state(p) == contact_inactive .and. .not. check%gap(p) < 0.0_wp) cycle
-        held_ok = abs(check%gap(p) - s%gap(p)) <= hold_depth*size
+        held_ok = abs(check%gap(p) - s%gap(p)) <= hold_depth*element_size
       end do
       if (.not. held_ok) return
       change = 0.0_wp
       do t = 1, ntool
-        if (table(f_surface, t) == 0) cycle
+        if (tools%tool(t)%discretization == contact_node) cycle
         ! (A Gauss-point tool's points are followed by its slaves' barrier points.)
-        do i = table(f_point, t) + 1, table(f_point, t) + &
-                                      table(f_order, t)**2*(face_first(t + 1) - face_first(t)) &
-                                      + merge(tool_first(t + 1) - tool_first(t), 0, &
-                                              table(f_surface, t) == surface_gauss)
-          held_force = face_weight(i)*s%pressure(i)
-          free_force = face_weight(i)*check%pressure(i)
+        do i = tools%tool(t)%first_point + 1, tools%tool(t)%first_point + tools%tool(t)%npoint
+          held_force = tools%face_weight(i)*s%pressure(i)
+          free_force = tools%face_weight(i)*check%pressure(i)
           change = change + (held_force - free_force)**2
         end do
       end do
@@ -835,14 +783,15 @@ contains
       type(evaluation), intent(inout) :: s
       integer :: status, element
       lock = s%patch
-      lock(1:npair) = merge(lock(1:npair), 0, on /= 0)
+      lock(1:npair) = merge(lock(1:npair), 0, law%on /= 0)
       if (.not. any(lock > 0)) return
       held_on_patches = .true.
-      holds = holds + 1
+      hold_count = hold_count + 1
       call evaluate(s, 0.0_wp, status, element)
       if (status /= 0) then
-        outcome = outcome_element
-        info(1:2) = [status, element]
+        report%outcome = outcome_element
+        report%element_status = status
+        report%element = element
         return
       end if
       call record(s)
@@ -851,79 +800,99 @@ contains
     !> The converged iterate s as the answer.
     subroutine finish(s)
       type(evaluation), intent(in) :: s
-      outcome = outcome_converged
-      u = s%u
-      force = s%force
-      fint = s%fint
-      stress = s%stress
-      ep = s%ep
-      strain = s%strain
-      axes = s%axes
-      back = s%back
-      state = merge(s%state, contact_inactive, on /= 0)
-      gap = s%gap
-      normal = s%normal
-      traction = s%traction
-      pressure = s%pressure
-      shift = s%shift
+      report%outcome = outcome_converged
+      answer%u = s%u
+      answer%force = s%force
+      answer%fint = s%fint
+      answer%stress = s%stress
+      answer%ep = s%ep
+      answer%strain = s%strain
+      answer%axes = s%axes
+      answer%back = s%back
+      answer%state = merge(s%state, contact_inactive, law%on /= 0)
+      answer%gap = s%gap
+      answer%normal = s%normal
+      answer%traction = s%traction
+      answer%pressure = s%pressure
+      answer%shift = s%shift
     end subroutine finish
 
   end subroutine forming_increment
 
-  !> The equations of the nhold force-controlled tools (see forming_increment) from the
-  !> pairs' forces (lambda; F(x) for an eliminated Gauss-point pair) and their dC/dt
-  !> (forming_contact): each tool's residual sum a . lambda - F (into hold_residual), and
-  !> from slot hold_base + 1 of values its column a . dC/dt per pair (the law rows, or an
-  !> eliminated pair's free equilibrium rows), its row (hold_coef times the value at slot
-  !> hold_source, 0-based, or hold_coef alone where hold_source < 0) and its diagonal
-  !> -sum a . dC/dt a over its eliminated pairs, whose force F = lambda - C moves with the
-  !> tool; and its stiffness along its axis, the sum of |dC/dt a| over its pairs that take
-  !> part (on).
-  subroutine hold_equations(nnode, ntool, npair, tool_first, pair_node, on, eqn, &
-                            eliminated, force, dc_dt, nhold, hold_tool, hold_axis, &
-                            hold_target, hold_first, nhold_src, hold_source, hold_coef, &
+  !> The equations of the force-controlled tools (see forming_increment) from the pairs'
+  !> forces (lambda; F(x) for an eliminated Gauss-point pair) and their dC/dt
+  !> (forming_contact): each tool's residual sum a . lambda - F (into hold_residual, F its
+  !> hold_force), and from slot hold_base + 1 of values its column a . dC/dt per pair (the
+  !> law rows, or an eliminated pair's free equilibrium rows), its row (the holds' coef
+  !> times the value at slot source, 0-based, or coef alone where source < 0) and its
+  !> diagonal -sum a . dC/dt a over its eliminated pairs, whose force F = lambda - C moves
+  !> with the tool; and its stiffness along its axis, the sum of |dC/dt a| over its pairs
+  !> that take part (on).
+  subroutine hold_equations(dofs, pairs, on, holds, hold_force, eliminated, force, dc_dt, &
                             hold_base, hold_residual, values, stiffness)
-    integer, intent(in) :: nnode, ntool, npair, nhold, nhold_src, hold_base
-    integer, intent(in) :: tool_first(ntool + 1), pair_node(npair), on(npair), &
-                           eqn(3, nnode), hold_tool(nhold), hold_first(nhold + 1), &
-                           hold_source(nhold_src)
-    logical, intent(in) :: eliminated(npair)
-    real(wp), intent(in) :: force(3, npair), dc_dt(3, 3, npair), hold_axis(3, nhold), &
-                            hold_target(nhold), hold_coef(nhold_src)
-    real(wp), intent(inout) :: hold_residual(nhold), values(*)
-    real(wp), intent(out) :: stiffness(nhold)
+    type(blank_dofs), intent(in) :: dofs
+    type(pair_set), intent(in) :: pairs
+    integer, intent(in) :: on(pairs%npair), hold_base
+    type(force_holds), intent(in) :: holds
+    real(wp), intent(in) :: hold_force(holds%nhold), force(3, pairs%npair), &
+                            dc_dt(3, 3, pairs%npair)
+    logical, intent(in) :: eliminated(pairs%npair)
+    real(wp), intent(inout) :: hold_residual(holds%nhold), values(*)
+    real(wp), intent(out) :: stiffness(holds%nhold)
     real(wp) :: along(3), a(3), diagonal
     integer :: k, p, i, m, slot, t
     slot = hold_base
-    do k = 1, nhold
-      t = hold_tool(k)
-      a = hold_axis(:, k)
+    do k = 1, holds%nhold
+      t = holds%tool(k)
+      a = holds%axis(:, k)
       diagonal = 0.0_wp
       stiffness(k) = 0.0_wp
-      hold_residual(k) = -hold_target(k)
-      do p = tool_first(t) + 1, tool_first(t + 1)
+      hold_residual(k) = -hold_force(k)
+      do p = pairs%tool_first(t) + 1, pairs%tool_first(t + 1)
         hold_residual(k) = hold_residual(k) + dot_product(a, force(:, p))
         along = matmul(dc_dt(:, :, p), a)
         if (on(p) /= 0) stiffness(k) = stiffness(k) + sum(abs(along))
         do i = 1, 3
-          if (eliminated(p) .and. eqn(i, pair_node(p) + 1) < 0) cycle
+          if (eliminated(p) .and. dofs%eqn(i, pairs%node(p) + 1) < 0) cycle
           slot = slot + 1
           values(slot) = along(i)
         end do
         if (eliminated(p)) diagonal = diagonal - dot_product(a, along)
       end do
-      do m = hold_first(k) + 1, hold_first(k + 1)
+      do m = holds%first(k) + 1, holds%first(k + 1)
         slot = slot + 1
-        if (hold_source(m) >= 0) then
-          values(slot) = hold_coef(m)*values(hold_source(m) + 1)
+        if (holds%source(m) >= 0) then
+          values(slot) = holds%coef(m)*values(holds%source(m) + 1)
         else
-          values(slot) = hold_coef(m)
+          values(slot) = holds%coef(m)
         end if
       end do
       slot = slot + 1
       values(slot) = diagonal
     end do
   end subroutine hold_equations
+
+  !> The Jacobian entries of the force-controlled tools (per tool its column, row and
+  !> diagonal: see forming_increment), which close the values.
+  pure integer function hold_entries(dofs, tools, pairs, holds) result(entries)
+    type(blank_dofs), intent(in) :: dofs
+    type(tool_set), intent(in) :: tools
+    type(pair_set), intent(in) :: pairs
+    type(force_holds), intent(in) :: holds
+    integer :: k, p, t
+    entries = 0
+    do k = 1, holds%nhold
+      t = holds%tool(k)
+      do p = pairs%tool_first(t) + 1, pairs%tool_first(t + 1)
+        if (tools%tool(t)%discretization == contact_gauss) then
+          entries = entries + count(dofs%eqn(:, pairs%node(p) + 1) >= 0)
+        else
+          entries = entries + 3
+        end if
+      end do
+      entries = entries + holds%first(k + 1) - holds%first(k) + 1
+    end do
+  end function hold_entries
 
   !> Longest fraction (at most 1) of the step du (3, nnode) that leaves no free pair's node
   !> (on, open, with a gap) deeper than room_depth inside its tool, the gaps and normals

@@ -1,4 +1,5 @@
-!> Sparse direct solver: MUMPS behind integer handles, sequential or across MPI processes.
+!> Sparse direct solver: MUMPS behind integer handles of the core's handle table
+!> (ddpy_handle_table), sequential or across MPI processes.
 !>
 !> A handle keeps one MUMPS instance with its sparsity structure, so the symbolic analysis
 !> (job 1) is done once per structure and reused by every factorization (job 2) and solve
@@ -16,17 +17,33 @@
 module ddpy_linear_solver
   use ddpy_kinds, only: wp
   use ddpy_build, only: parallel_mumps
+  use ddpy_handle_table, only: table, max_handles, claim_handle, free_entry, entry_solver, &
+                               handle_is => valid_handle, world, mpi_not_started, &
+                               mpi_running, mpi_finished
   implicit none
   private
-  public :: max_solvers, solver_create, solver_analyse, solver_factorize, solver_solve, &
+  public :: solver_create, solver_analyse, solver_factorize, solver_solve, &
             solver_destroy, solver_info, solver_set_control, solver_set_real_control, &
             solver_set_ordering, solver_world, solver_serve, solver_finish, &
             solver_analyse_elements
 
-  include 'dmumps_struc.h'
   include 'mpif.h'
 
-  !> Number of solver instances that may live at the same time.
+  !> The entries of solver_info's values (MUMPS's INFOG(1), INFOG(2), the ordering used, the
+  !> factor entries and their estimate, the estimated memory of the factorization on the
+  !> largest process and all, the memory allocated and used, the processes, the negative
+  !> pivots) and of its flops (the elimination's and its estimate).
+  integer, parameter, public :: info_infog1 = 1, info_infog2 = 2, info_ordering = 3, &
+                                info_factor_entries = 4, info_estimated_factor_entries = 5, &
+                                info_estimated_memory_mb_max = 6, &
+                                info_estimated_memory_mb_total = 7, info_memory_mb_max = 8, &
+                                info_memory_mb_total = 9, info_memory_used_mb_max = 10, &
+                                info_memory_used_mb_total = 11, info_processes = 12, &
+                                info_negative_pivots = 13, solver_info_values = 13
+  integer, parameter, public :: flops_elimination = 1, flops_estimate = 2, solver_flops = 2
+
+  !> MUMPS instances that may live at the same time (each holds its factors: a few of them
+  !> fill a machine's memory), among the handles of the table.
   integer, parameter :: max_solvers = 16
 
   !> Status values besides MUMPS's own (negative INFOG(1) values are passed through).
@@ -43,35 +60,22 @@ module ddpy_linear_solver
                         command_factorize = 3, command_solve = 4, command_destroy = 5, &
                         command_control = 6, command_real_control = 7
 
-  !> State of MPI in this process: not started, running, finished (stopped for good).
-  integer, parameter :: mpi_not_started = 0, mpi_running = 1, mpi_finished = 2
-
-  !> The handle table: MUMPS instances and what was done with each (the module's only state,
-  !> with the process's place in MPI_COMM_WORLD).
-  type(dmumps_struc), target, save :: instance(max_solvers)
-  logical, save :: in_use(max_solvers) = .false.
-  logical, save :: analysed(max_solvers) = .false.
-  logical, save :: factorized(max_solvers) = .false.
-  integer, save :: mpi_state = mpi_not_started
-  integer, save :: world_rank = 0, world_size = 1
 
 contains
 
   logical function valid_handle(handle)
     integer, intent(in) :: handle
-    valid_handle = .false.
-    if (handle < 1 .or. handle > max_solvers) return
-    valid_handle = in_use(handle)
+    valid_handle = handle_is(handle, entry_solver)
   end function valid_handle
 
   !> Start MPI once (MPI_Init) and learn this process's rank and the number of processes.
   subroutine start_mpi()
     integer :: ierr
-    if (mpi_state /= mpi_not_started) return
+    if (world%state /= mpi_not_started) return
     call mpi_init(ierr)
-    call mpi_comm_rank(mpi_comm_world, world_rank, ierr)
-    call mpi_comm_size(mpi_comm_world, world_size, ierr)
-    mpi_state = mpi_running
+    call mpi_comm_rank(mpi_comm_world, world%rank, ierr)
+    call mpi_comm_size(mpi_comm_world, world%size, ierr)
+    world%state = mpi_running
   end subroutine start_mpi
 
   !> This process's rank and the number of processes (MPI started here when it was not),
@@ -80,11 +84,11 @@ contains
   subroutine solver_world(rank, size, parallel, status)
     integer, intent(out) :: rank, size, parallel, status
     call start_mpi()
-    rank = world_rank
-    size = world_size
+    rank = world%rank
+    size = world%size
     parallel = merge(1, 0, parallel_mumps)
     status = 0
-    if (mpi_state == mpi_finished) status = status_finished
+    if (world%state == mpi_finished) status = status_finished
   end subroutine solver_world
 
   !> Rank 0: send a command to the ranks > 0 (nothing to send with one process).
@@ -92,7 +96,7 @@ contains
     integer, intent(in) :: command, handle, value1, value2
     real(wp), intent(in), optional :: real_value
     integer :: message(message_size), ierr
-    if (world_size < 2) return
+    if (world%size < 2) return
     message = 0
     message(1:4) = [command, handle, value1, value2]
     if (present(real_value)) message(5:6) = transfer(real_value, message(5:6))
@@ -106,7 +110,7 @@ contains
     integer :: message(message_size), ierr, handle, ignored
     call start_mpi()
     status = status_not_host
-    if (world_rank == 0 .or. mpi_state /= mpi_running) return
+    if (world%rank == 0 .or. world%state /= mpi_running) return
     status = 0
     do
       call mpi_bcast(message, message_size, mpi_integer, 0, mpi_comm_world, ierr)
@@ -116,7 +120,7 @@ contains
         call init_instance(handle, message(3), message(4), ignored)
       case (command_analyse)
         call run_job(handle, 1, ignored)
-        analysed(handle) = ignored >= 0
+        table(handle)%analysed = ignored >= 0
       case (command_factorize)
         call factorize_job(handle, ignored)
       case (command_solve)
@@ -124,9 +128,9 @@ contains
       case (command_destroy)
         call destroy_instance(handle, ignored)
       case (command_control)
-        instance(handle)%icntl(message(3)) = message(4)
+        table(handle)%mumps%icntl(message(3)) = message(4)
       case (command_real_control)
-        instance(handle)%cntl(message(3)) = transfer(message(5:6), 0.0_wp)
+        table(handle)%mumps%cntl(message(3)) = transfer(message(5:6), 0.0_wp)
       case default
         exit
       end select
@@ -140,13 +144,13 @@ contains
     integer, intent(out) :: status
     integer :: handle, ignored
     status = 0
-    if (mpi_state /= mpi_running) return
-    if (world_rank /= 0) then
+    if (world%state /= mpi_running) return
+    if (world%rank /= 0) then
       status = status_not_host
       return
     end if
-    do handle = 1, max_solvers
-      if (in_use(handle)) call solver_destroy(handle, ignored)
+    do handle = 1, max_handles
+      if (valid_handle(handle)) call solver_destroy(handle, ignored)
     end do
     call send_command(command_stop, 0, 0, 0)
     call end_mpi()
@@ -155,7 +159,7 @@ contains
   subroutine end_mpi()
     integer :: ierr
     call mpi_finalize(ierr)
-    mpi_state = mpi_finished
+    world%state = mpi_finished
   end subroutine end_mpi
 
   !> Start a MUMPS instance. sym: 0 unsymmetric, 1 symmetric positive definite,
@@ -167,27 +171,31 @@ contains
     handle = 0
     call start_mpi()
     status = status_finished
-    if (mpi_state /= mpi_running) return
+    if (world%state /= mpi_running) return
     status = status_not_host
-    if (world_rank /= 0) return
+    if (world%rank /= 0) return
     status = status_no_free_handle
-    do h = 1, max_solvers
-      if (.not. in_use(h)) then
-        handle = h
-        exit
-      end if
-    end do
+    if (count([(valid_handle(h), h = 1, max_handles)]) >= max_solvers) return
+    call claim_handle(entry_solver, handle)
     if (handle == 0) return
     call send_command(command_create, handle, sym, ordering)
     call init_instance(handle, sym, ordering, status)
-    if (status < 0) handle = 0
+    if (status < 0) then
+      call free_entry(handle)
+      handle = 0
+    end if
   end subroutine solver_create
 
-  !> The collective MUMPS initialization (job -1) of one handle, on every rank.
+  !> The collective MUMPS initialization (job -1) of one handle, on every rank (the ranks
+  !> > 0 take the handle rank 0 chose).
   subroutine init_instance(handle, sym, ordering, status)
     integer, intent(in) :: handle, sym, ordering
     integer, intent(out) :: status
-    associate (id => instance(handle))
+    integer :: claimed
+    claimed = handle
+    call claim_handle(entry_solver, claimed)
+    allocate(table(handle)%mumps)
+    associate (id => table(handle)%mumps)
       id%comm = mpi_comm_world
       id%sym = sym
       id%par = 1
@@ -205,18 +213,17 @@ contains
       id%icntl(14) = 40
       nullify (id%irn, id%jcn, id%a, id%rhs, id%perm_in, id%eltptr, id%eltvar)
     end associate
-    in_use(handle) = .true.
-    analysed(handle) = .false.
-    factorized(handle) = .false.
+    table(handle)%analysed = .false.
+    table(handle)%factorized = .false.
   end subroutine init_instance
 
   !> One collective MUMPS call (job) on a handle; status its INFOG(1), the same on all ranks.
   subroutine run_job(handle, job, status)
     integer, intent(in) :: handle, job
     integer, intent(out) :: status
-    instance(handle)%job = job
-    call dmumps(instance(handle))
-    status = instance(handle)%infog(1)
+    table(handle)%mumps%job = job
+    call dmumps(table(handle)%mumps)
+    status = table(handle)%mumps%infog(1)
   end subroutine run_job
 
   !> Numerical factorization (job 2); on a workspace shortage (INFO -8, -9) the relaxation
@@ -228,15 +235,15 @@ contains
     do attempt = 1, 4
       call run_job(handle, 2, status)
       if (status /= -8 .and. status /= -9) exit
-      instance(handle)%icntl(14) = 2*instance(handle)%icntl(14)
+      table(handle)%mumps%icntl(14) = 2*table(handle)%mumps%icntl(14)
     end do
-    factorized(handle) = status >= 0
+    table(handle)%factorized = status >= 0
     ! SYM = 1 factorizes LDL^T without pivoting, which completes on an indefinite matrix
     ! too: its negative pivots (INFOG(12), the same on every rank) tell that it is not
     ! positive definite, and its solutions would be an answer to the wrong question.
-    if (status >= 0 .and. instance(handle)%sym == 1 .and. instance(handle)%infog(12) > 0) then
+    if (status >= 0 .and. table(handle)%mumps%sym == 1 .and. table(handle)%mumps%infog(12) > 0) then
       status = status_not_positive_definite
-      factorized(handle) = .false.
+      table(handle)%factorized = .false.
     end if
   end subroutine factorize_job
 
@@ -245,10 +252,10 @@ contains
   integer function ordering_status(handle, n) result(status)
     integer, intent(in) :: handle, n
     status = 0
-    if (instance(handle)%icntl(7) /= 1) return
-    if (.not. associated(instance(handle)%perm_in)) then
+    if (table(handle)%mumps%icntl(7) /= 1) return
+    if (.not. associated(table(handle)%mumps%perm_in)) then
       status = status_size_mismatch
-    else if (size(instance(handle)%perm_in) /= n) then
+    else if (size(table(handle)%mumps%perm_in) /= n) then
       status = status_size_mismatch
     end if
   end function ordering_status
@@ -265,7 +272,7 @@ contains
     end if
     status = ordering_status(handle, n)
     if (status /= 0) return
-    associate (id => instance(handle))
+    associate (id => table(handle)%mumps)
       call release_arrays(handle)
       allocate (id%irn(nz), id%jcn(nz), id%a(nz), id%rhs(n))
       id%icntl(5) = 0
@@ -277,8 +284,8 @@ contains
     end associate
     call send_command(command_analyse, handle, 0, 0)
     call run_job(handle, 1, status)
-    analysed(handle) = status >= 0
-    factorized(handle) = .false.
+    table(handle)%analysed = status >= 0
+    table(handle)%factorized = .false.
   end subroutine solver_analyse
 
   !> Symbolic analysis of an n x n matrix given by its nelt elements (MUMPS's elemental
@@ -296,7 +303,7 @@ contains
     end if
     status = ordering_status(handle, n)
     if (status /= 0) return
-    associate (id => instance(handle))
+    associate (id => table(handle)%mumps)
       call release_arrays(handle)
       allocate (id%eltptr(nelt + 1), id%eltvar(nvar))
       id%eltptr = eltptr
@@ -308,8 +315,8 @@ contains
     call send_command(command_analyse, handle, 0, 0)
     call run_job(handle, 1, status)
     call release_arrays(handle)
-    analysed(handle) = .false.
-    factorized(handle) = .false.
+    table(handle)%analysed = .false.
+    table(handle)%factorized = .false.
   end subroutine solver_analyse_elements
 
   !> Numerical factorization with new values on the analysed structure. On a workspace
@@ -322,15 +329,15 @@ contains
       status = status_bad_handle
       return
     end if
-    if (.not. analysed(handle)) then
+    if (.not. table(handle)%analysed) then
       status = status_not_analysed
       return
     end if
-    if (int(nz, kind=8) /= instance(handle)%nnz) then
+    if (int(nz, kind=8) /= table(handle)%mumps%nnz) then
       status = status_size_mismatch
       return
     end if
-    instance(handle)%a = a
+    table(handle)%mumps%a = a
     call send_command(command_factorize, handle, 0, 0)
     call factorize_job(handle, status)
   end subroutine solver_factorize
@@ -346,18 +353,18 @@ contains
       status = status_bad_handle
       return
     end if
-    if (.not. factorized(handle)) then
+    if (.not. table(handle)%factorized) then
       status = status_not_analysed
       return
     end if
-    if (n /= instance(handle)%n) then
+    if (n /= table(handle)%mumps%n) then
       status = status_size_mismatch
       return
     end if
-    instance(handle)%rhs = rhs
+    table(handle)%mumps%rhs = rhs
     call send_command(command_solve, handle, 0, 0)
     call run_job(handle, 3, status)
-    if (status >= 0) x = instance(handle)%rhs
+    if (status >= 0) x = table(handle)%mumps%rhs
   end subroutine solver_solve
 
   !> MUMPS statistics of the last call (rank 0, the host, holds them): values are INFOG(1),
@@ -370,8 +377,8 @@ contains
   !> (RINFOG(3)) and the analysis's estimate (RINFOG(1)).
   subroutine solver_info(handle, values, flops, status)
     integer, intent(in) :: handle
-    integer, intent(out) :: values(13)
-    real(wp), intent(out) :: flops(2)
+    integer, intent(out) :: values(solver_info_values)
+    real(wp), intent(out) :: flops(solver_flops)
     integer, intent(out) :: status
     values = 0
     flops = 0.0_wp
@@ -379,11 +386,22 @@ contains
       status = status_bad_handle
       return
     end if
-    associate (id => instance(handle))
-      values = [id%infog(1), id%infog(2), id%infog(7), id%infog(29), id%infog(3), &
-                id%infog(16), id%infog(17), id%infog(18), id%infog(19), id%infog(21), &
-                id%infog(22), world_size, id%infog(12)]
-      flops = [id%rinfog(3), id%rinfog(1)]
+    associate (id => table(handle)%mumps)
+      values(info_infog1) = id%infog(1)
+      values(info_infog2) = id%infog(2)
+      values(info_ordering) = id%infog(7)
+      values(info_factor_entries) = id%infog(29)
+      values(info_estimated_factor_entries) = id%infog(3)
+      values(info_estimated_memory_mb_max) = id%infog(16)
+      values(info_estimated_memory_mb_total) = id%infog(17)
+      values(info_memory_mb_max) = id%infog(18)
+      values(info_memory_mb_total) = id%infog(19)
+      values(info_memory_used_mb_max) = id%infog(21)
+      values(info_memory_used_mb_total) = id%infog(22)
+      values(info_processes) = world%size
+      values(info_negative_pivots) = id%infog(12)
+      flops(flops_elimination) = id%rinfog(3)
+      flops(flops_estimate) = id%rinfog(1)
     end associate
     status = 0
   end subroutine solver_info
@@ -396,12 +414,12 @@ contains
       status = status_bad_handle
       return
     end if
-    if (index < 1 .or. index > size(instance(handle)%icntl)) then
+    if (index < 1 .or. index > size(table(handle)%mumps%icntl)) then
       status = status_size_mismatch
       return
     end if
     call send_command(command_control, handle, index, value)
-    instance(handle)%icntl(index) = value
+    table(handle)%mumps%icntl(index) = value
     status = 0
   end subroutine solver_set_control
 
@@ -415,12 +433,12 @@ contains
       status = status_bad_handle
       return
     end if
-    if (index < 1 .or. index > size(instance(handle)%cntl)) then
+    if (index < 1 .or. index > size(table(handle)%mumps%cntl)) then
       status = status_size_mismatch
       return
     end if
     call send_command(command_real_control, handle, index, 0, value)
-    instance(handle)%cntl(index) = value
+    table(handle)%mumps%cntl(index) = value
     status = 0
   end subroutine solver_set_real_control
 
@@ -433,7 +451,7 @@ contains
       status = status_bad_handle
       return
     end if
-    associate (id => instance(handle))
+    associate (id => table(handle)%mumps)
       if (associated(id%perm_in)) deallocate (id%perm_in)
       allocate (id%perm_in(n))
       id%perm_in = perm
@@ -459,18 +477,16 @@ contains
     integer, intent(in) :: handle
     integer, intent(out) :: status
     call release_arrays(handle)
-    associate (id => instance(handle))
+    associate (id => table(handle)%mumps)
       if (associated(id%perm_in)) deallocate (id%perm_in)
     end associate
     call run_job(handle, -2, status)
-    in_use(handle) = .false.
-    analysed(handle) = .false.
-    factorized(handle) = .false.
+    call free_entry(handle)
   end subroutine destroy_instance
 
   subroutine release_arrays(handle)
     integer, intent(in) :: handle
-    associate (id => instance(handle))
+    associate (id => table(handle)%mumps)
       if (associated(id%irn)) deallocate (id%irn)
       if (associated(id%jcn)) deallocate (id%jcn)
       if (associated(id%a)) deallocate (id%a)

@@ -333,9 +333,8 @@ contains
         if (maxval(abs(dshift))*alpha > limits%hold_step) &
           alpha = limits%hold_step/maxval(abs(dshift))
       end if
-      alpha = min(alpha, barrier_step(nnode, ntool, npair, du, tool_first, pair_node, on, &
-                                      slot(cur)%gap, slot(cur)%normal, penalty, nhold, &
-                                      hold_tool, hold_axis, dshift, settings(5)))
+      alpha = min(alpha, barrier_step(du, tools, pairs, law%on, slot(cur)%gap, &
+                                      slot(cur)%normal, holds, dshift, limits%min_step))
       previous = slot(cur)%state
       have_previous = .true.
       moving = slot(cur)%moving
@@ -929,28 +928,28 @@ contains
   !> has none of the barrier's stiffness, and the full step (a holder pressed with a force
   !> it meets with the penalty alone, 3 % of the thickness deep) lands it far inside: the
   !> next iterate's barrier force, many times the load, throws the tool off the blank.
-  pure function barrier_step(nnode, ntool, npair, du, tool_first, pair_node, on, gap, &
-                             normal, penalty, nhold, hold_tool, hold_axis, dshift, &
-                             min_step) result(step)
-    integer, intent(in) :: nnode, ntool, npair, tool_first(ntool + 1), pair_node(npair), &
-                           on(npair), nhold, hold_tool(nhold)
-    real(wp), intent(in) :: du(3, nnode), gap(npair), normal(3, npair), penalty(5, ntool), &
-                            hold_axis(3, nhold), dshift(nhold), min_step
+  pure function barrier_step(du, tools, pairs, on, gap, normal, holds, dshift, min_step) &
+      result(step)
+    real(wp), intent(in) :: du(:, :), gap(:), normal(:, :), dshift(:), min_step
+    type(tool_set), intent(in) :: tools
+    type(pair_set), intent(in) :: pairs
+    integer, intent(in) :: on(:)
+    type(force_holds), intent(in) :: holds
     real(wp) :: step, tool_du(3), depth, ramp_end, closing
     integer :: t, p, k
     step = 1.0_wp
-    do t = 1, ntool
-      if (.not. penalty(3, t) > 0.0_wp) cycle
+    do t = 1, tools%ntool
+      if (.not. tools%tool(t)%barrier_stiffness > 0.0_wp) cycle
       tool_du = 0.0_wp
-      do k = 1, nhold
-        if (hold_tool(k) == t) tool_du = tool_du + dshift(k)*hold_axis(:, k)
+      do k = 1, holds%nhold
+        if (holds%tool(k) == t) tool_du = tool_du + dshift(k)*holds%axis(:, k)
       end do
-      ramp_end = penalty(4, t) + penalty(5, t)
-      do p = tool_first(t) + 1, tool_first(t + 1)
+      ramp_end = tools%tool(t)%barrier_start + tools%tool(t)%barrier_width
+      do p = pairs%tool_first(t) + 1, pairs%tool_first(t + 1)
         if (on(p) == 0 .or. .not. ieee_is_finite(gap(p))) cycle
         depth = -gap(p)
         if (depth >= ramp_end) cycle
-        closing = -dot_product(du(:, pair_node(p) + 1) - tool_du, normal(:, p))
+        closing = -dot_product(du(:, pairs%node(p) + 1) - tool_du, normal(:, p))
         if (depth + closing*step > ramp_end) step = (ramp_end - depth)/closing
       end do
     end do

@@ -136,6 +136,20 @@ def runs_file(stem: str) -> Path:
     return DOCS / f"{stem}_runs.json"
 
 
+def deepest_per_tool(history: dict[str, Any], rows: Any, tools: list[str]
+                     ) -> dict[str, float] | None:
+    """The deepest slave node in each tool over the increments ``rows`` of a results
+    file's history (its ``penetration`` column, mm); None where the file has no such
+    column."""
+    import numpy as np
+
+    if "penetration" not in history:
+        return None
+    depth = history["penetration"][rows]
+    depth = np.where(np.isfinite(depth), depth, 0.0).max(axis=0, initial=0.0)
+    return {tool: float(f"{depth[i]:.4g}") for i, tool in enumerate(tools)}
+
+
 def table_row(cells: list[Any]) -> str:
     """A markdown table row."""
     return "| " + " | ".join(str(c) for c in cells) + " |"

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from jacobian_check import central_difference_errors
 from test_gauss_contact import PENALTY
+from test_hold_force import pulled_strip
 from test_penetration import PLANE
 from test_surface_contact import ELASTIC, dome, nodal_areas
 
@@ -149,27 +150,11 @@ def test_a_holder_pressed_with_a_force_settles_in_the_barrier(threads: int) -> N
     flies off the strip: every increment converges with the holder's reaction 500 N, the
     deepest node where the penalty and the barrier's law carry about 50 MPa, and the pull
     Coulomb's 2 mu F."""
-    from test_hold_force import STEEL, plane
-
-    from ddpy.geometry.surfaces import NagataSurface
-
     thickness, force, mu = 1.0, 500.0, 0.1
-    mesh = HexMesh.box(10.0, 1.0, thickness, 10, 1, 1)
-    pusher = NagataSurface([[0, -5, -5], [0, 5, -5], [0, 5, 5], [0, -5, 5]], [[1, 0, 0]] * 4,
-                           [[0, 1, 2, 3]])
-    tools = [RigidTool("die", plane(0.0, up=True), mesh.select(z=0.0), friction=mu,
-                       facing=(0, 0, -1), contact="node"),
-             RigidTool("holder", plane(thickness, up=False), mesh.select(z=thickness),
-                       friction=mu, facing=(0, 0, 1), barrier=BARRIER_DEPTH),
-             RigidTool("pusher", pusher, mesh.select(x=0.0), facing=(-1, 0, 0),
-                       contact="node")]
-    problem = FormingProblem(Solid(mesh, STEEL), tools)
-    problem.fix(np.arange(mesh.n_nodes), "y")
     # (Without the stop, the run failed on 1 thread and went through on 2: the order of
     # the sums decided whether the thrown-off holder found the strip again.)
     with parallel.threads(threads):
-        result = problem.run({"pusher": (1.0, 0, 0)}, max_increment=0.25,
-                             forces={"holder": force})
+        problem, result = pulled_strip(mu, force, barrier=BARRIER_DEPTH)
     assert result.cuts == 0
     assert result.tool_forces["holder"][-1][2] == pytest.approx(force, rel=1e-6)
     assert -result.tool_forces["pusher"][-1][0] == pytest.approx(2 * mu * force, rel=5e-3)

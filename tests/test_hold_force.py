@@ -73,23 +73,32 @@ def test_a_holder_pressed_on_a_flat_blank_carries_the_force_as_through_thickness
     assert problem.force.sum(axis=0)[2] == pytest.approx(-force, rel=1e-9)
 
 
-def test_the_pull_force_of_a_strip_between_die_and_holder_is_2_mu_f() -> None:
-    """A 10 x 1 x 1 mm strip between a flat die and a flat holder pressed with F = 500 N,
-    friction mu = 0.1 on both, pushed out along x by a frictionless pusher at its end: once
-    it slides, Coulomb's law gives 2 mu F, within 0.5 %."""
+def pulled_strip(mu: float, force: float, barrier: float | None = None
+                 ) -> tuple[FormingProblem, object]:
+    """A 10 x 1 x 1 mm strip between a flat die and a flat holder pressed with ``force`` N
+    (with the barrier ``barrier``), friction ``mu`` on both, pushed 1 mm out along x by a
+    frictionless pusher at its end."""
     mesh = HexMesh.box(10.0, 1.0, 1.0, 10, 1, 1)
-    mu, force = 0.1, 500.0
     pusher = NagataSurface([[0, -5, -5], [0, 5, -5], [0, 5, 5], [0, -5, 5]], [[1, 0, 0]] * 4,
                            [[0, 1, 2, 3]])
     tools = [RigidTool("die", plane(0.0, up=True), mesh.select(z=0.0), friction=mu,
                        facing=(0, 0, -1), contact="node"),
              RigidTool("holder", plane(1.0, up=False), mesh.select(z=1.0), friction=mu,
-                       facing=(0, 0, 1)),
+                       facing=(0, 0, 1), barrier=barrier),
              RigidTool("pusher", pusher, mesh.select(x=0.0), facing=(-1, 0, 0),
                        contact="node")]
     problem = FormingProblem(Solid(mesh, STEEL), tools)
     problem.fix(np.arange(mesh.n_nodes), "y")
     result = problem.run({"pusher": (1.0, 0, 0)}, max_increment=0.25, forces={"holder": force})
+    return problem, result
+
+
+def test_the_pull_force_of_a_strip_between_die_and_holder_is_2_mu_f() -> None:
+    """A 10 x 1 x 1 mm strip between a flat die and a flat holder pressed with F = 500 N,
+    friction mu = 0.1 on both, pushed out along x by a frictionless pusher at its end: once
+    it slides, Coulomb's law gives 2 mu F, within 0.5 %."""
+    mu, force = 0.1, 500.0
+    _, result = pulled_strip(mu, force)
     pull = -result.tool_forces["pusher"][-1][0]
     assert pull == pytest.approx(2.0 * mu * force, rel=5e-3)
     assert result.tool_forces["holder"][-1][2] == pytest.approx(force, rel=1e-6)
@@ -168,13 +177,12 @@ def test_newton_keeps_its_quadratic_rate_with_the_tools_unknown() -> None:
 
 
 def test_a_force_the_blank_cannot_carry_stops_the_phase_naming_the_tool() -> None:
-    """A blank on a die of a very soft penalty (1 N/mm^3) and no barrier: 0.4 N sinks it
-    0.1 mm, 400 N would sink it 100 mm, beyond the contact search's reach: the holder never
-    flies off, the phase stops naming it and the increment, with the first phase's results
-    kept."""
+    """A blank on a die of a very soft penalty (1 N/mm^3): 0.4 N sinks it 0.1 mm, 400 N
+    would sink it 100 mm, beyond the contact search's reach: the holder never flies off,
+    the phase stops naming it and the increment, with the first phase's results kept."""
     mesh = HexMesh.box(2.0, 2.0, 1.0, 2, 2, 1, origin=(0.0, 0.0, -1e-3))
     tools = [RigidTool("die", plane(0.0, up=True), mesh.select(z=-1e-3), facing=(0, 0, -1),
-                       penalty=1.0, barrier=None),
+                       penalty=1.0),
              RigidTool("holder", plane(1.2, up=False), mesh.select(z=1.0 - 1e-3),
                        facing=(0, 0, 1))]
     problem = FormingProblem(Solid(mesh, STEEL), tools)

@@ -41,6 +41,7 @@ from bench_common import (  # noqa: E402
     code_version,
     computed_at,
     cores,
+    deepest_per_tool,
     load_module,
     record_code,
     recorded_code,
@@ -163,7 +164,7 @@ def from_results(path: Path, output_at: tuple[float, ...] = make_case.OUTPUT_AT)
                    contact_nodes={tool: round(float(np.mean(
                        history["nodes_in_contact"][forming][:, i])), 1)
                        for i, tool in enumerate(r.tools)},
-                   penetration_mm=_deepest(history, forming, r.tools),
+                   penetration_mm=deepest_per_tool(history, forming, r.tools),
                    times=_times(history),
                    factorizations=int(history.get("factorizations", np.zeros(1)).sum()),
                    krylov_iterations=int(history.get("krylov_iterations",
@@ -197,16 +198,6 @@ def _depth(depths: dict[str, float] | None, tool: str) -> str:
     if not depths or tool not in depths:
         return "not recorded"
     return f"{depths[tool]:.2g} ({100 * depths[tool] / make_case.THICKNESS:.2g} %)"
-
-
-def _deepest(history: dict[str, np.ndarray], forming: np.ndarray, tools: list[str]
-             ) -> dict[str, float] | None:
-    """The deepest slave node in each tool over the forming increments, mm."""
-    if "penetration" not in history:
-        return None
-    depth = history["penetration"][forming]
-    depth = np.where(np.isfinite(depth), depth, 0.0).max(axis=0, initial=0.0)
-    return {tool: float(f"{depth[i]:.4g}") for i, tool in enumerate(tools)}
 
 
 def _forming_sum(history: dict[str, np.ndarray], name: str, forming: np.ndarray) -> int:

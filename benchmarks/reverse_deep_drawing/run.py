@@ -55,6 +55,7 @@ from bench_common import (  # noqa: E402
     code_version,
     computed_at,
     cores,
+    deepest_per_tool,
     load_module,
     record_code,
     recorded_code,
@@ -268,13 +269,9 @@ def from_results(path: Path, case_folder: Path) -> Run:
             marks = np.arange(1, int(np.floor(reached + 1e-9)) + 1)
             upto = np.searchsorted(travel, marks + 1e-9, side="right")
             cumulative = np.concatenate([[0], np.cumsum(h["iterations"][mask])])
-            # The deepest slave node in each tool at any converged increment of the stage
-            # (the solver's record, docs/results-format.md), mm.
-            deepest = h["penetration"][mask] if "penetration" in h else np.zeros((0, 0))
-            deepest = np.where(np.isfinite(deepest), deepest, 0.0).max(axis=0, initial=0.0)
             stage = {
-                "penetration_max_mm": {tool: float(f"{deepest[k]:.4g}")
-                                       for k, tool in enumerate(r.tools) if deepest.size},
+                # the deepest slave node in each tool at any converged increment, mm
+                "penetration_max_mm": deepest_per_tool(h, mask, r.tools),
                 "travel_mm": phase.travel, "reached_mm": round(reached, 4),
                 "by_mm": {"increments": upto.tolist(),
                           "iterations": cumulative[upto].astype(int).tolist()},
@@ -1075,8 +1072,12 @@ def report(mesh: str, numbers: dict[str, dict[str, Any]],
         f"(unstructured, elements of about {make_case.ELEMENT_SIZE[mesh]:.3g} mm; the "
         f"paper: {make_case.PAPER_HEXAHEDRA} hexahedra), "
         f"{' / '.join(sorted({numbers[m].get('discretization', 'not recorded') for m in models}))}"
-        " (the four tool models at ddpy's defaults, which the decks do not set; "
-        f"the last column, where it ran, at DD3IMP's: make_case.REFERENCE). "
+        " (each run's element and contact are in the table of runs; the four tool "
+        "models' decks set neither and add the barrier of Gauss-point contact to each "
+        "tool, which is not ddpy's default: without it the solid-shell failed stage 1 from "
+        "about 33 mm and the blank sank 9 to 13 % of its thickness into the blank-holders, "
+        "docs/theory/contact.md, \"The barrier\"; the last column, where it ran, is "
+        "DD3IMP's discretization: make_case.REFERENCE). "
         f"Report written on {threads} "
         "thread(s); each run's element and contact, threads and code version are in the "
         "table of runs. Wall "

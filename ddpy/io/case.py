@@ -27,7 +27,7 @@ from ddpy.model.forming_limits import FormingLimitCurve
 from ddpy.model.material import Material
 from ddpy.model.mesh import HEX_FACES, HexMesh
 from ddpy.model.solid import DEFAULT_ELEMENT
-from ddpy.model.tool import FACE_POINTS
+from ddpy.model.tool import BARRIER_DEPTH, FACE_POINTS
 
 if TYPE_CHECKING:
     from ddpy.io.toolfile import ToolModel
@@ -253,7 +253,8 @@ class Tool:
     discretization (``discretization``: "node", node-to-surface, "surface",
     surface-to-surface, or "gauss", Gauss-point contact) with its penalty, N/mm^3 (None:
     the solver chooses it), Gauss points per direction of a blank face (``points``) and,
-    for "gauss", its barrier depth (a fraction of the blank's thickness, None: off)."""
+    for "gauss", its barrier depth (a fraction of the blank's thickness, default
+    BARRIER_DEPTH; None: off)."""
 
     name: str
     description: Literal["bezier", "nagata", "facets"]
@@ -266,7 +267,7 @@ class Tool:
     discretization: str = "gauss"
     penalty: float | None = None
     points: int | None = None
-    barrier: float | None = None
+    barrier: float | None = BARRIER_DEPTH
 
     @property
     def face_points(self) -> int | None:

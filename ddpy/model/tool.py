@@ -57,9 +57,8 @@ class RigidTool:
     penalty of its law in N/mm^3 (``penalty``, default ``default_penalty``); "surface" and
     "gauss" integrate over the blank faces with ``points`` x ``points`` Gauss points each
     (default FACE_POINTS). A "gauss" tool's ``barrier`` (a fraction of the blank's
-    thickness; None, the default: none) is the depth past which its slave nodes are pushed
-    out (BARRIER_DEPTH is the measured choice; why it is not the default:
-    docs/theory/contact.md, "The barrier")."""
+    thickness, default BARRIER_DEPTH; None: none) is the depth past which its slave nodes
+    are pushed out (docs/theory/contact.md, "The barrier")."""
 
     name: str
     surface: BezierSurface | NagataSurface
@@ -70,7 +69,7 @@ class RigidTool:
     contact: str | None = None
     penalty: float | None = None
     points: int | None = None
-    barrier: float | None = None
+    barrier: float | None = BARRIER_DEPTH
     search: ContactSearch = field(init=False, repr=False)
 
     def __post_init__(self) -> None:

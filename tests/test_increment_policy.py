@@ -150,7 +150,11 @@ def test_a_restored_state_continues_the_run_as_the_problem_it_came_from() -> Non
     assert isinstance(state, FormingState)
     again = problem.run({"plane": (0, 0, 1e-3)}, max_increment=5e-4)
     other, _ = pressed_block()
-    other.u[:] = 1.0  # spoiled: restore must replace all it carries
+    # Spoiled: restore must replace all it carries.
+    other.u[:] = 1.0
+    other.force[:] = 0.0
+    other.position = {"plane": np.zeros(3)}
+    other.solid_state = other.solid.initial_state()
     other.restore(state)
     assert other.state().positions["plane"][2] == pytest.approx(1e-3)
     same = other.run({"plane": (0, 0, 1e-3)}, max_increment=5e-4)

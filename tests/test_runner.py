@@ -484,8 +484,8 @@ def test_a_first_increment_whose_default_start_fails_converges_on_the_careful_st
 def test_a_careful_start_may_take_more_iterations_than_the_deck_allows(tmp_path) -> None:
     # The blank above with max_iterations 12: its careful start needs about twice that
     # (it opens the die's pairs the blank does not need a few at a time), and it may take
-    # CAREFUL_ITERATIONS times the deck's limit, once per phase (docs/theory/contact.md).
-    # Held to the deck's 12 it is cut at every size.
+    # IncrementTuning.careful_iterations times the deck's limit, once per phase
+    # (docs/theory/contact.md). Held to the deck's 12 it is cut at every size.
     first = first_increment_of_a_solid_shell_blank(tmp_path, max_iterations=12)
     assert first.limit != "cutback" and 12 < first.iterations <= 48
 

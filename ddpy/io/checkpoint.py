@@ -128,8 +128,7 @@ def forming_state_from_arrays(arrays: Mapping[str, NDArray], tools: list[str],
             [f"forming/{f.name}"]
         missing = [k for k in keys if k not in arrays]
         if missing:
-            raise CheckpointError(f"{where}: the entry '{missing[0]}' is missing (written by "
-                                  "another version of ddpy or for other tools); run again "
+            raise CheckpointError(f"{where}: the entry '{missing[0]}' is missing; run again "
                                   "without --restart")
         values[f.name] = ({name: np.array(arrays[k]) for name, k in zip(tools, keys,
                                                                          strict=True)}

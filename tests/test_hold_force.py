@@ -63,7 +63,7 @@ def test_a_holder_pressed_on_a_flat_blank_carries_the_force_as_through_thickness
     problem, result = pressed_blank(force, contact)
     np.testing.assert_allclose(result.tool_forces["holder"][-1], [0.0, 0.0, force],
                                atol=1e-8 * force)
-    cauchy = problem.solid.stresses(problem.u, problem.state)[1]
+    cauchy = problem.solid.stresses(problem.u, problem.solid_state)[1]
     x = problem.solid.mesh.nodes + problem.u
     area = np.ptp(x[:, 0]) * np.ptp(x[:, 1])
     assert area == pytest.approx(4.0 * (1.0 + 0.3 * 100.0 / 210e3) ** 2, rel=1e-6)

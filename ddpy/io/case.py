@@ -247,8 +247,9 @@ class BlankMaterial:
 @dataclass(frozen=True)
 class Tool:
     """A rigid tool: its description (bezier, nagata or facets), its tool file, the Coulomb
-    friction coefficient, the side of the blank it touches (``facing``: the outward normal
-    of that blank surface; ``contact`` is top, bottom or facing), the augmentation
+    friction coefficient, the side of the blank it touches (``side``: top, bottom or a
+    surface facing a direction, tools.dat's ``contact``; ``facing``: the outward normal of
+    that blank surface), the augmentation
     parameter r of its contact law, N/mm (None: the solver chooses it), and its contact
     discretization (``discretization``: "node", node-to-surface, "surface",
     surface-to-surface, or "gauss", Gauss-point contact) with its penalty, N/mm^3 (None:
@@ -260,7 +261,7 @@ class Tool:
     description: Literal["bezier", "nagata", "facets"]
     file: Path
     friction: float
-    contact: str
+    side: str
     facing: tuple[float, float, float]
     augmentation: float | None = None
     origin: str = ""
@@ -474,7 +475,7 @@ class Case:
         ]
         for t in self.tools:
             lines.append(f"  tool {t.name}: {t.description}, {t.file.name}, friction "
-                         f"{t.friction:g}, contacts the {t.contact} of the blank, contact "
+                         f"{t.friction:g}, contacts the {t.side} of the blank, contact "
                          f"discretization {t.discretization} ("
                          + {"surface": "surface-to-surface",
                             "gauss": "Gauss-point contact",

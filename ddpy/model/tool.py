@@ -10,6 +10,7 @@ from numpy.typing import ArrayLike
 from ddpy._validate import float_array, int_array
 from ddpy.geometry.search import ContactSearch
 from ddpy.geometry.surfaces import BezierSurface, NagataSurface
+from ddpy.model.contact import check_friction
 
 __all__ = ["RigidTool", "CONTACT_DISCRETIZATIONS", "FACE_POINTS", "MAX_POINTS", "BARRIER_DEPTH",
            "BARRIER_WIDTH", "BARRIER_STIFFNESS",
@@ -81,8 +82,10 @@ class RigidTool:
             raise ValueError(f"tool {self.name} has no slave nodes: nothing can touch it")
         if np.unique(self.slaves).size != self.slaves.size:
             raise ValueError(f"tool {self.name}: slave nodes are repeated")
-        if not (np.isfinite(self.friction) and self.friction >= 0.0):
-            raise ValueError(f"tool {self.name}: friction must be >= 0, got {self.friction}")
+        try:
+            check_friction(self.friction)
+        except ValueError as error:
+            raise ValueError(f"tool {self.name}: {error}") from None
         if self.augmentation is not None and not self.augmentation > 0.0:
             raise ValueError(f"tool {self.name}: augmentation must be > 0, got "
                              f"{self.augmentation}")

@@ -37,8 +37,8 @@ from ddpy.io.decks.control import (
 )
 from ddpy.io.decks.lines import NAME_PATTERN, Deck, guard
 from ddpy.io.decks.tools import _ToolDraft
-from ddpy.model.control import MIN_FRACTION, IncrementLimits, NewtonSettings
-from ddpy.model.forming import MAX_INCREMENTS, blank_stiffness
+from ddpy.model.control import MAX_INCREMENTS, MIN_FRACTION, IncrementLimits, NewtonSettings
+from ddpy.model.forming import blank_stiffness
 from ddpy.model.mesh import HEX_EDGES, HexMesh
 from ddpy.model.tool import BARRIER_DEPTH
 

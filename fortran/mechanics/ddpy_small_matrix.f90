@@ -1,9 +1,13 @@
 !> Small dense matrices of the element and material kernels, written out: the determinant,
 !> inverse and product of 3 x 3 matrices, the symmetric tensor of a Voigt stress, the
 !> Voigt strain map of a change of basis, a Voigt vector times the strain-displacement
-!> rows, and the outer product. One copy for the hexahedron, the solid-shell and the
-!> materials; the build's link-time optimization (meson.build, b_lto) inlines them into
-!> the element loops as it did when each module had its own copy.
+!> rows, and the outer product. One copy for the hexahedron and the solid-shell, called
+!> from their element loops without link-time optimization: their answers are bitwise
+!> those of the copies each module had, and the time per Newton iteration stays within
+!> the noise (docs/theory/speed.md). The materials keep their own outer product: called
+!> from here it moves their return mapping's answers in the last bits (gfortran inlines
+!> the other helpers of ddpy_material differently), which the Newton loop carries to
+!> 1e-7 of the strains.
 !> Voigt order 11, 22, 33, 12, 23, 31 with engineering shear strains throughout.
 module ddpy_small_matrix
   use ddpy_kinds, only: wp

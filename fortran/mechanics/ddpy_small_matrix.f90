@@ -1,49 +1,25 @@
-!> Small dense matrices of the element and material kernels, written out: the determinant,
-!> inverse and product of 3 x 3 matrices, the symmetric tensor of a Voigt stress, the
-!> Voigt strain map of a change of basis, a Voigt vector times the strain-displacement
-!> rows, and the outer product. One copy for the hexahedron and the solid-shell, called
-!> from their element loops without link-time optimization: their answers are bitwise
-!> those of the copies each module had, and the time per Newton iteration stays within
-!> the noise (docs/theory/speed.md). The materials keep their own outer product: called
-!> from here it moves their return mapping's answers in the last bits (gfortran inlines
-!> the other helpers of ddpy_material differently), which the Newton loop carries to
-!> 1e-7 of the strains.
+!> Small dense matrices of the element kernels, written out: the product of 3 x 3 matrices,
+!> the symmetric tensor of a Voigt stress, the Voigt strain map of a change of basis (the
+!> strain rotation into the material axes) and a Voigt vector times the strain-displacement
+!> rows. One copy for the hexahedron and the solid-shell (ddpy_hex8, ddpy_solid_shell),
+!> called from their element loops without link-time optimization: their answers are
+!> bitwise those of the copies each module had (the built-in case's run, every increment
+!> and field), and the time per Newton iteration the same within its noise
+!> (docs/theory/speed.md). The determinant and inverse stay each element's own, and the
+!> materials keep their outer product: from here (with link-time optimization too) they
+!> move the answers in the last bits, which the Newton loop carries to 3e-9 of the tool
+!> forces and 1e-7 of the strains.
 !> Voigt order 11, 22, 33, 12, 23, 31 with engineering shear strains throughout.
 module ddpy_small_matrix
   use ddpy_kinds, only: wp
   implicit none
   private
-  public :: det3, inverse3, product3, stress_tensor, strain_map, by_dofs, outer
+  public :: product3, stress_tensor, strain_map, by_dofs
 
   !> Index pairs (i, j) of the Voigt components.
   integer, parameter :: voigt(2, 6) = reshape([1, 1, 2, 2, 3, 3, 1, 2, 2, 3, 3, 1], [2, 6])
 
 contains
-
-  !> The determinant of a 3 x 3 matrix.
-  pure function det3(a) result(d)
-    real(wp), intent(in) :: a(3, 3)
-    real(wp) :: d
-    d = a(1, 1)*(a(2, 2)*a(3, 3) - a(2, 3)*a(3, 2)) &
-        - a(1, 2)*(a(2, 1)*a(3, 3) - a(2, 3)*a(3, 1)) &
-        + a(1, 3)*(a(2, 1)*a(3, 2) - a(2, 2)*a(3, 1))
-  end function det3
-
-  !> Inverse of a 3 x 3 matrix with determinant det.
-  pure function inverse3(a, det) result(inv)
-    real(wp), intent(in) :: a(3, 3), det
-    real(wp) :: inv(3, 3)
-    inv(1, 1) = a(2, 2)*a(3, 3) - a(2, 3)*a(3, 2)
-    inv(1, 2) = a(1, 3)*a(3, 2) - a(1, 2)*a(3, 3)
-    inv(1, 3) = a(1, 2)*a(2, 3) - a(1, 3)*a(2, 2)
-    inv(2, 1) = a(2, 3)*a(3, 1) - a(2, 1)*a(3, 3)
-    inv(2, 2) = a(1, 1)*a(3, 3) - a(1, 3)*a(3, 1)
-    inv(2, 3) = a(1, 3)*a(2, 1) - a(1, 1)*a(2, 3)
-    inv(3, 1) = a(2, 1)*a(3, 2) - a(2, 2)*a(3, 1)
-    inv(3, 2) = a(1, 2)*a(3, 1) - a(1, 1)*a(3, 2)
-    inv(3, 3) = a(1, 1)*a(2, 2) - a(1, 2)*a(2, 1)
-    inv = inv/det
-  end function inverse3
 
   !> The product of two 3 x 3 matrices, written out (gfortran calls its library for some
   !> matmul forms, which costs more than the product).
@@ -107,15 +83,5 @@ contains
     w = bt(:, 1)*v(1) + bt(:, 2)*v(2) + bt(:, 3)*v(3) + bt(:, 4)*v(4) + bt(:, 5)*v(5) &
         + bt(:, 6)*v(6)
   end function by_dofs
-
-  !> The outer product u v^T.
-  pure function outer(u, v) result(m)
-    real(wp), intent(in) :: u(:), v(:)
-    real(wp) :: m(size(u), size(v))
-    integer :: j
-    do j = 1, size(v)
-      m(:, j) = u*v(j)
-    end do
-  end function outer
 
 end module ddpy_small_matrix

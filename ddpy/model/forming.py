@@ -176,11 +176,12 @@ def start_depth_limit(strain: float, size: float) -> float:
 
 @dataclass(frozen=True)
 class Linearization:
-    """The forming problem's equations at one point (``FormingProblem.linearization``): the
-    residual, free equilibrium rows first (``n_free``), then the three contact-law rows of
-    each pair; its Jacobian in coordinate form (``rows``, ``cols``, ``values``; duplicates
-    add up), as MUMPS reads it; the contact states of the pairs (0 open, 1 stick, 2 slip);
-    and the node of each unknown."""
+    """The forming problem's equations at one point (``FormingProblem.linearization``), as
+    the core evaluates them (``ddpy.model.newton.equations``): the residual, free
+    equilibrium rows first (``n_free``), then the three contact-law rows of each pair; its
+    Jacobian in coordinate form (``rows``, ``cols``: the core's layout; ``values``;
+    duplicates add up), as MUMPS reads it; the contact states of the pairs (0 open, 1
+    stick, 2 slip); and the node of each unknown."""
 
     residual: NDArray[np.float64]
     rows: NDArray[np.int32]

@@ -65,7 +65,8 @@ contains
     logical, intent(in) :: symmetric
     type(row_structure), intent(out) :: rs
     integer, allocatable :: r(:), c(:), origin(:), next(:), by_col(:), order(:)
-    integer :: total, i, k, e, prev
+    logical, allocatable :: new(:)
+    integer :: total, i, k, e
     total = m
     if (symmetric) total = m + count(rows /= cols)
     allocate(r(total), c(total), origin(total), next(n + 1), by_col(total), order(total))
@@ -84,37 +85,25 @@ contains
     end if
     call counting_sort(c, [(i, i = 1, total)], by_col)
     call counting_sort(r, by_col, order)
-    e = 0
-    prev = 0
+    ! new(k): the k-th sorted coordinate starts an entry (its row or column changes)
+    allocate(new(total))
     do k = 1, total
-      i = order(k)
-      if (k == 1) then
-        e = 1
-      else if (r(i) /= r(prev) .or. c(i) /= c(prev)) then
-        e = e + 1
-      end if
-      prev = i
+      new(k) = k == 1
+      if (k > 1) new(k) = r(order(k)) /= r(order(k - 1)) .or. c(order(k)) /= c(order(k - 1))
     end do
+    e = count(new)
     rs%n = n
     allocate(rs%row_start(n + 1), rs%col(e), rs%source_start(e + 1), rs%sources(total))
     rs%row_start = 0
     e = 0
     do k = 1, total
       i = order(k)
-      if (k == 1) then
-        e = 1
-      else if (r(i) /= r(prev) .or. c(i) /= c(prev)) then
-        e = e + 1
-      else
-        rs%sources(k) = origin(i)
-        prev = i
-        cycle
-      end if
+      rs%sources(k) = origin(i)
+      if (.not. new(k)) cycle
+      e = e + 1
       rs%col(e) = c(i)
       rs%source_start(e) = k - 1
       rs%row_start(r(i) + 2) = rs%row_start(r(i) + 2) + 1
-      rs%sources(k) = origin(i)
-      prev = i
     end do
     rs%source_start(e + 1) = total
     do i = 2, n + 1

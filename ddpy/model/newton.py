@@ -141,7 +141,6 @@ class Layout:
         n = solid.mesh.n_nodes
         free = ~fixed.ravel()
         self.symmetric = symmetric
-        self.tools = list(tools)
         self.nf = int(free.sum())
         eqn = np.full(3 * n, -1, dtype=np.int32)
         eqn[free] = np.arange(self.nf, dtype=np.int32)
@@ -201,7 +200,6 @@ class ToolPack:
     def __init__(self, tools: Sequence[RigidTool], mesh: HexMesh,
                  penalty: Sequence[float] | None = None,
                  barrier: Sequence[tuple[float, float, float]] | None = None) -> None:
-        self.tools = list(tools)
         self.names = [t.name for t in tools]
         faces = contact_faces(tools, mesh)
         # Per tool with a facing direction, the blank's boundary faces that face it (normal

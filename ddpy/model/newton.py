@@ -200,6 +200,7 @@ class ToolPack:
     def __init__(self, tools: Sequence[RigidTool], mesh: HexMesh,
                  penalty: Sequence[float] | None = None,
                  barrier: Sequence[tuple[float, float, float]] | None = None) -> None:
+        self.tools = list(tools)
         self.names = [t.name for t in tools]
         faces = contact_faces(tools, mesh)
         # Per tool with a facing direction, the blank's boundary faces that face it (normal

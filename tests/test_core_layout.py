@@ -102,7 +102,7 @@ def test_the_linearization_is_the_cores_evaluation_of_the_solid_and_the_pairs() 
     assert not eq.state.any()  # every pair open
     layout = Layout(problem.solid, problem.tools, problem.fixed)
     pattern = problem.solid.pattern(layout.eqn, symmetric=False)
-    assembly = problem.solid.assemble(u, problem.state, pattern)
+    assembly = problem.solid.assemble(u, problem.solid_state, pattern)
     k = layout.k_slots
     np.testing.assert_array_equal(eq.values[:k], assembly.values)
     np.testing.assert_array_equal(eq.residual[:eq.n_free],

@@ -66,7 +66,7 @@ def test_bending_example_model() -> None:
     assert mat.E == 210000 and mat.nu == 0.3 and mat.hardening == Swift(645.3, 0.0102, 0.252)
     assert mat.yield_criterion == Hill48(F=0.254, G=0.397, H=0.603, L=1.5, M=1.5, N=1.689)
     punch, die = case.tools
-    assert (punch.name, punch.description, punch.friction, punch.contact) == (
+    assert (punch.name, punch.description, punch.friction, punch.side) == (
         "punch", "nagata", 0.148, "top")
     assert punch.file == EXAMPLES / "bending" / "tools" / "punch.tool"
     assert die.facing == (0.0, 0.0, -1.0) and die.augmentation is None
@@ -98,7 +98,7 @@ def test_strip_draw_example_model() -> None:
     assert back.increments == 4
     assert case.tool("punch").description == "facets"
     assert case.tool("die").augmentation == 1e4 and case.tool("punch").augmentation is None
-    assert case.tool("die").contact.startswith("surface facing")
+    assert case.tool("die").side.startswith("surface facing")
     mat = case.material
     assert isinstance(mat.material.hardening, Voce)
     assert mat.material.yield_criterion.r0 == pytest.approx(1.73)

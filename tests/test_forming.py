@@ -16,7 +16,13 @@ from jacobian_check import central_difference_errors
 from ddpy.geometry.surfaces import BezierSurface, NagataSurface
 from ddpy.model import forming
 from ddpy.model.contact import SLIP, STICK
-from ddpy.model.control import IncrementLimits, NewtonSettings, next_step
+from ddpy.model.control import (
+    FormingTuning,
+    IncrementLimits,
+    IncrementTuning,
+    NewtonSettings,
+    next_step,
+)
 from ddpy.model.forming import FormingProblem
 from ddpy.model.forming import RigidTool as _RigidTool
 from ddpy.model.material import Hill48, Material, Swift, yield_landing
@@ -65,12 +71,12 @@ def test_block_sticks_below_and_slips_above_coulomb() -> None:
     tangential = abs(result.tool_forces["plane"][-1][0])
     assert 0.0 < tangential < mu * normal
     np.testing.assert_allclose(problem.u[bottom, 0], 2e-5, rtol=1e-9)
-    assert (result.contact_states["plane"][-1] == STICK).all()
+    assert (result.last.contact_states["plane"] == STICK).all()
     # A large one: every node slips and the friction force is mu N exactly.
     result = problem.run({"plane": (2e-3, 0, 0)}, max_increment=5e-4, result=result,
                          newton=NewtonSettings(1e-11, 1e-6))
     force = result.tool_forces["plane"][-1]
-    assert (result.contact_states["plane"][-1] == SLIP).all()
+    assert (result.last.contact_states["plane"] == SLIP).all()
     # Every node slips: its tangential force is mu times its normal force...
     node = problem.force
     np.testing.assert_allclose(np.hypot(node[:, 0], node[:, 1]), mu * node[:, 2], rtol=1e-9)
@@ -98,7 +104,7 @@ def test_friction_on_the_blank_follows_a_sliding_tool(contact: str) -> None:
     motion = np.array([4e-3, -2e-3, 0.0])
     result = problem.run({"plane": tuple(motion)}, max_increment=1e-3, result=result,
                          newton=NewtonSettings(1e-11, 1e-6))
-    assert (result.contact_states["plane"][-1] == SLIP).all()
+    assert (result.last.contact_states["plane"] == SLIP).all()
     on_blank = -result.tool_forces["plane"][-1]
     assert on_blank[2] > 1.0  # pressed: the tool pushes the blank up
     tangential = on_blank[:2]
@@ -111,7 +117,7 @@ def test_friction_on_the_blank_follows_a_sliding_tool(contact: str) -> None:
 def test_tool_reaction_equals_contact_forces_and_supports() -> None:
     problem, mesh = block_on_plane(0.3)
     result = problem.run({"plane": (4e-4, 0, 1e-3)}, max_increment=5e-4)
-    fint, _ = problem.solid.internal_force(problem.u, problem.state)
+    fint, _ = problem.solid.internal_force(problem.u, problem.solid_state)
     # The tool's force is minus the sum of the contact forces on the slaves...
     slaves = problem.tools[0].slaves
     np.testing.assert_allclose(result.tool_forces["plane"][-1], -problem.force.sum(axis=0))
@@ -204,7 +210,8 @@ def test_whole_steps_that_change_contact_states_save_iterations_not_answers(
     # alone. Taking it when it halves the residual (the default) saves iterations; the
     # equations, and so the forces to the Newton tolerance, are the same.
     force, iterations = slides["nagata"]
-    monkeypatch.setattr(forming, "WHOLE_STEP", 0.0)
+    default = FormingTuning()
+    monkeypatch.setattr(forming, "FormingTuning", lambda: replace(default, whole_step=0.0))
     force_test_only, iterations_test_only = slide_over_cylinder("nagata", 8)
     assert sum(iterations) < sum(iterations_test_only)
     np.testing.assert_allclose(force, force_test_only, rtol=0.0, atol=1e-6 * force.max())
@@ -334,11 +341,9 @@ def test_blank_holder_held_at_a_fixed_gap() -> None:
 def test_a_lifted_tool_lets_go_of_the_blank_in_steps() -> None:
     # A block clamped at its side between a die below and a punch above that presses it
     # 1 um. The next phase lifts the punch off: its forces become nodal loads brought to
-    # zero in RELEASE_STEPS steps before the phase's first increment, whose iterations
-    # they join (lifting it in one go leaves the blank out of balance by the whole force,
+    # zero in IncrementTuning.release_steps steps before the phase's first increment, whose
+    # iterations they join (lifting it in one go leaves the blank out of balance by the whole force,
     # which no cut of that increment makes smaller). The block, elastic, comes back.
-    from ddpy.model.forming import RELEASE_STEPS
-
     mesh = HexMesh.box(1.0, 1.0, 0.5, 2, 2, 1, origin=(-0.5, -0.5, 0.0))
     top = plane_tool(0.5, up=False)
     die = RigidTool("die", plane_tool(), mesh.select(z=0.0), facing=(0, 0, -1))
@@ -352,7 +357,7 @@ def test_a_lifted_tool_lets_go_of_the_blank_in_steps() -> None:
     lifted = problem.run({}, max_increment=1.0, active=["die"])
     assert len(lifted.factors) == 1
     # One iteration at least per release step, then the (empty) increment's own.
-    assert len(lifted.residuals[0]) >= RELEASE_STEPS + 1, lifted.residuals
+    assert len(lifted.residuals[0]) >= IncrementTuning().release_steps + 1, lifted.residuals
     assert np.abs(lifted.tool_forces["punch"][-1]).max() == 0.0
     assert np.abs(lifted.tool_forces["die"][-1]).max() < 1e-6 * abs(force)
     np.testing.assert_allclose(problem.u[:, 2], 0.0, atol=1e-9)
@@ -475,7 +480,7 @@ def test_springback_supports_only_the_rigid_modes() -> None:
     top = mesh.select(z=0.5)
     problem.fix(top, "xyz")
     problem.run({"plane": (0, 0, 5e-3)}, max_increment=1e-3)
-    assert problem.state.ep.max() > 1e-3
+    assert problem.solid_state.ep.max() > 1e-3
     problem.release(top)
     assert problem.free_rigid_modes() == 6
     before = problem.u.copy()
@@ -484,7 +489,7 @@ def test_springback_supports_only_the_rigid_modes() -> None:
     assert int(problem.fixed.sum()) == 6  # 3 + 2 + 1 dofs, nothing more
     # The tool forces are gone: the block is in equilibrium with no load, so the
     # supports carry nothing; it springs back by the elastic part only.
-    fint, _ = problem.solid.internal_force(problem.u, problem.state)
+    fint, _ = problem.solid.internal_force(problem.u, problem.solid_state)
     assert np.abs(fint).max() < 1e-6 * 203.0
     assert 0.0 < np.abs(problem.u - before).max() < 2e-3
 
@@ -515,7 +520,7 @@ def test_quadratic_convergence_sliding_with_friction_over_a_curved_tool(kind: st
     result = problem.run({"cylinder": (0, 0, 0.02)}, max_increment=0.02)
     result = problem.run({"cylinder": (0.2, 0, 0)}, max_increment=0.05, result=result,
                          newton=NewtonSettings(1e-12, 1e-6))
-    assert (result.contact_states["cylinder"][-1] == SLIP).sum() >= 3
+    assert (result.last.contact_states["cylinder"] == SLIP).sum() >= 3
     rates = []
     for history in result.residuals[-3:]:
         tail = [r for r in history if r > 1e-13 * history[0]]
@@ -683,12 +688,12 @@ def test_springback_of_a_bent_strip_converges_quadratically(linear_solver: str) 
         problem = FormingProblem(solid, [RigidTool("far", far, mesh.select(z=0.0),
                                                    facing=(0, 0, -1))],
                                  linear_solver=linear_solver)
-        problem.u, problem.state = bent.displacements[-1].copy(), bent.state
+        problem.u, problem.solid_state = bent.displacements[-1].copy(), bent.state
         problem.fix(mesh.select(x=0.0), "x")
         problem.fix(mesh.select(y=0.0), "y")
         problem.fix(centre, "z")
         result = problem.springback(increments, NewtonSettings(1e-8, 1e-8))
-        assert problem.state.ep.max() == bent.state.ep.max()  # elastic unloading
+        assert problem.solid_state.ep.max() == bent.state.ep.max()  # elastic unloading
         shapes[increments] = problem.u
         assert max(result.iterations) <= (8 if increments == 1 else 5), result.iterations
         # The rate on the corrections (relative to the step's motion), the measure of the
@@ -749,12 +754,12 @@ def test_contact_filter_follows_the_blank_surface_as_it_turns() -> None:
 
 def test_a_newton_step_stops_where_free_nodes_would_enter_a_tool() -> None:
     # The block hangs 0.1 mm above the plane, its bottom nodes free (no contact). A step
-    # moving every free node 1 mm down may go only until they are PENETRATION element
-    # sizes deep; a step moving them up, or a node already in contact, is not limited.
+    # moving every free node 1 mm down may go only until they are FormingTuning.penetration
+    # element sizes deep; a step moving them up, or a node already in contact, is not limited.
     # (The core's Newton loop applies this limit to the first trial of every step.)
     from ddpy import _core
     from ddpy.model.contact import INACTIVE
-    from ddpy.model.forming import MIN_STEP, PENETRATION
+    PENETRATION, MIN_STEP = FormingTuning().penetration, FormingTuning().min_step
 
     mesh = HexMesh.box(1.0, 1.0, 0.5, 2, 2, 2, origin=(-0.5, -0.5, 0.1))
     tool = RigidTool("plane", plane_tool(), mesh.select(z=0.1), facing=(0, 0, -1))
@@ -775,7 +780,7 @@ def test_a_newton_step_stops_where_free_nodes_would_enter_a_tool() -> None:
     assert step(-down, state) == 1.0
     closed = np.full_like(state, 2)  # every pair in contact (slip): the tangent sees the tool
     assert step(down, closed) == 1.0
-    # A step of 1 km still moves: the shortest fraction is MIN_STEP.
+    # A step of 1 km still moves: the shortest fraction is FormingTuning.min_step.
     assert step(1e6 * down, state) == MIN_STEP
 
 

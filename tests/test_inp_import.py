@@ -91,8 +91,8 @@ def test_example_round_trip(deck: Path, tmp_path: Path) -> None:
     np.testing.assert_allclose(material.yield_stress([0.01, 0.35, 1.0]), [230.0, 410.0, 440.0])
     # Tools: the S2 faces of the tool bricks, friction, the blank side from the slave surface.
     punch, die = case.tool("punch"), case.tool("die")
-    assert (punch.friction, punch.contact, punch.discretization) == (0.1, "top", "surface")
-    assert (die.friction, die.contact, die.discretization) == (0.1, "bottom", "surface")
+    assert (punch.friction, punch.side, punch.discretization) == (0.1, "top", "surface")
+    assert (die.friction, die.side, die.discretization) == (0.1, "bottom", "surface")
     assert punch.description == "facets" and punch.file.name == "punch.facets.tool"
     model = read_tool(case_dir / "tools" / "punch.facets.tool")
     assert model.surface.n_patches == 8                     # 6 on the radius, 2 on the flank
@@ -143,7 +143,7 @@ def test_nagata_tools_name_the_nagata_files(deck: Path, tmp_path: Path) -> None:
      "the first plastic strain must be 0", 1),
     ("bending.inp", "*BOUNDARY, FIXED\nCENTRE, 3, 3", "*BOUNDARY\nCENTRE, 3, 3",
      "expected *BOUNDARY, FIXED", 1),
-    ("bending.inp", "0.1, 5000.", "-0.1, 5000.", "the friction coefficient must be >= 0", 0),
+    ("bending.inp", "0.1, 5000.", "-0.1, 5000.", "friction must be >= 0, got -0.1", 0),
 ])
 def test_malformed_decks_are_refused_at_their_line(deck: Path, file: str, old: str, new: str,
                                                    message: str, below: int) -> None:
@@ -269,10 +269,10 @@ def test_abaqus_r3d4_deck(tmp_path: Path) -> None:
     assert model.element_type == "C3D8R" and model.normal == "z"
     assert model.hardening == [(0.0, 100.0), (0.1, 150.0)]
     punch, die = model.tools
-    assert (punch.name, punch.contact, punch.friction, punch.discretization) == \
+    assert (punch.name, punch.side, punch.friction, punch.discretization) == \
         ("punch", "top", 0.15, "node")
     assert punch.faces == [[104, 103, 102, 101]]           # SNEG: turned over
-    assert die.faces == [[201, 202, 203, 204]] and die.contact == "bottom"
+    assert die.faces == [[201, 202, 203, 204]] and die.side == "bottom"
     assert model.nodesets == {"sym_x": [1, 4, 5, 8], "sym_y": [1, 2, 5, 6]}
     assert model.constraints == [("sym_x", "x", ()), ("sym_y", "y", ())]
     (phase,) = model.phases

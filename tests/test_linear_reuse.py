@@ -138,7 +138,7 @@ def slide(linear_solver: str) -> tuple[FormingProblem, object]:
 def test_reused_factors_give_the_direct_solution_with_fewer_factorizations() -> None:
     direct, result_direct = slide("direct")
     reuse, result_reuse = slide("reuse")
-    assert (result_reuse.contact_states["cylinder"][-1] == SLIP).sum() >= 3
+    assert (result_reuse.last.contact_states["cylinder"] == SLIP).sum() >= 3
     # Direct: one factorization per Newton iteration (none rejected in this run).
     assert result_direct.cuts == 0
     assert result_direct.factorizations == sum(result_direct.iterations)

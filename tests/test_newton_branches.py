@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import logging
 import re
+from dataclasses import replace
 from functools import partial
 
 import numpy as np
@@ -24,7 +25,12 @@ import pytest
 
 import ddpy.model.forming as forming
 from ddpy.geometry.surfaces import NagataSurface
-from ddpy.model.control import IncrementLimits, NewtonSettings
+from ddpy.model.control import (
+    FormingTuning,
+    IncrementLimits,
+    IncrementTuning,
+    NewtonSettings,
+)
 from ddpy.model.forming import (
     FormingError,
     FormingProblem,
@@ -177,9 +183,9 @@ def test_a_stalled_increment_says_how_many_pairs_changed_state(caplog, monkeypat
     # the deck's one iteration: with its usual 4 times the limit it converges.) The half
     # increment's first correction is its whole motion, half a whole increment's: the
     # measure the correction is judged on (docs/theory/contact.md).
-    monkeypatch.setattr(forming, "CAREFUL_ITERATIONS", 1)
     caplog.set_level(logging.INFO, logger="ddpy.model.forming")
     problem = lifted_strip()
+    problem.tuning = replace(problem.tuning, increment=IncrementTuning(careful_iterations=1))
 
     def stalled(correction: str) -> str:
         return (r"no convergence in 1 iterations: residual \S+ of the force scale "
@@ -351,9 +357,9 @@ def test_gmres_that_does_not_converge_gives_way_to_a_factorization(monkeypatch) 
     # the first factorization every correction tries it once, then factorizes, and solves
     # with the new factors, so the run is the direct one, step for step.
     direct, result_direct = slide("direct")
-    monkeypatch.setattr(forming, "KRYLOV_MAX", 1)
-    monkeypatch.setattr(forming, "KRYLOV_LOOSE", 0.0)
-    monkeypatch.setattr(forming, "KRYLOV_TIGHT", 0.0)
+    default = FormingTuning()
+    monkeypatch.setattr(forming, "FormingTuning", lambda: replace(
+        default, krylov_max=1, krylov_loose=0.0, krylov_tight=0.0))
     reuse, result = slide("reuse")
     assert result.newton_iterations == result_direct.newton_iterations
     assert result.factorizations == result.newton_iterations

@@ -459,7 +459,7 @@ def test_a_matrix_size_mumps_cannot_take_is_refused_before_it(
         solver.analyse(n, rows, rows)  # type: ignore[arg-type]
 
 
-@pytest.mark.parametrize("entry", ["start/die", "position/punch", "u"])
+@pytest.mark.parametrize("entry", ["start/die", "position/punch", "forming/u"])
 def test_restart_from_a_checkpoint_without_an_entry_names_it(
         stopped_run: Path, tmp_path: Path, entry: str,
         capsys: pytest.CaptureFixture[str]) -> None:

@@ -38,6 +38,7 @@ from ddpy.app.runner import BUILT_IN_CASES, run_case
 from ddpy.io.decks import read_case
 from ddpy.io.results import ResultsReader
 from ddpy.io.toolfile import read_tool
+from ddpy.model.tool import BARRIER_DEPTH
 from ddpy.studies.drawing import element_centroids, hexahedron_volumes
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -162,7 +163,8 @@ def test_built_in_case_is_the_benchmark_coarse_nagata_case(tmp_path: Path) -> No
 def test_a_variant_is_the_built_in_case_on_another_blank(tmp_path: Path) -> None:
     # make_case.py --variant writes the smaller deep drawings measured for the test suite
     # (docs/theory/contact.md, "The barrier"): the built-in case's tool files, the decks of
-    # the benchmark's coarse Nagata case (ddpy's element and contact with the barrier), only
+    # the benchmark's coarse Nagata case (ddpy's defaults: no element, contact or barrier
+    # line), only
     # the blank (here one layer of 6 mm elements) and max_increment changed.
     made = _make_case()
     variant = made.write_variant_case(tmp_path / "variant", 6.0, layers=1, max_increment=1.0)
@@ -172,7 +174,10 @@ def test_a_variant_is_the_built_in_case_on_another_blank(tmp_path: Path) -> None
                              mesh_file="mesh.msh")
     for name in ("tools.dat", "material.dat", "bc.dat"):
         assert (variant / name).read_text() == (coarse / name).read_text(), name
-    assert "barrier" in (variant / "tools.dat").read_text()
+    text = (variant / "tools.dat").read_text()
+    assert "barrier" not in text and "discretization" not in text
+    assert all(t.discretization == "gauss" and t.barrier == BARRIER_DEPTH
+               for t in read_case(variant).tools)
     built, small = read_case(CASE), read_case(variant)
     assert [(p.name, p.tools, p.travel, p.lead) for p in small.phases] == \
         [(p.name, p.tools, p.travel, p.lead) for p in built.phases]

@@ -6,9 +6,10 @@ oscillation, and what the levers save. Writes docs/benchmarks/cylindrical_bendin
 The levers, and how a variant switches them off (docs/theory/speed.md):
 
 - the linear solver: GMRES on older LU factors with Eisenstat-Walker tolerances between
-  factorizations (``ddpy.model.forming.REUSE_FROM``: from that many unknowns);
+  factorizations (``FormingTuning.reuse_from``, ddpy.model.control: from that many
+  unknowns);
   off: every Newton iteration factorizes its own Jacobian and solves exactly;
-- the line search's whole-step acceptance (``ddpy.model.forming.WHOLE_STEP``); off: 0, the
+- the line search's whole-step acceptance (``FormingTuning.whole_step``); off: 0, the
   natural monotonicity test alone;
 - the first touch of a new contact zone only (the deck's ``rmin_touch new``, the default);
   off: ``rmin_touch every``, every free node that touches lands the increment.
@@ -83,14 +84,21 @@ def case_folder(variant: str) -> Path:
 
 
 def switch_off(variant: str) -> None:
-    """Set the module settings of ddpy.model.forming that the variant switches off."""
+    """Make every forming problem of this process (the runner builds its own) take the
+    tuning (ddpy.model.control.FormingTuning) with the levers the variant switches off."""
+    from dataclasses import replace
+
     from ddpy.model import forming
+    from ddpy.model.control import FormingTuning
 
     settings = VARIANTS[variant]
+    changes: dict[str, Any] = {}
     if settings.get("linear_solver") == "direct":
-        forming.REUSE_FROM = sys.maxsize  # "auto" never reuses: a factorization each time
+        changes["reuse_from"] = sys.maxsize  # "auto" never reuses: a factorization each time
     if "whole_step" in settings:
-        forming.WHOLE_STEP = settings["whole_step"]
+        changes["whole_step"] = settings["whole_step"]
+    tuning = replace(FormingTuning(), **changes)
+    forming.FormingTuning = lambda: tuning  # type: ignore[assignment,misc]
 
 
 def run_variant(variant: str, restart: bool = False) -> dict[str, Any]:

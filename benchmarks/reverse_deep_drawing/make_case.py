@@ -20,8 +20,8 @@ Writes, next to this script (all generated, git-ignored):
   hexahedra from an unstructured quadrilateral mesh (gmsh): ``paper`` as close to the
   paper's 15,408 hexahedra as gmsh's recombination gets, ``medium`` and ``coarse``;
 - ``cases/<mesh>/<model>/``: the five decks of each case, for the models ``bezier``,
-  ``nagata``, ``facets_coarse`` and ``facets_fine`` at ddpy's element and contact (neither
-  is set) with the barrier of Gauss-point contact on every tool, and ``dd3imp``
+  ``nagata``, ``facets_coarse`` and ``facets_fine`` at ddpy's defaults (neither the element
+  nor the contact is set: the solid-shell and Gauss-point contact with its barrier), and ``dd3imp``
   (REFERENCE: Nagata tools, the hexahedron and node-to-surface contact) on the coarse and
   paper blanks.
 """
@@ -41,7 +41,7 @@ from bench_common import TOOL_FILES, build_tool_model, written_tool_faces  # noq
 MODELS = ("bezier", "nagata", "facets_coarse", "facets_fine")
 #: DD3IMP's discretization (the hexahedron and node-to-surface contact) on the Nagata tools:
 #: the reports' fifth column, on the blanks of REFERENCE_MESHES, for comparison with ddpy's
-#: (the solid-shell, Gauss-point contact with the barrier).
+#: (the solid-shell, Gauss-point contact with its barrier).
 REFERENCE = "dd3imp"
 REFERENCE_MESHES = ("coarse", "paper")
 MESHES = ("coarse", "medium", "paper")
@@ -408,17 +408,15 @@ tool {tool}
 """
 
 #: The decks of the four tool models set neither the element nor the contact
-#: discretization (ddpy's defaults: the solid-shell and Gauss-point contact) and add one
-#: line to each tool, the barrier at the slave nodes (BARRIER), which keeps every node
-#: within 1 % of the thickness of every tool and carries the solid-shell through both
-#: stages; without it the solid-shell's flange wrinkled through die 1 and blank-holder 1
-#: from about 33 mm of stage 1, and the plain penalty left the blank 9 to 13 % of its
-#: thickness deep in the blank-holders (docs/theory/contact.md, "The barrier", which also
-#: says why the barrier is not yet ddpy's default). Before it the decks pinned DD3IMP's
+#: discretization: ddpy's defaults, the solid-shell and Gauss-point contact with the barrier
+#: at the slave nodes, which keeps every node within 1 % of the thickness of every tool and
+#: carries the solid-shell through both stages; without it the solid-shell's flange
+#: wrinkled through die 1 and blank-holder 1 from about 33 mm of stage 1, and the plain
+#: penalty left the blank 9 to 13 % of its thickness deep in the blank-holders
+#: (docs/theory/contact.md, "The barrier"). Before it the decks pinned DD3IMP's
 #: hexahedron and, on the coarse and medium blanks, node-to-surface contact (a bilinear
 #: face's chord stands c^2 / 8R off a tool radius R: 0.25 mm for the coarse blank's 4 mm
-#: faces on die 1's 8 mm shoulder). The REFERENCE case keeps both, without the barrier.
-BARRIER = "  barrier      0.005  # docs/theory/contact.md, \"The barrier\" (make_case.py)\n"
+#: faces on die 1's 8 mm shoulder). The REFERENCE case keeps both.
 REFERENCE_ELEMENT = "element hexahedron     # DD3IMP's element (make_case.py, REFERENCE)\n"
 REFERENCE_DISCRETIZATION = "  discretization node  # DD3IMP's contact (make_case.py, REFERENCE)\n"
 #: Augmentation r of node-to-surface contact (N/mm; the REFERENCE case's) set in the decks
@@ -473,7 +471,7 @@ def write_case(folder: Path, model: str, mesh: str, dims: Dimensions = DIMENSION
                                      prefix=tools_prefix, friction=FRICTION, side=SIDE[t],
                                      augmentation=augmentation,
                                      discretization=REFERENCE_DISCRETIZATION
-                                     if reference else BARRIER)
+                                     if reference else "")
                          for t in TOOLS),
     }
     for name, text in decks.items():
@@ -495,7 +493,7 @@ def write_default_case(folder: Path = DEFAULT_CASE) -> Path:
     """Write the built-in case into ``folder``: the decks of the coarse REFERENCE case (the
     Nagata tools at DD3IMP's hexahedron and node-to-surface contact) with the mesh
     (``mesh.msh``) and the tool files (``tools/<tool>.tool``) beside them. Not the four
-    models' setting (ddpy's element and contact with the barrier): that takes about 20
+    models' setting (ddpy's defaults, the solid-shell and Gauss-point contact): that takes about 20
     minutes on 2 threads, 990 increments at 7 to 14 Newton iterations each, too long for
     the test suite that runs this case, and no coarser blank holds (docs/theory/contact.md,
     "No smaller deep drawing for the test suite yet")."""

@@ -97,7 +97,7 @@ def deck_texts(model: InpModel, tools: str = "facets", element: str | None = Non
 
     tool_lines = [head.format("tools")]
     for t in model.tools:
-        contact = t.contact if t.facing is None else \
+        contact = t.side if t.facing is None else \
             "facing " + " ".join(_number(v) for v in t.facing)
         tool_lines += [f"tool {t.name}                      # {t.where}",
                        f"  description     {tools}",
@@ -150,7 +150,7 @@ def _blank_side(tool: InpTool, normal: str) -> tuple[float, float, float]:
     if tool.facing is not None:
         return tuple(-v for v in tool.facing)  # type: ignore[return-value]
     axis = _AXES[normal]
-    sign = -1.0 if tool.contact == "top" else 1.0
+    sign = -1.0 if tool.side == "top" else 1.0
     return tuple(sign * v for v in axis)  # type: ignore[return-value]
 
 

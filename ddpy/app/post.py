@@ -112,10 +112,9 @@ def load_run(target: str | os.PathLike[str], label: str | None = None) -> Run:
     """Read the curves of a results file (see find_results)."""
     path = find_results(target)
     with ResultsReader(path) as r:
-        attrs = r._file.attrs
-        leads = tuple(str(x) for x in attrs.get("leads", [""] * len(r.phases)))
+        leads = tuple(str(x) for x in r.attribute("leads", [""] * len(r.phases)))
         h = r.history()
-        status = str(attrs.get("status", "unknown"))
+        status = str(r.attribute("status", "unknown"))
         symmetry = r.symmetry
     k = len(h["phase"])
     phase = h["phase"].astype(np.int32)

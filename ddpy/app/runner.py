@@ -33,9 +33,9 @@ from numpy.typing import NDArray
 from ddpy.io.case import Case, HoldForce, HoldGap, Move, Phase
 from ddpy.io.checkpoint import (
     CheckpointError,
+    forming_state_arrays,
+    forming_state_from_arrays,
     read_checkpoint,
-    state_arrays,
-    state_from_arrays,
     write_checkpoint,
 )
 from ddpy.io.output_folder import (
@@ -60,7 +60,7 @@ from ddpy.model.forming import (
     PhaseProgress,
     RigidTool,
 )
-from ddpy.model.solid import Solid, SolidState
+from ddpy.model.solid import Solid
 
 _log = logging.getLogger(__name__)
 
@@ -105,16 +105,6 @@ _LIMITS = {"max": "max_increment", "touch": "contact_touch", "strain": "strain",
            "rotation": "rotation", "yield": "yield", "cut": "cutback", "regrow": "cutback",
            "release": "contact_release",
            "springback": "max_increment"}
-
-
-#: Arrays of FormingProblem carried from one increment to the next (besides the solid state
-#: and the tool positions): a checkpoint stores them. Add here any new state of the loop.
-_CARRIED = ("u", "force", "_contact_state", "traction", "pressure")
-#: Names checkpoints of earlier versions gave carried arrays: new name -> old.
-_CARRIED_BEFORE = {"_contact_state": "_status"}
-#: Of those, the ones a checkpoint written before they existed lacks (then zero): the
-#: tangential tractions and the pressures of Gauss-point contact.
-_SINCE = ("traction", "pressure")
 
 
 class RunError(RuntimeError):
@@ -284,10 +274,7 @@ class _Run:
     def save(self, progress: PhaseProgress | None) -> None:
         """Write a checkpoint of the present state (``progress``: inside a forming phase)."""
         assert self.writer is not None
-        p = self.problem
-        arrays: dict[str, NDArray] = {k: getattr(p, k) for k in _CARRIED}
-        arrays.update(state_arrays(p.state))
-        arrays.update({f"position/{k}": v for k, v in p.position.items()})
+        arrays = forming_state_arrays(self.problem.state())
         meta: dict[str, Any] = {
             "fingerprint": self.fingerprint, "discretization": self.discretization,
             "phase_index": self.phase_index,
@@ -342,28 +329,13 @@ class _Run:
                 f"{path}: written with {written}, and this code reads the case as "
                 f"{self.discretization} (a default changed); run again without --restart, "
                 "or name the element and contact in the decks")
-        p = self.problem
-        for new, old in _CARRIED_BEFORE.items():
-            if new not in arrays and old in arrays:
-                arrays[new] = arrays[old]
-        carried = {k: arrays[k] for k in _CARRIED if k in arrays or k not in _SINCE}
-        positions = {k: arrays[f"position/{k}"] for k in self.names}
-        for name, value in carried.items():
-            if value.shape != getattr(p, name).shape:
-                raise CheckpointError(f"{path}: written for another mesh or tools ({name} "
-                                      f"{value.shape}, expected {getattr(p, name).shape})")
-            setattr(p, name, value.copy())
-        p.position = positions
-        p.state = state_from_arrays(SolidState, arrays, where=str(path))
-        if p.solid.mixed and p.state.backstress is None:
-            # No guess of the backstress: zero would restart a hardened sheet as fresh.
-            raise CheckpointError(f"{path}: has no backstress, which the case's mixed "
-                                  "hardening needs (written by another version of ddpy); run "
-                                  "again without --restart")
-        if p.state.backstress is not None and (
-                not p.solid.mixed or p.state.backstress.shape != p.state.stress.shape):
-            raise CheckpointError(f"{path}: written for another material or mesh (backstress "
-                                  f"{p.state.backstress.shape}); run again without --restart")
+        try:
+            self.problem.restore(forming_state_from_arrays(arrays, self.names, str(path)))
+        except ValueError as error:
+            if isinstance(error, CheckpointError):
+                raise
+            raise CheckpointError(f"{path}: written for another mesh, tools or material "
+                                  f"({error}); run again without --restart") from None
         self.phase_index, self.segment = int(meta["phase_index"]), int(meta["segment"])
         self.phase_increments, self.last_frame = (int(meta["phase_increments"]),
                                                   int(meta["last_frame"]))
@@ -390,16 +362,16 @@ class _Run:
         n = p.u.shape[0]
         node_state = np.zeros(n, np.int8)
         tool = np.full(n, -1, np.int16)
-        states_of = None if result is None else result.contact_states
-        if states_of and all(states_of[k] for k in self.names):
-            states = np.concatenate([states_of[k][-1] for k in self.names])
+        last = None if result is None else result.last
+        if last is not None and all(k in last.contact_states for k in self.names):
+            states = np.concatenate([last.contact_states[k] for k in self.names])
             touching = states != 0
             node_state[self.slaves[touching]] = states[touching]
             tool[self.slaves[touching]] = self.tool_of[touching]
         contact = np.zeros((n, 3))
         np.add.at(contact, self.slaves, p.force)
-        cauchy = p.solid.stresses(p.u, p.state)[1]
-        self.writer.fields(displacement=p.u, stress=cauchy, plastic_strain=p.state.ep,
+        cauchy = p.solid.stresses(p.u, p.solid_state)[1]
+        self.writer.fields(displacement=p.u, stress=cauchy, plastic_strain=p.solid_state.ep,
                            contact_state=node_state, contact_force=contact, contact_tool=tool,
                            contact_pressure=p.contact_pressure())
         self.last_frame = self.writer.increments
@@ -468,14 +440,11 @@ class _Run:
     # -- phases ----------------------------------------------------------------------
 
     def constrain(self, phase: Phase) -> None:
-        p = self.problem
-        p.fixed[:] = False
+        """The phase's constraints, alone (those of the phase before are released)."""
+        fixed = np.zeros_like(self.problem.fixed)
         nodes, components = self.case.boundary.constrained(phase.name)
-        for c in range(3):
-            chosen = nodes[components == c]
-            if chosen.size:
-                p.fix(chosen, c)
-        p._reset()
+        fixed[nodes, components] = True
+        self.problem.constrain(fixed)
 
     def forming(self, phase: Phase) -> None:
         """The segments of a forming phase (split at output_at), from the resume point."""

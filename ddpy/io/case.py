@@ -27,7 +27,7 @@ from ddpy.model.forming_limits import FormingLimitCurve
 from ddpy.model.material import Material
 from ddpy.model.mesh import HEX_FACES, HexMesh
 from ddpy.model.solid import DEFAULT_ELEMENT
-from ddpy.model.tool import FACE_POINTS
+from ddpy.model.tool import BARRIER_DEPTH, FACE_POINTS
 
 if TYPE_CHECKING:
     from ddpy.io.toolfile import ToolModel
@@ -247,26 +247,28 @@ class BlankMaterial:
 @dataclass(frozen=True)
 class Tool:
     """A rigid tool: its description (bezier, nagata or facets), its tool file, the Coulomb
-    friction coefficient, the side of the blank it touches (``facing``: the outward normal
-    of that blank surface; ``contact`` is top, bottom or facing), the augmentation
+    friction coefficient, the side of the blank it touches (``side``: top, bottom or a
+    surface facing a direction, tools.dat's ``contact``; ``facing``: the outward normal of
+    that blank surface), the augmentation
     parameter r of its contact law, N/mm (None: the solver chooses it), and its contact
     discretization (``discretization``: "node", node-to-surface, "surface",
     surface-to-surface, or "gauss", Gauss-point contact) with its penalty, N/mm^3 (None:
     the solver chooses it), Gauss points per direction of a blank face (``points``) and,
-    for "gauss", its barrier depth (a fraction of the blank's thickness, None: off)."""
+    for "gauss", its barrier depth (a fraction of the blank's thickness, default
+    BARRIER_DEPTH; None: off)."""
 
     name: str
     description: Literal["bezier", "nagata", "facets"]
     file: Path
     friction: float
-    contact: str
+    side: str
     facing: tuple[float, float, float]
     augmentation: float | None = None
     origin: str = ""
     discretization: str = "gauss"
     penalty: float | None = None
     points: int | None = None
-    barrier: float | None = None
+    barrier: float | None = BARRIER_DEPTH
 
     @property
     def face_points(self) -> int | None:
@@ -473,7 +475,7 @@ class Case:
         ]
         for t in self.tools:
             lines.append(f"  tool {t.name}: {t.description}, {t.file.name}, friction "
-                         f"{t.friction:g}, contacts the {t.contact} of the blank, contact "
+                         f"{t.friction:g}, contacts the {t.side} of the blank, contact "
                          f"discretization {t.discretization} ("
                          + {"surface": "surface-to-surface",
                             "gauss": "Gauss-point contact",

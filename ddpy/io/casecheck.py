@@ -141,7 +141,7 @@ def _size_checks(case: Case, boxes: dict[str, Box]) -> tuple[list[DeckError], li
 def _facing_errors(case: Case, searches: dict[str, ContactSearch]) -> list[DeckError]:
     """A tool none of whose patches faces the blank side it touches: the run refuses it
     (ddpy.model.tool.RigidTool), whichever phase uses it."""
-    return [_error(t.origin, f"no patch of tool '{t.name}' faces the {t.contact} of the "
+    return [_error(t.origin, f"no patch of tool '{t.name}' faces the {t.side} of the "
                    f"blank: no normal of {t.file.name} points against the blank's outward "
                    f"normal ({_xyz(np.asarray(t.facing))}); expected a tool file whose "
                    "normals point towards the blank")
@@ -239,7 +239,7 @@ def geometry_warnings(case: Case, searches: dict[str, ContactSearch] | None = No
             towards = -float(np.dot(move, tool.facing))
             if towards <= 0.0:
                 away.append(f"{where}: phase '{phase.name}': the lead tool '{lead}' moves "
-                            f"away from the blank (its {tool.contact} faces the tool, the "
+                            f"away from the blank (its {tool.side} faces the tool, the "
                             f"motion {_xyz(move)} points the other way)")
             elif phase is first:
                 nodes = tool.contact_nodes(mesh)
@@ -271,7 +271,7 @@ def _start_errors(case: Case, searches: dict[str, ContactSearch]) -> list[DeckEr
         clear = inside & (np.abs(along) > 0.5)
         if inside.any() and not clear.any():
             errors.append(_error(tool.origin, f"tool '{name}' faces no node of the "
-                                 f"blank's {tool.contact}: its normals are side-on to the "
+                                 f"blank's {tool.side}: its normals are side-on to the "
                                  f"contact direction {_xyz(np.asarray(tool.facing))} (the "
                                  "search only pairs a node with a tool surface within 60 "
                                  "degrees of facing it); expected the side of the blank the "
@@ -279,7 +279,7 @@ def _start_errors(case: Case, searches: dict[str, ContactSearch]) -> list[DeckEr
             continue
         if clear.any() and (along[clear] > 0).all():
             errors.append(_error(tool.origin, f"the normals of tool '{name}' point away from "
-                                 f"the blank (the {tool.contact} of the blank faces them): "
+                                 f"the blank (the {tool.side} of the blank faces them): "
                                  "expected a tool file whose normals point towards the blank"))
             continue
         depth = np.where(inside, -found.distance, -np.inf)
@@ -291,7 +291,7 @@ def _start_errors(case: Case, searches: dict[str, ContactSearch]) -> list[DeckEr
                                  f"{depth[worst]:.3g} mm behind its surface, more than the "
                                  f"first phase's rmin_strain times the element size "
                                  f"({first.limits.strain:g} x {size:.3g} = {allowed:.3g} mm); "
-                                 f"expected the tool on the {tool.contact} of the blank, "
+                                 f"expected the tool on the {tool.side} of the blank, "
                                  "at most that deep in it"))
     return errors
 

@@ -3,8 +3,11 @@
 A checkpoint holds named arrays and a JSON document of counters. It is written to a temporary
 file in the same folder, flushed to disk and renamed over the previous one (``os.replace``),
 so the file on disk is always a complete checkpoint, even when the run is killed while
-writing. The solid state is stored field by field (``dataclasses.fields``), so new fields of
-:class:`ddpy.model.solid.SolidState` are saved without changes here.
+writing. A forming problem's state (:class:`ddpy.model.forming.FormingState`, what
+``FormingProblem.state()`` gives and ``restore`` takes) is stored field by field
+(``dataclasses.fields``): its arrays under ``forming/``, its solid state's under ``state/``
+and the tools' positions under ``position/``, so new fields of either are saved without
+changes here.
 """
 
 from __future__ import annotations
@@ -21,12 +24,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ddpy.io.output_folder import atomic_write
+from ddpy.model.forming import FormingState
+from ddpy.model.solid import SolidState
 
-__all__ = ["CheckpointError", "read_checkpoint", "state_arrays", "state_from_arrays",
-           "write_checkpoint"]
+__all__ = ["CheckpointError", "forming_state_arrays", "forming_state_from_arrays",
+           "read_checkpoint", "state_arrays", "state_from_arrays", "write_checkpoint"]
 
-#: Version of the checkpoint layout; a checkpoint of another version is refused.
-VERSION = 1
+#: Version of the checkpoint layout; a checkpoint of another version is refused. 2: the
+#: forming problem's state as FormingState's fields (1 named the problem's attributes).
+VERSION = 2
 _META = "__meta__"
 
 
@@ -59,7 +65,7 @@ def read_checkpoint(path: str | os.PathLike[str]) -> tuple[dict[str, Any], dict[
                               "without --restart") from None
     if meta.get("version") != VERSION:
         raise CheckpointError(f"{path}: checkpoint version {meta.get('version')}, this ddpy "
-                              f"reads version {VERSION}")
+                              f"reads version {VERSION} only; run again without --restart")
     return meta, arrays
 
 
@@ -93,3 +99,38 @@ def state_from_arrays(cls: type, arrays: Mapping[str, NDArray], prefix: str = "s
             raise CheckpointError(f"{where}: {cls.__name__} field {f.name!r} is missing "
                                   "(written by another version of ddpy)")
     return cls(**values)
+
+
+def forming_state_arrays(state: FormingState) -> dict[str, NDArray]:
+    """The arrays of a forming problem's state, each under its place in a checkpoint."""
+    out: dict[str, NDArray] = {}
+    for f in dataclasses.fields(state):
+        value = getattr(state, f.name)
+        if isinstance(value, SolidState):
+            out.update(state_arrays(value, "state/"))
+        elif isinstance(value, dict):
+            out.update({f"position/{name}": np.asarray(p) for name, p in value.items()})
+        else:
+            out[f"forming/{f.name}"] = np.asarray(value)
+    return out
+
+
+def forming_state_from_arrays(arrays: Mapping[str, NDArray], tools: list[str],
+                              where: str = "checkpoint") -> FormingState:
+    """The forming state of :func:`forming_state_arrays`' output, with the positions of
+    ``tools``; CheckpointError naming ``where`` and the entry when one is missing."""
+    values: dict[str, Any] = {}
+    for f in dataclasses.fields(FormingState):
+        if f.name == "solid":
+            values[f.name] = state_from_arrays(SolidState, arrays, "state/", where)
+            continue
+        keys = [f"position/{name}" for name in tools] if f.name == "positions" else \
+            [f"forming/{f.name}"]
+        missing = [k for k in keys if k not in arrays]
+        if missing:
+            raise CheckpointError(f"{where}: the entry '{missing[0]}' is missing; run again "
+                                  "without --restart")
+        values[f.name] = ({name: np.array(arrays[k]) for name, k in zip(tools, keys,
+                                                                         strict=True)}
+                          if f.name == "positions" else np.array(arrays[keys[0]]))
+    return FormingState(**values)

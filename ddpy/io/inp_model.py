@@ -38,7 +38,7 @@ class InpTool:
 
     name: str
     faces: list[list[int]]
-    contact: str
+    side: str
     facing: tuple[float, float, float] | None
     friction: float
     discretization: str

@@ -15,6 +15,7 @@ import numpy as np
 from ddpy.io.case import DeckError
 from ddpy.io.inp_cards import Card, DataLine, integer, number
 from ddpy.io.inp_mesh import STABILIZING_TYPES, MeshReader
+from ddpy.model.contact import check_friction
 
 __all__ = ["BLANK_TYPES", "BOUNDARY_TYPES", "IGNORED", "SUPPORTED", "TOOL_TYPES", "Amplitude",
            "Boundary", "Pair", "Reader"]
@@ -318,9 +319,10 @@ class Reader(MeshReader):
                              card.data[0] if card.data else None)
         line = card.data[0]
         mu = number(line, 0, "the friction coefficient")
-        if mu < 0:
-            raise DeckError(f"the friction coefficient must be >= 0, got {line.words[0]}",
-                            line.path, line.number)
+        try:
+            check_friction(mu)
+        except ValueError as error:
+            raise DeckError(str(error), line.path, line.number) from None
         self.friction[interaction] = mu
         if len(line.words) == 2:
             self.ignored.append(f"{line.where}: the stick slope of *FRICTION (ddpy's Coulomb "

@@ -939,6 +939,10 @@ class ResultsReader:
         peak = f.attrs.get("peak_memory_mb")
         self.peak_memory_mb = None if peak is None else float(peak)
 
+    def attribute(self, name: str, default: Any = None) -> Any:
+        """A root attribute of the file (the run's status, message, leads, threads...)."""
+        return self._file.attrs.get(name, default)
+
     @property
     def symmetry(self) -> str | None:
         """The normal axis of each symmetry plane of the case ("xy": planes normal to x

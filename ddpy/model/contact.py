@@ -18,11 +18,23 @@ from ddpy._validate import float_array
 from ddpy.core.constants import constant
 from ddpy.geometry.search import Projection
 
-__all__ = ["ContactLaw", "contact_law", "INACTIVE", "STICK", "SLIP"]
+__all__ = ["ContactLaw", "check_friction", "contact_law", "INACTIVE", "STICK", "SLIP"]
 
 #: State of a node: no force, sticking, slipping.
 INACTIVE, STICK, SLIP = (constant("contact_open"), constant("contact_stick"),
                          constant("contact_slip"))
+
+
+def check_friction(friction: ArrayLike) -> NDArray[np.float64]:
+    """Coulomb friction coefficients (a value or an array) checked: finite and >= 0, else
+    ValueError("friction must be >= 0, got ..."), the one check of every reader of a
+    friction (the decks and .inp files add where it came from: file and line; a tool its
+    name)."""
+    mu = np.asarray(friction, dtype=float)
+    bad = ~(np.isfinite(mu) & (mu >= 0.0))
+    if bad.any():
+        raise ValueError(f"friction must be >= 0, got {float(mu[bad].flat[0]):g}")
+    return mu
 
 
 @dataclass(frozen=True)
@@ -54,10 +66,8 @@ def contact_law(
     lam = float_array(force, "force", (k, 3))
     second = float_array(second_derivatives, "second_derivatives", (k, 3, 3))
     v = float_array(slip_path, "slip_path", (k, 3))
-    mu = float_array(np.broadcast_to(friction, (k,)), "friction", (k,))
+    mu = check_friction(float_array(np.broadcast_to(friction, (k,)), "friction", (k,)))
     r = float_array(np.broadcast_to(augmentation, (k,)), "augmentation", (k,))
-    if (mu < 0).any():
-        raise ValueError(f"friction must be >= 0, got {mu.min()}")
     if (r <= 0).any():
         raise ValueError(f"augmentation must be > 0, got {r.min()}")
     if k == 0:

@@ -1,18 +1,31 @@
 """The settings of an incremental solution, one class each, with the defaults that the decks,
 the Python API and the examples share: the r_min increment control (:class:`IncrementLimits`)
 and the Newton loop's convergence (:class:`NewtonSettings`). A deck that sets nothing runs
-with exactly these (docs/input-format.md lists them with their deck keywords)."""
+with exactly these (docs/input-format.md lists them with their deck keywords).
+
+The increment policy itself lives here too: :class:`IncrementController` decides each
+increment's size from those limits (touch, release, yield, strain, rotation), when an
+increment is cut or redone and what the next one tries; its constants are the fields of
+:class:`IncrementTuning`, and those of the forming problem's loop and contact (the search's
+reach, GMRES on older factors, the line search...) the fields of :class:`FormingTuning`.
+The measurements behind each default are in docs/theory/contact.md and speed.md."""
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
-__all__ = ["IncrementLimits", "NewtonSettings", "next_step"]
+import numpy as np
+
+__all__ = ["FormingTuning", "IncrementController", "IncrementLimits",
+           "IncrementTuning", "MAX_INCREMENTS", "NewtonSettings", "next_step"]
 
 #: Most Newton iterations of an increment, and most redos of one at a release: beyond, a
 #: run only spends time (a stalled increment is cut instead).
 MAX_ITERATIONS, MAX_REDOS = 1000, 10**6
+#: Most increments a phase may take at its largest increment: a max_increment smaller than
+#: the travel over this would only keep the process busy (1e-300 mm ran for ever).
+MAX_INCREMENTS = 1_000_000
 #: Which free nodes first touch lands (IncrementLimits.touch).
 TOUCH_RULES = ("new", "every")
 #: Ranges of the Newton loop's settings (docs/input-format.md). The relative tolerances:
@@ -152,20 +165,255 @@ class NewtonSettings:
                              f"thickness), got {self.penetration}")
 
 
+@dataclass(frozen=True)
+class IncrementTuning:
+    """The constants of the increment policy (:class:`IncrementController`), each measured
+    where docs/theory/contact.md and speed.md say; no deck sets them. To change one for a
+    run, ``FormingProblem(..., tuning=FormingTuning(increment=IncrementTuning(...)))``.
+
+    - ``slack``: a strain or rotation increment up to this times its limit is accepted (not
+      redone shorter for a few percent);
+    - ``grow_to``: after a strain or rotation limit the next increment is sized for this
+      share of it; ``regrow``: after a cut an increment grows at most by this factor;
+    - ``yield_floor``: the smallest yield tolerance used (a point landed on the yield surface
+      lies within rounding of it, and at 0 it would count as elastic and be landed again);
+    - ``touch_past``: first touch lands this share of the gap past the surface, so that the
+      node is caught in contact;
+    - ``bisect_below``: a release interpolated on the augmented pressure before this fraction
+      of the increment is not trusted (p << r g: r far from the node's own stiffness biases
+      it towards zero); the increment is halved instead;
+    - ``careful_iterations``: a careful start (the first increment of a phase whose default
+      start failed) may take this many times the deck's max_iterations: its full active-set
+      steps open the pairs a blank lying on its tools does not need a few at a time (58
+      iterations on the paper's deep drawing blank), once per phase;
+    - ``release_steps``: tools lifted at the start of a phase let go of their forces in this
+      many steps, each halved while it fails down to ``release_smallest`` of the release;
+    - ``max_augmentations``: most Uzawa updates of the Gauss points' pressure multipliers
+      within one increment (NewtonSettings.augment, docs/theory/contact.md, "Penetration").
+    """
+
+    slack: float = 1.05
+    grow_to: float = 0.9
+    regrow: float = 2.0
+    yield_floor: float = 1e-6
+    touch_past: float = 1e-3
+    bisect_below: float = 0.1
+    careful_iterations: int = 4
+    release_steps: int = 4
+    release_smallest: float = 1.0 / 1024.0
+    max_augmentations: int = 6
+
+    def __post_init__(self) -> None:
+        if not (self.slack >= 1.0 and 0.0 < self.grow_to <= 1.0 and self.regrow > 1.0
+                and 0.0 < self.bisect_below < 1.0 and self.yield_floor > 0.0
+                and self.touch_past >= 0.0 and 0.0 < self.release_smallest <= 1.0):
+            raise ValueError(f"increment tuning out of range: {self}")
+        if min(self.careful_iterations, self.release_steps) < 1 or self.max_augmentations < 0:
+            raise ValueError(f"careful_iterations and release_steps must be >= 1 and "
+                             f"max_augmentations >= 0: {self}")
+
+
+@dataclass(frozen=True)
+class FormingTuning:
+    """The constants of a forming problem's Newton loop and contact, with the increment
+    policy's (``increment``); no deck sets them (``FormingProblem(..., tuning=...)``).
+
+    - ``touching``: gap (times the element size) within which an unloaded node counts as
+      lying on a tool for the closed predictor of the first iteration: zero up to the
+      rounding of the positions;
+    - ``reuse_from``: unknowns from which linear_solver "auto" solves with older factors
+      (GMRES) between factorizations: below, a factorization costs little more than a few
+      solves;
+    - ``krylov_loose``, ``krylov_tight``: bounds of GMRES's relative tolerance on the older
+      factors (of the preconditioned, weighted residual: the correction's relative error);
+      ``krylov_max``: its iterations before it gives up (a factorization costs about 14 on
+      the paper's bending blank, 15 on the deep drawing's: docs/theory/speed.md);
+      ``krylov_keep``: the most after which the same factors are tried again;
+    - ``whole_step``: the line search's whole-step ratio (the core's Loop.whole_step);
+    - ``penetration``, ``min_step``: deepest a free node may be pushed into a tool by one
+      Newton step, in element sizes, and the shortest step that limit may leave;
+    - ``reach_sizes``, ``reach_travels``: a slave node whose nearest admissible point of a
+      tool lies farther than max(reach_sizes x element size, reach_travels x the leading
+      tool's largest travel of an increment) has no partner on it (a free node, no gap).
+      First touch sees a free node once it is nearer than the largest approach of the next
+      increment (the tool's travel plus the node's, at most 2 travels), here with a margin
+      of 2; without a reach the exact search paired nodes with far patch edges, 20 to 56 mm
+      away on the coarse reverse deep drawing (docs/theory/contact.md, "Reach");
+    - ``touch_depth``: a force-controlled tool that does not touch the blank at the start
+      of a phase is brought this many element sizes into its nearest slave node (a Gauss
+      point exactly on the tool carries no pressure, and nothing would hold the tool);
+    - ``hold_step``: a force-controlled tool moves at most this share of the search's reach
+      in one Newton step (the core's hold_step).
+    """
+
+    touching: float = 1e-6
+    reuse_from: int = 20_000
+    krylov_loose: float = 1e-2
+    krylov_tight: float = 1e-10
+    krylov_max: int = 12
+    krylov_keep: int = 8
+    whole_step: float = 0.5
+    penetration: float = 0.02
+    min_step: float = 1.0 / 64.0
+    reach_sizes: float = 2.0
+    reach_travels: float = 4.0
+    touch_depth: float = 1e-3
+    hold_step: float = 0.5
+    increment: IncrementTuning = field(default_factory=IncrementTuning)
+
+
 def next_step(step: float, nominal: float, reason: str, strain_ratio: float,
-              rotation_ratio: float) -> tuple[float, str]:
+              rotation_ratio: float, tuning: IncrementTuning | None = None
+              ) -> tuple[float, str]:
     """The trial size of the next increment and what set it, after one of ``step`` that
     ``reason`` limited, whose largest strain and rotation increments were these fractions
     of their limits. As in DD3IMP's r_min, each increment tries the nominal size again:
     the touch, release and yield limits are found before or in the first iteration and
     cost little to apply once more. Two things are remembered: a strain or rotation limit
     is found only after convergence, so the next size is predicted from this increment's
-    rates (strain and rotation grow about linearly with the size), to 90 % of the limit;
-    and after a cut (divergence) the size at most doubles per increment."""
-    grow = 0.9 / max(strain_ratio, rotation_ratio, 1e-12)
-    cap = 2.0 if reason in ("cut", "regrow") else math.inf
+    rates (strain and rotation grow about linearly with the size), to ``grow_to`` (90 %)
+    of the limit; and after a cut (divergence) the size at most doubles (``regrow``) per
+    increment."""
+    tuning = IncrementTuning() if tuning is None else tuning
+    grow = tuning.grow_to / max(strain_ratio, rotation_ratio, 1e-12)
+    cap = tuning.regrow if reason in ("cut", "regrow") else math.inf
     if min(grow, cap) * step >= nominal:
         return nominal, "max"
     if cap < grow:
         return cap * step, "regrow"
     return grow * step, "strain" if strain_ratio >= rotation_ratio else "rotation"
+
+
+class IncrementController:
+    """The increment policy of one forming phase: the size of each increment trial and what
+    set it (``step``, ``reason``: "max", "touch", "release", "yield", "strain",
+    "rotation", "cut" or "regrow"), from the r_min ``limits`` (:class:`IncrementLimits`)
+    and the Newton settings' cut-back, in phase factors of a nominal (largest) increment
+    ``nominal``. The problem measures (how far a free node is from touching, where a
+    release falls, the strain and rotation of a converged trial) and asks; the controller
+    shortens, cuts, redoes or accepts:
+
+    - before a trial: ``shorten`` by the touch and release-ahead fractions (not after a
+      cut: the cut size stands), ``landing`` says the yield tolerance;
+    - a trial that lands a yield point: ``shorten`` to it; one that fails: ``cut`` (or
+      why the run must stop);
+    - a converged trial: ``strain_redo``, ``rotation_redo`` and ``release_redo`` say whether
+      it is redone shorter; else ``accept`` sizes the next one (:func:`next_step`).
+    """
+
+    def __init__(self, limits: IncrementLimits, cutback: float, nominal: float,
+                 tuning: IncrementTuning | None = None) -> None:
+        self.limits = limits
+        self.tuning = IncrementTuning() if tuning is None else tuning
+        self.cutback, self.nominal = cutback, nominal
+        #: the smallest increment (phase factor): no limit makes one smaller
+        self.smallest = limits.min_fraction * nominal
+        self.max_cuts = limits.max_cuts(cutback)
+        self.rotation_limit = float(np.radians(limits.rotation_deg))
+        self.step, self.reason = nominal, "max"
+        self.cuts_in_row = 0
+        #: redos at a release of the present increment (IncrementLimits.release_redos)
+        self.redos = 0
+        #: the first increment's default start failed: careful starts until it converges
+        self.careful = False
+
+    def resume(self, step: float, reason: str) -> None:
+        """Continue a phase whose next trial was ``step`` set by ``reason``."""
+        self.step, self.reason = min(step, self.nominal), reason
+
+    @property
+    def looks_ahead(self) -> bool:
+        """Whether the touch and release-ahead limits apply to the next trial (not right
+        after a cut: it stands as cut)."""
+        return self.reason != "cut"
+
+    @property
+    def touch(self) -> bool:
+        """Whether first touch limits the next trial."""
+        return self.limits.first_touch and self.looks_ahead
+
+    def release_ahead(self, has_rate: bool) -> bool:
+        """Whether the release limit looks ahead of the next trial (it needs the last
+        increment's pressure rate: ``has_rate``)."""
+        return self.limits.release is not None and self.looks_ahead and has_rate
+
+    def shorten(self, fraction: float, reason: str) -> None:
+        """The next trial ``fraction`` (< 1: else nothing) of its size, ``reason`` setting
+        it (touch, release ahead, a yield landing), never below the smallest."""
+        if fraction < 1.0:
+            self.step, self.reason = max(self.step * fraction, self.smallest), reason
+
+    def landing(self) -> float | None:
+        """The yield tolerance of the next trial: None (no landing) when it is off or the
+        trial is already the smallest."""
+        tolerance = self.limits.yield_tolerance
+        if tolerance is None or self.step <= self.smallest:
+            return None
+        return max(tolerance, self.tuning.yield_floor)
+
+    def start(self, first: bool) -> bool:
+        """Whether the trial starts carefully (``first``: the first increment of the
+        phase, without a last increment's rate; a careful start stays one only there)."""
+        self.careful = self.careful and first
+        return self.careful
+
+    def cut(self, factor: float) -> str:
+        """A failed trial from phase factor ``factor``: cut the next by ``cutback``, or say
+        why the run stops ("cuts": more in a row than ``max_cuts``; "smallest": a cut would
+        go below the smallest increment with more of the phase left); "" when cut."""
+        self.cuts_in_row += 1
+        if self.cuts_in_row > self.max_cuts:
+            return "cuts"
+        if self.step * self.cutback < self.smallest and 1.0 - factor > self.smallest:
+            # Below the smallest increment a run only crawls: cut after cut, each tiny step
+            # converging and the next, larger one failing again.
+            return "smallest"
+        self.step, self.reason = self.step * self.cutback, "cut"
+        return ""
+
+    def strain_redo(self, strain: float) -> bool:
+        """Whether a converged trial whose largest equivalent strain increment is ``strain``
+        is redone shorter (then sized to the limit)."""
+        limit = self.limits.strain
+        if strain > self.tuning.slack * limit and self.step > self.smallest:
+            self.step, self.reason = max(self.step * limit / strain, self.smallest), "strain"
+            return True
+        return False
+
+    def rotation_redo(self, rotation: float) -> bool:
+        """Whether a converged trial whose largest element rotation is ``rotation``
+        (radians) is redone shorter (then sized to the limit)."""
+        limit = self.rotation_limit
+        if rotation > self.tuning.slack * limit and self.step > self.smallest:
+            self.step = max(self.step * limit / rotation, self.smallest)
+            self.reason = "rotation"
+            return True
+        return False
+
+    @property
+    def checks_release(self) -> bool:
+        """Whether a converged trial is checked for a release inside it (the limit is on,
+        the trial is not the smallest, and its redos are not used up)."""
+        limits = self.limits
+        return (limits.release is not None and self.step > self.smallest
+                and (limits.release_redos is None or self.redos < limits.release_redos))
+
+    def release_redo(self, release: float) -> bool:
+        """Whether a converged trial whose first release falls at ``release`` (a fraction
+        of it) is redone, ending just past the release so that the node is free at its end
+        (a release within the last ``limits.release`` fraction is accepted)."""
+        margin = self.limits.release
+        if margin is None or not release < 1.0 - margin:
+            return False
+        self.step = max(self.step * release * (1.0 + margin / 2.0), self.smallest)
+        self.reason = "release"
+        self.redos += 1
+        return True
+
+    def accept(self, strain: float, rotation: float) -> None:
+        """A trial accepted with these largest strain and rotation (radians) increments:
+        the next trial's size and reason (:func:`next_step`)."""
+        self.cuts_in_row = self.redos = 0
+        self.step, self.reason = next_step(self.step, self.nominal, self.reason,
+                                           strain / self.limits.strain,
+                                           rotation / self.rotation_limit, self.tuning)

@@ -29,7 +29,13 @@ from ddpy.core.linalg import MumpsSolver
 from ddpy.core.ordering import mesh_solver
 from ddpy.geometry.search import INSIDE, NONE
 from ddpy.model.contact import INACTIVE
-from ddpy.model.control import IncrementLimits, NewtonSettings, next_step
+from ddpy.model.control import (
+    MAX_INCREMENTS,
+    FormingTuning,
+    IncrementController,
+    IncrementLimits,
+    NewtonSettings,
+)
 from ddpy.model.forming_quantities import FieldFrame, SheetMeasures, nodal_average
 from ddpy.model.mesh import HEX_EDGES, free_rigid_modes, largest_rotation
 from ddpy.model.newton import (
@@ -51,74 +57,15 @@ from ddpy.model.newton import (
 )
 from ddpy.model.solid import Solid, SolidState, _components
 from ddpy.model.tool import BARRIER_STIFFNESS, BARRIER_WIDTH, RigidTool
+from ddpy.model.work import Work
 
 _log = logging.getLogger(__name__)
 
 __all__ = ["RigidTool", "FieldFrame", "FormingProblem", "FormingResult", "FormingError",
+           "FormingState", "IncrementRecord",
            "Linearization", "PhaseProgress", "cut_hint", "default_augmentation",
            "default_penalty",
            "start_depth_limit"]
-
-#: Most increments a phase may take at its largest increment: a max_increment smaller than
-#: the travel over this would only keep the process busy (1e-300 mm ran for ever).
-MAX_INCREMENTS = 1_000_000
-#: A release interpolated on the augmented pressure before this fraction of the increment
-#: is not trusted: the increment is halved instead.
-BISECT_BELOW = 0.1
-#: Gap (times the element size) within which an unloaded node counts as lying on a tool for
-#: the closed predictor of the first iteration: zero up to the rounding of the positions.
-TOUCHING = 1e-6
-#: A careful start (the first increment of a phase whose default start failed) may take this
-#: many times the iterations of the deck's limit: its full active-set steps open the pairs
-#: a blank lying on its tools does not need a few at a time (58 iterations on the paper's
-#: deep drawing blank, docs/theory/contact.md), and they are taken once per phase.
-CAREFUL_ITERATIONS = 4
-#: Unknowns from which linear_solver "auto" solves with older factors (GMRES) between
-#: factorizations: below, a factorization costs little more than a few solves.
-REUSE_FROM = 20_000
-#: GMRES on the older factors: bounds of its relative tolerance (of the preconditioned,
-#: weighted residual: the correction's relative error; see _increment), the iterations
-#: before it gives up (a factorization costs about 14 on the paper's bending blank, 15 on
-#: the deep drawing's: docs/theory/speed.md), and the most after which the same factors
-#: are tried again.
-KRYLOV_LOOSE, KRYLOV_TIGHT = 1e-2, 1e-10
-KRYLOV_MAX = 12
-KRYLOV_KEEP = 8
-#: The line search's whole-step ratio (Loop.whole_step). The increment's start is the
-#: last increment's rate (first order): a start extrapolated to second order, through the
-#: last three converged states, was measured and removed (docs/theory/speed.md).
-WHOLE_STEP = 0.5
-#: Deepest a free node may be pushed into a tool by one Newton step, in element sizes, and
-#: the shortest step that limit may leave (penetration_step of the core's Newton loop).
-PENETRATION, MIN_STEP = 0.02, 1.0 / 64.0
-#: Reach of the contact search of a forming run: a slave node whose nearest admissible
-#: point of a tool (the facing filter applied) lies farther than
-#: max(REACH_SIZES x element size, REACH_TRAVELS x the leading tool's largest travel of an
-#: increment) has no partner on it (status NONE: a free node, no gap). What the run needs
-#: of a gap lies well within: first touch sees a free node once it is nearer than the
-#: largest approach of the next increment, the tool's travel plus the node's (at most as
-#: fast as the tools that carry it: 2 travels), here with a margin of 2; the contact law,
-#: the touching predictor and the penetration limit of a Newton step look at gaps of a few
-#: hundredths of an element (TOUCHING, touch_gap, PENETRATION). Without a reach the exact
-#: search pairs a node whose nearby patches the filter leaves out with a far patch edge,
-#: 20 to 56 mm away on the coarse reverse deep drawing (an EDGE point, signed by the side
-#: of its patch: it may be a deep penetration to the law), and that run stopped at 31.7 mm
-#: of its 40 mm first stage (docs/theory/contact.md, "Reach").
-REACH_SIZES, REACH_TRAVELS = 2.0, 4.0
-#: Steps in which the forces of tools lifted at the start of a phase are released (each
-#: halved while it fails, down to RELEASE_SMALLEST of the whole release).
-RELEASE_STEPS, RELEASE_SMALLEST = 4, 1.0 / 1024.0
-#: A force-controlled tool that does not touch the blank at the start of a phase is first
-#: brought onto it, this many element sizes into its nearest slave node (a Gauss point
-#: exactly on the tool carries no pressure, and nothing would hold the tool).
-TOUCH_DEPTH = 1e-3
-#: A force-controlled tool moves at most this share of the search's reach in one Newton
-#: step: it never leaves the blank behind in one correction (the core's hold_step).
-HOLD_STEP = 0.5
-#: Most Uzawa updates of the Gauss points' pressure multipliers within one increment
-#: (NewtonSettings.augment; docs/theory/contact.md, "Penetration").
-MAX_AUGMENTATIONS = 6
-
 
 def _trial(target: float, step: float | None, travel: float) -> str:
     """An increment trial as messages name it: the lead tool's stroke in mm it goes to (and
@@ -230,14 +177,51 @@ class FormingError(RuntimeError):
 
 
 @dataclass
-class FormingResult:
+class FormingState:
+    """What a FormingProblem carries from one converged increment to the next, and so all
+    a checkpoint needs of it (``FormingProblem.state``, ``restore``): the blank's
+    displacements (n, 3) and its solid state, where each tool is (3,), and per pair its
+    contact force (pairs, 3) and the law's state at the last increment (pairs,: 0 open, 1
+    stick, 2 slip, which the release control reads); per Gauss point of Gauss-point
+    contact its tangential traction (points, 3) and the multiplier of its augmented law
+    (points,). Add here any new state of the loop (a checkpoint stores every field)."""
+
+    u: NDArray[np.float64]
+    solid: SolidState
+    positions: dict[str, NDArray[np.float64]]
+    force: NDArray[np.float64]
+    contact_state: NDArray[np.int32]
+    traction: NDArray[np.float64]
+    pressure: NDArray[np.float64]
+
+
+@dataclass
+class IncrementRecord:
+    """The fields of one converged increment: the blank's displacements (n, 3) and, per
+    tool, the contact state of every slave (0 open, 1 stick, 2 slip). A FormingResult
+    keeps the last one (``last``), and every one only when asked (``history``)."""
+
+    displacement: NDArray[np.float64]
+    contact_states: dict[str, NDArray[np.int32]] = field(default_factory=dict)
+
+
+@dataclass
+class FormingResult(Work):
     """Converged increments of a run, per increment: the phase factor and the increment
     size (as a fraction of the phase), each tool's displacement and the force the blank
-    exerts on it, the nodes in contact per tool, Newton iterations with the residual norms,
-    and the blank displacements. ``timings``: the seconds the core's Newton loop spent in
-    assembly, contact, factorization and solves (the rest of a run's time is the caller's
-    to measure: ddpy.app.runner records it per increment)."""
+    exerts on it, the nodes in contact per tool and its deepest penetration, Newton
+    iterations with the residual norms: small records, kept for every increment. The
+    fields of an increment (its displacements and the contact states of the tools' pairs,
+    an IncrementRecord) are kept for the last increment (``last``) and, with ``history``,
+    for every one (``displacements``, ``contact_states``): a run of many increments on a
+    large blank would otherwise hold a copy of its displacements per increment (the runner
+    writes each increment to the results file instead). The work of all trials is counted
+    as Work: cuts, evaluations, corrections, factorizations, GMRES iterations, fallbacks
+    and the seconds of the core's loop (``timings``; the rest of a run's time is the
+    caller's to measure: ddpy.app.runner records it per increment)."""
 
+    #: keep every increment's fields (``displacements``, ``contact_states``)
+    history: bool = False
     factors: list[float] = field(default_factory=list)
     sizes: list[float] = field(default_factory=list)
     #: what set each increment: "max", "touch", "release", "strain", "rotation", "yield",
@@ -246,29 +230,11 @@ class FormingResult:
     tool_displacements: dict[str, list[NDArray[np.float64]]] = field(default_factory=dict)
     tool_forces: dict[str, list[NDArray[np.float64]]] = field(default_factory=dict)
     contacts: dict[str, list[int]] = field(default_factory=dict)
-    #: per tool and increment, the contact state of every slave: 0 open, 1 stick, 2 slip
-    contact_states: dict[str, list[NDArray[np.int32]]] = field(default_factory=dict)
     residuals: list[list[float]] = field(default_factory=list)
     #: per increment and Newton iteration, what convergence is judged on: the residual norm
     #: over the force scale and the correction over the increment's displacement, scaled up
     #: to a whole increment's when the increment is smaller (inf before the first correction)
     relative: list[list[tuple[float, float]]] = field(default_factory=list)
-    displacements: list[NDArray[np.float64]] = field(default_factory=list)
-    #: increment trials that failed: each was cut and tried again, but for the last one of a
-    #: run that stopped on it, which counts too
-    cuts: int = 0
-    #: LU factorizations, and the GMRES iterations of the Newton corrections solved with an
-    #: older factorization instead (``FormingProblem.linear_solver``)
-    factorizations: int = 0
-    krylov_iterations: int = 0
-    #: Newton corrections and residual evaluations (line-search trials and extrapolated
-    #: starts included) of every trial increment, the rejected ones (cut, or redone shorter
-    #: by an increment limit) included: the work behind ``iterations``
-    newton_iterations: int = 0
-    evaluations: int = 0
-    #: Newton steps whose line search found no step length that passed the natural
-    #: monotonicity test and took the longest that lowered the residual norm instead
-    fallbacks: int = 0
     #: per tool and increment, the deepest penetration of the blank into the tool (mm, 0
     #: when none): the most negative signed distance of its slave nodes from it (for
     #: node-to-surface contact their gaps; for the others the nodes projected on the tool,
@@ -277,8 +243,12 @@ class FormingResult:
     #: Uzawa updates of the Gauss points' pressure multipliers (each one more solve of its
     #: increment, its iterations counted in the increment's)
     augmentations: int = 0
-    timings: dict[str, float] = field(default_factory=lambda: {
-        "assembly": 0.0, "contact": 0.0, "factorization": 0.0, "solve": 0.0})
+    #: the last converged increment's fields (None before the first)
+    last: IncrementRecord | None = None
+    #: with ``history``, per increment the blank displacements, and per tool and increment
+    #: the contact state of every slave (IncrementRecord)
+    displacements: list[NDArray[np.float64]] = field(default_factory=list)
+    contact_states: dict[str, list[NDArray[np.int32]]] = field(default_factory=dict)
     #: the blank's fields at the end of each run and springback (FieldFrame: displacement,
     #: stress, plastic strain, thickness, contact pressure...; ``frame.to_meshio()``)
     frames: list[FieldFrame] = field(default_factory=list)
@@ -288,6 +258,85 @@ class FormingResult:
         """Newton iterations of every converged increment."""
         return [len(r) - 1 for r in self.residuals]
 
+    def add_tools(self, names: Iterable[str]) -> None:
+        """Make room for the per-tool records of ``names``."""
+        for name in names:
+            for records in (self.tool_displacements, self.tool_forces, self.contacts,
+                            self.contact_states, self.penetration):
+                records.setdefault(name, [])
+
+    def record(self, size: float, reason: str, factor: float, residuals: list[float],
+               relative: list[tuple[float, float]], u: NDArray[np.float64],
+               tools: Mapping[str, tuple[NDArray[np.float64], NDArray[np.float64],
+                                         NDArray[np.int32], float]] | None = None) -> None:
+        """A converged increment of ``size`` (set by ``reason``) to phase factor ``factor``
+        with its residual history, the blank's displacements ``u`` and per tool its
+        position, its pairs' forces on the blank and contact states, and its deepest
+        penetration."""
+        self.sizes.append(size)
+        self.limited_by.append(reason)
+        self.factors.append(factor)
+        self.residuals.append(residuals)
+        self.relative.append(relative)
+        states: dict[str, NDArray[np.int32]] = {}
+        for name, (position, force, state, depth) in (tools or {}).items():
+            self.tool_displacements[name].append(position.copy())
+            self.tool_forces[name].append(-force.sum(axis=0))
+            self.contacts[name].append(int((state != INACTIVE).sum()))
+            self.penetration[name].append(depth)
+            states[name] = state.copy()
+        self.last = IncrementRecord(u.copy(), states)
+        if self.history:
+            self.displacements.append(self.last.displacement)
+            for name, state in states.items():
+                self.contact_states[name].append(state)
+
+
+@dataclass
+class _Attempt:
+    """An increment trial of a phase's run: the phase factor it goes to, where it puts the
+    tools, the force-controlled tools' forces, its touching predictor, its size ratio
+    (Loop.size_ratio), the core's outcome and, once it converged, its deepest penetration
+    per tool and its largest strain and rotation increments."""
+
+    target: float
+    positions: dict[str, NDArray[np.float64]]
+    pressing: NDArray[np.float64]
+    touching: _Touching
+    size_ratio: float
+    outcome: Trial
+    depth: list[float] = field(default_factory=list)
+    strain: float = 0.0
+    rotation: float = 0.0
+
+
+@dataclass
+class _PhaseRun:
+    """What ``FormingProblem.run`` carries from one increment to the next within a phase:
+    its layout and settings, the result it records into, the tools' motions, gap offsets,
+    force ramps and start positions, the phase factor reached, the last increment's rates
+    of the displacements and the pairs' pressures, the increment controller, and the lifted
+    tools' release histories waiting to join the first increment's."""
+
+    layout: Layout
+    newton: NewtonSettings
+    limits: IncrementLimits
+    result: FormingResult
+    phase: str
+    moves: dict[str, NDArray[np.float64]]
+    offsets: dict[str, tuple[str, NDArray[np.float64]]]
+    travel: float
+    on: NDArray[np.bool_]
+    holders: list[str]
+    ramp: NDArray[np.float64]
+    start: dict[str, NDArray[np.float64]]
+    control: IncrementController
+    factor: float = 0.0
+    last_du: NDArray[np.float64] | None = None
+    last_dp: NDArray[np.float64] | None = None
+    initial: dict[str, NDArray[np.float64]] = field(default_factory=dict)
+    released: tuple[list, list] = ([], [])
+
 
 class FormingProblem:
     """The blank (a Solid) and its rigid tools. ``fix`` holds displacement components of
@@ -295,14 +344,16 @@ class FormingProblem:
     successive calls continue from where the last one stopped (multi-stage processes)."""
 
     def __init__(self, solid: Solid, tools: Iterable[RigidTool], ordering: str = "nested",
-                 linear_solver: str = "auto") -> None:
+                 linear_solver: str = "auto", tuning: FormingTuning | None = None) -> None:
         if linear_solver not in ("auto", "direct", "reuse"):
             raise ValueError(f"linear_solver must be 'auto', 'direct' or 'reuse', got "
                              f"{linear_solver!r}")
         #: "direct": factorize the Jacobian at every Newton iteration; "reuse": solve with
         #: the last factorization as the preconditioner of GMRES while it converges fast,
-        #: factorizing again when it does not; "auto": reuse from REUSE_FROM unknowns
+        #: factorizing again when it does not; "auto": reuse from tuning.reuse_from unknowns
         self.linear_solver = linear_solver
+        #: the constants of the Newton loop, the contact and the increment policy
+        self.tuning = FormingTuning() if tuning is None else tuning
         self.solid = solid
         self.tools = list(tools)
         names = [t.name for t in self.tools]
@@ -340,7 +391,9 @@ class FormingProblem:
         self._neighbours = _neighbour_pairs(mesh.elements, self.tools, mesh.n_nodes)
         # State carried between increments and phases.
         self.u = np.zeros((n, 3))
-        self.state: SolidState = solid.initial_state()
+        #: the blank's solid state at the last converged increment (stresses, plastic
+        #: strains, material axes...)
+        self.solid_state: SolidState = solid.initial_state()
         self.position = {t.name: np.zeros(3) for t in self.tools}
         npair = sum(t.slaves.size for t in self.tools)
         self.force = np.zeros((npair, 3))
@@ -358,8 +411,9 @@ class FormingProblem:
         self._augment = False
         #: the blank's thickness (mm), the scale of NewtonSettings.penetration
         self._gap = (np.full(npair, np.inf), np.zeros((npair, 3)))
-        #: reach of the contact search (mm): see REACH_SIZES; run() adds its tool travel
-        self._reach = REACH_SIZES * self.size
+        #: reach of the contact search (mm): see FormingTuning.reach_sizes; run() adds its
+        #: tool travel
+        self._reach = self.tuning.reach_sizes * self.size
         self._contact_state = np.zeros(npair, dtype=np.int32)  # of the law, last increment
         self.external = np.zeros((n, 3))
         self._layout: Layout | None = None
@@ -388,6 +442,57 @@ class FormingProblem:
         if self._solver is not None:
             self._solver.close()
         self._solver, self._layout = None, None
+
+    def constrain(self, fixed: NDArray[np.bool_]) -> None:
+        """Hold exactly the components ``fixed`` (n, 3) marks (a phase's constraints), the
+        others free; the solver's analysis is made again at the next run."""
+        fixed = np.asarray(fixed)
+        if fixed.shape != self.fixed.shape or fixed.dtype != bool:
+            raise ValueError(f"fixed must be booleans of shape {self.fixed.shape}, got "
+                             f"{fixed.dtype} {fixed.shape}")
+        self.fixed[:] = fixed
+        self._reset()
+
+    # -- state -------------------------------------------------------------------------
+
+    def state(self) -> FormingState:
+        """A copy of what the problem carries from one increment to the next."""
+        return FormingState(self.u.copy(), self.solid_state.copy(),
+                            {name: p.copy() for name, p in self.position.items()},
+                            self.force.copy(), self._contact_state.copy(),
+                            self.traction.copy(), self.pressure.copy())
+
+    def restore(self, state: FormingState) -> None:
+        """Continue from ``state`` (``state()`` of this problem, or of one built alike:
+        a checkpoint's), checked against the problem: ValueError naming what does not fit
+        (another mesh, tools or material)."""
+        expected = {"u": self.u.shape, "force": self.force.shape,
+                    "contact_state": self._contact_state.shape,
+                    "traction": self.traction.shape, "pressure": self.pressure.shape}
+        for name, shape in expected.items():
+            value = getattr(state, name)
+            if value.shape != shape:
+                raise ValueError(f"{name} {value.shape}, expected {shape} (another mesh or "
+                                 "tools)")
+        if set(state.positions) != set(self.position):
+            raise ValueError(f"tools {sorted(state.positions)}, expected "
+                             f"{sorted(self.position)}")
+        solid = state.solid
+        if solid.stress.shape != self.solid_state.stress.shape:
+            raise ValueError(f"stress {solid.stress.shape}, expected "
+                             f"{self.solid_state.stress.shape} (another mesh)")
+        if self.solid.mixed and solid.backstress is None:
+            # No guess of the backstress: zero would restart a hardened sheet as fresh.
+            raise ValueError("no backstress, which the mixed hardening of the material needs")
+        if solid.backstress is not None and (
+                not self.solid.mixed or solid.backstress.shape != solid.stress.shape):
+            raise ValueError(f"a backstress {solid.backstress.shape}, which the material "
+                             "does not have (another material or mesh)")
+        self.u, self.force = state.u.copy(), state.force.copy()
+        self._contact_state = state.contact_state.astype(np.int32)
+        self.traction, self.pressure = state.traction.copy(), state.pressure.copy()
+        self.position = {name: np.array(p, dtype=float) for name, p in state.positions.items()}
+        self.solid_state = solid.copy()
 
     def _prepare(self, holds: tuple[int, ...] = ()) -> Layout:
         """The layout and the analysed MUMPS instance of the present constraints with the
@@ -441,13 +546,16 @@ class FormingProblem:
         smaller (a cut does not tighten the test); an increment that fails is cut by its
         ``cutback`` and retried, until a
         cut would go below ``limits.min_fraction``. ``limits``: the r_min control (default
-        IncrementLimits()). Both defaults are those of a deck that sets nothing. ``gaps``:
+        IncrementLimits(); the policy is ddpy.model.control.IncrementController's). Both
+        defaults are those of a deck that sets nothing. ``gaps``:
         tools held at a fixed gap from another, e.g. ``{"holder": ("die", 1.13, (0, 0, 1))}``:
         the holder is set, along the direction, at 1.13 mm from the die (the smallest
         distance between their surfaces) in the first increment and then follows the die
         (a position-controlled blank-holder).
-        ``on_increment`` is called after every converged increment (the result holds its
-        data) with a PhaseProgress that also says which increment it was (counted over
+        ``result``: where the increments are recorded (default: a new FormingResult, which
+        keeps the last increment's fields only; ``FormingResult(history=True)`` keeps them
+        all). ``on_increment`` is called after every converged increment (the result holds
+        its data) with a PhaseProgress that also says which increment it was (counted over
         ``result``), the phase (``phase``, a name for it) and the leading tool's travel
         since the start of the run's motion (mm); a true return stops the run there.
         ``resume`` continues a run from the progress such a call received. ``frames``:
@@ -460,12 +568,33 @@ class FormingProblem:
         touch the blank is first brought onto it (docs/theory/contact.md,
         "Force-controlled tools"). A tool that loses the blank stops the run
         (FormingError)."""
+        run = self._begin(motion, max_increment, active, newton, limits, gaps, result,
+                          resume, phase, forces)
+        while run.factor < 1.0 - 1e-12:
+            trial = self._attempt(run)
+            if self._cut(run, trial) or not self._settle(run, trial):
+                continue
+            progress = self._accept(run, trial)
+            if on_increment is not None and on_increment(progress):
+                break
+        if frames:
+            run.result.frames.append(self.fields(len(run.result.factors), phase,
+                                                 run.factor * run.travel))
+        return run.result
+
+    def _begin(self, motion: Mapping[str, ArrayLike], max_increment: float,
+               active: Iterable[str] | None, newton: NewtonSettings | None,
+               limits: IncrementLimits | None,
+               gaps: Mapping[str, tuple[str, float, ArrayLike]] | None,
+               result: FormingResult | None, resume: PhaseProgress | None, phase: str,
+               forces: Mapping[str, float | tuple[float, float]] | None) -> _PhaseRun:
+        """A phase's run checked and set up (``run``'s arguments): the layout with its
+        force-controlled tools brought onto the blank, the start refused where a tool lies
+        deeper in the blank than an increment may push it out, the lifted tools released,
+        and the increment controller at its first trial (or where ``resume`` left it)."""
         limits = IncrementLimits() if limits is None else limits
         newton = NewtonSettings() if newton is None else newton
         self._augment = newton.augment
-        tol_force, tol_disp = newton.force_tolerance, newton.displacement_tolerance
-        max_iterations, cutback = newton.max_iterations, newton.cutback
-        max_cuts = limits.max_cuts(cutback)
         unknown = set(motion) - {t.name for t in self.tools}
         if unknown:
             raise ValueError(f"motion names unknown tools: {sorted(unknown)}")
@@ -483,45 +612,52 @@ class FormingProblem:
             raise ValueError(f"max_increment {max_increment:g} mm would take more than "
                              f"{MAX_INCREMENTS:,} increments over the travel {travel:g} mm")
         result = FormingResult() if result is None else result
-        for t in self.tools:
-            result.tool_displacements.setdefault(t.name, [])
-            result.tool_forces.setdefault(t.name, [])
-            result.contacts.setdefault(t.name, [])
-            result.contact_states.setdefault(t.name, [])
-            result.penetration.setdefault(t.name, [])
+        result.add_tools([t.name for t in self.tools])
         layout = self._prepare(tuple(sorted(ramps)))
-        holders = [self.tools[k].name for k in layout.holds]
-        ramp = np.array([ramps[k] for k in layout.holds]).reshape(-1, 2)
         on = np.concatenate([np.full(t.slaves.size, t.name in active_set) for t in self.tools])
-        self._reach = max(REACH_SIZES * self.size,
-                          REACH_TRAVELS * min(max_increment, travel))
+        tuning = self.tuning
+        self._reach = max(tuning.reach_sizes * self.size,
+                          tuning.reach_travels * min(max_increment, travel))
         if resume is None:
             for k in layout.holds:
                 self._touch_down(layout, int(k))
-        start = {name: p.copy() for name, p in self.position.items()}
         nominal = min(1.0, max_increment / travel) if travel > 0.0 else 1.0
-        factor, step, cuts_in_row, reason = 0.0, nominal, 0, "max"
-        redos = 0  # redos at a release of the present increment
-        last_du: NDArray[np.float64] | None = None
-        last_dp: NDArray[np.float64] | None = None  # pressure rate of the last increment
-        careful = False  # the first increment's default start failed: careful starts only
+        run = _PhaseRun(layout, newton, limits, result, phase, moves, offsets, travel, on,
+                        [self.tools[k].name for k in layout.holds],
+                        np.array([ramps[k] for k in layout.holds]).reshape(-1, 2),
+                        {name: p.copy() for name, p in self.position.items()},
+                        IncrementController(limits, newton.cutback, nominal,
+                                            tuning.increment))
         if resume is not None:
-            start, factor, step = resume.start, resume.factor, min(resume.step, nominal)
-            reason, last_du, last_dp = resume.reason, resume.last_du, resume.last_dp
-        # Gaps at the start of the phase (tools held at a gap placed there), for first touch;
-        # a tool deeper in the blank than one increment may push it out is refused (seen
-        # here within the search's reach; the deck's checks search without one).
+            run.start, run.factor = resume.start, resume.factor
+            run.control.resume(resume.step, resume.reason)
+            run.last_du, run.last_dp = resume.last_du, resume.last_dp
+        self._check_start(run)
+        # Tools lifted off at the start of the phase let go of the blank gradually, before
+        # the phase's first increment (docs/theory/contact.md): their iterations count as
+        # that increment's.
+        if resume is None:
+            run.released = self._release(layout, on, run.initial, newton, result,
+                                         run.ramp[:, 0])
+        return run
+
+    def _check_start(self, run: _PhaseRun) -> None:
+        """The gaps at the start of the phase (tools held at a gap placed there), for first
+        touch; a tool deeper in the blank than one increment may push it out is refused
+        (seen here within the search's reach; the deck's checks search without one)."""
+        layout, limits = run.layout, run.limits
         x = self.solid.mesh.nodes + self.u
-        initial = dict(self.position)
-        for name, (other, offset) in offsets.items():
-            initial[name] = self.position[other] + offset
-        self._gap = self._contact(layout, x, x, initial, on, self.force, np.zeros(layout.n),
-                                  np.empty(0))[1]
+        run.initial = dict(self.position)
+        for name, (other, offset) in run.offsets.items():
+            run.initial[name] = self.position[other] + offset
+        self._gap = self._contact(layout, x, x, run.initial, run.on, self.force,
+                                  np.zeros(layout.n), np.empty(0))[1]
         # (Gauss-point contact that carries a force sits in the tool by its penalty's depth.)
         holding = self._gauss & (np.abs(self.force).sum(axis=1) > 0.0)
         # (A force-controlled tool was just brought onto the blank: it presses as it must.)
         holding |= np.isin(layout.tool_of, layout.holds)
-        depth = np.where(on & np.isfinite(self._gap[0]) & ~holding, -self._gap[0], -np.inf)
+        depth = np.where(run.on & np.isfinite(self._gap[0]) & ~holding, -self._gap[0],
+                         -np.inf)
         worst = int(np.argmax(depth)) if depth.size else 0
         if depth.size and depth[worst] > start_depth_limit(limits.strain, self.size):
             raise ValueError(
@@ -529,167 +665,150 @@ class FormingProblem:
                 f"slave node {int(layout.node[worst])} is {depth[worst]:.3g} mm deep, more "
                 f"than the strain limit times the element size ({limits.strain:g} x "
                 f"{self.size:.3g} mm); move the tool out first")
-        # Tools lifted off at the start of the phase let go of the blank gradually, before
-        # the phase's first increment (docs/theory/contact.md): their iterations count as
-        # that increment's.
-        released: tuple[list, list] = ([], [])
-        if resume is None:
-            released = self._release(layout, on, initial, tol_force, tol_disp,
-                                     max_iterations, result, ramp[:, 0])
-        while factor < 1.0 - 1e-12:
-            if limits.first_touch and reason != "cut":
-                touch = self._touch_factor(layout, on, moves, step, last_du, limits)
-                if touch < 1.0:
-                    step, reason = max(step * touch, limits.min_fraction * nominal), "touch"
-            if limits.release is not None and reason != "cut" and last_dp is not None:
-                ahead = self._release_ahead(step, last_dp, limits.release,
-                                            self._minor(layout, limits.release_share))
-                if ahead < 1.0:
-                    step = max(step * ahead, limits.min_fraction * nominal)
-                    reason = "release"
-            target = min(1.0, factor + step)
-            positions = {n: start[n] + target * moves[n] for n in start}
-            for name, (other, offset) in offsets.items():
-                positions[name] = positions[other] + offset
-            for name in holders:  # from where the last increment left it
-                positions[name] = self.position[name].copy()
-            pressing = ramp[:, 0] + target * (ramp[:, 1] - ramp[:, 0])
-            # A tolerance of 0 is taken as 1e-6: a point landed on the surface lies within
-            # rounding of it, and at 0 it would count as elastic and be landed again.
-            landing = None if (limits.yield_tolerance is None or
-                               step <= limits.min_fraction * nominal) else max(
-                                   limits.yield_tolerance, 1e-6)
-            # Start from the last increment's displacement rate (docs/theory/contact.md).
-            guess = _extrapolated(self.u, target - factor, last_du)
-            careful = careful and last_du is None
-            touching = _Touching(TOUCHING * self.size, resting=not careful)
-            size_ratio = nominal / (target - factor)
-            outcome = self._increment(layout, positions, on, tol_force, tol_disp,
-                                      max_iterations, result, landing, touching, guess,
-                                      careful=careful, size_ratio=size_ratio,
-                                      hold_force=pressing)
-            self._check_hold(outcome, target, travel, pressing, layout, result)
-            if outcome.failure and last_du is None and not careful:
-                # The first increment of a phase starts with the blank lying on its tools:
-                # a second start keeps open the touching pairs of the tools at rest that
-                # the blank does not need, with exact solves and full steps (a careful
-                # start, docs/theory/contact.md), before cutting; so do the retries of
-                # this increment.
-                _log.info("%s starts again with the resting tools' touching pairs open: %s",
-                          _trial(target, step, travel), outcome.failure)
-                careful = True
-                touching = _Touching(TOUCHING * self.size, resting=False)
-                outcome = self._increment(layout, positions, on, tol_force,
-                                          tol_disp, max_iterations, result, landing,
-                                          touching, guess, careful=True,
-                                          size_ratio=size_ratio, hold_force=pressing)
-                self._check_hold(outcome, target, travel, pressing, layout, result)
-            if outcome.landing < 1.0:  # an elastic point would overshoot the yield stress
-                step = max(step * outcome.landing, limits.min_fraction * nominal)
-                reason = "yield"
-                continue
-            if outcome.failure:
-                _log.info("%s cut: %s (hint: %s)", _trial(target, step, travel),
-                          outcome.failure, cut_hint(outcome.failure))
-                cuts_in_row += 1
-                result.cuts += 1
-                if cuts_in_row > max_cuts:
-                    raise FormingError(f"{_trial(target, None, travel)} failed after "
-                                       f"{max_cuts} cuts: {outcome.failure} (hint: "
-                                       f"{cut_hint(outcome.failure)})", result)
-                if step * cutback < limits.min_fraction * nominal and \
-                        1.0 - factor > limits.min_fraction * nominal:
-                    # Below the smallest increment a run only crawls: cut after cut, each
-                    # tiny step converging and the next, larger one failing again.
-                    raise FormingError(
-                        f"{_trial(target, None, travel)} failed: a cut would make it smaller "
-                        f"than the smallest increment ({limits.min_fraction:g} of the "
-                        f"largest): {outcome.failure} (hint: {cut_hint(outcome.failure)})",
-                        result)
-                step, reason = step * cutback, "cut"
-                continue
-            depth = self._penetration(layout, outcome, on, self._placed(layout, positions,
-                                                                        outcome))
-            if newton.augment:
-                outcome, depth = self._augmented(
-                    outcome, depth, newton.penetration * self.thickness, layout, positions,
-                    on, tol_force, tol_disp, max_iterations, result, touching, size_ratio,
-                    pressing)
-            positions = self._placed(layout, positions, outcome)
-            u, state, force, in_contact, gap = (outcome.u, outcome.state, outcome.force,
-                                                outcome.in_contact, outcome.gap)
-            residuals, relative = outcome.residuals, outcome.relative
-            strain = _equivalent_strain_increment(state.strain - self.state.strain)
-            if strain > 1.05 * limits.strain and step > limits.min_fraction * nominal:
-                step = max(step * limits.strain / strain, limits.min_fraction * nominal)
-                reason = "strain"
-                continue
-            rotation = largest_rotation(self.solid.mesh.nodes + self.u, self.solid.mesh.elements,
-                                        u - self.u)
-            limit = np.radians(limits.rotation_deg)
-            if rotation > 1.05 * limit and step > limits.min_fraction * nominal:
-                step = max(step * limit / rotation, limits.min_fraction * nominal)
-                reason = "rotation"
-                continue
-            if (limits.release is not None and step > limits.min_fraction * nominal
-                    and (limits.release_redos is None or redos < limits.release_redos)):
-                change = None if last_dp is None else last_dp * (target - factor)
-                release = self._release_factor(force, in_contact, gap, change,
-                                               self._minor(layout, limits.release_share))
-                if release < 1.0 - limits.release:
-                    # Redo it ending just past the release, so that the node is free at
-                    # the end (a release within the last fraction is accepted).
-                    step = max(step * release * (1.0 + limits.release / 2.0),
-                               limits.min_fraction * nominal)
-                    reason = "release"
-                    redos += 1
-                    continue
 
-            if released[0]:
-                # One history for the release and the increment: each later solve's start
-                # (the residual after the load's change) is left out, so that its
-                # iterations count the corrections of both.
-                residuals = released[0] + list(residuals)[1:]
-                relative = released[1] + list(relative)[1:]
-                released = ([], [])
-            last_du = (u - self.u) / (target - factor)
-            normal = gap[1]
-            last_dp = np.einsum("ij,ij->i", force - self.force, normal) / (target - factor)
-            self._take(outcome)
-            self.position = positions
-            result.sizes.append(target - factor)
-            result.limited_by.append(reason)
-            factor = target
-            result.factors.append(factor)
-            result.residuals.append(residuals)
-            result.relative.append(relative)
-            result.displacements.append(u.copy())
-            for i, t in enumerate(self.tools):
-                pairs = slice(layout.first[i], layout.first[i + 1])
-                result.tool_displacements[t.name].append(positions[t.name].copy())
-                result.tool_forces[t.name].append(-force[pairs].sum(axis=0))
-                result.contacts[t.name].append(int((in_contact[pairs] != INACTIVE).sum()))
-                result.contact_states[t.name].append(in_contact[pairs].copy())
-                result.penetration[t.name].append(depth[i])
-            cuts_in_row = redos = 0
-            step, reason = next_step(step, nominal, reason, strain / limits.strain,
-                                      rotation / limit)
-            if on_increment is not None and on_increment(
-                    PhaseProgress(start, offsets, factor, step, reason, last_du, last_dp,
-                                  increment=len(result.factors), phase=phase,
-                                  travel=factor * travel)):
-                break
-        if frames:
-            result.frames.append(self.fields(len(result.factors), phase, factor * travel))
-        return result
+    def _attempt(self, run: _PhaseRun) -> _Attempt:
+        """One increment trial of ``run``: its size limited ahead by first touch and the
+        release trend, the tools placed, the core's Newton loop from the last increment's
+        rate; where the phase's first increment fails from its default start, once more
+        from a careful start (docs/theory/contact.md)."""
+        control, layout = run.control, run.layout
+        if control.touch:
+            control.shorten(self._touch_factor(layout, run.on, run.moves, control.step,
+                                               run.last_du, run.limits), "touch")
+        if control.release_ahead(run.last_dp is not None):
+            assert run.limits.release is not None and run.last_dp is not None
+            control.shorten(self._release_ahead(control.step, run.last_dp, run.limits.release,
+                                                self._minor(layout, run.limits.release_share)),
+                            "release")
+        step, factor = control.step, run.factor
+        target = min(1.0, factor + step)
+        positions = {n: run.start[n] + target * run.moves[n] for n in run.start}
+        for name, (other, offset) in run.offsets.items():
+            positions[name] = positions[other] + offset
+        for name in run.holders:  # from where the last increment left it
+            positions[name] = self.position[name].copy()
+        pressing = run.ramp[:, 0] + target * (run.ramp[:, 1] - run.ramp[:, 0])
+        landing = control.landing()
+        # Start from the last increment's displacement rate (docs/theory/contact.md).
+        guess = _extrapolated(self.u, target - factor, run.last_du)
+        careful = control.start(run.last_du is None)
+        touching = _Touching(self.tuning.touching * self.size, resting=not careful)
+        size_ratio = control.nominal / (target - factor)
+        trial = _Attempt(target, positions, pressing, touching, size_ratio, self._increment(
+            layout, positions, run.on, run.newton, run.result, landing, touching, guess,
+            careful=careful, size_ratio=size_ratio, hold_force=pressing))
+        self._check_hold(trial.outcome, target, run.travel, pressing, layout, run.result)
+        if trial.outcome.failure and run.last_du is None and not careful:
+            # The first increment of a phase starts with the blank lying on its tools:
+            # a second start keeps open the touching pairs of the tools at rest that
+            # the blank does not need, with exact solves and full steps (a careful
+            # start, docs/theory/contact.md), before cutting; so do the retries of
+            # this increment.
+            _log.info("%s starts again with the resting tools' touching pairs open: %s",
+                      _trial(target, step, run.travel), trial.outcome.failure)
+            control.careful = True
+            trial.touching = _Touching(self.tuning.touching * self.size, resting=False)
+            trial.outcome = self._increment(layout, positions, run.on, run.newton, run.result,
+                                            landing, trial.touching, guess, careful=True,
+                                            size_ratio=size_ratio, hold_force=pressing)
+            self._check_hold(trial.outcome, target, run.travel, pressing, layout, run.result)
+        return trial
+
+    def _cut(self, run: _PhaseRun, trial: _Attempt) -> bool:
+        """Whether ``trial`` is done again: shorter where it lands a yield point, cut where
+        it failed (FormingError where the controller allows no more cuts)."""
+        outcome, control = trial.outcome, run.control
+        if outcome.landing < 1.0:  # an elastic point would overshoot the yield stress
+            control.shorten(outcome.landing, "yield")
+            return True
+        if not outcome.failure:
+            return False
+        where, hint = _trial(trial.target, None, run.travel), cut_hint(outcome.failure)
+        _log.info("%s cut: %s (hint: %s)", _trial(trial.target, control.step, run.travel),
+                  outcome.failure, hint)
+        run.result.cuts += 1
+        stop = control.cut(run.factor)
+        if stop == "cuts":
+            raise FormingError(f"{where} failed after {control.max_cuts} cuts: "
+                               f"{outcome.failure} (hint: {hint})", run.result)
+        if stop == "smallest":
+            raise FormingError(
+                f"{where} failed: a cut would make it smaller than the smallest increment "
+                f"({run.limits.min_fraction:g} of the largest): {outcome.failure} (hint: "
+                f"{hint})", run.result)
+        return True
+
+    def _settle(self, run: _PhaseRun, trial: _Attempt) -> bool:
+        """A converged ``trial`` with its penetration (its Gauss points' pressures augmented
+        while too deep), checked against the strain, rotation and release limits: whether
+        it stands (False: the controller redoes it shorter)."""
+        layout, control = run.layout, run.control
+        trial.depth = self._penetration(layout, trial.outcome, run.on,
+                                        self._placed(layout, trial.positions, trial.outcome))
+        if run.newton.augment:
+            trial.outcome, trial.depth = self._augmented(
+                trial.outcome, trial.depth, run.newton.penetration * self.thickness, layout,
+                trial.positions, run.on, run.newton, run.result, trial.touching,
+                trial.size_ratio, trial.pressing)
+        trial.positions = self._placed(layout, trial.positions, trial.outcome)
+        outcome = trial.outcome
+        assert outcome.state is not None and outcome.u is not None
+        trial.strain = _equivalent_strain_increment(outcome.state.strain - self.solid_state.strain)
+        if control.strain_redo(trial.strain):
+            return False
+        trial.rotation = largest_rotation(self.solid.mesh.nodes + self.u,
+                                          self.solid.mesh.elements, outcome.u - self.u)
+        if control.rotation_redo(trial.rotation):
+            return False
+        if control.checks_release:
+            assert outcome.gap is not None and outcome.in_contact is not None
+            change = None if run.last_dp is None else run.last_dp * (trial.target - run.factor)
+            release = self._release_factor(outcome.force, outcome.in_contact, outcome.gap,
+                                           change, self._minor(layout,
+                                                               run.limits.release_share))
+            if control.release_redo(release):
+                return False
+        return True
+
+    def _accept(self, run: _PhaseRun, trial: _Attempt) -> PhaseProgress:
+        """A settled ``trial`` as the problem's state, recorded in the run's result; the
+        controller sizes the next. Returns the progress the run reached."""
+        outcome, layout, result = trial.outcome, run.layout, run.result
+        assert outcome.u is not None and outcome.gap is not None
+        residuals, relative = outcome.residuals, outcome.relative
+        if run.released[0]:
+            # One history for the release and the increment: each later solve's start
+            # (the residual after the load's change) is left out, so that its
+            # iterations count the corrections of both.
+            residuals = run.released[0] + list(residuals)[1:]
+            relative = run.released[1] + list(relative)[1:]
+            run.released = ([], [])
+        size = trial.target - run.factor
+        run.last_du = (outcome.u - self.u) / size
+        run.last_dp = np.einsum("ij,ij->i", outcome.force - self.force,
+                                outcome.gap[1]) / size
+        self._take(outcome)
+        self.position = trial.positions
+        run.factor = trial.target
+        result.record(size, run.control.reason, run.factor, residuals, relative, outcome.u,
+                      {t.name: (trial.positions[t.name],
+                                outcome.force[layout.first[i]:layout.first[i + 1]],
+                                outcome.in_contact[layout.first[i]:layout.first[i + 1]],
+                                trial.depth[i])
+                       for i, t in enumerate(self.tools)})
+        run.control.accept(trial.strain, trial.rotation)
+        return PhaseProgress(run.start, run.offsets, run.factor, run.control.step,
+                             run.control.reason, run.last_du, run.last_dp,
+                             increment=len(result.factors), phase=run.phase,
+                             travel=run.factor * run.travel)
 
     def _release(self, layout: Layout, on: NDArray[np.bool_],
-                 positions: Mapping[str, NDArray[np.float64]], tol_force: float,
-                 tol_disp: float, max_iterations: int, result: FormingResult,
-                 hold_force: NDArray[np.float64] | None = None) -> tuple[list, list]:
+                 positions: Mapping[str, NDArray[np.float64]], newton: NewtonSettings,
+                 result: FormingResult, hold_force: NDArray[np.float64] | None = None
+                 ) -> tuple[list, list]:
         """Let go of the blank where tools that held it are lifted off (pairs not ``on``
         that carry a force): their forces become nodal loads, brought to zero in
-        RELEASE_STEPS steps (halved while one fails) with the other tools at
+        IncrementTuning.release_steps steps (halved while one fails) with the other tools at
         ``positions``, as springback does with all of them. Lifting them in one increment
         leaves the blank out of balance by their whole force, which the first increment
         of the phase has to absorb whatever its size: a cut cannot help it. The
@@ -703,7 +822,8 @@ class FormingProblem:
         loads = np.zeros_like(self.u)
         np.add.at(loads, layout.node[lifted], self.force[lifted])
         self.force = np.where(lifted[:, None], 0.0, self.force)
-        done, size, spent, relative = 0.0, 1.0 / RELEASE_STEPS, [], []
+        steps = self.tuning.increment.release_steps
+        done, size, spent, relative = 0.0, 1.0 / steps, [], []
         last_du: NDArray[np.float64] | None = None
         base = self.external.copy()
         try:
@@ -711,14 +831,14 @@ class FormingProblem:
                 target = min(1.0, done + size)
                 self.external = base + loads * (1.0 - target)
                 guess = None if last_du is None else self.u + (target - done) * last_du
-                outcome = self._increment(layout, positions, on, tol_force, tol_disp,
-                                          max_iterations, result,
-                                          touching=_Touching(TOUCHING * self.size, True),
+                outcome = self._increment(layout, positions, on, newton, result,
+                                          touching=_Touching(self.tuning.touching * self.size,
+                                                             True),
                                           guess=guess, exact=True,
-                                          size_ratio=1.0 / (RELEASE_STEPS * size),
+                                          size_ratio=1.0 / (steps * size),
                                           hold_force=hold_force)
                 if outcome.failure:
-                    if size / 2.0 < RELEASE_SMALLEST:
+                    if size / 2.0 < self.tuning.increment.release_smallest:
                         raise FormingError(f"release of the lifted tools at {done:.4g} of "
                                            f"their force failed: {outcome.failure}", result)
                     size /= 2.0
@@ -733,7 +853,7 @@ class FormingProblem:
                 for k in layout.holds:
                     self.position[self.tools[k].name] = positions[self.tools[k].name]
                 done = target
-                size = min(2.0 * size, 1.0 / RELEASE_STEPS)
+                size = min(2.0 * size, 1.0 / steps)
         finally:
             self.external = base
         return spent, relative
@@ -742,7 +862,7 @@ class FormingProblem:
         """A converged increment's state as the problem's (with the augmented law its Gauss
         points' pressures the multipliers of the next increment; with the plain penalty
         zero)."""
-        self.u, self.state, self.force, self._gap = (outcome.u, outcome.state, outcome.force,
+        self.u, self.solid_state, self.force, self._gap = (outcome.u, outcome.state, outcome.force,
                                                      outcome.gap)
         self.traction, self._contact_state = outcome.traction, outcome.in_contact
         assert outcome.pressure is not None
@@ -775,24 +895,23 @@ class FormingProblem:
 
     def _augmented(self, outcome: Trial, depth: list[float], limit: float, layout: Layout,
                    positions: Mapping[str, NDArray[np.float64]], on: NDArray[np.bool_],
-                   tol_force: float, tol_disp: float, max_iterations: int,
-                   result: FormingResult, touching: _Touching, size_ratio: float = 1.0,
+                   newton: NewtonSettings, result: FormingResult, touching: _Touching,
+                   size_ratio: float = 1.0,
                    hold_force: NDArray[np.float64] | None = None
                    ) -> tuple[Trial, list[float]]:
         """The converged ``outcome`` of an increment, whose penetration per tool is
         ``depth`` (``_penetration``), with the slave nodes of its Gauss-point tools at most
         ``limit`` (mm) inside them: while one is deeper, the points' multipliers take their
         pressures (an Uzawa update of the augmented Lagrangian) and the increment is solved
-        again from there, at most MAX_AUGMENTATIONS times. The residual histories of the
-        solves are joined, as the release's are. A solve that fails leaves the last
+        again from there, at most IncrementTuning.max_augmentations times. The residual
+        histories of the solves are joined, as the release's are. A solve that fails leaves the last
         converged answer (its depth is recorded, and the run warns). Returns the answer
         and its depth."""
         gauss = [i for i, t in enumerate(self.tools) if t.contact == "gauss"]
-        for _ in range(MAX_AUGMENTATIONS):
+        for _ in range(self.tuning.increment.max_augmentations):
             if max((depth[i] for i in gauss), default=0.0) <= limit:
                 break
-            again = self._increment(layout, positions, on, tol_force, tol_disp,
-                                    max_iterations, result, touching=touching,
+            again = self._increment(layout, positions, on, newton, result, touching=touching,
                                     guess=outcome.u, pressure=outcome.pressure,
                                     size_ratio=size_ratio, hold_force=hold_force)
             if again.failure or again.landing < 1.0:
@@ -836,7 +955,7 @@ class FormingProblem:
         return ramps
 
     def _touch_down(self, layout: Layout, k: int) -> None:
-        """Bring force-controlled tool ``k`` onto the blank along its axis, TOUCH_DEPTH
+        """Bring force-controlled tool ``k`` onto the blank along its axis, tuning.touch_depth
         element sizes into its nearest slave node (its slave nodes projected on it within
         the search's reach, those inside a patch: the gaps along its normals there),
         unless its pairs already carry a force."""
@@ -854,7 +973,7 @@ class FormingProblem:
                              f"slave node lies within the contact search's reach "
                              f"({self._reach:.3g} mm) of it along its axis; place it on the "
                              "blank")
-        travel = float(np.min(gap[seen] / closing[seen])) + TOUCH_DEPTH * self.size
+        travel = float(np.min(gap[seen] / closing[seen])) + self.tuning.touch_depth * self.size
         self.position[tool.name] = self.position[tool.name] + travel * axis
 
     def _placed(self, layout: Layout, positions: Mapping[str, NDArray[np.float64]],
@@ -965,7 +1084,7 @@ class FormingProblem:
         # The blank is in equilibrium under the tools and the supports it had: its internal
         # forces are those loads. Every one on a dof that is free now (contact forces, and
         # reactions of released clamps) is brought to zero.
-        loads, _ = self.solid.internal_force(self.u, self.state)
+        loads, _ = self.solid.internal_force(self.u, self.solid_state)
         loads[self.fixed] = 0.0
         self.force = np.zeros_like(self.force)
         self.traction = np.zeros_like(self.traction)
@@ -984,22 +1103,15 @@ class FormingProblem:
                 # is poor along those modes; the bending paper mesh took 16 iterations
                 # per step with it (320 for 20 steps, 413 s on 2 threads), 3 with a
                 # factorization at every iteration (62).
-                outcome = self._increment(layout, self.position, off,
-                                          newton.force_tolerance,
-                                          newton.displacement_tolerance,
-                                          newton.max_iterations, result, guess=guess,
-                                          exact=True)
+                outcome = self._increment(layout, self.position, off, newton, result,
+                                          guess=guess, exact=True)
                 if outcome.failure:
                     raise FormingError(f"springback step {k} failed: {outcome.failure}",
                                        result)
                 last_du = outcome.u - self.u
-                self.u, self.state = outcome.u, outcome.state
-                result.factors.append(k / increments)
-                result.sizes.append(1.0 / increments)
-                result.limited_by.append("springback")
-                result.residuals.append(outcome.residuals)
-                result.relative.append(outcome.relative)
-                result.displacements.append(self.u.copy())
+                self.u, self.solid_state = outcome.u, outcome.state
+                result.record(1.0 / increments, "springback", k / increments,
+                              outcome.residuals, outcome.relative, self.u)
         finally:
             self.external = np.zeros_like(self.u)
         if frames:
@@ -1035,7 +1147,8 @@ class FormingProblem:
         if not hits.any():
             return 1.0
         # Land just past the surface, so that the node is caught in contact.
-        return float(np.min(gap[hits] / approach[hits])) * (1.0 + 1e-3)
+        return float(np.min(gap[hits] / approach[hits])) * (
+            1.0 + self.tuning.increment.touch_past)
 
     def _minor(self, layout: Layout, share: float) -> NDArray[np.bool_]:
         """Pairs whose normal force at the start of the increment is at most ``share`` of
@@ -1084,7 +1197,7 @@ class FormingProblem:
         # the interpolation is biased towards zero (on the paper's bending blank, nodes at
         # the die shoulder pressed by 1e-3 N gave 1e-3 again and again while their pressure
         # rose); bisect instead.
-        fraction = np.where(fraction < BISECT_BELOW, 0.5, fraction)
+        fraction = np.where(fraction < self.tuning.increment.bisect_below, 0.5, fraction)
         if change is not None:
             drop = -change[released]
             trend = np.divide(p, drop, out=np.full(p.size, np.inf), where=drop > 0.0)
@@ -1136,7 +1249,7 @@ class FormingProblem:
         """The blank's fields at the present state (a snapshot: FieldFrame), labelled with
         ``increment``, ``phase`` and ``travel``."""
         mesh = self.solid.mesh
-        cauchy = self.solid.stresses(self.u, self.state)[1].mean(axis=1)
+        cauchy = self.solid.stresses(self.u, self.solid_state)[1].mean(axis=1)
         thickness = thinning = None
         strains: dict[str, NDArray[np.float64]] = {}
         measures = self.sheet_measures
@@ -1144,8 +1257,8 @@ class FormingProblem:
             thickness, thinning = measures.thickness(self.u), measures.thinning(self.u)
             strains = measures.surface_strains(self.u)
         return FieldFrame(mesh.nodes, mesh.elements, int(increment), str(phase), float(travel),
-                          self.u.copy(), cauchy, self.state.ep.mean(axis=1),
-                          nodal_average(mesh.elements, self.state.ep, mesh.n_nodes),
+                          self.u.copy(), cauchy, self.solid_state.ep.mean(axis=1),
+                          nodal_average(mesh.elements, self.solid_state.ep, mesh.n_nodes),
                           self.contact_pressure(), thickness, thinning, strains)
 
     @cached_property
@@ -1240,9 +1353,9 @@ class FormingProblem:
         u = self.u if u is None else float_array(u, "u", (n, 3))
         force = self.force if force is None else float_array(force, "force", (npair, 3))
         residual, values, state = equations(
-            self.solid, layout, self._tool_arguments(self._positions(positions)), self.state,
-            self.u, self.external, u, force, self.r, self.mu, self.traction, self.pressure,
-            touching, hold_force)
+            self.solid, layout, self._tool_arguments(self._positions(positions)),
+            self.solid_state, self.u, self.external, u, force, self.r, self.mu,
+            self.traction, self.pressure, touching, hold_force)
         nodes = np.concatenate([np.flatnonzero(~self.fixed.ravel()) // 3,
                                 np.repeat(layout.node, 3), np.full(layout.holds.size, -1)])
         return Linearization(residual, layout.rows, layout.cols, values, state, nodes,
@@ -1250,8 +1363,8 @@ class FormingProblem:
 
     def _increment(self, layout: Layout,
                    positions: Mapping[str, NDArray[np.float64]], on: NDArray[np.bool_],
-                   tol_force: float, tol_disp: float, max_iterations: int,
-                   result: FormingResult, yield_tolerance: float | None = None,
+                   newton: NewtonSettings, result: FormingResult,
+                   yield_tolerance: float | None = None,
                    touching: _Touching | None = None,
                    guess: NDArray[np.float64] | None = None,
                    careful: bool = False, exact: bool = False,
@@ -1284,31 +1397,27 @@ class FormingProblem:
         would otherwise make it cycle. The norm alone is the wrong measure for a thin sheet
         that bends: a step that bends it right leaves a large membrane residual of second
         order (docs/theory/contact.md)."""
+        tuning = self.tuning
         reuse = not (careful or exact) and (self.linear_solver == "reuse" or (
-            self.linear_solver == "auto" and layout.n >= REUSE_FROM))
+            self.linear_solver == "auto" and layout.n >= tuning.reuse_from))
+        max_iterations = newton.max_iterations
         if careful:
-            max_iterations *= CAREFUL_ITERATIONS
-        loop = Loop(tol_force, tol_disp, max_iterations,
+            max_iterations *= tuning.increment.careful_iterations
+        loop = Loop(newton.force_tolerance, newton.displacement_tolerance, max_iterations,
                     1e-8 * self.solid.props[0] * self.size**2, yield_tolerance,
-                    PENETRATION, MIN_STEP, reuse, KRYLOV_LOOSE, KRYLOV_TIGHT, KRYLOV_MAX,
-                    KRYLOV_KEEP, touching=0.0 if touching is None else touching.distance,
+                    tuning.penetration, tuning.min_step, reuse, tuning.krylov_loose,
+                    tuning.krylov_tight, tuning.krylov_max, tuning.krylov_keep,
+                    touching=0.0 if touching is None else touching.distance,
                     resting=touching is None or touching.resting,
                     search=SEARCH_NONE if careful else SEARCH_MONOTONICITY,
-                    whole_step=WHOLE_STEP, size_ratio=max(1.0, size_ratio))
+                    whole_step=tuning.whole_step, size_ratio=max(1.0, size_ratio))
         pairs = Pairs(self._tool_arguments(positions), on, self.r, self.mu, self.force,
                       self.traction, self.pressure if pressure is None else pressure,
                       np.zeros(layout.holds.size) if hold_force is None else hold_force,
-                      HOLD_STEP * self._reach)
-        trial = increment(self.solid, layout, self._factors, self.state, self.u,
+                      tuning.hold_step * self._reach)
+        trial = increment(self.solid, layout, self._factors, self.solid_state, self.u,
                           self.external, self.u, guess, loop, pairs)
-        evaluations, corrections, factorizations, krylov, fallbacks = trial.counters
-        result.evaluations += evaluations
-        result.newton_iterations += corrections
-        result.factorizations += factorizations
-        result.krylov_iterations += krylov
-        result.fallbacks += fallbacks
-        for key, seconds in trial.timings.items():
-            result.timings[key] += seconds
+        result.count(trial)
         if _log.isEnabledFor(logging.DEBUG):
             for k, (rel, moved) in enumerate(trial.relative):
                 _log.debug("iteration %d: residual %.3e of the force scale, correction %.3e "

@@ -27,7 +27,6 @@ from ddpy.core.parallel import threads as thread_count
 from ddpy.model.control import NewtonSettings
 from ddpy.model.mesh import RIGID_MODES, free_rigid_modes
 from ddpy.model.newton import (
-    PARTS,
     SEARCH_ENERGY,
     SEARCH_NONE,
     Factors,
@@ -36,6 +35,7 @@ from ddpy.model.newton import (
     increment,
 )
 from ddpy.model.solid import Solid, SolidState, _components
+from ddpy.model.work import Work
 
 __all__ = ["StaticProblem", "SolidResult", "ConvergenceError"]
 
@@ -45,15 +45,16 @@ FORCE_FLOOR = 1e-6
 
 
 @dataclass
-class SolidResult:
+class SolidResult(Work):
     """Converged increments of a static run. Per increment s: load factor ``factors[s]``,
     ``displacements[s]`` (n, 3), ``reactions[s]`` (n, 3; nonzero on constrained dofs),
     ``pk2[s]`` and ``cauchy[s]`` (m, 8, 6), ``ep[s]`` (m, 8), the norm of the free residual
     at every iteration ``residuals[s]`` and, per iteration, what convergence is judged on
     (``relative[s]``: the residual over the force scale and the correction over the
     increment of u, inf before the first correction). The work of every trial increment,
-    the cut ones included: evaluations (assemblies, line-search trials included), Newton
-    corrections, factorizations and the seconds of each part (``timings``)."""
+    the cut ones included, counted as Work: evaluations (assemblies, line-search trials
+    included), Newton corrections, factorizations, cuts and the seconds of each part
+    (``timings``)."""
 
     factors: list[float] = field(default_factory=list)
     displacements: list[NDArray[np.float64]] = field(default_factory=list)
@@ -63,13 +64,7 @@ class SolidResult:
     ep: list[NDArray[np.float64]] = field(default_factory=list)
     residuals: list[list[float]] = field(default_factory=list)
     relative: list[list[tuple[float, float]]] = field(default_factory=list)
-    #: increment trials that failed (as FormingResult.cuts: the last of a stopped run counts)
-    cuts: int = 0
     state: SolidState | None = None
-    evaluations: int = 0
-    newton_iterations: int = 0
-    factorizations: int = 0
-    timings: dict[str, float] = field(default_factory=lambda: dict.fromkeys(PARTS, 0.0))
 
     @property
     def iterations(self) -> list[int]:
@@ -275,17 +270,13 @@ class StaticProblem:
                         size_ratio=max(1.0, nominal / delta))
             trial = increment(solid, layout, self._factors, state, u, external, prescribed,
                               guess, loop)
-            evaluations, corrections, factorizations, _, _ = trial.counters
-            result.evaluations += evaluations
-            result.newton_iterations += corrections
-            result.factorizations += factorizations
-            for key, seconds in trial.timings.items():
-                result.timings[key] += seconds
-            if trial.solver and not self._factorized and factorizations == 0:
+            factorizations = result.factorizations
+            result.count(trial)
+            if trial.solver and not self._factorized and result.factorizations == factorizations:
                 raise ValueError(
                     f"the stiffness matrix is singular ({trial.failure}): is a part of the mesh "
                     "free to move without straining?")
-            self._factorized = self._factorized or factorizations > 0
+            self._factorized = self._factorized or result.factorizations > factorizations
             if trial.failure:
                 cuts_in_row += 1
                 result.cuts += 1

@@ -10,6 +10,7 @@ from numpy.typing import ArrayLike
 from ddpy._validate import float_array, int_array
 from ddpy.geometry.search import ContactSearch
 from ddpy.geometry.surfaces import BezierSurface, NagataSurface
+from ddpy.model.contact import check_friction
 
 __all__ = ["RigidTool", "CONTACT_DISCRETIZATIONS", "FACE_POINTS", "MAX_POINTS", "BARRIER_DEPTH",
            "BARRIER_WIDTH", "BARRIER_STIFFNESS",
@@ -57,9 +58,8 @@ class RigidTool:
     penalty of its law in N/mm^3 (``penalty``, default ``default_penalty``); "surface" and
     "gauss" integrate over the blank faces with ``points`` x ``points`` Gauss points each
     (default FACE_POINTS). A "gauss" tool's ``barrier`` (a fraction of the blank's
-    thickness; None, the default: none) is the depth past which its slave nodes are pushed
-    out (BARRIER_DEPTH is the measured choice; why it is not the default:
-    docs/theory/contact.md, "The barrier")."""
+    thickness, default BARRIER_DEPTH; None: none) is the depth past which its slave nodes
+    are pushed out (docs/theory/contact.md, "The barrier")."""
 
     name: str
     surface: BezierSurface | NagataSurface
@@ -70,7 +70,7 @@ class RigidTool:
     contact: str | None = None
     penalty: float | None = None
     points: int | None = None
-    barrier: float | None = None
+    barrier: float | None = BARRIER_DEPTH
     search: ContactSearch = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -82,8 +82,10 @@ class RigidTool:
             raise ValueError(f"tool {self.name} has no slave nodes: nothing can touch it")
         if np.unique(self.slaves).size != self.slaves.size:
             raise ValueError(f"tool {self.name}: slave nodes are repeated")
-        if not (np.isfinite(self.friction) and self.friction >= 0.0):
-            raise ValueError(f"tool {self.name}: friction must be >= 0, got {self.friction}")
+        try:
+            check_friction(self.friction)
+        except ValueError as error:
+            raise ValueError(f"tool {self.name}: {error}") from None
         if self.augmentation is not None and not self.augmentation > 0.0:
             raise ValueError(f"tool {self.name}: augmentation must be > 0, got "
                              f"{self.augmentation}")

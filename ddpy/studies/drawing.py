@@ -31,6 +31,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ddpy._validate import float_array
+from ddpy.model.contact import check_friction
 
 if TYPE_CHECKING:
     from ddpy.geometry.search import ContactSearch
@@ -240,8 +241,9 @@ def siebel_force(diameter: float, mean_diameter: float, thickness: float,
             raise ValueError(f"{name} must be positive, got {value}")
     if not diameter > mean_diameter:
         raise ValueError(f"the draw must reduce the diameter: {diameter} -> {mean_diameter}")
-    if any(not r > 0.0 for r in radii) or friction < 0.0 or wrap < 0.0 or holder_force < 0.0:
-        raise ValueError("radii must be positive; friction, wrap and holder_force >= 0")
+    check_friction(friction)
+    if any(not r > 0.0 for r in radii) or wrap < 0.0 or holder_force < 0.0:
+        raise ValueError("radii must be positive; wrap and holder_force >= 0")
     ideal = 1.1 * flow_stress_mean * np.log(diameter / mean_diameter)
     holder = 2.0 * friction * holder_force / (np.pi * diameter * thickness)
     bending = sum(flow_stress_bend * thickness / (2.0 * r) for r in radii)

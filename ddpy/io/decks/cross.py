@@ -37,9 +37,10 @@ from ddpy.io.decks.control import (
 )
 from ddpy.io.decks.lines import NAME_PATTERN, Deck, guard
 from ddpy.io.decks.tools import _ToolDraft
-from ddpy.model.control import MIN_FRACTION, IncrementLimits, NewtonSettings
-from ddpy.model.forming import MAX_INCREMENTS, blank_stiffness
+from ddpy.model.control import MAX_INCREMENTS, MIN_FRACTION, IncrementLimits, NewtonSettings
+from ddpy.model.forming import blank_stiffness
 from ddpy.model.mesh import HEX_EDGES, HexMesh
+from ddpy.model.tool import BARRIER_DEPTH
 
 
 class _Cross:
@@ -100,7 +101,7 @@ class _Cross:
                         "surface facing (" + ", ".join(f"{c:.3g}" for c in facing) + ")",
                         facing, d.values.get("augmentation"), self.tools_deck.where(d.line),
                         d.values.get("discretization", "gauss"), d.values.get("penalty"),
-                        d.values.get("points"), d.values.get("barrier"))
+                        d.values.get("points"), d.values.get("barrier", BARRIER_DEPTH))
             if d.model is not None:
                 object.__setattr__(tool, "_model", d.model)
             if tool.contact_nodes(mesh).size == 0:

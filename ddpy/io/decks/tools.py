@@ -21,6 +21,7 @@ from ddpy.io.decks.lines import (
     read_unit,
     show,
 )
+from ddpy.model.contact import check_friction
 from ddpy.model.tool import MAX_POINTS
 
 
@@ -103,7 +104,11 @@ def _parse_tools(deck: Deck) -> list[_ToolDraft]:
                     tool.values[key] = read_float(w[1], "the augmentation parameter", gt=0)
                 elif key == "friction":
                     check_arity(line, "friction MU", 1)
-                    mu = read_float(w[1], "friction", ge=0)
+                    mu = read_float(w[1], "friction")
+                    try:
+                        check_friction(mu)
+                    except ValueError as error:
+                        raise BadValue(str(error)) from None
                     if mu > 1:
                         deck.warn(line.number, f"friction coefficient {mu:g} is above 1")
                     tool.values[key] = mu

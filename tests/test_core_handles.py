@@ -15,7 +15,7 @@ from ddpy.core.constants import constant
 from ddpy.core.handles import CoreHandle, CoreRefusal, check
 from ddpy.model.material import Hill48, Material, Swift
 from ddpy.model.mesh import HexMesh
-from ddpy.model.newton import CoreProblem, Layout
+from ddpy.model.newton import Layout
 from ddpy.model.solid import Solid
 
 ELASTIC = Material(210e3, 0.3, Hill48.von_mises(), Swift(1e7, 0.01, 0.0))
@@ -37,14 +37,14 @@ def test_a_released_blank_is_refused_by_the_problem_made_from_it() -> None:
     solid = one_element()
     layout = Layout(solid, [], np.zeros((8, 3), dtype=bool))
     copy = blank(solid)
-    handle, status = _core.problem_create(copy.handle, layout.eqn, layout.pattern.offsets, 0)
+    handle, status = _core.problem_create(copy.handle, layout.eqn, 0)
     check(status, "a problem of a live blank")
     CoreHandle(handle).close()
     copy.close()
     assert copy.closed
     with pytest.raises(CoreRefusal, match=r"problem: the core refused it: the handle holds "
                                           r"no such object \(released\?\)"):
-        check(_core.problem_create(copy.handle, layout.eqn, layout.pattern.offsets, 0)[1],
+        check(_core.problem_create(copy.handle, layout.eqn, 0)[1],
               "the problem")
 
 
@@ -64,8 +64,7 @@ def test_a_full_table_is_refused_and_its_handles_come_back_when_released() -> No
 def test_a_trial_before_its_settings_and_state_is_refused() -> None:
     solid = one_element()
     layout = Layout(solid, [], np.zeros((8, 3), dtype=bool))
-    problem = CoreProblem(solid, layout, None)
-    problem.ensure_rows()
+    problem = layout.core_problem(None)
     state = solid.initial_state()
     check(_core.problem_set_state(problem.handle, state.displacement.ravel(),
                                   state.axes.transpose(0, 1, 3, 2).ravel(),

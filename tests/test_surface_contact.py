@@ -17,7 +17,7 @@ from ddpy.model.control import IncrementLimits, NewtonSettings
 from ddpy.model.forming import FormingProblem, FormingResult, RigidTool
 from ddpy.model.material import Hill48, Material, Swift
 from ddpy.model.mesh import HexMesh
-from ddpy.model.newton import Layout, ToolPack
+from ddpy.model.newton import CoreProblem, Layout, ToolPack
 from ddpy.model.solid import Solid as _Solid
 
 #: Elastic in practice (yield stress 1e7 MPa), no Poisson effect: the analytic answers hold.
@@ -69,15 +69,13 @@ def test_the_core_refuses_a_patch_that_misses_a_face_node() -> None:
     problem, _, _ = block_on_dome(0.0)
     mesh = problem.solid.mesh
     pack = ToolPack(problem.tools, mesh)
-    layout = Layout(problem.solid, problem.tools, problem.fixed)
-    layout.core_problem(problem.solid, pack)  # the layout as built fits
-    layout = Layout(problem.solid, problem.tools, problem.fixed)
+    layout = Layout(problem.solid, problem.tools, problem.fixed)  # the layout as built fits
     first = layout.patch_first[1]
     # the first pair's patch loses one of its face nodes to another node of the blank
     stranger = int(np.setdiff1d(np.arange(mesh.n_nodes), layout.patch_node[:first])[0])
     layout.patch_node[first - 1] = stranger
     with pytest.raises(CoreRefusal, match="tool dome's contact.*out of order"):
-        layout.core_problem(problem.solid, pack)
+        CoreProblem(problem.solid, layout, pack)
 
 
 def test_jacobian_of_frictionless_surface_contact_matches_central_differences() -> None:

@@ -82,7 +82,8 @@ def build_matrix() -> Path:
     u = np.zeros_like(nodes)
     u[:, 0] = STRETCH * nodes[:, 0]
     layout = Layout(solid, [], fixed)
-    assembly = solid.assemble(u, pattern=layout.pattern)
+    # (without tools the layout's slots are the solid's tangent's)
+    assembly = solid.assemble(u, pattern=solid.pattern(layout.eqn, symmetric=False))
     plastic = float(np.mean(assembly.state.ep > 0))
     MATRIX.parent.mkdir(parents=True, exist_ok=True)
     np.savez(MATRIX, n=layout.n, rows=layout.rows, cols=layout.cols, values=assembly.values,

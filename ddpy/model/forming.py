@@ -50,6 +50,7 @@ from ddpy.model.newton import (
     Trial,
     contact,
     contact_faces,
+    equations,
     face_basis,
     gauss_face_weights,
     increment,
@@ -122,11 +123,12 @@ def start_depth_limit(strain: float, size: float) -> float:
 
 @dataclass(frozen=True)
 class Linearization:
-    """The forming problem's equations at one point (``FormingProblem.linearization``): the
-    residual, free equilibrium rows first (``n_free``), then the three contact-law rows of
-    each pair; its Jacobian in coordinate form (``rows``, ``cols``, ``values``; duplicates
-    add up), as MUMPS reads it; the contact states of the pairs (0 open, 1 stick, 2 slip);
-    and the node of each unknown."""
+    """The forming problem's equations at one point (``FormingProblem.linearization``), as
+    the core evaluates them (``ddpy.model.newton.equations``): the residual, free
+    equilibrium rows first (``n_free``), then the three contact-law rows of each pair; its
+    Jacobian in coordinate form (``rows``, ``cols``: the core's layout; ``values``;
+    duplicates add up), as MUMPS reads it; the contact states of the pairs (0 open, 1
+    stick, 2 slip); and the node of each unknown."""
 
     residual: NDArray[np.float64]
     rows: NDArray[np.int32]
@@ -1350,18 +1352,10 @@ class FormingProblem:
         n, npair = self.solid.mesh.n_nodes, layout.node.size
         u = self.u if u is None else float_array(u, "u", (n, 3))
         force = self.force if force is None else float_array(force, "force", (npair, 3))
-        where = self._positions(positions)
-        values = np.empty(layout.rows.size)
-        values[layout.k_slots:layout.k_slots + layout.n_coupling] = layout.coupling_values
-        out = self.solid.assemble(u, self.solid_state, layout.pattern,
-                                  values=values[:layout.k_slots])
-        residual = np.empty(layout.n)
-        residual[:layout.nf] = (out.fint - self.external).ravel()[~self.fixed.ravel()]
-        on = np.ones(npair, dtype=bool)
-        state, _ = self._contact(layout, self.solid.mesh.nodes + u,
-                                 self.solid.mesh.nodes + self.u, where, on, force, residual,
-                                 values, _Touching(touching) if touching > 0.0 else None,
-                                 hold_force)
+        residual, values, state = equations(
+            self.solid, layout, self._tool_arguments(self._positions(positions)),
+            self.solid_state, self.u, self.external, u, force, self.r, self.mu,
+            self.traction, self.pressure, touching, hold_force)
         nodes = np.concatenate([np.flatnonzero(~self.fixed.ravel()) // 3,
                                 np.repeat(layout.node, 3), np.full(layout.holds.size, -1)])
         return Linearization(residual, layout.rows, layout.cols, values, state, nodes,

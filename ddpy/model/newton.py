@@ -2,19 +2,18 @@
 call it (fortran/solver/ddpy_forming_newton.f90, ``forming_increment``).
 
 One loop serves both: the static problem is the forming problem without tools, whose fixed
-dofs move to prescribed values. ``Layout`` numbers the unknowns and fixes the Jacobian's
-coordinate structure, ``ToolPack`` gathers the tools' contact (the blank faces that face
-each, their Gauss points' areas, the penalties), ``CoreProblem`` hands the core a problem's
-fixed data once (its handle), ``Loop`` says how the loop runs, ``increment`` makes a trial
-and says what came of it (``Trial``), and ``contact`` looks at the contact alone.
+dofs move to prescribed values. ``Layout`` numbers the unknowns and reads the Jacobian's
+coordinate structure from the core, ``ToolPack`` gathers the tools' contact (the blank
+faces that face each, their Gauss points' areas, the penalties), ``CoreProblem`` hands the
+core a problem's fixed data once (its handle), ``Loop`` says how the loop runs,
+``increment`` makes a trial and says what came of it (``Trial``), ``contact`` looks at the
+contact alone and ``equations`` at the equations the loop solves.
 """
 
 from __future__ import annotations
 
-import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from functools import cached_property
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -22,7 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 from ddpy import _core
 from ddpy.core.constants import constant
 from ddpy.core.handles import CoreHandle, check
-from ddpy.core.linalg import LinearSolverError, RowStructure, row_structure
+from ddpy.core.linalg import LinearSolverError
 from ddpy.model.mesh import HexMesh, boundary_faces, face_area_vectors
 from ddpy.model.solid import ElementError, Solid, SolidState, _flat
 from ddpy.model.tool import RigidTool
@@ -113,22 +112,32 @@ def face_basis(order: int) -> NDArray[np.float64]:
 
 
 class Layout:
-    """Unknowns and the fixed coordinate structure of the Jacobian for one constraint set:
-    free displacement dofs first, then 3 force components per (tool, slave) pair.
-    ``symmetric``: the solid's block as its lower triangle (a symmetric MUMPS instance; only
-    without tools, whose contact blocks are not symmetric). Each pair's law depends on the
-    positions of its patch of nodes (``patch_first``, ``patch_node``): its own node for a
-    node-to-surface tool, every node of the tool's contact faces at its node for a
-    surface-to-surface or Gauss-point one (its own node alone where it is on none).
-    ``holds``: the force-controlled tools (indices into ``tools``), each pressing along
-    ``-facing``: its displacement along that axis is one more unknown after the pairs'
-    forces, its equation the balance of its pairs' forces with the prescribed force."""
+    """The unknowns of one constraint set and the Jacobian's coordinate structure, which
+    the core computes (fortran/solver/ddpy_jacobian_layout.f90): free displacement dofs
+    first, then 3 force components per (tool, slave) pair, then one displacement per
+    force-controlled tool. ``symmetric``: the solid's block as its lower triangle (a
+    symmetric MUMPS instance; only without tools, whose contact blocks are not symmetric).
+    Each pair's law depends on the positions of its patch of nodes (``patch_first``,
+    ``patch_node``): its own node for a node-to-surface tool, every node of the tool's
+    contact faces at its node for a surface-to-surface or Gauss-point one (its own node
+    alone where it is on none). ``holds``: the force-controlled tools (indices into
+    ``tools``), each pressing along ``-facing``: its displacement along that axis is one
+    more unknown after the pairs' forces, its equation the balance of its pairs' forces
+    with the prescribed force.
+
+    The core's copy of the problem (``core_problem``) is made here, and the structure
+    (``rows``, ``cols``: 0-based, in the order the core writes the values; ``n`` unknowns,
+    ``k_slots`` of the solid's tangent first) is read from it for the solver's analysis."""
 
     def __init__(self, solid: Solid, tools: Sequence[RigidTool], fixed: NDArray[np.bool_],
                  symmetric: bool = False, holds: Sequence[int] = ()) -> None:
         if symmetric and tools:
             raise ValueError("a symmetric layout has no tools: the contact law's Jacobian "
                              "is not symmetric")
+        for k in holds:
+            if tools[k].facing is None:
+                raise ValueError(f"tool {tools[k].name} has no facing direction: a force "
+                                 "along it cannot be held")
         n = solid.mesh.n_nodes
         free = ~fixed.ravel()
         self.symmetric = symmetric
@@ -136,16 +145,17 @@ class Layout:
         eqn = np.full(3 * n, -1, dtype=np.int32)
         eqn[free] = np.arange(self.nf, dtype=np.int32)
         self.eqn = eqn
-        self.pattern = solid.pattern(eqn, symmetric=symmetric)
         #: each pair's node and tool, each tool's first pair (int32: as the core takes them)
         self.node = _join([t.slaves for t in tools], np.int32)
         self.tool_of = _join([np.full(t.slaves.size, i) for i, t in enumerate(tools)],
                              np.int64)
         self.first = np.concatenate([[0], np.cumsum([t.slaves.size for t in tools])]
                                     ).astype(np.int32)
-        npair = self.node.size
+        # The blank faces that face each tool (and the areas of their Gauss points), as the
+        # core's contact takes them; the penalties are the pack's (core_problem).
+        pack = ToolPack(tools, solid.mesh)
         patches = []
-        for tool, faces in zip(tools, contact_faces(tools, solid.mesh), strict=True):
+        for tool, (faces, _, _) in zip(tools, pack.tool_faces, strict=True):
             if tool.contact not in ("surface", "gauss"):
                 patches.extend([s] for s in tool.slaves)
                 continue
@@ -158,112 +168,25 @@ class Layout:
         self.patch_first = np.concatenate([[0], np.cumsum([len(p) for p in patches])]
                                           ).astype(np.int32)
         self.patch_node = _join([np.asarray(p) for p in patches], np.int32)
-        self.n = self.nf + 3 * npair
-        lam = self.nf + 3 * np.arange(npair)[:, None] + np.arange(3)  # (npair, 3)
-        equ = eqn.reshape(n, 3)[self.node]                              # (npair, 3)
-        # Components of a slave whose displacement is fixed: its force there is a support
-        # reaction, so that row of the law becomes lambda_k = 0.
-        self.held_flags = (equ < 0).astype(np.int32).ravel()
-        # The structure of the contact blocks, in the order the core writes their values:
-        # the coupling entries (-1), dC/dx at the free dofs of each pair's patch (pair, row,
-        # patch node, column), dC/dlambda (pair, row, column). A Gauss-point pair's
-        # multiplier is eliminated (lambda = F(x), ddpy_forming): its coupling entries are 0
-        # and its patch entries, -dF/dx, lie in its node's equilibrium rows (or, for a held
-        # component, zero in its law row), where the faces' nodes already couple: no fill.
-        #: per pair, whether its multiplier is eliminated (a Gauss-point tool's)
-        self.eliminated = _join([np.full(t.slaves.size, t.contact == "gauss")
-                                 for t in tools], bool)
-        coupling = equ >= 0
-        size = np.diff(self.patch_first)
-        width = int(size.max()) if npair else 1
-        entry = self.patch_first[:-1, None] + np.arange(width)          # (npair, width)
-        inside = np.arange(width) < size[:, None]
-        patch = eqn.reshape(n, 3)[self.patch_node[np.where(inside, entry, 0)]]
-        free_patch = inside[:, :, None] & (patch >= 0)                  # (npair, width, 3)
-        pi, ii, ei, jj = np.nonzero(np.broadcast_to(free_patch[:, None],
-                                                    (npair, 3, width, 3)))
-        # A held component of a surface-to-surface or Gauss-point pair (a slave on a
-        # symmetry plane) has the law lambda_k = 0, with no patch entries: in its row they
-        # would join the nodes of the patch to one another through the multiplier (the
-        # pivot order does not see that), and the paper's bending mesh took 81 million
-        # factor entries instead of 59 for these 410 pairs.
-        patch_pair = _join([np.full(t.slaves.size, t.contact in ("surface", "gauss"))
-                            for t in tools], bool)
-        keep = ~(patch_pair[pi] & (equ[pi, ii] < 0))
-        pi, ii, ei, jj = pi[keep], ii[keep], ei[keep], jj[keep]
-        into = np.where(self.eliminated[pi] & (equ[pi, ii] >= 0), equ[pi, ii], lam[pi, ii])
-        rows = [self.pattern.rows, equ[coupling], into, np.repeat(lam, 3, axis=1).ravel()]
-        cols = [self.pattern.cols, lam[coupling], patch[pi, ei, jj],
-                np.tile(lam, (1, 3)).ravel()]
-        self.rows = np.concatenate(rows).astype(np.int32)
-        self.cols = np.concatenate(cols).astype(np.int32)
-        self.k_slots = self.pattern.rows.size
-        self.n_coupling = int(coupling.sum())
-        #: the coupling entries' values: -1, 0 for an eliminated multiplier
-        self.coupling_values = np.where(np.broadcast_to(self.eliminated[:, None], equ.shape),
-                                        0.0, -1.0)[coupling]
-        self._hold_entries(tools, holds, lam, equ, into, pi, ii)
-
-    def _hold_entries(self, tools: Sequence[RigidTool], holds: Sequence[int],
-                      lam: NDArray, equ: NDArray, into: NDArray, pi: NDArray, ii: NDArray
-                      ) -> None:
-        """The unknowns, equations and Jacobian entries of the force-controlled tools
-        ``holds``, after the contact blocks in the order the core writes them
-        (forming_increment): per tool its column (3 law rows per pair; a Gauss-point pair's
-        free equilibrium rows), its row (a . lambda_p of each pair: the constant a_j at
-        lambda_p,j, or for a Gauss-point pair -a_i times each of its -dF_i/dx entries, the
-        source), its diagonal. ``lam``, ``equ``: the pairs' law and equilibrium rows;
-        ``into``, ``pi``, ``ii``: the rows, pairs and components of the patch entries."""
-        for k in holds:
-            if tools[k].facing is None:
-                raise ValueError(f"tool {tools[k].name} has no facing direction: a force "
-                                 "along it cannot be held")
         #: the force-controlled tools (indices) and the axes they press along (-facing)
         self.holds = np.asarray(holds, dtype=np.int32)
         self.hold_axis = np.array([-np.asarray(tools[k].facing, dtype=float) for k in holds]
                                   ).reshape(-1, 3)
-        first_patch = self.k_slots + self.n_coupling  # the patch entries' first slot
-        rows, cols, source, coef, first = [], [], [], [], [0]
-        for h, k in enumerate(self.holds):
-            row = self.nf + 3 * self.node.size + h
-            pairs = np.arange(self.first[k], self.first[k + 1])
-            column = np.where(self.eliminated[pairs, None], equ[pairs], lam[pairs])
-            column = column[column >= 0]
-            rows.append(column)
-            cols.append(np.full(column.size, row))
-            a = self.hold_axis[h]
-            plain = pairs[~self.eliminated[pairs]]
-            slots = np.flatnonzero(np.isin(pi, pairs) & self.eliminated[pi])
-            src = np.concatenate([np.full(3 * plain.size, -1), first_patch + slots])
-            source.append(src)
-            coef.append(np.concatenate([np.tile(a, plain.size), -a[ii[slots]]]))
-            rows.append(np.full(src.size + 1, row))
-            cols.append(np.concatenate([lam[plain].ravel(), self.cols[first_patch + slots],
-                                        [row]]))
-            first.append(first[-1] + src.size)
-        self.n += self.holds.size
-        self.rows = np.concatenate([self.rows, *rows]).astype(np.int32)
-        self.cols = np.concatenate([self.cols, *cols]).astype(np.int32)
-        #: per force-controlled tool, its row's entries in hold_source and hold_coef
-        self.hold_first = np.asarray(first, dtype=np.int32)
-        self.hold_source = _join(source, np.int32)
-        self.hold_coef = _join(coef, np.float64)
+        self._problem = CoreProblem(solid, self, pack)
+        n_unknowns, nvalues, k_slots, status = _core.problem_layout_size(self._problem.handle)
+        check(status, "the Jacobian's layout")
+        rows, cols, status = _core.problem_layout(self._problem.handle, nvalues)
+        check(status, "the Jacobian's layout")
+        self.n, self.k_slots = int(n_unknowns), int(k_slots)
+        self.rows, self.cols = rows, cols
 
-    @cached_property
-    def by_rows(self) -> RowStructure:
-        """The Jacobian's structure by rows, for the products of GMRES in the core: sorted
-        once, at the first increment (a layout made for a look at the contact needs none)."""
-        return row_structure(self.n, self.rows, self.cols, self.symmetric)
-
-    def core_problem(self, solid: Solid, pack: ToolPack | None) -> CoreProblem:
-        """The core's copy of the problem of this layout, ``solid`` and the tools of
-        ``pack`` (none: the static problem): made at the first call, kept while the layout
-        lives."""
-        cache: dict[int, CoreProblem] = self.__dict__.setdefault("_core_problems", {})
-        key = id(pack)
-        if key not in cache:
-            cache[key] = CoreProblem(solid, self, pack)
-        return cache[key]
+    def core_problem(self, pack: ToolPack | None) -> CoreProblem:
+        """The core's copy of the problem of this layout, with the penalties and barriers
+        of ``pack`` (none: the static problem, or the layout's own, zero)."""
+        problem = self._problem
+        if pack is not None and pack is not problem.pack:
+            problem.set_pack(pack)
+        return problem
 
 
 class ToolPack:
@@ -343,59 +266,73 @@ class ToolPlacement:
 class CoreProblem:
     """A problem's fixed data handed to the core once (fortran/api/ddpy_api_forming.f90),
     held behind a handle of its table: the blank of ``solid`` with the unknowns of
-    ``layout``, the tools of ``pack`` one by one with their pairs, the force-controlled
-    tools and, before the first trial, the Jacobian's structure by rows. Each trial then
-    gives the core what changes: settings, limits, state, tools' positions, pairs' law."""
+    ``layout``, the tools of ``pack`` one by one with their pairs, and the force-controlled
+    tools; the core computes the Jacobian's layout from them. Each trial then gives the
+    core what changes: settings, limits, state, tools' positions, pairs' law."""
 
-    def __init__(self, solid: Solid, layout: Layout, pack: ToolPack | None) -> None:
-        tools = [] if pack is None else pack.tools
+    def __init__(self, solid: Solid, layout: Layout, pack: ToolPack) -> None:
+        tools = pack.tools
         if layout.first.size != len(tools) + 1:
             raise ValueError(f"the layout has {layout.first.size - 1} tool(s), the pack "
                              f"{len(tools)}")
-        self.pack, self.solid = pack, solid
+        self.solid = solid
         handle, status = _core.problem_create(solid.blank_handle, layout.eqn,
-                                              layout.pattern.offsets, int(layout.symmetric))
+                                              int(layout.symmetric))
         check(status, "the problem's blank and unknowns")
         self._handle = CoreHandle(handle)
-        self._rows = False
         for k, tool in enumerate(tools):
-            assert pack is not None
             faces, corners, weights = pack.tool_faces[k]
             pairs = slice(layout.first[k], layout.first[k + 1])
             patch_first = layout.patch_first[layout.first[k]:layout.first[k + 1] + 1]
-            stiffness, start, width = pack.barrier[k]
             check(_core.problem_add_tool(
                 handle, tool.search.handle, faced=int(tool.facing is not None),
                 facing=np.zeros(3) if tool.facing is None else tool.facing,
                 discretization=SURFACE_CODES[tool.contact], order=tool.points,
-                normal_penalty=pack.penalty[k], tangential_penalty=pack.penalty[k],
-                barrier_stiffness=stiffness, barrier_start=start, barrier_width=width,
                 faces=faces.ravel(), corner=corners.ravel(), face_weight=weights,
                 slaves=layout.node[pairs], patch_first=patch_first - patch_first[0],
                 patch_node=layout.patch_node[patch_first[0]:patch_first[-1]]),
                 f"tool {tool.name}'s contact")
         if layout.holds.size:
-            check(_core.problem_set_holds(handle, layout.holds, layout.hold_axis.ravel(),
-                                          layout.hold_first, layout.hold_source,
-                                          layout.hold_coef), "the force-controlled tools")
-        self._layout = weakref.ref(layout)
+            check(_core.problem_set_holds(handle, layout.holds, layout.hold_axis.ravel()),
+                  "the force-controlled tools")
+        self.pack = pack
+        self.set_pack(pack)
 
     @property
     def handle(self) -> int:
         return self._handle.handle
 
-    def ensure_rows(self) -> None:
-        """Give the core the Jacobian's structure by rows (sorted once, at the first trial:
-        a problem made for a look at the contact needs none)."""
-        if self._rows:
-            return
-        layout = self._layout()
-        assert layout is not None
-        rows = layout.by_rows
-        check(_core.problem_set_rows(self.handle, rows.row_start, rows.col, rows.sources,
-                                     rows.source_start, layout.rows.size),
-              "the Jacobian's structure")
-        self._rows = True
+    def set_pack(self, pack: ToolPack) -> None:
+        """The penalties and barriers of Gauss-point contact of ``pack``'s tools, the
+        problem's tools (the blank faces facing them are the same: the pack's are not
+        read)."""
+        if [t.name for t in pack.tools] != [t.name for t in self.pack.tools]:
+            raise ValueError(f"the pack's tools {pack.names} are not the problem's "
+                             f"{self.pack.names}")
+        for k in range(len(pack.tools)):
+            stiffness, start, width = pack.barrier[k]
+            check(_core.problem_set_penalty(
+                self.handle, k, normal_penalty=pack.penalty[k],
+                tangential_penalty=pack.penalty[k], barrier_stiffness=stiffness,
+                barrier_start=start, barrier_width=width), f"tool {pack.names[k]}'s penalty")
+        self.pack = pack
+
+    def set_state(self, state: SolidState) -> None:
+        """The blank's converged state the next trials and evaluations start from."""
+        check(_core.problem_set_state(
+            self.handle, _flat(state.displacement), _flat(state.axes.transpose(0, 1, 3, 2)),
+            _flat(state.stress), _flat(state.ep), _flat(state.strain),
+            self.solid.backstress_in(state)), "the blank's converged state")
+
+    def set_start(self, u_n: NDArray[np.float64], external: NDArray[np.float64],
+                  prescribed: NDArray[np.float64], guess: NDArray[np.float64] | None,
+                  force_n: NDArray[np.float64]) -> None:
+        """The converged displacements u_n (n, 3), the nodal loads, the fixed dofs'
+        values, the iterations' start (none: u_n) and the pairs' converged forces."""
+        check(_core.problem_set_start(
+            self.handle, u_n.ravel(), external.ravel(), prescribed.ravel(),
+            (u_n if guess is None else guess).ravel(), int(guess is not None), force_n),
+            "the increment's start")
 
     def set_tools(self, placement: ToolPlacement, hold_force: ArrayLike | None,
                   holds: int) -> None:
@@ -541,8 +478,7 @@ def increment(solid: Solid, layout: Layout, factors: Factors, state: SolidState,
     if pairs is None and layout.node.size:
         raise ValueError("a layout with contact pairs needs their Pairs")
     placement = None if pairs is None else pairs.tools
-    problem = layout.core_problem(solid, None if placement is None else placement.pack)
-    problem.ensure_rows()
+    problem = layout.core_problem(None if placement is None else placement.pack)
     handle = problem.handle
     check(_core.problem_set_newton(
         handle, force_tolerance=loop.force_tolerance,
@@ -557,16 +493,10 @@ def increment(solid: Solid, layout: Layout, factors: Factors, state: SolidState,
         touching=loop.touching, resting=loop.resting, penetration=loop.penetration,
         min_step=loop.min_step, yield_tolerance=loop.yield_tolerance,
         size_ratio=loop.size_ratio, hold_step=0.0 if pairs is None else pairs.hold_step)
-    check(_core.problem_set_state(
-        handle, _flat(state.displacement), _flat(state.axes.transpose(0, 1, 3, 2)),
-        _flat(state.stress), _flat(state.ep), _flat(state.strain),
-        solid.backstress_in(state)), "the blank's converged state")
+    problem.set_state(state)
     force_n = np.zeros(0) if pairs is None else \
         np.where(pairs.on[:, None], pairs.force_n, 0.0).ravel()
-    check(_core.problem_set_start(
-        handle, u_n.ravel(), external.ravel(), prescribed.ravel(),
-        (u_n if guess is None else guess).ravel(), int(guess is not None), force_n),
-        "the increment's start")
+    problem.set_start(u_n, external, prescribed, guess, force_n)
     if pairs is not None:  # (the static problem has no tools and no pairs)
         problem.set_tools(placement, pairs.hold_force, layout.holds.size)
         problem.set_law(pairs.on, pairs.r, pairs.mu, pairs.traction_n, pairs.pressure_n)
@@ -627,7 +557,7 @@ def _converged(solid: Solid, layout: Layout, problem: CoreProblem, work: dict) -
         problem.handle, u, fint, out.stress.ravel(), out.ep.ravel(), out.strain.ravel(),
         out.axes.transpose(0, 1, 3, 2).ravel(), solid.backstress_out(out))[-1],
         "the increment's answer")
-    npoint = 0 if problem.pack is None else problem.pack.n_points
+    npoint = problem.pack.n_points
     force, state, gap, normal, traction, pressure, shift, status = _core.problem_pair_answer(
         problem.handle, layout.node.size, npoint, layout.holds.size)
     check(status, "the increment's answer")
@@ -656,7 +586,7 @@ def contact(solid: Solid, layout: Layout, placement: ToolPlacement, on: NDArray[
     at the gaps), and the rows and entries of the force-controlled tools, pressing with
     ``hold_force``. Returns the pairs' states, gaps (inf: no patch) and normals (pairs,
     3)."""
-    problem = layout.core_problem(solid, placement.pack)
+    problem = layout.core_problem(placement.pack)
     problem.set_limits(reach=placement.reach, element_size=placement.size, touching=touching,
                        resting=resting)
     problem.set_tools(placement, hold_force, layout.holds.size)
@@ -666,6 +596,37 @@ def contact(solid: Solid, layout: Layout, placement: ToolPlacement, on: NDArray[
         np.asarray(force, float).ravel(), residual, values, placement.pack.n_points)
     check(status, "the contact of the pairs")
     return state, gap, normal.reshape(-1, 3)
+
+
+def equations(solid: Solid, layout: Layout, placement: ToolPlacement, state: SolidState,
+              u_n: NDArray[np.float64], external: NDArray[np.float64],
+              u: NDArray[np.float64], force: NDArray[np.float64], r: ArrayLike,
+              mu: ArrayLike, traction_n: ArrayLike, pressure_n: ArrayLike,
+              touching: float = 0.0, hold_force: ArrayLike | None = None
+              ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int32]]:
+    """The equations the core's loop solves, as the core evaluates them (problem_evaluate)
+    at displacements u (n, 3) and pair forces ``force`` (pairs, 3), in the increment from
+    the converged (u_n, ``state``) under the nodal loads ``external`` (n, 3), with the tools
+    of ``placement`` and every pair taking part (augmentation ``r``, friction ``mu``, the
+    Gauss points' tractions and pressures at the last converged increment); pairs within
+    ``touching`` count as closed, as in an increment's first iteration. ``hold_force``:
+    the force-controlled tools' forces (N). Returns the residual, the Jacobian's values in
+    the layout's slots (``Layout.rows``, ``cols``) and the pairs' states (a Gauss-point
+    pair's law rows are lambda - F(x), before the loop eliminates its multiplier). Raises
+    ElementError where an element fails."""
+    problem = layout.core_problem(placement.pack)
+    problem.set_limits(reach=placement.reach, element_size=placement.size, touching=touching)
+    problem.set_tools(placement, hold_force, layout.holds.size)
+    problem.set_law(np.ones(layout.node.size, dtype=bool), r, mu, traction_n, pressure_n)
+    problem.set_state(state)
+    problem.set_start(u_n, external, u_n, None, np.zeros(3 * layout.node.size))
+    residual, values, pair_state, element_status, element, status = _core.problem_evaluate(
+        problem.handle, np.asarray(u, float).ravel(), np.asarray(force, float).ravel(),
+        layout.n, layout.rows.size)
+    check(status, "the equations")
+    if element_status:
+        raise ElementError(int(element_status), int(element) - 1)
+    return residual, values, pair_state
 
 
 def stalled(iterations: int, residual: float, correction: float, tol_force: float,

@@ -1,13 +1,15 @@
 !> f2py doorway of the forming problem (and of the static problem, a forming problem without
 !> tools): one handle per problem in the core's handle table, made from the blank and its
-!> constraints, given its tools one by one, its force-controlled tools and the Jacobian's
-!> row structure; then, per increment trial, its settings, limits and start, where the
-!> tools are and the pairs' law, by name; the trial itself; and what came of it. Node and
+!> constraints, given its tools one by one and its force-controlled tools; the Jacobian's
+!> layout the core computes from them (ddpy_jacobian_layout), read back for the solver's
+!> analysis; then, per increment trial, its settings, limits and start, where the tools
+!> are and the pairs' law, by name; the trial itself; and what came of it. Node and
 !> tool indices arrive 0-based (see ddpy_api.f90 for the conventions). Every call checks
 !> what it is given against the problem before it stores it (the core writes where the
 !> layout says), and refuses with a status of ddpy_handle_table (refusal_*) otherwise.
 module ddpy_api_forming
   use, intrinsic :: iso_c_binding, only: c_int, c_double
+  use, intrinsic :: iso_fortran_env, only: int64
   use ddpy_kinds, only: wp
   use ddpy_handle_table, only: table, claim_handle, valid_handle, entry_blank, &
                                entry_surface, entry_problem, refusal_handle, refusal_size, &
@@ -19,38 +21,49 @@ module ddpy_api_forming
                                   search_energy, history_width
   use ddpy_forming, only: forming_contact
   use ddpy_forming_newton, only: forming_increment, penetration_step, gmres, &
-                                 hold_equations, hold_entries
-  use ddpy_sparse, only: rows_fit
+                                 hold_equations
+  use ddpy_sparse, only: rows_fit, rows_build
+  use ddpy_jacobian_layout, only: layout_build
+  use ddpy_solid_assembly, only: solid_coo_count, solid_assemble, shell_modes
   implicit none
   private
-  public :: api_problem_create, api_problem_add_tool, api_problem_set_holds, &
-            api_problem_set_rows, api_problem_set_newton, api_problem_set_limits, &
+  public :: api_problem_create, api_problem_add_tool, api_problem_set_penalty, &
+            api_problem_set_holds, api_problem_layout_size, api_problem_layout, &
+            api_problem_set_newton, api_problem_set_limits, &
             api_problem_set_state, api_problem_set_start, api_problem_set_tools, &
             api_problem_set_law, api_problem_increment, api_problem_report, &
             api_problem_history, api_problem_blank_answer, api_problem_pair_answer, &
-            api_problem_contact, api_penetration_step, api_krylov_solve
+            api_problem_contact, api_problem_evaluate, api_penetration_step, &
+            api_krylov_solve
 
 contains
 
   !> A problem of the blank behind handle blank (ddpy_api_solid) with the equation numbers
-  !> eqn (0-based, -1 where a dof is fixed: the free ones numbered 0..nf - 1) and the
-  !> solid's tangent slots offsets (ddpy.model.solid's pattern, its lower triangle when
-  !> symmetric /= 0); no tools yet.
-  subroutine api_problem_create(blank, nnode, eqn, ne, offsets, symmetric, handle, status) &
+  !> eqn (0-based, -1 where a dof is fixed: the free ones numbered 0..nf - 1), the solid's
+  !> tangent as its lower triangle when symmetric /= 0 (its slots per element the core's,
+  !> solid_coo_count); no tools yet.
+  subroutine api_problem_create(blank, nnode, eqn, symmetric, handle, status) &
     bind(C, name="ddpy_problem_create")
-    integer(c_int), value, intent(in) :: blank, nnode, ne, symmetric
-    integer(c_int), intent(in) :: eqn(3, nnode), offsets(ne + 1)
+    integer(c_int), value, intent(in) :: blank, nnode, symmetric
+    integer(c_int), intent(in) :: eqn(3, nnode)
     integer(c_int), intent(out) :: handle, status
-    integer :: nf
+    integer, allocatable :: counts(:)
+    integer(int64) :: slots
+    integer :: nf, ne, e
     handle = 0
     status = refusal_handle
     if (.not. valid_handle(blank, entry_blank)) return
     status = refusal_size
-    if (nnode /= table(blank)%blank%nnode .or. ne /= table(blank)%blank%ne) return
+    if (nnode /= table(blank)%blank%nnode) return
+    ne = table(blank)%blank%ne
     nf = count(eqn >= 0)
     status = refusal_index
     if (any(eqn < -1) .or. any(eqn >= nf)) return
-    if (offsets(1) /= 0 .or. any(offsets(2:) < offsets(:ne))) return
+    allocate(counts(ne))
+    call solid_coo_count(nnode, ne, table(blank)%blank%conn, eqn, symmetric /= 0, counts)
+    status = refusal_size  ! the tangent's slots must count in 32 bits
+    slots = sum(int(counts, int64))
+    if (slots > huge(1)) return
     status = refusal_full
     call claim_handle(entry_problem, handle)
     if (handle == 0) return
@@ -58,11 +71,15 @@ contains
     associate (p => table(handle)%problem)
       p%blank = table(blank)%blank
       p%dofs%nf = nf
-      p%dofs%k_slots = offsets(ne + 1)
+      p%dofs%k_slots = int(slots)
       p%dofs%symmetric = symmetric /= 0
       p%dofs%eqn = eqn
       p%dofs%fixed = eqn < 0
-      p%dofs%offsets = offsets
+      allocate(p%dofs%offsets(ne + 1))
+      p%dofs%offsets(1) = 0
+      do e = 1, ne
+        p%dofs%offsets(e + 1) = p%dofs%offsets(e) + counts(e)
+      end do
       allocate(p%tools%tool(0), p%tools%faces(4, 0), p%tools%corner(4, 0), &
                p%tools%face_weight(0))
       p%tools%face_first = [0]
@@ -75,11 +92,18 @@ contains
       allocate(p%placement%positions(3, 0), p%placement%positions_n(3, 0), &
                p%placement%hold_force(0), p%law%on(0), p%law%r(0), p%law%mu(0), &
                p%law%traction_n(3, 0), p%law%pressure_n(0))
-      p%contact_values = p%dofs%k_slots
-      p%nvalues = p%dofs%k_slots
     end associate
     status = 0
   end subroutine api_problem_create
+
+  !> The Jacobian's layout of problem p, computed when a tool or hold changed it; its
+  !> structure by rows (for GMRES) is sorted again at the next trial.
+  subroutine ensure_layout(p)
+    type(forming_problem), intent(inout) :: p
+    if (p%layout%built) return
+    call layout_build(p%blank, p%dofs, p%tools, p%pairs, p%holds, p%layout)
+    p%rows%n = -1
+  end subroutine ensure_layout
 
   !> The problem behind handle, or refusal_handle in status.
   logical function problem_ok(handle, status)
@@ -92,7 +116,7 @@ contains
   !> One more tool, after those given: the surface behind handle surface (ddpy_api_search)
   !> with its contact (discretization: contact_node, contact_surface or contact_gauss;
   !> order: Gauss points per direction of its faces), its facing direction (faced /= 0:
-  !> it has one), its Gauss-point penalties and barrier (see contact_tool), the blank's
+  !> it has one; its penalties and barrier: problem_set_penalty), the blank's
   !> faces that face it (their nodes, 0-based; corner: each corner's slave index, -1 where
   !> not a slave; face_weight: the area each point stands for, order^2 per face, then one
   !> per slave for a Gauss-point tool), and its slaves (0-based nodes) with the nodes each
@@ -100,20 +124,17 @@ contains
   !> node-to-surface contact, else every node of the faces around it. Refused after the
   !> force-controlled tools were set, or where the faces, slaves and patches do not fit.
   subroutine api_problem_add_tool(handle, surface, faced, facing, discretization, order, &
-                                  normal_penalty, tangential_penalty, barrier_stiffness, &
-                                  barrier_start, barrier_width, nface, faces, ncorner, corner, &
-                                  npoint, face_weight, nslave, slaves, patch_first, npatch, &
-                                  patch_node, status) bind(C, name="ddpy_problem_add_tool")
+                                  nface, faces, ncorner, corner, npoint, face_weight, nslave, &
+                                  slaves, patch_first, npatch, patch_node, status) &
+    bind(C, name="ddpy_problem_add_tool")
     integer(c_int), value, intent(in) :: handle, surface, faced, discretization, order, &
                                          nface, ncorner, npoint, nslave, npatch
-    real(c_double), value, intent(in) :: normal_penalty, tangential_penalty, &
-                                         barrier_stiffness, barrier_start, barrier_width
     real(c_double), intent(in) :: facing(3), face_weight(npoint)
     integer(c_int), intent(in) :: faces(4, nface), corner(4, ncorner), slaves(nslave), &
                                   patch_first(nslave + 1), patch_node(npatch)
     integer(c_int), intent(out) :: status
     type(contact_tool) :: tool
-    integer :: points, nnode, coupled, entries, rows, p, f, q, qq, e
+    integer :: points, nnode, p, f, q, qq, e
     logical :: found
     if (.not. problem_ok(handle, status)) return
     status = refusal_handle
@@ -165,26 +186,9 @@ contains
       tool%order = order
       tool%first_point = p_%tools%npoint
       tool%npoint = npoint
-      tool%normal_penalty = normal_penalty
-      tool%tangential_penalty = tangential_penalty
-      tool%barrier_stiffness = barrier_stiffness
-      tool%barrier_start = barrier_start
-      tool%barrier_width = barrier_width
-      ! The Jacobian's contact slots of these pairs: coupling entries, dC/dx over the free
-      ! dofs of each pair's patch (a surface-to-surface or Gauss-point pair has no row for
-      ! a held component), dC/dlambda.
-      coupled = count(p_%dofs%eqn(:, slaves + 1) >= 0)
-      entries = 0
-      do p = 1, nslave
-        rows = 3
-        if (discretization /= contact_node) rows = count(p_%dofs%eqn(:, slaves(p) + 1) >= 0)
-        entries = entries + rows*count(p_%dofs%eqn(:, patch_node(patch_first(p) + 1: &
-                                                                 patch_first(p + 1)) + 1) >= 0)
-      end do
       call append_tool(p_%tools, tool, faces, corner, face_weight)
       call append_pairs(p_%pairs, p_%dofs, slaves, patch_first, patch_node)
-      p_%contact_values = p_%contact_values + coupled + entries + 9*nslave
-      p_%nvalues = p_%contact_values
+      p_%layout%built = .false.
       ! The per-increment parts sized for the old tools are set again.
       if (allocated(p_%placement%positions)) deallocate(p_%placement%positions)
       if (allocated(p_%law%on)) deallocate(p_%law%on)
@@ -227,67 +231,91 @@ contains
     pairs%tool_first = [pairs%tool_first, pairs%npair]
   end subroutine append_pairs
 
-  !> The force-controlled tools, after the tools: tool(k) (0-based) presses along axis(:, k);
-  !> its row's entries are first(k) + 1 .. first(k + 1) of source (0-based slots of the
-  !> contact blocks, -1: the constant coef alone) and coef (see forming_increment). Each
-  !> tool at most once.
-  subroutine api_problem_set_holds(handle, nhold, tool, axis, first, nsource, source, ncoef, &
-                                   coef, status) bind(C, name="ddpy_problem_set_holds")
-    integer(c_int), value, intent(in) :: handle, nhold, nsource, ncoef
-    integer(c_int), intent(in) :: tool(nhold), first(nhold + 1), source(nsource)
-    real(c_double), intent(in) :: axis(3, nhold), coef(ncoef)
+  !> Tool tool's (0-based) law of Gauss-point contact: its normal and tangential penalties
+  !> (N/mm^3) and its barrier's stiffness (N/mm^3; 0: none), start and width (mm) (see
+  !> contact_tool); zero until set.
+  subroutine api_problem_set_penalty(handle, tool, normal_penalty, tangential_penalty, &
+                                     barrier_stiffness, barrier_start, barrier_width, status) &
+    bind(C, name="ddpy_problem_set_penalty")
+    integer(c_int), value, intent(in) :: handle, tool
+    real(c_double), value, intent(in) :: normal_penalty, tangential_penalty, &
+                                         barrier_stiffness, barrier_start, barrier_width
+    integer(c_int), intent(out) :: status
+    if (.not. problem_ok(handle, status)) return
+    status = refusal_index
+    if (tool < 0 .or. tool >= table(handle)%problem%tools%ntool) return
+    associate (t => table(handle)%problem%tools%tool(tool + 1))
+      t%normal_penalty = normal_penalty
+      t%tangential_penalty = tangential_penalty
+      t%barrier_stiffness = barrier_stiffness
+      t%barrier_start = barrier_start
+      t%barrier_width = barrier_width
+    end associate
+    status = 0
+  end subroutine api_problem_set_penalty
+
+  !> The force-controlled tools, after the tools: tool(k) (0-based) presses along axis(:, k).
+  !> Each tool at most once. The entries of their rows and columns are the layout's.
+  subroutine api_problem_set_holds(handle, nhold, tool, axis, status) &
+    bind(C, name="ddpy_problem_set_holds")
+    integer(c_int), value, intent(in) :: handle, nhold
+    integer(c_int), intent(in) :: tool(nhold)
+    real(c_double), intent(in) :: axis(3, nhold)
     integer(c_int), intent(out) :: status
     integer :: k
     if (.not. problem_ok(handle, status)) return
     associate (p => table(handle)%problem)
-      status = refusal_size
-      if (ncoef /= nsource) return
       status = refusal_index
       if (any(tool < 0) .or. any(tool >= p%tools%ntool)) return
       do k = 1, nhold
         if (count(tool == tool(k)) /= 1) return
       end do
-      if (first(1) /= 0 .or. first(nhold + 1) /= nsource .or. &
-          any(first(2:) < first(:nhold))) return
-      if (any(source >= p%contact_values) .or. any(source < -1)) return
       p%holds%nhold = nhold
-      p%holds%nsource = nsource
       p%holds%tool = tool + 1
       p%holds%axis = axis
-      p%holds%first = first
-      p%holds%source = source
-      p%holds%coef = coef
-      p%nvalues = p%contact_values + hold_entries(p%dofs, p%tools, p%pairs, p%holds)
+      p%layout%built = .false.
       if (allocated(p%placement%positions)) deallocate(p%placement%positions)
     end associate
     status = 0
   end subroutine api_problem_set_holds
 
-  !> The Jacobian's structure by rows (ddpy.core.linalg.row_structure, 0-based), for the
-  !> Krylov products, over its nvalues coordinate values: needed before an increment.
-  subroutine api_problem_set_rows(handle, nrow, row_start, ncsr, col, nsrc, sources, &
-                                  source_start, nvalues, status) &
-    bind(C, name="ddpy_problem_set_rows")
-    integer(c_int), value, intent(in) :: handle, nrow, ncsr, nsrc, nvalues
-    integer(c_int), intent(in) :: row_start(nrow + 1), col(ncsr), sources(nsrc), &
-                                  source_start(ncsr + 1)
-    integer(c_int), intent(out) :: status
+  !> The size of the problem's Jacobian (ddpy_jacobian_layout): n unknowns, nvalues
+  !> coordinate slots, of which k_slots the solid's tangent.
+  subroutine api_problem_layout_size(handle, n, nvalues, k_slots, status) &
+    bind(C, name="ddpy_problem_layout_size")
+    integer(c_int), value, intent(in) :: handle
+    integer(c_int), intent(out) :: n, nvalues, k_slots, status
+    n = 0
+    nvalues = 0
+    k_slots = 0
     if (.not. problem_ok(handle, status)) return
     associate (p => table(handle)%problem)
+      call ensure_layout(p)
+      n = p%layout%n
+      nvalues = p%layout%nvalues
+      k_slots = p%layout%k_slots
+    end associate
+  end subroutine api_problem_layout_size
+
+  !> The Jacobian's coordinate structure, the row and column (0-based) of each of its
+  !> nvalues slots in the order the evaluations write them (ddpy_jacobian_layout): what
+  !> the solver analyses.
+  subroutine api_problem_layout(handle, nvalues, rows, cols, status) &
+    bind(C, name="ddpy_problem_layout")
+    integer(c_int), value, intent(in) :: handle, nvalues
+    integer(c_int), intent(out) :: rows(nvalues), cols(nvalues), status
+    rows = 0
+    cols = 0
+    if (.not. problem_ok(handle, status)) return
+    associate (p => table(handle)%problem)
+      call ensure_layout(p)
       status = refusal_size
-      if (nrow /= p%dofs%nf + 3*p%pairs%npair + p%holds%nhold .or. nvalues /= p%nvalues) &
-        return
-      status = refusal_index
-      if (.not. rows_fit(nrow, ncsr, nsrc, nvalues, row_start, col, sources, source_start)) &
-        return
-      p%rows%n = nrow
-      p%rows%row_start = row_start
-      p%rows%col = col
-      p%rows%sources = sources
-      p%rows%source_start = source_start
+      if (nvalues /= p%layout%nvalues) return
+      rows = p%layout%rows
+      cols = p%layout%cols
     end associate
     status = 0
-  end subroutine api_problem_set_rows
+  end subroutine api_problem_layout
 
   !> How the Newton loop runs the next trials (newton_settings, by name; reuse and the
   !> line search search_*).
@@ -453,8 +481,9 @@ contains
   !> solver (analysed for the problem's Jacobian): factored and reuse_next, the state of
   !> its factors, are updated; outcome says what came of it (problem_report,
   !> problem_history and, when converged, problem_blank_answer and problem_pair_answer
-  !> give the rest). Refused (refusal_order) before the rows, settings, limits, state,
-  !> start, tools and law are set.
+  !> give the rest). Refused (refusal_order) before the settings, limits, state, start,
+  !> tools and law are set. The Jacobian's structure by rows (for GMRES) is sorted at the
+  !> first trial of a layout.
   subroutine api_problem_increment(handle, solver, factored, reuse_next, outcome, status) &
     bind(C, name="ddpy_problem_increment")
     integer(c_int), value, intent(in) :: handle, solver
@@ -466,9 +495,12 @@ contains
       status = refusal_order
       if (.not. (p%has_newton .and. ready_for_contact(p) .and. allocated(p%start%u_ref) .and. &
                  allocated(p%start%force_n))) return
-      if (p%rows%n /= p%dofs%nf + 3*p%pairs%npair + p%holds%nhold) return
+      call ensure_layout(p)
+      if (p%rows%n /= p%layout%n) &
+        call rows_build(p%layout%n, p%layout%nvalues, p%layout%rows, p%layout%cols, &
+                        p%dofs%symmetric, p%rows)
       call size_answer(p, a)
-      call forming_increment(p%blank, p%dofs, p%rows, p%nvalues, p%tools, p%pairs, p%holds, &
+      call forming_increment(p%blank, p%dofs, p%layout, p%rows, p%tools, p%pairs, p%holds, &
                              p%newton, p%limits, p%start, p%placement, p%law, solver, &
                              factored, reuse_next, a, table(handle)%report)
       outcome = table(handle)%report%outcome
@@ -619,8 +651,9 @@ contains
   !> Contact of every pair at positions x, from the converged x_n, for the pair forces
   !> force, with the problem's tools, law and limits (see forming_contact): the law's rows
   !> and the pairs' forces in the equilibrium rows of residual (which hold fint -
-  !> external), the contact entries of values (none when it is empty: a look at the
-  !> gaps) and, with values, the rows and entries of the force-controlled tools; the
+  !> external), the contact entries of values (the coupling entries included; none when
+  !> it is empty: a look at the gaps) and, with values, the rows and entries of the
+  !> force-controlled tools; the
   !> pairs' states, gaps and normals, and the Gauss points' tractions and pressures.
   subroutine api_problem_contact(handle, nnode, x, x_n, npair, force, nrow, residual, &
                                  nvalues, values, state, gap, normal, npoint, traction, &
@@ -631,10 +664,6 @@ contains
     integer(c_int), intent(out) :: state(npair), status
     real(c_double), intent(out) :: gap(npair), normal(3, npair), traction(3, npoint), &
                                    pressure(npoint)
-    integer, allocatable :: lock(:), found(:)
-    real(wp), allocatable :: dc_dt(:, :, :), lambda(:, :), stiffness(:)
-    logical, allocatable :: eliminated(:)
-    integer :: t, p, nf
     state = 0
     gap = 0.0_wp
     normal = 0.0_wp
@@ -644,35 +673,119 @@ contains
     associate (pb => table(handle)%problem)
       status = refusal_order
       if (.not. ready_for_contact(pb)) return
+      call ensure_layout(pb)
       status = refusal_size
-      nf = pb%dofs%nf
       if (nnode /= pb%blank%nnode .or. npair /= pb%pairs%npair .or. &
-          npoint /= pb%tools%npoint .or. nrow /= nf + 3*npair + pb%holds%nhold .or. &
-          (nvalues /= pb%nvalues .and. nvalues /= 0)) return
-      allocate(lock(npair + npoint), found(npair + npoint), dc_dt(3, 3, npair), &
-               lambda(3, npair), eliminated(npair), stiffness(pb%holds%nhold))
-      lock = 0  ! no pair held: a plain search
-      call forming_contact(x, x_n, pb%dofs, pb%tools, pb%pairs, pb%law, &
-                           pb%placement%positions, pb%placement%positions_n, pb%limits, &
-                           pb%limits%touching, force, lock, min(nvalues, pb%contact_values), &
-                           residual(1:nf + 3*npair), values, state, gap, normal, traction, &
-                           pressure, found, dc_dt)
+          npoint /= pb%tools%npoint .or. nrow /= pb%layout%n .or. &
+          (nvalues /= pb%layout%nvalues .and. nvalues /= 0)) return
+      call contact_equations(pb, nnode, x, x_n, npair, force, nrow, residual, nvalues, &
+                             values, state, gap, normal, npoint, traction, pressure)
+    end associate
+    status = 0
+  end subroutine api_problem_contact
+
+  !> The contact's part of problem pb's equations (api_problem_contact), its sizes checked.
+  subroutine contact_equations(pb, nnode, x, x_n, npair, force, nrow, residual, nvalues, &
+                               values, state, gap, normal, npoint, traction, pressure)
+    type(forming_problem), intent(in) :: pb
+    integer, intent(in) :: nnode, npair, nrow, nvalues, npoint
+    real(wp), intent(in) :: x(3, nnode), x_n(3, nnode), force(3, npair)
+    real(wp), intent(inout) :: residual(nrow), values(nvalues)
+    integer, intent(out) :: state(npair)
+    real(wp), intent(out) :: gap(npair), normal(3, npair), traction(3, npoint), &
+                             pressure(npoint)
+    integer, allocatable :: lock(:), found(:)
+    real(wp), allocatable :: dc_dt(:, :, :), lambda(:, :), stiffness(:)
+    integer :: p, nf
+    nf = pb%dofs%nf
+    allocate(lock(npair + npoint), found(npair + npoint), dc_dt(3, 3, npair), &
+             lambda(3, npair), stiffness(pb%holds%nhold))
+    lock = 0  ! no pair held: a plain search
+    call forming_contact(x, x_n, pb%dofs, pb%tools, pb%pairs, pb%law, &
+                         pb%placement%positions, pb%placement%positions_n, pb%limits, &
+                         pb%limits%touching, force, lock, &
+                         min(nvalues, pb%layout%contact_values), &
+                         residual(1:nf + 3*npair), values, state, gap, normal, traction, &
+                         pressure, found, dc_dt)
+    if (nvalues == 0) return
+    values(pb%layout%k_slots + 1:pb%layout%k_slots + pb%layout%ncoupling) = &
+      pb%layout%coupling
+    if (pb%holds%nhold == 0) return
+    ! The tools' equations as the Newton loop has them: a Gauss-point pair's lambda is
+    ! F(x) (its law's residual is lambda - F).
+    lambda = force
+    do p = 1, npair
+      if (pb%layout%eliminated(p)) lambda(:, p) = force(:, p) - residual(nf + 3*p - 2:nf + 3*p)
+    end do
+    call hold_equations(pb%dofs, pb%pairs, pb%law%on, pb%holds, pb%placement%hold_force, &
+                        pb%layout%eliminated, lambda, dc_dt, pb%layout%contact_values, &
+                        residual(nf + 3*npair + 1:), values, stiffness)
+  end subroutine contact_equations
+
+  !> The equations of the Newton loop at displacements u and pair forces force, in an
+  !> increment from the problem's converged state (problem_set_state; problem_set_start's
+  !> u_n and loads) with its tools, law and limits (the touching predictor's gap of
+  !> problem_set_limits closes the pairs within it): the residual (the free equilibrium
+  !> rows fint - external less the pairs' forces, the pairs' laws, the force-controlled
+  !> tools' balances), every Jacobian value in the layout's slots (the solid's tangent,
+  !> then the contact's: problem_contact) and the pairs' states. A Gauss-point pair's law
+  !> rows are lambda - F(x), as the loop's evaluation writes them before it eliminates the
+  !> multiplier. element_status, element (1-based): an element that failed (nothing else
+  !> is then written).
+  subroutine api_problem_evaluate(handle, nnode, u, npair, force, nrow, residual, nvalues, &
+                                  values, state, element_status, element, status) &
+    bind(C, name="ddpy_problem_evaluate")
+    integer(c_int), value, intent(in) :: handle, nnode, npair, nrow, nvalues
+    real(c_double), intent(in) :: u(3, nnode), force(3, npair)
+    real(c_double), intent(out) :: residual(nrow), values(nvalues)
+    integer(c_int), intent(out) :: state(npair), element_status, element, status
+    real(wp), allocatable :: fint(:, :), kdu(:, :), dp(:, :), stress(:, :, :), ep(:, :), &
+                             strain(:, :, :), axes(:, :, :, :), back(:, :, :), &
+                             alpha_in(:, :), alpha(:, :), gap(:), normal(:, :), &
+                             traction(:, :), pressure(:)
+    integer :: a, c, ne, nback
+    residual = 0.0_wp
+    values = 0.0_wp
+    state = 0
+    element_status = 0
+    element = 0
+    if (.not. problem_ok(handle, status)) return
+    associate (p => table(handle)%problem)
+      status = refusal_order
+      if (.not. (ready_for_contact(p) .and. allocated(p%start%u_ref) .and. &
+                 allocated(p%start%u_n))) return
+      call ensure_layout(p)
+      status = refusal_size
+      if (nnode /= p%blank%nnode .or. npair /= p%pairs%npair .or. nrow /= p%layout%n .or. &
+          nvalues /= p%layout%nvalues) return
+      ne = p%blank%ne
+      nback = size(p%start%back_old, 3)
+      allocate(fint(3, nnode), kdu(3, nnode), dp(3, nnode), stress(6, 8, ne), ep(8, ne), &
+               strain(6, 8, ne), axes(3, 3, 8, ne), back(6, 8, nback), &
+               alpha_in(shell_modes, ne), alpha(shell_modes, ne), gap(npair), &
+               normal(3, npair), traction(3, p%tools%npoint), pressure(p%tools%npoint))
+      alpha_in = 0.0_wp
+      dp = 0.0_wp
+      back = p%start%back_old
+      call solid_assemble(nnode, p%blank%x0, ne, p%blank%conn, p%blank%kind, p%start%u_ref, &
+                          u, p%blank%props, p%start%axes_old, p%start%stress_old, &
+                          p%start%ep_old, p%start%strain_old, nback, p%start%back_old, &
+                          alpha_in, p%dofs%eqn, p%dofs%symmetric, .true., p%dofs%offsets, &
+                          p%layout%k_slots, values(1:p%layout%k_slots), .false., dp, fint, &
+                          kdu, stress, ep, strain, axes, back, alpha, element_status, element)
       status = 0
-      if (pb%holds%nhold == 0 .or. nvalues == 0) return
-      ! The tools' equations as the Newton loop has them: a Gauss-point pair's lambda is
-      ! F(x) (its law's residual is lambda - F).
-      lambda = force
-      do t = 1, pb%tools%ntool
-        do p = pb%pairs%tool_first(t) + 1, pb%pairs%tool_first(t + 1)
-          eliminated(p) = pb%tools%tool(t)%discretization == contact_gauss
-          if (eliminated(p)) lambda(:, p) = force(:, p) - residual(nf + 3*p - 2:nf + 3*p)
+      if (element_status /= 0) return
+      do a = 1, nnode
+        do c = 1, 3
+          if (p%dofs%eqn(c, a) >= 0) residual(p%dofs%eqn(c, a) + 1) = fint(c, a) - &
+                                                                   p%start%external(c, a)
         end do
       end do
-      call hold_equations(pb%dofs, pb%pairs, pb%law%on, pb%holds, pb%placement%hold_force, &
-                          eliminated, lambda, dc_dt, pb%contact_values, &
-                          residual(nf + 3*npair + 1:), values, stiffness)
+      call contact_equations(p, nnode, p%blank%x0 + u, p%blank%x0 + p%start%u_n, npair, &
+                             force, nrow, residual, nvalues, values, state, gap, normal, &
+                             p%tools%npoint, traction, pressure)
     end associate
-  end subroutine api_problem_contact
+  end subroutine api_problem_evaluate
 
   !> The step length the Newton loop's penetration limit allows (see penetration_step).
   subroutine api_penetration_step(nnode, npair, du, pair_node, on, state, gap, normal, &

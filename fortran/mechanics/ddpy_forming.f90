@@ -2,11 +2,11 @@
 !> active tool, the closest point on the tool, the Alart-Curnier residual with its
 !> derivatives, and their place in the combined residual and Jacobian (docs/theory/contact.md).
 !>
-!> The unknowns are ordered as the Python layout (ddpy.model.forming) numbers them: the free
-!> displacement dofs first (eqn), then 3 force components per pair. The Jacobian's contact
-!> blocks follow the layout's coordinate structure: the coupling entries (-1, set once by
-!> the caller), then dC/dx at the free dofs of each pair's node (pair-major, row, column),
-!> then dC/dlambda (pair-major, row, column). A pair's dC/dx runs over the nodes of its
+!> The unknowns are ordered as the core's layout numbers them (ddpy_jacobian_layout): the
+!> free displacement dofs first (eqn), then 3 force components per pair. The Jacobian's
+!> contact blocks are written into the layout's slots: the coupling entries (their values
+!> set once by the caller), then dC/dx at the free dofs of each pair's node (pair-major,
+!> row, column), then dC/dlambda (pair-major, row, column). A pair's dC/dx runs over the nodes of its
 !> patch (patch_first, patch_node): its own node for node-to-surface contact, every node of
 !> the blank faces around it for surface-to-surface and Gauss-point contact (row, patch
 !> node, column).
@@ -265,7 +265,7 @@ contains
       if (surface(p)) then
         do i = 1, 3
           ! A held component's row is lambda_k = 0 (above): no patch entries in the
-          ! structure (ddpy.model.newton.Layout), which would join the patch's nodes.
+          ! structure (ddpy_jacobian_layout), which would join the patch's nodes.
           if (pairs%held(i, p) /= 0) cycle
           do e = pairs%patch_first(p) + 1, pairs%patch_first(p + 1)
             do j = 1, 3

@@ -4,8 +4,8 @@
 !> the (tool, slave node) pairs, the force-controlled tools, and per increment where the
 !> tools are, the pairs' law and converged state, and the limits of the increment.
 !>
-!> Node indices (pair nodes, patch nodes, faces) are 0-based, as the layout of the Python
-!> model numbers them (ddpy.model.newton.Layout); tools are 1-based.
+!> Node indices (pair nodes, patch nodes, faces) are 0-based, as the Python model gives them
+!> (ddpy.model.newton.Layout, ToolPack); tools are 1-based.
 module ddpy_forming_data
   use ddpy_kinds, only: wp
   use ddpy_search_surface, only: search_surface
@@ -69,7 +69,8 @@ module ddpy_forming_data
 
   !> The force-controlled tools (ddpy_forming_newton): tool(k) presses along axis(:, k);
   !> the entries of its row are first(k) + 1 .. first(k + 1) of source (0-based slots of
-  !> the contact blocks, -1: none) and coef.
+  !> the contact blocks, -1: none) and coef, which the core's layout writes
+  !> (ddpy_jacobian_layout).
   type :: force_holds
     integer :: nhold = 0, nsource = 0
     integer, allocatable :: tool(:)                !< (nhold)

@@ -27,9 +27,10 @@ module ddpy_hex8
   use ddpy_element_products, only: lower_product, add_congruence, add_congruence_t
   use ddpy_log_strain, only: hencky_type, hencky_evaluate, hencky_first, hencky_second, &
                              hencky_stretch, tensor_from_stress, stress_from_tensor
+  use ddpy_small_matrix, only: product3, stress_tensor, strain_map, by_dofs
   implicit none
   private
-  public :: hex8_element, hex8_jacobians, hex8_stresses, strain_rotation, pushed_stress
+  public :: hex8_element, hex8_jacobians, hex8_stresses, pushed_stress
 
   !> Status values of hex8_element.
   integer, parameter, public :: hex8_ok = 0, hex8_inverted = 1, hex8_material_failed = 2
@@ -41,8 +42,6 @@ module ddpy_hex8
     1.0_wp, 1.0_wp, 1.0_wp, -1.0_wp, 1.0_wp, 1.0_wp], [3, 8])
   real(wp), parameter :: gauss = 0.577350269189625764509148780502_wp
 
-  !> Index pairs (i, j) of the Voigt components.
-  integer, parameter :: voigt(2, 6) = reshape([1, 1, 2, 2, 3, 3, 1, 2, 2, 3, 3, 1], [2, 6])
   real(wp), parameter :: identity_voigt(6) = [1.0_wp, 1.0_wp, 1.0_wp, 0.0_wp, 0.0_wp, 0.0_wp]
 
 contains
@@ -62,6 +61,11 @@ contains
     end do
   end subroutine shape_functions
 
+  ! det3 and inverse3 stay this module's own: called from ddpy_small_matrix (with or
+  ! without link-time optimization) they move the element's answers in the last bits,
+  ! which the Newton loop carries to 3e-9 of the built-in case's tool forces; the other
+  ! helpers are ddpy_small_matrix's, to the bit.
+  !> The determinant of a 3 x 3 matrix.
   pure function det3(a) result(d)
     real(wp), intent(in) :: a(3, 3)
     real(wp) :: d
@@ -69,6 +73,22 @@ contains
         - a(1, 2)*(a(2, 1)*a(3, 3) - a(2, 3)*a(3, 1)) &
         + a(1, 3)*(a(2, 1)*a(3, 2) - a(2, 2)*a(3, 1))
   end function det3
+
+  !> Inverse of a 3 x 3 matrix with determinant det.
+  pure function inverse3(a, det) result(inv)
+    real(wp), intent(in) :: a(3, 3), det
+    real(wp) :: inv(3, 3)
+    inv(1, 1) = a(2, 2)*a(3, 3) - a(2, 3)*a(3, 2)
+    inv(1, 2) = a(1, 3)*a(3, 2) - a(1, 2)*a(3, 3)
+    inv(1, 3) = a(1, 2)*a(2, 3) - a(1, 3)*a(2, 2)
+    inv(2, 1) = a(2, 3)*a(3, 1) - a(2, 1)*a(3, 3)
+    inv(2, 2) = a(1, 1)*a(3, 3) - a(1, 3)*a(3, 1)
+    inv(2, 3) = a(1, 3)*a(2, 1) - a(1, 1)*a(2, 3)
+    inv(3, 1) = a(2, 1)*a(3, 2) - a(2, 2)*a(3, 1)
+    inv(3, 2) = a(1, 2)*a(3, 1) - a(1, 1)*a(3, 2)
+    inv(3, 3) = a(1, 1)*a(2, 2) - a(1, 2)*a(2, 1)
+    inv = inv/det
+  end function inverse3
 
   !> Reference gradients g(a, J) = dN_a/dX_J and det J0 at natural point xi; g = 0 when
   !> det J0 <= 0.
@@ -100,56 +120,6 @@ contains
       detj(8 + p) = det3(matmul(x, dn))
     end do
   end subroutine hex8_jacobians
-
-  !> Voigt strain transformation t (engineering shears) from global axes to the material
-  !> axes whose directions are the columns of axes: strain_material = t strain_global. The
-  !> stress goes back as stress_global = t^T stress_material and the tangent as t^T D t.
-  pure function strain_rotation(axes) result(t)
-    real(wp), intent(in) :: axes(3, 3)
-    real(wp) :: t(6, 6)
-    call rotation_of_strains(axes, t)
-  end function strain_rotation
-
-  !> strain_rotation as a subroutine for the element loop (no result descriptor), by
-  !> blocks of rows and columns (normal, shear) without branches.
-  pure subroutine rotation_of_strains(axes, t)
-    real(wp), intent(in) :: axes(3, 3)
-    real(wp), intent(out) :: t(6, 6)
-    integer :: r, c, i, j, k, l
-    do c = 1, 3
-      do r = 1, 3
-        t(r, c) = axes(c, r)*axes(c, r)
-      end do
-      do r = 4, 6
-        i = voigt(1, r)
-        j = voigt(2, r)
-        t(r, c) = 2.0_wp*axes(c, i)*axes(c, j)
-      end do
-    end do
-    do c = 4, 6
-      k = voigt(1, c)
-      l = voigt(2, c)
-      do r = 1, 3
-        t(r, c) = axes(k, r)*axes(l, r)
-      end do
-      do r = 4, 6
-        i = voigt(1, r)
-        j = voigt(2, r)
-        t(r, c) = axes(k, i)*axes(l, j) + axes(l, i)*axes(k, j)
-      end do
-    end do
-  end subroutine rotation_of_strains
-
-  !> The symmetric 3 x 3 tensor of a Voigt stress: tensor_from_stress of ddpy_log_strain,
-  !> here again so that the element loop can inline it (an array result across modules is
-  !> a call with a descriptor).
-  pure function stress_tensor(s) result(t)
-    real(wp), intent(in) :: s(6)
-    real(wp) :: t(3, 3)
-    t(:, 1) = [s(1), s(4), s(6)]
-    t(:, 2) = [s(4), s(2), s(5)]
-    t(:, 3) = [s(6), s(5), s(3)]
-  end function stress_tensor
 
   !> Green-Lagrange strain (Voigt, engineering shears) of a deformation gradient.
   pure function green_lagrange(f) result(e)
@@ -265,7 +235,7 @@ contains
     kinematic = material_kinematic(props)
     do p = 1, 8
       de = hk(p)%strain + (mean_lnj - lnj(p))/3.0_wp*identity_voigt
-      call rotation_of_strains(axes_old(:, :, p), rot)
+      call strain_map(axes_old(:, :, p), rot)
       de = matmul(rot, de)
       if (kinematic) then
         call material_update_mixed(props, yield_floor, stress_old(:, p), back_old(:, p), &
@@ -386,25 +356,6 @@ contains
           0.5_wp*(w(3, 1) + w(1, 3))]
   end function pushed_stress
 
-  !> sum_r bt(:, r) v(r): a Voigt row vector v times b, over the 24 dofs.
-  pure function by_dofs(bt, v) result(w)
-    real(wp), intent(in) :: bt(24, 6), v(6)
-    real(wp) :: w(24)
-    w = bt(:, 1)*v(1) + bt(:, 2)*v(2) + bt(:, 3)*v(3) + bt(:, 4)*v(4) + bt(:, 5)*v(5) &
-        + bt(:, 6)*v(6)
-  end function by_dofs
-
-  !> The product of two 3 x 3 matrices, written out (gfortran calls its library for some
-  !> matmul forms, which costs more than the product).
-  pure function product3(a, b) result(c)
-    real(wp), intent(in) :: a(3, 3), b(3, 3)
-    real(wp) :: c(3, 3)
-    integer :: j
-    do j = 1, 3
-      c(:, j) = a(:, 1)*b(1, j) + a(:, 2)*b(2, j) + a(:, 3)*b(3, j)
-    end do
-  end function product3
-
   !> dF = I + du g^T over the 8 nodes (g(a, :) the gradient of N_a).
   pure function relative_gradient(du, g) result(fg)
     real(wp), intent(in) :: du(3, 8), g(8, 3)
@@ -464,21 +415,5 @@ contains
       pk2(:, p) = stress_from_tensor(matmul(finv, matmul(tau, transpose(finv))))
     end do
   end subroutine hex8_stresses
-
-  !> Inverse of a 3 x 3 matrix with determinant det.
-  pure function inverse3(a, det) result(inv)
-    real(wp), intent(in) :: a(3, 3), det
-    real(wp) :: inv(3, 3)
-    inv(1, 1) = a(2, 2)*a(3, 3) - a(2, 3)*a(3, 2)
-    inv(1, 2) = a(1, 3)*a(3, 2) - a(1, 2)*a(3, 3)
-    inv(1, 3) = a(1, 2)*a(2, 3) - a(1, 3)*a(2, 2)
-    inv(2, 1) = a(2, 3)*a(3, 1) - a(2, 1)*a(3, 3)
-    inv(2, 2) = a(1, 1)*a(3, 3) - a(1, 3)*a(3, 1)
-    inv(2, 3) = a(1, 3)*a(2, 1) - a(1, 1)*a(2, 3)
-    inv(3, 1) = a(2, 1)*a(3, 2) - a(2, 2)*a(3, 1)
-    inv(3, 2) = a(1, 2)*a(3, 1) - a(1, 1)*a(3, 2)
-    inv(3, 3) = a(1, 1)*a(2, 2) - a(1, 2)*a(2, 1)
-    inv = inv/det
-  end function inverse3
 
 end module ddpy_hex8

@@ -35,6 +35,7 @@ module ddpy_solid_shell
                                    add_pair_product
   use ddpy_log_strain, only: hencky_type, hencky_evaluate, hencky_first, hencky_second, &
                              symmetric_eigen
+  use ddpy_small_matrix, only: product3, stress_tensor, strain_map, by_dofs
   implicit none
   private
   public :: solid_shell_element
@@ -82,10 +83,14 @@ module ddpy_solid_shell
     0, 1, 0, 1, 1, 0, 0, 1, 1, &
     0, 0, 1, 1, 0, 1, 0, 1, 1, &
     1, 0, 0, 0, 1, 0, 1, 0, 1, 0, 1, 1], [3, shell_modes])
-  integer, parameter :: voigt(2, 6) = reshape([1, 1, 2, 2, 3, 3, 1, 2, 2, 3, 3, 1], [2, 6])
 
 contains
 
+  ! det3 and inverse3 stay this module's own: called from ddpy_small_matrix (with or
+  ! without link-time optimization) they move the element's answers in the last bits,
+  ! which the Newton loop carries to 3e-9 of the built-in case's tool forces; the other
+  ! helpers are ddpy_small_matrix's, to the bit.
+  !> The determinant of a 3 x 3 matrix.
   pure function det3(a) result(d)
     real(wp), intent(in) :: a(3, 3)
     real(wp) :: d
@@ -109,66 +114,6 @@ contains
     inv(3, 3) = a(1, 1)*a(2, 2) - a(1, 2)*a(2, 1)
     inv = inv/det
   end function inverse3
-
-  !> The product of two 3 x 3 matrices, written out.
-  pure function product3(a, b) result(c)
-    real(wp), intent(in) :: a(3, 3), b(3, 3)
-    real(wp) :: c(3, 3)
-    integer :: j
-    do j = 1, 3
-      c(:, j) = a(:, 1)*b(1, j) + a(:, 2)*b(2, j) + a(:, 3)*b(3, j)
-    end do
-  end function product3
-
-  !> The symmetric 3 x 3 tensor of a Voigt stress.
-  pure function stress_tensor(s) result(t)
-    real(wp), intent(in) :: s(6)
-    real(wp) :: t(3, 3)
-    t(:, 1) = [s(1), s(4), s(6)]
-    t(:, 2) = [s(4), s(2), s(5)]
-    t(:, 3) = [s(6), s(5), s(3)]
-  end function stress_tensor
-
-  !> Voigt strain map t (engineering shears) from the basis whose dual rows are the rows
-  !> of axes: strain(r) of the components axes(k, i) axes(l, j) E_kl. With the columns of
-  !> axes the material axes (orthonormal) it turns global strains into material ones (as
-  !> ddpy_hex8's strain_rotation); with axes = J^-1 (rows: dxi_a/dx) it turns covariant
-  !> natural strains into Cartesian ones.
-  pure subroutine strain_map(axes, t)
-    real(wp), intent(in) :: axes(3, 3)
-    real(wp), intent(out) :: t(6, 6)
-    integer :: r, c, i, j, k, l
-    do c = 1, 3
-      do r = 1, 3
-        t(r, c) = axes(c, r)*axes(c, r)
-      end do
-      do r = 4, 6
-        i = voigt(1, r)
-        j = voigt(2, r)
-        t(r, c) = 2.0_wp*axes(c, i)*axes(c, j)
-      end do
-    end do
-    do c = 4, 6
-      k = voigt(1, c)
-      l = voigt(2, c)
-      do r = 1, 3
-        t(r, c) = axes(k, r)*axes(l, r)
-      end do
-      do r = 4, 6
-        i = voigt(1, r)
-        j = voigt(2, r)
-        t(r, c) = axes(k, i)*axes(l, j) + axes(l, i)*axes(k, j)
-      end do
-    end do
-  end subroutine strain_map
-
-  !> sum_r bt(:, r) v(r) over the 24 dofs.
-  pure function by_dofs(bt, v) result(w)
-    real(wp), intent(in) :: bt(24, 6), v(6)
-    real(wp) :: w(24)
-    w = bt(:, 1)*v(1) + bt(:, 2)*v(2) + bt(:, 3)*v(3) + bt(:, 4)*v(4) + bt(:, 5)*v(5) &
-        + bt(:, 6)*v(6)
-  end function by_dofs
 
   !> Right stretch dU and its inverse of a deformation gradient fg (det > 0), from the
   !> eigenvalues of its Green-Lagrange strain.

@@ -17,7 +17,7 @@ module ddpy_forming_newton
   use ddpy_solid_assembly, only: solid_assemble, shell_modes
   use ddpy_blank, only: blank_mesh, blank_dofs
   use ddpy_forming_data, only: tool_set, pair_set, force_holds, tool_placement, pair_law, &
-                               increment_limits, contact_node, contact_gauss
+                               increment_limits, contact_node
   use ddpy_forming_problem, only: newton_settings, increment_start, increment_answer, &
                                   increment_report, search_none, search_energy, &
                                   outcome_converged, outcome_landing, outcome_element, &
@@ -29,9 +29,10 @@ module ddpy_forming_newton
   use ddpy_contact, only: contact_inactive
   use ddpy_linear_solver, only: solver_factorize, solver_solve
   use ddpy_sparse, only: sum_duplicates, row_structure
+  use ddpy_jacobian_layout, only: jacobian_layout
   implicit none
   private
-  public :: forming_increment, penetration_step, gmres, hold_equations, hold_entries
+  public :: forming_increment, penetration_step, gmres, hold_equations
 
   !> Pairs are held on their patches after 1/hold_fraction of the iterations
   !> (forming_increment); the answer's gaps may then differ from the search's by
@@ -51,7 +52,9 @@ contains
   !> solid state *_old of the blank's mesh, see solid_assemble) to the tools at
   !> placement%positions and the fixed dofs at start%prescribed (forming holds them at
   !> u_n), in the loop's settings (newton) and the increment's limits, the Jacobian's
-  !> structure by rows (rows, for GMRES) and its nvalues coordinate values. A prescribed
+  !> layout (ddpy_jacobian_layout: its coordinate slots, which pairs' multipliers are
+  !> eliminated, the coupling entries' values) and its structure by rows (rows, for
+  !> GMRES). A prescribed
   !> motion not yet reached enters each evaluation through the tangent, K_fp dp added to
   !> the free rows, and each step takes it whole (scaled by the step length like the
   !> rest): the linearized predictor, not a jump of the boundary nodes, which would invert
@@ -72,19 +75,21 @@ contains
   !> positions + shift(k) holds%axis(:, k), shift(k) one more unknown (after the pairs'
   !> forces), whose equation is sum over the tool's pairs of axis . lambda =
   !> placement%hold_force(k), the force the tool presses on the blank with. Its Jacobian
-  !> entries follow the contact blocks: per tool, its column (the rows of its pairs' laws,
-  !> or a Gauss-point pair's free equilibrium rows), its row (holds%first(k) + 1 ..
-  !> holds%first(k + 1): holds%coef times the value at slot holds%source (0-based), or
-  !> holds%coef alone where the source < 0), its diagonal. A step moves a tool by at most
+  !> entries follow the contact blocks (ddpy_jacobian_layout): per tool, its column (the
+  !> rows of its pairs' laws, or a Gauss-point pair's free equilibrium rows), its row
+  !> (holds%first(k) + 1 .. holds%first(k + 1): holds%coef times the value at slot
+  !> holds%source (0-based), or holds%coef alone where the source < 0), its diagonal. A
+  !> step moves a tool by at most
   !> limits%hold_step; outcome_hold when a tool has no contact stiffness along its axis or
   !> has moved farther than the reach in the increment.
-  subroutine forming_increment(blank, dofs, rows, nvalues, tools, pairs, holds, newton, &
+  subroutine forming_increment(blank, dofs, layout, rows, tools, pairs, holds, newton, &
                                limits, start, placement, law, solver, factored, reuse_next, &
                                answer, report)
     type(blank_mesh), intent(in) :: blank
     type(blank_dofs), intent(in) :: dofs
+    type(jacobian_layout), intent(in) :: layout
     type(row_structure), intent(in) :: rows
-    integer, intent(in) :: nvalues, solver
+    integer, intent(in) :: solver
     type(tool_set), intent(in) :: tools
     type(pair_set), intent(in) :: pairs
     type(force_holds), intent(in) :: holds
@@ -113,9 +118,8 @@ contains
                              kdu(:, :), dp(:, :), u_cur(:, :), force_cur(:, :), &
                              alpha_cur(:, :), shift_cur(:), dshift(:)
     integer, allocatable :: previous(:), lock(:)
-    logical, allocatable :: eliminated(:), averaged(:)
-    real(wp), allocatable :: coupling(:)
-    integer :: tool, pair, comp, entry, k, hold_base, retouches
+    logical, allocatable :: averaged(:)
+    integer :: tool, k, hold_base, retouches, nvalues
     logical :: retouched
     real(wp) :: tol_force, tol_disp, yield_tol, floor, norm, scale, moved, correction, rel, &
                 forcing, alpha, step_size, du_norm, landing, t_norm, t_scale, t_moved, &
@@ -142,7 +146,8 @@ contains
     npair = pairs%npair
     npoint = tools%npoint
     nhold = holds%nhold
-    n_coupling = count(dofs%eqn(:, pairs%node + 1) >= 0)
+    nvalues = layout%nvalues
+    n_coupling = layout%ncoupling
     element_size = limits%element_size
     call system_clock(count_rate=clock_rate)
     tol_force = newton%force_tolerance
@@ -174,26 +179,14 @@ contains
     weight(1:nf) = 1.0_wp
     weight(nf + 1:nf + 3*npair) = reshape(spread(1.0_wp/law%r, 1, 3), [3*npair])
     weight(nf + 3*npair + 1:) = 1.0_wp  ! the tools' shifts are lengths
-    ! The pairs of Gauss-point tools, whose multipliers are eliminated (forming_contact):
-    ! their coupling entries (node's equilibrium row, multiplier) are 0, the others' -1.
-    allocate(eliminated(npair), averaged(npair), coupling(n_coupling))
+    ! Pairs whose gap averages Gauss points' (held_ok checks the points instead).
+    allocate(averaged(npair))
     do tool = 1, ntool
-      eliminated(pairs%tool_first(tool) + 1:pairs%tool_first(tool + 1)) = &
-        tools%tool(tool)%discretization == contact_gauss
-      ! Pairs whose gap averages Gauss points' (held_ok checks the points instead).
       averaged(pairs%tool_first(tool) + 1:pairs%tool_first(tool + 1)) = &
         tools%tool(tool)%discretization /= contact_node
     end do
-    entry = 0
-    do pair = 1, npair
-      do comp = 1, 3
-        if (dofs%eqn(comp, pairs%node(pair) + 1) < 0) cycle
-        entry = entry + 1
-        coupling(entry) = merge(0.0_wp, -1.0_wp, eliminated(pair))
-      end do
-    end do
     ! The force-controlled tools' entries close the values.
-    hold_base = nvalues - hold_entries(dofs, tools, pairs, holds)
+    hold_base = layout%contact_values
     x_n = blank%x0 + start%u_n
     do cur = 1, 2
       allocate(slot(cur)%u(3, nnode), slot(cur)%force(3, npair), slot(cur)%residual(n), &
@@ -207,7 +200,7 @@ contains
                slot(cur)%back(6, 8, nback), slot(cur)%shift(nhold), &
                slot(cur)%dc_dt(3, 3, npair), slot(cur)%stiffness(nhold))
       slot(cur)%back = start%back_old
-      slot(cur)%values(k_slots + 1:k_slots + n_coupling) = coupling
+      slot(cur)%values(k_slots + 1:k_slots + n_coupling) = layout%coupling
       slot(cur)%shift = 0.0_wp
     end do
     correction = ieee_value(1.0_wp, ieee_positive_inf)
@@ -572,12 +565,13 @@ contains
                            s%traction, s%pressure, s%patch, s%dc_dt)
       ! A Gauss-point pair's multiplier is eliminated: lambda = F(x), C = 0.
       do p = 1, npair
-        if (.not. eliminated(p)) cycle
+        if (.not. layout%eliminated(p)) cycle
         s%force(:, p) = s%force(:, p) - s%residual(nf + 3*p - 2:nf + 3*p)
         s%residual(nf + 3*p - 2:nf + 3*p) = 0.0_wp
       end do
-      call hold_equations(dofs, pairs, law%on, holds, placement%hold_force, eliminated, &
-                          s%force, s%dc_dt, hold_base, s%residual(nf + 3*npair + 1:), &
+      call hold_equations(dofs, pairs, law%on, holds, placement%hold_force, &
+                          layout%eliminated, s%force, s%dc_dt, hold_base, &
+                          s%residual(nf + 3*npair + 1:), &
                           s%values, s%stiffness)
       call system_clock(t2)
       report%contact_time = report%contact_time + real(t2 - t1, wp)/real(clock_rate, wp)
@@ -870,28 +864,6 @@ contains
       values(slot) = diagonal
     end do
   end subroutine hold_equations
-
-  !> The Jacobian entries of the force-controlled tools (per tool its column, row and
-  !> diagonal: see forming_increment), which close the values.
-  pure integer function hold_entries(dofs, tools, pairs, holds) result(entries)
-    type(blank_dofs), intent(in) :: dofs
-    type(tool_set), intent(in) :: tools
-    type(pair_set), intent(in) :: pairs
-    type(force_holds), intent(in) :: holds
-    integer :: k, p, t
-    entries = 0
-    do k = 1, holds%nhold
-      t = holds%tool(k)
-      do p = pairs%tool_first(t) + 1, pairs%tool_first(t + 1)
-        if (tools%tool(t)%discretization == contact_gauss) then
-          entries = entries + count(dofs%eqn(:, pairs%node(p) + 1) >= 0)
-        else
-          entries = entries + 3
-        end if
-      end do
-      entries = entries + holds%first(k + 1) - holds%first(k) + 1
-    end do
-  end function hold_entries
 
   !> Longest fraction (at most 1) of the step du (3, nnode) that leaves no free pair's node
   !> (on, open, with a gap) deeper than room_depth inside its tool, the gaps and normals

@@ -1,8 +1,8 @@
 !> A forming problem as the core keeps it behind a handle (ddpy_handle_table): the blank and
-!> the numbering of its unknowns, the Jacobian's structure, the tools, the pairs and the
-!> force-controlled tools (fixed for the problem's life), and what changes per increment
-!> trial (the Newton settings, the increment's limits, the converged state it starts from,
-!> where the tools are and the pairs' law); and what a trial gives (increment_answer,
+!> the numbering of its unknowns, the tools, the pairs and the force-controlled tools (fixed
+!> for the problem's life) with the Jacobian's layout computed from them, and what changes
+!> per increment trial (the Newton settings, the increment's limits, the converged state it
+!> starts from, where the tools are and the pairs' law); and what a trial gives (increment_answer,
 !> increment_report). The static problem is one without tools. The api layer
 !> (ddpy_api_forming) builds them; the Newton loop (ddpy_forming_newton) takes them whole.
 module ddpy_forming_problem
@@ -11,6 +11,7 @@ module ddpy_forming_problem
   use ddpy_forming_data, only: tool_set, pair_set, force_holds, tool_placement, pair_law, &
                                increment_limits
   use ddpy_sparse, only: row_structure
+  use ddpy_jacobian_layout, only: jacobian_layout
   implicit none
   private
   public :: forming_problem, newton_settings, increment_start, increment_answer, &
@@ -101,17 +102,17 @@ module ddpy_forming_problem
     real(wp) :: landing = 1.0_wp, residual = 0.0_wp, correction = 0.0_wp
   end type increment_report
 
-  !> The problem: fixed data, then what each trial sets.
+  !> The problem: fixed data, then what each trial sets. The Jacobian's layout (layout)
+  !> and its structure by rows for GMRES (rows) are the core's, computed from the fixed
+  !> data when first needed (ddpy_api_forming) and again when a tool or hold is added.
   type :: forming_problem
     type(blank_mesh) :: blank
     type(blank_dofs) :: dofs
-    type(row_structure) :: rows
     type(tool_set) :: tools
     type(pair_set) :: pairs
     type(force_holds) :: holds
-    !> Slots of the Jacobian's values: all of them, and the solid's with the contact
-    !> blocks' (the force-controlled tools' entries close the values).
-    integer :: nvalues = 0, contact_values = 0
+    type(jacobian_layout) :: layout
+    type(row_structure) :: rows
     !> Whether the settings and the limits of a trial were given.
     logical :: has_newton = .false., has_limits = .false.
     type(newton_settings) :: newton

@@ -4,15 +4,15 @@
 !> contribution, so that threads never write to the same place). The products of the Krylov
 !> solver need it with the duplicates summed, once per GMRES call: on the paper's bending
 !> blank 11.7 million coordinates into 5.7 million entries. Every entry gathers its own
-!> contributions (ddpy.core.linalg.row_structure lists them), in parallel; a scatter over
-!> the coordinates would run on one thread.
+!> contributions (rows_build lists them), in parallel; a scatter over the coordinates would
+!> run on one thread.
 module ddpy_sparse
   use ddpy_kinds, only: wp
   implicit none
   private
-  public :: sum_duplicates, row_structure, rows_fit
+  public :: sum_duplicates, row_structure, rows_fit, rows_build
 
-  !> The Jacobian's coordinates summed by rows (ddpy.core.linalg.row_structure), for the
+  !> The Jacobian's coordinates summed by rows (rows_build), for the
   !> products of GMRES: row i's entries are row_start(i) + 1 .. row_start(i + 1), each in
   !> column col (0-based), the sum of the coordinate values at sources(source_start(k) +
   !> 1 .. source_start(k + 1)) (0-based). n = 0: none given (no Krylov solves).
@@ -54,5 +54,85 @@ contains
     end do
     !$omp end parallel do
   end subroutine sum_duplicates
+
+  !> The row structure of the n x n matrix with m coordinates at 0-based (rows, cols), as
+  !> ddpy.core.linalg.row_structure makes it: entries sorted by row, then column, each
+  !> gathering its coordinates in their order; symmetric: the coordinates are one triangle,
+  !> each off-diagonal one standing for its mirror too (the mirrors after every coordinate).
+  !> Two stable counting sorts, by column and then by row.
+  subroutine rows_build(n, m, rows, cols, symmetric, rs)
+    integer, intent(in) :: n, m, rows(m), cols(m)
+    logical, intent(in) :: symmetric
+    type(row_structure), intent(out) :: rs
+    integer, allocatable :: r(:), c(:), origin(:), next(:), by_col(:), order(:)
+    logical, allocatable :: new(:)
+    integer :: total, i, k, e
+    total = m
+    if (symmetric) total = m + count(rows /= cols)
+    allocate(r(total), c(total), origin(total), next(n + 1), by_col(total), order(total))
+    r(1:m) = rows
+    c(1:m) = cols
+    origin(1:m) = [(i - 1, i = 1, m)]
+    k = m
+    if (symmetric) then
+      do i = 1, m
+        if (rows(i) == cols(i)) cycle
+        k = k + 1
+        r(k) = cols(i)
+        c(k) = rows(i)
+        origin(k) = i - 1
+      end do
+    end if
+    call counting_sort(c, [(i, i = 1, total)], by_col)
+    call counting_sort(r, by_col, order)
+    ! new(k): the k-th sorted coordinate starts an entry (its row or column changes)
+    allocate(new(total))
+    do k = 1, total
+      new(k) = k == 1
+      if (k > 1) new(k) = r(order(k)) /= r(order(k - 1)) .or. c(order(k)) /= c(order(k - 1))
+    end do
+    e = count(new)
+    rs%n = n
+    allocate(rs%row_start(n + 1), rs%col(e), rs%source_start(e + 1), rs%sources(total))
+    rs%row_start = 0
+    e = 0
+    do k = 1, total
+      i = order(k)
+      rs%sources(k) = origin(i)
+      if (.not. new(k)) cycle
+      e = e + 1
+      rs%col(e) = c(i)
+      rs%source_start(e) = k - 1
+      rs%row_start(r(i) + 2) = rs%row_start(r(i) + 2) + 1
+    end do
+    rs%source_start(e + 1) = total
+    do i = 2, n + 1
+      rs%row_start(i) = rs%row_start(i) + rs%row_start(i - 1)
+    end do
+
+  contains
+
+    !> sorted: the items of items (indices into key) stably sorted by key (0..n-1).
+    subroutine counting_sort(key, items, sorted)
+      integer, intent(in) :: key(:), items(:)
+      integer, intent(out) :: sorted(:)
+      integer :: j, q
+      next = 0
+      do j = 1, size(items)
+        next(key(items(j)) + 1) = next(key(items(j)) + 1) + 1
+      end do
+      q = 0
+      do j = 1, n  ! next(v + 1): the entries before key v
+        q = q + next(j)
+        next(j) = q - next(j)
+      end do
+      do j = 1, size(items)
+        q = key(items(j)) + 1
+        next(q) = next(q) + 1
+        sorted(next(q)) = items(j)
+      end do
+    end subroutine counting_sort
+
+  end subroutine rows_build
 
 end module ddpy_sparse

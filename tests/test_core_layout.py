@@ -1,0 +1,126 @@
+"""The Jacobian's layout the core computes (fortran/solver/ddpy_jacobian_layout.f90), as
+``Layout`` reads it, and the core's evaluation that ``FormingProblem.linearization`` reads
+(problem_evaluate)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ddpy import _core
+from ddpy.core.handles import CoreRefusal, check
+from ddpy.geometry.surfaces import NagataSurface
+from ddpy.model.forming import FormingProblem, RigidTool
+from ddpy.model.material import Hill48, Material, Swift
+from ddpy.model.mesh import HexMesh
+from ddpy.model.newton import Layout
+from ddpy.model.solid import Solid
+
+STEEL = Material(210e3, 0.3, Hill48.von_mises(), Swift(500.0, 0.01, 0.2))
+
+
+def plane(z: float, facing: float) -> NagataSurface:
+    """A flat square tool at height z whose normal opposes ``facing`` (+1: blank below)."""
+    corners = np.array([[-2, -2, z], [6, -2, z], [6, 6, z], [-2, 6, z]], dtype=float)
+    normals = np.tile([0.0, 0.0, -facing], (4, 1))
+    return NagataSurface(corners, normals, [[0, 3, 2, 1]] if facing > 0 else [[0, 1, 2, 3]])
+
+
+def two_tools() -> FormingProblem:
+    """A 2 x 2 x 1 blank between a Gauss-point holder above and a node-to-surface die below,
+    on the symmetry plane x = 0 (held components of both tools' slaves)."""
+    mesh = HexMesh.box(2.0, 2.0, 1.0, 2, 2, 1)
+    holder = RigidTool("holder", plane(1.0, 1.0), mesh.select(z=1.0), facing=(0, 0, 1),
+                       contact="gauss", penalty=2000.0, friction=0.1)
+    die = RigidTool("die", plane(0.0, -1.0), mesh.select(z=0.0), facing=(0, 0, -1),
+                    contact="node", friction=0.1)
+    problem = FormingProblem(Solid(mesh, STEEL), [holder, die])
+    problem.fix(mesh.select(x=0.0), "x")
+    problem.fix(mesh.select(y=0.0), "y")
+    return problem
+
+
+def test_the_cores_layout_holds_each_block_where_the_evaluation_writes_it() -> None:
+    """The solid's tangent first (its own coordinate structure), then one coupling entry per
+    free component of each pair's node, the patch entries (a Gauss-point pair's in its
+    node's equilibrium rows, none in a held row), each pair's 3 x 3 dC/dlambda, and the
+    force-controlled holder's column, row and diagonal last."""
+    problem = two_tools()
+    layout = Layout(problem.solid, problem.tools, problem.fixed, holds=[0])
+    nf, npair = layout.nf, layout.node.size
+    assert layout.n == nf + 3 * npair + 1
+    assert layout.rows.min() >= 0 and max(layout.rows.max(), layout.cols.max()) < layout.n
+    solid = problem.solid.pattern(layout.eqn, symmetric=False)
+    k = layout.k_slots
+    assert k == solid.rows.size
+    np.testing.assert_array_equal(layout.rows[:k], solid.rows)
+    np.testing.assert_array_equal(layout.cols[:k], solid.cols)
+    equ = layout.eqn.reshape(-1, 3)[layout.node]                 # (pairs, 3)
+    law = nf + np.arange(3 * npair).reshape(npair, 3)
+    coupled = equ >= 0
+    assert (~coupled).any()  # held components on the symmetry planes
+    ncoupling = int(coupled.sum())
+    np.testing.assert_array_equal(layout.rows[k:k + ncoupling], equ[coupled])
+    np.testing.assert_array_equal(layout.cols[k:k + ncoupling], law[coupled])
+    # dC/dlambda closes the contact blocks, before the holder's entries
+    gauss = slice(layout.first[0], layout.first[1])
+    blocks = np.repeat(law, 3, axis=1).ravel(), np.tile(law, (1, 3)).ravel()
+    hold_rows = layout.rows == layout.n - 1
+    hold_cols = layout.cols == layout.n - 1
+    first_hold = int(np.flatnonzero(hold_rows | hold_cols)[0])
+    lam = slice(first_hold - 9 * npair, first_hold)
+    np.testing.assert_array_equal(layout.rows[lam], blocks[0])
+    np.testing.assert_array_equal(layout.cols[lam], blocks[1])
+    # the patch entries: every Gauss-point pair's in equilibrium rows, none in a held row
+    patch = slice(k + ncoupling, lam.start)
+    rows, cols = layout.rows[patch], layout.cols[patch]
+    assert np.all(cols < nf)
+    in_law = rows >= nf
+    assert np.all(np.isin(rows[in_law], law[layout.first[1]:]))  # the die's pairs only
+    die_held = law[layout.first[1]:][equ[layout.first[1]:] < 0]
+    assert np.isin(die_held, rows).all()  # a node-to-surface pair keeps its held rows
+    # the holder: its column in its pairs' free equilibrium rows, its diagonal last
+    assert layout.rows[-1] == layout.cols[-1] == layout.n - 1
+    np.testing.assert_array_equal(layout.rows[hold_cols & ~hold_rows],
+                                  equ[gauss][equ[gauss] >= 0])
+    # its row: the eliminated pairs' F(x) entries, in their equilibrium rows' columns
+    row_entries = hold_rows & ~hold_cols
+    assert row_entries.sum() == ((rows < nf) & (rows >= 0)).sum()
+
+
+def test_the_linearization_is_the_cores_evaluation_of_the_solid_and_the_pairs() -> None:
+    """With the tools 0.5 mm off the blank and no pair forces the free equilibrium rows
+    are fint - external and the solid's slots its tangent, bitwise as the solid assembles
+    them; the coupling entries are 0 for the holder's eliminated multipliers and -1 for
+    the die's."""
+    problem = two_tools()
+    rng = np.random.default_rng(5)
+    n = problem.solid.mesh.n_nodes
+    u = 1e-4 * rng.standard_normal((n, 3)) * ~problem.fixed
+    away = {"holder": np.array([0.0, 0.0, 0.5]), "die": np.array([0.0, 0.0, -0.5])}
+    eq = problem.linearization(u, np.zeros((problem.force.shape[0], 3)), away)
+    assert not eq.state.any()  # every pair open
+    layout = Layout(problem.solid, problem.tools, problem.fixed)
+    pattern = problem.solid.pattern(layout.eqn, symmetric=False)
+    assembly = problem.solid.assemble(u, problem.solid_state, pattern)
+    k = layout.k_slots
+    np.testing.assert_array_equal(eq.values[:k], assembly.values)
+    np.testing.assert_array_equal(eq.residual[:eq.n_free],
+                                  assembly.fint.ravel()[~problem.fixed.ravel()])
+    equ = layout.eqn.reshape(-1, 3)[layout.node]
+    gauss = np.repeat(np.arange(layout.node.size) < layout.first[1], 3).reshape(-1, 3)
+    expected = np.where(gauss, 0.0, -1.0)[equ >= 0]
+    np.testing.assert_array_equal(eq.values[k:k + expected.size], expected)
+
+
+def test_a_penalty_for_a_tool_the_problem_does_not_have_is_refused() -> None:
+    problem = two_tools()
+    layout = Layout(problem.solid, problem.tools, problem.fixed)
+    handle = layout.core_problem(None).handle
+    check(_core.problem_set_penalty(handle, 1, normal_penalty=1.0, tangential_penalty=1.0,
+                                    barrier_stiffness=0.0, barrier_start=0.0,
+                                    barrier_width=0.0), "the die's penalty")
+    with pytest.raises(CoreRefusal, match="index"):
+        check(_core.problem_set_penalty(handle, 2, normal_penalty=1.0,
+                                        tangential_penalty=1.0, barrier_stiffness=0.0,
+                                        barrier_start=0.0, barrier_width=0.0), "a penalty")

@@ -175,79 +175,8 @@ contains
 
   end subroutine material_update_mixed
 
-  ! elastic_moduli, elastic_tangent and hill48_modes are ddpy_material's, copied: made
-  ! public there, gfortran no longer inlines them into the isotropic update, whose answers
-  ! then move in the last bits (and the Newton loop carries that to 1e-4 of the bending
-  ! benchmark's forces). Change both copies together.
-
-  !> Shear and bulk moduli from E and nu.
-  pure subroutine elastic_moduli(props, shear, bulk)
-    real(wp), intent(in) :: props(material_prop_count)
-    real(wp), intent(out) :: shear, bulk
-    shear = props(prop_young)/(2.0_wp*(1.0_wp + props(prop_poisson)))
-    bulk = props(prop_young)/(3.0_wp*(1.0_wp - 2.0_wp*props(prop_poisson)))
-  end subroutine elastic_moduli
-
-  !> Isotropic elasticity C (engineering shears): stress = C strain.
-  pure function elastic_tangent(shear, bulk) result(c)
-    real(wp), intent(in) :: shear, bulk
-    real(wp) :: c(6, 6)
-    integer :: i
-    c = (bulk - 2.0_wp*shear/3.0_wp)*outer(unit_normal, unit_normal)
-    do i = 1, 3
-      c(i, i) = c(i, i) + 2.0_wp*shear
-      c(i + 3, i + 3) = shear
-    end do
-  end function elastic_tangent
-
-  !> The five deviatoric modes V_k (columns of modes, orthonormal Voigt vectors) in which the
-  !> Hill matrix P and the isotropic compliance C^-1 are both diagonal: P V_k = c_k V_k and
-  !> C^-1 V_k = V_k / mu_k, with mu_k = 2G, c_k = q_k on the two normal modes and mu_k = G,
-  !> c_k = 2 q_k on the three shears (q = N, L, M). For s = p m + sum a_k V_k this gives
-  !> s.P.s = sum c_k a_k^2, and (C^-1 + dlambda P)^-1 scales mode k by
-  !> mu_k / (1 + x q_k) with x = 2 G dlambda.
-  pure subroutine hill48_modes(coefficients, shear, modes, q, c, mu)
-    real(wp), intent(in) :: coefficients(6), shear
-    real(wp), intent(out) :: modes(6, 5), q(5), c(5), mu(5)
-    real(wp) :: q11, q22, q12, mean, half_diff, radius, angle, ea(3), eb(3)
-    associate (f => coefficients(1), g => coefficients(2), h => coefficients(3))
-      ! The Hill normal block restricted to the deviatoric plane, in the orthonormal basis
-      ! ea = (1, -1, 0)/sqrt(2), eb = (1, 1, -2)/sqrt(6).
-      q11 = 0.5_wp*(f + g + 4.0_wp*h)
-      q22 = 1.5_wp*(f + g)
-      q12 = 0.5_wp*sqrt(3.0_wp)*(g - f)
-    end associate
-    ea = [1.0_wp, -1.0_wp, 0.0_wp]/sqrt(2.0_wp)
-    eb = [1.0_wp, 1.0_wp, -2.0_wp]/sqrt(6.0_wp)
-    mean = 0.5_wp*(q11 + q22)
-    half_diff = 0.5_wp*(q11 - q22)
-    radius = hypot(half_diff, q12)
-    angle = 0.5_wp*atan2(q12, half_diff)
-    modes = 0.0_wp
-    modes(1:3, 1) = cos(angle)*ea + sin(angle)*eb
-    modes(1:3, 2) = -sin(angle)*ea + cos(angle)*eb
-    modes(4, 3) = 1.0_wp
-    modes(5, 4) = 1.0_wp
-    modes(6, 5) = 1.0_wp
-    ! The smaller eigenvalue as det/larger: no cancellation when the form is nearly singular.
-    q(1) = mean + radius
-    q(2) = (q11*q22 - q12*q12)/q(1)
-    q(3) = coefficients(6)
-    q(4) = coefficients(4)
-    q(5) = coefficients(5)
-    c(1:2) = q(1:2)
-    c(3:5) = 2.0_wp*q(3:5)
-    mu(1:2) = 2.0_wp*shear
-    mu(3:5) = shear
-  end subroutine hill48_modes
-
-  pure function outer(u, v) result(m)
-    real(wp), intent(in) :: u(:), v(:)
-    real(wp) :: m(size(u), size(v))
-    integer :: j
-    do j = 1, size(v)
-      m(:, j) = u*v(j)
-    end do
-  end function outer
+  ! elastic_moduli, elastic_tangent, hill48_modes and outer: one source with
+  ! ddpy_material's (see the file).
+  include "ddpy_material_helpers.inc"
 
 end module ddpy_material_mixed

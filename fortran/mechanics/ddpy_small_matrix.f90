@@ -5,10 +5,11 @@
 !> called from their element loops without link-time optimization: their answers are
 !> bitwise those of the copies each module had (the built-in case's run, every increment
 !> and field), and the time per Newton iteration the same within its noise
-!> (docs/theory/speed.md). The determinant and inverse stay each element's own, and the
-!> materials keep their outer product: from here (with link-time optimization too) they
-!> move the answers in the last bits, which the Newton loop carries to 3e-9 of the tool
-!> forces and 1e-7 of the strains.
+!> (docs/theory/speed.md). The determinant and inverse (ddpy_det_inverse3.inc) and the
+!> materials' helpers (ddpy_material_helpers.inc) are included into each module that uses
+!> them instead: from here (with link-time optimization too) they moved the answers in the
+!> last bits, which the Newton loop carried to 3e-9 of the tool forces and 1e-7 of the
+!> strains.
 !> Voigt order 11, 22, 33, 12, 23, 31 with engineering shear strains throughout.
 module ddpy_small_matrix
   use ddpy_kinds, only: wp

@@ -86,34 +86,8 @@ module ddpy_solid_shell
 
 contains
 
-  ! det3 and inverse3 stay this module's own: called from ddpy_small_matrix (with or
-  ! without link-time optimization) they move the element's answers in the last bits,
-  ! which the Newton loop carries to 3e-9 of the built-in case's tool forces; the other
-  ! helpers are ddpy_small_matrix's, to the bit.
-  !> The determinant of a 3 x 3 matrix.
-  pure function det3(a) result(d)
-    real(wp), intent(in) :: a(3, 3)
-    real(wp) :: d
-    d = a(1, 1)*(a(2, 2)*a(3, 3) - a(2, 3)*a(3, 2)) &
-        - a(1, 2)*(a(2, 1)*a(3, 3) - a(2, 3)*a(3, 1)) &
-        + a(1, 3)*(a(2, 1)*a(3, 2) - a(2, 2)*a(3, 1))
-  end function det3
-
-  !> Inverse of a 3 x 3 matrix with determinant det.
-  pure function inverse3(a, det) result(inv)
-    real(wp), intent(in) :: a(3, 3), det
-    real(wp) :: inv(3, 3)
-    inv(1, 1) = a(2, 2)*a(3, 3) - a(2, 3)*a(3, 2)
-    inv(1, 2) = a(1, 3)*a(3, 2) - a(1, 2)*a(3, 3)
-    inv(1, 3) = a(1, 2)*a(2, 3) - a(1, 3)*a(2, 2)
-    inv(2, 1) = a(2, 3)*a(3, 1) - a(2, 1)*a(3, 3)
-    inv(2, 2) = a(1, 1)*a(3, 3) - a(1, 3)*a(3, 1)
-    inv(2, 3) = a(1, 3)*a(2, 1) - a(1, 1)*a(2, 3)
-    inv(3, 1) = a(2, 1)*a(3, 2) - a(2, 2)*a(3, 1)
-    inv(3, 2) = a(1, 2)*a(3, 1) - a(1, 1)*a(3, 2)
-    inv(3, 3) = a(1, 1)*a(2, 2) - a(1, 2)*a(2, 1)
-    inv = inv/det
-  end function inverse3
+  ! det3 and inverse3: one source with the other element (see the file).
+  include "ddpy_det_inverse3.inc"
 
   !> Right stretch dU and its inverse of a deformation gradient fg (det > 0), from the
   !> eigenvalues of its Green-Lagrange strain.

@@ -55,6 +55,7 @@ from ddpy.model.newton import (
     gauss_face_weights,
     increment,
 )
+from ddpy.model.predictor import clear_of_barriers
 from ddpy.model.solid import Solid, SolidState, _components
 from ddpy.model.tool import BARRIER_STIFFNESS, BARRIER_WIDTH, RigidTool
 from ddpy.model.work import Work
@@ -691,6 +692,16 @@ class FormingProblem:
         landing = control.landing()
         # Start from the last increment's displacement rate (docs/theory/contact.md).
         guess = _extrapolated(self.u, target - factor, run.last_du)
+        measures = self.sheet_measures
+        if guess is not None and measures is not None:
+            active = [t for i, t in enumerate(self.tools)
+                      if run.on[layout.first[i]:layout.first[i + 1]].any()]
+            guess, moved = clear_of_barriers(guess, self.solid.mesh.nodes, active,
+                                             self._positions(positions), self.thickness,
+                                             measures.bottom, self._reach)
+            if moved:
+                _log.debug("%s starts with %d slave nodes moved out of the barriers",
+                           _trial(target, step, run.travel), moved)
         careful = control.start(run.last_du is None)
         touching = _Touching(self.tuning.touching * self.size, resting=not careful)
         size_ratio = control.nominal / (target - factor)

@@ -12,6 +12,7 @@ from test_surface_contact import dome
 
 from ddpy.geometry.surfaces import NagataSurface
 from ddpy.model.mesh import HexMesh, through_thickness_columns
+from ddpy.model.newton import contact_faces
 from ddpy.model.predictor import clear_of_barriers
 from ddpy.model.tool import BARRIER_DEPTH, BARRIER_WIDTH, RigidTool
 
@@ -50,8 +51,8 @@ def test_nodes_past_the_ramp_come_back_to_its_middle_with_their_columns(surface)
     for column_bottom, down in zip(tool.slaves, sink, strict=True):
         guess[bottom == column_bottom, 2] -= down
     before = depths(tool, mesh.nodes + guess, where)
-    start, moved = clear_of_barriers(guess, mesh.nodes, [tool], {"tool": where}, THICKNESS,
-                                     bottom, reach=1.0)
+    start, moved = clear_of_barriers(guess, mesh.nodes, [tool], contact_faces([tool], mesh),
+                                     {"tool": where}, THICKNESS, bottom, reach=1.0)
     after = depths(tool, mesh.nodes + start, where)
     past = before > END
     assert moved == past.sum() > 0
@@ -75,7 +76,8 @@ def test_only_gauss_point_tools_with_a_barrier_move_the_start() -> None:
     for tool in (RigidTool("tool", PLANE, mesh.select(z=0.0), facing=(0, 0, -1),
                            contact="gauss", barrier=None),
                  RigidTool("tool", PLANE, mesh.select(z=0.0))):
-        start, moved = clear_of_barriers(guess, mesh.nodes, [tool], {"tool": np.zeros(3)},
+        start, moved = clear_of_barriers(guess, mesh.nodes, [tool],
+                                         contact_faces([tool], mesh), {"tool": np.zeros(3)},
                                          THICKNESS, bottom, reach=1.0)
         assert moved == 0 and start is guess
 
@@ -92,9 +94,28 @@ def test_a_column_squeezed_between_two_tools_takes_both_moves() -> None:
     guess = np.zeros_like(mesh.nodes)
     guess[:, 2] = -0.02
     where = {"below": np.zeros(3), "above": np.array([0.0, 0.0, THICKNESS - 0.05])}
-    start, moved = clear_of_barriers(guess, mesh.nodes, [below, above], where, THICKNESS,
+    start, moved = clear_of_barriers(guess, mesh.nodes, [below, above],
+                                     contact_faces([below, above], mesh), where, THICKNESS,
                                      bottom, reach=1.0)
     middle = START + 0.5 * (END - START)
     assert moved == 2 * top.size
     np.testing.assert_allclose(start[:, 2] - guess[:, 2], (0.02 - middle) - (0.03 - middle),
                                atol=1e-12)
+
+
+def test_only_patches_facing_the_blank_count() -> None:
+    """A tool 0.05 mm thick (a plate: its top faces the blank, its bottom faces away) with
+    the blank sunk 0.04 mm into it: the nearest patch is the bottom one, 0.01 mm away, but
+    it faces away from the blank, so the blank comes back up to the middle of the top's
+    ramp (without the facing filter it went down, out through the bottom)."""
+    mesh, bottom = blank()
+    corners = [[-5, -5], [5, -5], [5, 5], [-5, 5]]
+    plate = NagataSurface([[x, y, 0.0] for x, y in corners] + [[x, y, -0.05] for x, y in corners],
+                          [[0, 0, 1]] * 4 + [[0, 0, -1]] * 4, [[0, 1, 2, 3], [4, 7, 6, 5]])
+    tool = RigidTool("plate", plate, mesh.select(z=0.0), facing=(0, 0, -1), contact="gauss")
+    guess = np.zeros_like(mesh.nodes)
+    guess[:, 2] = -0.04
+    start, moved = clear_of_barriers(guess, mesh.nodes, [tool], contact_faces([tool], mesh),
+                                     {"plate": np.zeros(3)}, THICKNESS, bottom, reach=1.0)
+    assert moved == tool.slaves.size
+    np.testing.assert_allclose(start[:, 2], -START - 0.5 * (END - START), atol=1e-12)

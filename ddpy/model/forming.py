@@ -372,10 +372,11 @@ class FormingProblem:
         self.r = np.concatenate([np.full(t.slaves.size, t.augmentation or default_r)
                                  for t in self.tools])
         #: per tool, the penalty of Gauss-point contact (N/mm^3; unused by the others)
+        #: per tool, the blank's faces that meet it (RigidTool.facing)
+        self._faces = contact_faces(self.tools, mesh)
         self.penalty = [t.penalty or (default_penalty(solid, faces) if t.contact == "gauss"
                                       else 0.0)
-                        for t, faces in zip(self.tools, contact_faces(self.tools, mesh),
-                                            strict=True)]
+                        for t, faces in zip(self.tools, self._faces, strict=True)]
         self.thickness = mesh.initial_thickness()
         stiffness = barrier_stiffness(solid, self.thickness)
         self._pack = ToolPack(self.tools, mesh, self.penalty,
@@ -694,9 +695,11 @@ class FormingProblem:
         guess = _extrapolated(self.u, target - factor, run.last_du)
         measures = self.sheet_measures
         if guess is not None and measures is not None:
-            active = [t for i, t in enumerate(self.tools)
+            active = [i for i in range(len(self.tools))
                       if run.on[layout.first[i]:layout.first[i + 1]].any()]
-            guess, moved = clear_of_barriers(guess, self.solid.mesh.nodes, active,
+            guess, moved = clear_of_barriers(guess, self.solid.mesh.nodes,
+                                             [self.tools[i] for i in active],
+                                             [self._faces[i] for i in active],
                                              self._positions(positions), self.thickness,
                                              measures.bottom, self._reach)
             if moved:

@@ -17,6 +17,8 @@ from test_penetration import PLANE
 from test_surface_contact import ELASTIC, dome, nodal_areas
 
 from ddpy.core import parallel
+from ddpy.geometry.search import EDGE
+from ddpy.geometry.surfaces import NagataSurface
 from ddpy.io.decks import DeckError, read_case
 from ddpy.model.control import NewtonSettings
 from ddpy.model.forming import FormingProblem, RigidTool, barrier_stiffness
@@ -104,6 +106,40 @@ def test_jacobian_with_the_barrier_matches_central_differences() -> None:
     moved = {"dome": problem.position["dome"] + (3e-5, 1e-5, 2e-5)}
     equilibrium, law, state = central_difference_errors(problem, u, problem.force, moved, 3e-5)
     assert 0 in set(state.tolist()) and len(set(state.tolist())) > 1, state
+    assert equilibrium <= 1e-7 and law <= 1e-7, (equilibrium, law)
+
+
+def valley(angle_deg: float) -> NagataSurface:
+    """Two flat patches 5 x 10 mm meeting along x = 0, each rising at ``angle_deg`` away
+    from it: a valley whose inside (below its bottom line) holds a thin wedge of points
+    whose nearest point on the tool is the bottom line, an edge of both patches."""
+    rise = 5.0 * np.tan(np.radians(angle_deg))
+    s, c = np.sin(np.radians(angle_deg)), np.cos(np.radians(angle_deg))
+    vertices = [[-5, -5, rise], [0, -5, 0], [0, 5, 0], [-5, 5, rise],
+                [0, -5, 0], [5, -5, rise], [5, 5, rise], [0, 5, 0]]
+    normals = [[-s, 0, c]] * 4 + [[s, 0, c]] * 4
+    return NagataSurface(vertices, normals, [[0, 1, 2, 3], [4, 5, 6, 7]])
+
+
+def test_jacobian_with_slaves_on_an_edge_matches_central_differences() -> None:
+    """The barrier where slave nodes' nearest point is a patch edge: a block pressed into a
+    valley (1 degree each side), friction on, its middle column of nodes on the valley's
+    bottom line deeper than d_b (their normal is the direction from the edge to the node,
+    its change (I - n n - a a) / g, a along the edge), against central differences."""
+    surface = valley(1.0)
+    mesh = HexMesh.box(1.0, 1.0, THICKNESS, 2, 2, 2, origin=(-0.5, -0.5, 0.02))
+    tool = RigidTool("valley", surface, mesh.select(z=0.02), friction=0.3, facing=(0, 0, -1),
+                     contact="gauss", penalty=PENALTY / 50, points=2)
+    problem = FormingProblem(Solid(mesh, ELASTIC), [tool])
+    problem.fix(mesh.select(z=0.02 + THICKNESS), "xyz")
+    problem.run({"valley": (0, 0, 0.036)}, max_increment=4e-3)
+    u = problem.u.copy()
+    x = mesh.nodes + u
+    found = tool.search.project(x[tool.slaves], problem.position["valley"])
+    on_edge = (found.status == EDGE) & (-found.distance > BARRIER_DEPTH * THICKNESS)
+    assert on_edge.sum() == 3, (found.status, found.distance)  # the middle column
+    moved = {"valley": problem.position["valley"] + (3e-5, 1e-5, 2e-5)}
+    equilibrium, law, _ = central_difference_errors(problem, u, problem.force, moved, 3e-5)
     assert equilibrium <= 1e-7 and law <= 1e-7, (equilibrium, law)
 
 

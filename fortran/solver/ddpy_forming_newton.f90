@@ -380,7 +380,8 @@ contains
           ! pair that changes state in the step makes it long however good the step: a
           ! whole step that changed some pairs and cut the residual enough stands.
           if (alpha == 1.0_wp .and. t_norm <= whole_step*norm) then
-            if (any(law%on /= 0 .and. slot(trial)%state /= slot(cur)%state)) then
+            ! (Against the iterate's states as saved: slot(cur) may be the trial's own.)
+            if (any(law%on /= 0 .and. slot(trial)%state /= previous)) then
               accepted = .true.
               have_hint = .true.
               exit

@@ -82,7 +82,8 @@ class _Cross:
                                      "contact states flip on tiny gaps or forces")
         title = control.title or self.folder.resolve().name
         warnings = tuple(w for d in self.decks.values() for w in d.warnings)
-        return Case(self.folder, Control(title, tuple(phases), str(self.control.path)), mesh,
+        return Case(self.folder, Control(title, tuple(phases), str(self.control.path),
+                                         control.tuning), mesh,
                     boundary, material, tuple(tools), warnings)
 
     # tools ----------------------------------------------------------------------------------

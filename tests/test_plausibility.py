@@ -202,8 +202,9 @@ def test_an_initial_yield_stress_below_1_MPa_is_refused(tmp_path: Path, line: st
     ("control.dat", "rmin_rotation        1.0", "rmin_rotation 1e-9",
      "rmin_rotation must lie in [0.001, 90] (degrees), got 1e-09"),
     ("control.dat", "cutback              0.5", "cutback 0.5\nmin_increment 1e-300",
-     "phase 'forming': min_increment 1e-300 mm is below max_increment / 1e+06 (1.14e-07 mm): "
-     "a failing increment would be cut more than 20 times (by half) before the run stops"),
+     "phase 'forming': min_increment 1e-300 mm over max_increment 0.114 mm: min_fraction (the "
+     "smallest increment over the largest) must be at least 1e-06, got 8.77e-300: below, a "
+     "failing increment would be cut more than 20 times (by half) before the run stops"),
     ("bc.dat", "tolerance  1e-4", "tolerance 1e-300",
      "tolerance 1e-300 mm is below 1e-06 mm: a node off a plane by the rounding of its "
      "coordinates would not be selected"),

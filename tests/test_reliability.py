@@ -67,7 +67,7 @@ def test_only_ascii_line_ends_end_a_line(tmp_path: Path, separator: str) -> None
          f"# ddpy material deck:{separator}hardening nonsense")
     edit(case, "material.dat", "n 0.252", "n 7")
     message = errors_of(case)
-    assert "material.dat:5:" in message and "Swift n must be <= 1" in message
+    assert "material.dat:5:" in message and "Swift exponent n must lie in [0, 1]" in message
     assert "nonsense" not in message
 
 

@@ -98,9 +98,15 @@ class IncrementLimits:
         if not MIN_ROTATION <= self.rotation_deg <= 90.0:
             raise ValueError(f"rotation_deg must lie in [{MIN_ROTATION:g}, 90] (degrees), got "
                              f"{self.rotation_deg}")
-        if not MIN_FRACTION <= self.min_fraction <= 1.0 or not self.touch_gap >= 0.0:
-            raise ValueError(f"min_fraction must lie in [{MIN_FRACTION:g}, 1] and touch_gap be "
-                             ">= 0")
+        what = "min_fraction (the smallest increment over the largest)"
+        if not self.min_fraction <= 1.0:
+            raise ValueError(f"{what} must be at most 1, got {self.min_fraction:.3g}")
+        if not self.min_fraction >= MIN_FRACTION:
+            raise ValueError(f"{what} must be at least {MIN_FRACTION:g}, got "
+                             f"{self.min_fraction:.3g}: below, a failing increment would be "
+                             "cut more than 20 times (by half) before the run stops")
+        if not self.touch_gap >= 0.0:
+            raise ValueError(f"touch_gap must be >= 0, got {self.touch_gap}")
         if self.touch not in TOUCH_RULES:
             raise ValueError(f"touch must be one of {', '.join(TOUCH_RULES)}, got "
                              f"{self.touch!r}")

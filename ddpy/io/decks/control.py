@@ -24,7 +24,6 @@ from ddpy.io.decks.lines import (
     show,
 )
 from ddpy.model.control import (
-    TOUCH_RULES,
     FormingTuning,
     IncrementLimits,
     NewtonSettings,
@@ -68,7 +67,7 @@ _SETTINGS: dict[str, Callable[[str], Any]] = {
     "rmin_rotation": _model_setting("rmin_rotation", IncrementLimits, "rotation_deg",
                                     read_float),
     "rmin_contact": lambda w: read_choice(w, "rmin_contact", ("on", "off")) == "on",
-    "rmin_touch": lambda w: read_choice(w, "rmin_touch", TOUCH_RULES),
+    "rmin_touch": _model_setting("rmin_touch", IncrementLimits, "touch", lambda w, _: w),
     "rmin_release": _model_setting("rmin_release", IncrementLimits, "release_share",
                                    read_float),
     "rmin_release_redos": _model_setting("rmin_release_redos", IncrementLimits,

@@ -37,7 +37,7 @@ from ddpy.io.decks.control import (
 )
 from ddpy.io.decks.lines import NAME_PATTERN, Deck, guard
 from ddpy.io.decks.tools import _ToolDraft
-from ddpy.model.control import MAX_INCREMENTS, MIN_FRACTION, IncrementLimits, NewtonSettings
+from ddpy.model.control import MAX_INCREMENTS, IncrementLimits, NewtonSettings
 from ddpy.model.forming import blank_stiffness
 from ddpy.model.mesh import HEX_EDGES, HexMesh
 from ddpy.model.tool import BARRIER_DEPTH
@@ -278,15 +278,11 @@ class _Cross:
         min_inc = self._setting(p, control, "min_increment",
                                 max_inc * IncrementLimits().min_fraction)
         line = self._line_of(p, control, "min_increment") or p.line
-        if min_inc > max_inc:
-            deck.error(line, f"phase '{p.name}': min_increment {min_inc:g} mm exceeds "
-                       f"max_increment {max_inc:g} mm")
-            return None
-        if min_inc < max_inc * MIN_FRACTION:
-            deck.error(line, f"phase '{p.name}': min_increment {min_inc:g} mm is below "
-                       f"max_increment / {1 / MIN_FRACTION:g} ({max_inc * MIN_FRACTION:g} mm): "
-                       "a failing increment would be cut more than 20 times (by half) before "
-                       "the run stops")
+        try:  # the range of min / max is IncrementLimits' own check
+            limits = replace(self._common(p, control)["limits"], min_fraction=min_inc / max_inc)
+        except ValueError as error:
+            deck.error(line, f"phase '{p.name}': min_increment {min_inc:g} mm over "
+                       f"max_increment {max_inc:g} mm: {error}")
             return None
         if travel / max_inc > MAX_INCREMENTS:
             deck.error(self._line_of(p, control, "max_increment") or p.line,
@@ -308,7 +304,7 @@ class _Cross:
                 return None
             output_at = tuple(values)
         common = self._common(p, control)
-        common["limits"] = replace(common["limits"], min_fraction=min_inc / max_inc)
+        common["limits"] = limits
         return Phase(p.name, "forming", tuple(p.tools), tuple(motions), lead, max_inc, min_inc,
                      output_at=output_at, **common)
 

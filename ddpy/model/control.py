@@ -228,13 +228,14 @@ _INCREMENT_TUNING_RANGES = {
     "max_augmentations": Range(0, integer=True),
 }
 #: The ranges of FormingTuning's fields but ``increment`` (krylov_tight also at most
-#: krylov_loose). A GMRES tolerance of 1 or more accepts any correction; krylov_max below 1
+#: krylov_loose). A GMRES tolerance of 1 or more accepts any correction (0: none, every
+#: correction is then factorized after krylov_max iterations); krylov_max below 1
 #: is refused by the core; a whole_step or min_step beyond 1 is a step longer than Newton's.
 _FORMING_TUNING_RANGES = {
     "touching": Range(0.0),
     "reuse_from": Range(0, integer=True),
-    "krylov_loose": Range(0.0, 1.0, low_open=True, high_open=True),
-    "krylov_tight": Range(0.0, 1.0, low_open=True, high_open=True),
+    "krylov_loose": Range(0.0, 1.0, high_open=True),
+    "krylov_tight": Range(0.0, 1.0, high_open=True),
     "krylov_max": Range(1, integer=True),
     "krylov_keep": Range(0, integer=True),
     "whole_step": Range(0.0, 1.0),

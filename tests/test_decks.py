@@ -433,7 +433,10 @@ def test_own_mesh_and_normal(tmp_path: Path) -> None:
 
 def test_mesh_box_limits(tmp_path: Path) -> None:
     case = copy_example("bending", tmp_path, mesh="box 1 1 1 1000 1000 1000\n")
-    assert f"elements: at most {MAX_ELEMENTS}" in str(error_of(case))  # HexMesh's limit too
+    assert f"mesh.dat:1: the box has 1000000000 elements (1000 x 1000 x 1000): at most " \
+        f"{MAX_ELEMENTS}" in str(error_of(case))  # HexMesh.box's limit, the one check
+    case = copy_example("bending", tmp_path / "e", mesh="box 1 -1 1 1 1 1\n")
+    assert "mesh.dat:1: LY must be positive, got -1.0" in str(error_of(case))
     case = copy_example("bending", tmp_path / "b", mesh="box 1 1 1 1 1\n")
     assert "expected 'box LX LY LZ NX NY NZ'" in str(error_of(case))
     case = copy_example("bending", tmp_path / "d", mesh="box 10 10 10 1 1 1\nscale 1e308\n")

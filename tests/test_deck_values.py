@@ -20,6 +20,7 @@ from ddpy.model.control import (
     IncrementLimits,
     IncrementTuning,
     NewtonSettings,
+    check_max_increment,
     tuning_default,
     tuning_ranges,
 )
@@ -71,6 +72,8 @@ MOVED = [
      lambda: IncrementLimits(release_share=2.0), ("release_share", "rmin_release")),
     ("control.dat", "cutback              0.5", "cutback 0.5\nmin_increment 1", "min_increment",
      lambda: IncrementLimits(min_fraction=1 / 0.114), ("", "")),
+    ("control.dat", "max_increment        0.114", "max_increment 1e-12", "max_increment",
+     lambda: check_max_increment(1e-12, 28.5), ("", "")),
     ("control.dat", "cutback              0.5", "cutback 0.5\ntune increment.slack 0.9", "tune",
      lambda: IncrementTuning(slack=0.9), ("slack", "increment.slack")),
     ("control.dat", "cutback              0.5", "cutback 0.5\ntune krylov_max 0", "tune",

@@ -223,8 +223,8 @@ def test_a_phase_needing_more_increments_than_a_run_takes_says_how_many(
     edit(case, "control.dat", "move      punch  0 0 -28.5", "move punch 0 0 -1e6")
     edit(case, "control.dat", "max_increment        0.114", "max_increment 1e-12")
     assert errors_of(case) == [
-        f"{where(case, 'control.dat', 'max_increment 1e-12')}: phase 'forming': the travel "
-        "1e+06 mm of the lead tool 'punch' in increments of at most 1e-12 mm needs at least "
+        f"{where(case, 'control.dat', 'max_increment 1e-12')}: phase 'forming': lead tool "
+        "'punch': the travel 1e+06 mm in increments of at most 1e-12 mm needs at least "
         "1e+18 increments; a phase may take at most 1,000,000 (expected a larger "
         "max_increment or a shorter travel)"]
 

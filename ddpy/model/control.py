@@ -19,7 +19,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 __all__ = ["FormingTuning", "IncrementController", "IncrementLimits",
-           "IncrementTuning", "MAX_INCREMENTS", "NewtonSettings", "Range", "next_step",
+           "IncrementTuning", "MAX_INCREMENTS", "NewtonSettings", "Range",
+           "check_max_increment", "next_step",
            "tuned", "tuning_default", "tuning_ranges"]
 
 #: Most Newton iterations of an increment, and most redos of one at a release: beyond, a
@@ -350,6 +351,18 @@ class FormingTuning:
         if not isinstance(self.increment, IncrementTuning):
             raise TypeError(f"increment must be an IncrementTuning, got "
                             f"{type(self.increment).__name__}")
+
+
+def check_max_increment(max_increment: float, travel: float) -> None:
+    """ValueError unless ``max_increment`` > 0 and a phase's ``travel`` (mm) takes at most
+    MAX_INCREMENTS of it: the one check, FormingProblem.run's and control.dat's."""
+    if not max_increment > 0.0:
+        raise ValueError(f"max_increment must be > 0, got {max_increment:g}")
+    if travel / max_increment > MAX_INCREMENTS:
+        raise ValueError(f"the travel {travel:g} mm in increments of at most {max_increment:g} "
+                         f"mm needs at least {travel / max_increment:,.3g} increments; a phase "
+                         f"may take at most {MAX_INCREMENTS:,} (expected a larger max_increment "
+                         "or a shorter travel)")
 
 
 def next_step(step: float, nominal: float, reason: str, strain_ratio: float,

@@ -60,7 +60,8 @@ def _count_or_off(word: str, what: str) -> int | None:
 
 #: Settings allowed at the top of control.dat (defaults of every phase) and inside a phase.
 _SETTINGS: dict[str, Callable[[str], Any]] = {
-    "max_increment": lambda w: read_float(w, "max_increment", gt=0, le=MAX_LENGTH),
+    # (max_increment's range, and min_increment's against it, are the model's: cross.py)
+    "max_increment": lambda w: read_float(w, "max_increment", le=MAX_LENGTH),
     "min_increment": lambda w: read_float(w, "min_increment", gt=0, le=MAX_LENGTH),
     "rmin_yield": _model_setting("rmin_yield", IncrementLimits, "yield_tolerance", read_float),
     "rmin_strain": _model_setting("rmin_strain", IncrementLimits, "strain", read_float),

@@ -37,7 +37,7 @@ from ddpy.io.decks.control import (
 )
 from ddpy.io.decks.lines import NAME_PATTERN, Deck, guard
 from ddpy.io.decks.tools import _ToolDraft
-from ddpy.model.control import MAX_INCREMENTS, IncrementLimits, NewtonSettings
+from ddpy.model.control import IncrementLimits, NewtonSettings, check_max_increment
 from ddpy.model.forming import blank_stiffness
 from ddpy.model.mesh import HEX_EDGES, HexMesh
 from ddpy.model.tool import BARRIER_DEPTH
@@ -275,6 +275,12 @@ class _Cross:
         travel = next(m.travel for m in moving if m.tool == lead)
         max_inc = self._setting(p, control, "max_increment",
                                 travel * DEFAULT_INCREMENT_FRACTION)
+        try:  # FormingProblem.run's check of the largest increment
+            check_max_increment(max_inc, travel)
+        except ValueError as error:
+            deck.error(self._line_of(p, control, "max_increment") or p.line,
+                       f"phase '{p.name}': lead tool '{lead}': {error}")
+            return None
         min_inc = self._setting(p, control, "min_increment",
                                 max_inc * IncrementLimits().min_fraction)
         line = self._line_of(p, control, "min_increment") or p.line
@@ -283,14 +289,6 @@ class _Cross:
         except ValueError as error:
             deck.error(line, f"phase '{p.name}': min_increment {min_inc:g} mm over "
                        f"max_increment {max_inc:g} mm: {error}")
-            return None
-        if travel / max_inc > MAX_INCREMENTS:
-            deck.error(self._line_of(p, control, "max_increment") or p.line,
-                       f"phase '{p.name}': the travel {travel:g} mm of the lead tool '{lead}' "
-                       f"in increments of at most {max_inc:g} mm needs at least "
-                       f"{travel / max_inc:,.3g} increments; a phase may take at most "
-                       f"{MAX_INCREMENTS:,} (expected a larger max_increment or a shorter "
-                       "travel)")
             return None
         if max_inc > travel:
             self.long_increments.append((self._line_of(p, control, "max_increment"), p.name,

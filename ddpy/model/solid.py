@@ -37,6 +37,7 @@ from ddpy.model.material import (
     PROP_COUNT,
     YOUNG_OFFSET,
     HardeningTable,
+    Material,
     Swift,
     Voce,
     initial_yield_stress,
@@ -89,8 +90,11 @@ def material_props(material: Any) -> NDArray[np.float64]:
     Layout: (0) E, (1) nu, (2:8) Hill F, G, H, L, M, N, (8) hardening (1 Swift, 2 Voce,
     3 table), (9:12) Swift K, eps0, n or Voce Y0, Q, b or the table's point count; (12:14)
     C_X, X_sat of the kinematic hardening (zero: none); (16:) the table's (ep, Y) pairs;
-    the rest is reserved (zero).
+    the rest is reserved (zero). A ``Material`` arrives checked by its own class (the one
+    check of a deck's material): its vector is taken as it is.
     """
+    if isinstance(material, Material):
+        return float_array(material.props(), "material properties", (PROP_COUNT,))
     props = material.props() if hasattr(material, "props") else material
     props = float_array(props, "material properties", (PROP_COUNT,))
     e, nu = props[YOUNG_OFFSET], props[POISSON_OFFSET]

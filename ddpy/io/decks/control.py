@@ -62,7 +62,7 @@ def _count_or_off(word: str, what: str) -> int | None:
 _SETTINGS: dict[str, Callable[[str], Any]] = {
     # (max_increment's range, and min_increment's against it, are the model's: cross.py)
     "max_increment": lambda w: read_float(w, "max_increment", le=MAX_LENGTH),
-    "min_increment": lambda w: read_float(w, "min_increment", gt=0, le=MAX_LENGTH),
+    "min_increment": lambda w: read_float(w, "min_increment", le=MAX_LENGTH),
     "rmin_yield": _model_setting("rmin_yield", IncrementLimits, "yield_tolerance", read_float),
     "rmin_strain": _model_setting("rmin_strain", IncrementLimits, "strain", read_float),
     "rmin_rotation": _model_setting("rmin_rotation", IncrementLimits, "rotation_deg",

@@ -210,21 +210,18 @@ def _forming_limit(deck: Deck, line: Line, rows: list[Line | None]) -> FormingLi
         try:
             check_arity(row, "MINOR MAJOR (a point of the forming limit table, logarithmic "
                         "strains)", 1)
-            e2 = read_float(row.words[0], "the minor strain", ge=-MAX_FLC_MINOR,
-                            le=MAX_FLC_MINOR)
-            e1 = read_float(row.words[1], "the major strain", gt=0, le=MAX_FLC_MAJOR)
-            if minor and e2 <= minor[-1]:
-                raise BadValue(f"the minor strain {row.words[0]} must be above the one before "
-                               f"({minor[-1]:g}): list the points from left to right")
-            if e1 < e2:
-                raise BadValue(f"the major strain {row.words[1]} is below the minor strain "
-                               f"{row.words[0]}: expected MINOR MAJOR with major >= minor")
+            # Plausibility bounds here; the table's own rules are FormingLimitCurve's.
+            minor.append(read_float(row.words[0], "the minor strain", ge=-MAX_FLC_MINOR,
+                                    le=MAX_FLC_MINOR))
+            major.append(read_float(row.words[1], "the major strain", le=MAX_FLC_MAJOR))
         except BadValue as bad:
             deck.error(row.number, str(bad))
             return None
-        minor.append(e2)
-        major.append(e1)
-    return FormingLimitCurve.table(minor, major, deck.where(line.number))
+    try:
+        return FormingLimitCurve.table(minor, major, deck.where(line.number))
+    except TablePointError as error:
+        deck.error(table[error.point].number, str(error))
+        return None
 
 
 def _table(deck: Deck, line: Line, rows: list[Line | None]) -> HardeningTable | None:

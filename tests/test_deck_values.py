@@ -26,6 +26,7 @@ from ddpy.model.control import (
 )
 from ddpy.model.material import ArmstrongFrederick, HardeningTable, Hill48, Material, Swift
 from ddpy.model.mesh import HexMesh
+from ddpy.model.solid import Solid
 from ddpy.model.tool import RigidTool
 
 DOC = Path(__file__).resolve().parent.parent / "docs" / "input-format.md"
@@ -94,6 +95,11 @@ MOVED = [
     ("tools.dat", "friction     0.148\n  contact      bottom",
      "friction     -0.2\n  contact      bottom", "-0.2",
      lambda: plane_tool(friction=-0.2), ("tool die: ", "")),
+    ("mesh.dat", "box     60 15 1", "element shell\nbox     60 15 1", "element shell",
+     lambda: Solid(HexMesh.box(1.0, 1.0, 1.0, 1, 1, 1),
+                   Material(210e3, 0.3, Hill48.von_mises(), SWIFT), element="shell"), ("", "")),
+    ("mesh.dat", "box     60 15 1  24", "box     60 15 1  0", "box",
+     lambda: HexMesh.box(60.0, 15.0, 1.0, 0, 3, 3), ("nx", "NX")),
     ("material.dat", "E 210000  nu 0.3", "E -1  nu 0.3", "E -1",
      lambda: Material(-1.0, 0.3, Hill48.von_mises(), SWIFT), ("", "")),
     ("material.dat", "E 210000  nu 0.3", "E 210000  nu 0.5", "nu 0.5",

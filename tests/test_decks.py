@@ -325,8 +325,8 @@ MESH_ERRORS = [
     ("normal z", "normal z\norigin 1 2 3", "'origin' applies to a generated 'box' only", 2),
     ("normal z", "normal z\nscale 1e308\nscale 2", "'scale' given twice", 3),
     ("normal z", "normal z\nsize 3", "unknown keyword 'size': expected normal", 2),
-    ("normal z", "normal z\nelement shell", "expected the element among hexahedron, "
-     "solid-shell, got 'shell'", 2),
+    ("normal z", "normal z\nelement shell", "element must be one of 'hexahedron', "
+     "'solid-shell', got 'shell'", 2),
     ("normal z", "normal z\nelement", "expected 'element hexahedron | solid-shell'", 2),
     ("normal z", "element solid-shell\nnormal z\nelement hexahedron", "'element' given twice "
      "(first at line 1)", 3),

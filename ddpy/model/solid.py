@@ -45,6 +45,7 @@ from ddpy.model.material import (
 from ddpy.model.mesh import HexMesh, zeta_off_normal
 
 __all__ = ["Assembly", "DEFAULT_ELEMENT", "ELEMENTS", "Solid", "SolidState", "ElementError",
+           "check_element",
            "material_props"]
 
 #: The element kinds and their codes in the core: the mean-dilatation hexahedron
@@ -136,6 +137,15 @@ def material_props(material: Any) -> NDArray[np.float64]:
     return props
 
 
+def check_element(element: str) -> str:
+    """``element`` if it names an element kind (ELEMENTS), else ValueError: the one check,
+    Solid's and mesh.dat's."""
+    if element not in ELEMENTS:
+        raise ValueError(f"element must be one of {', '.join(map(repr, ELEMENTS))}, got "
+                         f"{element!r}")
+    return element
+
+
 @dataclass
 class SolidState:
     """State of the blank at a converged increment, the reference configuration of the next
@@ -218,9 +228,7 @@ class Solid:
                  element: str = DEFAULT_ELEMENT) -> None:
         if not isinstance(mesh, HexMesh):
             raise TypeError(f"mesh must be a HexMesh, got {type(mesh).__name__}")
-        if element not in ELEMENTS:
-            raise ValueError(f"element must be one of {', '.join(map(repr, ELEMENTS))}, got "
-                             f"{element!r}")
+        check_element(element)
         if element == "solid-shell":
             _check_thickness_direction(mesh)
         self.element = element

@@ -42,7 +42,7 @@ from ddpy.model.mesh import (
     zeta_along_normal,
     zeta_off_normal,
 )
-from ddpy.model.solid import DEFAULT_ELEMENT, ELEMENTS
+from ddpy.model.solid import DEFAULT_ELEMENT, ELEMENTS, check_element
 
 #: Mesh files: Abaqus input (ddpy's reader), Gmsh (through meshio).
 MESH_SUFFIXES = (".inp", ".msh")
@@ -97,7 +97,10 @@ def _parse_mesh(deck: Deck) -> tuple[HexMesh, dict[str, NDArray[np.int64]], str]
             elif key == "element":
                 check_arity(line, "element " + " | ".join(ELEMENTS), 1)
                 if first_time(deck, seen, line):
-                    element = read_choice(line.words[1], "the element", tuple(ELEMENTS))
+                    try:  # Solid's check
+                        element = check_element(line.words[1])
+                    except ValueError as error:
+                        raise BadValue(str(error)) from None
             elif key == "scale":
                 check_arity(line, "scale FACTOR", 1)
                 if first_time(deck, seen, line):

@@ -154,7 +154,7 @@ def _parse_control(deck: Deck) -> _ControlDraft:
                 if phase is not None:
                     raise BadValue("'tune' belongs at the top of control.dat (a tuning holds "
                                    "for the whole run), not in a phase")
-                _tune(deck, draft, line)
+                _tune(draft, line)
             elif key in _SETTINGS:
                 check_arity(line, f"{key} VALUE", 1)
                 target = phase.settings if phase is not None else draft.settings
@@ -186,7 +186,7 @@ def _parse_control(deck: Deck) -> _ControlDraft:
     return draft
 
 
-def _tune(deck: Deck, draft: _ControlDraft, line: Line) -> None:
+def _tune(draft: _ControlDraft, line: Line) -> None:
     """``tune NAME VALUE``: the name known and given once, the value a number of its kind
     (its range is the tuning classes' own check, in ``_tuning``)."""
     check_arity(line, "tune NAME VALUE", 2)

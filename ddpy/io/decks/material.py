@@ -78,9 +78,9 @@ def _parse_material(deck: Deck) -> BlankMaterial | None:
                     v = read_pairs(line, 1, ("E", "nu"), ("E", "nu"), "elastic E VALUE nu VALUE")
                     # The range is the model's (check_elastic); the deck adds its
                     # plausibility bound on E.
-                    elastic = _model(check_elastic, read_float(v["E"], "Young's modulus E"),
+                    elastic = _model(check_elastic,
+                                     read_float(v["E"], "Young's modulus E", le=MAX_MODULUS),
                                      read_float(v["nu"], "Poisson's ratio nu"))
-                    read_float(v["E"], "Young's modulus E", le=MAX_MODULUS)
                     if elastic[0] < MIN_MODULUS:
                         deck.warn(line.number, f"Young's modulus {elastic[0]:g} MPa is outside "
                                   "1e3 to 1e6 MPa (polymers to tungsten carbide): is it in "
@@ -221,6 +221,9 @@ def _forming_limit(deck: Deck, line: Line, rows: list[Line | None]) -> FormingLi
         return FormingLimitCurve.table(minor, major, deck.where(line.number))
     except TablePointError as error:
         deck.error(table[error.point].number, str(error))
+        return None
+    except ValueError as error:  # the table as a whole
+        deck.error(line.number, str(error))
         return None
 
 

@@ -156,7 +156,7 @@ def test_several_errors_collected(tmp_path: Path) -> None:
     text = str(error)
     assert f"tools.dat:{line_of(case, 'tools.dat', '-0.1')}: friction must be >= 0, got -0.1" \
         in text
-    assert "Poisson's ratio nu must be < 0.5, got 0.7" in text
+    assert "Poisson's ratio nu must lie in (-1, 0.5), got 0.7" in text
     assert "cutback must lie in [0.1, 0.9], got 2" in text
     assert error.path == case / "control.dat"  # the first, in reading order
 
@@ -180,10 +180,11 @@ CONTROL_ERRORS = [
     ("type      forming", "type forming\n  increments 3", "'increments' applies to springback"),
     ("max_increment        0.114", "max_increment -1", "max_increment must be > 0, got -1"),
     ("max_increment        0.114", "max_increment 0.114\nmin_increment 1",
-     "min_increment 1 mm exceeds max_increment 0.114 mm"),
+     "min_increment 1 mm over max_increment 0.114 mm: min_fraction (the smallest increment "
+     "over the largest) must be at most 1, got 8.77"),
     ("rmin_contact         on", "rmin_contact maybe", "expected rmin_contact among on, off"),
     ("rmin_contact         on", "rmin_contact on\nrmin_touch sometimes",
-     "expected rmin_touch among new, every"),
+     "rmin_touch must be one of new, every, got 'sometimes'"),
     ("rmin_contact         on", "rmin_contact on\nrmin_release 2",
      "rmin_release must lie in [0, 1], got 2"),
     ("rmin_rotation        1.0", "rmin_rotation 120",
@@ -324,8 +325,8 @@ MESH_ERRORS = [
     ("normal z", "normal z\norigin 1 2 3", "'origin' applies to a generated 'box' only", 2),
     ("normal z", "normal z\nscale 1e308\nscale 2", "'scale' given twice", 3),
     ("normal z", "normal z\nsize 3", "unknown keyword 'size': expected normal", 2),
-    ("normal z", "normal z\nelement shell", "expected the element among hexahedron, "
-     "solid-shell, got 'shell'", 2),
+    ("normal z", "normal z\nelement shell", "element must be one of 'hexahedron', "
+     "'solid-shell', got 'shell'", 2),
     ("normal z", "normal z\nelement", "expected 'element hexahedron | solid-shell'", 2),
     ("normal z", "element solid-shell\nnormal z\nelement hexahedron", "'element' given twice "
      "(first at line 1)", 3),
@@ -432,7 +433,10 @@ def test_own_mesh_and_normal(tmp_path: Path) -> None:
 
 def test_mesh_box_limits(tmp_path: Path) -> None:
     case = copy_example("bending", tmp_path, mesh="box 1 1 1 1000 1000 1000\n")
-    assert f"elements: at most {MAX_ELEMENTS}" in str(error_of(case))  # HexMesh's limit too
+    assert f"mesh.dat:1: the box has 1000000000 elements (1000 x 1000 x 1000): at most " \
+        f"{MAX_ELEMENTS}" in str(error_of(case))  # HexMesh.box's limit, the one check
+    case = copy_example("bending", tmp_path / "e", mesh="box 1 -1 1 1 1 1\n")
+    assert "mesh.dat:1: LY must be positive, got -1.0" in str(error_of(case))
     case = copy_example("bending", tmp_path / "b", mesh="box 1 1 1 1 1\n")
     assert "expected 'box LX LY LZ NX NY NZ'" in str(error_of(case))
     case = copy_example("bending", tmp_path / "d", mesh="box 10 10 10 1 1 1\nscale 1e308\n")
@@ -632,8 +636,9 @@ def test_bc_symmetry_on_node_set_and_all(tmp_path: Path) -> None:
 # ----------------------------------------------------------------------------------- material
 
 MATERIAL_ERRORS = [
-    ("nu 0.3", "nu 0.5", "Poisson's ratio nu must be < 0.5, got 0.5"),
-    ("E 210000", "E -1", "Young's modulus E must be > 0"),
+    ("nu 0.3", "nu 0.5", "Poisson's ratio nu must lie in (-1, 0.5), got 0.5"),
+    ("E 210000", "E -1", "Young's modulus E must be positive, got -1"),
+    ("E 210000", "E 2e6", "Young's modulus E must be <= 1e+06, got 2e6"),
     ("E 210000", "", "missing E: expected 'elastic E VALUE nu VALUE'"),
     ("E 210000", "E 1 E 2", "E given twice"),
     ("E 210000", "E", "keys and values in pairs"),
@@ -645,8 +650,8 @@ MATERIAL_ERRORS = [
     ("N 1.689", "N 1e6", "Hill'48 N = 1e+06 above 100"),
     ("F 0.254", "F 250", "Hill'48 F = 250 above 100"),
     ("hill48 ", "hill ", "expected the yield criterion among vonmises, hill48"),
-    ("n 0.252", "n 1.5", "Swift n must be <= 1, got 1.5"),
-    ("eps0 0.0102", "eps0 0", "Swift eps0 must be > 0"),
+    ("n 0.252", "n 1.5", "Swift exponent n must lie in [0, 1], got 1.5"),
+    ("eps0 0.0102", "eps0 0", "Swift eps0 must be positive"),
     ("swift ", "voce ", "unknown key 'K' in 'hardening voce"),
     ("swift ", "power ", "expected the hardening law among swift, voce"),
     ("rolling_direction  0", "rolling_direction 400", "must be <= 360"),
@@ -734,14 +739,16 @@ TOOL_ERRORS = [
     ("tool punch", "toll punch", "unknown keyword 'toll' at the top of tools.dat"),
     ("contact      top", "contact top\n  speed 3", "unknown keyword 'speed' in a tool"),
     ("contact      top", "contact top\n  contact bottom", "'contact' given twice"),
-    ("contact      top", "contact top\n  augmentation 0", "augmentation parameter must be > 0"),
+    ("contact      top", "contact top\n  augmentation 0",
+     "augmentation must be > 0 (N/mm, the contact law's r), got 0"),
     ("contact      top", "contact top\n  discretization mortar",
-     "expected the contact discretization among node, surface"),
+     "discretization must be one of node, surface, gauss, got 'mortar'"),
     ("contact      top", "contact top\n  discretization",
      "expected 'discretization node|surface|gauss'"),
-    ("contact      top", "contact top\n  penalty -1", "contact penalty (N/mm^3) must be > 0"),
+    ("contact      top", "contact top\n  penalty -1", "penalty must be > 0 (N/mm^3), got -1"),
     ("contact      top", "contact top\n  points 9",
-     "Gauss points per direction of a blank face must be <= 8"),
+     "points (Gauss points per direction of a blank face) must be an integer from 1 to 8, "
+     "got 9"),
     ("contact      top", "contact top\n  points 2.5", "expected an integer for the Gauss points"),
     ("contact      top", "contact top\n  discretization node\n  discretization surface",
      "'discretization' given twice"),

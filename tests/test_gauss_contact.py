@@ -184,7 +184,8 @@ def test_gauss_contact_needs_a_facing_direction_a_positive_penalty_and_points() 
     with pytest.raises(ValueError, match="penalty must be > 0"):
         RigidTool("plane", dome(), mesh.select(z=0.0), facing=(0, 0, -1), contact="gauss",
                   penalty=0.0)
-    with pytest.raises(ValueError, match="points must be an integer from 1 to 8"):
+    with pytest.raises(ValueError, match=r"points \(Gauss points per direction of a blank "
+                       r"face\) must be an integer from 1 to 8"):
         RigidTool("plane", dome(), mesh.select(z=0.0), facing=(0, 0, -1), contact="gauss",
                   points=9)
 

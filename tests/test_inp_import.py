@@ -140,7 +140,7 @@ def test_nagata_tools_name_the_nagata_files(deck: Path, tmp_path: Path) -> None:
     ("bending.inp", "*STEP, NLGEOM, INC=1000", "*STEP, NLGEOM, INC=1000, PERTURBATION",
      "parameter PERTURBATION of *STEP is not supported", 0),
     ("bending.inp", "*PLASTIC\n200., 0.0", "*PLASTIC\n200., 0.01",
-     "the first plastic strain must be 0", 1),
+     "the table's first plastic strain must be 0", 1),
     ("bending.inp", "*BOUNDARY, FIXED\nCENTRE, 3, 3", "*BOUNDARY\nCENTRE, 3, 3",
      "expected *BOUNDARY, FIXED", 1),
     ("bending.inp", "0.1, 5000.", "-0.1, 5000.", "friction must be >= 0, got -0.1", 0),
@@ -414,7 +414,8 @@ def test_material_deck_accepts_a_plateau_and_refuses_a_decrease_at_its_line(
         read_case(case)
     error = caught.value.errors[0]
     assert (error.path.name, error.line) == ("material.dat", 7), str(caught.value)
-    assert "the yield stress 249.99 is below the one before (250): softening" in error.message
+    assert "yield stress 4 of the table (249.99) is below the one before (250): softening" \
+        in error.message
 
 
 def test_plastic_card_accepts_a_plateau_and_refuses_a_decrease_at_its_line(deck: Path
@@ -429,7 +430,7 @@ def test_plastic_card_accepts_a_plateau_and_refuses_a_decrease_at_its_line(deck:
         read_inp(deck)
     error = caught.value.errors[0]
     assert (error.path, error.line) == (deck, line), str(caught.value)
-    assert "yield stress 259.9 is below the one before (260)" in error.message
+    assert "yield stress 3 of the table (259.9) is below the one before (260)" in error.message
 
 
 def test_rigid_body_by_node_set(tmp_path: Path) -> None:

@@ -24,9 +24,9 @@ def test_worked_example_is_the_example_folder() -> None:
 def test_every_keyword_documented() -> None:
     text = DOC.read_text()
     documented = set(re.findall(r"`([a-z_0-9]+)`", text))
-    keywords = {"title", "phase", "end", "tool", "description", "file", "friction", "contact",
-                "normal", "element", "box", "origin", "nodes", "hexahedra", "scale", "tolerance",
-                "nodeset",
+    keywords = {"title", "tune", "phase", "end", "tool", "description", "file", "friction",
+                "contact", "normal", "element", "box", "origin", "nodes", "hexahedra", "scale",
+                "tolerance", "nodeset",
                 "symmetry", "fix", "elastic", "yield", "hardening", "rolling_direction", "ids",
                 "plane", "top", "bottom", "facing", "vonmises", "forming", "springback"}
     keywords |= set(decks._SETTINGS) | set(decks._PHASE_KEYS) | set(decks._TOOL_KEYS)

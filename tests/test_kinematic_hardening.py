@@ -260,11 +260,12 @@ def test_zero_rate_leaves_the_built_in_bending_unchanged(tmp_path: Path) -> None
 
 
 @pytest.mark.parametrize("line, expected", [
-    ("kinematic armstrong-frederick C -5 Xsat 50", "C must be >= 0"),
+    ("kinematic armstrong-frederick C -5 Xsat 50", "kinematic hardening C_X must be non-negative"),
     ("kinematic armstrong-frederick C 50 Xsat nan", "finite number for the kinematic"),
     ("kinematic armstrong-frederick C inf Xsat 50", "finite number for the kinematic"),
-    ("kinematic armstrong-frederick C 50 Xsat -1", "Xsat must be >= 0"),
-    ("kinematic armstrong-frederick C 50 Xsat 160", "at or above the initial yield stress 160"),
+    ("kinematic armstrong-frederick C 50 Xsat -1",
+     "kinematic hardening X_sat must be non-negative"),
+    ("kinematic armstrong-frederick C 50 Xsat 160", "must lie below the initial yield stress 160"),
     ("kinematic armstrong-frederick C 50", "kinematic armstrong-frederick C VALUE Xsat VALUE"),
     ("kinematic chaboche C 50 Xsat 50", "armstrong-frederick"),
 ])

@@ -202,8 +202,9 @@ def test_an_initial_yield_stress_below_1_MPa_is_refused(tmp_path: Path, line: st
     ("control.dat", "rmin_rotation        1.0", "rmin_rotation 1e-9",
      "rmin_rotation must lie in [0.001, 90] (degrees), got 1e-09"),
     ("control.dat", "cutback              0.5", "cutback 0.5\nmin_increment 1e-300",
-     "phase 'forming': min_increment 1e-300 mm is below max_increment / 1e+06 (1.14e-07 mm): "
-     "a failing increment would be cut more than 20 times (by half) before the run stops"),
+     "phase 'forming': min_increment 1e-300 mm over max_increment 0.114 mm: min_fraction (the "
+     "smallest increment over the largest) must be at least 1e-06, got 8.77e-300: below, a "
+     "failing increment would be cut more than 20 times (by half) before the run stops"),
     ("bc.dat", "tolerance  1e-4", "tolerance 1e-300",
      "tolerance 1e-300 mm is below 1e-06 mm: a node off a plane by the rounding of its "
      "coordinates would not be selected"),
@@ -222,8 +223,8 @@ def test_a_phase_needing_more_increments_than_a_run_takes_says_how_many(
     edit(case, "control.dat", "move      punch  0 0 -28.5", "move punch 0 0 -1e6")
     edit(case, "control.dat", "max_increment        0.114", "max_increment 1e-12")
     assert errors_of(case) == [
-        f"{where(case, 'control.dat', 'max_increment 1e-12')}: phase 'forming': the travel "
-        "1e+06 mm of the lead tool 'punch' in increments of at most 1e-12 mm needs at least "
+        f"{where(case, 'control.dat', 'max_increment 1e-12')}: phase 'forming': lead tool "
+        "'punch': the travel 1e+06 mm in increments of at most 1e-12 mm needs at least "
         "1e+18 increments; a phase may take at most 1,000,000 (expected a larger "
         "max_increment or a shorter travel)"]
 

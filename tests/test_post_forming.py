@@ -100,8 +100,8 @@ def test_forming_limit_table_is_read_from_material_dat(tmp_path: Path) -> None:
 @pytest.mark.parametrize(("old", "new", "line", "message"), [
     ("0.0 0.3", "0.0 x", 8, "expected a number for the major strain"),
     ("0.0 0.3", "-0.4 0.3", 8, "must be above the one before"),
-    ("0.0 0.3", "0.0 0", 8, "the major strain must be > 0"),
-    ("0.3 0.45", "0.3 0.2", 9, "is below the minor strain"),
+    ("0.0 0.3", "0.0 0", 8, "the major strain of point 2 must be > 0, got 0"),
+    ("0.3 0.45", "0.3 0.2", 9, "the major strain 0.2 of point 3 is below its minor strain 0.3"),
     ("0.3 0.45", "0.3 0.45 1", 9, "MINOR MAJOR"),
     ("  0.3 0.45\n", "", None, "the deck ends inside the forming limit table of line 6"),
     ("table 3", "table 1", 6, "must be >= 2"),

@@ -254,5 +254,5 @@ def test_surface_contact_needs_a_facing_direction() -> None:
     mesh = HexMesh.box(1.0, 1.0, 0.5, 1, 1, 1)
     with pytest.raises(ValueError, match="needs facing"):
         RigidTool("plane", dome(), mesh.select(z=0.0), contact="surface")
-    with pytest.raises(ValueError, match="contact must be one of node, surface"):
+    with pytest.raises(ValueError, match="discretization must be one of node, surface"):
         RigidTool("plane", dome(), mesh.select(z=0.0), facing=(0, 0, -1), contact="mortar")

@@ -7,10 +7,10 @@ The levers, and how a variant switches them off (docs/theory/speed.md):
 
 - the linear solver: GMRES on older LU factors with Eisenstat-Walker tolerances between
   factorizations (``FormingTuning.reuse_from``, ddpy.model.control: from that many
-  unknowns);
-  off: every Newton iteration factorizes its own Jacobian and solves exactly;
-- the line search's whole-step acceptance (``FormingTuning.whole_step``); off: 0, the
-  natural monotonicity test alone;
+  unknowns); off (the deck's ``tune reuse_from`` past any mesh): every Newton iteration
+  factorizes its own Jacobian and solves exactly;
+- the line search's whole-step acceptance (``FormingTuning.whole_step``); off (``tune
+  whole_step 0``): the natural monotonicity test alone;
 - the first touch of a new contact zone only (the deck's ``rmin_touch new``, the default);
   off: ``rmin_touch every``, every free node that touches lands the increment.
 
@@ -64,7 +64,8 @@ ANGLES = ("theta_1 (7 mm)", "theta_2 (14 mm)", "theta_3 (21 mm)", "theta_4 (28.5
 
 
 def case_folder(variant: str) -> Path:
-    """The paper mesh's Nagata case, its deck with the variant's ``rmin_touch``."""
+    """The paper mesh's Nagata case, its deck with the variant's ``rmin_touch`` and
+    ``tune`` lines (the levers it switches off)."""
     source = HERE / "cases" / "paper" / "nagata"
     if not (source / "control.dat").exists():
         make_case.main(["--mesh", "paper"])
@@ -80,30 +81,26 @@ def case_folder(variant: str) -> Path:
         if line not in text:
             raise SystemExit(f"{control}: no '{line.strip()}' line to add rmin_touch after")
         control.write_text(text.replace(line, line + f"rmin_touch           {touch}\n"))
+    control = folder / "control.dat"
+    control.write_text("".join(f"tune {name} {value}\n" for name, value in tunes(variant).items())
+                       + control.read_text())
     return folder
 
 
-def switch_off(variant: str) -> None:
-    """Make every forming problem of this process (the runner builds its own) take the
-    tuning (ddpy.model.control.FormingTuning) with the levers the variant switches off."""
-    from dataclasses import replace
-
-    from ddpy.model import forming
-    from ddpy.model.control import FormingTuning
-
+def tunes(variant: str) -> dict[str, Any]:
+    """The deck's ``tune`` lines (ddpy.model.control.FormingTuning) that switch off the
+    variant's levers."""
     settings = VARIANTS[variant]
     changes: dict[str, Any] = {}
     if settings.get("linear_solver") == "direct":
         changes["reuse_from"] = sys.maxsize  # "auto" never reuses: a factorization each time
     if "whole_step" in settings:
         changes["whole_step"] = settings["whole_step"]
-    tuning = replace(FormingTuning(), **changes)
-    forming.FormingTuning = lambda: tuning  # type: ignore[assignment,misc]
+    return changes
 
 
 def run_variant(variant: str, restart: bool = False) -> dict[str, Any]:
     """Run one variant into results/paper/levers_<variant> and keep its numbers."""
-    switch_off(variant)
     folder = case_folder(variant)
     output = HERE / "results" / "paper" / f"levers_{variant}"
     print(f"running {variant} ({VARIANTS[variant]}) ...", file=sys.stderr, flush=True)

@@ -200,14 +200,16 @@ def _rolling_angle(case: Case) -> float:
 
 def build_problem(case: Case) -> FormingProblem:
     """The Solid (material, rolling direction, element), the rigid tools and the
-    FormingProblem."""
+    FormingProblem with the case's tuning (control.dat's ``tune`` lines). A restart builds
+    it again from the same decks (the checkpoint refuses changed ones), so it runs on with
+    the same tuning."""
     solid = Solid(case.mesh, case.material.material, _rolling_angle(case), element=case.element)
     tools = [RigidTool(t.name, t.model().surface, t.contact_nodes(case.mesh),
                        friction=t.friction, facing=t.facing, augmentation=t.augmentation,
                        contact=t.discretization, penalty=t.penalty,
                        points=t.points, barrier=t.barrier)
              for t in case.tools]
-    return FormingProblem(solid, tools)
+    return FormingProblem(solid, tools, tuning=case.control.tuning)
 
 
 def _write_atomic(path: Path, text: str) -> None:

@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ddpy.model.control import IncrementLimits, NewtonSettings
+from ddpy.model.control import FormingTuning, IncrementLimits, NewtonSettings
 from ddpy.model.forming_limits import FormingLimitCurve
 from ddpy.model.material import Material
 from ddpy.model.mesh import HEX_FACES, HexMesh
@@ -398,11 +398,13 @@ class Phase:
 
 @dataclass(frozen=True)
 class Control:
-    """Title and phases, in order."""
+    """Title and phases, in order, and the run's tuning (control.dat's ``tune`` lines; the
+    defaults without them)."""
 
     title: str
     phases: tuple[Phase, ...]
     origin: str = ""
+    tuning: FormingTuning = FormingTuning()
 
     def phase(self, name: str) -> Phase:
         for p in self.phases:
@@ -494,8 +496,23 @@ class Case:
             lines.append(f"  phase {p.name}: forming with {', '.join(p.tools)}; {moves}; lead "
                          f"{p.lead}, max increment {p.max_increment:g} mm (>= {estimate} "
                          "increments)")
+        tuned = _tuned_text(self.control.tuning)
+        if tuned:
+            lines.append(f"  tuning (control.dat tune): {tuned}")
         lines += [f"  warning: {w}" for w in self.warnings]
         return "\n".join(lines)
+
+
+def _tuned_text(tuning: FormingTuning) -> str:
+    """The tuning's values that differ from the defaults, as control.dat's tune names them
+    ("" when none)."""
+    changed = []
+    for group, ours, default in (("", tuning, FormingTuning()),
+                                 ("increment.", tuning.increment, FormingTuning().increment)):
+        for name, value in vars(ours).items():
+            if name != "increment" and value != getattr(default, name):
+                changed.append(f"{group}{name} {value:g}")
+    return ", ".join(changed)
 
 
 def _motion_text(motion: Move | HoldGap | HoldForce) -> str:

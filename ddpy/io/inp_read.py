@@ -16,6 +16,7 @@ from ddpy.io.case import DeckError
 from ddpy.io.inp_cards import Card, DataLine, integer, number
 from ddpy.io.inp_mesh import STABILIZING_TYPES, MeshReader
 from ddpy.model.contact import check_friction
+from ddpy.model.material import HardeningTable, TablePointError
 
 __all__ = ["BLANK_TYPES", "BOUNDARY_TYPES", "IGNORED", "SUPPORTED", "TOOL_TYPES", "Amplitude",
            "Boundary", "Pair", "Reader"]
@@ -266,22 +267,15 @@ class Reader(MeshReader):
                 raise DeckError("expected 'yield stress, plastic strain' (no temperature "
                                 f"dependence), got '{', '.join(line.words)[:60]}'", line.path,
                                 line.number)
-            y, ep = number(line, 0, "the yield stress"), number(line, 1, "the plastic strain")
-            if table and ep <= table[-1][0]:
-                raise DeckError(f"plastic strain {line.words[1]} is not above the one before "
-                                f"({table[-1][0]:g}): expected increasing strains", line.path,
-                                line.number)
-            if not table and ep != 0.0:
-                raise DeckError(f"the first plastic strain must be 0 (the initial yield "
-                                f"stress), got {line.words[1]}", line.path, line.number)
-            if table and y < table[-1][1]:
-                raise DeckError(f"yield stress {line.words[0]} is below the one before "
-                                f"({table[-1][1]:g}): softening is not supported", line.path,
-                                line.number)
-            if y <= 0:
-                raise DeckError(f"the yield stress must be positive, got {line.words[0]}",
-                                line.path, line.number)
-            table.append((ep, y))
+            table.append((number(line, 1, "the plastic strain"),
+                          number(line, 0, "the yield stress")))
+        try:  # the table's rules are the model's (HardeningTable), at the point's line
+            HardeningTable(tuple(ep for ep, _ in table), tuple(y for _, y in table))
+        except TablePointError as error:
+            line = card.data[error.point]
+            raise DeckError(str(error), line.path, line.number) from None
+        except ValueError as error:  # the table as a whole (its number of points)
+            raise card.error(str(error)) from None
         self.plastic[material] = table
 
     def _solid_section(self, card: Card, *_: object) -> None:

@@ -7,7 +7,8 @@ The increment policy itself lives here too: :class:`IncrementController` decides
 increment's size from those limits (touch, release, yield, strain, rotation), when an
 increment is cut or redone and what the next one tries; its constants are the fields of
 :class:`IncrementTuning`, and those of the forming problem's loop and contact (the search's
-reach, GMRES on older factors, the line search...) the fields of :class:`FormingTuning`.
+reach, GMRES on older factors, the line search...) the fields of :class:`FormingTuning`,
+which control.dat's ``tune NAME VALUE`` sets (:func:`tuned`).
 The measurements behind each default are in docs/theory/contact.md and speed.md."""
 
 from __future__ import annotations
@@ -18,7 +19,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 __all__ = ["FormingTuning", "IncrementController", "IncrementLimits",
-           "IncrementTuning", "MAX_INCREMENTS", "NewtonSettings", "next_step"]
+           "IncrementTuning", "MAX_INCREMENTS", "NewtonSettings", "Range",
+           "check_max_increment", "next_step",
+           "tuned", "tuning_default", "tuning_ranges"]
 
 #: Most Newton iterations of an increment, and most redos of one at a release: beyond, a
 #: run only spends time (a stalled increment is cut instead).
@@ -96,9 +99,15 @@ class IncrementLimits:
         if not MIN_ROTATION <= self.rotation_deg <= 90.0:
             raise ValueError(f"rotation_deg must lie in [{MIN_ROTATION:g}, 90] (degrees), got "
                              f"{self.rotation_deg}")
-        if not MIN_FRACTION <= self.min_fraction <= 1.0 or not self.touch_gap >= 0.0:
-            raise ValueError(f"min_fraction must lie in [{MIN_FRACTION:g}, 1] and touch_gap be "
-                             ">= 0")
+        what = "min_fraction (the smallest increment over the largest)"
+        if not self.min_fraction <= 1.0:
+            raise ValueError(f"{what} must be at most 1, got {self.min_fraction:.3g}")
+        if not self.min_fraction >= MIN_FRACTION:
+            raise ValueError(f"{what} must be at least {MIN_FRACTION:g}, got "
+                             f"{self.min_fraction:.3g}: below, a failing increment would be "
+                             "cut more than 20 times (by half) before the run stops")
+        if not self.touch_gap >= 0.0:
+            raise ValueError(f"touch_gap must be >= 0, got {self.touch_gap}")
         if self.touch not in TOUCH_RULES:
             raise ValueError(f"touch must be one of {', '.join(TOUCH_RULES)}, got "
                              f"{self.touch!r}")
@@ -166,10 +175,87 @@ class NewtonSettings:
 
 
 @dataclass(frozen=True)
+class Range:
+    """The values a setting takes: from ``low`` to ``high`` (each end open or closed), whole
+    numbers only when ``integer``. Its ``text`` is what docs/input-format.md lists."""
+
+    low: float
+    high: float = math.inf
+    low_open: bool = False
+    high_open: bool = False
+    integer: bool = False
+
+    @property
+    def text(self) -> str:
+        """The range in words: "real > 0", "real in (0, 1]", "integer >= 1"."""
+        kind = "integer" if self.integer else "real"
+        if self.high == math.inf:
+            return f"{kind} {'>' if self.low_open else '>='} {self.low:g}"
+        return (f"{kind} in {'(' if self.low_open else '['}{self.low:g}, {self.high:g}"
+                f"{')' if self.high_open else ']'}")
+
+    def holds(self, value: object) -> bool:
+        """Whether ``value`` is of the kind and lies in the range."""
+        if isinstance(value, bool) or not isinstance(
+                value, (int, np.integer) if self.integer else (int, float, np.number)):
+            return False
+        number = float(value)  # type: ignore[arg-type]
+        return (math.isfinite(number)
+                and (number > self.low if self.low_open else number >= self.low)
+                and (number < self.high if self.high_open else number <= self.high))
+
+
+def check_fields(settings: object, ranges: dict[str, Range]) -> None:
+    """ValueError naming the first field of ``settings`` outside its range: "slack must be
+    a real >= 1, got 0.9" (a deck's reader puts its key in front and adds file and line)."""
+    for name, admissible in ranges.items():
+        value = getattr(settings, name)
+        if not admissible.holds(value):
+            article = "an" if admissible.integer else "a"
+            raise ValueError(f"{name} must be {article} {admissible.text}, got {value!r}")
+
+
+#: The ranges of IncrementTuning's fields (each field of it has one: tests check that).
+_INCREMENT_TUNING_RANGES = {
+    "slack": Range(1.0),
+    "grow_to": Range(0.0, 1.0, low_open=True),
+    "regrow": Range(1.0, low_open=True),
+    "yield_floor": Range(0.0, 1.0, low_open=True, high_open=True),
+    "touch_past": Range(0.0, 1.0, high_open=True),
+    "bisect_below": Range(0.0, 1.0, low_open=True, high_open=True),
+    "careful_iterations": Range(1, integer=True),
+    "release_steps": Range(1, integer=True),
+    "release_smallest": Range(0.0, 1.0, low_open=True),
+    "max_augmentations": Range(0, integer=True),
+}
+#: The ranges of FormingTuning's fields but ``increment`` (krylov_tight also at most
+#: krylov_loose). A GMRES tolerance of 1 or more accepts any correction (0: none, every
+#: correction is then factorized after krylov_max iterations); krylov_max below 1
+#: is refused by the core; a whole_step or min_step beyond 1 is a step longer than Newton's.
+_FORMING_TUNING_RANGES = {
+    "touching": Range(0.0),
+    "reuse_from": Range(0, integer=True),
+    "krylov_loose": Range(0.0, 1.0, high_open=True),
+    "krylov_tight": Range(0.0, 1.0, high_open=True),
+    "krylov_max": Range(1, integer=True),
+    "krylov_keep": Range(0, integer=True),
+    "whole_step": Range(0.0, 1.0),
+    "penetration": Range(0.0, low_open=True),
+    "min_step": Range(0.0, 1.0, low_open=True),
+    "reach_sizes": Range(0.0, low_open=True),
+    "reach_travels": Range(0.0, low_open=True),
+    "touch_depth": Range(0.0, low_open=True),
+    "hold_step": Range(0.0, low_open=True),
+}
+
+
+@dataclass(frozen=True)
 class IncrementTuning:
     """The constants of the increment policy (:class:`IncrementController`), each measured
-    where docs/theory/contact.md and speed.md say; no deck sets them. To change one for a
-    run, ``FormingProblem(..., tuning=FormingTuning(increment=IncrementTuning(...)))``.
+    where docs/theory/contact.md and speed.md say. To change one for a run, control.dat's
+    ``tune increment.NAME VALUE`` or
+    ``FormingProblem(..., tuning=FormingTuning(increment=IncrementTuning(...)))``; each
+    field's range is in ``_INCREMENT_TUNING_RANGES`` (docs/input-format.md lists them).
 
     - ``slack``: a strain or rotation increment up to this times its limit is accepted (not
       redone shorter for a few percent);
@@ -204,19 +290,15 @@ class IncrementTuning:
     max_augmentations: int = 6
 
     def __post_init__(self) -> None:
-        if not (self.slack >= 1.0 and 0.0 < self.grow_to <= 1.0 and self.regrow > 1.0
-                and 0.0 < self.bisect_below < 1.0 and self.yield_floor > 0.0
-                and self.touch_past >= 0.0 and 0.0 < self.release_smallest <= 1.0):
-            raise ValueError(f"increment tuning out of range: {self}")
-        if min(self.careful_iterations, self.release_steps) < 1 or self.max_augmentations < 0:
-            raise ValueError(f"careful_iterations and release_steps must be >= 1 and "
-                             f"max_augmentations >= 0: {self}")
+        check_fields(self, _INCREMENT_TUNING_RANGES)
 
 
 @dataclass(frozen=True)
 class FormingTuning:
     """The constants of a forming problem's Newton loop and contact, with the increment
-    policy's (``increment``); no deck sets them (``FormingProblem(..., tuning=...)``).
+    policy's (``increment``): control.dat's ``tune NAME VALUE`` or
+    ``FormingProblem(..., tuning=...)``; each field's range is in ``_FORMING_TUNING_RANGES``
+    (docs/input-format.md lists them).
 
     - ``touching``: gap (times the element size) within which an unloaded node counts as
       lying on a tool for the closed predictor of the first iteration: zero up to the
@@ -260,6 +342,27 @@ class FormingTuning:
     touch_depth: float = 1e-3
     hold_step: float = 0.5
     increment: IncrementTuning = field(default_factory=IncrementTuning)
+
+    def __post_init__(self) -> None:
+        check_fields(self, _FORMING_TUNING_RANGES)
+        if self.krylov_tight > self.krylov_loose:
+            raise ValueError(f"krylov_tight must not exceed krylov_loose ({self.krylov_loose:g}),"
+                             f" got {self.krylov_tight:g}")
+        if not isinstance(self.increment, IncrementTuning):
+            raise TypeError(f"increment must be an IncrementTuning, got "
+                            f"{type(self.increment).__name__}")
+
+
+def check_max_increment(max_increment: float, travel: float) -> None:
+    """ValueError unless ``max_increment`` > 0 and a phase's ``travel`` (mm) takes at most
+    MAX_INCREMENTS of it: the one check, FormingProblem.run's and control.dat's."""
+    if not max_increment > 0.0:
+        raise ValueError(f"max_increment must be > 0, got {max_increment:g}")
+    if travel / max_increment > MAX_INCREMENTS:
+        raise ValueError(f"the travel {travel:g} mm in increments of at most {max_increment:g} "
+                         f"mm needs at least {travel / max_increment:,.3g} increments; a phase "
+                         f"may take at most {MAX_INCREMENTS:,} (expected a larger max_increment "
+                         "or a shorter travel)")
 
 
 def next_step(step: float, nominal: float, reason: str, strain_ratio: float,
@@ -417,3 +520,34 @@ class IncrementController:
         self.step, self.reason = next_step(self.step, self.nominal, self.reason,
                                            strain / self.limits.strain,
                                            rotation / self.rotation_limit, self.tuning)
+
+
+def tuning_ranges() -> dict[str, Range]:
+    """Every name control.dat's ``tune NAME VALUE`` takes, with its range: the fields of
+    FormingTuning, and those of IncrementTuning as ``increment.NAME``."""
+    return {**_FORMING_TUNING_RANGES,
+            **{f"increment.{name}": r for name, r in _INCREMENT_TUNING_RANGES.items()}}
+
+
+def tuning_default(name: str) -> float:
+    """The default of a tuning name (``tuning_ranges``)."""
+    group, _, field_name = name.rpartition(".")
+    return getattr(IncrementTuning() if group else FormingTuning(), field_name)
+
+
+def tuned(values: dict[str, float]) -> FormingTuning:
+    """The FormingTuning with these values (names as ``tuning_ranges`` gives them), the rest
+    at their defaults; ValueError from the classes' own checks, naming the field as the
+    name given (``increment.slack must be ...``); KeyError for a name not in
+    ``tuning_ranges``."""
+    ranges = tuning_ranges()
+    unknown = [name for name in values if name not in ranges]
+    if unknown:
+        raise KeyError(unknown[0])
+    forming = {n: v for n, v in values.items() if "." not in n}
+    increment = {n.split(".", 1)[1]: v for n, v in values.items() if "." in n}
+    try:
+        increment_tuning = IncrementTuning(**increment)
+    except ValueError as error:
+        raise ValueError(f"increment.{error}") from None
+    return FormingTuning(**forming, increment=increment_tuning)

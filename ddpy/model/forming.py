@@ -30,11 +30,11 @@ from ddpy.core.ordering import mesh_solver
 from ddpy.geometry.search import INSIDE, NONE
 from ddpy.model.contact import INACTIVE
 from ddpy.model.control import (
-    MAX_INCREMENTS,
     FormingTuning,
     IncrementController,
     IncrementLimits,
     NewtonSettings,
+    check_max_increment,
 )
 from ddpy.model.forming_quantities import FieldFrame, SheetMeasures, nodal_average
 from ddpy.model.mesh import HEX_EDGES, free_rigid_modes, largest_rotation
@@ -608,11 +608,7 @@ class FormingProblem:
         offsets = self._gap_offsets(gaps or {}, moves) if resume is None else resume.offsets
         ramps = self._hold_ramps(forces or {}, moves, active_set, gaps or {})
         travel = max(float(np.linalg.norm(m)) for m in moves.values())
-        if not max_increment > 0.0:
-            raise ValueError(f"max_increment must be > 0, got {max_increment}")
-        if travel / max_increment > MAX_INCREMENTS:
-            raise ValueError(f"max_increment {max_increment:g} mm would take more than "
-                             f"{MAX_INCREMENTS:,} increments over the travel {travel:g} mm")
+        check_max_increment(max_increment, travel)
         result = FormingResult() if result is None else result
         result.add_tools([t.name for t in self.tools])
         layout = self._prepare(tuple(sorted(ramps)))

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ddpy.model.material import Material, Swift
+from ddpy.model.material import Material, Swift, TablePointError
 
 __all__ = ["FLC_MAX_POINTS", "KEELER_MAX_THICKNESS", "MARGINAL_BAND", "FormingLimitCurve",
            "SAFE", "MARGINAL", "FAILED", "hardening_exponent"]
@@ -72,12 +72,22 @@ class FormingLimitCurve:
             if len(minor) != len(major) or not 2 <= len(minor) <= FLC_MAX_POINTS:
                 raise ValueError(f"a forming limit table holds 2 to {FLC_MAX_POINTS} points "
                                  f"(minor, major), got {len(minor)} and {len(major)}")
-            if not all(math.isfinite(v) for v in minor + major):
-                raise ValueError("the forming limit table holds a value that is not finite")
-            if any(b <= a for a, b in zip(minor, minor[1:], strict=False)):
-                raise ValueError("the forming limit table's minor strains must increase")
-            if min(major) <= 0:
-                raise ValueError("the forming limit table's major strains must be positive")
+            # Point by point (TablePointError: a deck names the point's line), the one check
+            # of a table, material.dat's too.
+            for i, (e2, e1) in enumerate(zip(minor, major, strict=True)):
+                if not (math.isfinite(e2) and math.isfinite(e1)):
+                    raise TablePointError(i, f"point {i + 1} of the forming limit table is not "
+                                          f"finite: {e2:g}, {e1:g}")
+                if i and e2 <= minor[i - 1]:
+                    raise TablePointError(i, f"the minor strain {e2:g} of point {i + 1} must be "
+                                          f"above the one before ({minor[i - 1]:g}): list the "
+                                          "points from left to right")
+                if not e1 > 0:
+                    raise TablePointError(i, f"the major strain of point {i + 1} must be > 0, "
+                                          f"got {e1:g}")
+                if e1 < e2:
+                    raise TablePointError(i, f"the major strain {e1:g} of point {i + 1} is below "
+                                          f"its minor strain {e2:g}: expected major >= minor")
         else:
             raise ValueError(f"kind must be 'keeler-brazier' or 'table', got {self.kind!r}")
 

@@ -26,8 +26,8 @@ from ddpy._validate import float_array
 from ddpy.core.constants import constant
 
 __all__ = ["ArmstrongFrederick", "HardeningTable", "Hill48", "Material", "PROP_COUNT",
-           "ReturnMappingError", "Swift", "TABLE_MAX_POINTS", "Voce", "initial_yield_stress",
-           "yield_landing"]
+           "ReturnMappingError", "Swift", "TABLE_MAX_POINTS", "TablePointError", "Voce",
+           "check_backstress", "check_elastic", "initial_yield_stress", "yield_landing"]
 
 #: Points a hardening table may hold, and where they start in the property vector.
 TABLE_MAX_POINTS, _TABLE_START = constant("material_table_max_points"), \
@@ -55,6 +55,17 @@ def _real(value: float, name: str) -> float:
     if not math.isfinite(number):
         raise ValueError(f"{name} must be finite, got {number}")
     return number
+
+
+def check_elastic(E: float, nu: float) -> tuple[float, float]:
+    """Young's modulus and Poisson's ratio as floats, checked: E > 0, -1 < nu < 1/2 (the one
+    check, Material's and material.dat's), else ValueError (TypeError: not a number)."""
+    E, nu = _real(E, "Young's modulus E"), _real(nu, "Poisson's ratio nu")
+    if E <= 0:
+        raise ValueError(f"Young's modulus E must be positive, got {E:g}")
+    if not -1 < nu < 0.5:
+        raise ValueError(f"Poisson's ratio nu must lie in (-1, 0.5), got {nu:g}")
+    return E, nu
 
 
 @dataclass(frozen=True)
@@ -129,6 +140,15 @@ class Voce:
         return (self.Y0, self.Q, self.b)
 
 
+class TablePointError(ValueError):
+    """A hardening table's point ``point`` (0-based) is refused: a reader of a table in a
+    file names that point's line."""
+
+    def __init__(self, point: int, message: str) -> None:
+        super().__init__(message)
+        self.point = point
+
+
 @dataclass(frozen=True)
 class HardeningTable:
     """Tabulated hardening: the yield stress Y at equivalent plastic strains ep, interpolated
@@ -150,18 +170,19 @@ class HardeningTable:
             raise ValueError(f"a hardening table holds 1 to {TABLE_MAX_POINTS} points, got "
                              f"{len(ep)}")
         if ep[0] != 0.0:
-            raise ValueError(f"the table's first plastic strain must be 0 (the initial yield "
-                             f"stress), got {ep[0]:g}")
+            raise TablePointError(0, f"the table's first plastic strain must be 0 (the initial "
+                                  f"yield stress), got {ep[0]:g}")
         for i in range(len(ep)):
             if y[i] <= 0:
-                raise ValueError(f"yield stress {i + 1} of the table must be positive, got "
-                                 f"{y[i]:g}")
+                raise TablePointError(i, f"yield stress {i + 1} of the table must be positive, "
+                                      f"got {y[i]:g}")
             if i and ep[i] <= ep[i - 1]:
-                raise ValueError(f"plastic strain {i + 1} of the table ({ep[i]:g}) must be "
-                                 f"above the one before ({ep[i - 1]:g})")
+                raise TablePointError(i, f"plastic strain {i + 1} of the table ({ep[i]:g}) must "
+                                      f"be above the one before ({ep[i - 1]:g})")
             if i and y[i] < y[i - 1]:
-                raise ValueError(f"yield stress {i + 1} of the table ({y[i]:g}) is below the "
-                                 f"one before ({y[i - 1]:g}): softening is not supported")
+                raise TablePointError(i, f"yield stress {i + 1} of the table ({y[i]:g}) is "
+                                      f"below the one before ({y[i - 1]:g}): softening is not "
+                                      "supported")
 
     @property
     def initial_yield_stress(self) -> float:
@@ -199,6 +220,19 @@ class ArmstrongFrederick:
     def active(self) -> bool:
         """The backstress can grow (both parameters positive)."""
         return self.C > 0 and self.X_sat > 0
+
+
+def check_backstress(kinematic: ArmstrongFrederick,
+                     hardening: Swift | Voce | HardeningTable) -> None:
+    """ValueError unless the backstress's saturation X_sat lies below the initial yield
+    stress of ``hardening`` (the one check, Material's and material.dat's)."""
+    y0 = hardening.initial_yield_stress
+    if kinematic.X_sat >= y0:
+        raise ValueError(
+            f"kinematic hardening X_sat = {kinematic.X_sat:g} must lie below the initial yield "
+            f"stress {y0:.4g}: in the Lemaitre-Chaboche form the backstress grows towards "
+            "X_sat, and from X_sat = Y0 on the stress-free state leaves the yield surface "
+            "(unloading alone would yield the material)")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -322,12 +356,9 @@ class Material:
     kinematic: ArmstrongFrederick | None = None
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "E", _real(self.E, "Young's modulus E"))
-        object.__setattr__(self, "nu", _real(self.nu, "Poisson's ratio nu"))
-        if self.E <= 0:
-            raise ValueError(f"Young's modulus E must be positive, got {self.E}")
-        if not -1 < self.nu < 0.5:
-            raise ValueError(f"Poisson's ratio nu must lie in (-1, 0.5), got {self.nu}")
+        E, nu = check_elastic(self.E, self.nu)
+        object.__setattr__(self, "E", E)
+        object.__setattr__(self, "nu", nu)
         if not isinstance(self.yield_criterion, Hill48):
             raise TypeError(
                 f"yield_criterion must be a Hill48, got {type(self.yield_criterion).__name__}")
@@ -338,13 +369,7 @@ class Material:
             if not isinstance(self.kinematic, ArmstrongFrederick):
                 raise TypeError(f"kinematic must be an ArmstrongFrederick or None, got "
                                 f"{type(self.kinematic).__name__}")
-            y0 = self.hardening.initial_yield_stress
-            if self.kinematic.X_sat >= y0:
-                raise ValueError(
-                    f"kinematic hardening X_sat = {self.kinematic.X_sat:g} must lie below the "
-                    f"initial yield stress {y0:g}: the backstress grows towards X_sat, and "
-                    "from X_sat = Y0 on the stress-free state leaves the yield surface "
-                    "(unloading alone would yield the material)")
+            check_backstress(self.kinematic, self.hardening)
         info = int(_core.material_check(self.props()))
         if info != 0:  # the Python checks above should have caught it
             raise ValueError(f"material property {info} (1-based) rejected by the core")

@@ -37,6 +37,7 @@ from ddpy.model.material import (
     PROP_COUNT,
     YOUNG_OFFSET,
     HardeningTable,
+    Material,
     Swift,
     Voce,
     initial_yield_stress,
@@ -44,6 +45,7 @@ from ddpy.model.material import (
 from ddpy.model.mesh import HexMesh, zeta_off_normal
 
 __all__ = ["Assembly", "DEFAULT_ELEMENT", "ELEMENTS", "Solid", "SolidState", "ElementError",
+           "check_element",
            "material_props"]
 
 #: The element kinds and their codes in the core: the mean-dilatation hexahedron
@@ -89,8 +91,11 @@ def material_props(material: Any) -> NDArray[np.float64]:
     Layout: (0) E, (1) nu, (2:8) Hill F, G, H, L, M, N, (8) hardening (1 Swift, 2 Voce,
     3 table), (9:12) Swift K, eps0, n or Voce Y0, Q, b or the table's point count; (12:14)
     C_X, X_sat of the kinematic hardening (zero: none); (16:) the table's (ep, Y) pairs;
-    the rest is reserved (zero).
+    the rest is reserved (zero). A ``Material`` arrives checked by its own class (the one
+    check of a deck's material): its vector is taken as it is.
     """
+    if isinstance(material, Material):
+        return float_array(material.props(), "material properties", (PROP_COUNT,))
     props = material.props() if hasattr(material, "props") else material
     props = float_array(props, "material properties", (PROP_COUNT,))
     e, nu = props[YOUNG_OFFSET], props[POISSON_OFFSET]
@@ -130,6 +135,15 @@ def material_props(material: Any) -> NDArray[np.float64]:
         raise ValueError(f"material property {info - 1} (0-based) is out of range "
                          "(see ddpy.model.material for the accepted ranges)")
     return props
+
+
+def check_element(element: str) -> str:
+    """``element`` if it names an element kind (ELEMENTS), else ValueError: the one check,
+    Solid's and mesh.dat's."""
+    if element not in ELEMENTS:
+        raise ValueError(f"element must be one of {', '.join(map(repr, ELEMENTS))}, got "
+                         f"{element!r}")
+    return element
 
 
 @dataclass
@@ -214,9 +228,7 @@ class Solid:
                  element: str = DEFAULT_ELEMENT) -> None:
         if not isinstance(mesh, HexMesh):
             raise TypeError(f"mesh must be a HexMesh, got {type(mesh).__name__}")
-        if element not in ELEMENTS:
-            raise ValueError(f"element must be one of {', '.join(map(repr, ELEMENTS))}, got "
-                             f"{element!r}")
+        check_element(element)
         if element == "solid-shell":
             _check_thickness_direction(mesh)
         self.element = element

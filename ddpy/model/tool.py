@@ -13,8 +13,7 @@ from ddpy.geometry.surfaces import BezierSurface, NagataSurface
 from ddpy.model.contact import check_friction
 
 __all__ = ["RigidTool", "CONTACT_DISCRETIZATIONS", "FACE_POINTS", "MAX_POINTS", "BARRIER_DEPTH",
-           "BARRIER_WIDTH", "BARRIER_STIFFNESS",
-           "faces_blank"]
+           "BARRIER_WIDTH", "BARRIER_STIFFNESS", "check_contact_settings", "faces_blank"]
 
 #: How a tool's contact is discretized on the blank: "node" (node-to-surface, DD3IMP's: each
 #: slave node's own gap, normal and slip) or "surface" (surface-to-surface: each slave's
@@ -37,6 +36,30 @@ BARRIER_DEPTH = 0.005
 BARRIER_WIDTH = 0.005
 #: The barrier's stiffness in units of the blank's stiffness across its thickness, E / T.
 BARRIER_STIFFNESS = 1.0
+
+
+def check_contact_settings(*, discretization: str | None = None,
+                           augmentation: float | None = None, penalty: float | None = None,
+                           points: int | None = None, barrier: float | None = None) -> None:
+    """A tool's contact settings checked (those given; None: the default), the one check
+    of each: ValueError naming the setting as tools.dat does ("penalty must be > 0 (N/mm^3),
+    got -1"); tools.dat adds file and line, RigidTool the tool's name."""
+    if discretization is not None and discretization not in CONTACT_DISCRETIZATIONS:
+        raise ValueError(f"discretization must be one of {', '.join(CONTACT_DISCRETIZATIONS)}"
+                         f", got {discretization!r}")
+    if augmentation is not None and not augmentation > 0.0:
+        raise ValueError(f"augmentation must be > 0 (N/mm, the contact law's r), got "
+                         f"{augmentation:g}")
+    if penalty is not None and not penalty > 0.0:
+        raise ValueError(f"penalty must be > 0 (N/mm^3), got {penalty:g}")
+    if points is not None and not (isinstance(points, (int, np.integer))
+                                   and not isinstance(points, bool)
+                                   and 1 <= points <= MAX_POINTS):
+        raise ValueError(f"points (Gauss points per direction of a blank face) must be an "
+                         f"integer from 1 to {MAX_POINTS}, got {points!r}")
+    if barrier is not None and not 0.0 <= barrier <= 1.0:
+        raise ValueError(f"barrier must be a fraction of the blank's thickness from 0 to 1 "
+                         f"(or off), got {barrier:g}")
 
 
 def faces_blank(search: ContactSearch, facing: ArrayLike) -> bool:
@@ -86,27 +109,19 @@ class RigidTool:
             check_friction(self.friction)
         except ValueError as error:
             raise ValueError(f"tool {self.name}: {error}") from None
-        if self.augmentation is not None and not self.augmentation > 0.0:
-            raise ValueError(f"tool {self.name}: augmentation must be > 0, got "
-                             f"{self.augmentation}")
         if self.contact is None:
             self.contact = "gauss" if self.facing is not None else "node"
-        if self.contact not in CONTACT_DISCRETIZATIONS:
-            raise ValueError(f"tool {self.name}: contact must be one of "
-                             f"{', '.join(CONTACT_DISCRETIZATIONS)}, got {self.contact!r}")
+        if self.points is None:
+            self.points = FACE_POINTS.get(self.contact, 2)
+        try:
+            check_contact_settings(discretization=self.contact, augmentation=self.augmentation,
+                                   penalty=self.penalty, points=self.points,
+                                   barrier=self.barrier)
+        except ValueError as error:
+            raise ValueError(f"tool {self.name}: {error}") from None
         if self.contact in ("surface", "gauss") and self.facing is None:
             raise ValueError(f"tool {self.name}: {self.contact} contact needs facing (the "
                              "outward normal of the blank faces that meet the tool)")
-        if self.penalty is not None and not self.penalty > 0.0:
-            raise ValueError(f"tool {self.name}: penalty must be > 0, got {self.penalty}")
-        if self.barrier is not None and not 0.0 <= self.barrier <= 1.0:
-            raise ValueError(f"tool {self.name}: barrier must be a fraction of the blank's "
-                             f"thickness from 0 to 1, got {self.barrier}")
-        if self.points is None:
-            self.points = FACE_POINTS.get(self.contact, 2)
-        if not (isinstance(self.points, (int, np.integer)) and 1 <= self.points <= MAX_POINTS):
-            raise ValueError(f"tool {self.name}: points must be an integer from 1 to "
-                             f"{MAX_POINTS}, got {self.points!r}")
         if self.facing is not None:
             facing = float_array(self.facing, f"facing of tool {self.name}", (3,))
             if np.linalg.norm(facing) == 0.0:

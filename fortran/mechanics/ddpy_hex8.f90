@@ -27,7 +27,6 @@ module ddpy_hex8
   use ddpy_element_products, only: lower_product, add_congruence, add_congruence_t
   use ddpy_log_strain, only: hencky_type, hencky_evaluate, hencky_first, hencky_second, &
                              hencky_stretch, tensor_from_stress, stress_from_tensor
-  use ddpy_small_matrix, only: product3, stress_tensor, strain_map, by_dofs
   implicit none
   private
   public :: hex8_element, hex8_jacobians, hex8_stresses, pushed_stress
@@ -61,8 +60,8 @@ contains
     end do
   end subroutine shape_functions
 
-  ! det3 and inverse3: one source with the other element (see the file).
-  include "ddpy_det_inverse3.inc"
+  ! The small dense matrices: one source with the other element (see the file).
+  include "ddpy_small_matrix.inc"
 
   !> Reference gradients g(a, J) = dN_a/dX_J and det J0 at natural point xi; g = 0 when
   !> det J0 <= 0.

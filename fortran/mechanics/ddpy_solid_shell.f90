@@ -35,7 +35,6 @@ module ddpy_solid_shell
                                    add_pair_product
   use ddpy_log_strain, only: hencky_type, hencky_evaluate, hencky_first, hencky_second, &
                              symmetric_eigen
-  use ddpy_small_matrix, only: product3, stress_tensor, strain_map, by_dofs
   implicit none
   private
   public :: solid_shell_element
@@ -86,8 +85,8 @@ module ddpy_solid_shell
 
 contains
 
-  ! det3 and inverse3: one source with the other element (see the file).
-  include "ddpy_det_inverse3.inc"
+  ! The small dense matrices: one source with the other element (see the file).
+  include "ddpy_small_matrix.inc"
 
   !> Right stretch dU and its inverse of a deformation gradient fg (det > 0), from the
   !> eigenvalues of its Green-Lagrange strain.

@@ -23,7 +23,13 @@ from ddpy.io.decks.lines import (
     read_vector,
     show,
 )
-from ddpy.model.control import TOUCH_RULES, IncrementLimits, NewtonSettings
+from ddpy.model.control import (
+    FormingTuning,
+    IncrementLimits,
+    NewtonSettings,
+    tuned,
+    tuning_ranges,
+)
 
 
 def _model_setting(key: str, model: type, name: str,
@@ -54,14 +60,15 @@ def _count_or_off(word: str, what: str) -> int | None:
 
 #: Settings allowed at the top of control.dat (defaults of every phase) and inside a phase.
 _SETTINGS: dict[str, Callable[[str], Any]] = {
-    "max_increment": lambda w: read_float(w, "max_increment", gt=0, le=MAX_LENGTH),
-    "min_increment": lambda w: read_float(w, "min_increment", gt=0, le=MAX_LENGTH),
+    # (max_increment's range, and min_increment's against it, are the model's: cross.py)
+    "max_increment": lambda w: read_float(w, "max_increment", le=MAX_LENGTH),
+    "min_increment": lambda w: read_float(w, "min_increment", le=MAX_LENGTH),
     "rmin_yield": _model_setting("rmin_yield", IncrementLimits, "yield_tolerance", read_float),
     "rmin_strain": _model_setting("rmin_strain", IncrementLimits, "strain", read_float),
     "rmin_rotation": _model_setting("rmin_rotation", IncrementLimits, "rotation_deg",
                                     read_float),
     "rmin_contact": lambda w: read_choice(w, "rmin_contact", ("on", "off")) == "on",
-    "rmin_touch": lambda w: read_choice(w, "rmin_touch", TOUCH_RULES),
+    "rmin_touch": _model_setting("rmin_touch", IncrementLimits, "touch", lambda w, _: w),
     "rmin_release": _model_setting("rmin_release", IncrementLimits, "release_share",
                                    read_float),
     "rmin_release_redos": _model_setting("rmin_release_redos", IncrementLimits,
@@ -114,6 +121,9 @@ class _ControlDraft:
     title: str | None = None
     settings: dict[str, tuple[Any, int]] = field(default_factory=dict)
     phases: list[_PhaseDraft] = field(default_factory=list)
+    #: ``tune NAME VALUE`` lines: the value and line of each name
+    tunes: dict[str, tuple[float, int]] = field(default_factory=dict)
+    tuning: FormingTuning = field(default_factory=FormingTuning)
 
 
 def _parse_control(deck: Deck) -> _ControlDraft:
@@ -140,6 +150,11 @@ def _parse_control(deck: Deck) -> _ControlDraft:
                     raise BadValue("'title' belongs at the top of control.dat, not in a phase")
                 if first_time(deck, seen, line):
                     draft.title = _title(line.text[len("title"):].strip())
+            elif key == "tune":
+                if phase is not None:
+                    raise BadValue("'tune' belongs at the top of control.dat (a tuning holds "
+                                   "for the whole run), not in a phase")
+                _tune(draft, line)
             elif key in _SETTINGS:
                 check_arity(line, f"{key} VALUE", 1)
                 target = phase.settings if phase is not None else draft.settings
@@ -154,7 +169,7 @@ def _parse_control(deck: Deck) -> _ControlDraft:
             else:
                 where = "in a phase" if phase is not None else "at the top of control.dat"
                 allowed = (_PHASE_KEYS + ("end",)) if phase is not None else (
-                    "title", "phase")
+                    "title", "tune", "phase")
                 raise BadValue(f"unknown keyword {show(key)} {where}: expected one of "
                            f"{', '.join(allowed + tuple(_SETTINGS))}")
         except BadValue as bad:
@@ -162,12 +177,46 @@ def _parse_control(deck: Deck) -> _ControlDraft:
     if phase is not None:
         deck.error(phase.line, f"phase '{phase.name}' is not closed: expected 'end' before "
                    "the end of the file")
+    _tuning(deck, draft)
     if not draft.phases and not deck.errors:
         deck.error(None, "no phase: expected at least one 'phase NAME' ... 'end' block")
     if len(draft.phases) > MAX_PHASES:
         deck.error(draft.phases[MAX_PHASES].line, f"phase {MAX_PHASES + 1:,} of "
                    f"{len(draft.phases):,}: a case has at most {MAX_PHASES:,} phases")
     return draft
+
+
+def _tune(draft: _ControlDraft, line: Line) -> None:
+    """``tune NAME VALUE``: the name known and given once, the value a number of its kind
+    (its range is the tuning classes' own check, in ``_tuning``)."""
+    check_arity(line, "tune NAME VALUE", 2)
+    name, word = line.words[1], line.words[2]
+    ranges = tuning_ranges()
+    if name not in ranges:
+        raise BadValue(f"unknown tuning name {show(name)}: expected one of "
+                       f"{', '.join(ranges)}")
+    if name in draft.tunes:
+        raise BadValue(f"'tune {name}' given twice (first at line {draft.tunes[name][1]})")
+    what = f"tune {name}"
+    value = read_int(word, what) if ranges[name].integer else read_float(word, what)
+    draft.tunes[name] = (value, line.number)
+
+
+def _tuning(deck: Deck, draft: _ControlDraft) -> None:
+    """The run's FormingTuning from the ``tune`` lines; a value the classes refuse is an
+    error at its line, with their message (the field named as the deck names it)."""
+    if not draft.tunes:
+        return
+    try:
+        draft.tuning = tuned({name: value for name, (value, _) in draft.tunes.items()})
+    except ValueError as error:
+        message = str(error)
+        # The classes' message starts with the field it is about (krylov_tight's bound
+        # names krylov_loose too): the error goes to that field's line.
+        name = message.split(" ", 1)[0]
+        line = draft.tunes[name][1] if name in draft.tunes else min(
+            at for _, at in draft.tunes.values())
+        deck.error(line, f"tune {message}")
 
 
 def _title(text: str) -> str:

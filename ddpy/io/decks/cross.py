@@ -37,7 +37,7 @@ from ddpy.io.decks.control import (
 )
 from ddpy.io.decks.lines import NAME_PATTERN, Deck, guard
 from ddpy.io.decks.tools import _ToolDraft
-from ddpy.model.control import MAX_INCREMENTS, MIN_FRACTION, IncrementLimits, NewtonSettings
+from ddpy.model.control import IncrementLimits, NewtonSettings, check_max_increment
 from ddpy.model.forming import blank_stiffness
 from ddpy.model.mesh import HEX_EDGES, HexMesh
 from ddpy.model.tool import BARRIER_DEPTH
@@ -82,7 +82,8 @@ class _Cross:
                                      "contact states flip on tiny gaps or forces")
         title = control.title or self.folder.resolve().name
         warnings = tuple(w for d in self.decks.values() for w in d.warnings)
-        return Case(self.folder, Control(title, tuple(phases), str(self.control.path)), mesh,
+        return Case(self.folder, Control(title, tuple(phases), str(self.control.path),
+                                         control.tuning), mesh,
                     boundary, material, tuple(tools), warnings)
 
     # tools ----------------------------------------------------------------------------------
@@ -274,26 +275,20 @@ class _Cross:
         travel = next(m.travel for m in moving if m.tool == lead)
         max_inc = self._setting(p, control, "max_increment",
                                 travel * DEFAULT_INCREMENT_FRACTION)
+        try:  # FormingProblem.run's check of the largest increment
+            check_max_increment(max_inc, travel)
+        except ValueError as error:
+            deck.error(self._line_of(p, control, "max_increment") or p.line,
+                       f"phase '{p.name}': lead tool '{lead}': {error}")
+            return None
         min_inc = self._setting(p, control, "min_increment",
                                 max_inc * IncrementLimits().min_fraction)
         line = self._line_of(p, control, "min_increment") or p.line
-        if min_inc > max_inc:
-            deck.error(line, f"phase '{p.name}': min_increment {min_inc:g} mm exceeds "
-                       f"max_increment {max_inc:g} mm")
-            return None
-        if min_inc < max_inc * MIN_FRACTION:
-            deck.error(line, f"phase '{p.name}': min_increment {min_inc:g} mm is below "
-                       f"max_increment / {1 / MIN_FRACTION:g} ({max_inc * MIN_FRACTION:g} mm): "
-                       "a failing increment would be cut more than 20 times (by half) before "
-                       "the run stops")
-            return None
-        if travel / max_inc > MAX_INCREMENTS:
-            deck.error(self._line_of(p, control, "max_increment") or p.line,
-                       f"phase '{p.name}': the travel {travel:g} mm of the lead tool '{lead}' "
-                       f"in increments of at most {max_inc:g} mm needs at least "
-                       f"{travel / max_inc:,.3g} increments; a phase may take at most "
-                       f"{MAX_INCREMENTS:,} (expected a larger max_increment or a shorter "
-                       "travel)")
+        try:  # the range of min / max is IncrementLimits' own check
+            limits = replace(self._common(p, control)["limits"], min_fraction=min_inc / max_inc)
+        except ValueError as error:
+            deck.error(line, f"phase '{p.name}': min_increment {min_inc:g} mm over "
+                       f"max_increment {max_inc:g} mm: {error}")
             return None
         if max_inc > travel:
             self.long_increments.append((self._line_of(p, control, "max_increment"), p.name,
@@ -307,7 +302,7 @@ class _Cross:
                 return None
             output_at = tuple(values)
         common = self._common(p, control)
-        common["limits"] = replace(common["limits"], min_fraction=min_inc / max_inc)
+        common["limits"] = limits
         return Phase(p.name, "forming", tuple(p.tools), tuple(motions), lead, max_inc, min_inc,
                      output_at=output_at, **common)
 

@@ -5,6 +5,9 @@ kinematic hardening (mixed hardening) and the rolling direction.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import TypeVar
+
 from ddpy.io.case import BlankMaterial
 from ddpy.io.decks.lines import (
     BadValue,
@@ -26,7 +29,10 @@ from ddpy.model.material import (
     Hill48,
     Material,
     Swift,
+    TablePointError,
     Voce,
+    check_backstress,
+    check_elastic,
 )
 
 #: Plausibility bounds of the material (docs/input-format.md): stresses, including the
@@ -52,6 +58,7 @@ MAX_KINEMATIC_RATE = 1e6
 #: strains above 0 and at most 2 (a sheet stretched seven times its length).
 MAX_FLC_MINOR, MAX_FLC_MAJOR = 1.0, 2.0
 _KINEMATIC_FORM = "kinematic armstrong-frederick C VALUE Xsat VALUE"
+T = TypeVar("T")
 
 
 def _parse_material(deck: Deck) -> BlankMaterial | None:
@@ -69,8 +76,11 @@ def _parse_material(deck: Deck) -> BlankMaterial | None:
             if key == "elastic":
                 if first_time(deck, seen, line):
                     v = read_pairs(line, 1, ("E", "nu"), ("E", "nu"), "elastic E VALUE nu VALUE")
-                    elastic = (read_float(v["E"], "Young's modulus E", gt=0, le=MAX_MODULUS),
-                               read_float(v["nu"], "Poisson's ratio nu", gt=-1, lt=0.5))
+                    # The range is the model's (check_elastic); the deck adds its
+                    # plausibility bound on E.
+                    elastic = _model(check_elastic,
+                                     read_float(v["E"], "Young's modulus E", le=MAX_MODULUS),
+                                     read_float(v["nu"], "Poisson's ratio nu"))
                     if elastic[0] < MIN_MODULUS:
                         deck.warn(line.number, f"Young's modulus {elastic[0]:g} MPa is outside "
                                   "1e3 to 1e6 MPa (polymers to tungsten carbide): is it in "
@@ -125,13 +135,12 @@ def _parse_material(deck: Deck) -> BlankMaterial | None:
         deck.error(seen["hardening"], f"the initial yield stress {initial:.3g} MPa is below "
                    f"{MIN_YIELD:g} MPa: expected the hardening law in MPa")
         return None
-    if kinematic is not None and kinematic.X_sat >= initial:
-        deck.error(seen["kinematic"], f"Xsat {kinematic.X_sat:g} MPa is at or above the initial "
-                   f"yield stress {initial:.4g} MPa of line {seen['hardening']}: expected Xsat "
-                   "below it (in the Lemaitre-Chaboche form the backstress grows towards Xsat, "
-                   "and from there on the stress-free state would lie outside the yield "
-                   "surface: unloading alone would yield the sheet)")
-        return None
+    if kinematic is not None:
+        try:
+            check_backstress(kinematic, hardening)
+        except ValueError as error:
+            deck.error(seen["kinematic"], f"{error}; the hardening of line {seen['hardening']}")
+            return None
     try:
         material = Material(elastic[0], elastic[1], criterion[0], hardening, kinematic)
     except (ValueError, TypeError) as error:
@@ -151,7 +160,7 @@ def _yield(line: Line, deck: Deck) -> tuple[Hill48, str]:
         if "r0" in keys or "r45" in keys or "r90" in keys:
             form = "yield hill48 r0 VALUE r45 VALUE r90 VALUE"
             v = read_pairs(line, 2, ("r0", "r45", "r90"), ("r0", "r45", "r90"), form)
-            r = {k: read_float(v[k], k, gt=0) for k in ("r0", "r45", "r90")}
+            r = {k: read_float(v[k], k) for k in ("r0", "r45", "r90")}
             hill = Hill48.from_r_values(r["r0"], r["r45"], r["r90"])
             text = f"Hill'48 from r0 = {r['r0']:g}, r45 = {r['r45']:g}, r90 = {r['r90']:g}"
         else:
@@ -201,21 +210,21 @@ def _forming_limit(deck: Deck, line: Line, rows: list[Line | None]) -> FormingLi
         try:
             check_arity(row, "MINOR MAJOR (a point of the forming limit table, logarithmic "
                         "strains)", 1)
-            e2 = read_float(row.words[0], "the minor strain", ge=-MAX_FLC_MINOR,
-                            le=MAX_FLC_MINOR)
-            e1 = read_float(row.words[1], "the major strain", gt=0, le=MAX_FLC_MAJOR)
-            if minor and e2 <= minor[-1]:
-                raise BadValue(f"the minor strain {row.words[0]} must be above the one before "
-                               f"({minor[-1]:g}): list the points from left to right")
-            if e1 < e2:
-                raise BadValue(f"the major strain {row.words[1]} is below the minor strain "
-                               f"{row.words[0]}: expected MINOR MAJOR with major >= minor")
+            # Plausibility bounds here; the table's own rules are FormingLimitCurve's.
+            minor.append(read_float(row.words[0], "the minor strain", ge=-MAX_FLC_MINOR,
+                                    le=MAX_FLC_MINOR))
+            major.append(read_float(row.words[1], "the major strain", le=MAX_FLC_MAJOR))
         except BadValue as bad:
             deck.error(row.number, str(bad))
             return None
-        minor.append(e2)
-        major.append(e1)
-    return FormingLimitCurve.table(minor, major, deck.where(line.number))
+    try:
+        return FormingLimitCurve.table(minor, major, deck.where(line.number))
+    except TablePointError as error:
+        deck.error(table[error.point].number, str(error))
+        return None
+    except ValueError as error:  # the table as a whole
+        deck.error(line.number, str(error))
+        return None
 
 
 def _table(deck: Deck, line: Line, rows: list[Line | None]) -> HardeningTable | None:
@@ -228,33 +237,39 @@ def _table(deck: Deck, line: Line, rows: list[Line | None]) -> HardeningTable | 
     for row in table:
         try:
             check_arity(row, "EP Y (a point of the hardening table)", 1)
-            ep = read_float(row.words[0], "the plastic strain EP", ge=0, le=MAX_EPS0)
-            y = read_float(row.words[1], "the yield stress Y", gt=0, le=MAX_STRESS)
-            if strains and ep <= strains[-1]:
-                raise BadValue(f"the plastic strain {row.words[0]} must be above the one "
-                               f"before ({strains[-1]:g})")
-            if strains and y < stresses[-1]:
-                raise BadValue(f"the yield stress {row.words[1]} is below the one before "
-                               f"({stresses[-1]:g}): softening is not supported")
-            if not strains and ep != 0.0:
-                raise BadValue(f"the table's first plastic strain must be 0 (the initial yield "
-                               f"stress), got {row.words[0]}")
+            # Plausibility bounds here; the table's own rules are HardeningTable's.
+            strains.append(read_float(row.words[0], "the plastic strain EP", le=MAX_EPS0))
+            stresses.append(read_float(row.words[1], "the yield stress Y", le=MAX_STRESS))
         except BadValue as bad:
             deck.error(row.number, str(bad))
             return None
-        strains.append(ep)
-        stresses.append(y)
-    return HardeningTable(tuple(strains), tuple(stresses))
+    try:
+        return HardeningTable(tuple(strains), tuple(stresses))
+    except TablePointError as error:
+        deck.error(table[error.point].number, str(error))
+        return None
+    except ValueError as error:  # the table as a whole
+        deck.error(line.number, str(error))
+        return None
+
+
+def _model(check: Callable[..., T], *values: float) -> T:
+    """``check(*values)``, the model's own check of a deck value, its ValueError (or
+    TypeError) the deck's error at the line being read."""
+    try:
+        return check(*values)
+    except (ValueError, TypeError) as error:
+        raise BadValue(str(error)) from None
 
 
 def _kinematic(line: Line) -> ArmstrongFrederick:
     """``kinematic armstrong-frederick C VALUE Xsat VALUE``."""
     read_choice(line.words[1], "the kinematic hardening law", ("armstrong-frederick",))
     v = read_pairs(line, 2, ("C", "Xsat"), ("C", "Xsat"), _KINEMATIC_FORM)
-    return ArmstrongFrederick(
-        read_float(v["C"], "the kinematic hardening rate C", ge=0, le=MAX_KINEMATIC_RATE),
-        read_float(v["Xsat"], "the kinematic hardening saturation Xsat", ge=0,
-                   le=MAX_STRESS))
+    return _model(
+        ArmstrongFrederick,
+        read_float(v["C"], "the kinematic hardening rate C", le=MAX_KINEMATIC_RATE),
+        read_float(v["Xsat"], "the kinematic hardening saturation Xsat", le=MAX_STRESS))
 
 
 def _hardening(line: Line) -> Swift | Voce:
@@ -263,9 +278,9 @@ def _hardening(line: Line) -> Swift | Voce:
         if kind == "swift":
             v = read_pairs(line, 2, ("K", "eps0", "n"), ("K", "eps0", "n"),
                        "hardening swift K VALUE eps0 VALUE n VALUE")
-            law = Swift(read_float(v["K"], "Swift K", gt=0),
-                        read_float(v["eps0"], "Swift eps0", gt=0, le=MAX_EPS0),
-                        read_float(v["n"], "Swift n", ge=0, le=1))
+            law = Swift(read_float(v["K"], "Swift K"),
+                        read_float(v["eps0"], "Swift eps0", le=MAX_EPS0),
+                        read_float(v["n"], "Swift n"))
             initial = law.K * law.eps0**law.n
             if not initial <= MAX_STRESS:
                 raise BadValue(f"the initial yield stress K eps0^n = {initial:.3g} MPa is beyond "
@@ -273,8 +288,8 @@ def _hardening(line: Line) -> Swift | Voce:
             return law
         v = read_pairs(line, 2, ("Y0", "Q", "b"), ("Y0", "Q", "b"),
                    "hardening voce Y0 VALUE Q VALUE b VALUE")
-        return Voce(read_float(v["Y0"], "Voce Y0", gt=0, le=MAX_STRESS),
-                    read_float(v["Q"], "Voce Q", ge=0, le=MAX_STRESS),
-                    read_float(v["b"], "Voce b", ge=0, le=1e6))
+        return Voce(read_float(v["Y0"], "Voce Y0", le=MAX_STRESS),
+                    read_float(v["Q"], "Voce Q", le=MAX_STRESS),
+                    read_float(v["b"], "Voce b", le=MAX_KINEMATIC_RATE))
     except (ValueError, TypeError) as error:
         raise BadValue(str(error)) from None

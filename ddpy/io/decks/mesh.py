@@ -42,7 +42,7 @@ from ddpy.model.mesh import (
     zeta_along_normal,
     zeta_off_normal,
 )
-from ddpy.model.solid import DEFAULT_ELEMENT, ELEMENTS
+from ddpy.model.solid import DEFAULT_ELEMENT, ELEMENTS, check_element
 
 #: Mesh files: Abaqus input (ddpy's reader), Gmsh (through meshio).
 MESH_SUFFIXES = (".inp", ".msh")
@@ -97,7 +97,10 @@ def _parse_mesh(deck: Deck) -> tuple[HexMesh, dict[str, NDArray[np.int64]], str]
             elif key == "element":
                 check_arity(line, "element " + " | ".join(ELEMENTS), 1)
                 if first_time(deck, seen, line):
-                    element = read_choice(line.words[1], "the element", tuple(ELEMENTS))
+                    try:  # Solid's check
+                        element = check_element(line.words[1])
+                    except ValueError as error:
+                        raise BadValue(str(error)) from None
             elif key == "scale":
                 check_arity(line, "scale FACTOR", 1)
                 if first_time(deck, seen, line):
@@ -167,25 +170,23 @@ def _parse_mesh(deck: Deck) -> tuple[HexMesh, dict[str, NDArray[np.int64]], str]
 
 
 def _box(line: Line) -> _RawMesh:
+    """``box LX LY LZ NX NY NZ``: HexMesh.box's nodes and elements (its checks of the sizes
+    and of the element count, before anything is allocated, are the deck's); the deck adds
+    its bound on lengths."""
     w = line.words
-    size = [read_float(v, f"the box length L{a}", gt=0, le=MAX_LENGTH)
+    size = [read_float(v, f"the box length L{a}", le=MAX_LENGTH)
             for v, a in zip(w[1:4], "XYZ", strict=True)]
-    counts = [read_int(v, f"the element count N{a}", 1, MAX_ELEMENTS)
-              for v, a in zip(w[4:7], "XYZ", strict=True)]
-    nx, ny, nz = counts
-    if nx * ny * nz > MAX_ELEMENTS:
-        raise BadValue(f"the box has {nx * ny * nz} elements: at most {MAX_ELEMENTS}")
-    gx, gy, gz = (np.linspace(0.0, s, c + 1) for s, c in zip(size, counts, strict=True))
-    zz, yy, xx = np.meshgrid(gz, gy, gx, indexing="ij")
-    nodes = np.column_stack([xx.ravel(), yy.ravel(), zz.ravel()])
-    index = np.arange(len(nodes)).reshape(nz + 1, ny + 1, nx + 1)
-    c = index[:-1, :-1, :-1]
-    elements = np.stack([c, index[:-1, :-1, 1:], index[:-1, 1:, 1:], index[:-1, 1:, :-1],
-                         index[1:, :-1, :-1], index[1:, :-1, 1:], index[1:, 1:, 1:],
-                         index[1:, 1:, :-1]], axis=-1).reshape(-1, 8)
-    return _RawMesh(nodes, elements, np.arange(1, len(nodes) + 1),
-                    np.arange(1, len(elements) + 1), None, {},
-                    f"box {' '.join(w[1:7])}")
+    counts = [read_int(v, f"the element count N{a}") for v, a in zip(w[4:7], "XYZ", strict=True)]
+    try:
+        box = HexMesh.box(*size, *counts)
+    except ValueError as error:  # MeshError is one
+        message = str(error)
+        for name in ("lx", "ly", "lz", "nx", "ny", "nz"):  # the deck's names of the numbers
+            if message.startswith(name + " "):
+                message = name.upper() + message[len(name):]
+        raise BadValue(message) from None
+    return _RawMesh(box.nodes, box.elements, np.arange(1, box.n_nodes + 1),
+                    np.arange(1, box.n_elements + 1), None, {}, f"box {' '.join(w[1:7])}")
 
 
 def _own_mesh(deck: Deck, lines: list[Line], start: int) -> tuple[int, _RawMesh | None]:

@@ -22,7 +22,7 @@ from ddpy.io.decks.lines import (
     show,
 )
 from ddpy.model.contact import check_friction
-from ddpy.model.tool import MAX_POINTS
+from ddpy.model.tool import CONTACT_DISCRETIZATIONS, check_contact_settings
 
 
 @dataclass
@@ -41,8 +41,17 @@ _DESCRIPTIONS = ("bezier", "nagata", "facets")
 #: Most tools of a case: the results file names them in an HDF5 attribute, which holds about
 #: 4,000 names at most, and each tool is searched at every Newton iteration.
 MAX_TOOLS = 1000
-#: ddpy.model.tool.CONTACT_DISCRETIZATIONS (node-to-surface, surface-to-surface, Gauss-point)
-_DISCRETIZATIONS = ("node", "surface", "gauss")
+
+
+def _contact_setting(key: str, value: Any) -> Any:
+    """``value`` of a tool's contact setting ``key`` (discretization, augmentation,
+    penalty, points, barrier) checked by the model's one check
+    (ddpy.model.tool.check_contact_settings), its message the deck's error."""
+    try:
+        check_contact_settings(**{key: value})
+    except ValueError as error:
+        raise BadValue(str(error)) from None
+    return value
 
 
 def _parse_tools(deck: Deck) -> list[_ToolDraft]:
@@ -84,24 +93,24 @@ def _parse_tools(deck: Deck) -> list[_ToolDraft]:
                     path = Path(w[1])
                     tool.values[key] = path if path.is_absolute() else deck.path.parent / path
                 elif key == "discretization":
-                    check_arity(line, "discretization node|surface|gauss", 1)
-                    tool.values[key] = read_choice(w[1], "the contact discretization",
-                                                   _DISCRETIZATIONS)
+                    check_arity(line, f"discretization {'|'.join(CONTACT_DISCRETIZATIONS)}", 1)
+                    tool.values[key] = _contact_setting(key, w[1])
                 elif key == "penalty":
                     check_arity(line, "penalty EPS", 1)
-                    tool.values[key] = read_float(w[1], "the contact penalty (N/mm^3)", gt=0)
+                    tool.values[key] = _contact_setting(
+                        key, read_float(w[1], "the contact penalty (N/mm^3)"))
                 elif key == "barrier":
                     check_arity(line, "barrier FRACTION|off", 1)
-                    tool.values[key] = None if w[1] == "off" else read_float(
-                        w[1], "the barrier depth (a fraction of the blank's thickness) or off",
-                        ge=0, le=1)
+                    tool.values[key] = None if w[1] == "off" else _contact_setting(key, read_float(
+                        w[1], "the barrier depth (a fraction of the blank's thickness) or off"))
                 elif key == "points":
                     check_arity(line, "points N", 1)
-                    tool.values[key] = read_int(w[1], "the Gauss points per direction of a "
-                                                "blank face", 1, MAX_POINTS)
+                    tool.values[key] = _contact_setting(key, read_int(
+                        w[1], "the Gauss points per direction of a blank face"))
                 elif key == "augmentation":
                     check_arity(line, "augmentation R", 1)
-                    tool.values[key] = read_float(w[1], "the augmentation parameter", gt=0)
+                    tool.values[key] = _contact_setting(
+                        key, read_float(w[1], "the augmentation parameter"))
                 elif key == "friction":
                     check_arity(line, "friction MU", 1)
                     mu = read_float(w[1], "friction")

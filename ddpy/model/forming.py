@@ -371,9 +371,9 @@ class FormingProblem:
         default_r = default_augmentation(solid)
         self.r = np.concatenate([np.full(t.slaves.size, t.augmentation or default_r)
                                  for t in self.tools])
-        #: per tool, the penalty of Gauss-point contact (N/mm^3; unused by the others)
         #: per tool, the blank's faces that meet it (RigidTool.facing)
         self._faces = contact_faces(self.tools, mesh)
+        #: per tool, the penalty of Gauss-point contact (N/mm^3; unused by the others)
         self.penalty = [t.penalty or (default_penalty(solid, faces) if t.contact == "gauss"
                                       else 0.0)
                         for t, faces in zip(self.tools, self._faces, strict=True)]

@@ -217,14 +217,8 @@ def _forming_limit(deck: Deck, line: Line, rows: list[Line | None]) -> FormingLi
         except BadValue as bad:
             deck.error(row.number, str(bad))
             return None
-    try:
-        return FormingLimitCurve.table(minor, major, deck.where(line.number))
-    except TablePointError as error:
-        deck.error(table[error.point].number, str(error))
-        return None
-    except ValueError as error:  # the table as a whole
-        deck.error(line.number, str(error))
-        return None
+    return _checked_table(deck, line, table,
+                          lambda: FormingLimitCurve.table(minor, major, deck.where(line.number)))
 
 
 def _table(deck: Deck, line: Line, rows: list[Line | None]) -> HardeningTable | None:
@@ -243,8 +237,16 @@ def _table(deck: Deck, line: Line, rows: list[Line | None]) -> HardeningTable | 
         except BadValue as bad:
             deck.error(row.number, str(bad))
             return None
+    return _checked_table(deck, line, table,
+                          lambda: HardeningTable(tuple(strains), tuple(stresses)))
+
+
+def _checked_table(deck: Deck, line: Line, table: list[Line], build: Callable[[], T]) -> T | None:
+    """``build()``, the model's check of a whole table; its error is the deck's at the
+    refused point's line (TablePointError) or at the table's header line; None after an
+    error."""
     try:
-        return HardeningTable(tuple(strains), tuple(stresses))
+        return build()
     except TablePointError as error:
         deck.error(table[error.point].number, str(error))
         return None

@@ -322,3 +322,29 @@ if __name__ == "__main__":  # renew the reference
     REFERENCE.parent.mkdir(parents=True, exist_ok=True)
     REFERENCE.write_text(json.dumps(numbers, indent=1) + "\n")
     print(f"wrote {REFERENCE}", file=sys.stderr)
+
+
+def test_beta_is_read_as_the_paper_reads_it_the_angle_between_the_flanges() -> None:
+    """The paper's Table 2 itself decides the reading: with its own theta_4 one flange
+    cannot stand its beta_1 from the vertical (statics: steeper than the sheet's tangent at
+    the last punch contact, 90 - theta_4 / 2), half of it can; and a run whose flanges keep
+    the bound is told apart from one that breaks it."""
+    bench = _module("run")
+    assert bench.tangent_bound(155.3) == pytest.approx(12.35)
+    assert bench.between_flanges(10.35) == pytest.approx(20.7)
+    # ddpy's numbers as the paper's under the reading: one flange is half of its beta.
+    halved = {m: {"theta_deg": bench.PAPER[m]["theta"],
+                  "beta1_deg": bench.PAPER[m]["beta1"] / 2,
+                  "beta2_deg": bench.PAPER[m]["beta2"] / 2} for m in bench.MODELS}
+    rows, verdict = bench.beta_reading(halved, theta_step=0.0)
+    assert len(rows) == 4 and all("| no | yes |" in row for row in rows)
+    assert "only as the angle between the two flanges" in verdict
+    assert "keeps its own bound in 4 of 4 models" in verdict
+    assert "0.50 to 0.50 times the paper's read as one flange, 1.00 to 1.00 times read " \
+        "between" in verdict
+    # A flange 20.7 degrees from the vertical at theta_4 = 155.3 breaks the bound.
+    steep = {"bezier": {"theta_deg": [18.4, 60.9, 109.4, 155.3], "beta1_deg": 20.7,
+                        "beta2_deg": 35.2}}
+    rows, verdict = bench.beta_reading(steep, theta_step=1.0)
+    assert "| 20.7 | no |" in rows[0]
+    assert "keeps its own bound in 0 of 1 models" in verdict

@@ -61,7 +61,8 @@ def synthetic_run(model: str, partial: bool = False) -> Any:
             "end": _end(stage, reached, ep * (k + 1) / 2)}
         curves[stage] = {"travel": travel.tolist(), "force": force.tolist(),
                          "sizes": np.full(50, 0.1).tolist(), "iterations": [3] * 50,
-                         "die_contact": [int(contact[k])] * 50}
+                         "die_contact": [int(contact[k])] * 50,
+                         "penetration": np.linspace(0.0, 0.008, 50).tolist()}
         radius = np.linspace(0.0, 85.0, 20)
         curves["sections"][stage] = {"thickness": [radius.tolist(), (0.98 + 0 * radius).tolist()],
                                      "plastic_strain": [radius.tolist(),
@@ -86,7 +87,7 @@ SHAPE = {tool: {model: {"patches": 10, "cad_faces": 2, "min_signed_um": -5.0,
                         "max_angle_deg": 0.5} for model in run.MODELS}
          for tool in run.TOOLS}
 FIGURES = {key: f"{key}.png" for key in ("force", "strain_map", "strain_section", "contact",
-                                         "increments", "thickness")}
+                                         "increments", "thickness", "penetration")}
 
 
 def test_claims_hold_on_runs_made_to_hold_them() -> None:

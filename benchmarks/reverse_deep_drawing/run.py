@@ -32,6 +32,7 @@ from typing import Any
 
 import numpy as np
 
+from ddpy.model.control import DEFAULT_PENETRATION as PENETRATION_LIMIT
 from ddpy.studies.bending import force_oscillation
 from ddpy.studies.drawing import (
     contact_force_balance,
@@ -300,6 +301,10 @@ def from_results(path: Path, case_folder: Path) -> Run:
                                   "sizes": [float(f"{v:.6g}") for v in h["step"][mask]],
                                   "iterations": h["iterations"][mask].astype(int).tolist(),
                                   "die_contact": contact.astype(int).tolist()}
+            if "penetration" in h:  # the deepest slave node in any tool, mm
+                depth = h["penetration"][mask]
+                curves[phase.name]["penetration"] = _rounded(
+                    np.where(np.isfinite(depth), depth, 0.0).max(axis=1, initial=0.0), 6)
         last = max(frames, key=lambda f: f.increment) if frames else None
         if last is not None:
             x0 = r.nodes
@@ -947,12 +952,18 @@ def plot_force(runs: dict[str, Run], path: Path) -> Path:
 
 
 def plot_stage_curve(runs: dict[str, Run], path: Path, key: str, ylabel: str,
-                     log: bool = False, marker: bool = False) -> Path:
-    """One curve per model against the punch travel, a panel per stage (Fig. 20, 21)."""
+                     log: bool = False, marker: bool = False,
+                     limit: float | None = None) -> Path:
+    """One curve per model against the punch travel, a panel per stage (Fig. 20, 21); the
+    models whose runs lack the curve are left out; ``limit``: a horizontal line there."""
     plt = _pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
     for ax, stage in zip(axes, STAGES, strict=True):
+        if limit is not None:
+            ax.axhline(limit, color="k", ls="--", lw=0.8, label="limit")
         for model, c in _stage_curves(runs, stage).items():
+            if key not in c:
+                continue
             if marker:
                 ax.plot(c["travel"], c[key], ".", ms=2.5, label=LABELS[model])
             else:
@@ -960,7 +971,7 @@ def plot_stage_curve(runs: dict[str, Run], path: Path, key: str, ylabel: str,
         if log:
             ax.set_yscale("log")
             low = [float(np.min(c[key][c[key] > 0])) for c in
-                   _stage_curves(runs, stage).values() if np.any(c[key] > 0)]
+                   _stage_curves(runs, stage).values() if key in c and np.any(c[key] > 0)]
             if low:
                 ax.set_ylim(bottom=0.5 * min(low))
         lead = "punch 1" if stage == "stage1" else "punch 2"
@@ -1199,7 +1210,7 @@ def report(mesh: str, numbers: dict[str, dict[str, Any]],
         "",
         *effort_section(numbers, models, figures),
         *cup_section(numbers, models, figures),
-        *checks_section(numbers, models),
+        *checks_section(numbers, models, figures),
         *(convergence or []),
         "## The claims of the paper",
         "",
@@ -1558,7 +1569,8 @@ def convergence_section(by_mesh: dict[str, dict[str, dict[str, Any]]], model: st
     return [*lines, ""]
 
 
-def checks_section(numbers: dict[str, dict[str, Any]], models: list[str]) -> list[str]:
+def checks_section(numbers: dict[str, dict[str, Any]], models: list[str],
+                   figures: dict[str, str]) -> list[str]:
     """Physical checks per run at the end of each stage."""
     head = _row(["", *[LABELS[m] for m in models]])
     lines = [
@@ -1595,7 +1607,10 @@ def checks_section(numbers: dict[str, dict[str, Any]], models: list[str]) -> lis
                   "/ thickness)",
                   *[_recorded_penetration(numbers[m]["stages"][stage]) for m in models]]),
         ]
-    lines.append("")
+    lines += ["", "The deepest slave node of the blank in any tool at each converged increment "
+              f"(the solver's record), against the limit of {100 * PENETRATION_LIMIT:g} % of "
+              f"the thickness (runs kept before the record was plotted are left out):", "",
+              f"![penetration]({figures['penetration']})", ""]
     return lines
 
 
@@ -1766,6 +1781,9 @@ def make_figures(runs: dict[str, Run], stem: str, folder: Path = DOCS) -> dict[s
                                     "nodes in contact"),
         "increments": plot_stage_curve(runs, folder / f"{stem}_increments.png", "sizes",
                                        "increment size [mm]", log=True, marker=True),
+        "penetration": plot_stage_curve(runs, folder / f"{stem}_penetration.png",
+                                        "penetration", "deepest slave node in any tool [mm]",
+                                        limit=PENETRATION_LIMIT * make_case.THICKNESS),
         "thickness": plot_sections(runs, folder / f"{stem}_thickness.png", "thickness",
                                    "thickness [mm]"),
     }

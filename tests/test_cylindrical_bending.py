@@ -348,3 +348,32 @@ def test_beta_is_read_as_the_paper_reads_it_the_angle_between_the_flanges() -> N
     rows, verdict = bench.beta_reading(steep, theta_step=1.0)
     assert "| 20.7 | no |" in rows[0]
     assert "keeps its own bound in 0 of 1 models" in verdict
+
+
+def test_the_die_fit_finds_the_clearance_whose_angles_are_the_papers() -> None:
+    """Runs whose angles move linearly with the clearance and pass through the paper's
+    Bezier column at 1.6 mm: the fit finds 1.6 mm, the sensitivity the slopes, and the
+    report says both."""
+    fit = _module("fit_die")
+    paper = fit.bench.PAPER["bezier"]
+    slope = np.array([2.0, -5.0, -8.0, -12.0])  # degrees per mm of clearance
+
+    def synthetic(clearance: float) -> dict[str, Any]:
+        theta = np.array(paper["theta"]) + slope * (clearance - 1.6)
+        return {"clearance_mm": clearance, "shoulder_x_mm": fit.shoulder_x(clearance),
+                "code": "abc1234", "status": "completed", "increments": 250,
+                "iterations": 900, "theta_deg": theta.tolist(),
+                "beta1_deg": paper["beta1"] / 2 + 3.0 * (clearance - 1.6),
+                "beta2_deg": paper["beta2"] / 2 + 3.5 * (clearance - 1.6)}
+
+    runs = [synthetic(c) for c in (1.4, 2.0, 1.5)]
+    assert fit.fitted_clearance(runs) == pytest.approx(1.6, abs=1e-3)
+    assert fit.fitted_clearance(runs[:1]) is None
+    (lo, hi, per), *_ = fit.sensitivity(runs)
+    assert (lo, hi) == (1.4, 1.5)
+    assert per["theta_4"] == pytest.approx(-1.2) and per["beta_1"] == pytest.approx(0.6)
+    assert per["springback"] == pytest.approx(0.1)
+    assert fit.shoulder_x(2.0) == pytest.approx(29.5)  # today's die
+    text = fit.report("coarse", runs)
+    assert "clearance of **1.60 mm** (the shoulder at 29.10 mm)" in text
+    assert "| 1.4 and 1.5 mm | +0.20 | -0.50 | -0.80 | -1.20 | +0.60 | +0.70 | +0.10 |" in text

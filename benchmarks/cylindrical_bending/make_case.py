@@ -34,8 +34,11 @@ MESHES = ("coarse", "paper")
 LENGTH, WIDTH, THICKNESS = 60.0, 15.0, 1.0
 PAPER_HEXAHEDRA, LAYERS = 19950, 3
 #: Tools (a reconstruction of the paper's Fig. 6): punch radius, die shoulder radius and the
-#: distance of the shoulder's centre from the symmetry plane.
-PUNCH_RADIUS, SHOULDER_RADIUS, SHOULDER_X = 23.5, 4.0, 29.5
+#: clearance, the horizontal gap between the punch's side and the shoulder's inner edge,
+#: which places the shoulder's centre SHOULDER_X from the symmetry plane (fit_die.py
+#: measures what the clearance does to the angles of Table 2).
+PUNCH_RADIUS, SHOULDER_RADIUS, CLEARANCE = 23.5, 4.0, 2.0
+SHOULDER_X = PUNCH_RADIUS + CLEARANCE + SHOULDER_RADIUS
 #: Coarse blank: uniform, 1 mm elements along x (the blank engineers run), 5 mm across y,
 #: 2 layers of solid-shells (ddpy's default element and contact: 4 x 4 Gauss points per face
 #: against each tool). Measured on the built-in case (benchmarks/mesh_convergence for the
@@ -72,9 +75,11 @@ AUGMENTATION = {"paper": 2e4}
 OUTPUT_AT = (7.0, 14.0, 21.0, 28.5)
 
 
-def build_tools(folder: Path = HERE / "tools", size: float = 5.0) -> dict[str, dict[str, Path]]:
-    """Write the CAD model and the punch and die tool files; return the paths by tool and
-    model ('bezier', 'nagata', 'facets')."""
+def build_tools(folder: Path = HERE / "tools", size: float = 5.0,
+                shoulder_x: float = SHOULDER_X) -> dict[str, dict[str, Path]]:
+    """Write the CAD model and the punch and die tool files, the die's shoulder centred
+    ``shoulder_x`` from the symmetry plane; return the paths by tool and model ('bezier',
+    'nagata', 'facets')."""
     from ddpy.cad import build_tool_models, gmsh_session, load_cad
     from ddpy.cad.examples import bending_tools
 
@@ -85,7 +90,7 @@ def build_tools(folder: Path = HERE / "tools", size: float = 5.0) -> dict[str, d
 
         gmsh.clear()
         bending_tools(step, punch_radius=PUNCH_RADIUS, shoulder_radius=SHOULDER_RADIUS,
-                      shoulder_x=SHOULDER_X, thickness=THICKNESS)
+                      shoulder_x=shoulder_x, thickness=THICKNESS)
         gmsh.clear()
         faces = load_cad(step)
         # The punch lies above the blank (z > thickness), the die below (z <= 0).

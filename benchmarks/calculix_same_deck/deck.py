@@ -48,6 +48,8 @@ BACK = 1.0
 #: Swift's curve (make_case's steel) sampled at these plastic strains, the table both codes
 #: read: dense where the curve bends most (small strains), to 1 (the bend reaches about 0.1).
 TABLE_STRAINS = (0.0, *(float(f"{e:.3g}") for e in np.geomspace(2e-4, 1.0, 39)))
+#: make_case's Swift curve of the steel: K (MPa), eps0, n.
+SWIFT = (645.3, 0.0102, 0.252)
 #: CalculiX's face-to-face penalty: pressure per overclosure (MPa/mm), friction stick slope
 #: (MPa/mm). Those of examples/calculix_bending, which run on CalculiX 2.20: 1e5 MPa/mm
 #: holds 100 MPa of contact pressure at 1e-3 mm, a tenth of ddpy's 1 % penetration limit.
@@ -66,7 +68,7 @@ TIP = (make_case.LENGTH, 0.0, 0.0)
 
 def hardening_table() -> list[tuple[float, float]]:
     """(plastic strain, yield stress) of make_case's Swift curve at TABLE_STRAINS."""
-    k, eps0, n = 645.3, 0.0102, 0.252
+    k, eps0, n = SWIFT
     assert f"K {k}  eps0 {eps0}  n {n}" in make_case.MATERIAL  # the benchmark's steel
     return [(e, float(f"{k * (eps0 + e) ** n:.2f}")) for e in TABLE_STRAINS]
 
@@ -101,6 +103,24 @@ def prepare(root: Path, tools: Path = BENDING / "tools") -> dict[str, Path]:
     deck.write_text(ccx_deck(out["facets_coarse"]))
     out["ccx"] = deck
     return out
+
+
+def describe(folder: Path) -> dict[str, object]:
+    """What the report states of the case in ``folder``: its blank's elements and nodes, its
+    tools' faces, friction, stroke and largest increment."""
+    from ddpy.io.decks import read_case
+    from ddpy.io.toolfile import read_tool
+
+    case = read_case(folder)
+    forming = case.control.phases[0]
+    return {"elements": int(case.mesh.n_elements), "nodes": int(case.mesh.n_nodes),
+            "faces": {t.name: int(read_tool(t.file).surface.n_patches) for t in case.tools},
+            "friction": [float(t.friction) for t in case.tools],
+            "stroke": max(float(np.linalg.norm(m.displacement)) for m in forming.motions),
+            "max_increment": float(forming.max_increment),
+            "springback_increments": int(case.control.phases[1].increments),
+            "E": float(case.material.material.E), "nu": float(case.material.material.nu),
+            "springs": len(case.boundary.nodesets["centre"].nodes)}
 
 
 def _lines(ids: list[int], per_line: int = 16) -> list[str]:

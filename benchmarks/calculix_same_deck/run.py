@@ -39,6 +39,7 @@ from bench_common import DOCS, code_version, computed_at, cores, load_module, ru
 from bench_common import table_row as _row  # noqa: E402
 
 deck = load_module(HERE / "deck.py", "calculix_same_deck_deck")
+make_case = deck.make_case
 STEM = "calculix_same_deck"
 WORK = HERE / "work"
 LABELS = {"nagata": "ddpy, Nagata", "facets_coarse": "ddpy, coarse facets",
@@ -54,7 +55,8 @@ GOAL = 20.0
 
 def ddpy_worker(case: Path, output: Path, record: Path, stop_after: int | None) -> None:
     """Run one ddpy case on one thread in this process; write its CPU time (user + system,
-    getrusage of this process around the run), peak memory and status to ``record``."""
+    getrusage of this process: the whole process, and around the run), peak memory and status
+    to ``record``."""
     from ddpy.app.runner import run_case
     from ddpy.io.decks import read_case
 
@@ -66,7 +68,10 @@ def ddpy_worker(case: Path, output: Path, record: Path, stop_after: int | None) 
     after = resource.getrusage(resource.RUSAGE_SELF)
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
     record.write_text(json.dumps({
-        "cpu_s": cpu, "wall_s": wall, "peak_memory_mb": after.ru_maxrss / 1024.0,
+        # the run; and the whole process, Python's start and reading the case included (as
+        # ccx's CPU time includes reading its deck)
+        "run_cpu_s": cpu, "cpu_s": after.ru_utime + after.ru_stime, "wall_s": wall,
+        "peak_memory_mb": after.ru_maxrss / 1024.0,
         "status": outcome.status + (f": {outcome.message}" if outcome.message else ""),
         "results": str(outcome.results)}))
 
@@ -113,11 +118,12 @@ def read_ddpy(results: Path) -> dict[str, Any]:
         "springback_iterations": int(run.iterations[~forming].sum()),
         "all_iterations": int(all_trials.sum()) if all_trials is not None else None,
         "cuts": int(run.cutbacks.sum()),
-        "stroke": [round(float(s), 5) for s in run.stroke[forming]],
-        "force": [round(float(f), 4) for f in run.force[forming]],
+        # from the flat blank (0, 0) as CalculiX's curve, then each forming increment
+        "stroke": [0.0] + [round(float(s), 5) for s in run.stroke[forming]],
+        "force": [0.0] + [round(float(f), 4) for f in run.force[forming]],
         # wall time of each forming increment (one thread: close to its CPU time)
-        "increment_s": [round(float(t), 4) for t in time_total[forming]],
-        "iterations_per_increment": [int(i) for i in run.iterations[forming]],
+        "increment_s": [0.0] + [round(float(t), 4) for t in time_total[forming]],
+        "iterations_per_increment": [0] + [int(i) for i in run.iterations[forming]],
         "tip_z_formed": z_formed, "tip_z_sprung": z_final,
     }
 
@@ -220,7 +226,9 @@ class CcxRun:
             status = "completed"
         else:
             status = f"exit {self.status}"
-        return {**numbers, "label": LABELS["ccx"], "status": status,
+        # SPOOLES, CalculiX's default sparse solver where it is built in, leaves this file
+        solver = "SPOOLES" if (self.folder / "spooles.out").is_file() else "not known"
+        return {**numbers, "label": LABELS["ccx"], "status": status, "solver": solver,
                 "cpu_s": self.usage.ru_utime + self.usage.ru_stime,
                 "peak_memory_mb": self.usage.ru_maxrss / 1024.0, "wall_s": self.wall}
 
@@ -248,13 +256,14 @@ def run_all(stop_after: int | None, ccx_limit: float | None) -> dict[str, Any]:
                "code": code_version(), "cores": cores(), "cpu": cpu_model(),
                "load_before": round(os.getloadavg()[0], 2),
                "ccx": ccx_version(ccx) if ccx else None, "ddpy_stop_after": stop_after,
-               "ccx_limit_s": ccx_limit}
+               "ccx_limit_s": ccx_limit, "deck": deck.describe(paths["facets_coarse"])}
     started = time.perf_counter()
     solver = CcxRun(ccx, paths["ccx"]) if ccx else None
     runs = {model: _run_ddpy(model, paths[model], stop_after) for model in deck.MODELS}
     if solver is not None:
         print("ccx: waiting", file=sys.stderr, flush=True)
         runs["ccx"] = solver.finish(None if ccx_limit is None else started + ccx_limit)
+    session["load_after"] = round(os.getloadavg()[0], 2)
     return {"session": session, "runs": runs}
 
 
@@ -311,13 +320,20 @@ def _cpu_to(run: dict[str, Any], stroke: float) -> float | None:
 def report(data: dict[str, Any]) -> str:
     """The markdown report of one session's runs (and its figure)."""
     session, runs = data["session"], data["runs"]
+    d = session["deck"]
+    faces = ", ".join(f"{tool} {count}" for tool, count in d["faces"].items())
+    friction = " and ".join(sorted({f"{f:g}" for f in d["friction"]}))
+    per_arc = make_case.PATCHES_PER_ARC
+    solver_line = (f"its default linear solver, {runs['ccx'].get('solver', 'not known')} in "
+                   "this build" if "ccx" in runs else "not run")
     DOCS.mkdir(parents=True, exist_ok=True)
     figure(runs, DOCS / f"{STEM}.png")
     numbers = {key: summary(run) for key, run in runs.items()}
     order = [k for k in ("nagata", "facets_coarse", "ccx") if k in runs]
     columns = ("run", "status", "forming increments", "Newton iterations (forming)",
                "springback increments / iterations", "all iterations (cut attempts too)",
-               "cut attempts", "CPU (s)", "wall (s)", "peak memory (MB)")
+               "cut attempts", "CPU (s)", "CPU of the run alone (s)", "wall (s)",
+               "peak memory (MB)")
     rows = [_row(columns), "|---" * len(columns) + "|"]
     for k in order:
         r = runs[k]
@@ -325,7 +341,8 @@ def report(data: dict[str, Any]) -> str:
             r["label"], r["status"], r["increments"], r["iterations"],
             f"{r['springback_increments']} / {r['springback_iterations']}",
             "-" if r.get("all_iterations") is None else r["all_iterations"], r["cuts"],
-            f"{r['cpu_s']:.1f}", f"{r['wall_s']:.1f}", f"{r['peak_memory_mb']:.0f}"]))
+            f"{r['cpu_s']:.1f}", _fmt(r.get("run_cpu_s")), f"{r['wall_s']:.1f}",
+            f"{r['peak_memory_mb']:.0f}"]))
     force_cols = ("run", *(f"force at {a:g} mm (N)" for a in AT), "largest (N)",
                   f"chatter from {START:g} mm (N)", f"chatter from {LATE:g} mm (N)",
                   "chatter / mean force", "tip z formed (mm)", "tip z after springback (mm)")
@@ -345,7 +362,8 @@ def report(data: dict[str, Any]) -> str:
         complete = c["status"] == "completed"
         ratio_cols = ("ddpy model", "CPU: CalculiX / ddpy", "Newton iterations: ddpy / CalculiX",
                       "all iterations: ddpy / CalculiX", "peak memory: ddpy / CalculiX",
-                      "chatter: ddpy / CalculiX")
+                      "chatter: ddpy / CalculiX",
+                      f"force: ddpy / CalculiX at {', '.join(f'{a:g}' for a in AT)} mm")
         lines = [_row(ratio_cols), "|---" * len(ratio_cols) + "|"]
         for k in (m for m in ("nagata", "facets_coarse") if m in runs):
             r = runs[k]
@@ -365,8 +383,11 @@ def report(data: dict[str, Any]) -> str:
                      f"{r['all_iterations'] / max(c['all_iterations'], 1):.2f}")
             chat = (f"{numbers[k]['chatter'] / numbers['ccx']['chatter']:.3f}"
                     if numbers[k]["chatter"] and numbers["ccx"]["chatter"] else "-")
+            force = ", ".join(f"{a / b:.3f}" if a is not None and b else "-" for a, b in
+                              zip(numbers[k]["at"], numbers["ccx"]["at"], strict=True))
             lines.append(_row([r["label"], f"{cpu:.1f}", f"{its:.2f}", every,
-                               f"{r['peak_memory_mb'] / c['peak_memory_mb']:.2f}", chat]))
+                               f"{r['peak_memory_mb'] / c['peak_memory_mb']:.2f}", chat,
+                               force]))
         if "nagata" in runs:
             r = runs["nagata"]
             cpu = (c["cpu_s"] / r["cpu_s"] if complete else
@@ -377,8 +398,8 @@ def report(data: dict[str, Any]) -> str:
                      "was stopped (ddpy's CPU to there from its increments' times)")
             verdict = (f"**Goal {met}**: with Nagata tools ddpy used {cpu:.1f} times less CPU "
                        f"than CalculiX ({scope}); the goal is at least {GOAL:g} times."
-                       if np.isfinite(cpu) else "**The goal cannot be judged**: CalculiX "
-                       "converged no increment in this session.")
+                       if np.isfinite(cpu) else "**The goal cannot be judged**: the runs of "
+                       "this session share no stroke to compare.")
     codes = {LABELS[k]: session["code"] for k in order}
     partial = ""
     if session.get("ddpy_stop_after") is not None:
@@ -394,7 +415,8 @@ def report(data: dict[str, Any]) -> str:
 Written by `python benchmarks/calculix_same_deck/run.py` (issue #53, item 5); `--reuse`
 writes it again from [calculix_same_deck_runs.json](calculix_same_deck_runs.json).
 {computed_at(session['code'], codes)} One session: {session['date']}, {session['cores']}
-cores ({session['cpu']}), load average {session['load_before']} when it started; one thread
+cores ({session['cpu']}), load average {session['load_before']} when it started and
+{session.get('load_after', '-')} when it ended (this session's runs count in it); one thread
 each (OMP_NUM_THREADS=1), {ccx_line} on one core while ddpy's two runs, one after the other,
 use the other.
 {partial}
@@ -402,44 +424,50 @@ use the other.
 
 `benchmarks/calculix_same_deck/deck.py` writes both from ddpy's case of
 benchmarks/cylindrical_bending (make_case.py): the quarter 60 x 15 x 1 mm blank as
-`coarse_mesh(nx=60, ny=6, layers=2)` (720 elements, 1281 nodes), the punch (radius 23.5 mm)
-and the open die (shoulder radius 4 mm at x = 29.5 mm), friction 0.148, 28.5 mm of punch
-stroke at most 0.114 mm an increment, symmetry on x = 0 and y = 0, then springback with the
-centre line held along z.
+`coarse_mesh(nx={deck.NX}, ny={deck.NY}, layers={deck.LAYERS})` ({d['elements']} elements,
+{d['nodes']} nodes), the punch (radius {make_case.PUNCH_RADIUS:g} mm) and the open die
+(shoulder radius {make_case.SHOULDER_RADIUS:g} mm at x = {make_case.SHOULDER_X:g} mm), friction
+{friction}, {d['stroke']:g} mm of punch stroke at most {d['max_increment']:g} mm an increment,
+symmetry on x = 0 and y = 0, then springback with the centre line held along z.
 
-- **Tools.** ddpy runs its Nagata tools and its coarse facets, the same mesh of 4 patches per
-  90 degrees of arc made flat (make_case's `facets_coarse`: the Nagata file read with
-  `description facets`; the paper's coarse facets "keeping the same discretization"). The
-  CalculiX deck is written from that facet case: each tool is a `*RIGID BODY` of one C3D8
+- **Tools.** ddpy runs its Nagata tools and its coarse facets, the same mesh of {per_arc}
+  patches per 90 degrees of arc made flat (make_case's `facets_coarse`: the Nagata file read
+  with `description facets`; the paper's coarse facets "keeping the same discretization").
+  The CalculiX deck is written from that facet case: each tool is a `*RIGID BODY` of one C3D8
   brick behind each facet, whose S2 face is the facet, its four vertices those of the tool
-  file (punch 20 faces, die 85; written to the 20 characters CalculiX reads, the same
+  file ({faces} faces; written to the 20 characters CalculiX reads a number from: the same
   doubles but for values below 1e-15 mm). So CalculiX's tools are ddpy's coarse facets, and
-  ddpy's Nagata tools are the same vertices smoothed. (The fine facet files, `*.facets.tool`,
-  30 facets per arc, are another model, not the one these vertices are shared with.)
+  ddpy's Nagata tools are the same vertices smoothed. (The fine facet files,
+  `*.facets.tool`, {make_case.FACETS_PER_ARC} facets per arc, are another model, not the one
+  these vertices are shared with.)
 - **Blank.** C3D8I in CalculiX, ddpy's defaults otherwise: its solid-shell (what `ddpy
   convert` makes of C3D8I) and Gauss-point contact with the barrier.
-- **Material.** The benchmark's steel, E 210 GPa, nu 0.3, Swift K 645.3 MPa, eps0 0.0102,
-  n 0.252, as von Mises with the Swift curve sampled at {len(deck.TABLE_STRAINS)} plastic
-  strains (2e-4 to 1): the same table in CalculiX's `*PLASTIC` and ddpy's material.dat.
-  ddpy's bending case has Hill'48; CalculiX's `*PLASTIC` is von Mises, and Hill'48 there
-  needs a user material, so both codes read the isotropic table here.
+- **Material.** The benchmark's steel, E {d['E'] / 1000:g} GPa, nu {d['nu']:g}, Swift K
+  {deck.SWIFT[0]:g} MPa, eps0 {deck.SWIFT[1]:g}, n {deck.SWIFT[2]:g}, as von Mises with the
+  Swift curve sampled at {len(deck.TABLE_STRAINS)} plastic strains (2e-4 to 1): the same table
+  in CalculiX's `*PLASTIC` and ddpy's material.dat. ddpy's bending case has Hill'48;
+  CalculiX's `*PLASTIC` is von Mises, and Hill'48 there needs a user material, so both codes
+  read the isotropic table here.
 - **Contact.** CalculiX's face-to-face penalty contact, `*CONTACT PAIR, TYPE=SURFACE TO
   SURFACE` (the manual's "face-to-face penalty contact"), linear pressure-overclosure of
-  {deck.PENALTY:g} MPa/mm (100 MPa of pressure at 1e-3 mm, a tenth of ddpy's 1 % of the
-  thickness), Coulomb friction 0.148 with a stick slope of {deck.STICK_SLOPE:g} MPa/mm (the
-  values of examples/calculix_bending). Not the mortar (`TYPE=MORTAR`): face-to-face means
-  the contact integrated over the blank's faces, which the penalty form does, at Gauss
-  points of the slave faces as ddpy's Gauss-point contact does; the mortar form adds
-  Lagrange multipliers on top of that, and `ddpy convert` (docs/abaqus-import.md) reads
-  `SURFACE TO SURFACE` and `NODE TO SURFACE` only, so with the mortar the deck would not be
-  one deck for both codes. Four SPRING2 elements of {deck.SPRING:g} N/mm hold CalculiX's
-  blank along z before the tools grip it (ddpy's convert skips them; ddpy's contact holds the
-  blank).
-- **Process.** CalculiX: one `*STATIC` step of the 28.5 mm (initial and largest increment
-  0.004 of it, 0.114 mm; CalculiX's own increment control), then a step of 20 increments
-  without the contact pairs (`*MODEL CHANGE, REMOVE`) for the springback; ddpy: its forming
-  phase (largest increment 0.114 mm, its increment limits of the coarse blank) and 20
-  springback increments.
+  {deck.PENALTY:g} MPa/mm ({deck.PENALTY * 1e-3:g} MPa of pressure at 1e-3 mm of
+  overclosure, a tenth of ddpy's penetration limit, 1 % of the thickness), Coulomb friction
+  {friction} with a stick slope of {deck.STICK_SLOPE:g} MPa/mm (the values of
+  examples/calculix_bending). Not the mortar (`TYPE=MORTAR`): face-to-face means the contact
+  integrated over the blank's faces, which the penalty form does, at integration points of
+  the slave faces as ddpy's Gauss-point contact does; the mortar form adds Lagrange
+  multipliers on top of that, and `ddpy convert` (docs/abaqus-import.md) reads `SURFACE TO
+  SURFACE` and `NODE TO SURFACE` only, so with the mortar the deck would not be one deck for
+  both codes. {d['springs']} SPRING2 elements of {deck.SPRING:g} N/mm under the centre line
+  hold CalculiX's blank along z before the tools grip it (ddpy's convert skips them; ddpy's
+  contact holds the blank).
+- **Process.** CalculiX ({solver_line}): one `*STATIC` step of the {d['stroke']:g} mm
+  (initial and largest increment {d['max_increment'] / d['stroke']:.3g} of it,
+  {d['max_increment']:g} mm; CalculiX's own increment control), then a step of
+  {d['springback_increments']} increments without the contact pairs (`*MODEL CHANGE,
+  REMOVE`) for the springback; ddpy: its forming phase (largest increment
+  {d['max_increment']:g} mm, its increment limits of the coarse blank) and
+  {d['springback_increments']} springback increments.
 
 `tests/test_calculix_same_deck.py` checks the deck writer: the counts, the tool faces'
 vertices against the tool files, and that `ddpy convert` reads the deck back to the same
@@ -452,8 +480,10 @@ blank.
 CalculiX's increments and iterations are from its .sta file: a converged increment's
 iterations, and every attempt's (those marked U, cut back, too). ddpy's: accepted iterations
 of its increments, and the Newton corrections of all its trials. CPU: user + system time from
-getrusage (of the ccx child; of the ddpy process around its run); peak memory: ru_maxrss
-(ddpy's includes the Python interpreter and its libraries).
+getrusage, of the ccx child (reading its deck included) and of the ddpy process at its end
+(Python's start and reading the case included; the ratios take these); "of the run alone":
+ddpy's around its case runner only. Peak memory: ru_maxrss (ddpy's includes the Python
+interpreter and its libraries).
 
 {chr(10).join(lines)}
 

@@ -385,7 +385,10 @@ def report(data: dict[str, Any]) -> str:
                     if numbers[k]["chatter"] and numbers["ccx"]["chatter"] else "-")
             force = ", ".join(f"{a / b:.3f}" if a is not None and b else "-" for a, b in
                               zip(numbers[k]["at"], numbers["ccx"]["at"], strict=True))
-            lines.append(_row([r["label"], f"{cpu:.1f}", f"{its:.2f}", every,
+            if not np.isfinite(cpu) or c["stroke"][-1] <= 0.0:  # nothing to compare
+                cpu, its = float("nan"), float("nan")
+            lines.append(_row([r["label"], _fmt(cpu if np.isfinite(cpu) else None),
+                               _fmt(its if np.isfinite(its) else None, ".2f"), every,
                                f"{r['peak_memory_mb'] / c['peak_memory_mb']:.2f}", chat,
                                force]))
         if "nagata" in runs:

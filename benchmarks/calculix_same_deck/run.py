@@ -226,11 +226,20 @@ class CcxRun:
             status = "completed"
         else:
             status = f"exit {self.status}"
+        error = ccx_error(self.folder / "ccx.log")
         # SPOOLES, CalculiX's default sparse solver where it is built in, leaves this file
         solver = "SPOOLES" if (self.folder / "spooles.out").is_file() else "not known"
         return {**numbers, "label": LABELS["ccx"], "status": status, "solver": solver,
+                "error": error,
                 "cpu_s": self.usage.ru_utime + self.usage.ru_stime,
                 "peak_memory_mb": self.usage.ru_maxrss / 1024.0, "wall_s": self.wall}
+
+
+def ccx_error(log: Path) -> str | None:
+    """The last '*ERROR' message of a ccx log, on one line; None without one."""
+    text = log.read_text(errors="replace") if log.is_file() else ""
+    found = re.findall(r"\*ERROR[^\n]*(?:\n [^\n*]+)*", text)
+    return " ".join(found[-1].split()) if found else None
 
 
 def ccx_version(ccx: str) -> str:
@@ -397,8 +406,8 @@ def report(data: dict[str, Any]) -> str:
                    c["cpu_s"] / (_cpu_to(r, c["stroke"][-1]) or float("nan")))
             met = "met" if cpu >= GOAL else "not met"
             scope = ("the whole runs, forming and springback" if complete else
-                     f"to the {c['stroke'][-1]:.2f} mm of stroke CalculiX reached before it "
-                     "was stopped (ddpy's CPU to there from its increments' times)")
+                     f"to the {c['stroke'][-1]:.2f} mm of stroke CalculiX reached "
+                     f"({c['status']}; ddpy's CPU to there from its increments' times)")
             verdict = (f"**Goal {met}**: with Nagata tools ddpy used {cpu:.1f} times less CPU "
                        f"than CalculiX ({scope}); the goal is at least {GOAL:g} times."
                        if np.isfinite(cpu) else "**The goal cannot be judged**: the runs of "
@@ -409,8 +418,20 @@ def report(data: dict[str, Any]) -> str:
         partial = (f"\n**A check run, not the benchmark**: ddpy stopped after "
                    f"{session['ddpy_stop_after']} increments.\n")
     if "ccx" in runs and runs["ccx"]["status"] != "completed":
-        partial += (f"\n**CalculiX did not complete** ({runs['ccx']['status']}): its numbers "
-                    "are to where it got; the ratios compare ddpy to the same stroke.\n")
+        error = runs["ccx"].get("error")
+        partial += (f"\n**CalculiX did not complete** ({runs['ccx']['status']}"
+                    + (f", at {runs['ccx']['stroke'][-1]:.2f} mm of stroke: \"{error}\""
+                       if error else "")
+                    + "): its numbers are to where it got; the CPU and iteration ratios "
+                    "compare ddpy to the same stroke.\n")
+    ccx_note = ""
+    if "ccx" in runs and runs["ccx"]["status"] != "completed":
+        ccx_note = ("\n\nCalculiX's curve and chatter stop where it failed: its last "
+                    "increments before the failure, cut back and forced through, carry its "
+                    "largest force, which also weighs in its chatter. Why its force runs "
+                    "above ddpy's (the force ratios above) is not analysed here: the elements "
+                    "(C3D8I against the solid-shell), the penalty contact with its stick slope "
+                    "against ddpy's Gauss-point contact, are the candidates.")
     ccx_line = (f"CalculiX {session['ccx']} (Debian's calculix-ccx)" if session.get("ccx")
                 else "CalculiX (not installed in this session)")
     text = f"""# ddpy and CalculiX on the same deck: Numisheet 2002 BM-B bending, 60 x 6 x 2
@@ -503,7 +524,7 @@ reference node, `*NODE PRINT`, at each converged increment; ddpy: the tool force
 results). Chatter: the RMS deviation of the force from its moving quadratic over
 {WINDOW:g} mm of stroke (`ddpy.studies.bending.force_oscillation`, as
 benchmarks/cylindrical_bending/run.py), from {START:g} mm on and from {LATE:g} mm on. The
-tip: the blank's end node (x = 60, y = 0, z = 0).
+tip: the blank's end node (x = 60, y = 0, z = 0).{ccx_note}
 """
     return text
 

@@ -340,7 +340,8 @@ def beta_reading(numbers: dict[str, dict[str, Any]], theta_step: float
     Table 2 and from the runs: the table's rows (per model: the statics bound on one flange,
     the paper's and ddpy's beta_1 against it, the springback each reading gives against the
     paper's) and the verdict they support. ddpy's theta comes from nodes, ``theta_step``
-    degrees apart on the blank: its bound is uncertain by half of that."""
+    degrees apart on the blank: theta is uncertain by half a step, its bound (theta / 2)
+    by a quarter."""
     rows = []
     fits_one, fits_between, ours_within, ratio_one, ratio_between = [], [], [], [], []
     for m in (m for m in MODELS if m in numbers):

@@ -39,6 +39,12 @@ module ddpy_forming_newton
   !> hold_depth element sizes. An answer the search refuses is held again on the search's
   !> patches, at most hold_limit times in an increment.
   integer, parameter :: hold_fraction = 3, hold_limit = 3
+  !> MUMPS's INFOG(1) for a numerically singular matrix.
+  integer, parameter :: mumps_numerically_singular = -10
+  !> delta of the perturbed Lagrangian that factors a Jacobian singular in its
+  !> multipliers (direction): a penalty r / delta, delta near the square root of the
+  !> unit roundoff, so that the step's error in the determined unknowns stays near delta.
+  real(wp), parameter :: multiplier_perturbation = 1.0e-8_wp
   real(wp), parameter :: hold_depth = 1.0e-4_wp
   !> A force-controlled tool with no contact stiffness along its axis is moved onto its
   !> nearest slave, touch_depth element sizes into it, at most hold_retouches times in an
@@ -658,9 +664,9 @@ contains
       real(wp), intent(in) :: forcing
       real(wp), intent(out) :: step_size
       integer, intent(out) :: status
-      real(wp), allocatable :: preconditioned(:), z(:)
+      real(wp), allocatable :: preconditioned(:), z(:), perturbed(:)
       integer(int64) :: t0, t1
-      integer :: count
+      integer :: count, p, i, k
       logical :: gmres_converged
       status = 0
       if (newton%reuse .and. factored /= 0 .and. reuse_next /= 0) then
@@ -690,6 +696,24 @@ contains
       end if
       call system_clock(t0)
       call solver_factorize(solver, nvalues, s%values, status)
+      if (status == mumps_numerically_singular .and. npair > 0) then
+        ! Two closed pairs of one node can hold it along the same direction (a node that
+        ! sticks on the die, pushed along its slip by a second tool): its motion is
+        ! determined, the split of the load between their multipliers is not, and the
+        ! Jacobian is singular. Then the factors of the perturbed Lagrangian (+delta on
+        ! the diagonal of dC/dlambda of the pairs with multipliers: a penalty r / delta
+        ! behind each law), which split such a load by least squares; a free motion of
+        ! the blank stays singular (docs/theory/contact.md, "Redundant pairs").
+        perturbed = s%values
+        do p = 1, npair
+          if (law%on(p) == 0 .or. layout%eliminated(p)) cycle
+          do i = 1, 3  ! the (i, i) entry of the pair's 3 x 3 block, the last blocks
+            k = layout%contact_values - 9*(npair - p + 1) + 4*i - 3
+            perturbed(k) = perturbed(k) + multiplier_perturbation
+          end do
+        end do
+        call solver_factorize(solver, nvalues, perturbed, status)
+      end if
       call system_clock(t1)
       if (status < 0) then
         factored = 0

@@ -5,6 +5,8 @@ angle of Table 2.
     python benchmarks/cylindrical_bending/fit_die.py --mesh paper --clearances 1.5,1.6
     python benchmarks/cylindrical_bending/fit_die.py --mesh paper --reuse   # report only
 
+(``--reuse`` also keeps a finished run found in fit/ that the runs file lacks.)
+
 The clearance is the horizontal gap between the punch's side (x = its radius) and the inner
 edge of the die's shoulder (the shoulder's centre minus its radius): make_case.CLEARANCE.
 The paper's Fig. 6, which gives the die, is not in its text, so the die is a reconstruction
@@ -80,7 +82,12 @@ def run_clearance(mesh: str, clearance: float, root: Path) -> dict[str, Any]:
     else:
         make_case.coarse_mesh(blank)
     case = make_case.write_case(folder / "cases" / mesh / MODEL, MODEL, mesh)
-    run = bench.run_case_folder(case, output=folder / "results", verbose=True)
+    return kept_numbers(bench.run_case_folder(case, output=folder / "results", verbose=True),
+                        clearance)
+
+
+def kept_numbers(run: Any, clearance: float) -> dict[str, Any]:
+    """What the runs file keeps of one run (``run.Run``) at ``clearance``."""
     numbers = bench.summary(MODEL, run)
     return {"clearance_mm": clearance, "shoulder_x_mm": shoulder_x(clearance),
             "code": numbers["code"], "status": numbers["status"],
@@ -174,16 +181,28 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--reuse", action="store_true", help="report from the kept runs only")
     args = parser.parse_args(argv)
     kept_path = DOCS / f"{STEM}_runs.json"
-    kept = json.loads(kept_path.read_text()) if kept_path.exists() else {}
-    runs = {k: v for k, v in kept.get(args.mesh, {}).items()}
-    if not args.reuse:
+
+    def keep(clearance: float, numbers: dict[str, Any]) -> dict[str, Any]:
+        # Read again right before writing: two runs of this script at once (a clearance
+        # each, one thread each) must not lose each other's entry.
+        kept = json.loads(kept_path.read_text()) if kept_path.exists() else {}
+        kept.setdefault(args.mesh, {})[f"{clearance:g}"] = numbers
+        kept_path.write_text(json.dumps(kept, indent=1) + "\n")
+        return kept[args.mesh]
+
+    if args.reuse:  # a finished run in fit/ that the runs file lacks is read back
+        for results in sorted((HERE / "fit" / args.mesh).glob("c*/results/results.h5")):
+            clearance = float(results.parents[1].name[1:])
+            kept = json.loads(kept_path.read_text()) if kept_path.exists() else {}
+            if f"{clearance:g}" not in kept.get(args.mesh, {}):
+                keep(clearance, kept_numbers(bench.from_results(results), clearance))
+    else:
         for text in (t for t in args.clearances.split(",") if t.strip()):
             clearance = float(text)
             print(f"running clearance {clearance:g} mm ...", file=sys.stderr, flush=True)
-            runs[f"{clearance:g}"] = run_clearance(args.mesh, clearance,
-                                                   HERE / "fit" / args.mesh)
-            kept[args.mesh] = runs
-            kept_path.write_text(json.dumps(kept, indent=1) + "\n")
+            keep(clearance, run_clearance(args.mesh, clearance, HERE / "fit" / args.mesh))
+    kept = json.loads(kept_path.read_text()) if kept_path.exists() else {}
+    runs = dict(kept.get(args.mesh, {}))
     if not runs:
         parser.error("no runs: give --clearances")
     out = DOCS / (STEM + ("_paper" if args.mesh == "paper" else "") + ".md")

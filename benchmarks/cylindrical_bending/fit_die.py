@@ -182,27 +182,27 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     kept_path = DOCS / f"{STEM}_runs.json"
 
-    def keep(clearance: float, numbers: dict[str, Any]) -> dict[str, Any]:
+    def load() -> dict[str, Any]:
+        return json.loads(kept_path.read_text()) if kept_path.exists() else {}
+
+    def keep(clearance: float, numbers: dict[str, Any]) -> None:
         # Read again right before writing: two runs of this script at once (a clearance
         # each, one thread each) must not lose each other's entry.
-        kept = json.loads(kept_path.read_text()) if kept_path.exists() else {}
+        kept = load()
         kept.setdefault(args.mesh, {})[f"{clearance:g}"] = numbers
         kept_path.write_text(json.dumps(kept, indent=1) + "\n")
-        return kept[args.mesh]
 
     if args.reuse:  # a finished run in fit/ that the runs file lacks is read back
         for results in sorted((HERE / "fit" / args.mesh).glob("c*/results/results.h5")):
             clearance = float(results.parents[1].name[1:])
-            kept = json.loads(kept_path.read_text()) if kept_path.exists() else {}
-            if f"{clearance:g}" not in kept.get(args.mesh, {}):
+            if f"{clearance:g}" not in load().get(args.mesh, {}):
                 keep(clearance, kept_numbers(bench.from_results(results), clearance))
     else:
         for text in (t for t in args.clearances.split(",") if t.strip()):
             clearance = float(text)
             print(f"running clearance {clearance:g} mm ...", file=sys.stderr, flush=True)
             keep(clearance, run_clearance(args.mesh, clearance, HERE / "fit" / args.mesh))
-    kept = json.loads(kept_path.read_text()) if kept_path.exists() else {}
-    runs = dict(kept.get(args.mesh, {}))
+    runs = dict(load().get(args.mesh, {}))
     if not runs:
         parser.error("no runs: give --clearances")
     out = DOCS / (STEM + ("_paper" if args.mesh == "paper" else "") + ".md")

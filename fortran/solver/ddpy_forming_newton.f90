@@ -39,13 +39,13 @@ module ddpy_forming_newton
   !> hold_depth element sizes. An answer the search refuses is held again on the search's
   !> patches, at most hold_limit times in an increment.
   integer, parameter :: hold_fraction = 3, hold_limit = 3
+  real(wp), parameter :: hold_depth = 1.0e-4_wp
   !> MUMPS's INFOG(1) for a numerically singular matrix.
   integer, parameter :: mumps_numerically_singular = -10
   !> delta of the perturbed Lagrangian that factors a Jacobian singular in its
   !> multipliers (direction): a penalty r / delta, delta near the square root of the
   !> unit roundoff, so that the step's error in the determined unknowns stays near delta.
   real(wp), parameter :: multiplier_perturbation = 1.0e-8_wp
-  real(wp), parameter :: hold_depth = 1.0e-4_wp
   !> A force-controlled tool with no contact stiffness along its axis is moved onto its
   !> nearest slave, touch_depth element sizes into it, at most hold_retouches times in an
   !> increment (forming_increment).

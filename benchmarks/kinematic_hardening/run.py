@@ -2,7 +2,13 @@
 curve: the springback of the built-in bending (coarse) and of examples/strip_draw.
 
     python benchmarks/kinematic_hardening/run.py            # four runs, minutes on one thread
+    python benchmarks/kinematic_hardening/run.py --cases bending_paper --laws mixed  # and
+    python benchmarks/kinematic_hardening/run.py --cases bending_paper --laws isotropic
     python benchmarks/kinematic_hardening/run.py --reuse    # report from the saved runs
+
+The bending paper mesh's two runs (half an hour each on one thread) go side by side, a
+process per law, with OMP_NUM_THREADS=1: their times per Newton iteration are then measured
+alike.
 
 Writes the cases (the decks of the built-in bending and of examples/strip_draw with their
 material.dat's hardening replaced) into cases/<case>/<law>/, runs each with the case runner
@@ -77,10 +83,15 @@ TABLE_STRAINS = np.concatenate(([0.0], np.geomspace(1e-3, 2.0, 99)))
 CURVE_TOLERANCE = 0.5
 CURVE_RANGE = 1.0
 
-#: The cases: the built-in bending (coarse blank, Nagata tools) and the strip drawn over a
-#: die radius, with their own elasticity and Hill'48 coefficients.
+#: The cases: the built-in bending (coarse blank, Nagata tools), the same on the paper's
+#: blank (benchmarks/cylindrical_bending's case, made by its make_case.py when missing) and
+#: the strip drawn over a die radius, with their own elasticity and Hill'48 coefficients.
+BENDING = ROOT / "benchmarks" / "cylindrical_bending"
 CASES = {"bending": ROOT / "ddpy" / "cases" / "cylindrical_bending",
+         "bending_paper": BENDING / "cases" / "paper" / "nagata",
          "strip_draw": ROOT / "examples" / "strip_draw"}
+#: The cases run when --cases is not given: the paper blank takes half an hour per run.
+QUICK_CASES = ("bending", "strip_draw")
 LAWS = ("mixed", "isotropic")
 LAW_LABELS = {"mixed": "mixed (Voce + Armstrong-Frederick)",
               "isotropic": "isotropic (table fitted to the mixed monotonic curve)"}
@@ -196,7 +207,7 @@ def read_run(case: str, results: Path) -> dict[str, Any]:
         history = r.history()
         frames = r.frames
         threads = r.threads
-        if case == "bending":
+        if case.startswith("bending"):
             angles = {"beta": list(bending.betas(bending.from_results(results)))}
         else:
             last_forming = max(f.phase for f in frames if f.phase < frames[-1].phase)
@@ -220,6 +231,8 @@ def run_one(case: str, law: str, verbose: bool = True) -> dict[str, Any]:
     from ddpy.app.runner import run_case
     from ddpy.io.decks import read_case
 
+    if not (CASES[case] / "control.dat").exists():  # the paper blank's case
+        bending.make_case.main(["--mesh", "paper"])
     folder = write_case(CASES[case], HERE / "cases" / case / law, law)
     output = HERE / "results" / case / law
     record_code(output, code_version(), False)
@@ -253,7 +266,10 @@ def verdict(mixed: float, isotropic: float) -> tuple[bool, str]:
 ANGLE_LABELS = {"beta": "flange to the vertical (beta_1 formed, beta_2 sprung)",
                 "end": "free end to the horizontal", "wall": "wall to the vertical"}
 #: The angle each case's verdict is on: the bending's beta, the strip's free end.
-MAIN_ANGLE = {"bending": "beta", "strip_draw": "end"}
+MAIN_ANGLE = {"bending": "beta", "bending_paper": "beta", "strip_draw": "end"}
+#: Mixed hardening may cost this much more time per Newton iteration than isotropic on the
+#: bending paper mesh (issue #49).
+COST_LIMIT = 1.10
 
 
 def plot_curves(table: HardeningTable, path: Path) -> Path:
@@ -355,12 +371,14 @@ def report(numbers: dict[str, dict[str, Any]], table: HardeningTable, gap: tuple
         "## Springback",
         "",
         "The built-in bending case (`ddpy run cylindrical-bending`: coarse blank, Nagata tools; "
+        "bending_paper: the same on the paper's blank of benchmarks/cylindrical_bending; "
         "beta_1 and beta_2 read as benchmarks/cylindrical_bending/run.py reads them: the free "
         "flange's angle to the vertical at full stroke and after springback) and "
         "examples/strip_draw (drawn under a holder, drawn further without it over the die's "
         f"5 mm radius, released: the free end, initially at x >= {STRIP_FLANGE_X:g} mm, and the "
         f"wall, initially at x = {STRIP_WALL_X[0]:g} to {STRIP_WALL_X[1]:g} mm, each a line "
-        "through all its nodes). Each run on one thread, one at a time.",
+        "through all its nodes). Each run on one thread (the two laws of a case side by "
+        "side on the two cores, or one at a time).",
         "",
         _row(["case", "angle", "law", "formed, deg", "after springback, deg",
               "springback, deg", "status"]),
@@ -408,7 +426,17 @@ def report(numbers: dict[str, dict[str, Any]], table: HardeningTable, gap: tuple
                                f"{n['per_iteration_s']['total']:.4f}",
                                f"{n['per_iteration_s']['assembly']:.4f}", ratio,
                                n["threads"]]))
-    lines += ["", "Not run here: the bending paper mesh (hours per run)."]
+    mixed, iso = numbers.get("bending_paper/mixed"), numbers.get("bending_paper/isotropic")
+    if mixed and iso:
+        ratio = mixed["per_iteration_s"]["total"] / iso["per_iteration_s"]["total"]
+        lines += ["", f"On the bending paper mesh mixed hardening takes {ratio:.2f} times the "
+                  "time per Newton iteration of isotropic hardening (the limit: "
+                  f"{COST_LIMIT:.2f}): **{'within' if ratio <= COST_LIMIT else 'over'}** it."
+                  + (" Both runs side by side, one thread each, with nothing else on the "
+                     "machine." if mixed["threads"] == iso["threads"] == 1 else "")]
+    else:
+        lines += ["", "Not run here: the bending paper mesh (`--cases bending_paper`, half an "
+                  "hour per run on one thread)."]
     return "\n".join(lines) + "\n"
 
 
@@ -417,19 +445,26 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--reuse", action="store_true",
                         help="report from the runs saved in results/, else kept in the runs "
                         "file (no new run)")
-    parser.add_argument("--cases", default=",".join(CASES),
-                        help="comma-separated among " + ", ".join(CASES))
+    parser.add_argument("--cases", default=",".join(QUICK_CASES),
+                        help="comma-separated among " + ", ".join(CASES)
+                        + " (default: " + ",".join(QUICK_CASES) + ")")
+    parser.add_argument("--laws", default=",".join(LAWS),
+                        help="comma-separated among " + ", ".join(LAWS) + " (two processes, "
+                        "a law each, run side by side)")
     args = parser.parse_args(argv)
     cases = [c.strip() for c in args.cases.split(",") if c.strip()]
+    laws = [law.strip() for law in args.laws.split(",") if law.strip()]
     if set(cases) - set(CASES):
         parser.error(f"--cases must be among {', '.join(CASES)}")
+    if set(laws) - set(LAWS):
+        parser.error(f"--laws must be among {', '.join(LAWS)}")
     table = fitted_table()
     gap = curve_gap(table)
     stored = kept_runs(runs_file(STEM))
     numbers: dict[str, dict[str, Any]] = {}
     made: dict[str, dict[str, Any]] = {}
     for case in cases:
-        for law in LAWS:
+        for law in laws:
             key, saved = f"{case}/{law}", HERE / "results" / case / law / "results.h5"
             if args.reuse and saved.exists():
                 numbers[key] = read_run(case, saved)

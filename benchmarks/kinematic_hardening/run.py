@@ -432,8 +432,9 @@ def report(numbers: dict[str, dict[str, Any]], table: HardeningTable, gap: tuple
         lines += ["", f"On the bending paper mesh mixed hardening takes {ratio:.2f} times the "
                   "time per Newton iteration of isotropic hardening (the limit: "
                   f"{COST_LIMIT:.2f}): **{'within' if ratio <= COST_LIMIT else 'over'}** it."
-                  + (" Both runs side by side, one thread each, with nothing else on the "
-                     "machine." if mixed["threads"] == iso["threads"] == 1 else "")]
+                  + (" Both runs on one thread each, started together, so that they "
+                     "shared the machine alike." if mixed["threads"] == iso["threads"] == 1
+                     else "")]
     else:
         lines += ["", "Not run here: the bending paper mesh (`--cases bending_paper`, half an "
                   "hour per run on one thread)."]

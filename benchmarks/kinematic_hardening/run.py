@@ -151,10 +151,18 @@ def hardening_lines(law: str, table: HardeningTable | None = None) -> list[str]:
 
 def write_case(source: Path, folder: Path, law: str) -> Path:
     """The case at ``source`` copied to ``folder`` with its material.dat's hardening line
-    replaced by ``law``'s lines (its elasticity, Hill'48 and rolling direction kept)."""
+    replaced by ``law``'s lines (its elasticity, Hill'48 and rolling direction kept), and the
+    files its mesh and tools decks name relative to ``source`` named by absolute path."""
     if folder.exists():
         shutil.rmtree(folder)
     shutil.copytree(source, folder)
+    for name in ("mesh.dat", "tools.dat"):  # a file named relative to the source case
+        path = folder / name
+        path.write_text(re.sub(
+            r"^(\s*file\s+)(\S+)",
+            lambda m: m.group(1) + (m.group(2) if Path(m.group(2)).is_absolute()
+                                    else str((source / m.group(2)).resolve())),
+            path.read_text(), flags=re.MULTILINE))
     deck = folder / "material.dat"
     lines = deck.read_text().splitlines()
     hardening = [i for i, line in enumerate(lines) if re.match(r"\s*hardening\s", line)]

@@ -83,12 +83,19 @@ def material_text() -> str:
             f"hardening  table {len(TABLE_STRAINS)}\n{rows}\n")
 
 
-def prepare(root: Path, tools: Path = BENDING / "tools") -> dict[str, Path]:
+#: The die's shoulder centre, mm from the symmetry plane: the bending benchmark's die before
+#: it was fitted to the paper's contact angles (clearance 2 mm), the die of the kept runs. A
+#: comparison of two codes on one deck needs one die, not the paper's, so it stays.
+SHOULDER_X = 29.5
+
+
+def prepare(root: Path, tools: Path = HERE / "tools") -> dict[str, Path]:
     """Write the mesh, tools, ddpy cases and the CalculiX deck under ``root``; return the
     case folder of each model and the deck ("ccx"). ``tools``: where the bending benchmark's
-    tool files are (built there by its make_case.build_tools when missing)."""
+    tool files with this deck's die (SHOULDER_X) are, built there by its
+    make_case.build_tools when missing."""
     if not all((tools / f"{t}.nagata.tool").is_file() for t in ("punch", "die")):
-        make_case.build_tools(tools)
+        make_case.build_tools(tools, shoulder_x=SHOULDER_X)
     (root / "tools").mkdir(parents=True, exist_ok=True)
     for tool in ("punch", "die"):
         shutil.copyfile(tools / f"{tool}.nagata.tool", root / "tools" / f"{tool}.nagata.tool")

@@ -450,7 +450,7 @@ use the other.
 benchmarks/cylindrical_bending (make_case.py): the quarter 60 x 15 x 1 mm blank as
 `coarse_mesh(nx={deck.NX}, ny={deck.NY}, layers={deck.LAYERS})` ({d['elements']} elements,
 {d['nodes']} nodes), the punch (radius {make_case.PUNCH_RADIUS:g} mm) and the open die
-(shoulder radius {make_case.SHOULDER_RADIUS:g} mm at x = {make_case.SHOULDER_X:g} mm), friction
+(shoulder radius {make_case.SHOULDER_RADIUS:g} mm at x = {deck.SHOULDER_X:g} mm), friction
 {friction}, {d['stroke']:g} mm of punch stroke at most {d['max_increment']:g} mm an increment,
 symmetry on x = 0 and y = 0, then springback with the centre line held along z.
 

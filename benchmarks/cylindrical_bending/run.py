@@ -957,27 +957,36 @@ def die_fit(mesh: str, numbers: dict[str, dict[str, Any]]) -> list[str]:
                  "Missed: " + "; ".join(f"{k} ({', '.join(v)})" for k, v in misses.items())
                  + ". (beta_2 is beta_1 plus the springback, so it follows them.)")
     if "beta_1" in misses and slopes:
-        # The clearance that would put the Bezier beta_1 on the paper's, from the mean slope.
+        # A flange lying straight along the tangent from the punch to the shoulder has
+        # theta_4 + beta_1 = 180 (beta between the flanges): the clearance moves the two
+        # against each other, so their sum tells what no clearance can change.
         per_mm = {k: 10.0 * float(np.mean([d[k] for _, _, d in slopes])) for k in fit.ANGLES}
-        ours = fit.angles(numbers[checked[0]])
-        gap = PAPER[checked[0]]["beta1"] - ours["beta_1"]
+        m = checked[0]
+        ours, paper = fit.angles(numbers[m]), PAPER[m]
+        gap = paper["beta1"] - ours["beta_1"]
         shift = gap / per_mm["beta_1"]
         theta_4 = ours["theta_4"] + shift * per_mm["theta_4"]
+        sum_ours, sum_paper = ours["theta_4"] + ours["beta_1"], paper["theta"][3] + paper["beta1"]
+        sum_per_mm = per_mm["theta_4"] + per_mm["beta_1"]
         lines += ["", (
             f"Why beta_1 misses: the die has one free dimension here, and it is spent on "
             f"theta. beta_1 grows by {per_mm['beta_1']:.1f} degrees per mm of clearance, "
-            f"theta_4 falls by {-per_mm['theta_4']:.1f}; bringing the {LABELS[checked[0]]} "
-            f"beta_1 onto the paper's ({gap:+.1f} degrees) would take "
+            f"theta_4 falls by {-per_mm['theta_4']:.1f}; bringing the {LABELS[m]} beta_1 "
+            f"onto the paper's ({gap:+.1f} degrees) would take "
             f"{make_case.CLEARANCE + shift:.2f} mm, where theta_4 would be {theta_4:.1f}, "
-            f"{theta_4 - PAPER[checked[0]]['theta'][3]:+.1f} degrees off the paper's "
-            f"{PAPER[checked[0]]['theta'][3]:g}. No clearance matches both: the paper's die "
-            "differs in a dimension its text does not give (Fig. 6 is missing: the "
-            "shoulder radius, the die's height against the blank, or the flange's length "
-            "beyond the shoulder), or its beta is read off a different stretch of the "
-            "flange (Fig. 11, also missing). The springback, beta_2 - beta_1, depends "
-            f"little on the die ({per_mm['springback']:+.2f} degrees per mm) and is the "
-            "comparison of the material and the element that the missing figures leave "
-            "standing.")]
+            f"{theta_4 - paper['theta'][3]:+.1f} degrees off the paper's "
+            f"{paper['theta'][3]:g}. The sum theta_4 + beta_1 says why: a flange lying "
+            "straight along the tangent from the punch to the shoulder has a sum of 180 "
+            f"degrees. ddpy's is {sum_ours:.1f}, the paper's {sum_paper:.1f}: the paper's "
+            f"flange is turned {sum_ours - sum_paper:.1f} degrees further than ddpy's off "
+            "that tangent, and the clearance moves the sum by only "
+            f"{sum_per_mm:+.1f} degrees per mm. So the paper's die differs in a dimension "
+            "its text does not give (Fig. 6 is missing: the shoulder radius or the die's "
+            "shape beyond the shoulder, which bend the flange), or its beta is read off "
+            "another stretch of the flange (Fig. 11, also missing). The springback, "
+            "beta_2 - beta_1, depends little on the die "
+            f"({per_mm['springback']:+.2f} degrees per mm) and is the comparison of the "
+            "material and the element that the missing figures leave standing.")]
     return [*lines, ""]
 
 

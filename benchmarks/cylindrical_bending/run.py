@@ -892,15 +892,22 @@ def target(mesh: str, numbers: dict[str, dict[str, Any]]) -> list[str]:
 ANGLE_TOLERANCE, SPRINGBACK_TOLERANCE = 2.0, 0.15
 
 
-def die_fit(mesh: str, numbers: dict[str, dict[str, Any]]) -> list[str]:
-    """The section on the fitted die: what was fitted and from which runs, what 0.1 mm of
-    clearance does to every angle (fit_die.py's runs on the paper blank) and, on the paper
-    blank, whether the Bezier and Nagata runs meet the paper's Table 2 and why an angle
-    misses."""
+def _listed(items: list[str]) -> str:
+    """``items`` as prose: "a", "a and b", "a, b and c"."""
+    return " and ".join([", ".join(items[:-1]), items[-1]] if len(items) > 1 else items)
+
+
+def die_fit(mesh: str, numbers: dict[str, dict[str, Any]],
+            runs: list[dict[str, Any]] | None = None) -> list[str]:
+    """The section on the fitted die: what was fitted and from which runs (``runs``, by
+    default fit_die.py's kept runs on the paper blank), what 0.1 mm of clearance does to every
+    angle and, on the paper blank, whether the Bezier and Nagata runs meet the paper's
+    Table 2 and why an angle misses."""
     fit = load_module(HERE / "fit_die.py", "cylindrical_bending_fit_die")
-    kept_path = DOCS / f"{fit.STEM}_runs.json"
-    runs = list(json.loads(kept_path.read_text()).get("paper", {}).values()) \
-        if kept_path.exists() else []
+    if runs is None:
+        kept_path = DOCS / f"{fit.STEM}_runs.json"
+        runs = list(json.loads(kept_path.read_text()).get("paper", {}).values()) \
+            if kept_path.exists() else []
     lines = [
         "### The die, fitted to theta", "",
         "Of the die's dimensions only the shoulder's distance from the symmetry plane is "
@@ -909,11 +916,10 @@ def die_fit(mesh: str, numbers: dict[str, dict[str, Any]]) -> list[str]:
         "between the punch's side and the shoulder's inner edge is "
         f"**{make_case.CLEARANCE:g} mm**, the shoulder's centre at {make_case.SHOULDER_X:g} "
         "mm. It is fitted to theta: `fit_die.py --mesh paper` ran the Bezier model on the "
-        "paper blank at "
-        + ", ".join(f"{r['clearance_mm']:g}" for r in sorted(
-            runs, key=lambda r: r["clearance_mm"]))
-        + " mm and took the clearance whose theta_1..4, interpolated, are nearest the "
-        "paper's Bezier column in least squares (its report: "
+        "paper blank at " + _listed([f"{r['clearance_mm']:g}" for r in sorted(
+            runs, key=lambda r: r["clearance_mm"])]) + " mm and took the clearance whose "
+        "theta_1..4, interpolated, are nearest the paper's Bezier column in least squares "
+        "(its report: "
         "[cylindrical_bending_die_fit_paper.md](cylindrical_bending_die_fit_paper.md)). "
         "beta and the springback are not fitted.", ""]
     slopes = fit.sensitivity(runs)

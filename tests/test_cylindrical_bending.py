@@ -446,3 +446,24 @@ def test_runs_at_dd3imps_discretization_are_compared_only_on_the_same_die() -> N
     other = dict(same, clearance_mm=make_case.CLEARANCE + 0.28)
     text = "\n".join(bench.against_dd3imp({"nagata": run}, other))
     assert "Not compared here" in text and "| theta_4 [deg] |" not in text
+
+
+def test_the_same_angles_claim_is_judged_within_the_resolution_of_theta() -> None:
+    """theta comes from nodes: on the coarse blank it moves in steps of 4.7 degrees, so a
+    Nagata theta one node column ahead of Bezier's is the same angle; two columns, or a beta
+    1.5 degrees apart, are not."""
+    bench = _module("run")
+    step = bench.theta_resolution("coarse")
+    assert step == pytest.approx(2 * np.degrees(1.0 / 24.5))
+    assert bench.theta_resolution("paper") == pytest.approx(
+        2 * np.degrees(np.sqrt(60 * 15 * 3 / 19950) / 24.5))
+
+    def verdict(theta_shift: float, beta_shift: float) -> bool:
+        runs = {"bezier": _paper_run("bezier"),
+                "nagata": _paper_run("bezier", theta_shift, beta_shift)}
+        return {text[:6]: holds for text, holds, _ in bench.claims(runs, step)}["Nagata"]
+
+    assert verdict(0.5, 0.5) and verdict(step, 0.0)
+    assert not verdict(2 * step, 0.0) and not verdict(0.0, 1.5)
+    runs = {"bezier": _paper_run("bezier"), "nagata": _paper_run("bezier", 1.5)}
+    assert not {t[:6]: h for t, h, _ in bench.claims(runs)}["Nagata"]  # no step: 1 degree

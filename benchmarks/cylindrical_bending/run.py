@@ -120,6 +120,8 @@ class Run:
     date: str = ""
     #: the deck's rmin_release_redos (None: no cap; runs recorded before the cap had none)
     release_redos: int | None = None
+    #: the dates the run was continued on from its checkpoint (a run made at once: none)
+    continued: list[str] = field(default_factory=list)
     kept: dict[str, Any] = field(default_factory=dict)
 
 

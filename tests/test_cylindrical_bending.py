@@ -467,3 +467,18 @@ def test_the_same_angles_claim_is_judged_within_the_resolution_of_theta() -> Non
     assert not verdict(2 * step, 0.0) and not verdict(0.0, 1.5)
     runs = {"bezier": _paper_run("bezier"), "nagata": _paper_run("bezier", 1.5)}
     assert not {t[:6]: h for t, h, _ in bench.claims(runs)}["Nagata"]  # no step: 1 degree
+
+
+def test_a_run_continued_from_its_checkpoint_is_read_back(root: Path,
+                                                           result: dict[str, Any]) -> None:
+    """The report reads a run whose code file records the dates it was continued on (as
+    ``run.py --restart`` writes it) and gives the same numbers as the run's own."""
+    bench = _module("run")
+    sys.path.insert(0, str(BENCH.parent))
+    from bench_common import record_code
+
+    results = root / "results"
+    record_code(results, "abc1234", restart=True)
+    back = bench.from_results(results / "results.h5")
+    assert back.continued and back.code == bench.recorded_code(results)["code"]
+    assert bench.summary(MODEL, back)["theta_deg"] == result["theta_deg"]

@@ -56,8 +56,8 @@ STROKES = np.linspace(0.5, 28.5, 113)  # where the force curve is compared
 #: case's deck (the benchmark's Nagata tools and process, Hill'48 steel) on a blank of
 #: 240 x 6 x 2 solid-shells (0.25 mm along the strip, 2.5 mm across), Gauss-point contact;
 #: its punch force on the 1 mm moving mean at 3, 5, 10 and 20 mm and its flange angles. The
-#: same script on 240 x 3 x 2 and the built-in 60 x 3 x 2 blanks says how far from converged
-#: those are (kept in the same file, read by the last test below).
+#: same script on a 240 x 3 x 2 blank says how far from converged that is (kept in the same
+#: file, read by test_the_converged_answer_is_of_todays_die_and_converged).
 CONVERGED_RUNS = json.loads((Path(__file__).resolve().parents[1] / "docs" / "benchmarks"
                              / "cylindrical_bending_converged.json").read_text())
 CONVERGED = CONVERGED_RUNS["240x6x2"]
@@ -474,7 +474,6 @@ def test_a_run_continued_from_its_checkpoint_is_read_back(root: Path,
     """The report reads a run whose code file records the dates it was continued on (as
     ``run.py --restart`` writes it) and gives the same numbers as the run's own."""
     bench = _module("run")
-    sys.path.insert(0, str(BENCH.parent))
     from bench_common import record_code
 
     results = root / "results"

@@ -58,9 +58,9 @@ def angles(numbers: dict[str, Any]) -> dict[str, float]:
     return out
 
 
-def paper_angles() -> dict[str, float]:
-    """The paper's Bezier column of Table 2."""
-    paper = bench.PAPER[MODEL]
+def paper_angles(model: str = MODEL) -> dict[str, float]:
+    """The paper's column of Table 2 for ``model`` (Bezier by default)."""
+    paper = bench.PAPER[model]
     out = {f"theta_{i + 1}": float(t) for i, t in enumerate(paper["theta"])}
     out["beta_1"], out["beta_2"] = float(paper["beta1"]), float(paper["beta2"])
     out["springback"] = out["beta_2"] - out["beta_1"]

@@ -963,9 +963,7 @@ def die_fit(mesh: str, numbers: dict[str, dict[str, Any]],
     misses: dict[str, list[str]] = {}
     for m in checked:
         ours = fit.angles(numbers[m])
-        paper = {f"theta_{i + 1}": t for i, t in enumerate(PAPER[m]["theta"])}
-        paper.update(beta_1=PAPER[m]["beta1"], beta_2=PAPER[m]["beta2"],
-                     springback=PAPER[m]["beta2"] - PAPER[m]["beta1"])
+        paper = fit.paper_angles(m)
         cells = []
         for k in fit.ANGLES:
             if k == "beta_2":

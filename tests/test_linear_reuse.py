@@ -25,11 +25,15 @@ RigidTool = partial(_RigidTool, contact="node")
 Solid = partial(_Solid, element="hexahedron")
 
 
+def _dense_rows(n: int) -> tuple[np.ndarray, np.ndarray]:
+    return tuple(index.astype(np.int32) for index in np.nonzero(np.ones((n, n))))
+
+
 def test_gmres_on_older_factors_solves_and_reports_failure() -> None:
     # J: an unsymmetric 30 x 30 matrix in coordinates with repeated entries (summed); M: the
-    # LU of a perturbed J, the "older factors". GMRES on W M^-1 J W^-1 (W the weights)
-    # solves W x = W J^-1 b to its tolerance in a few iterations; capped at 2 iterations it
-    # says it did not converge; a zero right-hand side gives zero at once.
+    # LU of a perturbed J, the "older factors". GMRES from x0 = M^-1 f on J M^-1 solves
+    # J x = f to its tolerance in a few iterations; capped at 2 iterations it says it did
+    # not converge; a zero right-hand side gives zero at once.
     rng = np.random.default_rng(3)
     n = 30
     dense = np.eye(n) * 4.0 + rng.normal(0.0, 0.3, (n, n))
@@ -41,84 +45,132 @@ def test_gmres_on_older_factors_solves_and_reports_failure() -> None:
     values[:40] *= 0.5
     weight = rng.uniform(0.5, 2.0, n)
     older = dense + rng.normal(0.0, 0.05, (n, n))
-    b = rng.normal(size=n)
+    f = rng.normal(size=n)
     with MumpsSolver("unsymmetric") as solver:
-        solver.analyse(n, *np.nonzero(np.ones((n, n))))
-        solver.factorize(older[np.nonzero(np.ones((n, n)))])
-        rhs = weight * solver.solve(b)  # the preconditioned, weighted right-hand side
+        solver.analyse(n, *_dense_rows(n))
+        solver.factorize(older[_dense_rows(n)])
+        x0 = solver.solve(f)  # the simplified correction
         structure = row_structure(n, rows, cols)
-        z, k, converged, status = _core.krylov_solve(values, *structure, weight,
-                                                     solver.handle, rhs, 1e-12, n)
+        x, k, converged, status = _core.krylov_solve(values, *structure, weight,
+                                                     solver.handle, f, x0, 1e-12, n)
         assert status == 0 and converged == 1 and k < 15, (k, converged)
-        np.testing.assert_allclose(z / weight, np.linalg.solve(dense, b), rtol=1e-9)
+        np.testing.assert_allclose(x, np.linalg.solve(dense, f), rtol=1e-9)
         _, k, converged, status = _core.krylov_solve(values, *structure, weight,
-                                                     solver.handle, rhs, 1e-12, 2)
+                                                     solver.handle, f, x0, 1e-12, 2)
         assert status == 0 and converged == 0 and k == 2
-        z, k, converged, status = _core.krylov_solve(values, *structure, weight,
-                                                     solver.handle, np.zeros(n), 1e-8, 10)
-        assert converged == 1 and k == 0 and not z.any()
+        x, k, converged, status = _core.krylov_solve(values, *structure, weight,
+                                                     solver.handle, np.zeros(n), np.zeros(n),
+                                                     1e-8, 10)
+        assert converged == 1 and k == 0 and not x.any()
         bad = structure.col.copy()
         bad[0] = n
         assert _core.krylov_solve(values, *structure._replace(col=bad), weight, solver.handle,
-                                  rhs, 1e-8, 10)[3] == 1
+                                  f, x0, 1e-8, 10)[3] == 1
         # The lower triangle of a symmetric matrix stands for the whole of it.
         symmetric = dense + dense.T
         lower_rows, lower_cols = np.tril_indices(n)
-        full = row_structure(n, *np.nonzero(np.ones((n, n))))
+        full = row_structure(n, *_dense_rows(n))
         lower = row_structure(n, lower_rows, lower_cols, symmetric=True)
-        z_full = _core.krylov_solve(symmetric.ravel(), *full, weight, solver.handle, rhs,
+        x_full = _core.krylov_solve(symmetric.ravel(), *full, weight, solver.handle, f, x0,
                                     1e-12, n)[0]
-        z_lower = _core.krylov_solve(symmetric[lower_rows, lower_cols], *lower, weight,
-                                     solver.handle, rhs, 1e-12, n)[0]
-        np.testing.assert_allclose(z_lower, z_full, rtol=1e-12)
-        np.testing.assert_allclose(z_full / weight, np.linalg.solve(symmetric, b), rtol=1e-9)
+        x_lower = _core.krylov_solve(symmetric[lower_rows, lower_cols], *lower, weight,
+                                     solver.handle, f, x0, 1e-12, n)[0]
+        np.testing.assert_allclose(x_lower, x_full, rtol=1e-12)
+        np.testing.assert_allclose(x_full, np.linalg.solve(symmetric, f), rtol=1e-9)
 
+
+def _stiff_and_soft(n: int = 40) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """J = M + E with M diagonal, its first ten entries 1e4 times the rest (stiff
+    directions, like a contact penalty's, and soft ones, like a thin sheet's bending), and
+    a random E that couples them; W = 1. Returns J, M and a right-hand side that loads the
+    stiff directions."""
+    rng = np.random.default_rng(11)
+    stiffness = np.where(np.arange(n) < 10, 1.0e4, 1.0)
+    older = np.diag(stiffness)
+    dense = older + 0.2 * rng.normal(size=(n, n)) * np.sqrt(np.outer(stiffness, stiffness))
+    f = rng.normal(size=n) * stiffness
+    return dense, older, f
+
+
+@pytest.mark.parametrize("tol", [1e-1, 1e-2, 1e-3])
+def test_gmres_stops_when_both_the_force_and_the_correction_are_met(tol: float) -> None:
+    # The iterate GMRES returns meets both measures of the Newton loop: the force residual
+    # ||J x - f|| <= tol ||f|| and the correction's error as the factors see it,
+    # ||W M^-1 (J x - f)|| <= tol ||W x0|| (checked here with M and J themselves). On an
+    # operator with stiff and soft directions either measure alone stops at an iterate
+    # that misses the other: the test would fail if either check were dropped.
+    dense, older, f = _stiff_and_soft()
+    n = f.size
+    rows, cols = _dense_rows(n)
+    weight = np.ones(n)
+    with MumpsSolver("unsymmetric") as solver:
+        solver.analyse(n, rows, cols)
+        solver.factorize(older[rows, cols])
+        x0 = solver.solve(f)
+        x, k, converged, status = _core.krylov_solve(
+            dense[rows, cols], *row_structure(n, rows, cols), weight, solver.handle, f, x0,
+            tol, n)
+    assert status == 0 and converged == 1 and 0 < k < n
+    residual = dense @ x - f
+    assert np.linalg.norm(residual) <= tol * np.linalg.norm(f) * (1 + 1e-9)
+    assert (np.linalg.norm(np.linalg.solve(older, residual))
+            <= tol * np.linalg.norm(x0) * (1 + 1e-9))
+    # Each measure alone would have stopped earlier: the step before misses one of them.
+    with MumpsSolver("unsymmetric") as solver:
+        solver.analyse(n, rows, cols)
+        solver.factorize(older[rows, cols])
+        earlier, *_ = _core.krylov_solve(
+            dense[rows, cols], *row_structure(n, rows, cols), weight, solver.handle, f, x0,
+            0.0, k - 1)
+    residual = dense @ earlier - f
+    assert (np.linalg.norm(residual) > tol * np.linalg.norm(f)
+            or np.linalg.norm(np.linalg.solve(older, residual)) > tol * np.linalg.norm(x0))
 
 
 def test_gmres_stops_where_the_krylov_space_stops_growing() -> None:
-    # Older factors M of J(I + U V^T), U and V of rank 2: the operator W M^-1 J W^-1 is the
-    # identity plus a rank-2 term, so the Krylov space of any right-hand side is invariant
-    # from its third vector on (a breakdown). GMRES stops there with the solution, exact to
-    # rounding, even asked for 0 (which rounding cannot meet: not converged) and allowed
-    # all n iterations; a tolerance above rounding is met at the same iteration.
+    # Older factors M of J = M (I + U V^T), U and V of rank 2, so that J M^-1 =
+    # I + (M U)(V^T M^-1), the identity plus a rank-2 term. From x0 = M^-1 f the
+    # residual f - J x0 = -(M U) V^T x0 lies in that term's range, so the Krylov space is
+    # invariant from its second vector on (a breakdown). GMRES stops there with the solution,
+    # exact to rounding, even asked for 0 (which rounding cannot meet: not converged) and
+    # allowed all n iterations; a tolerance above rounding is met at the same iteration.
     rng = np.random.default_rng(5)
     n = 30
     older = np.eye(n) * 4.0 + rng.normal(0.0, 0.3, (n, n))
     u, v = rng.normal(size=(n, 2)), rng.normal(size=(n, 2))
     dense = older @ (np.eye(n) + u @ v.T)
-    rows, cols = (index.astype(np.int32) for index in np.nonzero(np.ones((n, n))))
+    rows, cols = _dense_rows(n)
     weight = rng.uniform(0.5, 2.0, n)
-    b = rng.normal(size=n)
+    f = rng.normal(size=n)
     with MumpsSolver("unsymmetric") as solver:
         solver.analyse(n, rows, cols)
         solver.factorize(older[rows, cols])
-        rhs = weight * solver.solve(b)
+        x0 = solver.solve(f)
         for tol, done in ((0.0, 0), (1e-12, 1)):
-            z, k, converged, status = _core.krylov_solve(
-                dense[rows, cols], *row_structure(n, rows, cols), weight, solver.handle, rhs,
-                tol, n)
-            assert status == 0 and k == 3 and converged == done, (tol, k, converged)
-            np.testing.assert_allclose(z / weight, np.linalg.solve(dense, b), rtol=1e-10)
+            x, k, converged, status = _core.krylov_solve(
+                dense[rows, cols], *row_structure(n, rows, cols), weight, solver.handle, f,
+                x0, tol, n)
+            assert status == 0 and k == 2 and converged == done, (tol, k, converged)
+            np.testing.assert_allclose(x, np.linalg.solve(dense, f), rtol=1e-10)
 
 
 def test_gmres_on_an_operator_singular_on_its_krylov_space_does_not_converge() -> None:
-    # J with a zero first column and M = I: the right-hand side e_1 is in the operator's
-    # null space, the Krylov space stops at its first vector and the least-squares problem
-    # there is singular. GMRES stops at once, with nothing, and says it did not converge
-    # (the residual of its rotations is 0 there: the singular pivot is what tells).
+    # J with a zero first column and M = I: from x0 = M^-1 e_1 = e_1 the residual is e_1,
+    # in the operator's null space; the Krylov space stops at its first vector and the
+    # least-squares problem there is singular. GMRES stops at once and says it did not
+    # converge (the residual of its rotations is 0 there: the singular pivot is what tells).
     n = 6
-    rows, cols = (index.astype(np.int32) for index in np.nonzero(np.ones((n, n))))
+    rows, cols = _dense_rows(n)
     singular = np.eye(n)
     singular[:, 0] = 0.0
     e1 = np.eye(n)[0]
     with MumpsSolver("unsymmetric") as solver:
         solver.analyse(n, rows, cols)
         solver.factorize(np.eye(n)[rows, cols])
-        z, k, converged, status = _core.krylov_solve(
+        _, k, converged, status = _core.krylov_solve(
             singular[rows, cols], *row_structure(n, rows, cols), np.ones(n), solver.handle,
-            e1, 1e-8, n)
+            e1, e1, 1e-8, n)
     assert status == 0 and k == 1 and converged == 0
-    assert not z.any()
 
 
 def slide(linear_solver: str) -> tuple[FormingProblem, object]:

@@ -3,8 +3,10 @@ docs/mpi.md).
 
 The structure is analysed once (``analyse``), then factorized (``factorize``) and solved
 (``solve``) as often as the values change, as the Newton loop of a forming run does.
-``gmres`` and ``CoordinateMatrix`` let a Newton loop solve with an older factorization as
-the preconditioner instead of factorizing again (docs/theory/linear-solver.md).
+``row_structure`` gives the core's GMRES (``_core.krylov_solve``, the one its Newton loop
+runs) the rows of a coordinate matrix, so that a correction is solved with an older
+factorization as the preconditioner instead of factorizing again
+(docs/theory/linear-solver.md).
 """
 
 from __future__ import annotations

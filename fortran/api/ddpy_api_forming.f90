@@ -802,29 +802,30 @@ contains
                             min_step)
   end subroutine api_penetration_step
 
-  !> GMRES of the Newton loop on W M^-1 J W^-1 (J the coordinate values summed into the rows
-  !> row_start, col, sources, source_start, 0-based: ddpy.core.linalg.row_structure; M the
-  !> factors held by the MUMPS instance handle): see gmres. converged is 1 or 0; status < 0
-  !> a MUMPS solve failed, 1 an index out of range.
+  !> The Newton loop's GMRES: the correction x of J x = f from x0 = M^-1 f (J the
+  !> coordinate values summed into the rows row_start, col, sources, source_start, 0-based:
+  !> ddpy.core.linalg.row_structure; M the factors held by the MUMPS instance handle; W the
+  !> weights): see gmres. converged is 1 or 0; status < 0 a MUMPS solve failed, 1 an index
+  !> out of range.
   subroutine api_krylov_solve(n, nvalues, values, ncsr, row_start, col, nsrc, sources, &
-                              source_start, weight, handle, b, tol, m, z, k, converged, &
+                              source_start, weight, handle, f, x0, tol, m, x, k, converged, &
                               status) bind(C, name="ddpy_krylov_solve")
     integer(c_int), value, intent(in) :: n, nvalues, ncsr, nsrc, handle, m
     real(c_double), value, intent(in) :: tol
     integer(c_int), intent(in) :: row_start(n + 1), col(ncsr), sources(nsrc), &
                                   source_start(ncsr + 1)
-    real(c_double), intent(in) :: values(nvalues), weight(n), b(n)
-    real(c_double), intent(out) :: z(n)
+    real(c_double), intent(in) :: values(nvalues), weight(n), f(n), x0(n)
+    real(c_double), intent(out) :: x(n)
     integer(c_int), intent(out) :: k, converged, status
     logical :: done
-    z = 0.0_wp
+    x = 0.0_wp
     k = 0
     converged = 0
     status = 1
     if (.not. rows_fit(n, ncsr, nsrc, nvalues, row_start, col, sources, source_start) .or. &
         m < 1 .or. any(weight <= 0.0_wp)) return
     call gmres(n, nvalues, values, row_start, ncsr, col, sources, source_start, weight, &
-               handle, b, tol, m, z, k, done, status)
+               handle, f, x0, tol, m, x, k, done, status)
     converged = merge(1, 0, done)
   end subroutine api_krylov_solve
 

@@ -673,24 +673,22 @@ contains
         allocate(preconditioned(n), z(n))
         call system_clock(t0)
         if (have_hint) then
-          preconditioned = weight*s%simplified
+          preconditioned = s%simplified
         else
           call mumps_solve(-s%residual, preconditioned, status)
           if (status < 0) return
-          preconditioned = weight*preconditioned
         end if
         call gmres(n, nvalues, s%values, rows%row_start, size(rows%col), rows%col, rows%sources, &
-                   rows%source_start, &
-                   weight, solver, preconditioned, forcing, newton%krylov_max, z, count, &
-                   gmres_converged, status)
+                   rows%source_start, weight, solver, -s%residual, preconditioned, forcing, &
+                   newton%krylov_max, z, count, gmres_converged, status)
         call system_clock(t1)
         report%solve_time = report%solve_time + real(t1 - t0, wp)/real(clock_rate, wp)
         if (status < 0) return
         report%krylov_iterations = report%krylov_iterations + count
         reuse_next = merge(1, 0, count <= newton%krylov_keep)
         if (gmres_converged) then
-          delta = z/weight
-          step_size = sqrt(dot_product(preconditioned, preconditioned))
+          delta = z
+          step_size = weighted_norm(preconditioned)
           return
         end if
       end if
@@ -964,50 +962,88 @@ contains
     step = max(step, min_step)
   end function barrier_step
 
-  !> GMRES from 0, without restart, on the operator v -> W M^-1 J W^-1 v (J: the
-  !> coordinate values summed into the rows of the structure row_start, col, sources,
-  !> source_start (0-based, see ddpy.core.linalg.row_structure), once, in parallel; each
-  !> product runs over the rows in parallel; M the factors MUMPS holds
-  !> behind handle; W the weights): the iterate z, the iterations and whether
-  !> ||op(z) - b|| <= tol ||b||; status < 0: a MUMPS solve failed. Arnoldi with modified Gram-Schmidt run twice
-  !> (the basis stays orthogonal to rounding when the operator is far from normal) and
-  !> Givens rotations for the residual norm.
+  !> The Newton correction x of J x = f with older factors M (MUMPS's, behind handle):
+  !> GMRES from x0 = M^-1 f on J M^-1 (right preconditioning, the preconditioned basis kept
+  !> as flexible GMRES keeps it, so the iterate needs no solve of its own), without restart,
+  !> at most m steps. J: the coordinate values summed into the rows of the structure
+  !> row_start, col, sources, source_start (0-based, see ddpy.core.linalg.row_structure),
+  !> once, in parallel; each product runs over the rows in parallel.
+  !>
+  !> It stops at the first iterate that meets both of
+  !>   ||J x - f|| <= tol ||f||              the residual the Newton loop measures, and
+  !>   ||W M^-1 (J x - f)|| <= tol ||W x0||  the correction's error as the factors see it
+  !> (W the weights). GMRES minimizes the first; the second is known one solve late (M^-1
+  !> of the residual's newest basis vector is the next step's solve), and is waived at the
+  !> m-th step. Either alone costs Newton iterations (docs/theory/linear-solver.md,
+  !> "GMRES"): the second alone (left preconditioning) leaves force in the stiff contact
+  !> directions, which M^-1 shrinks; the first alone leaves the sheet's soft bending modes
+  !> far off, which small forces move. Returns the iterate x (the last one, when it did not
+  !> converge), its steps k, whether it converged (the force residual met, at least) and
+  !> status < 0 when a MUMPS solve failed.
+  !> Arnoldi with modified Gram-Schmidt run twice (the basis stays orthogonal to rounding
+  !> when the operator is far from normal) and Givens rotations for the residual norm.
   subroutine gmres(n, nvalues, values, row_start, ncsr, col, sources, source_start, weight, &
-                   handle, b, tol, m, z, k, converged, status)
+                   handle, f, x0, tol, m, x, k, converged, status)
     integer, intent(in) :: n, nvalues, ncsr, row_start(n + 1), col(ncsr), sources(*), &
                            source_start(ncsr + 1), handle, m
-    real(wp), intent(in) :: values(nvalues), weight(n), b(n), tol
-    real(wp), intent(out) :: z(n)
+    real(wp), intent(in) :: values(nvalues), weight(n), f(n), x0(n), tol
+    real(wp), intent(out) :: x(n)
     integer, intent(out) :: k, status
     logical, intent(out) :: converged
-    real(wp), allocatable :: basis(:, :), w(:), jv(:), entry(:)
-    real(wp) :: hessenberg(m + 1, m), cosines(m), sines(m), res(m + 1), h(m + 1), beta, &
-                a, c, radius, y(m)
-    integer :: i, j, pass, last
-    logical :: breakdown
+    real(wp), allocatable :: basis(:, :), preconditioned(:, :), w(:), entry(:)
+    ! hessenberg: rotated to the triangle; arnoldi: as Arnoldi left it
+    real(wp) :: hessenberg(m + 1, m), arnoldi(m + 1, m), cosines(m), sines(m), res(m + 1), &
+                h(m + 1), y(m), beta, a, c, radius, force_target, correction_target
+    integer :: i, j, pass, accepted, steps
+    logical :: breakdown, force_met(0:m)
     status = 0
-    z = 0.0_wp
+    x = x0
     k = 0
     converged = .true.
-    beta = sqrt(dot_product(b, b))
-    if (beta == 0.0_wp) return
-    allocate(basis(n, m + 1), w(n), jv(n), entry(ncsr))
+    if (.not. any(f /= 0.0_wp)) return
+    allocate(basis(n, m + 1), preconditioned(n, m + 1), w(n), entry(ncsr))
     call sum_duplicates(nvalues, ncsr, values, sources, source_start, entry)
-    basis(:, 1) = b/beta
+    force_target = tol*sqrt(dot_product(f, f))
+    correction_target = tol*sqrt(sum((weight*x0)**2))
+    call row_product(n, ncsr, row_start, col, entry, x0, w)
+    w = f - w
+    beta = sqrt(dot_product(w, w))
     hessenberg = 0.0_wp
+    arnoldi = 0.0_wp
     cosines = 0.0_wp
     sines = 0.0_wp
     res = 0.0_wp
     res(1) = beta
-    last = 0
-    do j = 1, m
-      last = j
-      ! w = W M^-1 J W^-1 basis_j
-      w = basis(:, j)/weight
-      call row_product(n, ncsr, row_start, col, entry, w, jv)
-      call solver_solve(handle, n, jv, w, status)
+    force_met = .false.
+    force_met(0) = beta <= force_target
+    accepted = -1
+    steps = 0
+    if (beta > 0.0_wp) basis(:, 1) = w/beta
+    j = 0
+    do while (j <= m .and. beta > 0.0_wp)
+      j = j + 1
+      if (j > m .and. .not. force_met(m)) exit
+      call solver_solve(handle, n, basis(:, j), preconditioned(:, j), status)
       if (status < 0) return
-      w = weight*w
+      if (force_met(j - 1)) then  ! the last iterate's correction error, M^-1 of its residual
+        if (.not. solved(j - 1)) exit
+        h(1:j) = 0.0_wp
+        h(1) = beta
+        do i = 1, j - 1
+          h(1:j) = h(1:j) - y(i)*arnoldi(1:j, i)
+        end do
+        w = matmul(preconditioned(:, 1:j), h(1:j))
+        if (sqrt(sum((weight*w)**2)) <= correction_target) then
+          accepted = j - 1
+          exit
+        end if
+      end if
+      if (j > m) then  ! the m-th step meets the force residual: taken
+        accepted = m
+        exit
+      end if
+      ! w = J M^-1 basis_j
+      call row_product(n, ncsr, row_start, col, entry, preconditioned(:, j), w)
       do pass = 1, 2
         do i = 1, j
           h(i) = dot_product(basis(:, i), w)
@@ -1018,6 +1054,7 @@ contains
         hessenberg(1:j, j) = hessenberg(1:j, j) + h(1:j)
       end do
       hessenberg(j + 1, j) = sqrt(dot_product(w, w))
+      arnoldi(1:j + 1, j) = hessenberg(1:j + 1, j)
       breakdown = .not. hessenberg(j + 1, j) > 1.0e-14_wp*maxval(abs(hessenberg(1:j, j)))
       if (.not. breakdown) basis(:, j + 1) = w/hessenberg(j + 1, j)
       do i = 1, j - 1  ! the earlier rotations on the new column
@@ -1040,22 +1077,34 @@ contains
       hessenberg(j + 1, j) = 0.0_wp
       res(j + 1) = -sines(j)*res(j)
       res(j) = cosines(j)*res(j)
-      if (abs(res(j + 1)) <= tol*beta .or. breakdown .or. radius == 0.0_wp) exit
-    end do
-    k = last
-    converged = abs(res(k + 1)) <= tol*beta
-    do i = 1, k
-      if (hessenberg(i, i) == 0.0_wp) then  ! singular on the Krylov space
-        converged = .false.
-        return
+      force_met(j) = abs(res(j + 1)) <= force_target
+      steps = j
+      if (breakdown .or. radius == 0.0_wp) then  ! the Krylov space stops growing
+        if (force_met(j)) accepted = j
+        exit
       end if
     end do
-    do i = k, 1, -1  ! back substitution on the triangular factor
-      y(i) = (res(i) - dot_product(hessenberg(i, i + 1:k), y(i + 1:k)))/hessenberg(i, i)
-    end do
-    do i = 1, k
-      z = z + y(i)*basis(:, i)
-    end do
+    if (beta == 0.0_wp) accepted = 0
+    converged = accepted >= 0
+    k = merge(accepted, steps, converged)  ! else the last iterate, for what it is worth
+    if (k == 0) return
+    if (.not. solved(k)) then
+      converged = .false.
+      return
+    end if
+    x = x0 + matmul(preconditioned(:, 1:k), y(1:k))
+  contains
+    !> y(1:kk), the least-squares coefficients of the kk-step iterate (back substitution on
+    !> the rotated triangle); false where it is singular on the Krylov space.
+    logical function solved(kk)
+      integer, intent(in) :: kk
+      integer :: ii
+      solved = all([(hessenberg(ii, ii) /= 0.0_wp, ii = 1, kk)])
+      if (.not. solved) return
+      do ii = kk, 1, -1
+        y(ii) = (res(ii) - dot_product(hessenberg(ii, ii + 1:kk), y(ii + 1:kk)))/hessenberg(ii, ii)
+      end do
+    end function solved
   end subroutine gmres
 
   !> y = A x for the matrix of rows row_start, columns col (0-based) and entries entry.

@@ -664,13 +664,13 @@ contains
       real(wp), intent(in) :: forcing
       real(wp), intent(out) :: step_size
       integer, intent(out) :: status
-      real(wp), allocatable :: preconditioned(:), z(:), perturbed(:)
+      real(wp), allocatable :: preconditioned(:), perturbed(:)
       integer(int64) :: t0, t1
       integer :: count, p, i, k
       logical :: gmres_converged
       status = 0
       if (newton%reuse .and. factored /= 0 .and. reuse_next /= 0) then
-        allocate(preconditioned(n), z(n))
+        allocate(preconditioned(n))
         call system_clock(t0)
         if (have_hint) then
           preconditioned = s%simplified
@@ -680,14 +680,13 @@ contains
         end if
         call gmres(n, nvalues, s%values, rows%row_start, size(rows%col), rows%col, rows%sources, &
                    rows%source_start, weight, solver, -s%residual, preconditioned, forcing, &
-                   newton%krylov_max, z, count, gmres_converged, status)
+                   newton%krylov_max, delta, count, gmres_converged, status)
         call system_clock(t1)
         report%solve_time = report%solve_time + real(t1 - t0, wp)/real(clock_rate, wp)
         if (status < 0) return
         report%krylov_iterations = report%krylov_iterations + count
         reuse_next = merge(1, 0, count <= newton%krylov_keep)
         if (gmres_converged) then
-          delta = z
           step_size = weighted_norm(preconditioned)
           return
         end if
@@ -975,7 +974,7 @@ contains
   !> (W the weights). GMRES minimizes the first; the second is known one solve late (M^-1
   !> of the residual's newest basis vector is the next step's solve), and is waived at the
   !> m-th step. Either alone costs Newton iterations (docs/theory/linear-solver.md,
-  !> "GMRES"): the second alone (left preconditioning) leaves force in the stiff contact
+  !> "GMRES: two measures of one correction"): the second alone (left preconditioning) leaves force in the stiff contact
   !> directions, which M^-1 shrinks; the first alone leaves the sheet's soft bending modes
   !> far off, which small forces move. Returns the iterate x (the last one, when it did not
   !> converge), its steps k, whether it converged (the force residual met, at least) and

@@ -205,7 +205,7 @@ contains
                 cq(3, 3, 20), kg(8, 8), ga(8, 2), gb8(8, 2), mmat(6, 6), a_hat(6), s6(6), &
                 t_mat(6), tg(6), rp(6, 6), rdg(6, 4), bg(24, 4), a4(4), u(3, 3), u_inv(3, 3), &
                 s3(3, 3), scale, change, yield_floor, zero24(24), s_start, &
-                s_end, step, lo, hi, s_lo, s_hi, x_mat(6, 8), xg(6), x6(6)
+                s_end, step, lo, hi, s_lo, s_hi, x_mat(6, 8), stretches(3, 3, 8)
     integer :: p, q, a, c, i, j, m, col, level, iteration, mstatus, off, search
     logical :: ok, converged, elastic, kinematic
     ! The shape functions' natural derivatives dN_a/dxi_j (8, 3) at the fixed points of the
@@ -454,6 +454,7 @@ contains
       end do
       f = f + w0(p)*by_dofs(bt(:, :, p), s6)
       call stretch(fgs(:, :, p), u, u_inv)
+      stretches(:, :, p) = u  ! for the backstress: one call of stretch stays inline
       axes(:, :, p) = product3(product3(fgs(:, :, p), u_inv), axes_old(:, :, p))
       u = product3(u, product3(stress_tensor(s6), u))
       s3 = product3(u, axes_old(:, :, p))
@@ -465,21 +466,10 @@ contains
       stress(:, p) = [u(1, 1), u(2, 2), u(3, 3), 0.5_wp*(u(1, 2) + u(2, 1)), &
                       0.5_wp*(u(2, 3) + u(3, 2)), 0.5_wp*(u(3, 1) + u(1, 3))]
     end do
-    ! The backstress by the stress's own map (ddpy_hex8's pushed_stress), in a loop of its
-    ! own: inside the one above, its branch made the compiler keep the small helpers of the
-    ! isotropic path out of line (3 % more instructions per element with C_X = 0).
-    if (kinematic) then
-      do p = 1, 8
-        call stretch(fgs(:, :, p), u, u_inv)
-        do c = 1, 6
-          xg(c) = dot_product(rot(:, c, p), x_mat(:, p))
-        end do
-        do c = 1, 6
-          x6(c) = dot_product(xg, pm(:, c, p))
-        end do
-        back(:, p) = pushed_stress(u, x6, axes_old(:, :, p))
-      end do
-    end if
+    ! The backstress by the stress's own map, after the loop above: inside it, its branch
+    ! made GCC keep the isotropic path's small helpers out of line (docs/theory/material.md,
+    ! "Its cost when it is off").
+    if (kinematic) call push_backstress(stretches, rot, pm, x_mat, axes_old, back)
     if (.not. want_tangent) return
 
     ! The tangent. Per point the material and logarithm part b^T (W0 P^T D P + L(A)) b
@@ -507,8 +497,11 @@ contains
           rdg(i, c) = w0(p)*dot_product(rp(:, i), dg4(:, c, p))
         end do
       end do
+      ! bg = bt rdg written out: a second call of by_dofs here kept both out of line
+      ! (docs/theory/material.md, "Its cost when it is off").
       do c = 1, 4
-        bg(:, c) = by_dofs(bt(:, :, p), rdg(:, c))
+        bg(:, c) = bt(:, 1, p)*rdg(1, c) + bt(:, 2, p)*rdg(2, c) + bt(:, 3, p)*rdg(3, c) &
+                   + bt(:, 4, p)*rdg(4, c) + bt(:, 5, p)*rdg(5, c) + bt(:, 6, p)*rdg(6, c)
       end do
       do m = 1, shell_modes
         kua(:, m) = kua(:, m) + mono_gauss(m, p)*bg(:, mode_component(m))
@@ -575,6 +568,26 @@ contains
 
 
   end subroutine solid_shell_element
+
+  !> The backstress x_mat (material axes, at the end of the local iteration) pushed to
+  !> the end of the increment as the stress is (ddpy_hex8's pushed_stress): turned by rot,
+  !> mapped by pm, rotated with the point's stretch.
+  pure subroutine push_backstress(stretches, rot, pm, x_mat, axes_old, back)
+    real(wp), intent(in) :: stretches(3, 3, 8), rot(6, 6, 8), pm(6, 6, 8), x_mat(6, 8), &
+                            axes_old(3, 3, 8)
+    real(wp), intent(out) :: back(6, 8)
+    real(wp) :: xg(6), x6(6)
+    integer :: p, c
+    do p = 1, 8
+      do c = 1, 6
+        xg(c) = dot_product(rot(:, c, p), x_mat(:, p))
+      end do
+      do c = 1, 6
+        x6(c) = dot_product(xg, pm(:, c, p))
+      end do
+      back(:, p) = pushed_stress(stretches(:, :, p), x6, axes_old(:, :, p))
+    end do
+  end subroutine push_backstress
 
   !> Whether every point's stress s_mat + dg4 grouped(mono, dalpha), the elastic prediction
   !> at alpha + dalpha, relative to its backstress back_old (zeros without mixed hardening,

@@ -216,9 +216,10 @@ def slide_over_dome(friction: float, force_tolerance: float = 1e-12, solid: type
     problem = FormingProblem(solid(mesh, ELASTIC), [tool])
     problem.fix(mesh.select(z=lift + 0.5), "xyz")
     tight = NewtonSettings(force_tolerance, 1e-6)
-    # Every touching node lands (DD3IMP's r_min): each increment then ends with the
-    # contact set it converged with, and its last steps show the tangent's rate.
-    every = IncrementLimits(touch="every")
+    # Every touching node lands (DD3IMP's r_min), down to gaps of 1e-3 element sizes:
+    # each increment then ends with the contact set it converged with, and its last
+    # steps show the tangent's rate.
+    every = IncrementLimits(touch="every", touch_gap=1e-3)
     result = problem.run({"dome": (0, 0, 0.02)}, max_increment=0.02, newton=tight,
                          limits=every)
     return problem.run({"dome": (0.2, 0, 0.02)}, max_increment=0.05, result=result,

@@ -276,6 +276,26 @@ def test_first_touch_and_strain_limit_set_the_increments() -> None:
     assert steps.max() <= 1.05 * 0.01 / np.sqrt(2.0 / 3.0) * 0.5 / 0.9
 
 
+def test_a_gap_below_a_hundredth_of_an_element_counts_as_touching() -> None:
+    # A block 0.5 % of its element size above the plane (the paper bending punch's Nagata
+    # patches lay about that far from the blank): no increment lands it, the first one
+    # takes the whole step; with the old 1e-3 the first increment was that sliver of a gap.
+    def pressed(limits: IncrementLimits):
+        gap = 5e-3 * HexMesh.box(1.0, 1.0, 0.5, 2, 2, 2).element_size()
+        mesh = HexMesh.box(1.0, 1.0, 0.5, 2, 2, 2, origin=(-0.5, -0.5, gap))
+        tool = RigidTool("plane", plane_tool(), mesh.select(z=gap), facing=(0, 0, -1))
+        problem = FormingProblem(Solid(mesh, ELASTIC), [tool])
+        problem.fix(mesh.select(z=gap + 0.5), "xyz")
+        return gap, problem.run({"plane": (0, 0, 0.01)}, max_increment=0.005, limits=limits)
+
+    gap, default = pressed(IncrementLimits())
+    assert default.limited_by[0] == "max"
+    assert default.contacts["plane"][0] == 9
+    _, old = pressed(IncrementLimits(touch_gap=1e-3))
+    assert old.limited_by[0] == "touch"
+    assert old.tool_displacements["plane"][0][2] == pytest.approx(gap, rel=2e-3)
+
+
 def test_first_touch_lands_a_new_contact_zone_and_lets_its_front_join_inside() -> None:
     # A block whose bottom slopes 0.02 mm per mm over its 2 mm: its node rows hang 0.1,
     # 0.11, ..., 0.14 mm above a plane pushed up by 0.16 mm. Landing every node ends an

@@ -280,18 +280,19 @@ def test_a_gap_below_a_hundredth_of_an_element_counts_as_touching() -> None:
     # A block 0.5 % of its element size above the plane (the paper bending punch's Nagata
     # patches lay about that far from the blank): no increment lands it, the first one
     # takes the whole step; with the old 1e-3 the first increment was that sliver of a gap.
+    gap = 5e-3 * HexMesh.box(1.0, 1.0, 0.5, 2, 2, 2).element_size()
+
     def pressed(limits: IncrementLimits):
-        gap = 5e-3 * HexMesh.box(1.0, 1.0, 0.5, 2, 2, 2).element_size()
         mesh = HexMesh.box(1.0, 1.0, 0.5, 2, 2, 2, origin=(-0.5, -0.5, gap))
         tool = RigidTool("plane", plane_tool(), mesh.select(z=gap), facing=(0, 0, -1))
         problem = FormingProblem(Solid(mesh, ELASTIC), [tool])
         problem.fix(mesh.select(z=gap + 0.5), "xyz")
-        return gap, problem.run({"plane": (0, 0, 0.01)}, max_increment=0.005, limits=limits)
+        return problem.run({"plane": (0, 0, 0.01)}, max_increment=0.005, limits=limits)
 
-    gap, default = pressed(IncrementLimits())
+    default = pressed(IncrementLimits())
     assert default.limited_by[0] == "max"
     assert default.contacts["plane"][0] == 9
-    _, old = pressed(IncrementLimits(touch_gap=1e-3))
+    old = pressed(IncrementLimits(touch_gap=1e-3))
     assert old.limited_by[0] == "touch"
     assert old.tool_displacements["plane"][0][2] == pytest.approx(gap, rel=2e-3)
 

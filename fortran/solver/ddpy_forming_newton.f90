@@ -974,8 +974,8 @@ contains
   !> (W the weights). GMRES minimizes the first; the second is known one solve late (M^-1
   !> of the residual's newest basis vector is the next step's solve), and is waived at the
   !> m-th step. Either alone costs Newton iterations (docs/theory/linear-solver.md,
-  !> "GMRES: two measures of one correction"): the second alone (left preconditioning) leaves force in the stiff contact
-  !> directions, which M^-1 shrinks; the first alone leaves the sheet's soft bending modes
+  !> "GMRES: two measures of one correction"): the second alone (left preconditioning)
+  !> leaves force in the stiff contact directions, which M^-1 shrinks; the first alone leaves the sheet's soft bending modes
   !> far off, which small forces move. Returns the iterate x (the last one, when it did not
   !> converge), its steps k, whether it converged (the force residual met, at least) and
   !> status < 0 when a MUMPS solve failed.

@@ -26,12 +26,13 @@ def plane(z: float, facing: float) -> NagataSurface:
     return NagataSurface(corners, normals, [[0, 3, 2, 1]] if facing > 0 else [[0, 1, 2, 3]])
 
 
-def two_tools() -> FormingProblem:
-    """A 2 x 2 x 1 blank between a Gauss-point holder above and a node-to-surface die below,
-    on the symmetry plane x = 0 (held components of both tools' slaves)."""
+def two_tools(barrier: float | None = None) -> FormingProblem:
+    """A 2 x 2 x 1 blank between a Gauss-point holder above (with a ``barrier``, or none)
+    and a node-to-surface die below, on the symmetry plane x = 0 (held components of both
+    tools' slaves)."""
     mesh = HexMesh.box(2.0, 2.0, 1.0, 2, 2, 1)
     holder = RigidTool("holder", plane(1.0, 1.0), mesh.select(z=1.0), facing=(0, 0, 1),
-                       contact="gauss", penalty=2000.0, friction=0.1)
+                       contact="gauss", penalty=2000.0, friction=0.1, barrier=barrier)
     die = RigidTool("die", plane(0.0, -1.0), mesh.select(z=0.0), facing=(0, 0, -1),
                     contact="node", friction=0.1)
     problem = FormingProblem(Solid(mesh, STEEL), [holder, die])
@@ -40,12 +41,15 @@ def two_tools() -> FormingProblem:
     return problem
 
 
-def test_the_cores_layout_holds_each_block_where_the_evaluation_writes_it() -> None:
+@pytest.mark.parametrize("barrier", [None, 0.005])
+def test_the_cores_layout_holds_each_block_where_the_evaluation_writes_it(
+        barrier: float | None) -> None:
     """The solid's tangent first (its own coordinate structure), then one coupling entry per
     free component of each pair's node, the patch entries (a Gauss-point pair's in its
-    node's equilibrium rows, none in a held row), each pair's 3 x 3 dC/dlambda, and the
-    force-controlled holder's column, row and diagonal last."""
-    problem = two_tools()
+    node's equilibrium rows, none in a held row; with a barrier, its own law's at its node
+    after them, in its law rows), each pair's 3 x 3 dC/dlambda, and the force-controlled
+    holder's column, row and diagonal last."""
+    problem = two_tools(barrier)
     layout = Layout(problem.solid, problem.tools, problem.fixed, holds=[0])
     nf, npair = layout.nf, layout.node.size
     assert layout.n == nf + 3 * npair + 1
@@ -76,16 +80,29 @@ def test_the_cores_layout_holds_each_block_where_the_evaluation_writes_it() -> N
     rows, cols = layout.rows[patch], layout.cols[patch]
     assert np.all(cols < nf)
     in_law = rows >= nf
-    assert np.all(np.isin(rows[in_law], law[layout.first[1]:]))  # the die's pairs only
     die_held = law[layout.first[1]:][equ[layout.first[1]:] < 0]
     assert np.isin(die_held, rows).all()  # a node-to-surface pair keeps its held rows
-    # the holder: its column in its pairs' free equilibrium rows, its diagonal last
+    holder_law = np.isin(rows, law[gauss])
+    if barrier is None:
+        assert np.all(np.isin(rows[in_law], law[layout.first[1]:]))  # the die's pairs only
+    else:  # each pair's own law: its 3 rows times its node's free dofs
+        assert holder_law.sum() == 3 * (equ[gauss] >= 0).sum()
+        for pair, eqs in zip(law[gauss], equ[gauss], strict=True):
+            mine = np.isin(rows, pair)
+            np.testing.assert_array_equal(np.sort(cols[mine]),
+                                          np.sort(np.tile(eqs[eqs >= 0], 3)))
+    # the holder: its column in its pairs' free equilibrium rows (and, with a barrier,
+    # their law rows), its diagonal last
     assert layout.rows[-1] == layout.cols[-1] == layout.n - 1
-    np.testing.assert_array_equal(layout.rows[hold_cols & ~hold_rows],
-                                  equ[gauss][equ[gauss] >= 0])
-    # its row: the eliminated pairs' F(x) entries, in their equilibrium rows' columns
+    column = layout.rows[hold_cols & ~hold_rows]
+    expected = [np.concatenate([e[e >= 0], [] if barrier is None else pair])
+                for e, pair in zip(equ[gauss], law[gauss], strict=True)]
+    np.testing.assert_array_equal(column, np.concatenate(expected))
+    # its row: with a barrier the multipliers, then the Gauss-point pairs' F(x) entries,
+    # in their equilibrium rows' columns
     row_entries = hold_rows & ~hold_cols
-    assert row_entries.sum() == ((rows < nf) & (rows >= 0)).sum()
+    lumped = ((rows < nf) & (rows >= 0) & ~holder_law).sum()
+    assert row_entries.sum() == lumped + (0 if barrier is None else law[gauss].size)
 
 
 def test_the_linearization_is_the_cores_evaluation_of_the_solid_and_the_pairs() -> None:
@@ -118,9 +135,23 @@ def test_a_penalty_for_a_tool_the_problem_does_not_have_is_refused() -> None:
     layout = Layout(problem.solid, problem.tools, problem.fixed)
     handle = layout.core_problem(None).handle
     check(_core.problem_set_penalty(handle, 1, normal_penalty=1.0, tangential_penalty=1.0,
-                                    barrier_stiffness=0.0, barrier_start=0.0,
-                                    barrier_width=0.0), "the die's penalty")
+                                    barrier_depth=-1.0), "the die's penalty")
     with pytest.raises(CoreRefusal, match="index"):
         check(_core.problem_set_penalty(handle, 2, normal_penalty=1.0,
-                                        tangential_penalty=1.0, barrier_stiffness=0.0,
-                                        barrier_start=0.0, barrier_width=0.0), "a penalty")
+                                        tangential_penalty=1.0, barrier_depth=-1.0),
+              "a penalty")
+
+
+def test_a_barrier_cannot_come_or_go_once_the_layout_is_made() -> None:
+    """Whether a tool has a barrier shapes the layout (its pairs' own laws): once the layout
+    is made, a depth may change, its presence may not (the evaluation would write slots
+    the layout does not have)."""
+    problem = two_tools(0.005)
+    layout = Layout(problem.solid, problem.tools, problem.fixed)
+    handle = layout.core_problem(None).handle
+    check(_core.problem_set_penalty(handle, 0, normal_penalty=1.0, tangential_penalty=1.0,
+                                    barrier_depth=0.01), "a deeper barrier")
+    with pytest.raises(CoreRefusal, match="value"):
+        check(_core.problem_set_penalty(handle, 0, normal_penalty=1.0,
+                                        tangential_penalty=1.0, barrier_depth=-1.0),
+              "no barrier")

@@ -55,9 +55,8 @@ from ddpy.model.newton import (
     gauss_face_weights,
     increment,
 )
-from ddpy.model.predictor import clear_of_barriers
 from ddpy.model.solid import Solid, SolidState, _components
-from ddpy.model.tool import BARRIER_STIFFNESS, BARRIER_WIDTH, RigidTool
+from ddpy.model.tool import RigidTool
 from ddpy.model.work import Work
 
 _log = logging.getLogger(__name__)
@@ -378,12 +377,9 @@ class FormingProblem:
                                       else 0.0)
                         for t, faces in zip(self.tools, self._faces, strict=True)]
         self.thickness = mesh.initial_thickness()
-        stiffness = barrier_stiffness(solid, self.thickness)
         self._pack = ToolPack(self.tools, mesh, self.penalty,
-                              [(0.0, 0.0, 0.0) if t.barrier is None or t.contact != "gauss"
-                               else (stiffness, t.barrier * self.thickness,
-                                     BARRIER_WIDTH * self.thickness)
-                               for t in self.tools])
+                              [-1.0 if t.barrier is None or t.contact != "gauss"
+                               else t.barrier * self.thickness for t in self.tools])
         #: pairs of Gauss-point tools: their law is a function of the positions (a penalty),
         #: continuous at a release, which the release control leaves alone
         self._gauss = np.concatenate([np.full(t.slaves.size, t.contact == "gauss")
@@ -689,18 +685,6 @@ class FormingProblem:
         landing = control.landing()
         # Start from the last increment's displacement rate (docs/theory/contact.md).
         guess = _extrapolated(self.u, target - factor, run.last_du)
-        measures = self.sheet_measures
-        if guess is not None and measures is not None:
-            active = [i for i in range(len(self.tools))
-                      if run.on[layout.first[i]:layout.first[i + 1]].any()]
-            guess, moved = clear_of_barriers(guess, self.solid.mesh.nodes,
-                                             [self.tools[i] for i in active],
-                                             [self._faces[i] for i in active],
-                                             self._positions(positions), self.thickness,
-                                             measures.bottom, self._reach)
-            if moved:
-                _log.debug("%s starts with %d slave nodes moved out of the barriers",
-                           _trial(target, step, run.travel), moved)
         careful = control.start(run.last_du is None)
         touching = _Touching(self.tuning.touching * self.size, resting=not careful)
         size_ratio = control.nominal / (target - factor)
@@ -1299,7 +1283,7 @@ class FormingProblem:
         x = self.solid.mesh.nodes + u
         on = np.ones(layout.node.size, dtype=bool)
         state, (gap, normal) = self._contact(layout, x, self.solid.mesh.nodes + self.u,
-                                             where, on, self.force, np.zeros(layout.n),
+                                             where, on, self._multipliers(), np.zeros(layout.n),
                                              np.empty(0))
         return state, gap, normal
 
@@ -1318,6 +1302,18 @@ class FormingProblem:
         converged increment, with the search's reach and the element size: what the core's
         contact and loop take (ToolPack.arguments)."""
         return self._pack.arguments(positions, self.position, self._reach, self.size)
+
+    def _multipliers(self) -> NDArray[np.float64]:
+        """The pairs' multipliers as the core's laws take them: their forces, but a barrier
+        pair's multiplier is its slave's own force, which its node point carries as its
+        traction (the pair's force holds the Gauss points' lumped force too)."""
+        force = self.force.copy()
+        first = np.concatenate([[0], np.cumsum([t.slaves.size for t in self.tools])])
+        for k, tool in enumerate(self.tools):
+            if tool.contact == "gauss" and tool.barrier is not None:
+                end = self._pack.point_first[k + 1]
+                force[first[k]:first[k + 1]] = self.traction[end - tool.slaves.size:end]
+        return force
 
     def _contact(self, layout: Layout, x: NDArray[np.float64], x_n: NDArray[np.float64],
                  positions: Mapping[str, NDArray[np.float64]], on: NDArray[np.bool_],
@@ -1345,7 +1341,8 @@ class FormingProblem:
                       touching: float = 0.0, holds: Mapping[str, float] | None = None
                       ) -> Linearization:
         """The equations the Newton loop solves, at displacements ``u`` (n, 3) and pair
-        forces ``force`` (pairs, 3) (default: the present ones) with the tools at
+        multipliers ``force`` (pairs, 3) (default: the present ones; a barrier pair's is its
+        slave's own force, ``_multipliers``) with the tools at
         ``positions`` (default: where they are), in the increment from the present
         converged state: the residual and its Jacobian (the same core calls as an
         evaluation of the loop; every pair takes part). With ``touching`` > 0 the pairs
@@ -1361,7 +1358,8 @@ class FormingProblem:
         hold_force = np.array([(holds or {})[self.tools[k].name] for k in chosen], dtype=float)
         n, npair = self.solid.mesh.n_nodes, layout.node.size
         u = self.u if u is None else float_array(u, "u", (n, 3))
-        force = self.force if force is None else float_array(force, "force", (npair, 3))
+        force = self._multipliers() if force is None else \
+            float_array(force, "force", (npair, 3))
         residual, values, state = equations(
             self.solid, layout, self._tool_arguments(self._positions(positions)),
             self.solid_state, self.u, self.external, u, force, self.r, self.mu,
@@ -1464,12 +1462,6 @@ def default_augmentation(solid: Solid) -> float:
     lambda_T - r s): a value far above the blank's stiffness decides on gaps of 1e-3 mm
     and flips contact states from iteration to iteration (docs/theory/contact.md)."""
     return blank_stiffness(solid.mesh.nodes, solid.mesh.elements, float(solid.props[0]))
-
-
-def barrier_stiffness(solid: Solid, thickness: float) -> float:
-    """The barrier's stiffness eps_b (N/mm^3): BARRIER_STIFFNESS times E / T, the blank's
-    own stiffness across its thickness per area."""
-    return BARRIER_STIFFNESS * float(solid.props[0]) / thickness
 
 
 def default_penalty(solid: Solid, faces: NDArray[np.integer]) -> float:

@@ -152,8 +152,10 @@ class Layout:
         self.first = np.concatenate([[0], np.cumsum([t.slaves.size for t in tools])]
                                     ).astype(np.int32)
         # The blank faces that face each tool (and the areas of their Gauss points), as the
-        # core's contact takes them; the penalties are the pack's (core_problem).
-        pack = ToolPack(tools, solid.mesh)
+        # core's contact takes them; the penalties are the pack's (core_problem), the
+        # barriers' depths too, but which tools have one shapes the layout.
+        pack = ToolPack(tools, solid.mesh, barrier_depth=[
+            0.0 if t.contact == "gauss" and t.barrier is not None else -1.0 for t in tools])
         patches = []
         for tool, (faces, _, _) in zip(tools, pack.tool_faces, strict=True):
             if tool.contact not in ("surface", "gauss"):
@@ -193,13 +195,14 @@ class ToolPack:
     """Every tool's contact with the blank: its search (the core's copy of its surface,
     ``RigidTool.search``), its facing direction and discretization, the blank faces that
     face it with the area each of their Gauss points stands for, and the penalty of each
-    Gauss-point tool (``penalty``, per tool; 0 for the others) with its barrier: what the
+    Gauss-point tool (``penalty``, per tool; 0 for the others) with its barrier's depth
+    (``barrier_depth``, mm; negative: none): what the
     core's contact reads (fortran/mechanics/ddpy_forming.f90), per tool (``tool_faces``)
     and, for contact_pressure, one tool after another. Made once; empty for none."""
 
     def __init__(self, tools: Sequence[RigidTool], mesh: HexMesh,
                  penalty: Sequence[float] | None = None,
-                 barrier: Sequence[tuple[float, float, float]] | None = None) -> None:
+                 barrier_depth: Sequence[float] | None = None) -> None:
         self.tools = list(tools)
         self.names = [t.name for t in tools]
         faces = contact_faces(tools, mesh)
@@ -209,8 +212,9 @@ class ToolPack:
         # surface-to-surface or Gauss-point tool projects their Gauss points, which stand
         # for the areas face_weight of the undeformed blank (n x n per face, n the tool's
         # points).
-        # A Gauss-point tool's points are followed by one per slave, its barrier
-        # (forming_contact), which stands for the slave's share of the faces' area.
+        # A Gauss-point tool's points are followed by one per slave, its node point
+        # (forming_contact: its barrier), which stands for the slave's share of the faces'
+        # area.
         corners, weights = [], []
         for tool, chosen in zip(tools, faces, strict=True):
             where = np.full(mesh.n_nodes, -1, dtype=np.int32)
@@ -230,12 +234,15 @@ class ToolPack:
                                          ).astype(np.int32)
         self.faces = _join([f.ravel() for f in faces], np.int32)
         self.face_weight = _join(weights, np.float64)
+        #: per tool, where its points start in the flat point arrays (and the end)
+        self.point_first = np.concatenate([[0], np.cumsum([w.size for w in weights])]
+                                          ).astype(np.int64)
         #: per tool, the normal (= tangential) penalty of Gauss-point contact (N/mm^3) and
-        #: its barrier's stiffness (N/mm^3; 0: none), start and width (mm)
+        #: the depth of its barrier (mm; negative: none)
         self.penalty = np.zeros(len(tools)) if penalty is None else \
             np.asarray(penalty, dtype=float).reshape(len(tools))
-        self.barrier = np.zeros((len(tools), 3)) if barrier is None else \
-            np.asarray(barrier, dtype=float).reshape(len(tools), 3)
+        self.barrier_depth = np.full(len(tools), -1.0) if barrier_depth is None else \
+            np.asarray(barrier_depth, dtype=float).reshape(len(tools))
         #: Gauss points of all faces: their tangential tractions are (3,) each
         self.n_points = int(self.face_weight.size)
 
@@ -310,11 +317,10 @@ class CoreProblem:
             raise ValueError(f"the pack's tools {pack.names} are not the problem's "
                              f"{self.pack.names}")
         for k in range(len(pack.tools)):
-            stiffness, start, width = pack.barrier[k]
             check(_core.problem_set_penalty(
                 self.handle, k, normal_penalty=pack.penalty[k],
-                tangential_penalty=pack.penalty[k], barrier_stiffness=stiffness,
-                barrier_start=start, barrier_width=width), f"tool {pack.names[k]}'s penalty")
+                tangential_penalty=pack.penalty[k], barrier_depth=pack.barrier_depth[k]),
+                f"tool {pack.names[k]}'s penalty")
         self.pack = pack
 
     def set_state(self, state: SolidState) -> None:

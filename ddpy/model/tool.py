@@ -13,7 +13,7 @@ from ddpy.geometry.surfaces import BezierSurface, NagataSurface
 from ddpy.model.contact import check_friction
 
 __all__ = ["RigidTool", "CONTACT_DISCRETIZATIONS", "FACE_POINTS", "MAX_POINTS", "BARRIER_DEPTH",
-           "BARRIER_WIDTH", "BARRIER_STIFFNESS", "check_contact_settings", "faces_blank"]
+           "check_contact_settings", "faces_blank"]
 
 #: How a tool's contact is discretized on the blank: "node" (node-to-surface, DD3IMP's: each
 #: slave node's own gap, normal and slip) or "surface" (surface-to-surface: each slave's
@@ -28,14 +28,9 @@ CONTACT_DISCRETIZATIONS = ("node", "surface", "gauss")
 #: weighted gaps of surface-to-surface contact do not change with more points.
 FACE_POINTS = {"node": 2, "surface": 2, "gauss": 4}
 MAX_POINTS = 8
-#: Depth (a fraction of the blank's thickness) past which the barrier of Gauss-point contact
-#: pushes a slave node out of the tool, with the blank's own stiffness across its thickness
-#: (docs/theory/contact.md, "The barrier").
+#: Depth (a fraction of the blank's thickness) in a tool of Gauss-point contact at which
+#: the barrier holds each slave node exactly (docs/theory/contact.md, "The barrier").
 BARRIER_DEPTH = 0.005
-#: Width (a fraction of the thickness) over which the barrier's stiffness grows from zero.
-BARRIER_WIDTH = 0.005
-#: The barrier's stiffness in units of the blank's stiffness across its thickness, E / T.
-BARRIER_STIFFNESS = 1.0
 
 
 def check_contact_settings(*, discretization: str | None = None,
@@ -81,8 +76,8 @@ class RigidTool:
     penalty of its law in N/mm^3 (``penalty``, default ``default_penalty``); "surface" and
     "gauss" integrate over the blank faces with ``points`` x ``points`` Gauss points each
     (default FACE_POINTS). A "gauss" tool's ``barrier`` (a fraction of the blank's
-    thickness, default BARRIER_DEPTH; None: none) is the depth past which its slave nodes
-    are pushed out (docs/theory/contact.md, "The barrier")."""
+    thickness, default BARRIER_DEPTH; None: none) is the depth in the tool at which its
+    slave nodes are held exactly (docs/theory/contact.md, "The barrier")."""
 
     name: str
     surface: BezierSurface | NagataSurface

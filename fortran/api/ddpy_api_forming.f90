@@ -232,24 +232,25 @@ contains
   end subroutine append_pairs
 
   !> Tool tool's (0-based) law of Gauss-point contact: its normal and tangential penalties
-  !> (N/mm^3) and its barrier's stiffness (N/mm^3; 0: none), start and width (mm) (see
-  !> contact_tool); zero until set.
+  !> (N/mm^3) and its barrier's depth (mm; negative: none) (see contact_tool); zero and
+  !> none until set. Whether a tool has a barrier shapes the Jacobian's layout: once that
+  !> is built, it cannot change (refusal_value).
   subroutine api_problem_set_penalty(handle, tool, normal_penalty, tangential_penalty, &
-                                     barrier_stiffness, barrier_start, barrier_width, status) &
+                                     barrier_depth, status) &
     bind(C, name="ddpy_problem_set_penalty")
     integer(c_int), value, intent(in) :: handle, tool
-    real(c_double), value, intent(in) :: normal_penalty, tangential_penalty, &
-                                         barrier_stiffness, barrier_start, barrier_width
+    real(c_double), value, intent(in) :: normal_penalty, tangential_penalty, barrier_depth
     integer(c_int), intent(out) :: status
     if (.not. problem_ok(handle, status)) return
     status = refusal_index
     if (tool < 0 .or. tool >= table(handle)%problem%tools%ntool) return
     associate (t => table(handle)%problem%tools%tool(tool + 1))
+      status = refusal_value
+      if (table(handle)%problem%layout%built .and. &
+          ((t%barrier_depth >= 0.0_wp) .neqv. (barrier_depth >= 0.0_wp))) return
       t%normal_penalty = normal_penalty
       t%tangential_penalty = tangential_penalty
-      t%barrier_stiffness = barrier_stiffness
-      t%barrier_start = barrier_start
-      t%barrier_width = barrier_width
+      t%barrier_depth = barrier_depth
     end associate
     status = 0
   end subroutine api_problem_set_penalty
@@ -695,18 +696,20 @@ contains
     real(wp), intent(out) :: gap(npair), normal(3, npair), traction(3, npoint), &
                              pressure(npoint)
     integer, allocatable :: lock(:), found(:)
-    real(wp), allocatable :: dc_dt(:, :, :), lambda(:, :), stiffness(:)
+    real(wp), allocatable :: dc_dt(:, :, :), lambda(:, :), stiffness(:), lumped(:, :), &
+                             barrier_dt(:, :, :)
     integer :: p, nf
     nf = pb%dofs%nf
     allocate(lock(npair + npoint), found(npair + npoint), dc_dt(3, 3, npair), &
-             lambda(3, npair), stiffness(pb%holds%nhold))
+             lambda(3, npair), stiffness(pb%holds%nhold), lumped(3, npair), &
+             barrier_dt(3, 3, npair))
     lock = 0  ! no pair held: a plain search
     call forming_contact(x, x_n, pb%dofs, pb%tools, pb%pairs, pb%law, &
                          pb%placement%positions, pb%placement%positions_n, pb%limits, &
                          pb%limits%touching, force, lock, &
                          min(nvalues, pb%layout%contact_values), &
                          residual(1:nf + 3*npair), values, state, gap, normal, traction, &
-                         pressure, found, dc_dt)
+                         pressure, found, dc_dt, lumped, barrier_dt)
     if (nvalues == 0) return
     values(pb%layout%k_slots + 1:pb%layout%k_slots + pb%layout%ncoupling) = &
       pb%layout%coupling
@@ -718,8 +721,9 @@ contains
       if (pb%layout%eliminated(p)) lambda(:, p) = force(:, p) - residual(nf + 3*p - 2:nf + 3*p)
     end do
     call hold_equations(pb%dofs, pb%pairs, pb%law%on, pb%holds, pb%placement%hold_force, &
-                        pb%layout%eliminated, lambda, dc_dt, pb%layout%contact_values, &
-                        residual(nf + 3*npair + 1:), values, stiffness)
+                        pb%layout%eliminated, pb%layout%barrier, lambda, lumped, dc_dt, &
+                        barrier_dt, pb%layout%contact_values, residual(nf + 3*npair + 1:), &
+                        values, stiffness)
   end subroutine contact_equations
 
   !> The equations of the Newton loop at displacements u and pair forces force, in an

@@ -62,18 +62,22 @@ contains
   !> along x run over the nodes of those faces (docs/theory/contact.md).
   !>
   !> A Gauss-point tool (discretization contact_gauss) puts the penalty law of
-  !> gauss_traction at those Gauss points (its normal and tangential penalty, N/mm^3; its
-  !> barrier's stiffness eps_b, N/mm^3, start d_b and width w, mm: a slave deeper than d_b
-  !> in the tool is pushed out by barrier_law of the excess over its share of the faces'
-  !> area, none when eps_b is 0); law%traction_n(:, i): each point's tangential traction
-  !> at the last converged increment, traction: the new one, zero elsewhere;
-  !> law%pressure_n(i): its pressure multiplier, pressure: its new pressure) and each
-  !> slave's law is
-  !> C = lambda - F(x), F its share of the points' forces by the shape functions. Its
-  !> multiplier is eliminated: the equilibrium rows take F(x) and its derivative dF/dx
-  !> (the layout puts a Gauss-point pair's patch entries in its node's equilibrium rows),
-  !> and its law rows have dC/dlambda = I alone; the Newton loop sets lambda = F(x) at each
-  !> evaluation (forming_increment).
+  !> gauss_traction at those Gauss points (its normal and tangential penalty, N/mm^3;
+  !> law%traction_n(:, i): each point's tangential traction at the last converged
+  !> increment, traction: the new one, zero elsewhere; law%pressure_n(i): its pressure
+  !> multiplier, pressure: its new pressure); F(x), each slave's share of the points'
+  !> forces by the shape functions, is its lumped force (lumped), which the equilibrium
+  !> rows take with its derivative dF/dx (the layout puts a Gauss-point pair's patch
+  !> entries in its node's equilibrium rows). Without a barrier (barrier_depth < 0) each
+  !> slave's law is C = lambda - F(x): its multiplier is eliminated, its law rows have
+  !> dC/dlambda = I alone, and the Newton loop sets lambda = F(x) at each evaluation
+  !> (forming_increment). With a barrier, lambda is the slave's own force besides F, the
+  !> Alart-Curnier law of contact_residual for the slave at the depth barrier_depth in the
+  !> tool (its gap measured from there, along the tool's normal at its closest point):
+  !> the equilibrium rows take F(x) + lambda, the law rows depend on lambda and the slave
+  !> alone (no fill), and the slave's point after the tool's Gauss points (its node point)
+  !> carries lambda from increment to increment as its traction (docs/theory/contact.md,
+  !> "The barrier").
   !>
   !> lock(p) > 0 holds node-to-surface pair p on that patch of its tool (ddpy_global_search:
   !> no search, the patch's plane continued past its edges), lock(npair + i) Gauss point i
@@ -81,10 +85,11 @@ contains
   !> where it lies less than hold_band element sizes outside the tool (0 elsewhere: none,
   !> farther, or not that kind of contact), the ones worth holding. dc_dt(:, :, p): the
   !> derivative of pair p's law (of C = lambda - F for a Gauss-point pair) along a
-  !> translation of its tool, zero in a held component's row.
+  !> translation of its tool, zero in a held component's row; barrier_dt(:, :, p): that
+  !> of a barrier pair's own law (zero for the others).
   subroutine forming_contact(x, x_n, dofs, tools, pairs, law, positions, positions_n, limits, &
                              touching, force, lock, nvalues, residual, values, state, gap, &
-                             normal, traction, pressure, found, dc_dt)
+                             normal, traction, pressure, found, dc_dt, lumped, barrier_dt)
     real(wp), intent(in) :: x(:, :), x_n(:, :)
     type(blank_dofs), intent(in) :: dofs
     type(tool_set), intent(in) :: tools
@@ -98,15 +103,21 @@ contains
     integer, intent(out) :: state(pairs%npair), found(pairs%npair + tools%npoint)
     real(wp), intent(out) :: gap(pairs%npair), normal(3, pairs%npair), &
                              traction(3, tools%npoint), pressure(tools%npoint), &
-                             dc_dt(3, 3, pairs%npair)
+                             dc_dt(3, 3, pairs%npair), lumped(3, pairs%npair), &
+                             barrier_dt(3, 3, pairs%npair)
     real(wp), allocatable :: nodes(:, :), node_normals(:, :), params(:, :), points(:, :), &
                              tangents(:, :, :), distance(:), p_aug(:), c(:, :), &
                              dc_dlambda(:, :, :), dc_dx(:, :, :), slip(:, :), &
                              patch_gap(:, :), patch_normal(:, :, :), patch_weight(:), &
                              patch_dc(:, :, :), gauss_force(:, :)
+    ! A barrier pair's slave: where it found the tool (barred), its gap from the barrier's
+    ! depth, the tool's normal and its derivative there, the slave's slip.
+    real(wp), allocatable :: bar_gap(:), bar_normal(:, :), bar_dndx(:, :, :), bar_slip(:, :)
+    logical, allocatable :: barred(:), barrier_pair(:)
     integer, allocatable :: patch(:), status(:), iterations(:), ncandidates(:)
     logical, allocatable :: searched(:), shut(:), surface(:)
-    integer :: t, p, a, b, k, i, j, e, slot, nnode, ntool, npair, npatch, npoint, nf, k_slots
+    integer :: t, p, a, b, k, i, j, e, slot, nnode, ntool, npair, npatch, npoint, nf, k_slots, &
+               bar_state
     real(wp) :: d2(3, 3), point(3), d1(3, 2), lam(3), v(3), dndx(3, 3), lift, element_size
 
     nnode = size(x, 2)
@@ -128,8 +139,14 @@ contains
       surface(pairs%tool_first(t) + 1:pairs%tool_first(t + 1)) = &
         tools%tool(t)%discretization /= contact_node
     end do
-    allocate(gauss_force(3, npair))
+    allocate(gauss_force(3, npair), bar_gap(npair), bar_normal(3, npair), &
+             bar_dndx(3, 3, npair), bar_slip(3, npair), barred(npair), barrier_pair(npair))
     gauss_force = 0.0_wp
+    barred = .false.
+    do t = 1, ntool
+      barrier_pair(pairs%tool_first(t) + 1:pairs%tool_first(t + 1)) = &
+        tools%tool(t)%discretization == contact_gauss .and. tools%tool(t)%barrier_depth >= 0.0_wp
+    end do
     traction = 0.0_wp
     pressure = 0.0_wp
     patch_dc = 0.0_wp
@@ -183,9 +200,28 @@ contains
     do t = 1, ntool
       if (.not. searched(t)) cycle
       if (tools%tool(t)%discretization == contact_gauss) then
-        ! C = lambda - F(x): the pair's force is the lumped force of the Gauss points.
+        if (tools%tool(t)%barrier_depth < 0.0_wp) then
+          ! C = lambda - F(x): the pair's force is the lumped force of the Gauss points.
+          do p = pairs%tool_first(t) + 1, pairs%tool_first(t + 1)
+            if (status(p) /= contact_none) c(:, p) = force(:, p) - gauss_force(:, p)
+          end do
+          cycle
+        end if
+        ! The barrier: the slave's own law at the barrier's depth; its lambda is carried
+        ! as its node point's traction, and its pressure over its share of the area is
+        ! the point's (a slave that found no patch keeps C = lambda).
         do p = pairs%tool_first(t) + 1, pairs%tool_first(t + 1)
-          if (status(p) /= contact_none) c(:, p) = force(:, p) - gauss_force(:, p)
+          i = tools%tool(t)%first_point + tools%tool(t)%npoint - &
+              (pairs%tool_first(t + 1) - p)
+          traction(:, i) = force(:, p)
+          if (.not. barred(p)) cycle
+          call contact_residual(force(:, p), bar_normal(:, p), bar_gap(p), &
+                                bar_dndx(:, :, p), bar_slip(:, p), law%mu(p), law%r(p), &
+                                c(:, p), dc_dlambda(:, :, p), dc_dx(:, :, p), bar_state)
+          state(p) = max(state(p), bar_state)
+          if (tools%face_weight(i) > 0.0_wp) &
+            pressure(i) = max(dot_product(force(:, p), bar_normal(:, p)), 0.0_wp)/ &
+                          tools%face_weight(i)
         end do
         cycle
       end if
@@ -230,10 +266,12 @@ contains
     ! derivative of C = lambda - F): the tool enters every gap and slip as x - t, so it is
     ! minus the sum of dC/dx over the pair's patch (a force-controlled tool's column,
     ! forming_increment; docs/theory/contact.md, "Force-controlled tools").
+    barrier_dt = 0.0_wp
     do p = 1, npair
       if (surface(p)) then
         dc_dt(:, :, p) = -sum(patch_dc(:, :, pairs%patch_first(p) + 1: &
                                           pairs%patch_first(p + 1)), dim=3)
+        if (barrier_pair(p)) barrier_dt(:, :, p) = -dc_dx(:, :, p)
       else
         dc_dt(:, :, p) = -dc_dx(:, :, p)
       end if
@@ -241,6 +279,7 @@ contains
         if (pairs%held(i, p) /= 0) dc_dt(i, :, p) = 0.0_wp
       end do
     end do
+    lumped = gauss_force
     ! Equilibrium rows: minus the forces of the tools on their slave nodes, in pair order;
     ! a Gauss-point pair's is the points' force F(x) itself (its multiplier is eliminated:
     ! its dF/dx goes into the equilibrium rows, see forming_increment).
@@ -251,6 +290,7 @@ contains
           if (j < 0) cycle
           if (tools%tool(t)%discretization == contact_gauss) then
             residual(j + 1) = residual(j + 1) - gauss_force(i, p)
+            if (barrier_pair(p)) residual(j + 1) = residual(j + 1) - force(i, p)
           else
             residual(j + 1) = residual(j + 1) - force(i, p)
           end if
@@ -275,7 +315,7 @@ contains
             end do
           end do
         end do
-        cycle
+        if (.not. barrier_pair(p)) cycle
       end if
       do i = 1, 3
         do j = 1, 3
@@ -459,11 +499,10 @@ contains
       integer, allocatable :: node_patch(:)
       logical, allocatable :: node_found(:), node_edge(:)
       real(wp) :: basis(4, tools%tool(t)%order**2), vg(3), w, gpt(3), gd1(3, 2), &
-                  gd2(3, 3), dndx(3, 3), tr(3), tangential(3), dtr(3, 3), mu_t, len_m, &
-                  excess, p_bar, k_bar, along(3)
+                  gd2(3, 3), dndx(3, 3), tr(3), tangential(3), dtr(3, 3), mu_t, len_m, along(3)
       integer :: c
       integer :: f, first, nfc, kg, g, q, qq, s, p, e, i, lo, hi, gstate, npf, ip
-      logical :: barred
+      logical :: with_barrier
       first = tools%face_first(t)
       nfc = tools%face_first(t + 1) - first
       npf = tools%tool(t)%order**2
@@ -481,8 +520,8 @@ contains
       call face_points(t, npf, basis, gx, gn)
       call search_points(t, kg, gx, gn, gpatch, gparams, gpoints, gnormal, gtangents, &
                          gdistance, gstatus, gits, gcand)
-      barred = tools%tool(t)%barrier_stiffness > 0.0_wp
-      if (barred) call node_depths(t, lo, hi, npair + tools%tool(t)%first_point + kg, node_depth, &
+      with_barrier = tools%tool(t)%barrier_depth >= 0.0_wp
+      if (with_barrier) call node_depths(t, lo, hi, npair + tools%tool(t)%first_point + kg, node_depth, &
                                    node_normal, node_found, node_patch, node_uv, &
                                    node_tangents, node_edge)
       allocate(wsum(lo:hi), gsum(lo:hi), msum(3, lo:hi))
@@ -529,13 +568,11 @@ contains
           end do
         end do
       end do
-      ! The barrier at the slaves (points kg + 1.. of the tool, tools%face_weight their share of
-      ! the faces' area): barrier_law of the depth past d_b where a slave lies deeper than
-      ! d_b in the tool, along the tool's normal at its closest point, with friction as at
-      ! the Gauss points; the force acts on the slave alone.
-      if (barred) then
+      ! The barrier: each slave that finds the tool, its gap from the barrier's depth
+      ! along the tool's normal at its closest point, the normal's derivative there and
+      ! the slave's slip, for its own law (forming_contact).
+      if (with_barrier) then
         do i = 1, hi - lo + 1
-          ip = tools%tool(t)%first_point + kg + i
           if (.not. node_found(i)) cycle
           p = lo + i - 1
           s = pairs%node(p) + 1
@@ -559,24 +596,11 @@ contains
             dndx = normal_derivative(node_tangents(:, :, i), gd2, node_normal(:, i), &
                                      -node_depth(i))
           end if
-          vg = (x(:, s) - x_n(:, s)) - (positions(:, t) - positions_n(:, t))
-          ! The law's pressure and slope at the depth past d_b, p_b + k_b (x - x_now) the
-          ! tangent line gauss_traction takes (its g = -x, its p_n = p_b - k_b x).
-          excess = node_depth(i) - tools%tool(t)%barrier_start
-          call barrier_law(excess, tools%tool(t)%barrier_stiffness, &
-                           tools%tool(t)%barrier_width, p_bar, k_bar)
-          call gauss_traction(law%traction_n(:, ip), p_bar - k_bar*excess, node_normal(:, i), &
-                              -excess, dndx, vg, mu_t, k_bar, &
-                              tools%tool(t)%tangential_penalty, tr, tangential, &
-                              pressure(ip), dtr, gstate)
-          traction(:, ip) = tangential
-          if (gstate == contact_inactive) cycle
-          w = tools%face_weight(ip)
-          status(p) = contact_inside
-          state(p) = max(state(p), gstate)
-          gauss_force(:, p) = gauss_force(:, p) + w*tr
-          e = patch_entry(p, pairs%node(p))
-          if (e > 0) patch_dc(:, :, e) = patch_dc(:, :, e) - w*dtr
+          barred(p) = .true.
+          bar_gap(p) = tools%tool(t)%barrier_depth - node_depth(i)
+          bar_normal(:, p) = node_normal(:, i)
+          bar_dndx(:, :, p) = dndx
+          bar_slip(:, p) = (x(:, s) - x_n(:, s)) - (positions(:, t) - positions_n(:, t))
         end do
       end if
       do p = lo, hi
@@ -807,25 +831,6 @@ contains
 
   !> The six rigid modes of the blank (unit translations, rotations about its centre with
   !> the arm over the blank's size) along direction d at point y.
-  !> The barrier's pressure p and slope dp/dx at the depth x past its start: zero for
-  !> x <= 0, eps x^2 / (2 w) up to x = w and eps (x - w / 2) beyond: its stiffness grows
-  !> from zero to eps over the width w, so that a node entering it does not meet a jump
-  !> of stiffness between two Newton iterations.
-  pure subroutine barrier_law(x, eps, w, p, slope)
-    real(wp), intent(in) :: x, eps, w
-    real(wp), intent(out) :: p, slope
-    if (.not. x > 0.0_wp) then
-      p = 0.0_wp
-      slope = 0.0_wp
-    else if (x < w) then
-      p = eps*x**2/(2.0_wp*w)
-      slope = eps*x/w
-    else
-      p = eps*(x - 0.5_wp*w)
-      slope = eps
-    end if
-  end subroutine barrier_law
-
   pure function mode_row(y, d, centre, scale) result(row)
     real(wp), intent(in) :: y(3), d(3), centre(3), scale
     real(wp) :: row(6), arm(3)

@@ -27,8 +27,10 @@ module ddpy_forming_data
   !> that face it), its discretization, the Gauss points per direction of its faces
   !> (order: order x order per face) and its points' place in the flat point arrays
   !> (first_point, 0-based; npoint of them: order^2 per face, then one per slave for a
-  !> Gauss-point tool, its barrier); for Gauss-point contact the normal and tangential
-  !> penalty (N/mm^3) and the barrier's stiffness (N/mm^3; 0: none), start and width (mm).
+  !> Gauss-point tool, its node points); for Gauss-point contact the normal and tangential
+  !> penalty (N/mm^3) and its barrier: barrier_depth (mm), the depth in the tool at which
+  !> each slave node is held exactly (negative: none; docs/theory/contact.md, "The
+  !> barrier").
   type :: contact_tool
     type(search_surface) :: surface
     logical :: faced = .false.
@@ -37,14 +39,14 @@ module ddpy_forming_data
     integer :: order = 1
     integer :: first_point = 0, npoint = 0
     real(wp) :: normal_penalty = 0.0_wp, tangential_penalty = 0.0_wp
-    real(wp) :: barrier_stiffness = 0.0_wp, barrier_start = 0.0_wp, barrier_width = 0.0_wp
+    real(wp) :: barrier_depth = -1.0_wp
   end type contact_tool
 
   !> The tools, one after another, with the blank faces of each: tool t's are
   !> face_first(t) + 1 .. face_first(t + 1) of faces (their 4 nodes) and corner (each
   !> corner's slave index in the tool, 0-based, -1 where not a slave); face_weight(i): the
   !> undeformed area point i stands for (its Gauss weight times the area element; a
-  !> barrier point's: its slave's share of the faces' area).
+  !> node point's: its slave's share of the faces' area).
   type :: tool_set
     integer :: ntool = 0, nface = 0, npoint = 0
     type(contact_tool), allocatable :: tool(:)

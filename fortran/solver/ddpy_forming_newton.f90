@@ -114,7 +114,7 @@ contains
                                stress(:, :, :), ep(:, :), strain(:, :, :), axes(:, :, :, :), &
                                back(:, :, :), alpha(:, :), gap(:), normal(:, :), simplified(:), &
                                traction(:, :), pressure(:), shift(:), dc_dt(:, :, :), &
-                               stiffness(:)
+                               stiffness(:), lumped(:, :), barrier_dt(:, :, :)
       integer, allocatable :: state(:), patch(:)
       logical :: moving  ! some fixed dof short of its prescribed value
       real(wp) :: rest   ! how far short: the norm over the fixed dofs
@@ -204,7 +204,8 @@ contains
                slot(cur)%patch(npair + npoint), &
                slot(cur)%traction(3, npoint), slot(cur)%pressure(npoint), &
                slot(cur)%back(6, 8, nback), slot(cur)%shift(nhold), &
-               slot(cur)%dc_dt(3, 3, npair), slot(cur)%stiffness(nhold))
+               slot(cur)%dc_dt(3, 3, npair), slot(cur)%stiffness(nhold), &
+               slot(cur)%lumped(3, npair), slot(cur)%barrier_dt(3, 3, npair))
       slot(cur)%back = start%back_old
       slot(cur)%values(k_slots + 1:k_slots + n_coupling) = layout%coupling
       slot(cur)%shift = 0.0_wp
@@ -218,12 +219,12 @@ contains
     status = 1
     if (start%has_guess) then
       slot(cur)%u = start%guess
-      slot(cur)%force = start%force_n
+      slot(cur)%force = start_force()
       call evaluate(slot(cur), limits%touching, status, element)
     end if
     if (status /= 0) then
       slot(cur)%u = start%u_n
-      slot(cur)%force = start%force_n
+      slot(cur)%force = start_force()
       call evaluate(slot(cur), limits%touching, status, element)
       if (status /= 0) then
         report%outcome = outcome_element
@@ -332,8 +333,6 @@ contains
         if (maxval(abs(dshift))*alpha > limits%hold_step) &
           alpha = limits%hold_step/maxval(abs(dshift))
       end if
-      alpha = min(alpha, barrier_step(du, tools, pairs, law%on, slot(cur)%gap, &
-                                      slot(cur)%normal, holds, dshift, limits%min_step))
       previous = slot(cur)%state
       have_previous = .true.
       moving = slot(cur)%moving
@@ -569,7 +568,7 @@ contains
       call forming_contact(blank%x0 + s%u, x_n, dofs, tools, pairs, law, placed, &
                            placement%positions_n, limits, touching_gap, s%force, lock, &
                            nvalues, s%residual, s%values, s%state, s%gap, s%normal, &
-                           s%traction, s%pressure, s%patch, s%dc_dt)
+                           s%traction, s%pressure, s%patch, s%dc_dt, s%lumped, s%barrier_dt)
       ! A Gauss-point pair's multiplier is eliminated: lambda = F(x), C = 0.
       do p = 1, npair
         if (.not. layout%eliminated(p)) cycle
@@ -577,8 +576,8 @@ contains
         s%residual(nf + 3*p - 2:nf + 3*p) = 0.0_wp
       end do
       call hold_equations(dofs, pairs, law%on, holds, placement%hold_force, &
-                          layout%eliminated, s%force, s%dc_dt, hold_base, &
-                          s%residual(nf + 3*npair + 1:), &
+                          layout%eliminated, layout%barrier, s%force, s%lumped, s%dc_dt, &
+                          s%barrier_dt, hold_base, s%residual(nf + 3*npair + 1:), &
                           s%values, s%stiffness)
       call system_clock(t2)
       report%contact_time = report%contact_time + real(t2 - t1, wp)/real(clock_rate, wp)
@@ -783,7 +782,7 @@ contains
       change = 0.0_wp
       do t = 1, ntool
         if (tools%tool(t)%discretization == contact_node) cycle
-        ! (A Gauss-point tool's points are followed by its slaves' barrier points.)
+        ! (A Gauss-point tool's points are followed by its slaves' node points.)
         do i = tools%tool(t)%first_point + 1, tools%tool(t)%first_point + tools%tool(t)%npoint
           held_force = tools%face_weight(i)*s%pressure(i)
           free_force = tools%face_weight(i)*check%pressure(i)
@@ -806,7 +805,7 @@ contains
         ! stiffness made of that a force of 1.6e5 N on one node of the square cup's punch
         ! (docs/theory/contact.md, "The barrier"); the barrier's depth is continuous
         ! across patches, so its nodes need no hold.
-        if (.not. tools%tool(t)%barrier_stiffness > 0.0_wp) cycle
+        if (tools%tool(t)%barrier_depth < 0.0_wp) cycle
         last = npair + tools%tool(t)%first_point + tools%tool(t)%npoint
         lock(last - (pairs%tool_first(t + 1) - pairs%tool_first(t)) + 1:last) = 0
       end do
@@ -823,12 +822,39 @@ contains
       call record(s)
     end subroutine hold
 
-    !> The converged iterate s as the answer.
+    !> The pairs' forces the increment starts from: the converged ones, but a barrier
+    !> pair's multiplier is its own force, which its node point carries as its traction
+    !> (the converged force holds F(x) too, ddpy_forming).
+    function start_force() result(force)
+      real(wp) :: force(3, npair)
+      integer :: t, p
+      force = start%force_n
+      do t = 1, ntool
+        do p = pairs%tool_first(t) + 1, pairs%tool_first(t + 1)
+          if (layout%barrier(p)) force(:, p) = law%traction_n(:, node_point(t, p))
+        end do
+      end do
+    end function start_force
+
+    !> The node point of barrier pair p of tool t: the tool's points end with one per
+    !> slave (ddpy_forming).
+    pure integer function node_point(t, p)
+      integer, intent(in) :: t, p
+      node_point = tools%tool(t)%first_point + tools%tool(t)%npoint - &
+                   (pairs%tool_first(t + 1) - p)
+    end function node_point
+
+    !> The converged iterate s as the answer: a barrier pair's force is its own and the
+    !> lumped force of the Gauss points on it.
     subroutine finish(s)
       type(evaluation), intent(in) :: s
+      integer :: p
       report%outcome = outcome_converged
       answer%u = s%u
       answer%force = s%force
+      do p = 1, npair
+        if (layout%barrier(p)) answer%force(:, p) = s%force(:, p) + s%lumped(:, p)
+      end do
       answer%fint = s%fint
       answer%stress = s%stress
       answer%ep = s%ep
@@ -846,27 +872,31 @@ contains
   end subroutine forming_increment
 
   !> The equations of the force-controlled tools (see forming_increment) from the pairs'
-  !> forces (lambda; F(x) for an eliminated Gauss-point pair) and their dC/dt
-  !> (forming_contact): each tool's residual sum a . lambda - F (into hold_residual, F its
-  !> hold_force), and from slot hold_base + 1 of values its column a . dC/dt per pair (the
-  !> law rows, or an eliminated pair's free equilibrium rows), its row (the holds' coef
-  !> times the value at slot source, 0-based, or coef alone where source < 0) and its
-  !> diagonal -sum a . dC/dt a over its eliminated pairs, whose force F = lambda - C moves
-  !> with the tool; and its stiffness along its axis, the sum of |dC/dt a| over its pairs
-  !> that take part (on).
-  subroutine hold_equations(dofs, pairs, on, holds, hold_force, eliminated, force, dc_dt, &
-                            hold_base, hold_residual, values, stiffness)
+  !> forces (lambda; F(x) for an eliminated Gauss-point pair, lambda + lumped = lambda +
+  !> F(x) for a barrier pair) and their dC/dt (forming_contact; barrier_dt: a barrier
+  !> pair's own law's): each tool's residual sum a . force - F (into hold_residual, F its
+  !> hold_force), and from slot hold_base + 1 of values its column per pair (a . dC/dt in
+  !> a Gauss-point pair's free equilibrium rows, then in the law rows of a pair with a
+  !> multiplier), its row (the holds' coef times the value at slot source, 0-based, or
+  !> coef alone where source < 0) and its diagonal -sum a . dC/dt a over its Gauss-point
+  !> pairs, whose force F moves with the tool; and its stiffness along its axis, the sum
+  !> of the column's |entries| over its pairs that take part (on).
+  subroutine hold_equations(dofs, pairs, on, holds, hold_force, eliminated, barrier, force, &
+                            lumped, dc_dt, barrier_dt, hold_base, hold_residual, values, &
+                            stiffness)
     type(blank_dofs), intent(in) :: dofs
     type(pair_set), intent(in) :: pairs
     integer, intent(in) :: on(pairs%npair), hold_base
     type(force_holds), intent(in) :: holds
     real(wp), intent(in) :: hold_force(holds%nhold), force(3, pairs%npair), &
-                            dc_dt(3, 3, pairs%npair)
-    logical, intent(in) :: eliminated(pairs%npair)
+                            lumped(3, pairs%npair), dc_dt(3, 3, pairs%npair), &
+                            barrier_dt(3, 3, pairs%npair)
+    logical, intent(in) :: eliminated(pairs%npair), barrier(pairs%npair)
     real(wp), intent(inout) :: hold_residual(holds%nhold), values(*)
     real(wp), intent(out) :: stiffness(holds%nhold)
-    real(wp) :: along(3), a(3), diagonal
+    real(wp) :: along(3), own(3), a(3), diagonal
     integer :: k, p, i, m, slot, t
+    logical :: lumping
     slot = hold_base
     do k = 1, holds%nhold
       t = holds%tool(k)
@@ -875,15 +905,29 @@ contains
       stiffness(k) = 0.0_wp
       hold_residual(k) = -hold_force(k)
       do p = pairs%tool_first(t) + 1, pairs%tool_first(t + 1)
+        lumping = eliminated(p) .or. barrier(p)
         hold_residual(k) = hold_residual(k) + dot_product(a, force(:, p))
+        if (barrier(p)) hold_residual(k) = hold_residual(k) + dot_product(a, lumped(:, p))
         along = matmul(dc_dt(:, :, p), a)
-        if (on(p) /= 0) stiffness(k) = stiffness(k) + sum(abs(along))
+        own = along
+        if (barrier(p)) own = matmul(barrier_dt(:, :, p), a)
+        if (on(p) /= 0) then
+          if (lumping) stiffness(k) = stiffness(k) + sum(abs(along))
+          if (.not. eliminated(p)) stiffness(k) = stiffness(k) + sum(abs(own))
+        end if
+        if (lumping) then
+          do i = 1, 3
+            if (dofs%eqn(i, pairs%node(p) + 1) < 0) cycle
+            slot = slot + 1
+            values(slot) = along(i)
+          end do
+          diagonal = diagonal - dot_product(a, along)
+        end if
+        if (eliminated(p)) cycle
         do i = 1, 3
-          if (eliminated(p) .and. dofs%eqn(i, pairs%node(p) + 1) < 0) cycle
           slot = slot + 1
-          values(slot) = along(i)
+          values(slot) = own(i)
         end do
-        if (eliminated(p)) diagonal = diagonal - dot_product(a, along)
       end do
       do m = holds%first(k) + 1, holds%first(k + 1)
         slot = slot + 1
@@ -924,42 +968,6 @@ contains
       step = max(step, min_step)
     end if
   end function penetration_step
-
-  !> Longest fraction (at most 1) of the step du (3, nnode), with the force-controlled
-  !> tools' shifts dshift along hold_axis, that takes no slave node of a tool with a
-  !> barrier (penalty(3, t) > 0) from above the end of the barrier's ramp (d_b + w,
-  !> penalty(4:5, t)) to below it, the pair's depth (-gap) and normal linearized at the
-  !> present iterate; at least min_step. Where a node is not yet in the ramp the tangent
-  !> has none of the barrier's stiffness, and the full step (a holder pressed with a force
-  !> it meets with the penalty alone, 3 % of the thickness deep) lands it far inside: the
-  !> next iterate's barrier force, many times the load, throws the tool off the blank.
-  pure function barrier_step(du, tools, pairs, on, gap, normal, holds, dshift, min_step) &
-      result(step)
-    real(wp), intent(in) :: du(:, :), gap(:), normal(:, :), dshift(:), min_step
-    type(tool_set), intent(in) :: tools
-    type(pair_set), intent(in) :: pairs
-    integer, intent(in) :: on(:)
-    type(force_holds), intent(in) :: holds
-    real(wp) :: step, tool_du(3), depth, ramp_end, closing
-    integer :: t, p, k
-    step = 1.0_wp
-    do t = 1, tools%ntool
-      if (.not. tools%tool(t)%barrier_stiffness > 0.0_wp) cycle
-      tool_du = 0.0_wp
-      do k = 1, holds%nhold
-        if (holds%tool(k) == t) tool_du = tool_du + dshift(k)*holds%axis(:, k)
-      end do
-      ramp_end = tools%tool(t)%barrier_start + tools%tool(t)%barrier_width
-      do p = pairs%tool_first(t) + 1, pairs%tool_first(t + 1)
-        if (on(p) == 0 .or. .not. ieee_is_finite(gap(p))) cycle
-        depth = -gap(p)
-        if (depth >= ramp_end) cycle
-        closing = -dot_product(du(:, pairs%node(p) + 1) - tool_du, normal(:, p))
-        if (depth + closing*step > ramp_end) step = (ramp_end - depth)/closing
-      end do
-    end do
-    step = max(step, min_step)
-  end function barrier_step
 
   !> The Newton correction x of J x = f with older factors M (MUMPS's, behind handle):
   !> GMRES from x0 = M^-1 f on J M^-1 (right preconditioning, the preconditioned basis kept

@@ -9,19 +9,21 @@
 !>   1. the solid's tangent (ddpy_solid_assembly, solid_coo_pattern): k_slots of them;
 !>   2. the coupling entries (node's equilibrium row, multiplier) of every free component of
 !>      every pair, pair after pair: -1, or 0 where the multiplier is eliminated (a
-!>      Gauss-point pair: lambda = F(x), ddpy_forming_newton);
+!>      Gauss-point pair without a barrier: lambda = F(x), ddpy_forming_newton);
 !>   3. dC/dx over the free dofs of each pair's patch (pair, row, patch node, column); a
 !>      held component of a surface-to-surface or Gauss-point pair (a slave on a symmetry
 !>      plane, law lambda_k = 0) has none, since in its row they would join the patch's
 !>      nodes to one another through the multiplier (the paper's bending mesh took 81
-!>      million factor entries instead of 59 for these 410 pairs); an eliminated pair's
+!>      million factor entries instead of 59 for these 410 pairs); a Gauss-point pair's
 !>      entries, -dF/dx, lie in its node's equilibrium rows, where the faces' nodes already
-!>      couple (no fill);
+!>      couple (no fill), and a barrier pair's own law (ddpy_forming) follows them: dC/dx
+!>      at its node's free dofs (row, column), in its law rows;
 !>   4. dC/dlambda (pair, row, column): contact_values slots up to here (ddpy_forming);
-!>   5. per force-controlled tool (ddpy_forming_newton, hold_equations): its column (3 law
-!>      rows per pair; a Gauss-point pair's free equilibrium rows), its row (a . lambda_p
-!>      of each pair: the constant a_j at lambda_p,j, or for a Gauss-point pair -a_i times
-!>      each of its -dF_i/dx entries, their source slots) and its diagonal.
+!>   5. per force-controlled tool (ddpy_forming_newton, hold_equations): its column (per
+!>      pair, a Gauss-point pair's free equilibrium rows, then the 3 law rows of a pair
+!>      with a multiplier), its row (a . lambda_p of each pair with a multiplier: the
+!>      constant a_j at lambda_p,j; then for each Gauss-point pair -a_i times each of its
+!>      -dF_i/dx entries, their source slots) and its diagonal.
 module ddpy_jacobian_layout
   use ddpy_kinds, only: wp
   use ddpy_blank, only: blank_mesh, blank_dofs
@@ -34,13 +36,15 @@ module ddpy_jacobian_layout
   !> The layout: n unknowns, nvalues coordinate slots (rows, cols: 0-based), of which
   !> k_slots the solid's, ncoupling the coupling entries (their values, coupling) and
   !> contact_values the solid's with the contact blocks'; per pair, whether its multiplier
-  !> is eliminated. built: computed for the present tools and holds.
+  !> is eliminated, and whether it is a barrier pair (a Gauss-point pair with a multiplier
+  !> of its own). built: computed for the present tools and holds.
   type :: jacobian_layout
     logical :: built = .false.
     integer :: n = 0, nvalues = 0, k_slots = 0, ncoupling = 0, contact_values = 0
     integer, allocatable :: rows(:), cols(:)       !< (nvalues)
     real(wp), allocatable :: coupling(:)           !< (ncoupling)
     logical, allocatable :: eliminated(:)          !< (npair)
+    logical, allocatable :: barrier(:)             !< (npair)
   end type jacobian_layout
 
 contains
@@ -55,16 +59,21 @@ contains
     type(pair_set), intent(in) :: pairs
     type(force_holds), intent(inout) :: holds
     type(jacobian_layout), intent(out) :: layout
-    logical, allocatable :: patched(:)
+    logical, allocatable :: patched(:), lumped(:)
     integer, allocatable :: patch_slot(:)
     integer :: pass, slot, nsource, nf, npair, t, p, i, j, e, k, node_eq, col, row, s
     logical :: fill
     nf = dofs%nf
     npair = pairs%npair
-    allocate(layout%eliminated(npair), patched(npair), patch_slot(npair))
+    allocate(layout%eliminated(npair), layout%barrier(npair), patched(npair), lumped(npair), &
+             patch_slot(npair))
     do t = 1, tools%ntool
-      layout%eliminated(pairs%tool_first(t) + 1:pairs%tool_first(t + 1)) = &
+      lumped(pairs%tool_first(t) + 1:pairs%tool_first(t + 1)) = &
         tools%tool(t)%discretization == contact_gauss
+      layout%barrier(pairs%tool_first(t) + 1:pairs%tool_first(t + 1)) = &
+        tools%tool(t)%discretization == contact_gauss .and. tools%tool(t)%barrier_depth >= 0.0_wp
+      layout%eliminated(pairs%tool_first(t) + 1:pairs%tool_first(t + 1)) = &
+        tools%tool(t)%discretization == contact_gauss .and. tools%tool(t)%barrier_depth < 0.0_wp
       patched(pairs%tool_first(t) + 1:pairs%tool_first(t + 1)) = &
         tools%tool(t)%discretization /= contact_node
     end do
@@ -101,7 +110,7 @@ contains
           node_eq = dofs%eqn(i, pairs%node(p) + 1)
           if (patched(p) .and. node_eq < 0) cycle
           row = law_row(p, i)
-          if (layout%eliminated(p) .and. node_eq >= 0) row = node_eq
+          if (lumped(p) .and. node_eq >= 0) row = node_eq
           do e = pairs%patch_first(p) + 1, pairs%patch_first(p + 1)
             do j = 1, 3
               col = dofs%eqn(j, pairs%patch_node(e) + 1)
@@ -109,6 +118,15 @@ contains
               slot = slot + 1
               if (fill) call put(slot, row, col)
             end do
+          end do
+        end do
+        if (.not. layout%barrier(p)) cycle
+        do i = 1, 3  ! a barrier pair's own law: its node alone
+          do j = 1, 3
+            col = dofs%eqn(j, pairs%node(p) + 1)
+            if (col < 0) cycle
+            slot = slot + 1
+            if (fill) call put(slot, law_row(p, i), col)
           end do
         end do
       end do
@@ -127,11 +145,16 @@ contains
         row = nf + 3*npair + k - 1
         do p = pairs%tool_first(t) + 1, pairs%tool_first(t + 1)  ! its column
           do i = 1, 3
-            col = law_row(p, i)
-            if (layout%eliminated(p)) col = dofs%eqn(i, pairs%node(p) + 1)
+            if (.not. lumped(p)) exit
+            col = dofs%eqn(i, pairs%node(p) + 1)
             if (col < 0) cycle
             slot = slot + 1
             if (fill) call put(slot, col, row)
+          end do
+          if (layout%eliminated(p)) cycle
+          do i = 1, 3
+            slot = slot + 1
+            if (fill) call put(slot, law_row(p, i), row)
           end do
         end do
         do p = pairs%tool_first(t) + 1, pairs%tool_first(t + 1)  ! its row: the multipliers
@@ -146,7 +169,7 @@ contains
           end do
         end do
         do p = pairs%tool_first(t) + 1, pairs%tool_first(t + 1)  ! and the F(x) entries
-          if (.not. layout%eliminated(p)) cycle
+          if (.not. lumped(p)) cycle
           s = patch_slot(p)
           do i = 1, 3
             if (dofs%eqn(i, pairs%node(p) + 1) < 0) cycle  ! (patched: a held row has none)

@@ -493,10 +493,11 @@ def write_default_case(folder: Path = DEFAULT_CASE) -> Path:
     """Write the built-in case into ``folder``: the decks of the coarse REFERENCE case (the
     Nagata tools at DD3IMP's hexahedron and node-to-surface contact) with the mesh
     (``mesh.msh``) and the tool files (``tools/<tool>.tool``) beside them. Not the four
-    models' setting (ddpy's defaults, the solid-shell and Gauss-point contact): that takes about 20
-    minutes on 2 threads, 990 increments at 7 to 14 Newton iterations each, too long for
-    the test suite that runs this case, and no coarser blank holds (docs/theory/contact.md,
-    "No smaller deep drawing for the test suite yet")."""
+    models' setting (ddpy's defaults, the solid-shell and Gauss-point contact): that takes about
+    12 minutes on 1 thread, 802 increments at 3.3 Newton iterations each (docs/theory/
+    contact.md, "The barrier"), still too long for the test suite that runs this case, and
+    no coarser blank holds (docs/theory/contact.md, "No smaller deep drawing for the test
+    suite yet")."""
     import shutil
     import tempfile
 

@@ -22,7 +22,7 @@ module ddpy_forming
                           gauss_traction
   use ddpy_blank, only: blank_dofs
   use ddpy_forming_data, only: tool_set, pair_set, pair_law, increment_limits, contact_node, &
-                               contact_gauss, max_face_order
+                               contact_gauss, max_face_order, has_barrier, node_point
   implicit none
   private
   public :: forming_contact, rank_of_rows, gauss_legendre
@@ -144,8 +144,7 @@ contains
     gauss_force = 0.0_wp
     barred = .false.
     do t = 1, ntool
-      barrier_pair(pairs%tool_first(t) + 1:pairs%tool_first(t + 1)) = &
-        tools%tool(t)%discretization == contact_gauss .and. tools%tool(t)%barrier_depth >= 0.0_wp
+      barrier_pair(pairs%tool_first(t) + 1:pairs%tool_first(t + 1)) = has_barrier(tools%tool(t))
     end do
     traction = 0.0_wp
     pressure = 0.0_wp
@@ -200,7 +199,7 @@ contains
     do t = 1, ntool
       if (.not. searched(t)) cycle
       if (tools%tool(t)%discretization == contact_gauss) then
-        if (tools%tool(t)%barrier_depth < 0.0_wp) then
+        if (.not. has_barrier(tools%tool(t))) then
           ! C = lambda - F(x): the pair's force is the lumped force of the Gauss points.
           do p = pairs%tool_first(t) + 1, pairs%tool_first(t + 1)
             if (status(p) /= contact_none) c(:, p) = force(:, p) - gauss_force(:, p)
@@ -211,8 +210,7 @@ contains
         ! as its node point's traction, and its pressure over its share of the area is
         ! the point's (a slave that found no patch keeps C = lambda).
         do p = pairs%tool_first(t) + 1, pairs%tool_first(t + 1)
-          i = tools%tool(t)%first_point + tools%tool(t)%npoint - &
-              (pairs%tool_first(t + 1) - p)
+          i = node_point(tools, pairs, t, p)
           traction(:, i) = force(:, p)
           if (.not. barred(p)) cycle
           call contact_residual(force(:, p), bar_normal(:, p), bar_gap(p), &
@@ -520,7 +518,7 @@ contains
       call face_points(t, npf, basis, gx, gn)
       call search_points(t, kg, gx, gn, gpatch, gparams, gpoints, gnormal, gtangents, &
                          gdistance, gstatus, gits, gcand)
-      with_barrier = tools%tool(t)%barrier_depth >= 0.0_wp
+      with_barrier = has_barrier(tools%tool(t))
       if (with_barrier) call node_depths(t, lo, hi, npair + tools%tool(t)%first_point + kg, node_depth, &
                                    node_normal, node_found, node_patch, node_uv, &
                                    node_tangents, node_edge)

@@ -12,7 +12,7 @@ module ddpy_forming_data
   implicit none
   private
   public :: contact_tool, tool_set, pair_set, force_holds, tool_placement, pair_law, &
-            increment_limits
+            increment_limits, has_barrier, node_point
 
   !> Contact discretizations of a tool: node-to-surface (its slaves projected on it),
   !> surface-to-surface (gaps, normals and slips of the Gauss points of the blank faces
@@ -112,5 +112,22 @@ module ddpy_forming_data
     real(wp) :: penetration = 0.0_wp, min_step = 1.0_wp, yield_tolerance = -1.0_wp
     real(wp) :: size_ratio = 1.0_wp, hold_step = 0.0_wp
   end type increment_limits
+
+contains
+
+  !> Whether tool holds its slaves at a barrier (a Gauss-point tool with a barrier depth).
+  pure logical function has_barrier(tool)
+    type(contact_tool), intent(in) :: tool
+    has_barrier = tool%discretization == contact_gauss .and. tool%barrier_depth >= 0.0_wp
+  end function has_barrier
+
+  !> The node point (in the flat point arrays) of pair p of Gauss-point tool t: the tool's
+  !> points end with one per slave, in pair order.
+  pure integer function node_point(tools, pairs, t, p)
+    type(tool_set), intent(in) :: tools
+    type(pair_set), intent(in) :: pairs
+    integer, intent(in) :: t, p
+    node_point = tools%tool(t)%first_point + tools%tool(t)%npoint - (pairs%tool_first(t + 1) - p)
+  end function node_point
 
 end module ddpy_forming_data

@@ -17,7 +17,7 @@ module ddpy_forming_newton
   use ddpy_solid_assembly, only: solid_assemble, shell_modes
   use ddpy_blank, only: blank_mesh, blank_dofs
   use ddpy_forming_data, only: tool_set, pair_set, force_holds, tool_placement, pair_law, &
-                               increment_limits, contact_node
+                               increment_limits, contact_node, has_barrier, node_point
   use ddpy_forming_problem, only: newton_settings, increment_start, increment_answer, &
                                   increment_report, search_none, search_energy, &
                                   outcome_converged, outcome_landing, outcome_element, &
@@ -795,7 +795,7 @@ contains
     !> Holds the pairs in contact on the patches they have at s, and evaluates s so.
     subroutine hold(s)
       type(evaluation), intent(inout) :: s
-      integer :: status, element, t, last
+      integer :: status, element, t
       lock = s%patch
       lock(1:npair) = merge(lock(1:npair), 0, law%on /= 0)
       do t = 1, ntool
@@ -805,9 +805,9 @@ contains
         ! stiffness made of that a force of 1.6e5 N on one node of the square cup's punch
         ! (docs/theory/contact.md, "The barrier"); the barrier's depth is continuous
         ! across patches, so its nodes need no hold.
-        if (tools%tool(t)%barrier_depth < 0.0_wp) cycle
-        last = npair + tools%tool(t)%first_point + tools%tool(t)%npoint
-        lock(last - (pairs%tool_first(t + 1) - pairs%tool_first(t)) + 1:last) = 0
+        if (.not. has_barrier(tools%tool(t))) cycle
+        lock(npair + node_point(tools, pairs, t, pairs%tool_first(t) + 1): &
+             npair + node_point(tools, pairs, t, pairs%tool_first(t + 1))) = 0
       end do
       if (.not. any(lock > 0)) return
       held_on_patches = .true.
@@ -831,18 +831,10 @@ contains
       force = start%force_n
       do t = 1, ntool
         do p = pairs%tool_first(t) + 1, pairs%tool_first(t + 1)
-          if (layout%barrier(p)) force(:, p) = law%traction_n(:, node_point(t, p))
+          if (layout%barrier(p)) force(:, p) = law%traction_n(:, node_point(tools, pairs, t, p))
         end do
       end do
     end function start_force
-
-    !> The node point of barrier pair p of tool t: the tool's points end with one per
-    !> slave (ddpy_forming).
-    pure integer function node_point(t, p)
-      integer, intent(in) :: t, p
-      node_point = tools%tool(t)%first_point + tools%tool(t)%npoint - &
-                   (pairs%tool_first(t + 1) - p)
-    end function node_point
 
     !> The converged iterate s as the answer: a barrier pair's force is its own and the
     !> lumped force of the Gauss points on it.

@@ -27,7 +27,8 @@
 module ddpy_jacobian_layout
   use ddpy_kinds, only: wp
   use ddpy_blank, only: blank_mesh, blank_dofs
-  use ddpy_forming_data, only: tool_set, pair_set, force_holds, contact_node, contact_gauss
+  use ddpy_forming_data, only: tool_set, pair_set, force_holds, contact_node, contact_gauss, &
+                               has_barrier
   use ddpy_solid_assembly, only: solid_coo_pattern
   implicit none
   private
@@ -70,10 +71,9 @@ contains
     do t = 1, tools%ntool
       lumped(pairs%tool_first(t) + 1:pairs%tool_first(t + 1)) = &
         tools%tool(t)%discretization == contact_gauss
-      layout%barrier(pairs%tool_first(t) + 1:pairs%tool_first(t + 1)) = &
-        tools%tool(t)%discretization == contact_gauss .and. tools%tool(t)%barrier_depth >= 0.0_wp
+      layout%barrier(pairs%tool_first(t) + 1:pairs%tool_first(t + 1)) = has_barrier(tools%tool(t))
       layout%eliminated(pairs%tool_first(t) + 1:pairs%tool_first(t + 1)) = &
-        tools%tool(t)%discretization == contact_gauss .and. tools%tool(t)%barrier_depth < 0.0_wp
+        tools%tool(t)%discretization == contact_gauss .and. .not. has_barrier(tools%tool(t))
       patched(pairs%tool_first(t) + 1:pairs%tool_first(t + 1)) = &
         tools%tool(t)%discretization /= contact_node
     end do

@@ -6,9 +6,9 @@ answer is sane.
 - ``examples/bending`` and the built-in cylindrical bending (``ddpy run``) over the first
   quarter of their punch travel (7.1 of 28.5 mm) and springback: whole, each takes about a
   minute on one thread;
-- the built-in deep drawing (``ddpy run deep-drawing``) whole, in
-  tests/test_reverse_deep_drawing.py, which checks the same of it (its tolerances with
-  assert_converged_within_tolerances below).
+- the built-in deep drawing (``ddpy run deep-drawing``) as its smaller variant (one layer
+  of solid-shells), whole, in tests/test_reverse_deep_drawing.py, which checks the same of
+  it (its tolerances with assert_converged_within_tolerances below).
 
 Each run: completed; every converged increment's recorded residual and correction within
 its phase's tolerances (a loop that accepts an increment on one criterion alone, or

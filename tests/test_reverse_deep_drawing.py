@@ -1,9 +1,12 @@
-"""The reverse deep drawing benchmark end to end: `ddpy run deep-drawing`, both stages.
+"""The reverse deep drawing benchmark end to end at ddpy's defaults, both stages.
 
-Runs the built-in case (the benchmark's coarse blank with Nagata tools at DD3IMP's
-hexahedron and node-to-surface contact, its ``dd3imp`` case,
-benchmarks/reverse_deep_drawing/make_case.py) through both stages with the case runner, and
-checks it twice:
+The built-in case (`ddpy run deep-drawing`: the benchmark's coarse blank with Nagata tools
+at the defaults, the solid-shell and Gauss-point contact with its barrier, its ``nagata``
+case) takes about 12 minutes on 1 thread, too long for the suite. The run checked here is
+its smaller variant (benchmarks/reverse_deep_drawing/make_case.py ``write_variant_case``):
+the same tool files and decks, the blank meshed with the same 4 mm quadrilaterals in one
+layer of solid-shells instead of two (the element is made for one layer; 384 elements
+against 768). It is run through both stages with the case runner and checked twice:
 
 - against the physics, independently of any earlier run: the blank has no support along z
   but the tools (its symmetry planes react along x and y only), so the tools' z reactions
@@ -12,13 +15,16 @@ checks it twice:
   stress and the force that tears the cup wall in plane strain, and within 30 % of Siebel's
   classical estimate; the flange's free edge is in uniaxial hoop compression, so its
   equivalent plastic strain is its hoop strain ln(r / R0); the cup's depth after stage 1 is
-  the punch travel;
+  the punch travel; no node sinks into a tool deeper than the barrier's 0.5 % of the
+  thickness (#47's limit is 1 %);
 - against stored reference values (tests/data/reverse_deep_drawing_reference.json): the punch
   force curves of both stages, the cup heights and flange radius, the plastic strain along a
-  radial section and its maximum. The reference is a run of this same case
+  radial section and its maximum. The reference is a run of this same variant
   (``python tests/test_reverse_deep_drawing.py`` rewrites it, stating the commit), accepted
-  because it passes the physical checks above; the tolerances below say how far a change
-  may move it before it must explain why and renew the reference.
+  because it passes the physical checks above and because its forces agree with the
+  benchmark's coarse two-layer blank (docs/benchmarks/reverse_deep_drawing.md) within the
+  tolerance stated at ``COARSE_PEAKS``; the tolerances below say how far a change may move
+  it before it must explain why and renew the reference.
 """
 
 from __future__ import annotations
@@ -38,6 +44,7 @@ from ddpy.app.runner import BUILT_IN_CASES, run_case
 from ddpy.io.decks import read_case
 from ddpy.io.results import ResultsReader
 from ddpy.io.toolfile import read_tool
+from ddpy.model.solid import DEFAULT_ELEMENT
 from ddpy.model.tool import BARRIER_DEPTH
 from ddpy.studies.drawing import element_centroids, hexahedron_volumes
 
@@ -47,6 +54,8 @@ sys.path.insert(0, str(BENCH.parent))  # the benchmarks' shared module
 from bench_common import load_module  # noqa: E402
 
 CASE = BUILT_IN_CASES["deep-drawing"]
+#: The variant run here: the built-in case's 4 mm quadrilaterals in one layer.
+VARIANT_SIZE, VARIANT_LAYERS = 4.0, 1
 REFERENCE = Path(__file__).resolve().parent / "data" / "reverse_deep_drawing_reference.json"
 #: Where the force curves are compared: fractions of each stage's travel.
 SAMPLES = np.linspace(0.05, 1.0, 39)
@@ -90,6 +99,7 @@ def read_numbers(results: Path) -> dict[str, Any]:
         numbers["curves"] = [(t.tolist(), f.tolist()) for t, f in curves]
         numbers["peak_force_N"] = [float(f.max()) for _, f in curves]
         numbers["tool_force_z"] = history["tool_force"][:, :, 2].tolist()
+        numbers["penetration_mm"] = np.asarray(history["penetration"]).max(axis=1).tolist()
         shapes = [r.field("coordinates", f.index) for f in ends]
         numbers["volume_mm3"] = [float(hexahedron_volumes(x, elements).sum())
                                  for x in (nodes0, *shapes)]
@@ -119,10 +129,20 @@ def read_numbers(results: Path) -> dict[str, Any]:
     return numbers
 
 
+def write_variant(folder: Path) -> Path:
+    """The smaller variant of the built-in case that the suite runs."""
+    return _make_case().write_variant_case(folder, VARIANT_SIZE, layers=VARIANT_LAYERS)
+
+
 @pytest.fixture(scope="module")
-def numbers(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
+def variant(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return write_variant(tmp_path_factory.mktemp("variant"))
+
+
+@pytest.fixture(scope="module")
+def numbers(tmp_path_factory: pytest.TempPathFactory, variant: Path) -> dict[str, Any]:
     out = tmp_path_factory.mktemp("deep_drawing")
-    outcome = run_case(read_case(CASE), out)
+    outcome = run_case(read_case(variant), out)
     return {"status": outcome.status, "message": outcome.message,
             "results": outcome.results, **read_numbers(outcome.results)}
 
@@ -162,22 +182,22 @@ def test_built_in_case_is_the_benchmark_coarse_nagata_case(tmp_path: Path) -> No
 
 def test_a_variant_is_the_built_in_case_on_another_blank(tmp_path: Path) -> None:
     # make_case.py --variant writes the smaller deep drawings measured for the test suite
-    # (docs/theory/contact.md, "The barrier"): the built-in case's tool files, the decks of
-    # the benchmark's coarse Nagata case (ddpy's defaults: no element, contact or barrier
-    # line), only
-    # the blank (here one layer of 6 mm elements) and max_increment changed.
+    # (docs/theory/contact.md, "The barrier"): the built-in case's tool files and decks
+    # (ddpy's defaults: no element, contact or barrier line), only the blank (here one layer
+    # of 6 mm elements) and max_increment changed.
     made = _make_case()
     variant = made.write_variant_case(tmp_path / "variant", 6.0, layers=1, max_increment=1.0)
     for tool in (CASE / "tools").iterdir():
         assert (variant / "tools" / tool.name).read_bytes() == tool.read_bytes(), tool.name
-    coarse = made.write_case(tmp_path / "coarse", "nagata", "coarse", tools_prefix="tools/",
-                             mesh_file="mesh.msh")
     for name in ("tools.dat", "material.dat", "bc.dat"):
-        assert (variant / name).read_text() == (coarse / name).read_text(), name
-    text = (variant / "tools.dat").read_text()
-    assert "barrier" not in text and "discretization" not in text
+        assert (CASE / name).read_text() == made.DEFAULT_HEADER + (variant / name).read_text()
+    for name in ("tools.dat", "mesh.dat"):
+        keys = {line.split()[0] for line in (CASE / name).read_text().splitlines()
+                if line.strip() and not line.startswith("#")}
+        assert not keys & {"barrier", "discretization", "element"}, name
     assert all(t.discretization == "gauss" and t.barrier == BARRIER_DEPTH
-               for t in read_case(variant).tools)
+               for t in read_case(CASE).tools)
+    assert read_case(CASE).element == read_case(variant).element == DEFAULT_ELEMENT
     built, small = read_case(CASE), read_case(variant)
     assert [(p.name, p.tools, p.travel, p.lead) for p in small.phases] == \
         [(p.name, p.tools, p.travel, p.lead) for p in built.phases]
@@ -198,26 +218,55 @@ def test_both_stages_complete(numbers: dict[str, Any]) -> None:
     assert all(n > 10 for n in numbers["increments"])
 
 
-def test_every_increment_converged_within_its_phase_tolerances(numbers: dict[str, Any]
-                                                               ) -> None:
+def test_every_increment_converged_within_its_phase_tolerances(numbers: dict[str, Any],
+                                                               variant: Path) -> None:
     with ResultsReader(numbers["results"]) as r:
         history = r.history()
-    assert_converged_within_tolerances(history, read_case(CASE).phases)
+    assert_converged_within_tolerances(history, read_case(variant).phases)
 
 
 def test_the_tools_balance_along_z(numbers: dict[str, Any]) -> None:
     # Newton stops at an out-of-balance force of 1e-4 of the internal force's norm; over
-    # the blank's ~1300 nodes that allows sums of the order of 1e-4 * sqrt(n) of the force.
+    # the blank's ~850 nodes that allows sums of the order of 1e-4 * sqrt(n) of the force.
     forces = np.asarray(numbers["tool_force_z"])
     scale = np.abs(forces).max(axis=1)
     assert np.all(np.abs(forces.sum(axis=1)) <= 5e-3 * scale + 1.0)
 
 
-def test_plastic_flow_keeps_the_volume(numbers: dict[str, Any]) -> None:
-    # Elastic volume change: (1 - 2 nu) / E * mean stress ~ 0.4 / 210000 * 300 = 6e-4.
+def test_the_nodes_volume_is_kept_to_the_coarse_solid_shells_bound(numbers: dict[str, Any]
+                                                                     ) -> None:
+    # Plastic flow keeps the volume and elastic strains change it by (1 - 2 nu) / E * mean
+    # stress ~ 6e-4. The volume measured here is the trilinear hexahedra's through the nodes,
+    # which the solid-shell's assumed strains do not hold to: elements bent over radii of one
+    # or two element sizes lose it (the stage-2 wall, wrapped half a turn over punch 1's
+    # nose, most). It shrinks with the element size: on the benchmark's two-layer blanks at
+    # the end of stage 2, -5.0 % with 4 mm elements and -1.0 % with 2 mm
+    # (docs/benchmarks/reverse_deep_drawing*.md, "Physical checks"). Measured here -1.7 % and
+    # -4.4 %; a lost element or a wrong stress update loses far more.
     v0, v1, v2 = numbers["volume_mm3"]
     assert v0 == pytest.approx(math.pi * 85.0**2 / 4 * 0.98, rel=2e-3)  # the faceted disc
-    assert abs(v1 / v0 - 1) < 3e-3 and abs(v2 / v0 - 1) < 3e-3
+    assert -0.03 < v1 / v0 - 1 < 6e-4 and -0.06 < v2 / v0 - 1 < 6e-4
+
+
+def test_no_node_sinks_into_a_tool_below_the_limit(numbers: dict[str, Any]) -> None:
+    # #47's limit: 1 % of the thickness at every converged increment; the barrier holds
+    # every node at 0.5 % (BARRIER_DEPTH), so the deepest is that, to Newton's tolerance.
+    deepest = float(np.max(numbers["penetration_mm"]))
+    assert deepest <= 0.01 * 0.98
+    assert deepest == pytest.approx(BARRIER_DEPTH * 0.98, rel=0.05)
+
+
+def test_the_peak_forces_agree_with_the_two_layer_blank(numbers: dict[str, Any]) -> None:
+    # The benchmark's coarse blank (the built-in case: the same 4 mm quadrilaterals in two
+    # layers), its kept run in docs/benchmarks/reverse_deep_drawing_runs.json. One layer's
+    # two Gauss points through the thickness overrate the fully plastic bending moment by
+    # 15 % (docs/theory/solid_shell.md), but the drawing force is mostly the flange's
+    # drawing and friction: measured -1.1 % and -2.9 %.
+    kept = json.loads((ROOT / "docs" / "benchmarks" / "reverse_deep_drawing_runs.json")
+                      .read_text())["nagata"]["numbers"]["stages"]
+    for stage, name in enumerate(("stage1", "stage2")):
+        assert numbers["peak_force_N"][stage] == pytest.approx(kept[name]["max_force_N"],
+                                                               rel=0.05), name
 
 
 def test_stage1_peak_force_against_drawing_theory(numbers: dict[str, Any]) -> None:
@@ -257,7 +306,7 @@ def test_the_flange_edge_is_in_hoop_compression(numbers: dict[str, Any]) -> None
 
 def test_the_cup_depth_after_stage_1_is_the_punch_travel(numbers: dict[str, Any]) -> None:
     # The bottom follows punch 1's end ring (0.98 above the blank's bottom) down; inside
-    # punch 1's bore it is free and sags a little under the radial tension (0.24 mm here).
+    # punch 1's bore it is free and sags a little under the radial tension (0.12 mm here).
     travel = _make_case().DIMENSIONS.stage1
     assert -travel - 0.3 < numbers["bottom_z_mm"] < -travel + 0.05
 
@@ -308,7 +357,8 @@ def write_reference(results: Path | None = None) -> None:
         result = read_numbers(results)
     else:
         with tempfile.TemporaryDirectory() as scratch:
-            outcome = run_case(read_case(CASE), Path(scratch))
+            folder = write_variant(Path(scratch) / "variant")
+            outcome = run_case(read_case(folder), Path(scratch) / "run")
             assert outcome.status == "completed", outcome.message
             result = read_numbers(outcome.results)
     samples = []
@@ -331,12 +381,13 @@ if __name__ == "__main__":
     write_reference(Path(sys.argv[1]) if len(sys.argv) > 1 else None)
 
 
-def test_the_report_counts_the_effort_up_to_each_mm_of_travel(numbers: dict[str, Any]) -> None:
+def test_the_report_counts_the_effort_up_to_each_mm_of_travel(numbers: dict[str, Any],
+                                                               variant: Path) -> None:
     # The benchmark's report compares runs that stopped over the travel they all reached
     # (claim (d) on the paper's blank): its counts up to each whole mm of punch travel
     # must be those of the increments that ended there.
     report = load_module(BENCH / "run.py", "drawing_run")
-    run = report.from_results(Path(numbers["results"]), CASE).numbers
+    run = report.from_results(Path(numbers["results"]), variant).numbers
     with ResultsReader(numbers["results"]) as r:
         history = r.history()
     for p, name in enumerate(report.STAGES):

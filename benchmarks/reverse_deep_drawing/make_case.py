@@ -3,7 +3,7 @@
     python benchmarks/reverse_deep_drawing/make_case.py              # all meshes
     python benchmarks/reverse_deep_drawing/make_case.py --mesh coarse
     python benchmarks/reverse_deep_drawing/make_case.py --default-case   # `ddpy run deep-drawing`
-    python benchmarks/reverse_deep_drawing/make_case.py --variant DIR --size 6 --layers 1
+    python benchmarks/reverse_deep_drawing/make_case.py --variant DIR --size 4 --layers 1   # tests
 
 Writes, next to this script (all generated, git-ignored):
 
@@ -483,21 +483,19 @@ def write_case(folder: Path, model: str, mesh: str, dims: Dimensions = DIMENSION
 DEFAULT_CASE = HERE.parents[1] / "ddpy" / "cases" / "reverse_deep_drawing"
 DEFAULT_HEADER = """\
 # A built-in case of `ddpy run` (`ddpy run deep-drawing`): the coarse blank and Nagata tools of
-# benchmarks/reverse_deep_drawing at DD3IMP's element and contact (its dd3imp case), written
-# by its make_case.py --default-case (do not edit here: tests/test_reverse_deep_drawing.py
-# checks that the two agree).
+# benchmarks/reverse_deep_drawing at ddpy's defaults (its nagata case), written by its
+# make_case.py --default-case (do not edit here: tests/test_reverse_deep_drawing.py checks
+# that the two agree).
 """
 
 
 def write_default_case(folder: Path = DEFAULT_CASE) -> Path:
-    """Write the built-in case into ``folder``: the decks of the coarse REFERENCE case (the
-    Nagata tools at DD3IMP's hexahedron and node-to-surface contact) with the mesh
-    (``mesh.msh``) and the tool files (``tools/<tool>.tool``) beside them. Not the four
-    models' setting (ddpy's defaults, the solid-shell and Gauss-point contact): that takes about
-    12 minutes on 1 thread, 802 increments at 3.3 Newton iterations each (docs/theory/
-    contact.md, "The barrier"), still too long for the test suite that runs this case, and
-    no coarser blank holds (docs/theory/contact.md, "No smaller deep drawing for the test
-    suite yet")."""
+    """Write the built-in case into ``folder``: the decks of the coarse Nagata case (ddpy's
+    defaults: the solid-shell and Gauss-point contact with its barrier) with the mesh
+    (``mesh.msh``) and the tool files (``tools/<tool>.tool``) beside them. It takes about
+    12 minutes on 1 thread (802 increments at 3.3 Newton iterations each, docs/theory/
+    contact.md, "The barrier"); the test suite runs a smaller variant of it
+    (write_variant_case)."""
     import shutil
     import tempfile
 
@@ -508,7 +506,7 @@ def write_default_case(folder: Path = DEFAULT_CASE) -> Path:
         for tool, paths in built.items():
             shutil.copyfile(paths["nagata"], folder / "tools" / f"{tool}.nagata.tool")
     make_mesh("coarse", folder / "mesh.msh")
-    write_case(folder, REFERENCE, "coarse", tools_prefix="tools/", mesh_file="mesh.msh")
+    write_case(folder, "nagata", "coarse", tools_prefix="tools/", mesh_file="mesh.msh")
     for name in ("control.dat", "mesh.dat", "tools.dat", "bc.dat", "material.dat"):
         path = folder / name
         path.write_text(DEFAULT_HEADER + path.read_text())

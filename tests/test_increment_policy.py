@@ -85,7 +85,8 @@ def test_a_converged_trial_over_its_strain_or_rotation_limit_is_redone_to_it(kin
     assert (control.step, control.reason) == next_step(0.025, 0.1, kind, *(
         (0.5, 0.0) if kind == "strain" else (0.0, 0.5)))
     # A tuning with no slack redoes a trial just over its limit.
-    strict = IncrementController(IncrementLimits(), 0.5, 0.1, IncrementTuning(slack=1.0))
+    strict = IncrementController(IncrementLimits(strain=0.02, rotation_deg=1.0), 0.5, 0.1,
+                                 IncrementTuning(slack=1.0))
     assert (strict.strain_redo if kind == "strain" else strict.rotation_redo)(1.01 * limit)
 
 

@@ -22,9 +22,9 @@ against 768). It is run through both stages with the case runner and checked twi
   radial section and its maximum. The reference is a run of this same variant
   (``python tests/test_reverse_deep_drawing.py`` rewrites it, stating the commit), accepted
   because it passes the physical checks above and because its forces agree with the
-  benchmark's coarse two-layer blank (docs/benchmarks/reverse_deep_drawing.md) within the
-  tolerance stated at ``COARSE_PEAKS``; the tolerances below say how far a change may move
-  it before it must explain why and renew the reference.
+  benchmark's coarse two-layer blank (docs/benchmarks/reverse_deep_drawing.md) within 5 %
+  (test_the_peak_forces_agree_with_the_two_layer_blank); the tolerances below say how far
+  a change may move it before it must explain why and renew the reference.
 """
 
 from __future__ import annotations

@@ -492,9 +492,9 @@ DEFAULT_HEADER = """\
 def write_default_case(folder: Path = DEFAULT_CASE) -> Path:
     """Write the built-in case into ``folder``: the decks of the coarse Nagata case (ddpy's
     defaults: the solid-shell and Gauss-point contact with its barrier) with the mesh
-    (``mesh.msh``) and the tool files (``tools/<tool>.tool``) beside them. It takes 575
-    increments and 2,054 Newton iterations (docs/theory/speed.md, "The rotation limit"),
-    11 minutes on 1 thread; the test suite runs a smaller variant of it
+    (``mesh.msh``) and the tool files (``tools/<tool>.tool``) beside them. It takes about
+    12 minutes on 1 thread (802 increments at 3.3 Newton iterations each, docs/theory/
+    contact.md, "The barrier"); the test suite runs a smaller variant of it
     (write_variant_case)."""
     import shutil
     import tempfile

@@ -195,10 +195,9 @@ def test_a_variant_is_the_built_in_case_on_another_blank(tmp_path: Path) -> None
         keys = {line.split()[0] for line in (CASE / name).read_text().splitlines()
                 if line.strip() and not line.startswith("#")}
         assert not keys & {"barrier", "discretization", "element"}, name
-    assert all(t.discretization == "gauss" and t.barrier == BARRIER_DEPTH
-               for t in read_case(CASE).tools)
-    assert read_case(CASE).element == read_case(variant).element == DEFAULT_ELEMENT
     built, small = read_case(CASE), read_case(variant)
+    assert all(t.discretization == "gauss" and t.barrier == BARRIER_DEPTH for t in built.tools)
+    assert built.element == small.element == DEFAULT_ELEMENT
     assert [(p.name, p.tools, p.travel, p.lead) for p in small.phases] == \
         [(p.name, p.tools, p.travel, p.lead) for p in built.phases]
     assert [p.max_increment for p in small.phases] == [1.0, 1.0]

@@ -472,7 +472,7 @@ def test_increment_lands_on_the_yield_surface() -> None:
     assert result.tool_displacements["plane"][-1][2] == pytest.approx(6e-3)
 
 
-def test_yield_landing_skips_points_already_at_the_surface() -> None:
+def test_yield_landing_skips_points_at_the_surface_and_reloading() -> None:
     # Uniaxial stress in one Gauss point under a step that would overshoot the yield stress
     # by 50 %: from 0.5 Y the step is cut to reach Y (r = 0.5 / 1.0 of the way, plus half the
     # tolerance); from 0.9996 Y (a point a tiny unloading left just inside the surface) it is
@@ -481,14 +481,18 @@ def test_yield_landing_skips_points_already_at_the_surface() -> None:
     props = material_props(steel)
     y0 = 645.3 * 0.0102**0.252
 
-    def landing(sigma: float, strain: float) -> float:
+    def landing(sigma: float, strain: float, ep: float = 0.0) -> float:
         stress, increment = np.zeros((8, 6)), np.zeros((8, 6))
         stress[:, 0], increment[:, 0] = sigma, strain
-        return yield_landing(props, stress, np.zeros(8), increment, 0.01)
+        return yield_landing(props, stress, np.full(8, ep), increment, 0.01)
 
     de = 1.0 * y0 / 210e3
     assert landing(0.5 * y0, de) == pytest.approx(0.5 * 1.005, rel=1e-6)
     assert landing(0.9996 * y0, de) == 1.0
+    # A point that yielded before (ep 0.05, Y = 318 MPa) and unloaded to half its yield
+    # stress reloads without a landing; its first yielding was landed.
+    y = 645.3 * (0.0102 + 0.05)**0.252
+    assert landing(0.5 * y, 1.0 * y / 210e3, ep=0.05) == 1.0
 
 
 def test_springback_supports_only_the_rigid_modes() -> None:

@@ -278,7 +278,8 @@ def write_case(folder: Path, material: str, model: str, mesh: str,
 
 
 #: Increment limits of the built-in case, looser than ddpy's defaults (rmin_yield 0.1,
-#: rmin_rotation 1 degree), for a run of minutes: at the defaults the coarse aluminium case
+#: rmin_rotation 2 degrees), for a run of minutes: at the defaults of the time (rmin_rotation
+#: 1 degree, every reloading point landed too) the coarse aluminium case
 #: took increments of 0.03 to 0.05 mm, landing the yield front point by point as it crosses
 #: the flange (47 increments to 2.3 mm: about 900 to 40 mm), then 0.1 to 0.16 mm as the sheet
 #: turns over the die's 5 mm radius (rotation-limited with rmin_yield 0.5); with both loosened
@@ -291,7 +292,7 @@ DEFAULT_LIMITS = {"rmin_yield": 0.5, "rmin_rotation": 5.0}
 #: meshed in fair faces; the hexahedron reached 40 mm (84 increments, 468 iterations).
 DEFAULT_ELEMENT = "hexahedron"
 LIMIT_REASONS = {"rmin_yield": "fraction of the yield stress (default 0.1), see make_case.py",
-                 "rmin_rotation": "degrees (default 1), see make_case.py"}
+                 "rmin_rotation": "degrees (default 2), see make_case.py"}
 #: The built-in case ``ddpy run square-cup``: this benchmark's coarse aluminium case with
 #: Nagata tools, at DEFAULT_LIMITS.
 DEFAULT_CASE = HERE.parents[1] / "ddpy" / "cases" / "square_cup"

@@ -54,13 +54,15 @@ class IncrementLimits:
       Gauss point;
     - ``rotation_deg`` (``rmin_rotation``): the largest rigid rotation of an element, in
       degrees (from the least-squares linear fit of its nodes' displacement increments;
-      2 would save the deep drawing 23 % of its iterations, docs/theory/speed.md, "The
-      rotation limit");
+      2 rather than 1 saved the deep drawing 23 % of its iterations, docs/theory/speed.md,
+      "The rotation limit");
     - ``yield_tolerance`` (``rmin_yield``): the elasto-plastic transition. A Gauss point
-      elastic at the start of the increment whose elastic trial stress would overshoot the
-      yield stress by more than this fraction makes the increment land it on the yield
-      surface (None: off). In a bend a point starts to yield in almost every increment:
-      0.01 landed them one by one (docs/input-format.md);
+      that has not yielded yet whose elastic trial stress would overshoot the yield stress
+      by more than this fraction makes the increment land it on the yield surface (None:
+      off); a point that yielded before reloads without a landing (on faceted tools every
+      facet edge unloads and reloads the points sliding over it). In a bend a point starts
+      to yield in almost every increment: 0.01 landed them one by one
+      (docs/input-format.md);
     - ``first_touch`` (``rmin_contact``): a free node that would pass through a tool lands
       on it instead; gaps below ``touch_gap`` times the element size count as touching
       (1e-2: at 1e-3 the paper bending blank's first increment landed a punch node 0.44 um
@@ -88,7 +90,7 @@ class IncrementLimits:
     """
 
     strain: float = 0.02
-    rotation_deg: float = 1.0
+    rotation_deg: float = 2.0
     yield_tolerance: float | None = 0.1
     first_touch: bool = True
     touch: str = "new"

@@ -492,13 +492,14 @@ class Material:
 
 def yield_landing(props: ArrayLike, stress_old: ArrayLike, ep_old: ArrayLike,
                   strain_increment: ArrayLike, tolerance: float) -> float:
-    """The fraction of a strain increment at which the first of k material points that was
-    elastic reaches the yield surface, if its elastic trial stress would overshoot it by
-    more than ``tolerance`` (a fraction of the yield stress); 1 otherwise (the r_min
-    elasto-plastic transition, docs/theory/contact.md). ``props``: the PROP_COUNT properties
-    (``Material.props()``); stress_old (k, 6), ep_old (k,): the converged state;
-    strain_increment (k, 6), engineering shears. A point within ``tolerance`` below the
-    surface counts as yielding already. The fraction is that of the first landing times
+    """The fraction of a strain increment at which the first of k material points that has
+    not yielded yet (``ep_old`` 0) reaches the yield surface, if its elastic trial stress
+    would overshoot it by more than ``tolerance`` (a fraction of the yield stress); 1
+    otherwise (the r_min elasto-plastic transition, docs/theory/contact.md). ``props``: the
+    PROP_COUNT properties (``Material.props()``); stress_old (k, 6), ep_old (k,): the
+    converged state; strain_increment (k, 6), engineering shears. A point within
+    ``tolerance`` below the surface counts as yielding already; a point that yielded before
+    is not landed when it reloads. The fraction is that of the first landing times
     1 + tolerance / 2 (just past the surface), at least 1e-6."""
     s = float_array(np.reshape(stress_old, (-1, 6)), "stress_old", (None, 6))
     k = s.shape[0]

@@ -413,11 +413,14 @@ contains
                            + coefficients(6)*stress(4)**2)))
   end function hill48_equivalent_stress
 
-  !> The fraction of a strain increment at which the first material point that was elastic
-  !> reaches the yield surface, if its elastic trial stress overshoots it by more than
-  !> tolerance (a fraction of the yield stress); 1 otherwise. A point within tolerance below
-  !> the surface counts as yielding already: landing it again would cut the increment to
-  !> almost nothing, over and over. The Hill form is quadratic, so along the elastic path
+  !> The fraction of a strain increment at which the first material point that has not
+  !> yielded yet (ep_old = 0) reaches the yield surface, if its elastic trial stress
+  !> overshoots it by more than tolerance (a fraction of the yield stress); 1 otherwise. A
+  !> point within tolerance below the surface counts as yielding already: landing it again
+  !> would cut the increment to almost nothing, over and over. A point that has yielded
+  !> before and unloaded is not landed when it reloads: on faceted tools every facet edge
+  !> a point slides over unloads and reloads it, and landing each reloading multiplied the
+  !> increments by five (docs/theory/contact.md, increment control). The Hill form is quadratic, so along the elastic path
   !> stress_old + s C de the landing s solves a quadratic; the fraction returned is the
   !> smallest s times 1 + tolerance / 2 (just past the surface), within [1e-6, 1].
   pure function yield_landing(props, k, stress_old, ep_old, strain_increment, tolerance) &
@@ -436,6 +439,7 @@ contains
         ds(4:6) = shear*de(4:6)
         y = material_yield_stress(props, ep_old(i))
         qa = hill48_form(props(prop_hill:prop_hill + 5), a, a)
+        if (ep_old(i) > 0.0_wp) cycle  ! yielded before: a reloading, not landed
         if (.not. qa < (y*(1.0_wp - tolerance))**2) cycle  ! yielding already
         qab = hill48_form(props(prop_hill:prop_hill + 5), a, ds)
         qb = hill48_form(props(prop_hill:prop_hill + 5), ds, ds)

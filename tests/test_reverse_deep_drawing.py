@@ -2,7 +2,7 @@
 
 The built-in case (`ddpy run deep-drawing`: the benchmark's coarse blank with Nagata tools
 at the defaults, the solid-shell and Gauss-point contact with its barrier, its ``nagata``
-case) takes about 12 minutes on 1 thread, too long for the suite. The run checked here is
+case) takes about 5 minutes on 1 thread, too long for the suite. The run checked here is
 its smaller variant (benchmarks/reverse_deep_drawing/make_case.py ``write_variant_case``):
 the same tool files and decks, the blank meshed with the same 4 mm quadrilaterals in one
 layer of solid-shells instead of two (the element is made for one layer; 384 elements

@@ -158,6 +158,24 @@ def test_partial_runs_compare_their_effort_over_the_travel_they_all_reached() ->
     assert "Faceted-fine increments 4.29" in found["(d)"] and "2.5: no;" in found["(d)"]
 
 
+def test_a_run_at_other_code_leaves_its_claims_not_checked() -> None:
+    # Claims compare tool models at one code: a kept run of older code (another element,
+    # another increment control) differs by more than its tool model.
+    numbers = {m: synthetic_run(m).numbers for m in run.MODELS}
+    numbers["facets_fine"]["code"] = "0ld0000"
+    assert run.judged_code(numbers) == "abc1234"
+    found = {text[:3]: (verdict, detail) for text, verdict, detail in run.claims(numbers)}
+    for claim in "abcdefgh":
+        assert found[f"({claim})"][0] == "not checked", claim
+    assert ("not at the judged code abc1234: Faceted-fine at code 0ld0000"
+            in found["(b)"][1])
+    # Two against two: Nagata's code is the judged one.
+    numbers["bezier"]["code"] = "0ld0000"
+    assert run.judged_code(numbers) == "abc1234"
+    numbers["nagata"]["code"] = "0ld0000"
+    assert run.judged_code(numbers) == "0ld0000"
+
+
 def test_a_partial_bezier_run_leaves_the_claims_that_need_it() -> None:
     # Nagata stands for the smooth models in (a); (b) and (c) need Bezier; (d) does not.
     numbers = {m: synthetic_run(m, partial=m == "bezier").numbers for m in run.MODELS}

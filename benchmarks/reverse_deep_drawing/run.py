@@ -535,22 +535,38 @@ def shape_errors(tools: Path, stem: str | None = None
 # ------------------------------------------------------------------------ claims
 
 
+def judged_code(numbers: dict[str, dict[str, Any]]) -> str:
+    """The code the claims are judged at: that of most of the four tool models' runs (of
+    Nagata's on a tie). A claim compares runs at this code only: runs at other code differ
+    by more than the tool model."""
+    codes = [numbers[m].get("code", "") for m in MODELS if m in numbers]
+    if not codes:
+        return ""
+    first = numbers["nagata"].get("code", "") if "nagata" in numbers else codes[0]
+    return max(dict.fromkeys([first, *codes]), key=codes.count)
+
+
 def _complete(numbers: dict[str, dict[str, Any]], model: str, stage: str | None = None
               ) -> bool:
-    """Whether ``model`` ran and completed ``stage`` (default: both)."""
-    if model not in numbers:
+    """Whether ``model`` ran at the judged code and completed ``stage`` (default: both)."""
+    if model not in numbers or numbers[model].get("code", "") != judged_code(numbers):
         return False
     stages = STAGES if stage is None else (stage,)
     return all(numbers[model]["stages"][s]["complete"] for s in stages)
 
 
 def _not_reached(numbers: dict[str, dict[str, Any]], models: tuple[str, ...]) -> str:
-    """Why a claim is not checked: the runs it needs that are missing or partial."""
+    """Why a claim is not checked: the runs it needs that are missing, at other code or
+    partial."""
+    code = judged_code(numbers)
     missing = [LABELS[m] for m in models if m not in numbers]
+    other = [f"{LABELS[m]} at code {numbers[m].get('code') or 'unknown'}" for m in models
+             if m in numbers and numbers[m].get("code", "") != code]
     partial = [f"{LABELS[m]} partial, {_reached(numbers[m])}" for m in models
                if m in numbers and numbers[m]["status"] != "completed"]
     return "; ".join(([f"not run: {', '.join(missing)}"] if missing else [])
-                         + partial)
+                     + ([f"not at the judged code {code}: {', '.join(other)}"]
+                        if other else []) + partial)
 
 
 def _reached(n: dict[str, Any]) -> str:

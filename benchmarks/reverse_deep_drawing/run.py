@@ -1093,7 +1093,10 @@ def report(mesh: str, numbers: dict[str, dict[str, Any]],
         f"{dims.approach:g} mm below the cup), blank-holder 2 held {make_case.GAP2:g} mm "
         "from punch 1's end (die 2); die 1 and blank-holder 1 are lifted (off), the flange "
         "left by stage 1 is free (make_case.Dimensions says why). Largest increment "
-        f"{make_case.MAX_INCREMENT.get(mesh, 0.25):g} mm of punch travel.",
+        f"{make_case.MAX_INCREMENT.get(mesh, 0.25):g} mm of punch travel"
+        + (f"; r_min elasto-plastic transition `rmin_yield {make_case.RMIN_YIELD[mesh]:g}` "
+           "(ddpy's default 0.1; make_case.RMIN_YIELD says why)"
+           if mesh in make_case.RMIN_YIELD else "") + ".",
         "",
         f"Blank: **{mesh}** mesh, {hexahedra} hexahedra in {make_case.LAYERS} layers "
         f"(unstructured, elements of about {make_case.ELEMENT_SIZE[mesh]:.3g} mm; the "

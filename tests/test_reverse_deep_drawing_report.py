@@ -397,6 +397,9 @@ def test_the_convergence_table_names_what_does_not_converge_and_why() -> None:
         in text
     assert "the blank's refinement" in text
     assert text.count("(outside)") == 1
+    # The decks' own settings per blank are stated, from make_case.
+    assert ("Deck settings that differ between the blanks (coarse / medium / paper): "
+            "`max_increment` 0.5 / 0.25 / 0.25; `rmin_yield` 0.1 / 0.1 / 0.3") in text
     by_mesh["paper"]["nagata"]["discretization"] = "hexahedron, node-to-surface contact"
     assert "no pure mesh effect" in "\n".join(run.convergence_section(by_mesh))
     by_mesh["paper"]["nagata"]["stages"]["stage2"]["max_force_N"] /= 1.10

@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 
 from ddpy.model.control import DEFAULT_PENETRATION as PENETRATION_LIMIT
+from ddpy.model.control import IncrementLimits
 from ddpy.studies.bending import force_oscillation
 from ddpy.studies.drawing import (
     contact_force_balance,
@@ -111,6 +112,9 @@ ELEMENT_VOLUME = 0.05
 SAME_STRAIN = 0.05
 #: Claim (d): "about twice" the increments and iterations: a ratio in this range.
 TWICE = (1.5, 2.5)
+#: ddpy's default r_min elasto-plastic transition, which a blank's decks keep unless
+#: make_case.RMIN_YIELD sets another.
+DEFAULT_RMIN_YIELD = IncrementLimits().yield_tolerance
 #: Share of a run's increments at the largest size from which the size, not the contact,
 #: is what fixed their count (claim (d)'s explanation).
 AT_MAX_SHARE = 0.8
@@ -1573,6 +1577,15 @@ def convergence_section(by_mesh: dict[str, dict[str, dict[str, Any]]], model: st
               for m in meshes}
     lines += ["", "Runs: " + "; ".join(f"{m}: {d}, code {c}" for m, (d, c) in setups.items())
               + "."]
+    settings = {"max_increment": {m: make_case.MAX_INCREMENT.get(m, 0.25) for m in meshes},
+                "rmin_yield": {m: make_case.RMIN_YIELD.get(m, DEFAULT_RMIN_YIELD)
+                               for m in meshes}}
+    differ = [f"`{k}` " + " / ".join(f"{v[m]:g}" for m in meshes)
+              for k, v in settings.items() if len(set(v.values())) > 1]
+    if differ:
+        lines.append("Deck settings that differ between the blanks (" + " / ".join(meshes)
+                     + "): " + "; ".join(differ) + " (make_case.py, MAX_INCREMENT and "
+                     "RMIN_YIELD, gives why and what each moved where it was measured).")
     if missed:
         same = setups[fine] == setups[finer]
         lines.append(

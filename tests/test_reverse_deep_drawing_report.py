@@ -405,6 +405,14 @@ def test_the_convergence_table_names_what_does_not_converge_and_why() -> None:
     by_mesh["paper"]["nagata"]["stages"]["stage2"]["max_force_N"] /= 1.10
     assert "Every quantity of medium and paper agrees" in "\n".join(
         run.convergence_section(by_mesh))
+    # A finest run that stopped in stage 1 compares nothing: the table must not say it
+    # agrees.
+    by_mesh["paper"]["nagata"]["stages"]["stage1"]["complete"] = False
+    by_mesh["paper"]["nagata"]["stages"]["stage2"]["complete"] = False
+    text = "\n".join(run.convergence_section(by_mesh))
+    assert "agrees" not in text
+    assert ("Not compared between medium and paper (a run did not reach where it is "
+            "measured): stage1: largest punch force, stage1: cup height") in text
 
 
 def make_case_meshes() -> tuple[str, ...]:

@@ -1560,12 +1560,13 @@ def convergence_section(by_mesh: dict[str, dict[str, dict[str, Any]]], model: st
              f"the two finest, {fine} and {finer}, against {100 * CONVERGED:g} %.", "",
              _row(["", *meshes, f"{finer} against {fine}"]),
              _row(["---"] * (len(meshes) + 2))]
-    missed = []
+    missed, unknown = [], []
     for key in values[finer]:
         row = [values[m][key] for m in meshes]
         a, b = values[fine][key], values[finer][key]
         if a is None or b is None:
             verdict = "-"
+            unknown.append(key.split(" [")[0])
         else:
             change = (b - a) / max(abs(a), 1e-12)
             ok = abs(change) <= CONVERGED
@@ -1596,9 +1597,12 @@ def convergence_section(by_mesh: dict[str, dict[str, dict[str, Any]]], model: st
                 + " against ".join(f"{d}, {c}" for d, c in (setups[fine], setups[finer]))
                 + "), so this is no pure mesh effect: rerun both at one discretization and "
                 "code to tell."))
-    else:
+    elif not unknown:
         lines.append(f"Every quantity of {fine} and {finer} agrees within "
                      f"{100 * CONVERGED:g} %.")
+    if unknown:
+        lines.append(f"Not compared between {fine} and {finer} (a run did not reach where "
+                     f"it is measured): {', '.join(unknown)}.")
     return [*lines, ""]
 
 

@@ -1099,7 +1099,7 @@ def report(mesh: str, numbers: dict[str, dict[str, Any]],
         "left by stage 1 is free (make_case.Dimensions says why). Largest increment "
         f"{make_case.MAX_INCREMENT.get(mesh, 0.25):g} mm of punch travel"
         + (f"; r_min elasto-plastic transition `rmin_yield {make_case.RMIN_YIELD[mesh]:g}` "
-           "(ddpy's default 0.1; make_case.RMIN_YIELD says why)"
+           f"(ddpy's default {DEFAULT_RMIN_YIELD:g}; make_case.RMIN_YIELD says why)"
            if mesh in make_case.RMIN_YIELD else "") + ".",
         "",
         f"Blank: **{mesh}** mesh, {hexahedra} hexahedra in {make_case.LAYERS} layers "

@@ -507,8 +507,8 @@ def write_default_case(folder: Path = DEFAULT_CASE) -> Path:
     """Write the built-in case into ``folder``: the decks of the coarse Nagata case (ddpy's
     defaults: the solid-shell and Gauss-point contact with its barrier) with the mesh
     (``mesh.msh``) and the tool files (``tools/<tool>.tool``) beside them. It takes about
-    12 minutes on 1 thread (802 increments at 3.3 Newton iterations each, docs/theory/
-    contact.md, "The barrier"); the test suite runs a smaller variant of it
+    5 minutes on 1 thread (its increments and iterations are the Nagata column of
+    docs/benchmarks/reverse_deep_drawing.md); the test suite runs a smaller variant of it
     (write_variant_case)."""
     import shutil
     import tempfile

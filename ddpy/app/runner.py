@@ -237,7 +237,8 @@ def _carried(last: PhaseProgress, share: float, next_share: float,
         start={name: x.copy() for name, x in position.items()}, offsets=last.offsets,
         factor=0.0, step=step, reason=last.reason,
         last_du=None if last.last_du is None else last.last_du * scale,
-        last_dp=None if last.last_dp is None else last.last_dp * scale)
+        last_dp=None if last.last_dp is None else last.last_dp * scale,
+        last_size=None if last.last_size is None else last.last_size / scale)
 
 
 class _Run:
@@ -286,7 +287,7 @@ class _Run:
             "elapsed": self.elapsed + time.perf_counter() - self._clock, "progress": None}
         if progress is not None:
             meta["progress"] = {"factor": progress.factor, "step": progress.step,
-                                "reason": progress.reason,
+                                "reason": progress.reason, "last_size": progress.last_size,
                                 "offsets": {k: o for k, (o, _) in progress.offsets.items()}}
             arrays.update({f"start/{k}": v for k, v in progress.start.items()})
             arrays.update({f"offset/{k}": v for k, (_, v) in progress.offsets.items()})
@@ -349,7 +350,7 @@ class _Run:
                 offsets={k: (o, arrays[f"offset/{k}"]) for k, o in prog["offsets"].items()},
                 factor=float(prog["factor"]), step=float(prog["step"]),
                 reason=str(prog["reason"]), last_du=arrays.get("last_du"),
-                last_dp=arrays.get("last_dp"))
+                last_dp=arrays.get("last_dp"), last_size=prog.get("last_size"))
         self._reopen_at = (int(meta["increments"]), int(meta["iterations"]),
                            int(meta["frames"]))
 

@@ -56,6 +56,7 @@ from ddpy.model.newton import (
     increment,
 )
 from ddpy.model.solid import Solid, SolidState, _components
+from ddpy.model.start import increment_start
 from ddpy.model.tool import RigidTool
 from ddpy.model.work import Work
 
@@ -96,11 +97,6 @@ def cut_hint(failure: str) -> str:
     return "lower max_increment (control.dat)"
 
 
-def _extrapolated(u: NDArray[np.float64], step: float, rate: NDArray[np.float64] | None,
-                  ) -> NDArray[np.float64] | None:
-    """The start of an increment of ``step`` (phase factor) from the converged ``u`` at the
-    last increment's mean ``rate``. None without a rate."""
-    return None if rate is None else u + step * rate
 
 
 @dataclass(frozen=True)
@@ -151,8 +147,8 @@ class PhaseProgress:
     """Where a ``FormingProblem.run`` stands after a converged increment: the tool positions
     at the start of the phase, the offsets of gap-held tools, the phase factor reached, the
     next trial increment with what set it, and the last displacement increment and
-    pressure change per unit factor. Given back as ``resume`` (with the problem's state
-    restored) the run continues exactly as it would have."""
+    pressure change per unit factor and that increment's size. Given back as ``resume``
+    (with the problem's state restored) the run continues exactly as it would have."""
 
     start: dict[str, NDArray[np.float64]]
     offsets: dict[str, tuple[str, NDArray[np.float64]]]
@@ -161,6 +157,8 @@ class PhaseProgress:
     reason: str
     last_du: NDArray[np.float64] | None
     last_dp: NDArray[np.float64] | None = None
+    #: the last increment's size (phase factor; None: taken as the next one's)
+    last_size: float | None = None
     #: the increment's number (counted over the FormingResult), the phase's name given to
     #: run, and the leading tool's travel since the start of the run's motion (mm)
     increment: int = 0
@@ -315,8 +313,8 @@ class _PhaseRun:
     """What ``FormingProblem.run`` carries from one increment to the next within a phase:
     its layout and settings, the result it records into, the tools' motions, gap offsets,
     force ramps and start positions, the phase factor reached, the last increment's rates
-    of the displacements and the pairs' pressures, the increment controller, and the lifted
-    tools' release histories waiting to join the first increment's."""
+    of the displacements and the pairs' pressures and its size, the increment controller,
+    and the lifted tools' release histories waiting to join the first increment's."""
 
     layout: Layout
     newton: NewtonSettings
@@ -334,6 +332,7 @@ class _PhaseRun:
     factor: float = 0.0
     last_du: NDArray[np.float64] | None = None
     last_dp: NDArray[np.float64] | None = None
+    last_size: float | None = None
     initial: dict[str, NDArray[np.float64]] = field(default_factory=dict)
     released: tuple[list, list] = ([], [])
 
@@ -626,6 +625,7 @@ class FormingProblem:
             run.start, run.factor = resume.start, resume.factor
             run.control.resume(resume.step, resume.reason)
             run.last_du, run.last_dp = resume.last_du, resume.last_dp
+            run.last_size = resume.last_size
         self._check_start(run)
         # Tools lifted off at the start of the phase let go of the blank gradually, before
         # the phase's first increment (docs/theory/contact.md): their iterations count as
@@ -683,8 +683,10 @@ class FormingProblem:
             positions[name] = self.position[name].copy()
         pressing = run.ramp[:, 0] + target * (run.ramp[:, 1] - run.ramp[:, 0])
         landing = control.landing()
-        # Start from the last increment's displacement rate (docs/theory/contact.md).
-        guess = _extrapolated(self.u, target - factor, run.last_du)
+        # Start from the last increment's displacement rate and turn (docs/theory/contact.md).
+        guess = None if run.last_du is None else increment_start(
+            self.solid.mesh.nodes, self.solid.mesh.elements, self.u, run.last_du,
+            target - factor, run.last_size or target - factor)
         careful = control.start(run.last_du is None)
         touching = _Touching(self.tuning.touching * self.size, resting=not careful)
         size_ratio = control.nominal / (target - factor)
@@ -779,6 +781,7 @@ class FormingProblem:
             run.released = ([], [])
         size = trial.target - run.factor
         run.last_du = (outcome.u - self.u) / size
+        run.last_size = size
         run.last_dp = np.einsum("ij,ij->i", outcome.force - self.force,
                                 outcome.gap[1]) / size
         self._take(outcome)
@@ -792,7 +795,7 @@ class FormingProblem:
                        for i, t in enumerate(self.tools)})
         run.control.accept(trial.strain, trial.rotation)
         return PhaseProgress(run.start, run.offsets, run.factor, run.control.step,
-                             run.control.reason, run.last_du, run.last_dp,
+                             run.control.reason, run.last_du, run.last_dp, size,
                              increment=len(result.factors), phase=run.phase,
                              travel=run.factor * run.travel)
 

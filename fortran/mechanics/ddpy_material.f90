@@ -420,9 +420,10 @@ contains
   !> would cut the increment to almost nothing, over and over. A point that has yielded
   !> before and unloaded is not landed when it reloads: on faceted tools every facet edge
   !> a point slides over unloads and reloads it, and landing each reloading multiplied the
-  !> increments by five (docs/theory/contact.md, increment control). The Hill form is quadratic, so along the elastic path
-  !> stress_old + s C de the landing s solves a quadratic; the fraction returned is the
-  !> smallest s times 1 + tolerance / 2 (just past the surface), within [1e-6, 1].
+  !> increments by five (docs/theory/contact.md, increment control). The Hill form is
+  !> quadratic, so along the elastic path stress_old + s C de the landing s solves a
+  !> quadratic; the fraction returned is the smallest s times 1 + tolerance / 2 (just past
+  !> the surface), within [1e-6, 1].
   pure function yield_landing(props, k, stress_old, ep_old, strain_increment, tolerance) &
     result(fraction)
     real(wp), intent(in) :: props(material_prop_count), stress_old(6, k), ep_old(k), &
@@ -430,16 +431,17 @@ contains
     integer, intent(in) :: k
     real(wp) :: fraction, lam, shear, ds(6), y, qa, qab, qb, disc, s, smallest
     integer :: i
-    lam = props(prop_young)*props(prop_poisson)/((1.0_wp + props(prop_poisson))*(1.0_wp - 2.0_wp*props(prop_poisson)))
+    lam = props(prop_young)*props(prop_poisson)/ &
+          ((1.0_wp + props(prop_poisson))*(1.0_wp - 2.0_wp*props(prop_poisson)))
     shear = props(prop_young)/(2.0_wp*(1.0_wp + props(prop_poisson)))
     smallest = huge(1.0_wp)
     do i = 1, k
+      if (ep_old(i) > 0.0_wp) cycle  ! yielded before: a reloading, not landed
       associate (a => stress_old(:, i), de => strain_increment(:, i))
         ds(1:3) = lam*(de(1) + de(2) + de(3)) + 2.0_wp*shear*de(1:3)
         ds(4:6) = shear*de(4:6)
         y = material_yield_stress(props, ep_old(i))
         qa = hill48_form(props(prop_hill:prop_hill + 5), a, a)
-        if (ep_old(i) > 0.0_wp) cycle  ! yielded before: a reloading, not landed
         if (.not. qa < (y*(1.0_wp - tolerance))**2) cycle  ! yielding already
         qab = hill48_form(props(prop_hill:prop_hill + 5), a, ds)
         qb = hill48_form(props(prop_hill:prop_hill + 5), ds, ds)

@@ -310,6 +310,23 @@ def test_the_soundness_check_reads_its_verdicts_off_the_forces() -> None:
     assert "some above it" in first and "outside its 20 %" in first
 
 
+def test_the_soundness_check_leaves_out_a_stage_a_run_did_not_complete() -> None:
+    """A run stopped in stage 2 has no stage-2 force in the hand check: its largest force
+    so far, here far above the necking force, is not the stage's."""
+    numbers = {m: synthetic_run(m).numbers for m in run.MODELS}
+    numbers["nagata"] = synthetic_run("nagata", partial=True).numbers
+    estimates = run.stage_estimates({})
+    for n in numbers.values():
+        for stage in run.STAGES:
+            n["stages"][stage]["max_force_N"] = 0.95 * estimates[stage]["siebel_N"]
+    numbers["nagata"]["stages"]["stage2"]["max_force_N"] = 10.0 * estimates["stage2"]["neck_N"]
+    lines = run.soundness_section(numbers, list(run.MODELS))
+    row = [line for line in lines if line.startswith("| computed, Nagata")][0]
+    assert row.rstrip(" |").endswith("-"), row
+    second = [line for line in lines if line.startswith("- stage2")][0]
+    assert "0.95 to 0.95 of Siebel's estimate (within its 20 %)" in second, second
+
+
 def test_the_effort_claims_fail_where_the_runs_say_so() -> None:
     """(e)-(h) each turned by one number: the facets as fast as the smooth models; the
     fine facets' contact gain largest in stage 1; the facets' increments within the smooth

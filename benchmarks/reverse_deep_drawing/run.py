@@ -1302,7 +1302,8 @@ def soundness_section(numbers: dict[str, dict[str, Any]], models: list[str]) -> 
              "wall's section). A drawing is sound when its ratios are within practice (a "
              "first draw below the limiting ratio of about 2 of a DDQ steel, a redraw of 1.2 "
              "to 1.4) and its force below the necking force; Siebel's estimate is good to "
-             "10 or 20 %.", "",
+             "10 or 20 %. A run that did not complete a stage has no computed force there "
+             "(-).", "",
              _row(["", *[s for s in STAGES]]), _row(["---"] * (1 + len(STAGES))),
              _row(["draw ratio", *[f"{estimates[s]['draw_ratio']:.3g}" for s in STAGES]]),
              _row(["Siebel, no holder friction [N]",
@@ -1312,10 +1313,17 @@ def soundness_section(numbers: dict[str, dict[str, Any]], models: list[str]) -> 
              _row(["Siebel with it [N]",
                    *[f"{estimates[s]['siebel_holder_N']:.0f}" for s in STAGES]]),
              _row(["wall necks at [N]", *[f"{estimates[s]['neck_N']:.0f}" for s in STAGES]])]
+
+    def largest(m: str, s: str) -> float | None:
+        # A stage the run did not complete has no largest force yet: its largest so far
+        # is not the stage's.
+        stage = numbers[m]["stages"][s]
+        return stage["max_force_N"] if stage.get("complete") else None
+
     for m in models:
         cells = []
         for s in STAGES:
-            force = numbers[m]["stages"][s]["max_force_N"]
+            force = largest(m, s)
             cells.append("-" if force is None else
                          f"{force:.0f} ({force / estimates[s]['siebel_holder_N']:.2f} of "
                          f"Siebel, {force / estimates[s]['neck_N']:.2f} of necking)")
@@ -1323,7 +1331,7 @@ def soundness_section(numbers: dict[str, dict[str, Any]], models: list[str]) -> 
     lines.append("")
     for s in STAGES:
         e = estimates[s]
-        forces = [f for m in models if (f := numbers[m]["stages"][s]["max_force_N"])]
+        forces = [f for m in models if (f := largest(m, s))]
         thin = [e_["thickness_mm"][0] for m in models if (e_ := _end(numbers[m], s))]
         if not forces:
             continue

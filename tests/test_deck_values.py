@@ -139,12 +139,12 @@ def test_tune_lines_set_the_runs_tuning_and_the_problem_takes_it(tmp_path: Path)
     from ddpy.app.runner import build_problem
 
     case = read_case(tuned_case(tmp_path, "tune increment.release_steps 8\n"
-                                          "tune reach_sizes 3\ntune krylov_loose 0.05"),
+                                          "tune reach_sizes 3\ntune krylov_loose 0.1"),
                      geometry=False)
-    expected = FormingTuning(reach_sizes=3.0, krylov_loose=0.05,
+    expected = FormingTuning(reach_sizes=3.0, krylov_loose=0.1,
                              increment=IncrementTuning(release_steps=8))
     assert case.control.tuning == expected
-    assert "tuning (control.dat tune): krylov_loose 0.05, reach_sizes 3, " \
+    assert "tuning (control.dat tune): krylov_loose 0.1, reach_sizes 3, " \
         "increment.release_steps 8" in case.summary()
     assert build_problem(read_case(tuned_case(tmp_path / "b", "tune touch_depth 0.01"))
                          ).tuning == FormingTuning(touch_depth=0.01)

@@ -22,6 +22,7 @@ from ddpy import _core
 from ddpy.core.constants import constant
 from ddpy.core.handles import CoreHandle, check
 from ddpy.core.linalg import LinearSolverError
+from ddpy.model.control import FormingTuning
 from ddpy.model.mesh import HexMesh, boundary_faces, face_area_vectors
 from ddpy.model.solid import ElementError, Solid, SolidState, _flat
 from ddpy.model.tool import RigidTool
@@ -394,10 +395,10 @@ class Loop:
     penetration: float = 0.0
     min_step: float = 1.0
     reuse: bool = False
-    krylov_loose: float = 1e-2
-    krylov_tight: float = 1e-10
-    krylov_max: int = 12
-    krylov_keep: int = 8
+    krylov_loose: float = FormingTuning.krylov_loose
+    krylov_tight: float = FormingTuning.krylov_tight
+    krylov_max: int = FormingTuning.krylov_max
+    krylov_keep: int = FormingTuning.krylov_keep
     search: int = SEARCH_MONOTONICITY
     whole_step: float = 0.0
     touching: float = 0.0

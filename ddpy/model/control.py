@@ -317,7 +317,7 @@ class FormingTuning:
       factors (of the preconditioned, weighted residual: the correction's relative error);
       the loose bound holds where the residual is above a tenth of the force scale, in
       practice an increment's first corrections (0.05: the deep drawing's paper blank takes
-      10 to 24 % fewer factorizations than at 0.01, the bending's the same count;
+      24 to 28 % fewer factorizations than at 0.01, the bending's about the same count;
       docs/theory/linear-solver.md, "Tolerance");
       ``krylov_max``: its iterations before it gives up (a factorization costs about 14 on
       the paper's bending blank, 15 on the deep drawing's: docs/theory/speed.md);

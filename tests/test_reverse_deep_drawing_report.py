@@ -396,7 +396,8 @@ def test_the_convergence_table_names_what_does_not_converge_and_why() -> None:
     """Three blanks of one model: the two finest agree within 3 % on every quantity but
     the stage-2 force (+10 %), which is named; the reason reads the runs' setups: the
     same element, contact and code make it the blank's refinement, others no pure mesh
-    effect."""
+    effect; and the values over the blanks: converging (with the geometric limit of the
+    changes) or not, and for blank-holder 1's reaction the fixed gap it is held at."""
     by_mesh = {}
     for k, mesh in enumerate(make_case_meshes()):
         n = synthetic_run("nagata").numbers
@@ -414,6 +415,33 @@ def test_the_convergence_table_names_what_does_not_converge_and_why() -> None:
         in text
     assert "the blank's refinement" in text
     assert text.count("(outside)") == 1
+    # Why, from the values over the three blanks: unchanged, then +10 % is no trend
+    # toward a limit.
+    assert ("- stage2: largest punch force: from blank to blank +0.0 % then +10.0 % "
+            "(coarse -> medium -> paper): not converging with the blank (the change "
+            "grew)") in text
+    # Changes of +25 % then +10 %: converging at 0.4 per refinement, the limit
+    # 1.1 + 0.1 x 0.4 / 0.6 of the medium value, +6.1 % from the paper's.
+    force = by_mesh["medium"]["nagata"]["stages"]["stage2"]["max_force_N"]
+    by_mesh["coarse"]["nagata"]["stages"]["stage2"]["max_force_N"] = force / 1.25
+    text = "\n".join(run.convergence_section(by_mesh))
+    assert ("from blank to blank +25.0 % then +10.0 % (coarse -> medium -> paper): "
+            "converging, each refinement changes it 0.40 times as much as the last; if it "
+            f"goes on so, the limit is about {force * (1.1 + 0.1 * 0.4 / 0.6):.4g} (+6.1 % "
+            "from the finest)") in text
+    # Blank-holder 1's reaction names the fixed gap and the thickened flange it squeezes.
+    by_mesh["paper"]["nagata"]["stages"]["stage1"]["end"]["balance"]["holder1"][
+        "reaction_N"] = 900.0
+    thickest = [by_mesh[m]["nagata"]["stages"]["stage1"]["end"]["thickness_mm"][1]
+                for m in make_case_meshes()]
+    text = "\n".join(run.convergence_section(by_mesh))
+    assert "- stage1: holder1's reaction: from blank to blank +0.0 % then -10.0 %" in text
+    assert ("Blank-holder 1 is held at a fixed gap of 1.13 mm: its reaction is the squeeze "
+            "of the flange where it thickened past the gap (the thickest sheet at the "
+            "stage's end " + " / ".join(f"{t:.4g}" for t in thickest) + " mm)") in text
+    by_mesh["paper"]["nagata"]["stages"]["stage1"]["end"]["balance"]["holder1"][
+        "reaction_N"] = 1000.0
+    by_mesh["coarse"]["nagata"]["stages"]["stage2"]["max_force_N"] = force
     # The decks' own settings per blank are stated, from make_case.
     assert ("Deck settings that differ between the blanks (coarse / medium / paper): "
             "`max_increment` 0.5 / 0.25 / 0.25; `rmin_yield` 0.1 / 0.1 / 0.3") in text

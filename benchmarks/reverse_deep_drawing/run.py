@@ -1551,6 +1551,46 @@ def convergence_quantities(n: dict[str, Any]) -> dict[str, float | None]:
     return out
 
 
+def convergence_trend(key: str, meshes: list[str], row: list[float | None],
+                      runs: dict[str, dict[str, Any]]) -> str:
+    """Why ``key`` (its values ``row`` on ``meshes``, coarse to fine) missed the mesh
+    study's tolerance, from the values: converging (each refinement changed it less, in
+    one direction: the geometric limit of the changes is estimated) or not (the change
+    turned or grew); for blank-holder 1's reaction also the thickened flange against the
+    fixed gap it is held at, which sets that reaction."""
+    name = key.split(" [")[0]
+    known = [(m, v) for m, v in zip(meshes, row, strict=True) if v is not None]
+    values = [v for _, v in known]
+    changes = [(b - a) / max(abs(a), 1e-12)
+               for a, b in zip(values[:-1], values[1:], strict=True)]
+    steps = " then ".join(f"{100 * c:+.1f} %" for c in changes)
+    text = f"- {name}: from blank to blank {steps} ({' -> '.join(m for m, _ in known)})"
+    if len(changes) < 2:
+        text += "; two blanks do not show a trend."
+    elif changes[-1] * changes[-2] > 0 and abs(changes[-1]) < abs(changes[-2]):
+        ratio = abs(changes[-1] / changes[-2])
+        last = known[-1][1]
+        limit = last + (last - known[-2][1]) * ratio / (1.0 - ratio)
+        text += (f": converging, each refinement changes it {ratio:.2f} times as much as the "
+                 f"last; if it goes on so, the limit is about {limit:.4g} "
+                 f"({100 * (limit - last) / abs(last):+.1f} % from the finest), and a finer "
+                 "blank would be within the tolerance.")
+    else:
+        text += (": not converging with the blank (the change " +
+                 ("turned" if changes[-1] * changes[-2] < 0 else "grew") +
+                 "): the quantity follows the blank's local resolution, not a limit.")
+    if name == "stage1: holder1's reaction":
+        thickest = [runs[m]["stages"]["stage1"]["end"]["thickness_mm"][1] for m, _ in known]
+        text += (f" Blank-holder 1 is held at a fixed gap of {make_case.GAP1:g} mm: its "
+                 "reaction is the squeeze of the flange where it thickened past the gap "
+                 "(the thickest sheet at the stage's end " +
+                 " / ".join(f"{t:.4g}" for t in thickest) +
+                 " mm), a few micrometres that a small change of the thickness moves by "
+                 "a large share; a holder pressed with a force would carry that force on "
+                 "every blank.")
+    return text
+
+
 def convergence_section(by_mesh: dict[str, dict[str, dict[str, Any]]], model: str = "nagata"
                         ) -> list[str]:
     """The mesh study of ``model``: its quantities (convergence_quantities) on every blank
@@ -1568,7 +1608,7 @@ def convergence_section(by_mesh: dict[str, dict[str, dict[str, Any]]], model: st
              f"the two finest, {fine} and {finer}, against {100 * CONVERGED:g} %.", "",
              _row(["", *meshes, f"{finer} against {fine}"]),
              _row(["---"] * (len(meshes) + 2))]
-    missed, unknown = [], []
+    missed, unknown, trends = [], [], []
     for key in values[finer]:
         row = [values[m][key] for m in meshes]
         a, b = values[fine][key], values[finer][key]
@@ -1581,6 +1621,7 @@ def convergence_section(by_mesh: dict[str, dict[str, dict[str, Any]]], model: st
             verdict = f"{100 * change:+.1f} % ({'within' if ok else 'outside'})"
             if not ok:
                 missed.append(f"{key.split(' [')[0]} ({100 * change:+.1f} %)")
+                trends.append(convergence_trend(key, meshes, row, runs))
         lines.append(_row([key, *["-" if v is None else f"{v:.4g}" for v in row], verdict]))
     setups = {m: (runs[m].get("discretization", "not recorded"), runs[m].get("code") or "?")
               for m in meshes}
@@ -1605,6 +1646,7 @@ def convergence_section(by_mesh: dict[str, dict[str, dict[str, Any]]], model: st
                 + " against ".join(f"{d}, {c}" for d, c in (setups[fine], setups[finer]))
                 + "), so this is no pure mesh effect: rerun both at one discretization and "
                 "code to tell."))
+        lines += ["", *trends]
     elif not unknown:
         lines.append(f"Every quantity of {fine} and {finer} agrees within "
                      f"{100 * CONVERGED:g} %.")

@@ -6,13 +6,17 @@ A material line that turns by theta in an increment is lengthened by about theta
 its nodes' last motion is extrapolated along straight lines. At the 2 degree rotation
 limit that is 1.2e-3, 250 MPa of elastic stress in steel: on the deep drawing's paper
 blank the columns of nodes drawn over die 1's shoulder started every increment stretched
-across the thickness, and the first Newton steps were cut to a quarter. Carrying the turn
-on removes that term."""
+across the thickness (5 times the force scale of residual). Carrying the turn on removes
+that term (the stretch falls to 2e-4, the residual to about the force scale); the first
+Newton steps there are still cut, by the contact entering die 1's barrier
+(docs/theory/speed.md, "The paper blank at the defaults")."""
 
 from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
+from ddpy.model.forming_quantities import nodal_average
 
 #: The corners of the 8-node hexahedron in its natural coordinates (ddpy's node order), over
 #: 8: the derivatives of its shape functions at its centre.
@@ -38,12 +42,8 @@ def spin(nodes: ArrayLike, elements: ArrayLike, u: ArrayLike, rate: ArrayLike
         @ np.linalg.inv(jacobian[valid])
     skew = 0.5 * (gradient - np.swapaxes(gradient, 1, 2))
     omega = np.stack([skew[:, 2, 1], skew[:, 0, 2], skew[:, 1, 0]], axis=1)
-    total = np.zeros_like(x0)
-    count = np.zeros(x0.shape[0])
-    for corner in range(connectivity.shape[1]):
-        np.add.at(total, connectivity[valid, corner], omega[valid])
-        np.add.at(count, connectivity[valid, corner], 1.0)
-    return total / np.maximum(count, 1.0)[:, None]
+    return np.stack([nodal_average(connectivity[valid], omega[valid, k], x0.shape[0])
+                     for k in range(3)], axis=1)
 
 
 def increment_start(nodes: ArrayLike, elements: ArrayLike, u: ArrayLike, rate: ArrayLike,

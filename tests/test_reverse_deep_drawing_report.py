@@ -437,7 +437,7 @@ def test_the_convergence_table_names_what_does_not_converge_and_why() -> None:
     text = "\n".join(run.convergence_section(by_mesh))
     assert "- stage1: holder1's reaction: from blank to blank +0.0 % then -10.0 %" in text
     assert ("Blank-holder 1 is held at a fixed gap of 1.13 mm: its reaction is the squeeze "
-            "of the flange where it thickened past the gap (the thickest sheet at the "
+            "of the flange where it thickened to the gap (the thickest sheet at the "
             "stage's end " + " / ".join(f"{t:.4g}" for t in thickest) + " mm)") in text
     by_mesh["paper"]["nagata"]["stages"]["stage1"]["end"]["balance"]["holder1"][
         "reaction_N"] = 1000.0

@@ -1582,7 +1582,7 @@ def convergence_trend(key: str, meshes: list[str], row: list[float | None],
     if name == "stage1: holder1's reaction":
         thickest = [runs[m]["stages"]["stage1"]["end"]["thickness_mm"][1] for m, _ in known]
         text += (f" Blank-holder 1 is held at a fixed gap of {make_case.GAP1:g} mm: its "
-                 "reaction is the squeeze of the flange where it thickened past the gap "
+                 "reaction is the squeeze of the flange where it thickened to the gap "
                  "(the thickest sheet at the stage's end " +
                  " / ".join(f"{t:.4g}" for t in thickest) +
                  " mm), a few micrometres that a small change of the thickness moves by "

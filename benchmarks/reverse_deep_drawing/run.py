@@ -1569,8 +1569,8 @@ def convergence_trend(key: str, meshes: list[str], row: list[float | None],
         text += "; two blanks do not show a trend."
     elif changes[-1] * changes[-2] > 0 and abs(changes[-1]) < abs(changes[-2]):
         ratio = abs(changes[-1] / changes[-2])
-        last = known[-1][1]
-        limit = last + (last - known[-2][1]) * ratio / (1.0 - ratio)
+        last = values[-1]
+        limit = last + (last - values[-2]) * ratio / (1.0 - ratio)
         text += (f": converging, each refinement changes it {ratio:.2f} times as much as the "
                  f"last; if it goes on so, the limit is about {limit:.4g} "
                  f"({100 * (limit - last) / abs(last):+.1f} % from the finest), and a finer "

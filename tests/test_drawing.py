@@ -167,6 +167,29 @@ def test_siebel_force_by_hand() -> None:
         siebel_force(90.0, 100.0, 1.0, 300.0, 400.0, 0.1, (8.0,), 1.0)
 
 
+def test_siebel_force_of_a_reverse_redraw_by_hand() -> None:
+    """A reverse redraw's wall turns half a turn over a 7 mm nose before the drawing zone,
+    without tension: the nose brings in its bending and unbending, 400 / 28 MPa each,
+    the first under the friction of the half turn; the drawing zone's stress is added
+    and then carried a quarter turn over a 5 mm die edge."""
+    from ddpy.studies.drawing import siebel_force
+
+    mu, half_bend = 0.15, 400.0 * 1.0 / 28.0
+    incoming = half_bend * math.exp(mu * math.pi) + half_bend
+    ideal = 1.1 * 300.0 * math.log(100.0 / 74.0)
+    expected = math.pi * 74.0 * (math.exp(mu * math.pi / 2) * (incoming + ideal)
+                                 + 400.0 / 10.0)
+    got = siebel_force(100.0, 74.0, 1.0, 300.0, 400.0, mu, (5.0,), math.pi / 2,
+                       entry=((7.0, math.pi),))
+    assert got == pytest.approx(expected, rel=1e-12)
+    # Entered without friction, the nose adds its full bending, k_b s / (2 r), and no more.
+    frictionless = siebel_force(100.0, 74.0, 1.0, 300.0, 400.0, 0.0, (), 0.0,
+                                entry=((7.0, math.pi),))
+    assert frictionless == pytest.approx(math.pi * 74.0 * (ideal + 2 * half_bend), rel=1e-12)
+    with pytest.raises(ValueError, match="entry"):
+        siebel_force(100.0, 74.0, 1.0, 300.0, 400.0, mu, (5.0,), 1.0, entry=((7.0, -1.0),))
+
+
 def test_tensile_limit_is_the_largest_engineering_stress_of_the_swift_curve() -> None:
     """Considere's strain n - eps0 gives the top of K (eps0 + e)^n exp(-e), found here by
     a dense search instead (the paper's DDQ steel)."""

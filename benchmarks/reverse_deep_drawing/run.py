@@ -1261,18 +1261,20 @@ def stage_estimates(holder_forces: dict[str, float]) -> dict[str, dict[str, floa
     strain2 = strain1 + np.log(mean1 / mean2)  # the redraw on the first cup's strain
     draws = {
         # the first draw: over die 1's shoulder, a quarter turn
-        "stage1": (blank / cup1, siebel_force, (blank, mean1, t, 0.5 * (k(0) + k(strain1)),
-                   k(strain1), make_case.FRICTION, (dims.die_shoulder,), np.pi / 2), mean1),
-        # the reverse redraw: half a turn over punch 1's outer nose, a quarter over die 2
-        "stage2": (cup1 / cup2, siebel_force, (mean1, mean2, t, 0.5 * (k(strain1) + k(strain2)),
-                   k(strain2), make_case.FRICTION, (dims.punch1_nose, dims.punch1_edge),
-                   1.5 * np.pi), mean2),
+        "stage1": (blank / cup1, (blank, mean1, t, 0.5 * (k(0) + k(strain1)), k(strain1),
+                   make_case.FRICTION, (dims.die_shoulder,), np.pi / 2), (), mean1),
+        # the reverse redraw: the first cup's wall turns half a turn over punch 1's outer
+        # nose before the end ring, where its diameter shrinks, then a quarter over die 2
+        "stage2": (cup1 / cup2, (mean1, mean2, t, 0.5 * (k(strain1) + k(strain2)),
+                   k(strain2), make_case.FRICTION, (dims.punch1_edge,), np.pi / 2),
+                   ((dims.punch1_nose, np.pi),), mean2),
     }
     out = {}
-    for stage, (ratio, force, args, mean) in draws.items():
+    for stage, (ratio, args, entry, mean) in draws.items():
         holder = 4.0 * holder_forces.get(stage, 0.0)
-        out[stage] = {"draw_ratio": ratio, "siebel_N": force(*args) / 4.0,
-                      "siebel_holder_N": force(*args, holder_force=holder) / 4.0,
+        out[stage] = {"draw_ratio": ratio, "siebel_N": siebel_force(*args, entry=entry) / 4.0,
+                      "siebel_holder_N": siebel_force(*args, holder_force=holder,
+                                                      entry=entry) / 4.0,
                       "neck_N": np.pi * mean * t * tensile_limit(**make_case.SWIFT) / 4.0}
     return out
 
@@ -1294,8 +1296,11 @@ def soundness_section(numbers: dict[str, dict[str, Any]], models: list[str]) -> 
              "elementary estimate of its largest punch force (`ddpy.studies.drawing."
              "siebel_force`: the flange's ideal drawing at the mean of the flow stresses "
              "before and after the draw, belt friction over the tool radii the sheet wraps "
-             "(a quarter turn over die 1; half a turn over punch 1's nose and a quarter over "
-             "die 2 in the reverse redraw), bending over each radius, and the blank-holder's "
+             "after the drawing zone (a quarter turn over die 1; a quarter over die 2 in the "
+             "reverse redraw, whose first-cup wall turns half a turn over punch 1's nose "
+             "before the end ring where its diameter shrinks: that turn carries only the "
+             "bending's stress, under its friction, into the drawing zone), bending over "
+             "each radius, and the blank-holder's "
              "friction at the runs' mean holder reaction at the end of the stage), and the "
              "force at which the new wall would neck (the steel's tensile strength, "
              f"{tensile_limit(**make_case.SWIFT):.0f} MPa from its Swift law, times the "

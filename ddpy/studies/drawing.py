@@ -220,19 +220,28 @@ def tensile_limit(k: float, eps0: float, n: float) -> float:
 
 def siebel_force(diameter: float, mean_diameter: float, thickness: float,
                  flow_stress_mean: float, flow_stress_bend: float, friction: float,
-                 radii: tuple[float, ...], wrap: float, holder_force: float = 0.0) -> float:
+                 radii: tuple[float, ...], wrap: float, holder_force: float = 0.0,
+                 entry: tuple[tuple[float, float], ...] = ()) -> float:
     """Siebel's estimate of the largest punch force (N, the whole cup) of a cylindrical
     draw that reduces ``diameter`` (the blank's, or the last cup's, at the start of the
     draw) to ``mean_diameter`` (the new cup's mid-wall diameter) in a sheet of
     ``thickness`` (mm):
 
-        F = pi d_m s [exp(mu alpha) (1.1 k_m ln(D / d_m) + 2 mu F_N / (pi D s))
+        F = pi d_m s [exp(mu alpha) (s_in + 1.1 k_m ln(D / d_m) + 2 mu F_N / (pi D s))
                       + sum_r k_b s / (2 r)]
 
     the ideal work of the flange's radial drawing (k_m its mean flow stress, 1.1 for the
     inhomogeneity), the blank-holder's friction (F_N its force), the belt friction over the
-    angle ``wrap`` (rad) that the sheet wraps around the tool radii, and the bending and
-    unbending over each of ``radii`` at the flow stress ``flow_stress_bend``. An
+    angle ``wrap`` (rad) that the sheet wraps around the tool radii ``radii`` after the
+    drawing zone, and the bending and unbending over each of them at the flow stress
+    ``flow_stress_bend``. ``entry``: the (radius, wrap) of each tool radius the sheet
+    passes *before* the drawing zone, coming in without tension (a reverse redraw: the
+    first cup's wall turning half a turn over the last punch's nose before the end ring on
+    which its diameter shrinks). Each bends the sheet in and out, k_b s / (4 r) each, the
+    friction of its wrap acting on what the bending brought in:
+    s <- (s + k_b s / (4 r)) exp(mu alpha_r) + k_b s / (4 r), from s = 0; s_in is the
+    result. Friction over the whole wrap of a reverse redraw applied to the ideal
+    drawing stress would count half a turn that the drawing stress never passes. An
     elementary bound to hold a computed force against (to 10 or 20 %), not a model."""
     for name, value in (("diameter", diameter), ("mean_diameter", mean_diameter),
                         ("thickness", thickness), ("flow_stress_mean", flow_stress_mean),
@@ -242,10 +251,15 @@ def siebel_force(diameter: float, mean_diameter: float, thickness: float,
     if not diameter > mean_diameter:
         raise ValueError(f"the draw must reduce the diameter: {diameter} -> {mean_diameter}")
     check_friction(friction)
-    if any(not r > 0.0 for r in radii) or wrap < 0.0 or holder_force < 0.0:
-        raise ValueError("radii must be positive; wrap and holder_force >= 0")
+    if (any(not r > 0.0 for r in radii) or wrap < 0.0 or holder_force < 0.0
+            or any(not r > 0.0 or a < 0.0 for r, a in entry)):
+        raise ValueError("radii must be positive; wrap, entry wraps and holder_force >= 0")
+    incoming = 0.0
+    for r, a in entry:
+        half_bend = flow_stress_bend * thickness / (4.0 * r)
+        incoming = (incoming + half_bend) * np.exp(friction * a) + half_bend
     ideal = 1.1 * flow_stress_mean * np.log(diameter / mean_diameter)
     holder = 2.0 * friction * holder_force / (np.pi * diameter * thickness)
     bending = sum(flow_stress_bend * thickness / (2.0 * r) for r in radii)
-    stress = np.exp(friction * wrap) * (ideal + holder) + bending
+    stress = np.exp(friction * wrap) * (incoming + ideal + holder) + bending
     return float(np.pi * mean_diameter * thickness * stress)

@@ -15,10 +15,10 @@ against 768). It is run through both stages with the case runner and checked twi
   stress and the force that tears the cup wall in plane strain, and within 30 % of Siebel's
   classical estimate; the stage 2 peak force likewise, and within 20 % of Siebel's estimate
   taken step by step along the reverse redraw's path (the first cup's wall over punch 1's
-  nose, its diameter shrinking on punch 1's end ring, over die 2's edge); the flange's free edge is in uniaxial hoop compression, so its
-  equivalent plastic strain is its hoop strain ln(r / R0); the cup's depth after stage 1 is
-  the punch travel; no node sinks into a tool deeper than the barrier's 0.5 % of the
-  thickness (#47's limit is 1 %);
+  nose, its diameter shrinking on punch 1's end ring, over die 2's edge); the flange's free
+  edge is in uniaxial hoop compression, so its equivalent plastic strain is its hoop strain
+  ln(r / R0); the cup's depth after stage 1 is the punch travel; no node sinks into a tool
+  deeper than the barrier's 0.5 % of the thickness (#47's limit is 1 %);
 - against stored reference values (tests/data/reverse_deep_drawing_reference.json): the punch
   force curves of both stages, the cup heights and flange radius, the plastic strain along a
   radial section and its maximum. The reference is a run of this same variant

@@ -247,7 +247,7 @@ def test_the_start_of_an_increment_is_first_order() -> None:
         problem.fix(mesh.select(z=0.5), "xyz")
         result = problem.run({"plane": (0, 0, 0.1)}, max_increment=h)
         assert set(result.limited_by) == {"max"}
-        errors.append(np.median([rel[1][1] for rel in result.relative[3:]]))
+        errors.append(np.median([rel[1].correction for rel in result.convergence[3:]]))
     assert 1.5 < errors[0] / errors[1] < 2.5, errors
 
 
@@ -725,8 +725,8 @@ def test_springback_of_a_bent_strip_converges_quadratically(linear_solver: str) 
         # error; a step after the first starts from the last one's rate, where the
         # residual, of second order in the bending, is no scale for it.
         checked = 0
-        for relative in result.relative:
-            e = np.array([moved for _, moved in relative[1:]])
+        for iterations in result.convergence:
+            e = np.array([it.correction for it in iterations[1:]])
             for now, after in zip(e[:-1], e[1:], strict=True):
                 if now < 0.02 and after > 1e-8:  # quadratic above round-off
                     assert after <= 10.0 * now**2, e
@@ -835,7 +835,7 @@ def test_nodes_at_a_tools_edge_keep_their_contact_state_through_the_first_increm
                          on_increment=lambda progress: True)  # one increment
     assert len(result.factors) == 1 and result.cuts == 0
     assert result.fallbacks == 0 and result.newton_iterations <= 8
-    assert result.relative[0][-1][0] <= phase.newton.force_tolerance
+    assert result.convergence[0][-1].residual <= phase.newton.force_tolerance
 
 
 def test_jacobian_of_the_combined_equations_matches_central_differences() -> None:

@@ -138,8 +138,8 @@ def test_a_fallback_step_keeps_its_evaluation_while_shorter_steps_are_tried(capl
     assert step_lengths(caplog)[0] == 1.0
     residuals = result.residuals[0]
     assert residuals[1] < residuals[0]
-    assert result.relative[0][1][1] == pytest.approx(1.0, rel=1e-9)
-    assert result.relative[0][-1][0] <= 1e-10
+    assert result.convergence[0][1].correction == pytest.approx(1.0, rel=1e-9)
+    assert result.convergence[0][-1].residual <= 1e-10
     # The strip ends off the die (its free bottom nodes lifted, no contact force): the
     # same answer as without the die.
     assert_ends_off_the_die(problem, lifted_strip(contact=False), 4)
@@ -172,7 +172,7 @@ def test_a_step_that_no_trial_improves_is_the_last_one_tried(caplog) -> None:
     assert step_lengths(caplog)[0] == 1.0 / 16.0
     residuals = result.residuals[0]
     assert residuals[1] > residuals[0]
-    assert result.relative[0][1][1] == pytest.approx(1.0, rel=1e-9)
+    assert result.convergence[0][1].correction == pytest.approx(1.0, rel=1e-9)
     assert_ends_off_the_die(problem, tilted_column(contact=False), 2)
 
 

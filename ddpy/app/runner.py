@@ -384,10 +384,10 @@ class _Run:
         """Write the last increment of ``result`` as a row of the results; ``counts``, the
         increment's share of the COUNTERS of a FormingResult."""
         assert self.writer is not None
-        # The measures convergence is judged on (FormingResult.relative): the residual over
-        # the force scale and the correction over the increment's displacement, scaled up
-        # to a whole increment's when the increment is smaller.
-        history = np.asarray(result.relative[-1], dtype=float).reshape(-1, 2)
+        # Per iteration (FormingResult.convergence): the residual over the force scale and
+        # the correction over the increment's displacement, scaled up to a whole
+        # increment's when the increment is smaller; the step and what changed.
+        history = np.asarray(result.convergence[-1], dtype=float).reshape(-1, 6)
         depth = [result.penetration[k][-1] if result.penetration.get(k) else 0.0
                  for k in self.names]
         self._warn_penetration(phase, depth)
@@ -519,7 +519,7 @@ class _Run:
         t = result.timings
         for k in range(len(result.residuals)):
             part = FormingResult(residuals=[result.residuals[k]],
-                                 relative=[result.relative[k]])
+                                 convergence=[result.convergence[k]])
             self.record(phase, part, 0.0, 0.0, "max_increment",
                         Timings(t["assembly"] / phase.increments, t["contact"] / phase.increments,
                                 t["factorization"] / phase.increments,

@@ -109,6 +109,13 @@ _ITERATION_COLUMNS: dict[str, tuple[str, str, str]] = {
     "iteration": ("i4", "1", "Newton iteration, from 1"),
     "residual_force": ("f8", "1", "relative residual force"),
     "residual_displacement": ("f8", "1", "relative displacement correction"),
+    "step": ("f8", "1", "length of the Newton step that led to the iterate (0 at the start)"),
+    "points_switched": ("i4", "1", "contact points whose pressure turned on or off since the "
+                        "previous iterate"),
+    "pairs_switched": ("i4", "1", "contact pairs whose state (open, stick, slip) changed since "
+                       "the previous iterate"),
+    "yield_switched": ("i4", "1", "integration points of the blank that turned from elastic "
+                       "to plastic or back since the previous iterate"),
 }
 _CHUNK = 256
 
@@ -524,9 +531,12 @@ class ResultsWriter:
                   krylov_iterations: int = 0, newton_iterations: int = 0,
                   evaluations: int = 0, penetration: ArrayLike | None = None) -> int:
         """Append one converged increment; return its number (from 1). ``tool_displacement``
-        and ``tool_force`` are (tools, 3); ``residual_history`` (iterations, 2) holds the
-        force and displacement residuals of each Newton iteration; ``penetration`` (tools,)
-        the deepest penetration of the blank into each tool (mm)."""
+        and ``tool_force`` are (tools, 3); ``residual_history`` (iterations, 2 or 6) holds the
+        force and displacement residuals of each Newton iteration, and may add the step's
+        length and the points switched, pairs switched and yield points switched
+        (ddpy.model.newton.Iteration; else those columns are written as -1);
+        ``penetration`` (tools,) the deepest penetration of the blank into each tool
+        (mm)."""
         t = len(self.tools)
         u = _shaped(tool_displacement, (t, 3), "tool_displacement")
         force = _shaped(tool_force, (t, 3), "tool_force")
@@ -537,6 +547,13 @@ class ResultsWriter:
         if int(phase) < 0 or (self.phases and int(phase) >= len(self.phases)):
             raise ValueError(f"phase {phase} is not an index of phases {list(self.phases)}")
         code = _limit_code(limit)
+        history = None
+        if residual_history is not None:
+            history = np.asarray(residual_history, dtype=float)
+            history = history.reshape(len(history), -1) if history.size else history.reshape(0, 2)
+            if history.shape[1] not in (2, 6):
+                raise ValueError(f"residual_history must have 2 or 6 columns, got "
+                                 f"{history.shape[1]}")
         k = self._count
         row = {"increment": k + 1, "phase": int(phase), "step": float(step),
                "travel": float(travel), "iterations": int(iterations),
@@ -554,15 +571,20 @@ class ResultsWriter:
             inc = self._file["increments"]
             for name, value in row.items():
                 _append(inc[name], k, value)
-            if residual_history is not None:
-                history = np.asarray(residual_history, dtype=float).reshape(-1, 2)
+            if history is not None:
                 it = self._file["iterations"]
                 start = self._iterations
+                extra = history[:, 2:] if history.shape[1] == 6 else np.full((len(history), 4),
+                                                                               -1.0)
                 columns = {"increment": np.full(len(history), k + 1),
                            "iteration": np.arange(1, len(history) + 1),
                            "residual_force": history[:, 0],
-                           "residual_displacement": history[:, 1]}
+                           "residual_displacement": history[:, 1],
+                           "step": extra[:, 0], "points_switched": extra[:, 1],
+                           "pairs_switched": extra[:, 2], "yield_switched": extra[:, 3]}
                 for name, values in columns.items():
+                    if name not in it:  # a file written before the column existed
+                        continue
                     d = it[name]
                     d.resize(start + len(history), axis=0)
                     d[start:] = values
@@ -1010,7 +1032,9 @@ class ResultsReader:
         return self.curve("tool_displacement")[:, self._tool(tool)]
 
     def iterations(self) -> dict[str, NDArray]:
-        """Per Newton iteration: increment, iteration and the two residuals."""
+        """Per Newton iteration: increment, iteration, the two residuals, the step's length
+        and what switched since the previous iterate (files written before those columns
+        existed have the first four only)."""
         it = self._file["iterations"]
         k = min([int(it.attrs["count"])] + [d.shape[0] for d in it.values()])
         return {name: d[:k] for name, d in it.items()}

@@ -42,6 +42,7 @@ from ddpy.model.newton import (
     SEARCH_MONOTONICITY,
     SEARCH_NONE,
     Factors,
+    Iteration,
     Layout,
     Loop,
     Pairs,
@@ -229,10 +230,11 @@ class FormingResult(Work):
     tool_forces: dict[str, list[NDArray[np.float64]]] = field(default_factory=dict)
     contacts: dict[str, list[int]] = field(default_factory=dict)
     residuals: list[list[float]] = field(default_factory=list)
-    #: per increment and Newton iteration, what convergence is judged on: the residual norm
-    #: over the force scale and the correction over the increment's displacement, scaled up
-    #: to a whole increment's when the increment is smaller (inf before the first correction)
-    relative: list[list[tuple[float, float]]] = field(default_factory=list)
+    #: per increment and Newton iteration (Iteration), what convergence is judged on: the
+    #: residual norm over the force scale and the correction over the increment's
+    #: displacement, scaled up to a whole increment's when the increment is smaller (inf
+    #: before the first correction); the step's length and what changed in the iteration
+    convergence: list[list[Iteration]] = field(default_factory=list)
     #: per tool and increment, the deepest penetration of the blank into the tool (mm, 0
     #: when none): the most negative signed distance of its slave nodes from it (for
     #: node-to-surface contact their gaps; for the others the nodes projected on the tool,
@@ -264,7 +266,7 @@ class FormingResult(Work):
                 records.setdefault(name, [])
 
     def record(self, size: float, reason: str, factor: float, residuals: list[float],
-               relative: list[tuple[float, float]], u: NDArray[np.float64],
+               convergence: list[Iteration], u: NDArray[np.float64],
                tools: Mapping[str, tuple[NDArray[np.float64], NDArray[np.float64],
                                          NDArray[np.int32], float]] | None = None) -> None:
         """A converged increment of ``size`` (set by ``reason``) to phase factor ``factor``
@@ -275,7 +277,7 @@ class FormingResult(Work):
         self.limited_by.append(reason)
         self.factors.append(factor)
         self.residuals.append(residuals)
-        self.relative.append(relative)
+        self.convergence.append(convergence)
         states: dict[str, NDArray[np.int32]] = {}
         for name, (position, force, state, depth) in (tools or {}).items():
             self.tool_displacements[name].append(position.copy())
@@ -771,13 +773,13 @@ class FormingProblem:
         controller sizes the next. Returns the progress the run reached."""
         outcome, layout, result = trial.outcome, run.layout, run.result
         assert outcome.u is not None and outcome.gap is not None
-        residuals, relative = outcome.residuals, outcome.relative
+        residuals, convergence = outcome.residuals, outcome.convergence
         if run.released[0]:
             # One history for the release and the increment: each later solve's start
             # (the residual after the load's change) is left out, so that its
             # iterations count the corrections of both.
             residuals = run.released[0] + list(residuals)[1:]
-            relative = run.released[1] + list(relative)[1:]
+            convergence = run.released[1] + list(convergence)[1:]
             run.released = ([], [])
         size = trial.target - run.factor
         run.last_du = (outcome.u - self.u) / size
@@ -787,7 +789,7 @@ class FormingProblem:
         self._take(outcome)
         self.position = trial.positions
         run.factor = trial.target
-        result.record(size, run.control.reason, run.factor, residuals, relative, outcome.u,
+        result.record(size, run.control.reason, run.factor, residuals, convergence, outcome.u,
                       {t.name: (trial.positions[t.name],
                                 outcome.force[layout.first[i]:layout.first[i + 1]],
                                 outcome.in_contact[layout.first[i]:layout.first[i + 1]],
@@ -820,7 +822,7 @@ class FormingProblem:
         np.add.at(loads, layout.node[lifted], self.force[lifted])
         self.force = np.where(lifted[:, None], 0.0, self.force)
         steps = self.tuning.increment.release_steps
-        done, size, spent, relative = 0.0, 1.0 / steps, [], []
+        done, size, spent, convergence = 0.0, 1.0 / steps, [], []
         last_du: NDArray[np.float64] | None = None
         base = self.external.copy()
         try:
@@ -843,7 +845,7 @@ class FormingProblem:
                 # A later step's start is left out (see run): the corrections count.
                 skip = 1 if spent else 0
                 spent += list(outcome.residuals)[skip:]
-                relative += list(outcome.relative)[skip:]
+                convergence += list(outcome.convergence)[skip:]
                 last_du = (outcome.u - self.u) / (target - done)
                 self._take(outcome)
                 positions = self._placed(layout, positions, outcome)
@@ -853,7 +855,7 @@ class FormingProblem:
                 size = min(2.0 * size, 1.0 / steps)
         finally:
             self.external = base
-        return spent, relative
+        return spent, convergence
 
     def _take(self, outcome: Trial) -> None:
         """A converged increment's state as the problem's (with the augmented law its Gauss
@@ -917,7 +919,7 @@ class FormingProblem:
                 break
             result.augmentations += 1
             again.residuals = list(outcome.residuals) + list(again.residuals)[1:]
-            again.relative = list(outcome.relative) + list(again.relative)[1:]
+            again.convergence = list(outcome.convergence) + list(again.convergence)[1:]
             outcome = again
             depth = self._penetration(layout, outcome, on,
                                       self._placed(layout, positions, outcome))
@@ -1108,7 +1110,7 @@ class FormingProblem:
                 last_du = outcome.u - self.u
                 self.u, self.solid_state = outcome.u, outcome.state
                 result.record(1.0 / increments, "springback", k / increments,
-                              outcome.residuals, outcome.relative, self.u)
+                              outcome.residuals, outcome.convergence, self.u)
         finally:
             self.external = np.zeros_like(self.u)
         if frames:
@@ -1430,10 +1432,12 @@ class FormingProblem:
                           self.external, self.u, guess, loop, pairs)
         result.count(trial)
         if _log.isEnabledFor(logging.DEBUG):
-            for k, (rel, moved) in enumerate(trial.relative):
+            for k, it in enumerate(trial.convergence):
                 _log.debug("iteration %d: residual %.3e of the force scale, correction %.3e "
-                           "of the motion%s", k, rel, moved,
-                           f", step length {trial.steps[k - 1]:.4g}" if k else "")
+                           "of the motion%s", k, it.residual, it.correction,
+                           f"; switched: {it.points_switched} contact points, "
+                           f"{it.pairs_switched} pairs, {it.yield_switched} points between "
+                           f"elastic and plastic, step length {it.step:.4g}" if k else "")
         return trial
 
     def close(self) -> None:

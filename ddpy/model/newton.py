@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -43,7 +44,24 @@ SURFACE_CODES = {name: constant(f"discretization_{name}")
 PARTS = ("assembly", "contact", "factorization", "solve")
 #: The columns of the core's iteration history.
 _HISTORY = {name: constant(f"history_{name}_offset")
-            for name in ("residual", "relative_residual", "relative_correction", "step")}
+            for name in ("residual", "relative_residual", "relative_correction", "step",
+                         "points_switched", "pairs_switched", "yield_switched")}
+
+
+class Iteration(NamedTuple):
+    """One Newton iteration of an increment: what convergence is judged on (the residual
+    over the force scale, the correction over the increment's motion, inf before the
+    first), the length of the step that led to it (0 at the start), and what changed since
+    the previous iterate (0 at the start): the contact points whose pressure turned on or
+    off, the pairs whose contact state changed, and the blank's integration points that
+    turned from elastic to plastic or back."""
+
+    residual: float
+    correction: float
+    step: float = 0.0
+    points_switched: int = 0
+    pairs_switched: int = 0
+    yield_switched: int = 0
 
 
 def _join(parts: Sequence[NDArray], dtype: type) -> NDArray:
@@ -424,9 +442,8 @@ class Trial:
     force: NDArray[np.float64] | None = None
     fint: NDArray[np.float64] | None = None
     residuals: list[float] = field(default_factory=list)
-    relative: list[tuple[float, float]] = field(default_factory=list)
-    #: per iteration after the first, the length of the step that led to it
-    steps: list[float] = field(default_factory=list)
+    #: per iteration from the start (Iteration)
+    convergence: list[Iteration] = field(default_factory=list)
     in_contact: NDArray[np.int32] | None = None
     #: the tangential traction of every Gauss point of Gauss-point contact (points, 3)
     traction: NDArray[np.float64] | None = None
@@ -525,10 +542,13 @@ def increment(solid: Solid, layout: Layout, factors: Factors, state: SolidState,
     work = {"counters": (evaluations, corrections, factorizations, krylov, fallbacks),
             "timings": {key: float(t) for key, t in zip(PARTS, spent, strict=True)},
             "residuals": history[:, _HISTORY["residual"]].tolist(),
-            "relative": [(float(a), float(b)) for a, b in
-                         history[:, [_HISTORY["relative_residual"],
-                                     _HISTORY["relative_correction"]]]],
-            "steps": history[1:, _HISTORY["step"]].tolist()}
+            "convergence": [Iteration(float(row[_HISTORY["relative_residual"]]),
+                                      float(row[_HISTORY["relative_correction"]]),
+                                      float(row[_HISTORY["step"]]),
+                                      int(row[_HISTORY["points_switched"]]),
+                                      int(row[_HISTORY["pairs_switched"]]),
+                                      int(row[_HISTORY["yield_switched"]]))
+                            for row in history]}
     if outcome == CONVERGED:
         return _converged(solid, layout, problem, work)
     if outcome == LANDING:

@@ -30,6 +30,7 @@ from ddpy.model.newton import (
     SEARCH_ENERGY,
     SEARCH_NONE,
     Factors,
+    Iteration,
     Layout,
     Loop,
     increment,
@@ -50,8 +51,9 @@ class SolidResult(Work):
     ``displacements[s]`` (n, 3), ``reactions[s]`` (n, 3; nonzero on constrained dofs),
     ``pk2[s]`` and ``cauchy[s]`` (m, 8, 6), ``ep[s]`` (m, 8), the norm of the free residual
     at every iteration ``residuals[s]`` and, per iteration, what convergence is judged on
-    (``relative[s]``: the residual over the force scale and the correction over the
-    increment of u, inf before the first correction). The work of every trial increment,
+    (``convergence[s]``, Iteration: the residual over the force scale and the correction
+    over the increment of u, inf before the first correction, with the step and what
+    changed). The work of every trial increment,
     the cut ones included, counted as Work: evaluations (assemblies, line-search trials
     included), Newton corrections, factorizations, cuts and the seconds of each part
     (``timings``)."""
@@ -63,7 +65,7 @@ class SolidResult(Work):
     cauchy: list[NDArray[np.float64]] = field(default_factory=list)
     ep: list[NDArray[np.float64]] = field(default_factory=list)
     residuals: list[list[float]] = field(default_factory=list)
-    relative: list[list[tuple[float, float]]] = field(default_factory=list)
+    convergence: list[list[Iteration]] = field(default_factory=list)
     state: SolidState | None = None
 
     @property
@@ -298,7 +300,7 @@ class StaticProblem:
             result.cauchy.append(cauchy)
             result.ep.append(state.ep.copy())
             result.residuals.append(trial.residuals)
-            result.relative.append(trial.relative)
+            result.convergence.append(trial.convergence)
             # Back to the nominal size once a cut increment ends on the grid of increments.
             on_grid = abs(target / nominal - round(target / nominal)) < 1e-9
             if cuts_in_row == 0 or on_grid:

@@ -571,7 +571,7 @@ contains
   end subroutine api_problem_report
 
   !> The last trial's first nhistory iterations (nhistory at most its niter): per iteration
-  !> its residual norm, relative residual, relative correction and step length.
+  !> the rows history_* of increment_report%history (residuals, step, what switched).
   subroutine api_problem_history(handle, nhistory, history, status) &
     bind(C, name="ddpy_problem_history")
     integer(c_int), value, intent(in) :: handle, nhistory

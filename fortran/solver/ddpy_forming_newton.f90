@@ -24,7 +24,9 @@ module ddpy_forming_newton
                                   outcome_not_finite, outcome_solver, outcome_stalled, &
                                   outcome_hold, hold_no_stiffness, hold_too_far, &
                                   history_width, history_residual, history_relative_residual, &
-                                  history_relative_correction, history_step
+                                  history_relative_correction, history_step, &
+                                  history_points_switched, history_pairs_switched, &
+                                  history_yield_switched
   use ddpy_forming, only: forming_contact
   use ddpy_contact, only: contact_inactive
   use ddpy_linear_solver, only: solver_factorize, solver_solve
@@ -125,6 +127,11 @@ contains
                              alpha_cur(:, :), shift_cur(:), dshift(:)
     integer, allocatable :: previous(:), lock(:)
     logical, allocatable :: averaged(:)
+    ! The sets of the last recorded iterate and of the one before it (record): the contact
+    ! points carrying pressure, the pairs' states, the plastic integration points.
+    logical, allocatable :: on_last(:), on_before(:), yield_last(:, :), yield_before(:, :)
+    integer, allocatable :: state_last(:), state_before(:)
+    integer :: sets_niter
     integer :: tool, k, hold_base, retouches, nvalues
     logical :: retouched
     real(wp) :: tol_force, tol_disp, yield_tol, floor, norm, scale, moved, correction, rel, &
@@ -178,6 +185,9 @@ contains
              shift_cur(nhold), dshift(nhold))
     alpha_cur = 0.0_wp
     lock = 0
+    allocate(on_last(npoint), on_before(npoint), yield_last(8, ne), yield_before(8, ne), &
+             state_last(npair), state_before(npair))
+    sets_niter = 0
     held_on_patches = .false.
     hold_count = 0
     dp = 0.0_wp
@@ -612,13 +622,34 @@ contains
     end function retouch
 
     !> measure for slot s, as this iteration's history (residual, relative residual and
-    !> correction).
+    !> correction), with what changed since the previous iterate: contact points on or
+    !> off, pairs' states, integration points between elastic and plastic. An iterate
+    !> recorded again (the held answer's evaluation without the hold) is compared with the
+    !> same previous iterate.
     subroutine record(s)
       type(evaluation), intent(in) :: s
       call measure(s, correction, norm, scale, moved, converged)
       report%history(history_residual, report%niter) = norm
       report%history(history_relative_residual, report%niter) = norm/scale
       report%history(history_relative_correction, report%niter) = correction/moved
+      if (report%niter > sets_niter) then
+        if (sets_niter > 0) then
+          on_before = on_last
+          state_before = state_last
+          yield_before = yield_last
+        end if
+        sets_niter = report%niter
+      end if
+      on_last = s%pressure > 0.0_wp
+      state_last = s%state
+      yield_last = s%ep > start%ep_old
+      if (report%niter == 1) return
+      report%history(history_points_switched, report%niter) = &
+        real(count(on_last .neqv. on_before), wp)
+      report%history(history_pairs_switched, report%niter) = &
+        real(count(state_last /= state_before), wp)
+      report%history(history_yield_switched, report%niter) = &
+        real(count(yield_last .neqv. yield_before), wp)
     end subroutine record
 
     !> Residual norm, force scale, motion, and whether converged with this correction:

@@ -452,6 +452,11 @@ class ResultsWriter:
         if _PENETRATION[0] not in inc:
             cls._column(inc, *_PENETRATION, (len(f.attrs["tools"]),), *_PENETRATION_TEXT)
             inc[_PENETRATION[0]].resize(increments, axis=0)
+        for name, (dtype, units, meaning) in _ITERATION_COLUMNS.items():
+            if name not in it:  # a file of an older version: -1 in the rows written before
+                cls._column(it, name, dtype, (), units, meaning)
+                it[name].resize(iterations, axis=0)
+                it[name][:] = -1
         fields.attrs["count"] = frames
         for index in range(frames, have[2]):
             del fields[f"{index:06d}"]
@@ -583,8 +588,6 @@ class ResultsWriter:
                            "step": extra[:, 0], "points_switched": extra[:, 1],
                            "pairs_switched": extra[:, 2], "yield_switched": extra[:, 3]}
                 for name, values in columns.items():
-                    if name not in it:  # a file written before the column existed
-                        continue
                     d = it[name]
                     d.resize(start + len(history), axis=0)
                     d[start:] = values

@@ -69,6 +69,39 @@ def test_post_writes_figures_and_tables(runs: tuple[Path, Path, Path], tmp_path:
     assert "| draw | punch |" in summary and "status completed" in summary
 
 
+def test_iterations_table_counts_each_place_in_an_increment(runs: tuple[Path, Path, Path],
+                                                            tmp_path: Path) -> None:
+    """iterations.csv: per phase, the increments reaching iteration k are those with at least
+    k Newton iterations (the increments table's own count), and the iteration rows' columns
+    averaged over them; summary.md carries the table."""
+    _, full, _ = runs
+    assert cli("post", str(full), "--output", str(tmp_path)).returncode == 0
+    with open(tmp_path / "iterations.csv") as f:
+        rows = list(csv.DictReader(f))
+    with ResultsReader(full / RESULTS) as r:
+        phase, iterations = r.curve("phase").astype(int), r.curve("iterations").astype(int)
+        it = r.iterations()
+        names = r.phases
+    for p, name in enumerate(names):
+        mine = [row for row in rows if row["phase"] == name]
+        assert [int(row["iteration"]) for row in mine] == list(range(
+            iterations[phase == p].max() + 1))
+        for row in mine:
+            k = int(row["iteration"])
+            assert int(row["increments"]) == int((iterations[phase == p] >= k).sum())
+        start = mine[0]
+        assert float(start["mean_step"]) == 0.0 and float(start["mean_yield_switched"]) == 0.0
+    # the first correction of the draw, against the rows themselves
+    draw = (phase[it["increment"] - 1] == 0) & (it["iteration"] == 2)
+    first = next(row for row in rows if row["phase"] == names[0] and row["iteration"] == "1")
+    assert float(first["mean_yield_switched"]) == pytest.approx(
+        it["yield_switched"][draw].mean())
+    assert float(first["median_residual"]) == pytest.approx(
+        np.median(it["residual_force"][draw]))
+    summary = (tmp_path / "summary.md").read_text()
+    assert "## Newton iterations by their place in an increment" in summary
+
+
 def test_post_finds_the_results_of_a_case_folder_and_says_when_there_are_none(
         runs: tuple[Path, Path, Path], tmp_path: Path) -> None:
     case, full, _ = runs

@@ -337,8 +337,9 @@ def add_post(commands: argparse._SubParsersAction) -> None:
     post = commands.add_parser(
         "post", help="figures (PNG) and tables (CSV, markdown) of a run",
         description="Write force_stroke.png, increments.png, contact.png, plastic_strain.png, "
-        "thinning.png, fld.png (the forming limit diagram), increments.csv, phases.csv and "
-        "summary.md for a run.")
+        "thinning.png, fld.png (the forming limit diagram), increments.csv, phases.csv, "
+        "iterations.csv (Newton iterations by their place in an increment) and summary.md "
+        "for a run.")
     post.add_argument("target", metavar="CASE_OR_RESULTS",
                       help="a results file, an output folder, or a case folder (its default "
                       "output results/<name>)")

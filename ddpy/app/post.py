@@ -203,6 +203,41 @@ def increment_rows(run: Run) -> list[dict[str, object]]:
     return rows
 
 
+#: The iteration rows' columns of what switched (files written before them have none).
+SWITCHES = ("points_switched", "pairs_switched", "yield_switched")
+
+
+def iteration_rows(results: str | os.PathLike[str]) -> list[dict[str, object]]:
+    """Per phase and per Newton iteration k of an increment (0: the start): the increments
+    that reach it, the median relative residual there, the mean length of the step that
+    led to it and the mean counts of what switched since the previous iterate (contact
+    points, pairs, points between elastic and plastic), over the rows that recorded them.
+    Where the iterations of a run go: a residual that falls slowly while the counts stay
+    high is Newton finding the contact and plastic sets (docs/theory/speed.md)."""
+    with ResultsReader(results) as r:
+        it = r.iterations()
+        phase = r.curve("phase").astype(int)
+        phases = r.phases
+    if not it or it["increment"].size == 0:
+        return []
+    row_phase = phase[it["increment"] - 1]
+    place = it["iteration"] - 1
+    rows: list[dict[str, object]] = []
+    for p in np.unique(row_phase):
+        for k in range(int(place[row_phase == p].max()) + 1):
+            sel = (row_phase == p) & (place == k)
+            row: dict[str, object] = {
+                "phase": phases[p] if p < len(phases) else str(p), "iteration": k,
+                "increments": int(sel.sum()),
+                "median_residual": float(np.median(it["residual_force"][sel]))}
+            for name in ("step", *SWITCHES):
+                values = it[name][sel] if name in it else np.zeros(0)
+                values = values[values >= 0]  # -1: rows written before the column
+                row[f"mean_{name}"] = float(values.mean()) if values.size else ""
+            rows.append(row)
+    return rows
+
+
 # ----------------------------------------------------------------------------- figures
 
 
@@ -500,7 +535,8 @@ def post_run(target: str | os.PathLike[str], output: str | os.PathLike[str] | No
     """Figures and tables of one run into ``output`` (default: the results' folder):
     force_stroke.png, increments.png (increment size and iterations), contact.png (nodes in
     contact per tool), plastic_strain.png, thinning.png, fld.png (the forming limit
-    diagram, marginal band ``band``), increments.csv, phases.csv and summary.md."""
+    diagram, marginal band ``band``), increments.csv, phases.csv, iterations.csv
+    (iteration_rows) and summary.md."""
     run = load_run(target)
     check = forming_limit_check(run.path, band)
     out = Path(output) if output else run.path.parent
@@ -527,14 +563,17 @@ def post_run(target: str | os.PathLike[str], output: str | os.PathLike[str] | No
     if isinstance(check, FormingLimitCheck):
         paths.append(_fld_plot(check, out / "fld.png"))
     phases = phase_table(run)
+    iterations = iteration_rows(run.path)
     paths.append(write_csv(out / "increments.csv", increment_rows(run)))
     paths.append(write_csv(out / "phases.csv", phases))
+    paths.append(write_csv(out / "iterations.csv", iterations))
     copies, name = run.fraction
     summary = (f"# {run.title}\n\nResults: `{run.path}`, status {run.status}, "
                f"{len(run.phase)} increments; a {name}"
                + (f": the full part's force is {copies} x the model's" if copies and copies > 1
                   else "") + ".\n\n"
-               + markdown(phases) + forming_summary(run) + _fld_summary(check))
+               + markdown(phases) + forming_summary(run) + _fld_summary(check)
+               + "\n## Newton iterations by their place in an increment\n\n" + markdown(iterations))
     (out / "summary.md").write_text(summary)
     paths.append(out / "summary.md")
     return paths

@@ -218,7 +218,7 @@ def iteration_rows(results: str | os.PathLike[str]) -> list[dict[str, object]]:
         it = r.iterations()
         phase = r.curve("phase").astype(int)
         phases = r.phases
-    if not it or it["increment"].size == 0:
+    if it["increment"].size == 0:
         return []
     row_phase = phase[it["increment"] - 1]
     place = it["iteration"] - 1

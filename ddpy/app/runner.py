@@ -387,7 +387,7 @@ class _Run:
         # Per iteration (FormingResult.convergence): the residual over the force scale and
         # the correction over the increment's displacement, scaled up to a whole
         # increment's when the increment is smaller; the step and what changed.
-        history = np.asarray(result.convergence[-1], dtype=float).reshape(-1, 6)
+        history = np.asarray(result.convergence[-1], dtype=float)  # (iterations, 6)
         depth = [result.penetration[k][-1] if result.penetration.get(k) else 0.0
                  for k in self.names]
         self._warn_penetration(phase, depth)

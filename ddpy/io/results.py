@@ -117,6 +117,8 @@ _ITERATION_COLUMNS: dict[str, tuple[str, str, str]] = {
     "yield_switched": ("i4", "1", "integration points of the blank that turned from elastic "
                        "to plastic or back since the previous iterate"),
 }
+#: The columns of an increment's residual history, in its order (ddpy.model.newton.Iteration).
+_HISTORY_COLUMNS = list(_ITERATION_COLUMNS)[2:]
 _CHUNK = 256
 
 
@@ -556,9 +558,13 @@ class ResultsWriter:
         if residual_history is not None:
             history = np.asarray(residual_history, dtype=float)
             history = history.reshape(len(history), -1) if history.size else history.reshape(0, 2)
-            if history.shape[1] not in (2, 6):
-                raise ValueError(f"residual_history must have 2 or 6 columns, got "
-                                 f"{history.shape[1]}")
+            if history.shape[1] not in (2, len(_HISTORY_COLUMNS)):
+                raise ValueError(f"residual_history must have 2 or {len(_HISTORY_COLUMNS)} "
+                                 f"columns, got {history.shape[1]}")
+            # the step and the switches unknown (-1) where only the residuals are given
+            history = np.hstack([history, np.full((len(history),
+                                                   len(_HISTORY_COLUMNS) - history.shape[1]),
+                                                  -1.0)])
         k = self._count
         row = {"increment": k + 1, "phase": int(phase), "step": float(step),
                "travel": float(travel), "iterations": int(iterations),
@@ -579,14 +585,9 @@ class ResultsWriter:
             if history is not None:
                 it = self._file["iterations"]
                 start = self._iterations
-                extra = history[:, 2:] if history.shape[1] == 6 else np.full((len(history), 4),
-                                                                               -1.0)
                 columns = {"increment": np.full(len(history), k + 1),
                            "iteration": np.arange(1, len(history) + 1),
-                           "residual_force": history[:, 0],
-                           "residual_displacement": history[:, 1],
-                           "step": extra[:, 0], "points_switched": extra[:, 1],
-                           "pairs_switched": extra[:, 2], "yield_switched": extra[:, 3]}
+                           **dict(zip(_HISTORY_COLUMNS, history.T, strict=True))}
                 for name, values in columns.items():
                     d = it[name]
                     d.resize(start + len(history), axis=0)

@@ -49,12 +49,16 @@ REPEATS = 3
 TIME_LIMIT = 900
 #: solver -> its short name in the report's sentences
 SHORT = {"mumps_nested": "ddpy's MUMPS", "mumps_metis": "MUMPS with METIS",
+         "mumps_coordinates": "MUMPS on the coordinates",
          "superlu": "SuperLU", "umfpack": "UMFPACK", "pardiso": "PARDISO"}
 #: solver -> (what it is, where it comes from, whether threads apply)
 SOLVERS = {
     "mumps_nested": ("MUMPS 5, LU, ddpy's nested-dissection order (ddpy's default)",
                      "Debian libmumps-seq (setup.sh)", True),
     "mumps_metis": ("MUMPS 5, LU, METIS order", "Debian libmumps-seq (setup.sh)", True),
+    "mumps_coordinates": ("MUMPS 5, LU, ddpy's order, given the coordinates with their "
+                          "duplicates (ddpy's Newton loop until 2026-12-05)",
+                          "Debian libmumps-seq (setup.sh)", True),
     "superlu": ("SuperLU, COLAMD order (scipy.sparse.linalg.splu)", "PyPI scipy (setup.sh)",
                 False),
     "umfpack": ("UMFPACK (scikits.umfpack)",
@@ -118,9 +122,12 @@ def measure(solver: str) -> dict[str, Any]:
     if solver.startswith("mumps"):
         from ddpy.core.ordering import mesh_solver
 
-        mumps = mesh_solver("unsymmetric", "nested" if solver == "mumps_nested" else "metis",
+        mumps = mesh_solver("unsymmetric", "metis" if solver == "mumps_metis" else "nested",
                             lambda: data["node_order"], data["equation_nodes"])
+        # ddpy's loop gives MUMPS the coordinates summed (ddpy.model.newton.Layout.entries)
         coo = matrix.tocoo()
+        if solver == "mumps_coordinates":
+            coo = sp.coo_matrix((values, (rows, cols)), shape=(n, n))
         out["analysis_s"], _ = _best(lambda: mumps.analyse(n, coo.row, coo.col), 1)
         out["factorization_s"], _ = _best(lambda: mumps.factorize(coo.data), REPEATS)
         out["solve_s"], x = _best(lambda: mumps.solve(b), REPEATS)

@@ -513,7 +513,7 @@ class FormingProblem:
                                  first=(np.arange(layout.n) >= layout.nf)
                                  & (np.arange(layout.n) < layout.n - layout.holds.size),
                                  last=np.arange(layout.n) >= layout.n - layout.holds.size)
-            solver.analyse(layout.n, layout.rows, layout.cols)
+            solver.analyse(layout.n, *layout.entries())
             self._layout, self._solver = layout, solver
             self._factors = Factors(solver.handle)
         return self._layout

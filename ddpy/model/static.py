@@ -204,7 +204,7 @@ class StaticProblem:
             layout = Layout(self.solid, [], self.fixed, self.symmetry == "symmetric")
             solver = mesh_solver(self.symmetry, self.ordering, self.solid.node_order,
                                  np.flatnonzero(free) // 3)
-            solver.analyse(layout.n, layout.rows, layout.cols)
+            solver.analyse(layout.n, *layout.entries())
             self._layout, self._solver = layout, solver
             self._factors = Factors(solver.handle)
         return self._layout

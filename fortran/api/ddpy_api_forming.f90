@@ -483,8 +483,9 @@ contains
   !> its factors, are updated; outcome says what came of it (problem_report,
   !> problem_history and, when converged, problem_blank_answer and problem_pair_answer
   !> give the rest). Refused (refusal_order) before the settings, limits, state, start,
-  !> tools and law are set. The Jacobian's structure by rows (for GMRES) is sorted at the
-  !> first trial of a layout.
+  !> tools and law are set. The Jacobian's structure by rows (for GMRES; and a symmetric
+  !> layout's entries, which its solver factorizes) is sorted at the first trial of a
+  !> layout.
   subroutine api_problem_increment(handle, solver, factored, reuse_next, outcome, status) &
     bind(C, name="ddpy_problem_increment")
     integer(c_int), value, intent(in) :: handle, solver
@@ -497,13 +498,17 @@ contains
       if (.not. (p%has_newton .and. ready_for_contact(p) .and. allocated(p%start%u_ref) .and. &
                  allocated(p%start%force_n))) return
       call ensure_layout(p)
-      if (p%rows%n /= p%layout%n) &
+      if (p%rows%n /= p%layout%n) then
         call rows_build(p%layout%n, p%layout%nvalues, p%layout%rows, p%layout%cols, &
                         p%dofs%symmetric, p%rows)
+        if (p%dofs%symmetric) &
+          call rows_build(p%layout%n, p%layout%nvalues, p%layout%rows, p%layout%cols, &
+                          .false., p%entries)
+      end if
       call size_answer(p, a)
-      call forming_increment(p%blank, p%dofs, p%layout, p%rows, p%tools, p%pairs, p%holds, &
-                             p%newton, p%limits, p%start, p%placement, p%law, solver, &
-                             factored, reuse_next, a, table(handle)%report)
+      call forming_increment(p%blank, p%dofs, p%layout, p%rows, p%entries, p%tools, p%pairs, &
+                             p%holds, p%newton, p%limits, p%start, p%placement, p%law, &
+                             solver, factored, reuse_next, a, table(handle)%report)
       outcome = table(handle)%report%outcome
     end associate
     status = 0

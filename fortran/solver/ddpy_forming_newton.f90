@@ -61,8 +61,10 @@ contains
   !> placement%positions and the fixed dofs at start%prescribed (forming holds them at
   !> u_n), in the loop's settings (newton) and the increment's limits, the Jacobian's
   !> layout (ddpy_jacobian_layout: its coordinate slots, which pairs' multipliers are
-  !> eliminated, the coupling entries' values) and its structure by rows (rows, for
-  !> GMRES). A prescribed
+  !> eliminated, the coupling entries' values), its structure by rows (rows, for GMRES)
+  !> and, for a symmetric layout, the entries of its triangle (entries, unused otherwise):
+  !> the solver factorizes the coordinates summed into the entries it was analysed with,
+  !> rows' for an unsymmetric layout (ddpy.model.newton.Layout.entries). A prescribed
   !> motion not yet reached enters each evaluation through the tangent, K_fp dp added to
   !> the free rows, and each step takes it whole (scaled by the step length like the
   !> rest): the linearized predictor, not a jump of the boundary nodes, which would invert
@@ -90,13 +92,13 @@ contains
   !> step moves a tool by at most
   !> limits%hold_step; outcome_hold when a tool has no contact stiffness along its axis or
   !> has moved farther than the reach in the increment.
-  subroutine forming_increment(blank, dofs, layout, rows, tools, pairs, holds, newton, &
-                               limits, start, placement, law, solver, factored, reuse_next, &
-                               answer, report)
+  subroutine forming_increment(blank, dofs, layout, rows, entries, tools, pairs, holds, &
+                               newton, limits, start, placement, law, solver, factored, &
+                               reuse_next, answer, report)
     type(blank_mesh), intent(in) :: blank
     type(blank_dofs), intent(in) :: dofs
     type(jacobian_layout), intent(in) :: layout
-    type(row_structure), intent(in) :: rows
+    type(row_structure), intent(in) :: rows, entries
     integer, intent(in) :: solver
     type(tool_set), intent(in) :: tools
     type(pair_set), intent(in) :: pairs
@@ -124,7 +126,7 @@ contains
     type(evaluation) :: slot(2)
     real(wp), allocatable :: weight(:), delta(:), du(:, :), dforce(:, :), x_n(:, :), &
                              kdu(:, :), dp(:, :), u_cur(:, :), force_cur(:, :), &
-                             alpha_cur(:, :), shift_cur(:), dshift(:)
+                             alpha_cur(:, :), shift_cur(:), dshift(:), summed(:)
     integer, allocatable :: previous(:), lock(:)
     logical, allocatable :: averaged(:)
     ! The sets of the last recorded iterate and of the one before it (record): the contact
@@ -722,7 +724,7 @@ contains
         end if
       end if
       call system_clock(t0)
-      call solver_factorize(solver, nvalues, s%values, status)
+      call factorize(s%values, status)
       if (status == mumps_numerically_singular .and. npair > 0) then
         ! Two closed pairs of one node can hold it along the same direction (a node that
         ! sticks on the die, pushed along its slip by a second tool): its motion is
@@ -739,7 +741,7 @@ contains
             perturbed(k) = perturbed(k) + multiplier_perturbation
           end do
         end do
-        call solver_factorize(solver, nvalues, perturbed, status)
+        call factorize(perturbed, status)
       end if
       call system_clock(t1)
       if (status < 0) then
@@ -754,6 +756,24 @@ contains
       if (status < 0) return
       step_size = weighted_norm(delta)
     end subroutine direction
+
+    !> Factors of the Jacobian of coordinate values: summed into the entries the solver
+    !> was analysed with (half as many as the coordinates on a forming blank, so MUMPS
+    !> keeps half the copy and arrowheads; docs/theory/linear-solver.md, "The entries").
+    subroutine factorize(values, status)
+      real(wp), intent(in) :: values(nvalues)
+      integer, intent(out) :: status
+      if (dofs%symmetric) then
+        if (.not. allocated(summed)) allocate(summed(size(entries%col)))
+        call sum_duplicates(nvalues, size(entries%col), values, entries%sources, &
+                            entries%source_start, summed)
+      else
+        if (.not. allocated(summed)) allocate(summed(size(rows%col)))
+        call sum_duplicates(nvalues, size(rows%col), values, rows%sources, &
+                            rows%source_start, summed)
+      end if
+      call solver_factorize(solver, size(summed), summed, status)
+    end subroutine factorize
 
     !> x = M^-1 b with the present factors.
     subroutine mumps_solve(b, x, status)

@@ -119,6 +119,9 @@ module ddpy_forming_problem
     type(force_holds) :: holds
     type(jacobian_layout) :: layout
     type(row_structure) :: rows
+    !> A symmetric layout's entries (its one triangle's coordinates summed), which its
+    !> solver is analysed with and factorizes; an unsymmetric one's are rows'.
+    type(row_structure) :: entries
     !> Whether the settings and the limits of a trial were given.
     logical :: has_newton = .false., has_limits = .false.
     type(newton_settings) :: newton

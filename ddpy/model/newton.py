@@ -201,22 +201,18 @@ class Layout:
         check(status, "the Jacobian's layout")
         self.n, self.k_slots = int(n_unknowns), int(k_slots)
         self.rows, self.cols = rows, cols
-        self._entries: tuple[NDArray[np.int32], NDArray[np.int32]] | None = None
 
     def entries(self) -> tuple[NDArray[np.int32], NDArray[np.int32]]:
         """The Jacobian's distinct entries (rows, cols; 0-based, by row, then column): the
         coordinates summed, which the solver is analysed with and the core's Newton loop
         factorizes (a forming blank's coordinates repeat each entry about twice, once per
         element around it; MUMPS would keep them all, docs/theory/linear-solver.md, "The
-        entries"). A symmetric layout's are those of its one triangle."""
-        if self._entries is None:
-            # A sort and a mask: np.unique took 30 times a sort on 11.7 million keys
-            # (NumPy 2.4).
-            key = np.sort(self.rows.astype(np.int64) * self.n + self.cols)
-            key = key[np.concatenate([[True], key[1:] != key[:-1]])]
-            self._entries = ((key // self.n).astype(np.int32),
-                             (key % self.n).astype(np.int32))
-        return self._entries
+        entries"). A symmetric layout's are those of its one triangle. Computed at each
+        call (the analysis needs them once; kept, they would hold memory all run)."""
+        # A sort and a mask: np.unique took 30 times a sort on 11.7 million keys (NumPy 2.4).
+        key = np.sort(self.rows.astype(np.int64) * self.n + self.cols)
+        key = key[np.concatenate([[True], key[1:] != key[:-1]])]
+        return (key // self.n).astype(np.int32), (key % self.n).astype(np.int32)
 
     def core_problem(self, pack: ToolPack | None) -> CoreProblem:
         """The core's copy of the problem of this layout, with the penalties and barriers

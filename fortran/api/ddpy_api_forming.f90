@@ -22,7 +22,7 @@ module ddpy_api_forming
   use ddpy_forming, only: forming_contact
   use ddpy_forming_newton, only: forming_increment, penetration_step, gmres, &
                                  hold_equations
-  use ddpy_sparse, only: rows_fit, rows_build
+  use ddpy_sparse, only: rows_fit, rows_build, sum_duplicates
   use ddpy_jacobian_layout, only: layout_build
   use ddpy_solid_assembly, only: solid_coo_count, solid_assemble, shell_modes
   implicit none
@@ -826,6 +826,7 @@ contains
     real(c_double), intent(in) :: values(nvalues), weight(n), f(n), x0(n)
     real(c_double), intent(out) :: x(n)
     integer(c_int), intent(out) :: k, converged, status
+    real(wp), allocatable :: entry(:)
     logical :: done
     x = 0.0_wp
     k = 0
@@ -833,8 +834,10 @@ contains
     status = 1
     if (.not. rows_fit(n, ncsr, nsrc, nvalues, row_start, col, sources, source_start) .or. &
         m < 1 .or. any(weight <= 0.0_wp)) return
-    call gmres(n, nvalues, values, row_start, ncsr, col, sources, source_start, weight, &
-               handle, f, x0, tol, m, x, k, done, status)
+    allocate(entry(ncsr))
+    call sum_duplicates(nvalues, ncsr, values, sources, source_start, entry)
+    call gmres(n, row_start, ncsr, col, entry, weight, handle, f, x0, tol, m, x, k, done, &
+               status)
     converged = merge(1, 0, done)
   end subroutine api_krylov_solve
 

@@ -127,6 +127,8 @@ contains
     real(wp), allocatable :: weight(:), delta(:), du(:, :), dforce(:, :), x_n(:, :), &
                              kdu(:, :), dp(:, :), u_cur(:, :), force_cur(:, :), &
                              alpha_cur(:, :), shift_cur(:), dshift(:), summed(:)
+    ! summed: the present Jacobian's entries (sum_entries), set in this call of direction
+    logical :: summed_now
     integer, allocatable :: previous(:), lock(:)
     logical, allocatable :: averaged(:)
     ! The sets of the last recorded iterate and of the one before it (record): the contact
@@ -701,6 +703,7 @@ contains
       integer :: count, p, i, k
       logical :: gmres_converged
       status = 0
+      summed_now = .false.
       if (newton%reuse .and. factored /= 0 .and. reuse_next /= 0) then
         allocate(preconditioned(n))
         call system_clock(t0)
@@ -710,9 +713,10 @@ contains
           call mumps_solve(-s%residual, preconditioned, status)
           if (status < 0) return
         end if
-        call gmres(n, nvalues, s%values, rows%row_start, size(rows%col), rows%col, rows%sources, &
-                   rows%source_start, weight, solver, -s%residual, preconditioned, forcing, &
-                   newton%krylov_max, delta, count, gmres_converged, status)
+        call sum_entries(s%values, rows)
+        call gmres(n, rows%row_start, size(rows%col), rows%col, summed, weight, solver, &
+                   -s%residual, preconditioned, forcing, newton%krylov_max, delta, count, &
+                   gmres_converged, status)
         call system_clock(t1)
         report%solve_time = report%solve_time + real(t1 - t0, wp)/real(clock_rate, wp)
         if (status < 0) return
@@ -724,7 +728,14 @@ contains
         end if
       end if
       call system_clock(t0)
-      call factorize(s%values, status)
+      ! GMRES summed this Jacobian's entries already, unless the layout is symmetric
+      ! (GMRES's rows then hold both triangles, the solver one).
+      if (dofs%symmetric) then
+        call sum_entries(s%values, entries)
+      else if (.not. summed_now) then
+        call sum_entries(s%values, rows)
+      end if
+      call solver_factorize(solver, size(summed), summed, status)
       if (status == mumps_numerically_singular .and. npair > 0) then
         ! Two closed pairs of one node can hold it along the same direction (a node that
         ! sticks on the die, pushed along its slip by a second tool): its motion is
@@ -741,7 +752,12 @@ contains
             perturbed(k) = perturbed(k) + multiplier_perturbation
           end do
         end do
-        call factorize(perturbed, status)
+        if (dofs%symmetric) then
+          call sum_entries(perturbed, entries)
+        else
+          call sum_entries(perturbed, rows)
+        end if
+        call solver_factorize(solver, size(summed), summed, status)
       end if
       call system_clock(t1)
       if (status < 0) then
@@ -757,23 +773,22 @@ contains
       step_size = weighted_norm(delta)
     end subroutine direction
 
-    !> Factors of the Jacobian of coordinate values: summed into the entries the solver
-    !> was analysed with (half as many as the coordinates on a forming blank, so MUMPS
-    !> keeps half the copy and arrowheads; docs/theory/linear-solver.md, "The entries").
-    subroutine factorize(values, status)
+    !> summed = the coordinate values summed into the entries of structure (rows, or a
+    !> symmetric layout's entries): what GMRES multiplies with and the solver factorizes,
+    !> which was analysed with those entries (half as many as the coordinates on a forming
+    !> blank, so MUMPS keeps half the copy and arrowheads; docs/theory/linear-solver.md,
+    !> "The entries").
+    subroutine sum_entries(values, structure)
       real(wp), intent(in) :: values(nvalues)
-      integer, intent(out) :: status
-      if (dofs%symmetric) then
-        if (.not. allocated(summed)) allocate(summed(size(entries%col)))
-        call sum_duplicates(nvalues, size(entries%col), values, entries%sources, &
-                            entries%source_start, summed)
-      else
-        if (.not. allocated(summed)) allocate(summed(size(rows%col)))
-        call sum_duplicates(nvalues, size(rows%col), values, rows%sources, &
-                            rows%source_start, summed)
+      type(row_structure), intent(in) :: structure
+      if (allocated(summed)) then
+        if (size(summed) /= size(structure%col)) deallocate(summed)
       end if
-      call solver_factorize(solver, size(summed), summed, status)
-    end subroutine factorize
+      if (.not. allocated(summed)) allocate(summed(size(structure%col)))
+      call sum_duplicates(nvalues, size(structure%col), values, structure%sources, &
+                          structure%source_start, summed)
+      summed_now = .true.
+    end subroutine sum_entries
 
     !> x = M^-1 b with the present factors.
     subroutine mumps_solve(b, x, status)
@@ -1015,9 +1030,8 @@ contains
   !> The Newton correction x of J x = f with older factors M (MUMPS's, behind handle):
   !> GMRES from x0 = M^-1 f on J M^-1 (right preconditioning, the preconditioned basis kept
   !> as flexible GMRES keeps it, so the iterate needs no solve of its own), without restart,
-  !> at most m steps. J: the coordinate values summed into the rows of the structure
-  !> row_start, col, sources, source_start (0-based, see ddpy.core.linalg.row_structure),
-  !> once, in parallel; each product runs over the rows in parallel.
+  !> at most m steps. J: the entries entry of the rows row_start, columns col (0-based,
+  !> see ddpy.core.linalg.row_structure); each product runs over the rows in parallel.
   !>
   !> It stops at the first iterate that meets both of
   !>   ||J x - f|| <= tol ||f||              the residual the Newton loop measures, and
@@ -1032,15 +1046,14 @@ contains
   !> status < 0 when a MUMPS solve failed.
   !> Arnoldi with modified Gram-Schmidt run twice (the basis stays orthogonal to rounding
   !> when the operator is far from normal) and Givens rotations for the residual norm.
-  subroutine gmres(n, nvalues, values, row_start, ncsr, col, sources, source_start, weight, &
-                   handle, f, x0, tol, m, x, k, converged, status)
-    integer, intent(in) :: n, nvalues, ncsr, row_start(n + 1), col(ncsr), sources(*), &
-                           source_start(ncsr + 1), handle, m
-    real(wp), intent(in) :: values(nvalues), weight(n), f(n), x0(n), tol
+  subroutine gmres(n, row_start, ncsr, col, entry, weight, handle, f, x0, tol, m, x, k, &
+                   converged, status)
+    integer, intent(in) :: n, ncsr, row_start(n + 1), col(ncsr), handle, m
+    real(wp), intent(in) :: entry(ncsr), weight(n), f(n), x0(n), tol
     real(wp), intent(out) :: x(n)
     integer, intent(out) :: k, status
     logical, intent(out) :: converged
-    real(wp), allocatable :: basis(:, :), preconditioned(:, :), w(:), entry(:)
+    real(wp), allocatable :: basis(:, :), preconditioned(:, :), w(:)
     ! hessenberg: rotated to the triangle; arnoldi: as Arnoldi left it
     real(wp) :: hessenberg(m + 1, m), arnoldi(m + 1, m), cosines(m), sines(m), res(m + 1), &
                 h(m + 1), y(m), beta, a, c, radius, force_target, correction_target
@@ -1051,8 +1064,7 @@ contains
     k = 0
     converged = .true.
     if (.not. any(f /= 0.0_wp)) return
-    allocate(basis(n, m + 1), preconditioned(n, m + 1), w(n), entry(ncsr))
-    call sum_duplicates(nvalues, ncsr, values, sources, source_start, entry)
+    allocate(basis(n, m + 1), preconditioned(n, m + 1), w(n))
     force_target = tol*sqrt(dot_product(f, f))
     correction_target = tol*sqrt(sum((weight*x0)**2))
     call row_product(n, ncsr, row_start, col, entry, x0, w)

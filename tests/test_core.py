@@ -179,6 +179,35 @@ def test_singular_matrix_is_an_error() -> None:
         spsolve((n, rows, cols, values), np.ones(n))
 
 
+def test_the_workspace_of_a_factorization_is_kept_for_the_next() -> None:
+    """MUMPS allocates its workspace at the first factorization of a structure; the next
+    ones are given one of that size (the same factors, bitwise); a failed factorization
+    (singular) or a new analysis gives it back, and the one after allocates again."""
+    n = 60
+    rows, cols, values, dense = random_system(n, seed=7)
+    b = np.arange(n, dtype=float)
+    with MumpsSolver() as solver:
+        solver.analyse(n, rows, cols)
+        solver.factorize(values)
+        first = solver.solve(b)
+        assert solver.statistics()["workspace_given"] == 0
+        solver.factorize(values)
+        given = solver.statistics()["workspace_given"]
+        assert given >= solver.statistics()["factor_entries"]
+        np.testing.assert_array_equal(solver.solve(b), first)
+        with pytest.raises(LinearSolverError, match="singular"):
+            solver.factorize(np.zeros_like(values))
+        solver.factorize(values)
+        assert solver.statistics()["workspace_given"] == 0
+        np.testing.assert_array_equal(solver.solve(b), first)
+        solver.factorize(values)
+        assert solver.statistics()["workspace_given"] == given
+        solver.analyse(n, rows, cols)
+        solver.factorize(values)
+        assert solver.statistics()["workspace_given"] == 0
+        np.testing.assert_allclose(dense @ solver.solve(b), b, rtol=0, atol=1e-10 * n)
+
+
 def test_closed_and_misused_solver_errors() -> None:
     solver = MumpsSolver()
     with pytest.raises(LinearSolverError, match="analyse and factorize"):

@@ -54,7 +54,7 @@ _INFO = {name: constant(f"info_{name}_offset") for name in (
     "infog1", "ordering", "factor_entries", "estimated_factor_entries",
     "estimated_memory_mb_max", "estimated_memory_mb_total", "memory_mb_max",
     "memory_mb_total", "memory_used_mb_max", "memory_used_mb_total", "processes",
-    "negative_pivots")}
+    "negative_pivots", "workspace_given")}
 _FLOPS = {name: constant(f"flops_{name}_offset") for name in ("elimination", "estimate")}
 
 
@@ -225,7 +225,11 @@ class MumpsSolver:
         ``_total``, INFOG(18)/(19)) and used (``memory_used_mb_max``/``_total``,
         INFOG(21)/(22)); ``processes``, the MPI processes sharing the work;
         ``negative_pivots``, those of the last factorization with "symmetric" or "spd"
-        (INFOG(12); with "unsymmetric" MUMPS counts its off-diagonal pivots there)."""
+        (INFOG(12); with "unsymmetric" MUMPS counts its off-diagonal pivots there);
+        ``workspace_given``, the entries of the workspace given to MUMPS for the last
+        factorization (0: MUMPS allocated its own; from the second factorization of a
+        structure on, the core gives it what MUMPS took the first time, so that it is not
+        allocated and faulted in again at every factorization)."""
         values, flops, status = _core.solver_info(self._live())
         if status < 0:
             raise LinearSolverError(int(status), "statistics")
@@ -234,7 +238,7 @@ class MumpsSolver:
             return int(value) if value >= 0 else -int(value) * 1_000_000
 
         info = {name: int(values[at]) for name, at in _INFO.items()}
-        for name in ("factor_entries", "estimated_factor_entries"):
+        for name in ("factor_entries", "estimated_factor_entries", "workspace_given"):
             info[name] = entries(info[name])
         info.update({"flops": float(flops[_FLOPS["elimination"]]),
                      "estimated_flops": float(flops[_FLOPS["estimate"]])})

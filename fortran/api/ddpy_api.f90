@@ -22,7 +22,8 @@ module ddpy_api
                                 info_estimated_memory_mb_total, info_memory_mb_max, &
                                 info_memory_mb_total, info_memory_used_mb_max, &
                                 info_memory_used_mb_total, info_processes, &
-                                info_negative_pivots, flops_elimination, flops_estimate
+                                info_negative_pivots, info_workspace_given, &
+                                flops_elimination, flops_estimate
   use ddpy_handle_table, only: valid_handle, free_entry, max_handles, entry_solver, &
                                entry_blank, entry_surface, entry_problem, refusal_handle, &
                                refusal_size, refusal_index, refusal_full, refusal_value, &
@@ -432,6 +433,7 @@ contains
     call add('info_memory_used_mb_total_offset', info_memory_used_mb_total - 1)
     call add('info_processes_offset', info_processes - 1)
     call add('info_negative_pivots_offset', info_negative_pivots - 1)
+    call add('info_workspace_given_offset', info_workspace_given - 1)
     call add('flops_elimination_offset', flops_elimination - 1)
     call add('flops_estimate_offset', flops_estimate - 1)
     call add('solver_bad_handle', status_bad_handle)

@@ -7,6 +7,7 @@
 !> place among the MPI processes, is the core's only state; every other entry point is a
 !> function of its arguments.
 module ddpy_handle_table
+  use iso_fortran_env, only: int64
   use ddpy_blank, only: blank_mesh
   use ddpy_search_surface, only: search_surface
   use ddpy_forming_problem, only: forming_problem, increment_answer, increment_report
@@ -34,6 +35,9 @@ module ddpy_handle_table
     integer :: holds = entry_free
     type(dmumps_struc), allocatable :: mumps
     logical :: analysed = .false., factorized = .false.
+    !> Entries of the factorization's workspace to give MUMPS (its S, as large as MUMPS took
+    !> for the last factorization of its own; 0: none known yet).
+    integer(int64) :: workspace = 0
     type(blank_mesh), allocatable :: blank
     type(search_surface), allocatable :: surface
     type(forming_problem), allocatable :: problem

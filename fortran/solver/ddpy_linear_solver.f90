@@ -16,6 +16,7 @@
 !> stub MPI of libmumps-seq: its broadcast does nothing).
 module ddpy_linear_solver
   use ddpy_kinds, only: wp
+  use iso_fortran_env, only: int64
   use ddpy_build, only: parallel_mumps
   use ddpy_handle_table, only: table, max_handles, claim_handle, free_entry, entry_solver, &
                                handle_is => valid_handle, world, mpi_not_started, &
@@ -32,14 +33,15 @@ module ddpy_linear_solver
   !> The entries of solver_info's values (MUMPS's INFOG(1), INFOG(2), the ordering used, the
   !> factor entries and their estimate, the estimated memory of the factorization on the
   !> largest process and all, the memory allocated and used, the processes, the negative
-  !> pivots) and of its flops (the elimination's and its estimate).
+  !> pivots, the workspace given to the last factorization: LWK_USER) and of its flops (the elimination's and its estimate).
   integer, parameter, public :: info_infog1 = 1, info_infog2 = 2, info_ordering = 3, &
                                 info_factor_entries = 4, info_estimated_factor_entries = 5, &
                                 info_estimated_memory_mb_max = 6, &
                                 info_estimated_memory_mb_total = 7, info_memory_mb_max = 8, &
                                 info_memory_mb_total = 9, info_memory_used_mb_max = 10, &
                                 info_memory_used_mb_total = 11, info_processes = 12, &
-                                info_negative_pivots = 13, solver_info_values = 13
+                                info_negative_pivots = 13, info_workspace_given = 14, &
+                                solver_info_values = 14
   integer, parameter, public :: flops_elimination = 1, flops_estimate = 2, solver_flops = 2
 
   !> MUMPS instances that may live at the same time (each holds its factors: a few of them
@@ -119,6 +121,7 @@ contains
       case (command_create)
         call init_instance(handle, message(3), message(4), ignored)
       case (command_analyse)
+        call drop_workspace(handle)
         call run_job(handle, 1, ignored)
         table(handle)%analysed = ignored >= 0
       case (command_factorize)
@@ -211,7 +214,7 @@ contains
       id%icntl(7) = ordering
       ! Extra workspace: FE matrices with many equal pivots can outgrow the estimate.
       id%icntl(14) = 40
-      nullify (id%irn, id%jcn, id%a, id%rhs, id%perm_in, id%eltptr, id%eltvar)
+      nullify (id%irn, id%jcn, id%a, id%rhs, id%perm_in, id%eltptr, id%eltvar, id%wk_user)
     end associate
     table(handle)%analysed = .false.
     table(handle)%factorized = .false.
@@ -232,11 +235,33 @@ contains
     integer, intent(in) :: handle
     integer, intent(out) :: status
     integer :: attempt
-    do attempt = 1, 4
-      call run_job(handle, 2, status)
-      if (status /= -8 .and. status /= -9) exit
-      table(handle)%mumps%icntl(14) = 2*table(handle)%mumps%icntl(14)
-    end do
+    associate (id => table(handle)%mumps)
+      ! The workspace of the last factorization kept for the next ones (MUMPS's user
+      ! workspace, WK_USER): MUMPS frees its own at every factorization and allocates it
+      ! again, 0.76 GB of fresh pages per LU on the paper blanks.
+      if (id%lwk_user == 0 .and. table(handle)%workspace > 0) then
+        ! LWK_USER counts entries, or millions of them when negative.
+        if (table(handle)%workspace <= huge(id%lwk_user)) then
+          id%lwk_user = int(table(handle)%workspace)
+          allocate(id%wk_user(table(handle)%workspace))
+        else
+          id%lwk_user = -int((table(handle)%workspace + 999999_int64)/1000000_int64)
+          allocate(id%wk_user(-1000000_int64*id%lwk_user))
+        end if
+      end if
+      do attempt = 1, 4
+        call run_job(handle, 2, status)
+        if (status >= 0) then
+          ! INFO(39): the entries of S MUMPS took, or millions of them when negative.
+          if (id%lwk_user == 0) table(handle)%workspace = &
+            merge(int(id%info(39), int64), -1000000_int64*id%info(39), id%info(39) >= 0)
+          exit
+        end if
+        call drop_workspace(handle)
+        if (status /= -8 .and. status /= -9) exit
+        id%icntl(14) = 2*id%icntl(14)
+      end do
+    end associate
     table(handle)%factorized = status >= 0
     ! SYM = 1 factorizes LDL^T without pivoting, which completes on an indefinite matrix
     ! too: its negative pivots (INFOG(12), the same on every rank) tell that it is not
@@ -272,6 +297,7 @@ contains
     end if
     status = ordering_status(handle, n)
     if (status /= 0) return
+    call drop_workspace(handle)
     associate (id => table(handle)%mumps)
       call release_arrays(handle)
       allocate (id%irn(nz), id%jcn(nz), id%a(nz), id%rhs(n))
@@ -400,6 +426,7 @@ contains
       values(info_memory_used_mb_total) = id%infog(22)
       values(info_processes) = world%size
       values(info_negative_pivots) = id%infog(12)
+      values(info_workspace_given) = id%lwk_user
       flops(flops_elimination) = id%rinfog(3)
       flops(flops_estimate) = id%rinfog(1)
     end associate
@@ -481,8 +508,20 @@ contains
       if (associated(id%perm_in)) deallocate (id%perm_in)
     end associate
     call run_job(handle, -2, status)
+    call drop_workspace(handle)
     call free_entry(handle)
   end subroutine destroy_instance
+
+  !> Take back the workspace given to MUMPS: its own is used from the next factorization.
+  subroutine drop_workspace(handle)
+    integer, intent(in) :: handle
+    table(handle)%workspace = 0
+    associate (id => table(handle)%mumps)
+      if (associated(id%wk_user)) deallocate (id%wk_user)
+      nullify (id%wk_user)
+      id%lwk_user = 0
+    end associate
+  end subroutine drop_workspace
 
   subroutine release_arrays(handle)
     integer, intent(in) :: handle

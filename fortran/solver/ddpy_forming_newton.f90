@@ -127,7 +127,8 @@ contains
     real(wp), allocatable :: weight(:), delta(:), du(:, :), dforce(:, :), x_n(:, :), &
                              kdu(:, :), dp(:, :), u_cur(:, :), force_cur(:, :), &
                              alpha_cur(:, :), shift_cur(:), dshift(:), summed(:)
-    ! summed: the present Jacobian's entries (sum_entries), set in this call of direction
+    ! summed: the present Jacobian's entries (sum_entries); summed_now: the rows' ones of
+    ! the iterate direction is at
     logical :: summed_now
     integer, allocatable :: previous(:), lock(:)
     logical, allocatable :: averaged(:)
@@ -713,7 +714,7 @@ contains
           call mumps_solve(-s%residual, preconditioned, status)
           if (status < 0) return
         end if
-        call sum_entries(s%values, rows)
+        call sum_entries(s%values, .false.)
         call gmres(n, rows%row_start, size(rows%col), rows%col, summed, weight, solver, &
                    -s%residual, preconditioned, forcing, newton%krylov_max, delta, count, &
                    gmres_converged, status)
@@ -728,13 +729,7 @@ contains
         end if
       end if
       call system_clock(t0)
-      ! GMRES summed this Jacobian's entries already, unless the layout is symmetric
-      ! (GMRES's rows then hold both triangles, the solver one).
-      if (dofs%symmetric) then
-        call sum_entries(s%values, entries)
-      else if (.not. summed_now) then
-        call sum_entries(s%values, rows)
-      end if
+      if (.not. summed_now .or. dofs%symmetric) call sum_entries(s%values, .true.)
       call solver_factorize(solver, size(summed), summed, status)
       if (status == mumps_numerically_singular .and. npair > 0) then
         ! Two closed pairs of one node can hold it along the same direction (a node that
@@ -752,11 +747,7 @@ contains
             perturbed(k) = perturbed(k) + multiplier_perturbation
           end do
         end do
-        if (dofs%symmetric) then
-          call sum_entries(perturbed, entries)
-        else
-          call sum_entries(perturbed, rows)
-        end if
+        call sum_entries(perturbed, .true.)
         call solver_factorize(solver, size(summed), summed, status)
       end if
       call system_clock(t1)
@@ -773,12 +764,25 @@ contains
       step_size = weighted_norm(delta)
     end subroutine direction
 
-    !> summed = the coordinate values summed into the entries of structure (rows, or a
-    !> symmetric layout's entries): what GMRES multiplies with and the solver factorizes,
-    !> which was analysed with those entries (half as many as the coordinates on a forming
-    !> blank, so MUMPS keeps half the copy and arrowheads; docs/theory/linear-solver.md,
-    !> "The entries").
-    subroutine sum_entries(values, structure)
+    !> summed = the coordinate values summed into the entries of the rows (what GMRES
+    !> multiplies with), or, for_solver, into those the solver was analysed with and
+    !> factorizes: the same, but a symmetric layout's one triangle (entries). Half as many
+    !> as the coordinates on a forming blank, so MUMPS keeps half the copy and arrowheads
+    !> (docs/theory/linear-solver.md, "The entries"). summed_now: summed are the rows'.
+    subroutine sum_entries(values, for_solver)
+      real(wp), intent(in) :: values(nvalues)
+      logical, intent(in) :: for_solver
+      if (for_solver .and. dofs%symmetric) then
+        call sum_into(values, entries)
+        summed_now = .false.
+      else
+        call sum_into(values, rows)
+        summed_now = .true.
+      end if
+    end subroutine sum_entries
+
+    !> summed = values summed into the entries of structure.
+    subroutine sum_into(values, structure)
       real(wp), intent(in) :: values(nvalues)
       type(row_structure), intent(in) :: structure
       if (allocated(summed)) then
@@ -787,8 +791,7 @@ contains
       if (.not. allocated(summed)) allocate(summed(size(structure%col)))
       call sum_duplicates(nvalues, size(structure%col), values, structure%sources, &
                           structure%source_start, summed)
-      summed_now = .true.
-    end subroutine sum_entries
+    end subroutine sum_into
 
     !> x = M^-1 b with the present factors.
     subroutine mumps_solve(b, x, status)

@@ -339,6 +339,13 @@ def test_the_effort_claims_fail_where_the_runs_say_so() -> None:
     for m in ("facets_coarse", "facets_fine"):
         numbers[m]["wall_s"] = 119.0
     assert verdict(numbers, "(e)") == "does not hold"
+    # the wall time's ratio split into the iterations' and the time per iteration's
+    numbers["facets_fine"]["iterations"] = 2 * numbers["nagata"]["iterations"]
+    smooth = 0.5 * (numbers["bezier"]["wall_s"] + numbers["nagata"]["wall_s"])
+    iterations = 0.5 * (numbers["bezier"]["iterations"] + numbers["nagata"]["iterations"])
+    detail = {t[:3]: d for t, _, d in run.claims(numbers)}["(e)"]
+    fine = numbers["facets_fine"]["iterations"] / iterations
+    assert f"Faceted-fine {fine:.2f} x {119.0 / smooth / fine:.2f}" in detail, detail
     numbers = {m: synthetic_run(m).numbers for m in run.MODELS}
     numbers["facets_fine"]["stages"]["stage1"]["die_contact_mean"] = 70.0
     assert verdict(numbers, "(f)") == "does not hold"

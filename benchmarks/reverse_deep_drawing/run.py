@@ -773,6 +773,17 @@ def effort_claims(numbers: dict[str, dict[str, Any]]) -> list[tuple[str, str, st
             + f" (about twice taken as within {TWICE[0]:g}-{TWICE[1]:g}; Bezier "
             f"{numbers['bezier']['wall_s']:.0f} s, Nagata {numbers['nagata']['wall_s']:.0f} s"
             f" on {threads.pop()} thread(s))")
+        # The ratio is the iterations' (which no load on the machine moves) times the time
+        # per iteration's (which the other work on the cores does).
+        iterations = 0.5 * (numbers["bezier"]["iterations"] + numbers["nagata"]["iterations"])
+        split = {m: numbers[m]["iterations"] / max(iterations, 1e-12) for m in facets}
+        parts.append("as the iterations over the smooth models' mean times the time per "
+                     "iteration over theirs: " + ", ".join(
+                         f"{LABELS[m]} {split[m]:.2f} x {ratios[m] / max(split[m], 1e-12):.2f}"
+                         for m in facets)
+                     + " (the iterations do not depend on the load on the machine's cores, "
+                     "the time per iteration does: the runs' wall times compare only as far "
+                     "as they shared the cores alike)")
     elif checked:
         needs = "runs on equal threads"
         checked = False

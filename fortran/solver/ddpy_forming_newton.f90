@@ -127,9 +127,6 @@ contains
     real(wp), allocatable :: weight(:), delta(:), du(:, :), dforce(:, :), x_n(:, :), &
                              kdu(:, :), dp(:, :), u_cur(:, :), force_cur(:, :), &
                              alpha_cur(:, :), shift_cur(:), dshift(:), summed(:)
-    ! summed: the present Jacobian's entries (sum_entries); summed_now: the rows' ones of
-    ! the iterate direction is at
-    logical :: summed_now
     integer, allocatable :: previous(:), lock(:)
     logical, allocatable :: averaged(:)
     ! The sets of the last recorded iterate and of the one before it (record): the contact
@@ -702,9 +699,9 @@ contains
       real(wp), allocatable :: preconditioned(:), perturbed(:)
       integer(int64) :: t0, t1
       integer :: count, p, i, k
-      logical :: gmres_converged
+      logical :: gmres_converged, rows_summed
       status = 0
-      summed_now = .false.
+      rows_summed = .false.
       if (newton%reuse .and. factored /= 0 .and. reuse_next /= 0) then
         allocate(preconditioned(n))
         call system_clock(t0)
@@ -715,6 +712,7 @@ contains
           if (status < 0) return
         end if
         call sum_entries(s%values, .false.)
+        rows_summed = .true.
         call gmres(n, rows%row_start, size(rows%col), rows%col, summed, weight, solver, &
                    -s%residual, preconditioned, forcing, newton%krylov_max, delta, count, &
                    gmres_converged, status)
@@ -729,7 +727,8 @@ contains
         end if
       end if
       call system_clock(t0)
-      if (.not. summed_now .or. dofs%symmetric) call sum_entries(s%values, .true.)
+      ! GMRES's sums are the solver's too, but for a symmetric layout's triangle.
+      if (.not. rows_summed .or. dofs%symmetric) call sum_entries(s%values, .true.)
       call solver_factorize(solver, size(summed), summed, status)
       if (status == mumps_numerically_singular .and. npair > 0) then
         ! Two closed pairs of one node can hold it along the same direction (a node that
@@ -768,16 +767,14 @@ contains
     !> multiplies with), or, for_solver, into those the solver was analysed with and
     !> factorizes: the same, but a symmetric layout's one triangle (entries). Half as many
     !> as the coordinates on a forming blank, so MUMPS keeps half the copy and arrowheads
-    !> (docs/theory/linear-solver.md, "The entries"). summed_now: summed are the rows'.
+    !> (docs/theory/linear-solver.md, "The entries").
     subroutine sum_entries(values, for_solver)
       real(wp), intent(in) :: values(nvalues)
       logical, intent(in) :: for_solver
       if (for_solver .and. dofs%symmetric) then
         call sum_into(values, entries)
-        summed_now = .false.
       else
         call sum_into(values, rows)
-        summed_now = .true.
       end if
     end subroutine sum_entries
 

@@ -168,7 +168,9 @@ def test_scipy_sparse_input() -> None:
     matrix = sparse.coo_matrix((values, (rows, cols)), shape=(n, n)).tocsr()
     b = np.arange(n, dtype=float)
     x = spsolve(matrix, b)
-    assert np.linalg.norm(dense @ x - b) / np.linalg.norm(b) < 1e-12
+    # Without refinement MUMPS's threshold pivoting leaves about 1e-12 on this random
+    # matrix (0.7e-12 or 1.4e-12, as the rounding of its products falls; see above).
+    assert np.linalg.norm(dense @ x - b) / np.linalg.norm(b) < 1e-11
 
 
 def test_singular_matrix_is_an_error() -> None:

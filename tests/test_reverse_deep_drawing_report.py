@@ -469,3 +469,54 @@ def test_the_convergence_table_names_what_does_not_converge_and_why() -> None:
 
 def make_case_meshes() -> tuple[str, ...]:
     return ("coarse", "medium", "paper")
+
+
+def test_a_failing_contact_claim_names_the_cause_the_runs_show() -> None:
+    """(c) and (f), when they fail, weigh the count's change with the contact's
+    discretization (Nagata at DD3IMP's element and contact, make_case.REFERENCE) against
+    its change with the tool model: a count three times another's at DD3IMP's
+    discretization names the code's discretization; the same count there clears it; no
+    such run leaves the cause not computed."""
+    reference = run.make_case.REFERENCE
+    numbers = {m: synthetic_run(m).numbers for m in run.MODELS}
+    numbers["nagata"]["stages"]["stage2"]["die_contact_mean"] = 50.0  # (c) fails
+    numbers["facets_fine"]["stages"]["stage1"]["die_contact_mean"] = 70.0  # (f) fails
+    detail = {t[:3]: d for t, _, d in run.claims(numbers)}
+    assert "cause: not computed" in detail["(c)"] and "cause: not computed" in detail["(f)"]
+    numbers[reference] = synthetic_run("nagata").numbers
+    for k, stage in enumerate(run.STAGES):
+        numbers[reference]["stages"][stage]["die_contact_mean"] = (26.0, 20.0)[k]
+    detail = {t[:3]: d for t, _, d in run.claims(numbers)}
+    for claim in ("(c)", "(f)"):
+        assert "cause the data show is the code's discretization" in detail[claim], claim
+        assert "stage1: Nagata 78.0 nodes at the defaults, 26.0 at DD3IMP's" in detail[claim]
+    for k, stage in enumerate(run.STAGES):
+        numbers[reference]["stages"][stage]["die_contact_mean"] = (78.0, 50.0)[k]
+    detail = {t[:3]: d for t, _, d in run.claims(numbers)}
+    assert "not the cause" in detail["(c)"]
+    base = {m: synthetic_run(m).numbers for m in run.MODELS}
+    assert "cause" not in {t[:3]: d for t, _, d in run.claims(base)}["(c)"]
+
+
+def test_the_shape_claim_names_the_reconstruction_where_the_tools_differ() -> None:
+    """(i) failing on the negative error's tool: holder 2 and punch 2, both shaped
+    otherwise than the paper's (make_case.TABLE5_NOT_MET), name the reconstruction; the
+    positive error moved from die 1 to punch 1, two tools recorded as the paper's, names
+    neither shape nor meshing but the code."""
+    shape = {tool: {m: {"max_signed_um": 5.0, "min_signed_um": -1.0} for m in run.MODELS}
+             for tool in run.TOOLS}
+    shape["die1"]["nagata"]["max_signed_um"] = 9.6
+    shape["holder2"]["nagata"]["min_signed_um"] = -3.0
+    shape["die1"]["facets_fine"]["max_signed_um"] = 19.0
+    verdict, detail = run.shape_claim(shape)[1:]
+    assert verdict == "does not hold"
+    assert "negative errors by tool: holder2 -3.00 um" in detail
+    assert "cause: the reconstruction (punch2: our flat end" in detail
+    assert run.make_case.TABLE5_NOT_MET[("holder2", "nagata")] in detail
+    shape["holder2"]["nagata"]["min_signed_um"] = -1.0
+    shape["punch2"]["nagata"]["min_signed_um"] = -3.0
+    shape["punch1"]["nagata"]["max_signed_um"] = 12.0
+    verdict, detail = run.shape_claim(shape)[1:]
+    assert verdict == "does not hold" and "negative errors" not in detail
+    assert "positive errors by tool: punch1 12.00 um, die1 9.60 um" in detail
+    assert "the code's interpolation is to be checked" in detail

@@ -520,3 +520,16 @@ def test_the_shape_claim_names_the_reconstruction_where_the_tools_differ() -> No
     assert verdict == "does not hold" and "negative errors" not in detail
     assert "positive errors by tool: punch1 12.00 um, die1 9.60 um" in detail
     assert "the code's interpolation is to be checked" in detail
+
+
+def test_claim_d_lists_limits_of_equal_weight_by_name() -> None:
+    """Two limits that differ from Nagata's by as many increments come in their names'
+    order, not in the order of a set's string hashes (which changes between processes)."""
+    numbers = {m: synthetic_run(m).numbers for m in run.MODELS}
+    for m in ("nagata", "facets_coarse", "facets_fine"):
+        for stage in run.STAGES:
+            numbers[m]["stages"][stage]["limits"] = {
+                "yield": 5, "strain": 5 if m == "nagata" else 2,
+                "rotation": 1 if m == "nagata" else 4}
+    text = run.increment_cause(numbers, ("nagata", "facets_coarse", "facets_fine"))
+    assert "Faceted-coarse against Nagata: rotation +6, strain -6;" in text, text

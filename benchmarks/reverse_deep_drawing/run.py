@@ -945,7 +945,10 @@ def increment_cause(numbers: dict[str, dict[str, Any]], trio: tuple[str, ...]) -
     for m in trio[1:]:
         extra = {k: limits[m].get(k, 0) - limits[base].get(k, 0)
                  for k in set(limits[m]) | set(limits[base])}
-        extra = {k: v for k, v in sorted(extra.items(), key=lambda kv: -abs(kv[1])) if v}
+        # Ties by name: the set above iterates in the order of its strings' hashes, which
+        # changes from one process to the next.
+        extra = {k: v for k, v in sorted(extra.items(), key=lambda kv: (-abs(kv[1]), kv[0]))
+                 if v}
         text += (f"; {LABELS[m]} against {LABELS[base]}: " + (", ".join(
             f"{k} {v:+d}" for k, v in list(extra.items())[:3]) or "the same limits"))
     if min(share.values()) >= AT_MAX_SHARE:

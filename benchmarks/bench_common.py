@@ -12,6 +12,8 @@ import datetime
 import importlib.util
 import json
 import os
+import platform
+import re
 import subprocess
 import sys
 from collections.abc import Callable
@@ -83,6 +85,16 @@ def cores() -> int:
     """The cores this process may run on."""
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else \
         os.cpu_count() or 1
+
+
+def cpu_model() -> str:
+    """The processor's model name (Linux's /proc/cpuinfo), for reports that compare times."""
+    try:
+        text = Path("/proc/cpuinfo").read_text()
+    except OSError:
+        return platform.processor() or "unknown"
+    found = re.search(r"model name\s*:\s*(.+)", text)
+    return found[1].strip() if found else "unknown"
 
 
 def recorded_code(folder: Path) -> dict[str, Any]:

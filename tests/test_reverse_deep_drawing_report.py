@@ -533,3 +533,39 @@ def test_claim_d_lists_limits_of_equal_weight_by_name() -> None:
                 "rotation": 1 if m == "nagata" else 4}
     text = run.increment_cause(numbers, ("nagata", "facets_coarse", "facets_fine"))
     assert "Faceted-coarse against Nagata: rotation +6, strain -6;" in text, text
+
+
+def _timed(wall_s: float, threads: int = 2, status: str = "completed",
+           iterations: int = 3650) -> dict[str, Any]:
+    numbers = {**synthetic_run("nagata").numbers, "wall_s": wall_s, "threads": threads,
+               "status": status, "iterations": iterations, "factorizations": 100,
+               "krylov_iterations": 700, "lu_s": 0.05, "peak_memory_mb": 900.0,
+               "discretization": "solid-shell, Gauss-point contact", "code": "def5678"}
+    return run.timing_record(numbers, "paper", 2, "Some CPU", 2.1)
+
+
+def test_the_timed_run_is_judged_against_the_target_and_its_column(tmp_path: Path) -> None:
+    numbers = {"nagata": synthetic_run("nagata").numbers}  # 3650 iterations, 920 increments
+    assert "Not measured" in "\n".join(run.timing_section(None, numbers, "paper"))
+    limit = run.TIMING_TARGET_MIN * 60.0
+    met = "\n".join(run.timing_section(_timed(limit - 60.0), numbers, "paper"))
+    assert "**Target (at most 60 min alone on the machine, both stages): met**" in met
+    assert "59.0 min" in met and "def5678" in met and "Some CPU" in met
+    # per iteration 5 x 0.01 s over one LU of 0.05 s
+    assert "| per iteration / one LU | 1.00 |" in met
+    assert "so the same computation" in met
+    for timed in (_timed(limit + 60.0), _timed(limit - 60.0, threads=1),
+                  _timed(limit - 60.0, status="partial")):
+        assert ": not met**" in "\n".join(run.timing_section(timed, numbers, "paper"))
+    other = "\n".join(run.timing_section(_timed(limit, iterations=3000), numbers, "paper"))
+    assert "another computation" in other and "3650 iterations" in other
+    # the record lives in the runs file beside the kept runs, which skip it
+    path = tmp_path / "runs.json"
+    run.keep_runs(path, {"nagata": synthetic_run("nagata")})
+    run.keep_timing(path, _timed(limit))
+    run.keep_runs(path, {"bezier": synthetic_run("bezier")})
+    assert set(run.kept_runs(path)) == {"nagata", "bezier"}
+    assert run.kept_timing(path) == _timed(limit)
+    text = run.report("paper", numbers, SHAPE, {"nagata": "map.png"}, FIGURES, 2,
+                      timing=run.kept_timing(path))
+    assert "### Speed at the defaults, alone on the machine" in text

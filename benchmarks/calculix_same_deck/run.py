@@ -19,7 +19,6 @@ import argparse
 import datetime
 import json
 import os
-import platform
 import re
 import resource
 import shutil
@@ -35,7 +34,15 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))  # the benchmarks' shared module
-from bench_common import DOCS, code_version, computed_at, cores, load_module, runs_file  # noqa: E402
+from bench_common import (  # noqa: E402
+    DOCS,
+    code_version,
+    computed_at,
+    cores,
+    cpu_model,
+    load_module,
+    runs_file,
+)
 from bench_common import table_row as _row  # noqa: E402
 
 deck = load_module(HERE / "deck.py", "calculix_same_deck_deck")
@@ -246,15 +253,6 @@ def ccx_version(ccx: str) -> str:
     out = subprocess.run([ccx, "-v"], capture_output=True, text=True, check=False).stdout
     found = re.search(r"Version\s+(\S+)", out)
     return found[1] if found else "unknown"
-
-
-def cpu_model() -> str:
-    try:
-        text = Path("/proc/cpuinfo").read_text()
-    except OSError:
-        return platform.processor() or "unknown"
-    found = re.search(r"model name\s*:\s*(.+)", text)
-    return found[1].strip() if found else "unknown"
 
 
 def run_all(stop_after: int | None, ccx_limit: float | None) -> dict[str, Any]:

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import platform
 import sys
 import time
@@ -57,6 +58,7 @@ from bench_common import (  # noqa: E402
     code_version,
     computed_at,
     cores,
+    cpu_model,
     deepest_per_tool,
     load_module,
     record_code,
@@ -466,7 +468,21 @@ def kept_runs(path: Path) -> dict[str, Run]:
     if not path.exists():
         return {}
     return {model: Run(entry["numbers"], entry["curves"], kept=True)
-            for model, entry in json.loads(path.read_text()).items()}
+            for model, entry in json.loads(path.read_text()).items() if model != TIMING}
+
+
+def keep_timing(path: Path, record: dict[str, Any]) -> None:
+    """Keep the timed run's ``record`` (timing_record) in the runs file ``path``."""
+    kept = json.loads(path.read_text()) if path.exists() else {}
+    kept[TIMING] = record
+    path.write_text(json_text(kept) + "\n")
+
+
+def kept_timing(path: Path) -> dict[str, Any] | None:
+    """The timed run's record kept in the runs file ``path`` (None: not measured)."""
+    if not path.exists():
+        return None
+    return json.loads(path.read_text()).get(TIMING)
 
 
 # ------------------------------------------------------------------------ tool models
@@ -1158,7 +1174,8 @@ def _end(n: dict[str, Any], stage: str) -> dict[str, Any] | None:
 def report(mesh: str, numbers: dict[str, dict[str, Any]],
            shape: dict[str, dict[str, dict[str, Any]]], maps: dict[str, str],
            figures: dict[str, str], threads: int, code: str = "",
-           convergence: list[str] | None = None) -> str:
+           convergence: list[str] | None = None,
+           timing: dict[str, Any] | None = None) -> str:
     """The markdown report: every number from ``numbers`` (the runs), ``shape`` (the tool
     models), make_case and PAPER; ``code``: the code version that wrote it (the runs name
     their own)."""
@@ -1317,6 +1334,7 @@ def report(mesh: str, numbers: dict[str, dict[str, Any]],
         f"![nodes in contact]({figures['contact']})",
         "",
         *effort_section(numbers, models, figures),
+        *timing_section(timing, numbers, mesh),
         *cup_section(numbers, models, figures),
         *checks_section(numbers, models, figures),
         *(convergence or []),
@@ -1526,6 +1544,81 @@ def tool_model_section(shape: dict[str, dict[str, dict[str, Any]]], maps: dict[s
     ]
     for model, png in maps.items():
         lines += [f"![{LABELS[model]} shape error]({png})", ""]
+    return lines
+
+
+#: The runs file's entry of the run timed alone on the machine (``--timing MODEL``), and
+#: the longest wall time the paper blank's run at the defaults may take alone on 2 cores.
+TIMING = "timing"
+TIMING_TARGET_MIN = 60.0
+#: What the timed run's record keeps of its numbers (from_results).
+TIMING_KEYS = ("model", "status", "code", "date", "threads", "increments", "iterations",
+               "wall_s", "per_iteration_s", "factorizations", "krylov_iterations", "lu_s",
+               "peak_memory_mb", "discretization")
+
+
+def timing_record(numbers: dict[str, Any], mesh: str, n_cores: int, cpu: str,
+                  load: float) -> dict[str, Any]:
+    """The record of a run timed alone: its numbers (TIMING_KEYS), the blank, the machine's
+    cores and processor, and its load average when the record was made (a run alone keeps
+    it near its thread count)."""
+    return {**{key: numbers.get(key) for key in TIMING_KEYS}, "mesh": mesh,
+            "cores": n_cores, "cpu": cpu, "load_average": round(load, 2)}
+
+
+def timing_section(timing: dict[str, Any] | None, numbers: dict[str, dict[str, Any]],
+                   mesh: str) -> list[str]:
+    """The run at the defaults timed alone on the machine, against TIMING_TARGET_MIN."""
+    lines = ["### Speed at the defaults, alone on the machine", ""]
+    command = f"`python run.py --mesh {mesh} --timing nagata`"
+    if not timing:
+        return lines + [f"Not measured on this blank ({command} measures it).", ""]
+    model = timing["model"]
+    minutes = timing["wall_s"] / 60.0
+    complete = timing["status"] == "completed"
+    alone = timing["threads"] >= timing["cores"]
+    verdict = "met" if complete and alone and minutes <= TIMING_TARGET_MIN else "not met"
+    per = timing["per_iteration_s"]
+    total = sum(per.values())
+    lines += [
+        f"{LABELS.get(model, model)} tools at the defaults ({timing['discretization']}), "
+        f"{timing['threads']} threads on {timing['cores']} cores ({timing['cpu']}), code "
+        f"{timing['code']}, {timing['date']} ({command}; load average "
+        f"{timing['load_average']:g} when it ended): {timing['status']}, "
+        f"{timing['increments']} increments, {timing['iterations']} Newton iterations, "
+        f"{timing['factorizations']} LU factorizations, {timing['krylov_iterations']} GMRES "
+        f"iterations, **{minutes:.1f} min**; peak memory "
+        f"{_num(timing.get('peak_memory_mb'), '.0f')} MB.",
+        "",
+        f"**Target (at most {TIMING_TARGET_MIN:g} min alone on the machine, both stages): "
+        f"{verdict}**" + ("" if alone else " (the run had fewer threads than cores)") + ".",
+        "",
+        _row(["per Newton iteration", "s", "share"]),
+        _row(["---"] * 3),
+        *[_row([part, f"{per.get(part, 0.0):.4f}", f"{per.get(part, 0.0) / total:.0%}"])
+          for part in PARTS],
+        _row(["**per iteration**", f"**{total:.4f}**", "100%"]),
+        _row(["one LU factorization (mean over the run)", _num(timing.get("lu_s"), ".4f"),
+              ""]),
+        _row(["per iteration / one LU",
+              f"{total / timing['lu_s']:.2f}" if timing.get("lu_s") else "not recorded", ""]),
+        "",
+    ]
+    kept = numbers.get(model)
+    if kept is not None:
+        same = (kept["increments"], kept["iterations"]) == \
+            (timing["increments"], timing["iterations"])
+        lines += [
+            f"The {LABELS.get(model, model)} column above is the run kept for the claims "
+            f"(code {kept.get('code') or '?'}, {kept.get('threads') or '?'} thread(s)): "
+            + ("the same increments and iterations as this one, so the same computation."
+               if same else
+               f"{kept['increments']} increments and {kept['iterations']} iterations "
+               f"against this run's {timing['increments']} and {timing['iterations']}: "
+               "another computation (the code moved between them), whose answers the "
+               "report's claims use; this run says only how long the defaults take."),
+            "",
+        ]
     return lines
 
 
@@ -1860,6 +1953,23 @@ def findings(numbers: dict[str, dict[str, Any]], models: list[str]) -> list[str]
 # ------------------------------------------------------------------------ main
 
 
+def timed_run(mesh: str, model: str, reuse: bool, stem: str) -> None:
+    """Run ``model``'s deck of the ``mesh`` blank with a thread per core into
+    results/<mesh>/timing_<model> (with ``reuse``: read the run saved there) and keep its
+    record in the runs file. Meant for a machine otherwise idle: the record says the load."""
+    folder = HERE / "cases" / mesh / model
+    output = HERE / "results" / mesh / f"timing_{model}"
+    if reuse:
+        if not (output / "results.h5").exists():
+            raise SystemExit(f"no timed run saved in {output}")
+        run = from_results(output / "results.h5", folder)
+    else:
+        print(f"timing {mesh}/{model} on {cores()} threads ...", file=sys.stderr, flush=True)
+        run = run_case_folder(folder, output=output, verbose=True, threads=cores())
+    keep_timing(runs_file(stem), timing_record(run.numbers, mesh, cores(), cpu_model(),
+                                               os.getloadavg()[0]))
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--mesh", choices=make_case.MESHES, default="coarse")
@@ -1878,6 +1988,11 @@ def main(argv: list[str] | None = None) -> int:
                         help="continue the runs saved in results/ from their checkpoints "
                         "(a run stopped at --minutes or cut off; a completed one is read "
                         "back)")
+    parser.add_argument("--timing", choices=MODELS, default=None, metavar="MODEL",
+                        help="time MODEL's deck alone on the machine (a thread per core) "
+                        "into results/<mesh>/timing_<model> and keep its record; the "
+                        "report's columns come from the runs file (with --reuse: read the "
+                        "timed run's results instead of running it)")
     parser.add_argument("--minutes", type=float, default=None,
                         help="stop each run after this wall time and report it as far as "
                         "it got (the paper's blank: a run longer than a session)")
@@ -1898,6 +2013,10 @@ def main(argv: list[str] | None = None) -> int:
         for model in models:
             make_case.write_case(case_root / model, model, args.mesh)
     stem = _stem(args.mesh)
+    if args.timing:
+        timed_run(args.mesh, args.timing, args.reuse, stem)
+        args.reuse = True  # the columns: the kept runs
+        models = [m for m in COLUMNS if m in kept_runs(runs_file(stem))]
     kept = kept_runs(runs_file(stem)) if args.reuse else {}
     saved_runs = {m: HERE / "results" / args.mesh / m / "results.h5" for m in models}
     plan = restart_plan(saved_runs) if args.restart and not args.reuse else {}
@@ -1939,7 +2058,8 @@ def main(argv: list[str] | None = None) -> int:
                for m in make_case.MESHES if m != args.mesh}
     by_mesh[args.mesh] = numbers
     text = report(args.mesh, numbers, shape, maps, figures, max_threads(), code_version(),
-                  convergence_section(by_mesh) if args.mesh == make_case.MESHES[-1] else [])
+                  convergence_section(by_mesh) if args.mesh == make_case.MESHES[-1] else [],
+                  kept_timing(runs_file(stem)))
     out = DOCS / f"{stem}.md"
     out.write_text(text)
     print(f"wrote {out}", file=sys.stderr)

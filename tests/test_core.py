@@ -234,3 +234,32 @@ def test_too_many_open_solvers() -> None:
     for solver in open_solvers:
         solver.close()
     MumpsSolver().close()  # handles are free again
+
+
+_BINDING_SCRIPT = """
+import numpy as np, scipy.sparse as sp
+from ddpy.core.linalg import MumpsSolver
+lap = sp.diags([-1.0, 2.0, -1.0], [-1, 0, 1], shape=(40, 40))
+a = (sp.kron(sp.kron(lap, sp.eye(40)), sp.eye(4)) + sp.kron(sp.eye(40), sp.kron(lap, sp.eye(4)))
+     + 0.1 * sp.eye(6400)).tocoo()
+s = MumpsSolver("unsymmetric", "amd")
+s.analyse(a.shape[0], a.row, a.col)
+s.factorize(a.data)
+assert np.abs(a @ s.solve(np.ones(6400)) - 1.0).max() < 1e-10
+"""
+
+
+def test_mumps_calls_the_cores_own_dgemm(tmp_path) -> None:
+    """MUMPS's DGEMM references bind to the core's (fortran/solver/ddpy_dgemm.f90, which
+    passes one-column products to DGEMV: docs/theory/linear-solver.md), not to the BLAS's:
+    the dynamic linker's own account of the binding (glibc's LD_DEBUG)."""
+    log = tmp_path / "ld"
+    env = {**os.environ, "LD_DEBUG": "bindings", "LD_DEBUG_OUTPUT": str(log)}
+    subprocess.run([sys.executable, "-c", _BINDING_SCRIPT], env=env, check=True,
+                   capture_output=True)
+    lines = [line for path in tmp_path.glob("ld.*") for line in path.read_text().splitlines()
+             if "symbol `dgemm_'" in line and "mumps" in line]
+    if not list(tmp_path.glob("ld.*")):
+        pytest.skip("the dynamic linker does not report its bindings (not glibc)")
+    assert lines, "MUMPS never bound dgemm_"
+    assert all("_core" in line.split(" to ")[1] for line in lines), lines

@@ -520,6 +520,11 @@ def test_the_shape_claim_names_the_reconstruction_where_the_tools_differ() -> No
     assert verdict == "does not hold" and "negative errors" not in detail
     assert "positive errors by tool: punch1 12.00 um, die1 9.60 um" in detail
     assert "the code's interpolation is to be checked" in detail
+    assert "largest error is on" not in detail  # the ratio holds: 19.0 / 12.0
+    shape["holder1"]["facets_fine"]["min_signed_um"] = -40.0  # 40 / 12: not about twice
+    detail = run.shape_claim(shape)[2]
+    assert "the fine facets' largest error is on holder1, Nagata's on punch1" in detail
+    assert "cause not computed" in detail
 
 
 def test_claim_d_lists_limits_of_equal_weight_by_name() -> None:

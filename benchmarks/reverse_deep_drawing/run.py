@@ -890,8 +890,8 @@ def shape_cause(shape: dict[str, dict[str, dict[str, Any]]], tools: list[str],
     in order, and whether the two tools are among those make_case.TABLE5_NOT_MET records
     as shaped otherwise than the paper's (then the reconstruction is the cause the data
     show; else neither the tools' shapes nor their meshing rule explains it, and the code's
-    interpolation is suspect). A ratio outside "about twice" follows the meshing rule
-    (make_case.PER_ARC, AROUND): the reconstruction of the paper's meshing."""
+    interpolation is suspect). A ratio outside "about twice" names the tools where each
+    model's largest error sits; its cause is not computed."""
     out = []
     for paper, ours in where.items():
         if paper == ours:
@@ -907,9 +907,13 @@ def shape_cause(shape: dict[str, dict[str, dict[str, Any]]], tools: list[str],
         out.append(f"Nagata's {'positive' if paper == 'die1' else 'negative'} errors by tool: "
                    f"{listed}; the paper's on {paper}, ours on {ours}; {cause}")
     if not ratio_holds:
-        out.append("the fine facets' ratio follows the meshing rule (make_case.PER_ARC and "
-                   "AROUND, the paper's as far as its text gives it): cause the reconstruction "
-                   "of the paper's meshing")
+        at = {m: max(tools, key=lambda t: max(abs(shape[t][m]["max_signed_um"]),
+                                              abs(shape[t][m]["min_signed_um"])))
+              for m in ("nagata", "facets_fine")}
+        out.append(f"the fine facets' largest error is on {at['facets_fine']}, Nagata's on "
+                   f"{at['nagata']}; their ratio is set by the meshing rule of each "
+                   "(make_case.PER_ARC, AROUND) against the tools' radii, which this report "
+                   "does not model: cause not computed")
     return "; ".join(out)
 
 

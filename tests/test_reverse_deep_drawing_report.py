@@ -562,6 +562,9 @@ def test_the_timed_run_is_judged_against_the_target_and_its_column(tmp_path: Pat
     for timed in (_timed(limit + 60.0), _timed(limit - 60.0, threads=1),
                   _timed(limit - 60.0, status="partial")):
         assert ": not met**" in "\n".join(run.timing_section(timed, numbers, "paper"))
+    unrecorded = {**_timed(limit), "load_average": None}
+    assert "load average not recorded" in "\n".join(
+        run.timing_section(unrecorded, numbers, "paper"))
     other = "\n".join(run.timing_section(_timed(limit, iterations=3000), numbers, "paper"))
     assert "another computation" in other and "3650 iterations" in other
     # the record lives in the runs file beside the kept runs, which skip it

@@ -1562,12 +1562,13 @@ TIMING_KEYS = ("model", "status", "code", "date", "threads", "increments", "iter
 
 
 def timing_record(numbers: dict[str, Any], mesh: str, n_cores: int, cpu: str,
-                  load: float) -> dict[str, Any]:
+                  load: float | None) -> dict[str, Any]:
     """The record of a run timed alone: its numbers (TIMING_KEYS), the blank, the machine's
-    cores and processor, and its load average when the record was made (a run alone keeps
-    it near its thread count)."""
+    cores and processor, and the load average as the run ended (a run alone keeps it near
+    its thread count; None: not recorded)."""
     return {**{key: numbers.get(key) for key in TIMING_KEYS}, "mesh": mesh,
-            "cores": n_cores, "cpu": cpu, "load_average": round(load, 2)}
+            "cores": n_cores, "cpu": cpu,
+            "load_average": None if load is None else round(load, 2)}
 
 
 def timing_section(timing: dict[str, Any] | None, numbers: dict[str, dict[str, Any]],
@@ -1587,8 +1588,9 @@ def timing_section(timing: dict[str, Any] | None, numbers: dict[str, dict[str, A
     lines += [
         f"{LABELS.get(model, model)} tools at the defaults ({timing['discretization']}), "
         f"{timing['threads']} threads on {timing['cores']} cores ({timing['cpu']}), code "
-        f"{timing['code']}, {timing['date']} ({command}; load average "
-        f"{timing['load_average']:g} when it ended): {timing['status']}, "
+        f"{timing['code']}, {timing['date']} ({command}; "
+        + ("load average not recorded" if timing.get("load_average") is None else
+           f"load average {timing['load_average']:g} as it ended") + f"): {timing['status']}, "
         f"{timing['increments']} increments, {timing['iterations']} Newton iterations, "
         f"{timing['factorizations']} LU factorizations, {timing['krylov_iterations']} GMRES "
         f"iterations, **{minutes:.1f} min**; peak memory "
@@ -1963,15 +1965,20 @@ def timed_run(mesh: str, model: str, reuse: bool, stem: str) -> None:
     record in the runs file. Meant for a machine otherwise idle: the record says the load."""
     folder = HERE / "cases" / mesh / model
     output = HERE / "results" / mesh / f"timing_{model}"
+    load: float | None = None
     if reuse:
         if not (output / "results.h5").exists():
             raise SystemExit(f"no timed run saved in {output}")
         run = from_results(output / "results.h5", folder)
+        earlier = kept_timing(runs_file(stem)) or {}
+        if (earlier.get("increments"), earlier.get("iterations"), earlier.get("code")) == \
+                (run.numbers["increments"], run.numbers["iterations"], run.numbers["code"]):
+            load = earlier.get("load_average")  # the load is the run's, not today's
     else:
         print(f"timing {mesh}/{model} on {cores()} threads ...", file=sys.stderr, flush=True)
         run = run_case_folder(folder, output=output, verbose=True, threads=cores())
-    keep_timing(runs_file(stem), timing_record(run.numbers, mesh, cores(), cpu_model(),
-                                               os.getloadavg()[0]))
+        load = os.getloadavg()[0]
+    keep_timing(runs_file(stem), timing_record(run.numbers, mesh, cores(), cpu_model(), load))
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -14,6 +14,11 @@
 !> command sent is a MUMPS call on every rank, and MUMPS's INFOG(1), the same on all ranks,
 !> drives the retries alike. The sequential build runs the same code with one process (the
 !> stub MPI of libmumps-seq: its broadcast does nothing).
+!>
+!> Never call MUMPS on two instances at the same time from threads of one process: MUMPS
+!> keeps state outside its instances (its load module's arrays), so two factorizations
+!> abort and two solves return wrong solutions (docs/theory/linear-solver.md). The
+!> interface holds the GIL through every call (the .pyf releases it nowhere).
 module ddpy_linear_solver
   use ddpy_kinds, only: wp
   use iso_fortran_env, only: int64

@@ -9,6 +9,7 @@ meshes) with its figures, next to the paper's values.
     python benchmarks/reverse_deep_drawing/run.py --json             # print the numbers only
     python benchmarks/reverse_deep_drawing/run.py --reuse            # report from saved runs
     python benchmarks/reverse_deep_drawing/run.py --mesh paper --restart   # continue them
+    python benchmarks/reverse_deep_drawing/run.py --mesh paper --timing nagata  # alone: time it
 
 The cases are written first by make_case.py (tools, meshes, decks) when missing; each case
 runs through the case runner (``ddpy run``) into results/<mesh>/<model>/ (git-ignored), which
@@ -16,7 +17,10 @@ runs through the case runner (``ddpy run``) into results/<mesh>/<model>/ (git-ig
 STALL_INCREMENTS increments) is stopped there and reported as partial. Every report keeps
 the numbers and curves of its runs, with the code version and date of each, in
 docs/benchmarks/<report>_runs.json (merged: a model not run keeps its entry); ``--reuse``
-takes a model without results/ from there.
+takes a model without results/ from there. ``--timing MODEL`` runs that deck with a thread
+per core into results/<mesh>/timing_<model>/ (on a machine otherwise idle) and keeps its
+record in the runs file's "timing" entry, apart from the columns, which come from the runs
+file: the report's "Speed at the defaults" judges it against TIMING_TARGET_MIN.
 """
 
 from __future__ import annotations

@@ -1565,6 +1565,14 @@ TIMING_KEYS = ("model", "status", "code", "date", "threads", "increments", "iter
                "peak_memory_mb", "discretization")
 
 
+def _per_lu(numbers: dict[str, Any]) -> str:
+    """A run's time per Newton iteration over its mean LU factorization, as the report
+    prints it."""
+    if not numbers.get("lu_s"):
+        return "not recorded"
+    return f"{sum(numbers['per_iteration_s'].values()) / numbers['lu_s']:.2f}"
+
+
 def timing_record(numbers: dict[str, Any], mesh: str, n_cores: int, cpu: str,
                   load: float | None) -> dict[str, Any]:
     """The record of a run timed alone: its numbers (TIMING_KEYS), the blank, the machine's
@@ -1610,8 +1618,7 @@ def timing_section(timing: dict[str, Any] | None, numbers: dict[str, dict[str, A
         _row(["**per iteration**", f"**{total:.4f}**", "100%"]),
         _row(["one LU factorization (mean over the run)", _num(timing.get("lu_s"), ".4f"),
               ""]),
-        _row(["per iteration / one LU",
-              f"{total / timing['lu_s']:.2f}" if timing.get("lu_s") else "not recorded", ""]),
+        _row(["per iteration / one LU", _per_lu(timing), ""]),
         "",
     ]
     kept = numbers.get(model)
@@ -1675,9 +1682,7 @@ def effort_section(numbers: dict[str, dict[str, Any]], models: list[str],
               *[numbers[m].get("krylov_iterations", "?") for m in models]]),
         _row(["one LU factorization (mean over the run, s)",
               *[_num(numbers[m].get("lu_s"), ".4f") for m in models]]),
-        _row(["per iteration / one LU",
-              *[f"{sum(numbers[m]['per_iteration_s'].values()) / numbers[m]['lu_s']:.2f}"
-                if numbers[m].get("lu_s") else "not recorded" for m in models]]),
+        _row(["per iteration / one LU", *[_per_lu(numbers[m]) for m in models]]),
         _row(["peak memory of the run (MB)",
               *[f"{numbers[m]['peak_memory_mb']:.0f}" if numbers[m].get("peak_memory_mb")
                 else "not recorded" for m in models]]),

@@ -25,7 +25,8 @@ from ddpy.core.constants import constant
 from ddpy.core.handles import CoreHandle, check
 from ddpy.geometry.surfaces import BezierSurface, NagataSurface
 
-__all__ = ["ContactSearch", "Projection", "SearchArrays", "NONE", "INSIDE", "EDGE"]
+__all__ = ["ContactSearch", "Projection", "SearchArrays", "SearchMemory", "NONE", "INSIDE",
+           "EDGE"]
 
 #: Status of a node: no candidate patch; projection inside a patch; held on a patch boundary.
 NONE, INSIDE, EDGE = (constant("projection_none"), constant("projection_inside"),
@@ -79,6 +80,30 @@ class Projection:
     def mean_iterations(self) -> float:
         """Mean Newton iterations per projection (one projection per candidate)."""
         return float(self.iterations.sum() / max(int(self.candidates.sum()), 1))
+
+
+_MEMORY_ROWS = constant("search_memory_rows")
+
+
+class SearchMemory:
+    """What the tree search remembers of k points from one ``ContactSearch.project`` to the
+    next (its ``memory``), updated in place: per point where its last full search was (in
+    the tool's frame), the patch it found there and a lower bound there of its distance to
+    every other patch. A point that moved less than that bound's margin is projected on
+    its patch alone, with the answer of a full search (docs/theory/contact.md, "Search
+    memory"). The forming Newton loop keeps one over an increment's evaluations."""
+
+    def __init__(self, k: int) -> None:
+        #: (k, ROWS): where each point was last searched in full (x, y, z), the bound, and
+        #: 1 where the last call answered the point from the memory (else 0)
+        self.bounds = np.zeros((k, _MEMORY_ROWS))
+        #: (k,): the core's patch found there (1-based, 0: none, -1: never searched)
+        self.patches = np.full(k, -1, dtype=np.int32)
+
+    @property
+    def recalled(self) -> NDArray[np.bool_]:
+        """Which points the last ``project`` answered from the memory."""
+        return self.bounds[:, 4] == 1.0
 
 
 class ContactSearch:
@@ -170,6 +195,7 @@ class ContactSearch:
         brute_force: bool = False,
         reach: float | None = None,
         held: ArrayLike | None = None,
+        memory: SearchMemory | None = None,
     ) -> Projection:
         """Closest point on the tool of each of ``points`` (k, 3), the tool moved by
         ``tool_displacement``. With ``node_normals`` (k, 3), only patch points whose outward
@@ -181,7 +207,9 @@ class ContactSearch:
         tests. ``held`` (k,): a patch number holds that point on that patch (no search;
         its projection there counts as inside, with its signed normal distance: on a facet,
         the distance to the facet's plane continued past its edges), -1 searches; the
-        forming Newton loop holds pairs so (docs/theory/contact.md)."""
+        forming Newton loop holds pairs so (docs/theory/contact.md). ``memory``: what the
+        last calls found for these points (SearchMemory), used and updated by the tree
+        search; the answers are those without it."""
         x = float_array(np.reshape(points, (-1, 3)) if np.size(points) == 0 else points,
                         "points", (None, 3))
         k = x.shape[0]
@@ -213,10 +241,15 @@ class ContactSearch:
             return Projection(empty, np.zeros((0, 2)), np.zeros((0, 3)), np.zeros((0, 3)),
                               np.zeros((0, 2, 3)), np.zeros(0), empty, empty, empty)
         mode = _MODE["brute"] if brute_force else self.mode
+        if memory is not None and memory.patches.shape != (k,):
+            raise ValueError(f"memory must be of {k} points, got {memory.patches.size}")
+        kept = SearchMemory(k) if memory is None else memory
         (patch, params, point, normal, tangents, distance, status, iterations, ncand_out,
-         refusal) = _core.contact_search(self.handle, mode, x.ravel(), nn.ravel(), u, limit,
-                                         on_patch)
+         bounds, patches, refusal) = _core.contact_search(
+            self.handle, mode, x.ravel(), nn.ravel(), u, limit, on_patch,
+            np.ascontiguousarray(kept.bounds).ravel(), kept.patches)
         check(refusal, "the contact search")
+        kept.bounds, kept.patches = bounds.reshape(k, _MEMORY_ROWS), patches
         return Projection(patch, params.reshape(k, 2), point.reshape(k, 3),
                           normal.reshape(k, 3), tangents.reshape(k, 2, 3), distance, status,
                           iterations, ncand_out)

@@ -253,6 +253,7 @@ _FORMING_TUNING_RANGES = {
     "reach_travels": Range(0.0, low_open=True),
     "touch_depth": Range(0.0, low_open=True),
     "hold_step": Range(0.0, low_open=True),
+    "search_memory": Range(0, 1, integer=True),
 }
 
 
@@ -336,7 +337,10 @@ class FormingTuning:
       of a phase is brought this many element sizes into its nearest slave node (a Gauss
       point exactly on the tool carries no pressure, and nothing would hold the tool);
     - ``hold_step``: a force-controlled tool moves at most this share of the search's reach
-      in one Newton step (the core's hold_step).
+      in one Newton step (the core's hold_step);
+    - ``search_memory``: 1, the contact search of an increment's evaluations starts from
+      what the earlier ones found, where that provably gives the same answer (0: every
+      evaluation searches afresh; docs/theory/contact.md, "Search memory").
     """
 
     touching: float = 1e-6
@@ -352,6 +356,7 @@ class FormingTuning:
     reach_travels: float = 4.0
     touch_depth: float = 1e-3
     hold_step: float = 0.5
+    search_memory: int = 1
     increment: IncrementTuning = field(default_factory=IncrementTuning)
 
     def __post_init__(self) -> None:

@@ -1423,7 +1423,8 @@ class FormingProblem:
                     touching=0.0 if touching is None else touching.distance,
                     resting=touching is None or touching.resting,
                     search=SEARCH_NONE if careful else SEARCH_MONOTONICITY,
-                    whole_step=tuning.whole_step, size_ratio=max(1.0, size_ratio))
+                    whole_step=tuning.whole_step, size_ratio=max(1.0, size_ratio),
+                    search_memory=bool(tuning.search_memory))
         pairs = Pairs(self._tool_arguments(positions), on, self.r, self.mu, self.force,
                       self.traction, self.pressure if pressure is None else pressure,
                       np.zeros(layout.holds.size) if hold_force is None else hold_force,

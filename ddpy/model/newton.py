@@ -23,6 +23,7 @@ from ddpy import _core
 from ddpy.core.constants import constant
 from ddpy.core.handles import CoreHandle, check
 from ddpy.core.linalg import LinearSolverError, distinct
+from ddpy.core.memory import keep_freed_memory
 from ddpy.model.control import FormingTuning
 from ddpy.model.mesh import HexMesh, boundary_faces, face_area_vectors
 from ddpy.model.solid import ElementError, Solid, SolidState, _flat
@@ -313,6 +314,7 @@ class CoreProblem:
             raise ValueError(f"the layout has {layout.first.size - 1} tool(s), the pack "
                              f"{len(tools)}")
         self.solid = solid
+        keep_freed_memory()  # the loop's work arrays stay mapped between iterations
         handle, status = _core.problem_create(solid.blank_handle, layout.eqn,
                                               int(layout.symmetric))
         check(status, "the problem's blank and unknowns")
@@ -412,9 +414,11 @@ class Loop:
     after which the next correction factorizes), the line search (SEARCH_*) with the
     residual ratio under which a whole step that changed contact states stands although
     it fails the monotonicity test (0: off), the touching predictor's gap and resting
-    flag, and the size ratio: the largest increment over this one's size (at least 1), by
+    flag, the size ratio: the largest increment over this one's size (at least 1), by
     which the convergence test scales the increment's motion up, so that a cut does not
-    tighten it (docs/theory/contact.md, "The convergence test")."""
+    tighten it (docs/theory/contact.md, "The convergence test"), and whether the contact
+    search remembers its answers over the trial's evaluations (the same answers, found
+    with less work: docs/theory/contact.md, "Search memory")."""
 
     force_tolerance: float
     displacement_tolerance: float
@@ -433,6 +437,7 @@ class Loop:
     touching: float = 0.0
     resting: bool = True
     size_ratio: float = 1.0
+    search_memory: bool = True
 
 
 @dataclass
@@ -521,7 +526,8 @@ def increment(solid: Solid, layout: Layout, factors: Factors, state: SolidState,
         max_iterations=loop.max_iterations, floor=loop.floor, reuse=int(loop.reuse),
         krylov_loose=loop.krylov_loose, krylov_tight=loop.krylov_tight,
         krylov_max=loop.krylov_max, krylov_keep=loop.krylov_keep, line_search=loop.search,
-        whole_step=loop.whole_step), "the Newton loop's settings")
+        whole_step=loop.whole_step, search_memory=int(loop.search_memory)),
+        "the Newton loop's settings")
     problem.set_limits(
         reach=0.0 if placement is None else placement.reach,
         element_size=solid.mesh.element_size() if placement is None else placement.size,

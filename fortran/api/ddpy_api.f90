@@ -30,7 +30,7 @@ module ddpy_api
                                refusal_order
   use ddpy_surface, only: surface_bezier, surface_nagata, bezier_stride, nagata_stride
   use ddpy_global_search, only: search_mode_tree, search_mode_brute, contact_none, &
-                                contact_inside, contact_edge
+                                contact_inside, contact_edge, memory_rows
   use ddpy_contact, only: contact_inactive, contact_stick, contact_slip
   use ddpy_material, only: material_prop_count, table_max_points, table_start, &
                            kinematic_rate, hardening_swift, hardening_voce, hardening_table, &
@@ -384,6 +384,7 @@ contains
     call add('projection_none', contact_none)
     call add('projection_inside', contact_inside)
     call add('projection_edge', contact_edge)
+    call add('search_memory_rows', memory_rows)
     call add('contact_open', contact_inactive)
     call add('contact_stick', contact_stick)
     call add('contact_slip', contact_slip)

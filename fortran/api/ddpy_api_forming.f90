@@ -20,6 +20,7 @@ module ddpy_api_forming
   use ddpy_forming_problem, only: forming_problem, increment_answer, search_none, &
                                   search_energy, history_width
   use ddpy_forming, only: forming_contact
+  use ddpy_global_search, only: memory_rows
   use ddpy_forming_newton, only: forming_increment, penetration_step, gmres, &
                                  hold_equations
   use ddpy_sparse, only: rows_fit, rows_build, sum_duplicates
@@ -318,15 +319,15 @@ contains
     status = 0
   end subroutine api_problem_layout
 
-  !> How the Newton loop runs the next trials (newton_settings, by name; reuse and the
-  !> line search search_*).
+  !> How the Newton loop runs the next trials (newton_settings, by name; reuse,
+  !> search_memory and the line search search_*).
   subroutine api_problem_set_newton(handle, force_tolerance, displacement_tolerance, &
                                     max_iterations, floor, reuse, krylov_loose, &
                                     krylov_tight, krylov_max, krylov_keep, line_search, &
-                                    whole_step, status) &
+                                    whole_step, search_memory, status) &
     bind(C, name="ddpy_problem_set_newton")
     integer(c_int), value, intent(in) :: handle, max_iterations, reuse, krylov_max, &
-                                         krylov_keep, line_search
+                                         krylov_keep, line_search, search_memory
     real(c_double), value, intent(in) :: force_tolerance, displacement_tolerance, floor, &
                                          krylov_loose, krylov_tight, whole_step
     integer(c_int), intent(out) :: status
@@ -346,6 +347,7 @@ contains
       n%krylov_keep = krylov_keep
       n%line_search = line_search
       n%whole_step = whole_step
+      n%search_memory = search_memory /= 0
     end associate
     table(handle)%problem%has_newton = .true.
     status = 0
@@ -703,6 +705,8 @@ contains
     integer, allocatable :: lock(:), found(:)
     real(wp), allocatable :: dc_dt(:, :, :), lambda(:, :), stiffness(:), lumped(:, :), &
                              barrier_dt(:, :, :)
+    real(wp) :: no_memory(memory_rows, 0)
+    integer :: no_patch(0)
     integer :: p, nf
     nf = pb%dofs%nf
     allocate(lock(npair + npoint), found(npair + npoint), dc_dt(3, 3, npair), &
@@ -711,7 +715,7 @@ contains
     lock = 0  ! no pair held: a plain search
     call forming_contact(x, x_n, pb%dofs, pb%tools, pb%pairs, pb%law, &
                          pb%placement%positions, pb%placement%positions_n, pb%limits, &
-                         pb%limits%touching, force, lock, &
+                         pb%limits%touching, force, lock, 0, no_memory, no_patch, &
                          min(nvalues, pb%layout%contact_values), &
                          residual(1:nf + 3*npair), values, state, gap, normal, traction, &
                          pressure, found, dc_dt, lumped, barrier_dt)

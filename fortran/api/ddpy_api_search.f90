@@ -9,7 +9,7 @@ module ddpy_api_search
   use ddpy_kinds, only: wp
   use ddpy_patch_bounds, only: patch_bounds
   use ddpy_box_tree, only: box_tree_build
-  use ddpy_global_search, only: search_mode_tree, search_mode_brute
+  use ddpy_global_search, only: search_mode_tree, search_mode_brute, memory_rows
   use ddpy_surface, only: surface_bezier, surface_nagata
   use ddpy_search_surface, only: search_surface, surface_build, surface_contact_search
   use ddpy_handle_table, only: table, claim_handle, valid_handle, entry_surface, &
@@ -89,12 +89,19 @@ contains
   !> held (0-based, -1: search) the patch each node is held on.
   !> Outputs: patch (0-based, -1 for none), parameters, closest point (moved with the tool),
   !> unit normal, tangents, signed normal distance, status, Newton iterations, projections;
-  !> refusal: 0, or refusal_handle (no such surface) with empty answers.
+  !> memory (memory_rows, nmemory), memory_patch (nmemory): the search's memory of the nodes
+  !> (ddpy_global_search; nmemory 0: none, else nnode, memory_patch -1 for a node not
+  !> searched yet), updated.
+  !> refusal: 0, or refusal_handle (no such surface) with empty answers, refusal_size
+  !> (a memory of another size).
   subroutine api_contact_search(surface, mode, nnode, nodes, node_normals, &
                                 tool_displacement, reach, held, patch, params, points, &
                                 normals, tangents, distance, status, iterations, &
-                                ncandidates, refusal) bind(C, name="ddpy_contact_search")
-    integer(c_int), value, intent(in) :: surface, mode, nnode
+                                ncandidates, nmemory, memory, memory_patch, refusal) &
+                                bind(C, name="ddpy_contact_search")
+    integer(c_int), value, intent(in) :: surface, mode, nnode, nmemory
+    real(c_double), intent(inout) :: memory(memory_rows, nmemory)
+    integer(c_int), intent(inout) :: memory_patch(nmemory)
     real(c_double), value, intent(in) :: reach
     real(c_double), intent(in) :: nodes(3, nnode), node_normals(3, nnode), &
                                   tool_displacement(3)
@@ -117,13 +124,16 @@ contains
     if (.not. valid_handle(surface, entry_surface)) return
     refusal = refusal_value
     if (mode /= search_mode_tree .and. mode /= search_mode_brute) return
+    refusal = refusal_size
+    if (nmemory /= 0 .and. nmemory /= nnode) return
     refusal = 0
     associate (s => table(surface)%surface)
       allocate(lock(nnode))
       lock = merge(held + 1, 0, held >= 0 .and. held < s%npatch)  ! 1-based; 0: search
       call surface_contact_search(s, mode, nnode, nodes, node_normals, tool_displacement, &
                                   reach, lock, patch, params, points, normals, tangents, &
-                                  distance, status, iterations, ncandidates)
+                                  distance, status, iterations, ncandidates, nmemory, memory, &
+                                  memory_patch)
     end associate
     patch = patch - 1
   end subroutine api_contact_search

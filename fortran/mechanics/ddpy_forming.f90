@@ -16,7 +16,7 @@ module ddpy_forming
   use, intrinsic :: ieee_arithmetic, only: ieee_value, ieee_positive_inf
   use ddpy_kinds, only: wp
   use ddpy_surface, only: patch_evaluate
-  use ddpy_global_search, only: contact_none, contact_inside, contact_edge
+  use ddpy_global_search, only: contact_none, contact_inside, contact_edge, memory_rows
   use ddpy_search_surface, only: surface_contact_search
   use ddpy_contact, only: contact_residual, contact_law, normal_derivative, contact_inactive, &
                           gauss_traction
@@ -79,6 +79,10 @@ contains
   !> carries lambda from increment to increment as its traction (docs/theory/contact.md,
   !> "The barrier").
   !>
+  !> nmemory = npair + npoint: memory, memory_patch are the search's memory of each pair's
+  !> node and each Gauss point (ddpy_global_search.contact_search, indexed as lock), kept
+  !> by the caller over the evaluations of an increment; nmemory = 0: none.
+  !>
   !> lock(p) > 0 holds node-to-surface pair p on that patch of its tool (ddpy_global_search:
   !> no search, the patch's plane continued past its edges), lock(npair + i) Gauss point i
   !> of a surface-to-surface or Gauss-point tool; found gives the patch each of them took
@@ -88,8 +92,9 @@ contains
   !> translation of its tool, zero in a held component's row; barrier_dt(:, :, p): that
   !> of a barrier pair's own law (zero for the others).
   subroutine forming_contact(x, x_n, dofs, tools, pairs, law, positions, positions_n, limits, &
-                             touching, force, lock, nvalues, residual, values, state, gap, &
-                             normal, traction, pressure, found, dc_dt, lumped, barrier_dt)
+                             touching, force, lock, nmemory, memory, memory_patch, nvalues, &
+                             residual, values, state, gap, normal, traction, pressure, found, &
+                             dc_dt, lumped, barrier_dt)
     real(wp), intent(in) :: x(:, :), x_n(:, :)
     type(blank_dofs), intent(in) :: dofs
     type(tool_set), intent(in) :: tools
@@ -98,7 +103,9 @@ contains
     real(wp), intent(in) :: positions(3, tools%ntool), positions_n(3, tools%ntool)
     type(increment_limits), intent(in) :: limits
     real(wp), intent(in) :: touching, force(3, pairs%npair)
-    integer, intent(in) :: lock(pairs%npair + tools%npoint), nvalues
+    integer, intent(in) :: lock(pairs%npair + tools%npoint), nvalues, nmemory
+    real(wp), intent(inout) :: memory(memory_rows, nmemory)
+    integer, intent(inout) :: memory_patch(nmemory)
     real(wp), intent(inout) :: residual(dofs%nf + 3*pairs%npair), values(nvalues)
     integer, intent(out) :: state(pairs%npair), found(pairs%npair + tools%npoint)
     real(wp), intent(out) :: gap(pairs%npair), normal(3, pairs%npair), &
@@ -179,7 +186,7 @@ contains
       end do
       node_normals = 0.0_wp
       if (tools%tool(t)%faced) call facing_normals(t, k, node_normals)
-      call search_tool(t, k, nodes, node_normals, lock(a:b), patch(a:b), params(:, a:b), &
+      call search_tool(t, k, a - 1, nodes, node_normals, patch(a:b), params(:, a:b), &
                        points, normal(:, a:b), tangents(:, :, a:b), distance, status(a:b), &
                        iterations, ncandidates)
       found(a:b) = merge(patch(a:b), 0, distance < hold_band*element_size)
@@ -635,7 +642,7 @@ contains
       end do
       facing_at = 0.0_wp
       if (tools%tool(t)%faced) call facing_normals(t, k, facing_at)
-      call search_tool(t, k, at, facing_at, lock(first + 1:first + k), on_patch, uv, on_tool, &
+      call search_tool(t, k, first, at, facing_at, on_patch, uv, on_tool, &
                        normals, tangent, depth, how, its, candidates)
       found(first + 1:first + k) = merge(on_patch, 0, depth < hold_band*element_size)
       ! A slave whose nearest point is on a patch's edge (as between two Nagata patches
@@ -713,23 +720,36 @@ contains
                                gtangents(3, 2, kg), gdistance(kg)
       integer :: first_point
       first_point = npair + tools%tool(t)%first_point
-      call search_tool(t, kg, gx, gn, lock(first_point + 1:first_point + kg), gpatch, &
+      call search_tool(t, kg, first_point, gx, gn, gpatch, &
                        gparams, gpoints, gnormal, gtangents, gdistance, gstatus, gits, gcand)
       found(first_point + 1:first_point + kg) = merge(gpatch, 0, gdistance < hold_band*element_size)
     end subroutine search_points
 
-    !> Global and local search of the k slaves of tool t.
-    subroutine search_tool(t, k, nodes, node_normals, lock, patch, params, points, normals, &
+    !> Global and local search of the k slaves of tool t, first + 1 .. first + k in lock
+    !> and the memory.
+    subroutine search_tool(t, k, first, nodes, node_normals, patch, params, points, normals, &
                            tangents, distance, status, iterations, ncandidates)
-      integer, intent(in) :: t, k, lock(k)
+      integer, intent(in) :: t, k, first
       real(wp), intent(in) :: nodes(3, k), node_normals(3, k)
       integer, intent(out) :: patch(k), status(k), iterations(k), ncandidates(k)
       real(wp), intent(out) :: params(2, k), points(3, k), normals(3, k), tangents(3, 2, k), &
                                distance(k)
-      call surface_contact_search(tools%tool(t)%surface, tools%tool(t)%surface%mode, k, &
-                                  nodes, node_normals, positions(:, t), limits%reach, lock, &
-                                  patch, params, points, normals, tangents, distance, status, &
-                                  iterations, ncandidates)
+      real(wp) :: no_memory(memory_rows, 0)
+      integer :: no_patch(0)
+      if (nmemory > 0) then
+        call surface_contact_search(tools%tool(t)%surface, tools%tool(t)%surface%mode, k, &
+                                    nodes, node_normals, positions(:, t), limits%reach, &
+                                    lock(first + 1:first + k), patch, params, points, normals, &
+                                    tangents, distance, status, iterations, ncandidates, k, &
+                                    memory(:, first + 1:first + k), &
+                                    memory_patch(first + 1:first + k))
+      else
+        call surface_contact_search(tools%tool(t)%surface, tools%tool(t)%surface%mode, k, &
+                                    nodes, node_normals, positions(:, t), limits%reach, &
+                                    lock(first + 1:first + k), patch, params, points, normals, &
+                                    tangents, distance, status, iterations, ncandidates, 0, &
+                                    no_memory, no_patch)
+      end if
     end subroutine search_tool
 
     !> Outward normals of the blank at the k slaves of tool t (pairs a..): the sum of the

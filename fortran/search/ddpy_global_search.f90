@@ -22,7 +22,7 @@ module ddpy_global_search
   implicit none
   private
   public :: contact_search, search_mode_tree, search_mode_brute, contact_none, &
-            contact_inside, contact_edge, tie_tolerance
+            contact_inside, contact_edge, tie_tolerance, memory_rows
 
   integer, parameter :: search_mode_tree = 1, search_mode_brute = 2
   !> Status of a node: no candidate; projection inside a patch; held on a patch boundary.
@@ -45,6 +45,8 @@ module ddpy_global_search
   !> tilt of 1e-3 rad decide between a punch's outer wall and its bore, both vertical: the
   !> bore won and closed a flange node 27 mm deep (docs/theory/contact.md).
   real(wp), parameter :: facing_cosine = 0.5_wp
+  !> Rows of the search's memory of a node (contact_search).
+  integer, parameter :: memory_rows = 5
 
   !> The local search's answer on one patch: parameters, point, tangents, unit normal,
   !> signed normal distance, and its Euclidean distance to the node (patch 0: none yet).
@@ -68,13 +70,29 @@ contains
   !> inside, with its signed normal distance (on a facet: the distance to the facet's
   !> plane, continued past its edges). The Newton loop holds the nodes that keep hopping
   !> between the two facets of an edge (ddpy_forming_newton, docs/theory/contact.md).
+  !>
+  !> With nmemory = nnode the tree search remembers, per node, where its last full search
+  !> was (memory(1:3, i), in the tool's frame), the patch it found there (memory_patch(i);
+  !> 0: none, -1: no search yet) and a lower bound there of the distance to every other
+  !> patch (memory(4, i): the least box bound of the patches it did not take), and whether
+  !> the last call answered it from the memory (memory(5, i) = 1, else 0). A node that
+  !> moved by delta since is then projected on that patch alone when the bound less delta
+  !> still exceeds that projection's distance (no box bound is steeper than the distance
+  !> itself, so no other patch can come within the tie tolerance), and found nowhere when
+  !> it exceeds the reach: the answer the full search gives, bit for bit (the same local
+  !> search from the same grid point), without the tree (docs/theory/contact.md, "Search
+  !> memory"). nmemory = 0: no memory.
   subroutine contact_search(kind, npatch, stride, coef, degrees, triangle, mode, ntree, &
                             tree_lower, tree_upper, tree_child, frame, frame_lower, &
                             frame_upper, ngrid, grid_start, grid_params, grid_normals, &
                             grid_points, nnode, nodes, node_normals, tool_displacement, &
                             max_iterations, tol, reach, lock, patch, params, points, normals, &
-                            tangents, distance, status, iterations, ncandidates)
-    integer, intent(in) :: kind, npatch, stride, mode, ntree, ngrid, nnode, max_iterations
+                            tangents, distance, status, iterations, ncandidates, nmemory, &
+                            memory, memory_patch)
+    integer, intent(in) :: kind, npatch, stride, mode, ntree, ngrid, nnode, max_iterations, &
+                           nmemory
+    real(wp), intent(inout) :: memory(memory_rows, nmemory)
+    integer, intent(inout) :: memory_patch(nmemory)
     real(wp), intent(in) :: coef(stride, npatch), tree_lower(3, ntree), tree_upper(3, ntree), &
                             frame(3, 3, npatch), frame_lower(3, npatch), &
                             frame_upper(3, npatch), grid_params(2, ngrid), &
@@ -111,9 +129,9 @@ contains
       integer, intent(in) :: i
       real(wp), intent(inout) :: heap_key(:)
       integer, intent(inout) :: heap_item(:)
-      real(wp) :: x(3), bound, key
+      real(wp) :: x(3), bound, key, first_key, second_key, unexplored
       type(projection) :: nearest, nearest_inside
-      integer :: pp, item, c, nheap, j
+      integer :: pp, item, c, nheap, j, first_patch, taken
       logical :: filter
       x = nodes(:, i) - tool_displacement
       filter = any(node_normals(:, i) /= 0.0_wp)
@@ -121,6 +139,7 @@ contains
       ncandidates(i) = 0
       patch(i) = 0; params(:, i) = 0.0_wp; points(:, i) = 0.0_wp; normals(:, i) = 0.0_wp
       tangents(:, :, i) = 0.0_wp; distance(i) = huge(1.0_wp); status(i) = contact_none
+      if (nmemory > 0) memory(5, i) = 0.0_wp
       if (lock(i) > 0) then
         call consider(i, x, .false., lock(i), nearest, nearest_inside)
         if (nearest%patch > 0) call take(i, nearest, nearest%distance, contact_inside)
@@ -130,31 +149,78 @@ contains
         do pp = 1, npatch
           call consider(i, x, filter, pp, nearest, nearest_inside)
         end do
+        taken = choose(i, nearest, nearest_inside)
       else if (ntree > 0) then
+        if (nmemory > 0) then
+          if (recalled(i, x, filter, nearest, nearest_inside)) then
+            taken = choose(i, nearest, nearest_inside)
+            memory(5, i) = 1.0_wp
+            return
+          end if
+        end if
+        ! The two least bounds of the patches projected on (or filtered out) and the first's
+        ! patch, and the least bound of the boxes left unopened: what the memory keeps.
+        first_key = huge(1.0_wp)
+        second_key = huge(1.0_wp)
+        first_patch = 0
+        unexplored = huge(1.0_wp)
         nheap = 0
         ! The reach is the first bound: no box beyond it is opened, no patch projected on.
         bound = reach
         key = node_bound(x, 1)
-        if (key <= bound) call heap_push(key, 1, nheap, heap_key, heap_item)
+        if (key <= bound) then
+          call heap_push(key, 1, nheap, heap_key, heap_item)
+        else
+          unexplored = key
+        end if
         do while (nheap > 0)
           call heap_pop(nheap, heap_key, heap_item, key, item)
           ! Every box still in the heap is at least key away, and so is every patch in it.
-          if (key > bound) exit
+          if (key > bound) then
+            unexplored = min(unexplored, key)
+            exit
+          end if
           if (tree_child(item) < 0) then
+            if (key < first_key) then
+              second_key = first_key
+              first_key = key
+              first_patch = -tree_child(item)
+            else
+              second_key = min(second_key, key)
+            end if
             call consider(i, x, filter, -tree_child(item), nearest, nearest_inside)
             if (nearest%patch > 0) bound = min(reach, nearest%measure + tie(nearest%measure))
           else
             do j = 0, 1
               c = tree_child(item) + j
               key = node_bound(x, c)
-              if (key <= bound) call heap_push(key, c, nheap, heap_key, heap_item)
+              if (key <= bound) then
+                call heap_push(key, c, nheap, heap_key, heap_item)
+              else
+                unexplored = min(unexplored, key)
+              end if
             end do
           end if
         end do
+        taken = choose(i, nearest, nearest_inside)
+        if (nmemory > 0) then
+          memory(1:3, i) = x
+          memory(4, i) = min(unexplored, merge(second_key, first_key, first_patch == taken))
+          memory_patch(i) = taken
+        end if
       end if
+    end subroutine search_node
+
+    !> Node i's answer from the projections found (none, the nearest, or the nearest
+    !> inside a patch within the tie tolerance of it), written by take; its patch (0: none).
+    integer function choose(i, nearest, nearest_inside) result(taken)
+      integer, intent(in) :: i
+      type(projection), intent(in) :: nearest, nearest_inside
+      taken = 0
       if (nearest_inside%patch > 0) then
         if (nearest_inside%measure <= nearest%measure + tie(nearest%measure)) then
           call take(i, nearest_inside, nearest_inside%distance, contact_inside)
+          taken = nearest_inside%patch
           return
         end if
       end if
@@ -164,8 +230,33 @@ contains
         else
           call take(i, nearest, sign(nearest%measure, nearest%distance), contact_edge)
         end if
+        taken = nearest%patch
       end if
-    end subroutine search_node
+    end function choose
+
+    !> Whether node i, now at x, has its answer from its memory (see contact_search): its
+    !> remembered patch projected on alone (into nearest, nearest_inside), or none.
+    logical function recalled(i, x, filter, nearest, nearest_inside)
+      integer, intent(in) :: i
+      real(wp), intent(in) :: x(3)
+      logical, intent(in) :: filter
+      type(projection), intent(inout) :: nearest, nearest_inside
+      real(wp) :: clear
+      recalled = .false.
+      if (memory_patch(i) < 0) return
+      ! Every patch but the remembered one is at least this far from x.
+      clear = memory(4, i) - norm2(x - memory(1:3, i))
+      if (memory_patch(i) == 0) then
+        recalled = clear > reach + 2.0_wp*tie(reach)
+        return
+      end if
+      call consider(i, x, filter, memory_patch(i), nearest, nearest_inside)
+      if (nearest%patch > 0) recalled = clear > nearest%measure + 2.0_wp*tie(nearest%measure)
+      if (.not. recalled) then
+        nearest = projection()
+        nearest_inside = projection()
+      end if
+    end function recalled
 
     !> Distances within tie(d) of d are equal.
     pure real(wp) function tie(d)

@@ -5,7 +5,7 @@
 !> holds a copy per tool.
 module ddpy_search_surface
   use ddpy_kinds, only: wp
-  use ddpy_global_search, only: contact_search
+  use ddpy_global_search, only: contact_search, memory_rows
   implicit none
   private
   public :: search_surface, surface_build, surface_contact_search
@@ -83,9 +83,11 @@ contains
   !> reach, lock (1-based patches; 0 searches) and the outputs, patch 1-based).
   subroutine surface_contact_search(surface, mode, k, nodes, node_normals, displacement, reach, &
                             lock, patch, params, points, normals, tangents, distance, status, &
-                            iterations, ncandidates)
+                            iterations, ncandidates, nmemory, memory, memory_patch)
     type(search_surface), intent(in) :: surface
-    integer, intent(in) :: mode, k, lock(k)
+    integer, intent(in) :: mode, k, lock(k), nmemory
+    real(wp), intent(inout) :: memory(memory_rows, nmemory)
+    integer, intent(inout) :: memory_patch(nmemory)
     real(wp), intent(in) :: nodes(3, k), node_normals(3, k), displacement(3), reach
     integer, intent(out) :: patch(k), status(k), iterations(k), ncandidates(k)
     real(wp), intent(out) :: params(2, k), points(3, k), normals(3, k), tangents(3, 2, k), &
@@ -98,7 +100,8 @@ contains
                         surface%grid_params, surface%grid_normals, surface%grid_points, k, &
                         nodes, node_normals, displacement, surface%max_iterations, &
                         surface%tol, reach, lock, patch, params, points, normals, tangents, &
-                        distance, status, iterations, ncandidates)
+                        distance, status, iterations, ncandidates, nmemory, memory, &
+                        memory_patch)
   end subroutine surface_contact_search
 
 end module ddpy_search_surface

@@ -28,6 +28,7 @@ module ddpy_forming_newton
                                   history_points_switched, history_pairs_switched, &
                                   history_yield_switched
   use ddpy_forming, only: forming_contact
+  use ddpy_global_search, only: memory_rows
   use ddpy_contact, only: contact_inactive
   use ddpy_linear_solver, only: solver_factorize, solver_solve
   use ddpy_sparse, only: sum_duplicates, row_structure
@@ -127,7 +128,10 @@ contains
     real(wp), allocatable :: weight(:), delta(:), du(:, :), dforce(:, :), x_n(:, :), &
                              kdu(:, :), dp(:, :), u_cur(:, :), force_cur(:, :), &
                              alpha_cur(:, :), shift_cur(:), dshift(:), summed(:)
-    integer, allocatable :: previous(:), lock(:)
+    integer, allocatable :: previous(:), lock(:), memory_patch(:)
+    ! The contact search's memory of every pair's node and Gauss point over the trial's
+    ! evaluations (ddpy_global_search.contact_search; none when newton%search_memory is off).
+    real(wp), allocatable :: memory(:, :)
     logical, allocatable :: averaged(:)
     ! The sets of the last recorded iterate and of the one before it (record): the contact
     ! points carrying pressure, the pairs' states, the plastic integration points.
@@ -187,6 +191,12 @@ contains
              shift_cur(nhold), dshift(nhold))
     alpha_cur = 0.0_wp
     lock = 0
+    if (newton%search_memory) then
+      allocate(memory(memory_rows, npair + npoint), memory_patch(npair + npoint))
+    else
+      allocate(memory(memory_rows, 0), memory_patch(0))
+    end if
+    memory_patch = -1
     allocate(on_last(npoint), on_before(npoint), yield_last(8, ne), yield_before(8, ne), &
              state_last(npair), state_before(npair))
     sets_niter = 0
@@ -579,6 +589,7 @@ contains
       end do
       call forming_contact(blank%x0 + s%u, x_n, dofs, tools, pairs, law, placed, &
                            placement%positions_n, limits, touching_gap, s%force, lock, &
+                           size(memory_patch), memory, memory_patch, &
                            nvalues, s%residual, s%values, s%state, s%gap, s%normal, &
                            s%traction, s%pressure, s%patch, s%dc_dt, s%lumped, s%barrier_dt)
       ! A Gauss-point pair's multiplier is eliminated: lambda = F(x), C = 0.

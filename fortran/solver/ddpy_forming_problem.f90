@@ -56,6 +56,8 @@ module ddpy_forming_problem
     integer :: krylov_max = 12, krylov_keep = 8
     integer :: line_search = search_monotonicity
     real(wp) :: whole_step = 0.0_wp
+    !> the contact search remembers each node's answer over an increment's evaluations
+    logical :: search_memory = .false.
   end type newton_settings
 
   !> Where an increment starts and what drives it: the converged state of the blank (its

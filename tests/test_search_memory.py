@@ -6,9 +6,14 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from test_search import MODELS, near_points
+from test_surface_contact import ELASTIC, dome
 
 from ddpy.geometry.search import NONE, ContactSearch, SearchMemory
-from tests.test_search import MODELS, near_points
+from ddpy.model.control import FormingTuning
+from ddpy.model.forming import FormingProblem, RigidTool
+from ddpy.model.mesh import HexMesh
+from ddpy.model.solid import Solid
 
 RNG = np.random.default_rng(7)
 FIELDS = ("patch", "params", "point", "normal", "tangents", "distance", "status")
@@ -102,13 +107,6 @@ def test_a_forming_run_is_the_same_with_and_without_the_memory(contact) -> None:
     # The block pressed onto the dome and slid over it (tests/test_surface_contact.py) with
     # each contact discretization: the memory of the search over an increment's
     # evaluations changes no bit of the run.
-    from test_surface_contact import ELASTIC, dome
-
-    from ddpy.model.control import FormingTuning
-    from ddpy.model.forming import FormingProblem, RigidTool
-    from ddpy.model.mesh import HexMesh
-    from ddpy.model.solid import Solid
-
     def run(memory: int):
         surface = dome()
         lift = float(surface.evaluate([0], [[0.5, 0.5]])[0][0, 2])

@@ -89,11 +89,10 @@ contains
   !> held (0-based, -1: search) the patch each node is held on.
   !> Outputs: patch (0-based, -1 for none), parameters, closest point (moved with the tool),
   !> unit normal, tangents, signed normal distance, status, Newton iterations, projections;
-  !> memory (memory_rows, nmemory), memory_patch (nmemory): the search's memory of the nodes
-  !> (ddpy_global_search; nmemory 0: none, else nnode, memory_patch -1 for a node not
-  !> searched yet), updated.
+  !> memory (memory_rows, nmemory), memory_patch (nmemory): the search's memory of the nnode
+  !> nodes (ddpy_global_search; memory_patch -1 for a node not searched yet), updated.
   !> refusal: 0, or refusal_handle (no such surface) with empty answers, refusal_size
-  !> (a memory of another size).
+  !> (a memory of another size than nnode).
   subroutine api_contact_search(surface, mode, nnode, nodes, node_normals, &
                                 tool_displacement, reach, held, patch, params, points, &
                                 normals, tangents, distance, status, iterations, &
@@ -125,7 +124,7 @@ contains
     refusal = refusal_value
     if (mode /= search_mode_tree .and. mode /= search_mode_brute) return
     refusal = refusal_size
-    if (nmemory /= 0 .and. nmemory /= nnode) return
+    if (nmemory /= nnode) return
     refusal = 0
     associate (s => table(surface)%surface)
       allocate(lock(nnode))

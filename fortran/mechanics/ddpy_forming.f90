@@ -734,22 +734,14 @@ contains
       integer, intent(out) :: patch(k), status(k), iterations(k), ncandidates(k)
       real(wp), intent(out) :: params(2, k), points(3, k), normals(3, k), tangents(3, 2, k), &
                                distance(k)
-      real(wp) :: no_memory(memory_rows, 0)
-      integer :: no_patch(0)
-      if (nmemory > 0) then
-        call surface_contact_search(tools%tool(t)%surface, tools%tool(t)%surface%mode, k, &
-                                    nodes, node_normals, positions(:, t), limits%reach, &
-                                    lock(first + 1:first + k), patch, params, points, normals, &
-                                    tangents, distance, status, iterations, ncandidates, k, &
-                                    memory(:, first + 1:first + k), &
-                                    memory_patch(first + 1:first + k))
-      else
-        call surface_contact_search(tools%tool(t)%surface, tools%tool(t)%surface%mode, k, &
-                                    nodes, node_normals, positions(:, t), limits%reach, &
-                                    lock(first + 1:first + k), patch, params, points, normals, &
-                                    tangents, distance, status, iterations, ncandidates, 0, &
-                                    no_memory, no_patch)
-      end if
+      integer :: m
+      m = merge(k, 0, nmemory > 0)  ! without a memory its sections are empty
+      call surface_contact_search(tools%tool(t)%surface, tools%tool(t)%surface%mode, k, &
+                                  nodes, node_normals, positions(:, t), limits%reach, &
+                                  lock(first + 1:first + k), patch, params, points, normals, &
+                                  tangents, distance, status, iterations, ncandidates, m, &
+                                  memory(:, first + 1:first + m), &
+                                  memory_patch(first + 1:first + m))
     end subroutine search_tool
 
     !> Outward normals of the blank at the k slaves of tool t (pairs a..): the sum of the

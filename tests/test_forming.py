@@ -23,13 +23,13 @@ from ddpy.model.control import (
     NewtonSettings,
     next_step,
 )
-from ddpy.model.forming import FormingProblem
+from ddpy.model.forming import FormingError, FormingProblem
 from ddpy.model.forming import RigidTool as _RigidTool
 from ddpy.model.material import Hill48, Material, Swift, yield_landing
 from ddpy.model.mesh import HexMesh, largest_rotation
 from ddpy.model.solid import Solid as _Solid
 from ddpy.model.solid import material_props
-from ddpy.model.static import StaticProblem
+from ddpy.model.static import SolidResult, StaticProblem
 
 Solid = partial(_Solid, element="hexahedron")
 RigidTool = partial(_RigidTool, contact="node")
@@ -695,28 +695,10 @@ def test_springback_of_a_bent_strip_converges_quadratically(linear_solver: str) 
     # the residual norm is a poor measure of progress for it (a step that bends the strip right
     # leaves a large membrane residual of second order), and backtracking on that norm crept along
     # at 1/16 steps (24 to 31 iterations per step).
-    steel = Material(210e3, 0.3, Hill48.von_mises(), Swift(645.3, 0.0102, 0.252))
-    mesh = HexMesh.box(20.0, 2.0, 1.0, 20, 1, 2)
-    solid = Solid(mesh, steel)
-    centre, tip = mesh.select(x=0.0, y=0.0), mesh.select(x=20.0)
-    static = StaticProblem(solid)
-    static.fix(mesh.select(x=0.0), "x")
-    static.fix(mesh.select(y=0.0), "y")
-    static.fix(centre, "z")
-    static.load(tip, np.tile([0.0, 0.0, 35.0 / tip.size], (tip.size, 1)))
-    bent = static.solve(increments=8, newton=NewtonSettings(1e-10, 1e-8))
-    assert bent.state is not None and bent.state.ep.max() > 0.1
-    far = NagataSurface([[-5, -5, -50], [50, -5, -50], [50, 5, -50], [-5, 5, -50]],
-                        [[0, 0, 1]] * 4, [[0, 1, 2, 3]])
+    solid, bent, tip = _bent_strip()
     shapes = {}
     for increments in (1, 5):
-        problem = FormingProblem(solid, [RigidTool("far", far, mesh.select(z=0.0),
-                                                   facing=(0, 0, -1))],
-                                 linear_solver=linear_solver)
-        problem.u, problem.solid_state = bent.displacements[-1].copy(), bent.state
-        problem.fix(mesh.select(x=0.0), "x")
-        problem.fix(mesh.select(y=0.0), "y")
-        problem.fix(centre, "z")
+        problem = _released_strip(solid, bent, linear_solver)
         result = problem.springback(increments, NewtonSettings(1e-8, 1e-8))
         assert problem.solid_state.ep.max() == bent.state.ep.max()  # elastic unloading
         shapes[increments] = problem.u
@@ -737,6 +719,60 @@ def test_springback_of_a_bent_strip_converges_quadratically(linear_solver: str) 
     np.testing.assert_allclose(shapes[1], shapes[5], atol=1e-6)
     springback = bent.displacements[-1][tip, 2] - shapes[5][tip, 2]
     assert springback.min() > 0.1
+
+
+def _bent_strip() -> tuple[_Solid, SolidResult, np.ndarray]:
+    """A steel strip (half of a symmetric one: u_x = 0 at x = 0, u_y = 0 at y = 0, the centre
+    line held in z) bent as a cantilever by a tip load well into the plastic range: the solid,
+    the static run, its tip nodes."""
+    steel = Material(210e3, 0.3, Hill48.von_mises(), Swift(645.3, 0.0102, 0.252))
+    mesh = HexMesh.box(20.0, 2.0, 1.0, 20, 1, 2)
+    centre, tip = mesh.select(x=0.0, y=0.0), mesh.select(x=20.0)
+    solid = Solid(mesh, steel)
+    static = StaticProblem(solid)
+    static.fix(mesh.select(x=0.0), "x")
+    static.fix(mesh.select(y=0.0), "y")
+    static.fix(centre, "z")
+    static.load(tip, np.tile([0.0, 0.0, 35.0 / tip.size], (tip.size, 1)))
+    bent = static.solve(increments=8, newton=NewtonSettings(1e-10, 1e-8))
+    assert bent.state is not None and bent.state.ep.max() > 0.1
+    return solid, bent, tip
+
+
+def _released_strip(solid: _Solid, bent: SolidResult, linear_solver: str = "auto"
+                    ) -> FormingProblem:
+    """The bent strip as a forming problem with a tool far away, ready to spring back."""
+    mesh = solid.mesh
+    far = NagataSurface([[-5, -5, -50], [50, -5, -50], [50, 5, -50], [-5, 5, -50]],
+                        [[0, 0, 1]] * 4, [[0, 1, 2, 3]])
+    problem = FormingProblem(solid, [RigidTool("far", far, mesh.select(z=0.0),
+                                               facing=(0, 0, -1))],
+                             linear_solver=linear_solver)
+    problem.u, problem.solid_state = bent.displacements[-1].copy(), bent.state
+    problem.fix(mesh.select(x=0.0), "x")
+    problem.fix(mesh.select(y=0.0), "y")
+    problem.fix(mesh.select(x=0.0, y=0.0), "z")
+    return problem
+
+
+def test_a_springback_step_that_fails_is_halved() -> None:
+    # The strip above released in one step needs up to 8 iterations (the test above): allowed 4,
+    # the step fails and is halved until its pieces converge; the steps grow back after each
+    # one, and the shape is that of 5 equal steps (elastic unloading). With no halving allowed
+    # the same step stops the springback, with its reason.
+    solid, bent, _ = _bent_strip()
+    reference = _released_strip(solid, bent)
+    reference.springback(5, NewtonSettings(1e-8, 1e-8))
+    problem = _released_strip(solid, bent)
+    result = problem.springback(1, NewtonSettings(1e-8, 1e-8, max_iterations=4))
+    assert result.cuts >= 1 and len(result.factors) > 1
+    assert result.factors[-1] == 1.0
+    np.testing.assert_allclose(np.diff(result.factors, prepend=0.0), result.sizes)
+    assert max(result.sizes[1:]) > min(result.sizes)  # grown back after the halvings
+    np.testing.assert_allclose(problem.u, reference.u, atol=1e-6)
+    with pytest.raises(FormingError, match="springback step to 1 of the release failed"):
+        _released_strip(solid, bent).springback(1, NewtonSettings(1e-8, 1e-8, max_iterations=4),
+                                         max_cuts=0)
 
 
 def test_next_increment_tries_the_nominal_size_again_after_a_limit() -> None:

@@ -515,17 +515,19 @@ class _Run:
         result = FormingResult()
         start = time.perf_counter()
         self.problem.springback(phase.increments, phase.newton, result=result, frames=False)
-        share = (time.perf_counter() - start) / phase.increments
+        # Its steps (more than the phase's increments where one was halved) share the
+        # times and counts, known per phase only.
+        steps = len(result.residuals)
+        share = (time.perf_counter() - start) / steps
         t = result.timings
-        for k in range(len(result.residuals)):
+        for k in range(steps):
             part = FormingResult(residuals=[result.residuals[k]],
                                  convergence=[result.convergence[k]])
             self.record(phase, part, 0.0, 0.0, "max_increment",
-                        Timings(t["assembly"] / phase.increments, t["contact"] / phase.increments,
-                                t["factorization"] / phase.increments,
-                                max(0.0, share - sum(t.values()) / phase.increments),
-                                t["solve"] / phase.increments),
-                        {name: _share(total, k, phase.increments)
+                        Timings(t["assembly"] / steps, t["contact"] / steps,
+                                t["factorization"] / steps,
+                                max(0.0, share - sum(t.values()) / steps), t["solve"] / steps),
+                        {name: _share(total, k, steps)
                          for name, total in _counts(result).items()})
         self.fields(None)
 

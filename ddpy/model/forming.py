@@ -1062,8 +1062,8 @@ class FormingProblem:
         return added
 
     def springback(self, increments: int = 5, newton: NewtonSettings | None = None,
-                   result: FormingResult | None = None, frames: bool = True
-                   ) -> FormingResult:
+                   result: FormingResult | None = None, frames: bool = True,
+                   max_cuts: int = 6) -> FormingResult:
         """Remove the tools and let the blank unload. The forces that held it at the end of
         forming (contact forces, reactions of released clamps) become nodal loads, brought
         to zero in ``increments`` steps (unloading is elastic unless it yields in reverse),
@@ -1071,11 +1071,15 @@ class FormingProblem:
         only the constraints that stop rigid-body motion: ``release`` clamps first; if the
         remaining constraints leave rigid motions free, ``support_rigid_modes`` adds a
         3-2-1 set of supports (docs/theory/contact.md). ``newton``: convergence of each
-        step (default NewtonSettings(); a step that fails stops the springback).
-        ``frames``: append the blank's fields at its end to ``result.frames``."""
+        step (default NewtonSettings()); a step that fails is halved, and the steps grow
+        back by half after each converged one up to 1 / ``increments`` of the release; a
+        step of 2^-``max_cuts`` of that that fails stops it (FormingError). ``frames``:
+        append the blank's fields at its end to ``result.frames``."""
         newton = NewtonSettings() if newton is None else newton
         if int(increments) < 1:
             raise ValueError(f"increments must be at least 1, got {increments}")
+        if int(max_cuts) < 0:
+            raise ValueError(f"max_cuts must be at least 0, got {max_cuts}")
         if self.free_rigid_modes():
             self.support_rigid_modes()
         result = FormingResult() if result is None else result
@@ -1091,12 +1095,19 @@ class FormingProblem:
         self.point_pressure = np.zeros_like(self.point_pressure)
         off = np.zeros(layout.node.size, dtype=bool)
         last_du: NDArray[np.float64] | None = None
+        # The release counted in units of the smallest step, 1 / (increments 2^max_cuts),
+        # so that equal steps release exactly k / increments.
+        full = 2 ** int(max_cuts)
+        whole = int(increments) * full
+        released, step, last_step = 0, full, full
         try:
-            for k in range(1, int(increments) + 1):
-                self.external = loads * (1.0 - k / increments)
-                # The loads fall in equal steps and the blank unloads nearly elastically:
-                # each step starts from the last one's displacement change.
-                guess = None if last_du is None else self.u + last_du
+            while released < whole:
+                target = min(released + step, whole)
+                self.external = loads * (1.0 - target / whole)
+                # The blank unloads nearly elastically: each step starts from the last
+                # one's displacement change, scaled to its size.
+                guess = None if last_du is None else \
+                    self.u + last_du * ((target - released) / last_step)
                 # Exact solves: the free blank on its supports is soft in bending, and a
                 # direction from GMRES on older factors, within its relative tolerance,
                 # is poor along those modes; the bending paper mesh took 16 iterations
@@ -1105,12 +1116,21 @@ class FormingProblem:
                 outcome = self._increment(layout, self.position, off, newton, result,
                                           guess=guess, exact=True)
                 if outcome.failure:
-                    raise FormingError(f"springback step {k} failed: {outcome.failure}",
-                                       result)
-                last_du = outcome.u - self.u
+                    if target - released == 1:
+                        raise FormingError(
+                            f"springback step to {target / whole:.4g} of the release failed "
+                            f"at 1/{2 ** int(max_cuts)} of its size: {outcome.failure}",
+                            result)
+                    _log.info("springback step to %.4g of the release halved: %s",
+                              target / whole, outcome.failure)
+                    result.cuts += 1
+                    step = (target - released) // 2
+                    continue
+                last_du, last_step = outcome.u - self.u, target - released
                 self.u, self.solid_state = outcome.u, outcome.state
-                result.record(1.0 / increments, "springback", k / increments,
+                result.record(last_step / whole, "springback", target / whole,
                               outcome.residuals, outcome.convergence, self.u)
+                released, step = target, min(full, (3 * last_step) // 2)
         finally:
             self.external = np.zeros_like(self.u)
         if frames:

@@ -1130,7 +1130,7 @@ class FormingProblem:
                 self.u, self.solid_state = outcome.u, outcome.state
                 result.record(last_step / whole, "springback", target / whole,
                               outcome.residuals, outcome.convergence, self.u)
-                released, step = target, min(full, (3 * last_step) // 2)
+                released, step = target, min(full, max(last_step + 1, (3 * last_step) // 2))
         finally:
             self.external = np.zeros_like(self.u)
         if frames:

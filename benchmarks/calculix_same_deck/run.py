@@ -289,11 +289,6 @@ def summary(run: dict[str, Any]) -> dict[str, Any]:
             "chatter": chatter, "chatter_late": late, "mean": mean}
 
 
-def _steps(n: int) -> str:
-    """'1 step', 'n steps'."""
-    return f"{n} step" + ("" if n == 1 else "s")
-
-
 def _fmt(value: float | None, spec: str = ".1f") -> str:
     return "-" if value is None else format(value, spec)
 
@@ -494,7 +489,8 @@ symmetry on x = 0 and y = 0, then springback with the centre line held along z.
   contact pairs (`*MODEL CHANGE, REMOVE`) for the springback, its initial increment
   {1.0 / d['springback_increments']:.3g} of it; ddpy: its forming phase (largest increment
   {d['max_increment']:g} mm, its increment limits of the coarse blank) and its springback
-  released in {_steps(d['springback_increments'])} (a step that fails halved).
+  released in {d['springback_increments']} step{'' if d['springback_increments'] == 1 else 's'}
+  (a step that fails halved).
 
 `tests/test_calculix_same_deck.py` checks the deck writer: the counts, the tool faces'
 vertices against the tool files, and that `ddpy convert` reads the deck back to the same

@@ -1119,7 +1119,7 @@ class FormingProblem:
                     if target - released == 1:
                         raise FormingError(
                             f"springback step to {target / whole:.4g} of the release failed "
-                            f"at 1/{2 ** int(max_cuts)} of its size: {outcome.failure}",
+                            f"at 1/{full} of its size: {outcome.failure}",
                             result)
                     _log.info("springback step to %.4g of the release halved: %s",
                               target / whole, outcome.failure)

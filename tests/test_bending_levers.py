@@ -56,6 +56,9 @@ def test_an_angle_beyond_half_a_degree_or_a_worse_oscillation_fails_its_check() 
     v = levers.verdicts(ON, off)  # 0.032 N against 0.024 N + 0.007 N: worse
     assert not v["angles_hold"] and not v["oscillation_holds"]
     assert levers.verdicts(ON, {**off, "oscillation_N": 0.026})["oscillation_holds"]
+    # a run converged to 1e-3 of the force resolves 0.07 N of 70 N, not 0.007 N
+    assert levers.verdicts({**ON, "newton_force": 1e-3}, off)["oscillation_holds"]
+    assert not levers.verdicts({**ON, "newton_force": 1e-4}, off)["oscillation_holds"]
     text = levers.report(ON, {"direct": {**off, "switched_off": levers.VARIANTS["direct"]}},
                          "def5678")
     assert "Against direct solves only: the angles of Table 2 within 0.5 degrees: **does " \

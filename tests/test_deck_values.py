@@ -65,7 +65,7 @@ def deck_error(tmp_path: Path, deck: str, old: str, new: str, marker: str
 #: (deck, old, new, the text of the line the error is at, the Python API's call, its
 #: message with the deck's names: (old, new))
 MOVED = [
-    ("control.dat", "newton_force         1e-4", "newton_force 1", "newton_force 1",
+    ("control.dat", "newton_force         1e-3", "newton_force 1", "newton_force 1",
      lambda: NewtonSettings(force_tolerance=1.0), ("force_tolerance", "newton_force")),
     ("control.dat", "cutback              0.5", "cutback 0.5\nrmin_touch sometimes", "rmin_touch",
      lambda: IncrementLimits(touch="sometimes"), ("touch", "rmin_touch")),

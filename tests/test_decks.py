@@ -54,7 +54,7 @@ def test_bending_example_model() -> None:
     # min_fraction is min_increment over max_increment, to rounding
     assert forming.limits.min_fraction == pytest.approx(1e-3, rel=1e-12)
     assert replace(forming.limits, min_fraction=1e-3) == IncrementLimits(0.02, 1.0, 0.1, True)
-    assert forming.newton == NewtonSettings(1e-4, 1e-4, 25, 0.5)
+    assert forming.newton == NewtonSettings(1e-3, 1e-3, 25, 0.5)
     np.testing.assert_array_equal(forming.displacement("die"), [0, 0, 0])
     assert springback.is_springback and springback.increments == 1 and springback.tools == ()
     mesh = case.mesh
@@ -193,7 +193,7 @@ CONTROL_ERRORS = [
      "rmin_release_redos must lie in 0..1,000,000 or be off"),
     ("rmin_contact         on", "rmin_contact on\nrmin_release_redos 1.5",
      "expected an integer for rmin_release_redos"),
-    ("newton_force         1e-4", "newton_force 0",
+    ("newton_force         1e-3", "newton_force 0",
      "newton_force must lie in [1e-14, 0.1], got 0"),
     ("max_iterations       25", "max_iterations 2.5", "expected an integer for max_iterations"),
     ("max_iterations       25", "max_iterations 0",

@@ -189,9 +189,9 @@ def test_an_initial_yield_stress_below_1_MPa_is_refused(tmp_path: Path, line: st
 
 
 @pytest.mark.parametrize("deck, old, new, message", [
-    ("control.dat", "newton_force         1e-4", "newton_force 1e-300",
+    ("control.dat", "newton_force         1e-3", "newton_force 1e-300",
      "newton_force must lie in [1e-14, 0.1], got 1e-300"),
-    ("control.dat", "newton_displacement  1e-4", "newton_displacement 0.5",
+    ("control.dat", "newton_displacement  1e-3", "newton_displacement 0.5",
      "newton_displacement must lie in [1e-14, 0.1], got 0.5"),
     ("control.dat", "cutback              0.5", "cutback 1e-300",
      "cutback must lie in [0.1, 0.9], got 1e-300"),

@@ -198,8 +198,8 @@ rmin_yield           {rmin_yield}     # fraction of the yield stress (see make_c
 rmin_strain          0.02
 rmin_rotation        1.0
 rmin_contact         on
-newton_force         1e-4
-newton_displacement  1e-4
+newton_force         1e-3
+newton_displacement  1e-3
 max_iterations       25
 cutback              0.5
 output_every         0         # fields only at output_at and at the end of each phase

@@ -283,6 +283,19 @@ def kept_runs(path: Path) -> dict[str, Run]:
     return runs
 
 
+def deck_numbers(folder: Path) -> dict[str, Any]:
+    """What a run's numbers keep of its deck: the discretization (element and contact) and
+    the forming phase's Newton tolerance on the force (``newton_force``), which sets how
+    closely two runs' forces can agree."""
+    from ddpy.io.decks import read_case
+
+    deck = read_case(folder, geometry=False)
+    return {"discretization": ", ".join(
+                [deck.element, *sorted({t.discretization for t in deck.tools})]).replace(
+                    "gauss", "Gauss-point").replace("node", "node-to-surface"),
+            "newton_force": deck.phases[0].newton.force_tolerance}
+
+
 def run_case_folder(folder: Path, output: Path | None = None, verbose: bool = False,
                     max_increments: int | None = None, restart: bool = False) -> Run:
     """Run one case folder with the case runner (``ddpy run``) into ``output`` (default:
@@ -1348,10 +1361,7 @@ def main(argv: list[str] | None = None) -> int:
         if not run.kept:  # a kept run's numbers hold their own record
             record = stored[model].kept.get("timed_alone") if model in stored else None
             numbers[model]["timed_alone"] = timed_alone(numbers[model], record, cores())
-            deck = read_case(case_root / model, geometry=False)
-            numbers[model]["discretization"] = ", ".join(
-                [deck.element, *sorted({t.discretization for t in deck.tools})]).replace(
-                    "gauss", "Gauss-point").replace("node", "node-to-surface")
+            numbers[model].update(deck_numbers(case_root / model))
     if args.json:
         print(json.dumps({"mesh": args.mesh, "models": numbers,
                           "claims": [{"claim": c, "holds": h, "detail": d}

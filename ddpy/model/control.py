@@ -156,8 +156,8 @@ class NewtonSettings:
     carries its pressures from increment to increment and augments them (Uzawa) until the
     limit holds, instead of the plain penalty (docs/theory/contact.md, "Penetration")."""
 
-    force_tolerance: float = 1e-4
-    displacement_tolerance: float = 1e-4
+    force_tolerance: float = 1e-3
+    displacement_tolerance: float = 1e-3
     max_iterations: int = 25
     cutback: float = 0.5
     penetration: float = DEFAULT_PENETRATION

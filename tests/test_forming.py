@@ -771,6 +771,11 @@ def test_a_springback_step_that_fails_is_halved() -> None:
     np.testing.assert_allclose(np.diff(result.factors, prepend=0.0), result.sizes)
     assert max(result.sizes[1:]) > min(result.sizes)  # grown back after the halvings
     np.testing.assert_allclose(problem.u, reference.u, atol=1e-6)
+    # The cut is the deck's cutback, the growth the increment policy's regrow (2): a
+    # quarter's cut lands on 1/16 where halving landed on 1/8, and grows by doubling.
+    quarter = _released_strip(solid, bent).springback(
+        1, NewtonSettings(1e-8, 1e-8, max_iterations=4, cutback=0.25), max_cuts=4)
+    np.testing.assert_array_equal(quarter.sizes, [0.0625, 0.125, 0.25, 0.5, 0.0625])
     with pytest.raises(FormingError, match="springback step to 1 of the release failed"):
         _released_strip(solid, bent).springback(1, NewtonSettings(1e-8, 1e-8, max_iterations=4),
                                          max_cuts=0)

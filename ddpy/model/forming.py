@@ -16,6 +16,7 @@ Example::
 from __future__ import annotations
 
 import logging
+import math
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -1071,9 +1072,10 @@ class FormingProblem:
         only the constraints that stop rigid-body motion: ``release`` clamps first; if the
         remaining constraints leave rigid motions free, ``support_rigid_modes`` adds a
         3-2-1 set of supports (docs/theory/contact.md). ``newton``: convergence of each
-        step (default NewtonSettings()); a step that fails is halved, and the steps grow
-        back by half after each converged one up to 1 / ``increments`` of the release; a
-        step of 2^-``max_cuts`` of that that fails stops it (FormingError). ``frames``:
+        step (default NewtonSettings()); a step that fails is cut by its ``cutback``, and
+        the steps grow back after each converged one by the increment policy's ``regrow``
+        (IncrementTuning) up to 1 / ``increments`` of the release; a step of
+        2^-``max_cuts`` of that that fails stops it (FormingError). ``frames``:
         append the blank's fields at its end to ``result.frames``."""
         newton = NewtonSettings() if newton is None else newton
         if int(increments) < 1:
@@ -1121,16 +1123,18 @@ class FormingProblem:
                             f"springback step to {target / whole:.4g} of the release failed "
                             f"at 1/{full} of its size: {outcome.failure}",
                             result)
-                    _log.info("springback step to %.4g of the release halved: %s",
+                    _log.info("springback step to %.4g of the release cut back: %s",
                               target / whole, outcome.failure)
                     result.cuts += 1
-                    step = (target - released) // 2
+                    step = max(1, math.floor((target - released) * newton.cutback))
                     continue
                 last_du, last_step = outcome.u - self.u, target - released
                 self.u, self.solid_state = outcome.u, outcome.state
                 result.record(last_step / whole, "springback", target / whole,
                               outcome.residuals, outcome.convergence, self.u)
-                released, step = target, min(full, max(last_step + 1, (3 * last_step) // 2))
+                regrow = self.tuning.increment.regrow
+                released, step = target, min(full, max(last_step + 1,
+                                                        math.floor(last_step * regrow)))
         finally:
             self.external = np.zeros_like(self.u)
         if frames:

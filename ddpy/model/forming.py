@@ -1102,6 +1102,7 @@ class FormingProblem:
         full = 2 ** int(max_cuts)
         whole = int(increments) * full
         released, step, last_step = 0, full, full
+        regrow = self.tuning.increment.regrow
         try:
             while released < whole:
                 target = min(released + step, whole)
@@ -1132,7 +1133,6 @@ class FormingProblem:
                 self.u, self.solid_state = outcome.u, outcome.state
                 result.record(last_step / whole, "springback", target / whole,
                               outcome.residuals, outcome.convergence, self.u)
-                regrow = self.tuning.increment.regrow
                 released, step = target, min(full, max(last_step + 1,
                                                         math.floor(last_step * regrow)))
         finally:

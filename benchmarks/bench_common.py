@@ -81,6 +81,28 @@ def computed_at(code: str, runs: dict[str, str] | None = None) -> str:
         f"code not recorded ({', '.join(labels)})" for stamp, labels in by_code.items()) + ".")
 
 
+#: The commit that changed ddpy's default Newton tolerances (``newton_force`` and
+#: ``newton_displacement``) from the first value to the second.
+TOLERANCE_CHANGE = ("2bf9974", 1e-4, 1e-3)
+
+
+def force_tolerance(recorded: Any, code: str) -> float | None:
+    """The Newton tolerance on the force a run converged to: the loosest of its phases'
+    as its results file records them (``recorded``, the ``newton_force`` attribute), else
+    ddpy's default at the run's ``code`` (for a deck without the line, run before results
+    files recorded it); None when git cannot place ``code``."""
+    if recorded is not None:
+        return float(max(recorded))
+    commit, before, after = TOLERANCE_CHANGE
+    revision = code.split(",")[0].removesuffix("-dirty")
+    try:
+        placed = subprocess.run(["git", "merge-base", "--is-ancestor", commit, revision],
+                                cwd=ROOT, capture_output=True).returncode
+    except OSError:
+        return None
+    return {0: after, 1: before}.get(placed)
+
+
 def cores() -> int:
     """The cores this process may run on."""
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else \

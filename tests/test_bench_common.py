@@ -1,14 +1,17 @@
-"""The benchmarks' shared module: the code version a run records."""
+"""The benchmarks' shared module: the code version a run records, the tolerance it ran at."""
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
-from bench_common import code_version  # noqa: E402
+from bench_common import TOLERANCE_CHANGE, code_version, force_tolerance  # noqa: E402
 
 
 def _git(folder: Path, *args: str) -> str:
@@ -43,3 +46,27 @@ def test_the_code_version_is_the_last_commit_that_changed_the_code(tmp_path: Pat
     _git(tmp_path, "commit", "-qam", "code again")
     assert code_version(tmp_path) == _git(tmp_path, "rev-parse", "--short", "HEAD") != code
     assert code_version(tmp_path / "nowhere") == ""
+
+
+def _default_tolerance(revision: str) -> float:
+    """NewtonSettings' default force tolerance in ddpy/model/control.py at ``revision``."""
+    text = subprocess.run(["git", "show", f"{revision}:ddpy/model/control.py"], cwd=ROOT,
+                          capture_output=True, text=True, check=True).stdout
+    return float(re.search(r"force_tolerance: float = (\S+)", text)[1])
+
+
+def test_a_run_without_a_recorded_tolerance_ran_at_its_codes_default() -> None:
+    # The change the helper names is the commit that changed NewtonSettings' default, read
+    # from the source on either side of it; runs before it take the old value.
+    commit, before, after = TOLERANCE_CHANGE
+    if subprocess.run(["git", "cat-file", "-e", f"{commit}^"], cwd=ROOT).returncode != 0:
+        pytest.skip("not a checkout with the history")
+    assert _default_tolerance(f"{commit}^") == before
+    assert _default_tolerance(commit) == after
+    assert force_tolerance(None, f"{commit}^") == before
+    assert force_tolerance(None, commit) == after
+    assert force_tolerance(None, "HEAD") == after
+    assert force_tolerance(None, f"{commit}^, continued at {commit}") == before
+    assert force_tolerance(None, "not-a-revision") is None
+    # What the results file records wins: the loosest of the phases.
+    assert force_tolerance([1e-3, 5e-4, 2e-3], f"{commit}^") == 2e-3

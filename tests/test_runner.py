@@ -30,6 +30,7 @@ from ddpy.app.runner import (
 from ddpy.io.checkpoint import CheckpointError, read_checkpoint, write_checkpoint
 from ddpy.io.decks import read_case
 from ddpy.io.results import ResultsReader
+from ddpy.model.control import NewtonSettings
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -556,3 +557,28 @@ def test_a_second_run_on_a_running_folder_is_refused_and_the_first_ends_as_a_lon
     assert first.returncode == 0 and "completed" in stdout, stderr
     compare(lone, tmp_path)
     assert not (tmp_path / ".ddpy.lock").exists()  # given back at the end
+
+
+def test_the_results_file_records_each_phase_newton_tolerances(tmp_path: Path) -> None:
+    # The tolerances set how closely two runs' answers can agree, so a results file says
+    # what its answers were converged to: the deck's lines, and the defaults elsewhere.
+    case = tiny_case(tmp_path / "case")
+    control = case / "control.dat"
+    text = control.read_text().replace(
+        "  rmin_strain    0.01", "  rmin_strain    0.01\n  newton_force   5e-4")
+    text = text.replace("  tools  punch die holder",
+                        "  tools  punch die holder\n  newton_displacement  2e-3")
+    control.write_text(text)
+    phases = read_case(case).phases
+    default = NewtonSettings()
+    assert [p.newton.force_tolerance for p in phases] == \
+        [default.force_tolerance, 5e-4, default.force_tolerance]
+    outcome = run_case(read_case(case), tmp_path / "out", max_increments=1, threads=1)
+    assert outcome.status == "stopped"
+    with ResultsReader(tmp_path / "out" / RESULTS) as r:
+        np.testing.assert_array_equal(r.attribute("newton_force"),
+                                      [default.force_tolerance, 5e-4,
+                                       default.force_tolerance])
+        np.testing.assert_array_equal(r.attribute("newton_displacement"),
+                                      [2e-3, default.displacement_tolerance,
+                                       default.displacement_tolerance])

@@ -64,6 +64,7 @@ from bench_common import (  # noqa: E402
     cores,
     cpu_model,
     deepest_per_tool,
+    force_tolerance,
     load_module,
     record_code,
     recorded_code,
@@ -325,6 +326,7 @@ def from_results(path: Path, case_folder: Path) -> Run:
                              "y": _rounded(cy, 3), "plastic_strain": _rounded(ep, 4)}
         threads = r.threads
         peak_mb = r.peak_memory_mb
+        recorded_tolerance = r.attribute("newton_force")
         lus = int(h["factorizations"].sum()) if "factorizations" in h else 0
         krylov = int(h["krylov_iterations"].sum()) if "krylov_iterations" in h else 0
     done = [s for s in STAGES if stages.get(s, {}).get("increments")]
@@ -357,6 +359,8 @@ def from_results(path: Path, case_folder: Path) -> Run:
         "peak_memory_mb": None if peak_mb is None else round(peak_mb, 1),
         "hexahedra": int(case.mesh.n_elements),
         "discretization": discretization(case),
+        # the decks set no newton_force: a run without the record ran at its code's default
+        "newton_force": force_tolerance(recorded_tolerance, str(record.get("code", ""))),
         "last_increments": ending,
         "stages": stages,
     }
@@ -1238,6 +1242,7 @@ def report(mesh: str, numbers: dict[str, dict[str, Any]],
                            for m in models]]),
         _row(["element, contact", *[numbers[m].get("discretization", "not recorded")
                                     for m in models]]),
+        _row(["Newton tolerance (force)", *[_tolerance(numbers[m]) for m in models]]),
         _row(["threads", *[numbers[m]["threads"] or "?" for m in models]]),
         _row(["code, date", *[f"{numbers[m]['code'] or '?'}, {numbers[m]['date'] or '?'}"
                               for m in models]]),
@@ -1562,7 +1567,7 @@ TIMING_TARGET_MIN = 60.0
 #: What the timed run's record keeps of its numbers (from_results).
 TIMING_KEYS = ("model", "status", "code", "date", "threads", "increments", "iterations",
                "wall_s", "per_iteration_s", "factorizations", "krylov_iterations", "lu_s",
-               "peak_memory_mb", "discretization")
+               "peak_memory_mb", "discretization", "newton_force")
 
 
 def _per_lu(numbers: dict[str, Any]) -> str:
@@ -1571,6 +1576,14 @@ def _per_lu(numbers: dict[str, Any]) -> str:
     if not numbers.get("lu_s"):
         return "not recorded"
     return f"{sum(numbers['per_iteration_s'].values()) / numbers['lu_s']:.2f}"
+
+
+def _tolerance(numbers: dict[str, Any]) -> str:
+    """A run's Newton tolerance on the force as the report prints it (a run kept before
+    the numbers held it: its code's default, as the decks set none)."""
+    value = numbers["newton_force"] if "newton_force" in numbers else \
+        force_tolerance(None, numbers.get("code") or "")
+    return "not recorded" if value is None else f"{value:g}"
 
 
 def timing_record(numbers: dict[str, Any], mesh: str, n_cores: int, cpu: str,
@@ -1598,7 +1611,8 @@ def timing_section(timing: dict[str, Any] | None, numbers: dict[str, dict[str, A
     per = timing["per_iteration_s"]
     total = sum(per.values())
     lines += [
-        f"{LABELS.get(model, model)} tools at the defaults ({timing['discretization']}), "
+        f"{LABELS.get(model, model)} tools at the defaults ({timing['discretization']}, "
+        f"Newton tolerance {_tolerance(timing)}), "
         f"{timing['threads']} threads on {timing['cores']} cores ({timing['cpu']}), code "
         f"{timing['code']}, {timing['date']} ({command}; "
         + ("load average not recorded" if timing.get("load_average") is None else

@@ -655,7 +655,11 @@ def _run_locked(case: Case, output: Path, restart: bool,
     threads = max_threads()
     before = int(run.writer.attribute("threads", 0)) if restart else 0
     threads = min(threads, before) if before > 0 else threads
-    run.writer.annotate(status="running", message="", leads=leads, threads=threads)
+    # The tolerances say how closely two runs' answers can agree (docs/results-format.md).
+    run.writer.annotate(status="running", message="", leads=leads, threads=threads,
+                        newton_force=[p.newton.force_tolerance for p in case.phases],
+                        newton_displacement=[p.newton.displacement_tolerance
+                                             for p in case.phases])
     _write_atomic(output / STATUS, json.dumps({"status": "running", "case": str(case.folder)}))
     reset_peak_memory()
     status, message = "failed", "stopped by an error"

@@ -144,6 +144,21 @@ def _blocks(text: str, what: str, node_set: str) -> list[tuple[float, list[float
             for m in pattern.finditer(text)]
 
 
+def _block_sums(text: str, what: str, node_set: str) -> dict[float, list[float]]:
+    """Time -> the sum over the set's nodes of each '<what> ... for set <set>' block of a
+    CalculiX .dat file."""
+    head = re.compile(rf"{what} \(.*?\) for set {node_set} and time\s+(\S+)\s*\n\s*\n")
+    row = re.compile(r"\s*\d+\s+(\S+)\s+(\S+)\s+(\S+)\s*\n")
+    sums: dict[float, list[float]] = {}
+    for m in head.finditer(text):
+        total, at = np.zeros(3), m.end()
+        while (r := row.match(text, at)) is not None:
+            total += [float(r[1]), float(r[2]), float(r[3])]
+            at = r.end()
+        sums[float(m[1])] = total.tolist()
+    return sums
+
+
 def read_sta(text: str) -> dict[int, dict[str, int]]:
     """Per step of a CalculiX .sta file: converged increments, their iterations, every
     attempt's iterations (unconverged ones, marked U, included), unconverged attempts."""
@@ -171,6 +186,7 @@ def read_ccx(folder: Path, stem: str = "same_deck") -> dict[str, Any]:
     u = {t: v for t, v in _blocks(text, "displacements", lead) if t <= 1.0 + 1e-9}
     f = {t: v for t, v in _blocks(text, "forces", lead) if t <= 1.0 + 1e-9}
     times = sorted(set(u) & set(f))
+    ground = _block_sums(text, "forces", "GROUND")
     tip = _blocks(text, "displacements", "TIP")
     formed = [v for t, v in tip if t <= 1.0 + 1e-9]
     sprung = [v for t, v in tip if t >= 2.0 - 1e-9]
@@ -183,6 +199,10 @@ def read_ccx(folder: Path, stem: str = "same_deck") -> dict[str, Any]:
         # the blank pushes the punch up: the reference node's reaction is -z
         "stroke": [0.0] + [round(-u[t][2], 5) for t in times],
         "force": [0.0] + [round(-f[t][2], 4) for t in times],
+        # what the springs under the centre line hold along z (deck.SPRING): part of the
+        # punch's force that does not go into the tools' contact with the blank
+        "spring_force": [0.0] + [round(abs(ground[t][2]), 6) if t in ground else None
+                                 for t in times],
         "tip_z_formed": formed[-1][2] if formed else None,
         "tip_z_sprung": sprung[-1][2] if sprung else None,
         "sprung_complete": bool(sprung),
@@ -324,6 +344,23 @@ def _cpu_to(run: dict[str, Any], stroke: float) -> float | None:
     return float(np.interp(stroke, s, t)) * run["cpu_s"] / max(run["wall_s"], 1e-9)
 
 
+def spring_note(run: dict[str, Any]) -> str:
+    """What the springs under the centre line (deck.SPRING) carried of CalculiX's punch
+    force: its punch pushes them down with the blank, ddpy has none."""
+    springs = [(s, g, f) for s, g, f in zip(run["stroke"], run.get("spring_force", []),
+                                            run["force"], strict=False)
+               if g is not None and s > 0.0]
+    if not springs:
+        return ("\n\nThe springs' reactions were not recorded in this session: CalculiX's "
+                "punch force includes what they hold.")
+    stroke, largest, force = max(springs, key=lambda x: x[1])
+    return (f"\n\nThe springs under the centre line ({deck.SPRING:g} N/mm each, to fixed "
+            "ground) are pushed down with the blank, so CalculiX's punch force includes what "
+            f"they hold: at most {largest:.3g} N (at {stroke:.2f} mm of stroke, "
+            f"{100 * largest / max(abs(force), 1e-30):.2g} % of the punch force there), "
+            "from the ground nodes' reactions (deck.SPRING says why they are this soft).")
+
+
 def report(data: dict[str, Any]) -> str:
     """The markdown report of one session's runs (and its figure)."""
     session, runs = data["session"], data["runs"]
@@ -426,10 +463,9 @@ def report(data: dict[str, Any]) -> str:
     if "ccx" in runs and runs["ccx"]["status"] != "completed":
         ccx_note = ("\n\nCalculiX's curve and chatter stop where it failed: its last "
                     "increments before the failure, cut back and forced through, carry its "
-                    "largest force, which also weighs in its chatter. Why its force runs "
-                    "above ddpy's (the force ratios above) is not analysed here: the elements "
-                    "(C3D8I against the solid-shell), the penalty contact with its stick slope "
-                    "against ddpy's Gauss-point contact, are the candidates.")
+                    "largest force, which also weighs in its chatter.")
+    if "ccx" in runs:
+        ccx_note += spring_note(runs["ccx"])
     ccx_line = (f"CalculiX {session['ccx']} (Debian's calculix-ccx)" if session.get("ccx")
                 else "CalculiX (not installed in this session)")
     text = f"""# ddpy and CalculiX on the same deck: Numisheet 2002 BM-B bending, 60 x 6 x 2

@@ -530,6 +530,8 @@ def test_cae_deck_defects_are_refused_at_their_line(tmp_path: Path, old: str, ne
 
 
 NUMISHEET = Path(__file__).resolve().parents[1] / "examples" / "numisheet2002_bending"
+#: The springs' stiffness in its deck (N/mm; make_deck.py's SPRING).
+SPRING_STIFFNESS = 1e-3
 
 
 def test_numisheet_2002_calculix_deck_with_springs_converts_and_runs(
@@ -543,7 +545,8 @@ def test_numisheet_2002_calculix_deck_with_springs_converts_and_runs(
     assert main(["convert", str(deck), str(case)]) == 0
     out = capsys.readouterr().out
     assert f"ignored: {deck}:{spring}: 4 SPRING2 element(s), skipped" in out
-    assert f"ignored: {deck}:{spring + 5}: *SPRING (its elements are skipped)" in out
+    assert (f"ignored: {deck}:{spring + 5}: *SPRING (its elements are skipped): stiffness "
+            f"{SPRING_STIFFNESS:g} each") in out
     # The ground nodes are not the blank's; the blank is the 30 x 3 x 2 hexahedra.
     mesh = (case / "mesh.dat").read_text()
     assert "nodes 372\n" in mesh and "hexahedra 180\n" in mesh and "\n  9100 " not in mesh

@@ -57,6 +57,21 @@ IGNORED = ("PREPRINT", "NODE PRINT", "EL PRINT", "NODE FILE", "EL FILE", "OUTPUT
            "RESTART", "MONITOR", "DENSITY")
 #: Cards of the springs and dashpots skipped with their elements (inp_mesh.STABILIZING_TYPES).
 STABILIZER_CARDS = ("SPRING", "DASHPOT")
+def _stiffness_note(card: Card) -> str:
+    """What a linear *SPRING's elements carry in the deck's own model: a spring to the
+    ground pushes back its stiffness for each mm its node moves, so a stiff one changes the
+    tool forces a run of the deck reports (3 springs of 1 N/mm once held 21 N of a 62 N
+    punch force at 7 mm: benchmarks/calculix_same_deck, deck.SPRING)."""
+    if card.keyword != "SPRING" or "NONLINEAR" in card.params or not card.data:
+        return ""
+    try:
+        stiffness = float(card.data[-1].words[0])
+    except (IndexError, ValueError):
+        return ""
+    return (f": stiffness {stiffness:g} each; in the deck's own model a spring to the "
+            "ground takes that much force per unit its node moves, out of the tool forces")
+
+
 #: What to do instead, for keywords users meet most.
 _HINTS = {
     "ORIENTATION": "write the rolling direction in material.dat (rolling_direction)",
@@ -140,7 +155,8 @@ class Reader(MeshReader):
                 self.ignored.append(f"{card.where}: *{key}")
                 continue
             if key in STABILIZER_CARDS:
-                self.ignored.append(f"{card.where}: *{key} (its elements are skipped)")
+                self.ignored.append(f"{card.where}: *{key} (its elements are skipped)"
+                                    + _stiffness_note(card))
                 continue
             if key not in SUPPORTED:
                 unsupported.setdefault(key, []).append(card)

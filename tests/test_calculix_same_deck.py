@@ -168,3 +168,17 @@ def test_the_dat_reader_takes_the_punch_force_of_the_forming_step(tmp_path: Path
     assert numbers["spring_force"] == [0.0, 0.015, 0.03]
     assert "at most 0.03 N (at 28.50 mm of stroke, 0.03 % of the punch force" in \
         run.spring_note(numbers)
+
+
+def test_the_curve_gap_compares_from_1_mm_to_a_window_short_of_the_end() -> None:
+    # A curve 2 % above its reference up to 5 mm, then 50 % above it (the reference's
+    # forced last increments): only the first part is compared, to 1 mm short of the end.
+    run = load_module(BENCH / "run.py", "calculix_same_deck_run")
+    stroke = np.linspace(0.0, 6.0, 61)
+    reference = {"stroke": stroke.tolist(), "force": (10.0 + stroke).tolist()}
+    scale = np.where(stroke <= 5.0 + 1e-9, 1.02, 1.5)
+    largest, rms, end = run.curve_gap(
+        {"stroke": stroke.tolist(), "force": ((10.0 + stroke) * scale).tolist()}, reference)
+    assert end == pytest.approx(5.0)
+    assert largest == pytest.approx(0.02) and rms == pytest.approx(0.02)
+    assert run.curve_gap({"stroke": [0.0, 1.5], "force": [0.0, 1.0]}, reference)[2] == 0.0

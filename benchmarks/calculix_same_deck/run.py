@@ -344,6 +344,21 @@ def _cpu_to(run: dict[str, Any], stroke: float) -> float | None:
     return float(np.interp(stroke, s, t)) * run["cpu_s"] / max(run["wall_s"], 1e-9)
 
 
+def curve_gap(run: dict[str, Any], reference: dict[str, Any]) -> tuple[float, float, float]:
+    """How far ``run``'s force-stroke curve lies from ``reference``'s, at the reference's
+    increments from START mm to WINDOW mm short of where either stopped (a run that fails is
+    cut back and forced through in its last increments): the largest and the RMS difference
+    as shares of the reference's force, and the stroke compared to (0: none shared)."""
+    s, f = np.asarray(run["stroke"], float), np.asarray(run["force"], float)
+    rs, rf = np.asarray(reference["stroke"], float), np.asarray(reference["force"], float)
+    end = min(s[-1], rs[-1]) - WINDOW
+    at = (rs >= START) & (rs <= end)
+    if not at.any():
+        return float("nan"), float("nan"), 0.0
+    gap = (np.interp(rs[at], s, f) - rf[at]) / rf[at]
+    return float(np.abs(gap).max()), float(np.sqrt(np.mean(gap ** 2))), float(end)
+
+
 def spring_note(run: dict[str, Any]) -> str:
     """What the springs under the centre line (deck.SPRING) carried of CalculiX's punch
     force: its punch pushes them down with the blank, ddpy has none."""
@@ -407,7 +422,9 @@ def report(data: dict[str, Any]) -> str:
         ratio_cols = ("ddpy model", "CPU: CalculiX / ddpy", "Newton iterations: ddpy / CalculiX",
                       "all iterations: ddpy / CalculiX", "peak memory: ddpy / CalculiX",
                       "chatter: ddpy / CalculiX",
-                      f"force: ddpy / CalculiX at {', '.join(f'{a:g}' for a in AT)} mm")
+                      f"force: ddpy / CalculiX at {', '.join(f'{a:g}' for a in AT)} mm",
+                      f"force: largest / RMS difference from CalculiX's, {START:g} mm to "
+                      f"{WINDOW:g} mm short of its end")
         lines = [_row(ratio_cols), "|---" * len(ratio_cols) + "|"]
         for k in (m for m in ("nagata", "facets_coarse") if m in runs):
             r = runs[k]
@@ -431,10 +448,13 @@ def report(data: dict[str, Any]) -> str:
                               zip(numbers[k]["at"], numbers["ccx"]["at"], strict=True))
             if not np.isfinite(cpu) or c["stroke"][-1] <= 0.0:  # nothing to compare
                 cpu, its = float("nan"), float("nan")
+            largest, rms, end = curve_gap(r, c)
+            gap = (f"{100 * largest:.1f} % / {100 * rms:.1f} % (to {end:.2f} mm)" if end > 0
+                   else "-")
             lines.append(_row([r["label"], _fmt(cpu if np.isfinite(cpu) else None),
                                _fmt(its if np.isfinite(its) else None, ".2f"), every,
                                f"{r['peak_memory_mb'] / c['peak_memory_mb']:.2f}", chat,
-                               force]))
+                               force, gap]))
         if "nagata" in runs:
             r = runs["nagata"]
             cpu = (c["cpu_s"] / r["cpu_s"] if complete else

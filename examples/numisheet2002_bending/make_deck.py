@@ -52,7 +52,7 @@ def _brick(front: list[tuple[float, float]], normals: list[tuple[float, float]],
         # Nodes 1-4 counter-clockwise seen from the working face: a positive volume.
         (x0, z0), (x1, z1) = front[k], front[k + 1]
         tangent, normal = (x1 - x0, z1 - z0), normals[k]
-        if tangent[0] * normal[1] - tangent[1] * normal[0] > 0:   # (t x y) . n along y
+        if tangent[0] * normal[1] - tangent[1] * normal[0] < 0:   # (t x y) . n along y
             back, face = back[::-1], face[::-1]
         elements.append(f"{e}, " + ", ".join(map(str, back + face)))
         e += 1
@@ -68,6 +68,11 @@ def _arc(cx: float, cz: float, r: float, a0: float, a1: float, count: int, inwar
         s = -1.0 if inward else 1.0
         normals.append((s * math.cos(a), s * math.sin(a)))
     return points, normals
+
+
+def _lines(ids: list[int]) -> list[str]:
+    """A set's members, at most 16 a line (CalculiX 2.20 refuses longer lines)."""
+    return [", ".join(map(str, ids[i:i + 16])) for i in range(0, len(ids), 16)]
 
 
 def deck() -> str:
@@ -99,11 +104,11 @@ def deck() -> str:
     layer = NX * NY
     w += ["*ELSET, ELSET=BLANK_TOP, GENERATE", f"{e - layer + 1}, {e}, 1",
           "*ELSET, ELSET=BLANK_BOTTOM, GENERATE", f"1, {layer}, 1", "*NSET, NSET=XSYM"]
-    w += [", ".join(str(ident[0, j, k]) for j in range(NY + 1)) for k in range(NZ + 1)]
+    w += _lines([ident[0, j, k] for k in range(NZ + 1) for j in range(NY + 1)])
     w += ["*NSET, NSET=YSYM"]
-    w += [", ".join(str(ident[i, 0, k]) for i in range(NX + 1)) for k in range(NZ + 1)]
+    w += _lines([ident[i, 0, k] for k in range(NZ + 1) for i in range(NX + 1)])
     w += ["*NSET, NSET=CENTRE"]
-    w += [", ".join(str(ident[0, j, k]) for j in range(NY + 1) for k in range(NZ + 1))]
+    w += _lines([ident[0, j, k] for j in range(NY + 1) for k in range(NZ + 1)])
     # The punch: a quarter cylinder from its lowest line (x = 0) up to x = R.
     zc = THICKNESS + PUNCH_RADIUS
     front, normals = _arc(0.0, zc, PUNCH_RADIUS, -90.0, 0.0, 24, inward=True)

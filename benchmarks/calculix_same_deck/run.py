@@ -136,27 +136,18 @@ def read_ddpy(results: Path) -> dict[str, Any]:
 
 
 def _blocks(text: str, what: str, node_set: str) -> list[tuple[float, list[float]]]:
-    """(time, values of the set's first node) of each '<what> ... for set <set>' block of a
-    CalculiX .dat file."""
-    pattern = re.compile(rf"{what} \(.*?\) for set {node_set} and time\s+(\S+)\s*\n\s*\n"
-                         r"\s*\d+\s+(\S+)\s+(\S+)\s+(\S+)")
-    return [(float(m[1]), [float(m[2]), float(m[3]), float(m[4])])
-            for m in pattern.finditer(text)]
-
-
-def _block_sums(text: str, what: str, node_set: str) -> dict[float, list[float]]:
-    """Time -> the sum over the set's nodes of each '<what> ... for set <set>' block of a
-    CalculiX .dat file."""
+    """(time, values summed over the set's nodes: a one-node set's own) of each '<what> ...
+    for set <set>' block of a CalculiX .dat file."""
     head = re.compile(rf"{what} \(.*?\) for set {node_set} and time\s+(\S+)\s*\n\s*\n")
     row = re.compile(r"\s*\d+\s+(\S+)\s+(\S+)\s+(\S+)\s*\n")
-    sums: dict[float, list[float]] = {}
+    blocks = []
     for m in head.finditer(text):
         total, at = np.zeros(3), m.end()
         while (r := row.match(text, at)) is not None:
             total += [float(r[1]), float(r[2]), float(r[3])]
             at = r.end()
-        sums[float(m[1])] = total.tolist()
-    return sums
+        blocks.append((float(m[1]), total.tolist()))
+    return blocks
 
 
 def read_sta(text: str) -> dict[int, dict[str, int]]:
@@ -186,7 +177,7 @@ def read_ccx(folder: Path, stem: str = "same_deck") -> dict[str, Any]:
     u = {t: v for t, v in _blocks(text, "displacements", lead) if t <= 1.0 + 1e-9}
     f = {t: v for t, v in _blocks(text, "forces", lead) if t <= 1.0 + 1e-9}
     times = sorted(set(u) & set(f))
-    ground = _block_sums(text, "forces", "GROUND")
+    ground = dict(_blocks(text, "forces", "GROUND"))
     tip = _blocks(text, "displacements", "TIP")
     formed = [v for t, v in tip if t <= 1.0 + 1e-9]
     sprung = [v for t, v in tip if t >= 2.0 - 1e-9]

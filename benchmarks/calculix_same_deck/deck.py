@@ -56,6 +56,9 @@ SWIFT = (645.3, 0.0102, 0.252)
 #: and frictionless as well (8.32 mm); at 1e4 it passed on (measured 2026-12-06). 1e4 MPa/mm
 #: holds 100 MPa of contact pressure at 0.01 mm of overclosure, ddpy's 1 % penetration limit.
 PENALTY, STICK_SLOPE = 1.0e4, 5000.0
+#: The penalty of the sessions before 2026-12-06 (MPa/mm) and the stroke (mm) where CalculiX
+#: stopped with it, for the report.
+STIFFER_PENALTY, STIFFER_PENALTY_STOP = 1.0e5, 8.38
 #: Springs (N/mm) that hold the blank's rigid-body mode along z for CalculiX before the
 #: tools grip it; ddpy's convert skips them. They tie the centre line to fixed ground, so
 #: the punch also pushes them down: at 1 N/mm (examples/numisheet2002_bending's value) the

@@ -520,10 +520,13 @@ symmetry on x = 0 and y = 0, then springback with the centre line held along z.
 - **Contact.** CalculiX's face-to-face penalty contact, `*CONTACT PAIR, TYPE=SURFACE TO
   SURFACE` (the manual's "face-to-face penalty contact"), linear pressure-overclosure of
   {deck.PENALTY:g} MPa/mm ({deck.PENALTY * 1e-2:g} MPa of pressure at 0.01 mm of
-  overclosure, ddpy's penetration limit, 1 % of the thickness; deck.PENALTY says why not
-  stiffer), Coulomb friction {friction} with a stick slope of {deck.STICK_SLOPE:g} MPa/mm
-  (examples/calculix_bending's). Not the mortar (`TYPE=MORTAR`): face-to-face means the contact
-  integrated over the blank's faces, which the penalty form does, at integration points of
+  overclosure, ddpy's penetration limit, 1 % of the thickness; with
+  {deck.STIFFER_PENALTY:g} MPa/mm, before 2026-12-06, CalculiX stopped at
+  {deck.STIFFER_PENALTY_STOP:g} mm of stroke in every session, "increment size smaller than
+  minimum", and frictionless too), Coulomb friction {friction} with a stick slope of
+  {deck.STICK_SLOPE:g} MPa/mm (examples/calculix_bending's). Not the mortar
+  (`TYPE=MORTAR`): face-to-face means the contact integrated over the blank's faces, which
+  the penalty form does, at integration points of
   the slave faces as ddpy's Gauss-point contact does; the mortar form adds Lagrange
   multipliers on top of that, and `ddpy convert` (docs/abaqus-import.md) reads `SURFACE TO
   SURFACE` and `NODE TO SURFACE` only, so with the mortar the deck would not be one deck for

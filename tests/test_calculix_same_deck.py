@@ -44,7 +44,7 @@ def _cards(text: str) -> dict[str, list[list[str]]]:
 
 
 def test_the_deck_has_the_blank_of_60_x_6_x_2_c3d8i(written: dict[str, Path]) -> None:
-    cards = _cards(written["ccx"].read_text())
+    cards = _cards(written["ccx_facets_coarse"].read_text())
     blank = cards["*ELEMENT, TYPE=C3D8I, ELSET=BLANK"]
     assert len(blank) == 60 * 6 * 2
     assert len(cards["*NODE, NSET=BLANK_NODES"]) == 61 * 7 * 3
@@ -64,7 +64,7 @@ def test_the_springs_hold_a_negligible_share_of_the_punch_force(
     # by up to its stroke: all of them at full stroke must hold under 0.5 % of the least
     # punch force past the first mm (ddpy's kept Nagata run; at 1 N/mm they held 21 N at
     # 7 mm, a third of CalculiX's force there).
-    cards = _cards(written["ccx"].read_text())
+    cards = _cards(written["ccx_facets_coarse"].read_text())
     springs = len(cards["*ELEMENT, TYPE=SPRING2, ELSET=HOLD"])
     stiffness = float(cards["*SPRING, ELSET=HOLD"][1][0])  # the line after the dofs
     kept = json.loads((ROOT / "docs" / "benchmarks" / "calculix_same_deck_runs.json")
@@ -82,24 +82,25 @@ def _tool_faces(text: str, tool: str) -> np.ndarray:
     return np.array([[nodes[int(n)] for n in b[5:9]] for b in bricks])
 
 
+@pytest.mark.parametrize("facets", ["facets_coarse", "facets_fine"])
 @pytest.mark.parametrize("tool", ["punch", "die"])
 def test_the_tool_faces_are_the_facet_models_vertices(written: dict[str, Path],
-                                                      tool: str) -> None:
+                                                      tool: str, facets: str) -> None:
     """Each brick's working face is one face of the facet case's tool file, vertex for vertex,
     in its order (counter-clockwise seen from the blank: S2 faces the blank)."""
     from ddpy.io.decks import read_case
     from ddpy.io.toolfile import read_tool
 
-    case = read_case(written["facets_coarse"])
+    case = read_case(written[facets])
     model = next(t for t in case.tools if t.name == tool)
     assert model.description == "facets"
     surface = read_tool(model.file).surface
     expected = np.asarray(surface.vertices)[np.asarray(surface.faces)]
-    faces = _tool_faces(written["ccx"].read_text(), tool)
+    faces = _tool_faces(written[f"ccx_{facets}"].read_text(), tool)
     assert faces.shape == expected.shape
-    # the same doubles, but for values below 1e-15 mm that need more than CalculiX's 20
-    # characters a number
-    assert np.abs(faces - expected).max() <= 1e-20
+    # the same doubles, but for numbers that need more than CalculiX's 20 characters (a tiny
+    # value with its exponent, or 17 digits after "-0.0"): their last digits dropped
+    assert np.abs(faces - expected).max() <= 1e-17
     # the brick lies behind its face: S2's outward normal points to the blank's side
     back = 1 if tool == "die" else -1
     normal = np.cross(faces[:, 2] - faces[:, 0], faces[:, 3] - faces[:, 1])
@@ -111,7 +112,7 @@ def test_ddpy_convert_reads_the_deck_back_to_the_same_blank(written: dict[str, P
     from ddpy.app.convert import convert_inp
     from ddpy.io.decks import read_case
 
-    conversion = convert_inp(written["ccx"], tmp_path / "case")
+    conversion = convert_inp(written["ccx_facets_coarse"], tmp_path / "case")
     case = read_case(written["nagata"])
     back = conversion.model
     assert back.element_type == "C3D8I"

@@ -1,16 +1,16 @@
 """The same deck for ddpy and CalculiX: the quarter Numisheet 2002 BM-B bending blank of
-60 x 6 x 2 elements, written as ddpy cases and, from ddpy's facet case, as a CalculiX deck.
+60 x 6 x 2 elements, written as ddpy cases and, from ddpy's facet cases, as CalculiX decks.
 
 ``prepare(root)`` writes, under ``root`` (git-ignored):
 
 - ``meshes/coarse.msh``: benchmarks/cylindrical_bending/make_case.py's ``coarse_mesh`` with
   60 x 6 x 2 solid-shells;
-- ``tools/{punch,die}.nagata.tool``: that benchmark's tool files (its coarse facets are the
-  Nagata mesh read with ``description facets``);
-- ``cases/coarse/{nagata,facets_coarse}/``: its case decks (make_case.write_case), the
-  material changed to von Mises with the Swift curve sampled as a table (HARDENING), the
+- ``tools/{punch,die}.{nagata,facets}.tool``: that benchmark's tool files (its coarse facets
+  are the Nagata mesh read with ``description facets``, its fine facets the ``.facets`` files);
+- ``cases/coarse/{nagata,facets_coarse,facets_fine}/``: its case decks (make_case.write_case),
+  the material changed to von Mises with the Swift curve sampled as a table (HARDENING), the
   one CalculiX's ``*PLASTIC`` reads: CalculiX has no Hill'48 but through a user material;
-- ``ccx/same_deck.inp``: ``ccx_deck`` of the facets_coarse case.
+- ``ccx/{facets_coarse,facets_fine}/same_deck.inp``: ``ccx_deck`` of each facet case.
 
 ``ccx_deck(case)`` writes the CalculiX deck from a ddpy case (ddpy.io.decks.read_case): the
 blank's nodes and hexahedra with ddpy's ids as C3D8I, the symmetry planes, each rigid tool as
@@ -38,9 +38,14 @@ make_case = load_module(BENDING / "make_case.py", "bending_make_case")
 
 #: The blank: 60 x 6 x 2 elements of the 60 x 15 x 1 mm quarter.
 NX, NY, LAYERS = 60, 6, 2
-#: The ddpy models run: Nagata patches and the same mesh flat (the coarse facets, whose
-#: vertices the CalculiX tools share).
-MODELS = ("nagata", "facets_coarse")
+#: The ddpy models run: Nagata patches, the same mesh flat (the coarse facets) and the fine
+#: facets (make_case.FACETS_PER_ARC per 90 degrees of arc).
+MODELS = ("nagata", "facets_coarse", "facets_fine")
+#: The facet models CalculiX runs, each with the vertices of ddpy's case of that name. The
+#: fine facets are the nearest CalculiX comes to the smooth tools: on the punch (radius
+#: 23.5 mm) a facet's sagitta is 8 um, on the die's 4 mm shoulder 1.4 um, below ddpy's
+#: penetration limit (0.01 mm); the coarse facets' are 0.45 and 0.08 mm.
+CCX_MODELS = ("facets_coarse", "facets_fine")
 #: The mesh name of the cases (make_case's: its increment limits for the coarse blank).
 MESH = "coarse"
 #: Brick depth behind a tool face, mm (the brick only carries the face).
@@ -76,6 +81,12 @@ FIELD = 20
 TIP = (make_case.LENGTH, 0.0, 0.0)
 
 
+def sagitta(radius: float, per_arc: int) -> float:
+    """How far a facet's middle lies inside an arc of ``radius`` cut into ``per_arc`` facets
+    per 90 degrees (mm)."""
+    return radius * (1.0 - np.cos(np.pi / 4.0 / per_arc))
+
+
 def hardening_table() -> list[tuple[float, float]]:
     """(plastic strain, yield stress) of make_case's Swift curve at TABLE_STRAINS."""
     k, eps0, n = SWIFT
@@ -100,25 +111,27 @@ SHOULDER_X = 29.5
 
 
 def prepare(root: Path, tools: Path = HERE / "tools") -> dict[str, Path]:
-    """Write the mesh, tools, ddpy cases and the CalculiX deck under ``root``; return the
-    case folder of each model and the deck ("ccx"). ``tools``: where the bending benchmark's
-    tool files with this deck's die (SHOULDER_X) are, built there by its
-    make_case.build_tools when missing."""
-    if not all((tools / f"{t}.nagata.tool").is_file() for t in ("punch", "die")):
+    """Write the mesh, tools, ddpy cases and the CalculiX decks under ``root``; return the
+    case folder of each model and the deck of each of CCX_MODELS (key "ccx_" + model).
+    ``tools``: where the bending benchmark's tool files with this deck's die (SHOULDER_X)
+    are, built there by its make_case.build_tools when missing."""
+    files = [f"{t}.{m}.tool" for t in ("punch", "die") for m in ("nagata", "facets")]
+    if not all((tools / f).is_file() for f in files):
         make_case.build_tools(tools, shoulder_x=SHOULDER_X)
     (root / "tools").mkdir(parents=True, exist_ok=True)
-    for tool in ("punch", "die"):
-        shutil.copyfile(tools / f"{tool}.nagata.tool", root / "tools" / f"{tool}.nagata.tool")
+    for file in files:
+        shutil.copyfile(tools / file, root / "tools" / file)
     make_case.coarse_mesh(root / "meshes" / f"{MESH}.msh", nx=NX, ny=NY, layers=LAYERS)
     out: dict[str, Path] = {}
     for model in MODELS:
         folder = make_case.write_case(root / "cases" / MESH / model, model, MESH)
         (folder / "material.dat").write_text(material_text())
         out[model] = folder
-    deck = root / "ccx" / "same_deck.inp"
-    deck.parent.mkdir(parents=True, exist_ok=True)
-    deck.write_text(ccx_deck(out["facets_coarse"]))
-    out["ccx"] = deck
+    for model in CCX_MODELS:
+        deck = root / "ccx" / model / "same_deck.inp"
+        deck.parent.mkdir(parents=True, exist_ok=True)
+        deck.write_text(ccx_deck(out[model]))
+        out[f"ccx_{model}"] = deck
     return out
 
 
@@ -146,8 +159,9 @@ def _lines(ids: list[int], per_line: int = 16) -> list[str]:
 
 def _exact(x: float) -> str:
     """A coordinate as CalculiX reads it back: the shortest text of the same double (repr),
-    else (a tiny value such as -8.9e-16 needs 22 characters) the most digits that fit in
-    FIELD characters: 1e-28 mm off at most on these tools."""
+    else (a tiny value such as -8.9e-16 needs 22 characters, a value such as -0.0412... with
+    17 digits 21) the most digits that fit in FIELD characters: within 1e-17 mm on these
+    tools."""
     text = repr(float(x))
     digits = 17
     while len(text) > FIELD:

@@ -10,9 +10,10 @@ import numpy as np
 import pytest
 
 from ddpy import _core
+from ddpy.core.constants import constant
 from ddpy.core.linalg import MumpsSolver, row_structure
 from ddpy.model.contact import SLIP
-from ddpy.model.control import NewtonSettings
+from ddpy.model.control import FormingTuning, NewtonSettings
 from ddpy.model.forming import FormingProblem
 from ddpy.model.forming import RigidTool as _RigidTool
 from ddpy.model.mesh import HexMesh
@@ -173,13 +174,14 @@ def test_gmres_on_an_operator_singular_on_its_krylov_space_does_not_converge() -
     assert status == 0 and k == 1 and converged == 0
 
 
-def slide(linear_solver: str) -> tuple[FormingProblem, object]:
+def slide(linear_solver: str, single_factors: int = 0) -> tuple[FormingProblem, object]:
     """A block pressed onto a cylinder crest, then slid over it with friction (nodes
-    between stick and slip, the contact set changing)."""
+    between stick and slip, the contact set changing); ``single_factors``: the tuning's."""
     mesh = HexMesh.box(2.0, 1.0, 0.5, 8, 2, 2, origin=(-1.0, -0.5, 0.0))
     tool = RigidTool("cylinder", cylinder_crest("nagata", 8), mesh.select(z=0.0),
                      friction=0.15, facing=(0, 0, -1))
-    problem = FormingProblem(Solid(mesh, ELASTIC), [tool], linear_solver=linear_solver)
+    problem = FormingProblem(Solid(mesh, ELASTIC), [tool], linear_solver=linear_solver,
+                             tuning=FormingTuning(single_factors=single_factors))
     problem.fix(mesh.select(z=0.5), "xyz")
     result = problem.run({"cylinder": (0, 0, 0.02)}, max_increment=0.02)
     result = problem.run({"cylinder": (0.2, 0, 0)}, max_increment=0.05, result=result,
@@ -209,6 +211,58 @@ def test_reused_factors_give_the_direct_solution_with_fewer_factorizations() -> 
     # iteration), so the last step is not quadratic by design; the quadratic rate of the
     # tangent itself is tested with the direct solver (tests/test_forming.py).
     assert sum(result_reuse.iterations) <= sum(result_direct.iterations) + 2
+
+
+def test_single_precision_factors_solve_to_eps_single_times_the_condition() -> None:
+    # A 40 x 40 unsymmetric matrix of condition number 1e4 (singular values from 1 to 1e-4):
+    # double-precision factors solve it to rounding, single-precision ones to about
+    # eps_single (6e-8) times the condition (a relative error within 1e-2, above 1e-6,
+    # far above double's), and GMRES on the single factors to 1e-10 in a few steps.
+    rng = np.random.default_rng(5)
+    n = 40
+    q1, _ = np.linalg.qr(rng.normal(size=(n, n)))
+    q2, _ = np.linalg.qr(rng.normal(size=(n, n)))
+    dense = q1 @ np.diag(np.geomspace(1.0, 1e-4, n)) @ q2
+    exact = rng.normal(size=n)
+    f = dense @ exact
+    rows, cols = _dense_rows(n)
+    errors = {}
+    for precision in ("double", "single"):
+        with MumpsSolver("unsymmetric", precision=precision) as solver:
+            solver.analyse(n, rows, cols)
+            solver.factorize(dense[rows, cols])
+            x0 = solver.solve(f)
+            errors[precision] = np.linalg.norm(x0 - exact) / np.linalg.norm(exact)
+            if precision == "single":
+                assert _core.solver_precision(solver.handle) == (
+                    constant("solver_precision_single"), 0)
+                x, k, converged, status = _core.krylov_solve(
+                    dense[rows, cols], *row_structure(n, rows, cols), np.ones(n),
+                    solver.handle, f, x0, 1e-10, n)
+                assert status == 0 and converged == 1 and k <= 8, k
+                np.testing.assert_allclose(x, exact, rtol=0, atol=1e-8 * np.abs(exact).max())
+    assert errors["double"] < 1e-10
+    assert 1e-6 < errors["single"] < 1e-2, errors
+    with pytest.raises(ValueError, match="precision"):
+        MumpsSolver(precision="half")
+
+
+@pytest.mark.parametrize("linear_solver", ["direct", "reuse"])
+def test_single_precision_factors_give_the_same_slide(linear_solver: str) -> None:
+    # The slide with the Jacobian factorized in single precision: every correction is
+    # GMRES's on those factors (to the Eisenstat-Walker tolerance with older factors, to
+    # 1e-8 where the loop solves exactly), so the same increments converge to the same
+    # answer within the Newton tolerance, in at most one more iteration an increment.
+    double, result_double = slide(linear_solver)
+    single, result_single = slide(linear_solver, single_factors=1)
+    assert result_single.cuts == result_double.cuts == 0
+    assert len(result_single.iterations) == len(result_double.iterations)
+    assert result_single.krylov_iterations > 0
+    assert np.allclose(single.u, double.u, rtol=0, atol=1e-5 * np.abs(double.u).max())
+    assert np.allclose(single.force, double.force, rtol=0,
+                       atol=1e-5 * np.abs(double.force).max())
+    assert all(s <= d + 1 for s, d in zip(result_single.iterations, result_double.iterations,
+                                          strict=True))
 
 
 def test_linear_solver_choice_is_checked() -> None:

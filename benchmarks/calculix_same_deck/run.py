@@ -496,13 +496,21 @@ def report(data: dict[str, Any]) -> str:
         c = runs[GOAL_REFERENCE]
         cpu = ratios[("nagata", GOAL_REFERENCE)]
         complete = c["status"] == "completed"
-        # judged on whole runs only: a run that stops has not answered the problem
+        # judged where CalculiX answered the forming at least: a run stopped short of the
+        # stroke has not answered the problem
+        formed = bool(c["stroke"]) and c["stroke"][-1] >= session["deck"]["stroke"] - 1e-6
         met = "met" if cpu >= GOAL else "not met"
-        if not complete:
-            met = "not judged (CalculiX did not complete)"
+        if not complete and not formed:
+            met = "not judged (CalculiX did not complete its forming)"
         scope = ("the whole runs, forming and springback" if complete else
                  f"to the {c['stroke'][-1]:.2f} mm of stroke CalculiX reached "
                  f"({c['status']}; ddpy's CPU to there from its increments' times)")
+        if formed and not complete:
+            scope = ("the forming, the whole stroke: CalculiX's springback failed "
+                     f"({c['status']}), its CPU includes the failed attempts "
+                     f"({c['all_iterations'] - c['iterations']} iterations of "
+                     f"{c['all_iterations']} were attempts that were cut back); ddpy's CPU to "
+                     "the end of its forming from its increments' times")
         verdict = (f"**Goal {met}**: with Nagata tools ddpy used {cpu:.1f} times less CPU "
                    f"than CalculiX with {c['label'].split(', ')[1]} ({scope}); the goal is at "
                    f"least {GOAL:g} times. The reference is CalculiX's run on the fine "

@@ -29,6 +29,8 @@ __all__ = ["MumpsSolver", "LinearSolverError", "RowStructure", "distinct", "row_
 INT32_MAX = 2**31 - 1
 _SYMMETRY = {"unsymmetric": 0, "spd": 1, "symmetric": 2}
 _ORDERING = {"amd": 0, "amf": 2, "scotch": 3, "pord": 4, "metis": 5, "qamd": 6, "auto": 7}
+_PRECISION = {"double": constant("solver_precision_double"),
+              "single": constant("solver_precision_single")}
 _MESSAGES = {
     -6: "the matrix is structurally singular",
     -10: "the matrix is numerically singular",
@@ -43,6 +45,7 @@ _MESSAGES = {
     constant("solver_finished"): "the processes were finished (ddpy.core.mpi.finish)",
     constant("solver_not_host"): "only rank 0 drives the solver; ranks > 0 serve it "
                                  "(ddpy.core.mpi.serve)",
+    constant("solver_bad_precision"): "the precision must be 'double' or 'single'",
     constant("solver_not_positive_definite"): "the matrix is not positive definite (MUMPS "
                                               "found negative pivots, INFOG(12)); factorize it "
                                               "with symmetry='symmetric' if it is meant to be "
@@ -119,19 +122,27 @@ class MumpsSolver:
     falls back to its own choice when the library lacks it); ``controls`` sets further MUMPS
     ICNTL entries by their 1-based index, e.g. ``{10: -2}`` for two refinement steps, and
     ``real_controls`` CNTL entries, e.g. ``{7: 1e-9}`` for the block low-rank tolerance.
+    ``precision`` "single" factorizes and solves in single precision (MUMPS's SMUMPS) the
+    double-precision values and right-hand sides it is given: half the factor memory and
+    its traffic, for solutions good to about eps_single times the condition number, fit for
+    preconditioning (docs/theory/linear-solver.md, "Single-precision factors").
     """
 
     def __init__(
         self, symmetry: str = "unsymmetric", ordering: str = "metis",
         controls: dict[int, int] | None = None,
-        real_controls: dict[int, float] | None = None,
+        real_controls: dict[int, float] | None = None, precision: str = "double",
     ) -> None:
         if symmetry not in _SYMMETRY:
             raise ValueError(f"symmetry must be one of {sorted(_SYMMETRY)}, got {symmetry!r}")
         if ordering not in _ORDERING:
             raise ValueError(f"ordering must be one of {sorted(_ORDERING)}, got {ordering!r}")
+        if precision not in _PRECISION:
+            raise ValueError(f"precision must be one of {sorted(_PRECISION)}, got "
+                             f"{precision!r}")
         mpi.start()
-        handle, status = _core.solver_create(_SYMMETRY[symmetry], _ORDERING[ordering])
+        handle, status = _core.solver_create(_SYMMETRY[symmetry], _ORDERING[ordering],
+                                             _PRECISION[precision])
         if status < 0:
             raise LinearSolverError(int(status), "initialization")
         self._handle = int(handle)

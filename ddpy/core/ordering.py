@@ -119,14 +119,14 @@ def equation_order(node_order: ArrayLike, equation_nodes: ArrayLike,
 
 def mesh_solver(symmetry: str, ordering: str, node_order: Callable[[], NDArray[np.int64]],
                 equation_nodes: ArrayLike, first: ArrayLike | None = None,
-                last: ArrayLike | None = None) -> MumpsSolver:
+                last: ArrayLike | None = None, precision: str = "double") -> MumpsSolver:
     """A MUMPS solver with the pivot order ``ordering``: "nested" for the nested dissection
     of the mesh (``node_order()``, computed only then; ``equation_nodes``: the node of every
     equation; ``first``, ``last``: equations eliminated before and after the others, see
     equation_order), or
-    one of MUMPS's own orderings by name."""
+    one of MUMPS's own orderings by name; ``precision``: MumpsSolver's."""
     if ordering != "nested":
-        return MumpsSolver(symmetry, ordering)
-    solver = MumpsSolver(symmetry, "amd")
+        return MumpsSolver(symmetry, ordering, precision=precision)
+    solver = MumpsSolver(symmetry, "amd", precision=precision)
     solver.set_ordering(equation_order(node_order(), equation_nodes, first, last))
     return solver

@@ -254,6 +254,7 @@ _FORMING_TUNING_RANGES = {
     "touch_depth": Range(0.0, low_open=True),
     "hold_step": Range(0.0, low_open=True),
     "search_memory": Range(0, 1, integer=True),
+    "single_factors": Range(0, 1, integer=True),
 }
 
 
@@ -340,7 +341,12 @@ class FormingTuning:
       in one Newton step (the core's hold_step);
     - ``search_memory``: 1, the contact search of an increment's evaluations starts from
       what the earlier ones found, where that provably gives the same answer (0: every
-      evaluation searches afresh; docs/theory/contact.md, "Search memory").
+      evaluation searches afresh; docs/theory/contact.md, "Search memory");
+    - ``single_factors``: 1, the Jacobian factorized in single precision (MUMPS's SMUMPS:
+      half the factor memory and traffic), every correction then solved by GMRES in double
+      precision on those factors, also right after a factorization and in exact and careful
+      solves (docs/theory/linear-solver.md, "Single-precision factors"); 0: double-precision
+      factors, a factorization's correction solved with them directly.
     """
 
     touching: float = 1e-6
@@ -357,6 +363,7 @@ class FormingTuning:
     touch_depth: float = 1e-3
     hold_step: float = 0.5
     search_memory: int = 1
+    single_factors: int = 0
     increment: IncrementTuning = field(default_factory=IncrementTuning)
 
     def __post_init__(self) -> None:

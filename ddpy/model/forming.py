@@ -513,7 +513,9 @@ class FormingProblem:
                                                  np.zeros(layout.holds.size, np.int64)]),
                                  first=(np.arange(layout.n) >= layout.nf)
                                  & (np.arange(layout.n) < layout.n - layout.holds.size),
-                                 last=np.arange(layout.n) >= layout.n - layout.holds.size)
+                                 last=np.arange(layout.n) >= layout.n - layout.holds.size,
+                                 precision=("single" if self.tuning.single_factors
+                                            else "double"))
             solver.analyse(layout.n, *layout.entries())
             self._layout, self._solver = layout, solver
             self._factors = Factors(solver.handle)

@@ -16,6 +16,8 @@ module ddpy_api
                                 status_not_analysed, status_size_mismatch, &
                                 status_no_free_handle, status_finished, status_not_host, &
                                 status_not_positive_definite, solver_info_values, &
+                                status_bad_precision, precision_double, precision_single, &
+                                solver_precision, &
                                 solver_flops, info_infog1, info_infog2, info_ordering, &
                                 info_factor_entries, info_estimated_factor_entries, &
                                 info_estimated_memory_mb_max, &
@@ -55,7 +57,8 @@ module ddpy_api
   public :: api_max_threads, api_set_threads, api_bezier_power_coefficients, &
             api_bezier_evaluate, api_bezier_de_casteljau, api_nagata_coefficients, &
             api_nagata_evaluate, api_nagata_edge_coefficient, api_solver_create, &
-            api_solver_analyse, api_solver_factorize, api_solver_solve, api_solver_info, &
+            api_solver_analyse, api_solver_factorize, api_solver_precision, &
+            api_solver_solve, api_solver_info, &
             api_solver_destroy, api_solver_set_control, api_solver_set_real_control, &
             api_solver_set_ordering, api_solver_world, api_solver_serve, api_solver_finish, &
             api_solver_analyse_elements, api_core_constant_count, api_core_constants, &
@@ -206,12 +209,20 @@ contains
     end do
   end subroutine api_nagata_edge_coefficient
 
-  subroutine api_solver_create(sym, ordering, handle, status) &
+  subroutine api_solver_create(sym, ordering, precision, handle, status) &
     bind(C, name="ddpy_solver_create")
-    integer(c_int), value, intent(in) :: sym, ordering
+    integer(c_int), value, intent(in) :: sym, ordering, precision
     integer(c_int), intent(out) :: handle, status
-    call solver_create(sym, ordering, handle, status)
+    call solver_create(sym, ordering, precision, handle, status)
   end subroutine api_solver_create
+
+  !> The precision of a solver's factors (the constants solver_precision_*).
+  subroutine api_solver_precision(handle, precision, status) &
+    bind(C, name="ddpy_solver_precision")
+    integer(c_int), value, intent(in) :: handle
+    integer(c_int), intent(out) :: precision, status
+    call solver_precision(handle, precision, status)
+  end subroutine api_solver_precision
 
   !> Analyse the structure given by 0-based (row, col) coordinates.
   subroutine api_solver_analyse(handle, n, nz, irn, jcn, status) &
@@ -444,6 +455,9 @@ contains
     call add('solver_finished', status_finished)
     call add('solver_not_host', status_not_host)
     call add('solver_not_positive_definite', status_not_positive_definite)
+    call add('solver_bad_precision', status_bad_precision)
+    call add('solver_precision_double', precision_double)
+    call add('solver_precision_single', precision_single)
 
   contains
 

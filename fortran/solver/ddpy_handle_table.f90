@@ -16,6 +16,7 @@ module ddpy_handle_table
   public :: table_entry, table, max_handles, claim_handle, valid_handle, free_entry
 
   include 'dmumps_struc.h'
+  include 'smumps_struc.h'
 
   !> Handles that may live at the same time, of all kinds together.
   integer, parameter :: max_handles = 1024
@@ -34,6 +35,9 @@ module ddpy_handle_table
   type :: table_entry
     integer :: holds = entry_free
     type(dmumps_struc), allocatable :: mumps
+    !> A single-precision solver's instance (solver_create's precision): it factorizes
+    !> and solves, with the structure, controls and pivot order of mumps, which it mirrors.
+    type(smumps_struc), allocatable :: single
     logical :: analysed = .false., factorized = .false.
     !> Entries of the factorization's workspace to give MUMPS (its S, as large as MUMPS took
     !> for the last factorization of its own; 0: none known yet).
@@ -90,6 +94,7 @@ contains
   subroutine free_entry(handle)
     integer, intent(in) :: handle
     if (allocated(table(handle)%mumps)) deallocate(table(handle)%mumps)
+    if (allocated(table(handle)%single)) deallocate(table(handle)%single)
     if (allocated(table(handle)%blank)) deallocate(table(handle)%blank)
     if (allocated(table(handle)%surface)) deallocate(table(handle)%surface)
     if (allocated(table(handle)%problem)) deallocate(table(handle)%problem)

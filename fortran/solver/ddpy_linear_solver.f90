@@ -15,6 +15,14 @@
 !> drives the retries alike. The sequential build runs the same code with one process (the
 !> stub MPI of libmumps-seq: its broadcast does nothing).
 !>
+!> Precision: a solver created single factorizes and solves in single precision (MUMPS's
+!> SMUMPS) on the double-precision matrix and right-hand sides it is given, and returns its
+!> solutions in double precision. It keeps a double-precision instance beside it for the
+!> structure, the controls and the pivot order, which the single one mirrors at each call:
+!> half the factor memory and its traffic in the solves, for factors whose solutions
+!> leave about eps_single times the condition number (docs/theory/linear-solver.md, "Single-
+!> precision factors"): for preconditioning, as the forming loop's GMRES uses them.
+!>
 !> Never call MUMPS on two instances at the same time from threads of one process: MUMPS
 !> keeps state outside its instances (its load module's arrays), so two factorizations
 !> abort and two solves return wrong solutions (docs/theory/linear-solver.md). The
@@ -31,9 +39,12 @@ module ddpy_linear_solver
   public :: solver_create, solver_analyse, solver_factorize, solver_solve, &
             solver_destroy, solver_info, solver_set_control, solver_set_real_control, &
             solver_set_ordering, solver_world, solver_serve, solver_finish, &
-            solver_analyse_elements
+            solver_analyse_elements, solver_precision
 
   include 'mpif.h'
+
+  !> solver_create's precision.
+  integer, parameter, public :: precision_double = 0, precision_single = 1
 
   !> The entries of solver_info's values (MUMPS's INFOG(1), INFOG(2), the ordering used, the
   !> factor entries and their estimate, the estimated memory of the factorization on the
@@ -57,11 +68,12 @@ module ddpy_linear_solver
   integer, parameter, public :: status_bad_handle = -1001, status_not_analysed = -1002, &
                                 status_size_mismatch = -1003, status_no_free_handle = -1004, &
                                 status_finished = -1005, status_not_host = -1006, &
-                                status_not_positive_definite = -1007
+                                status_not_positive_definite = -1007, &
+                                status_bad_precision = -1008
 
   !> Commands rank 0 broadcasts to the ranks > 0: one integer message (command, handle,
-  !> value, value, and a real value's bits in the last two: one type for every broadcast,
-  !> which gfortran's argument checks ask of the implicit MPI interface).
+  !> value, value, and a real value's bits or a third value in the last two: one type for
+  !> every broadcast, which gfortran's argument checks ask of the implicit MPI interface).
   integer, parameter :: message_size = 6
   integer, parameter :: command_stop = 0, command_create = 1, command_analyse = 2, &
                         command_factorize = 3, command_solve = 4, command_destroy = 5, &
@@ -99,14 +111,16 @@ contains
   end subroutine solver_world
 
   !> Rank 0: send a command to the ranks > 0 (nothing to send with one process).
-  subroutine send_command(command, handle, value1, value2, real_value)
+  subroutine send_command(command, handle, value1, value2, real_value, value3)
     integer, intent(in) :: command, handle, value1, value2
     real(wp), intent(in), optional :: real_value
+    integer, intent(in), optional :: value3
     integer :: message(message_size), ierr
     if (world%size < 2) return
     message = 0
     message(1:4) = [command, handle, value1, value2]
     if (present(real_value)) message(5:6) = transfer(real_value, message(5:6))
+    if (present(value3)) message(5) = value3
     call mpi_bcast(message, message_size, mpi_integer, 0, mpi_comm_world, ierr)
   end subroutine send_command
 
@@ -124,7 +138,7 @@ contains
       handle = message(2)
       select case (message(1))
       case (command_create)
-        call init_instance(handle, message(3), message(4), ignored)
+        call init_instance(handle, message(3), message(4), message(5), ignored)
       case (command_analyse)
         call drop_workspace(handle)
         call run_job(handle, 1, ignored)
@@ -171,12 +185,15 @@ contains
   end subroutine end_mpi
 
   !> Start a MUMPS instance. sym: 0 unsymmetric, 1 symmetric positive definite,
-  !> 2 general symmetric. ordering: MUMPS ICNTL(7) (5 = METIS, 7 = automatic).
-  subroutine solver_create(sym, ordering, handle, status)
-    integer, intent(in) :: sym, ordering
+  !> 2 general symmetric. ordering: MUMPS ICNTL(7) (5 = METIS, 7 = automatic). precision:
+  !> precision_double, or precision_single for factors and solves in single precision.
+  subroutine solver_create(sym, ordering, precision, handle, status)
+    integer, intent(in) :: sym, ordering, precision
     integer, intent(out) :: handle, status
     integer :: h
     handle = 0
+    status = status_bad_precision
+    if (precision /= precision_double .and. precision /= precision_single) return
     call start_mpi()
     status = status_finished
     if (world%state /= mpi_running) return
@@ -186,8 +203,8 @@ contains
     if (count([(valid_handle(h), h = 1, max_handles)]) >= max_solvers) return
     call claim_handle(entry_solver, handle)
     if (handle == 0) return
-    call send_command(command_create, handle, sym, ordering)
-    call init_instance(handle, sym, ordering, status)
+    call send_command(command_create, handle, sym, ordering, value3=precision)
+    call init_instance(handle, sym, ordering, precision, status)
     if (status < 0) then
       call free_entry(handle)
       handle = 0
@@ -195,9 +212,9 @@ contains
   end subroutine solver_create
 
   !> The collective MUMPS initialization (job -1) of one handle, on every rank (the ranks
-  !> > 0 take the handle rank 0 chose).
-  subroutine init_instance(handle, sym, ordering, status)
-    integer, intent(in) :: handle, sym, ordering
+  !> > 0 take the handle rank 0 chose); with precision_single, of its single instance too.
+  subroutine init_instance(handle, sym, ordering, precision, status)
+    integer, intent(in) :: handle, sym, ordering, precision
     integer, intent(out) :: status
     integer :: claimed
     claimed = handle
@@ -223,16 +240,82 @@ contains
     end associate
     table(handle)%analysed = .false.
     table(handle)%factorized = .false.
+    if (precision /= precision_single) return
+    allocate(table(handle)%single)
+    associate (sp => table(handle)%single)
+      sp%comm = mpi_comm_world
+      sp%sym = sym
+      sp%par = 1
+      sp%job = -1
+      call smumps(sp)
+      status = sp%infog(1)
+      nullify (sp%irn, sp%jcn, sp%a, sp%rhs, sp%perm_in, sp%eltptr, sp%eltvar, sp%wk_user)
+    end associate
   end subroutine init_instance
 
   !> One collective MUMPS call (job) on a handle; status its INFOG(1), the same on all ranks.
+  !> A single-precision handle's analysis, factorization and solve run on its single
+  !> instance (run_single).
   subroutine run_job(handle, job, status)
     integer, intent(in) :: handle, job
     integer, intent(out) :: status
+    if (allocated(table(handle)%single) .and. job >= 1) then
+      call run_single(handle, job, status)
+      return
+    end if
     table(handle)%mumps%job = job
     call dmumps(table(handle)%mumps)
     status = table(handle)%mumps%infog(1)
   end subroutine run_job
+
+  !> A job (1 analysis, 2 factorization, 3 solve) on the single instance: the controls of
+  !> the double one first; at the analysis its structure and pivot order (pointers to its
+  !> arrays: MUMPS reads the coordinates again when it factorizes) and arrays for the
+  !> values and right-hand side; the values or the right-hand side converted in, the
+  !> solution converted back into the double instance's rhs. Where an array is not
+  !> associated (the ranks > 0 of an assembled, centralized matrix) nothing is converted.
+  subroutine run_single(handle, job, status)
+    integer, intent(in) :: handle, job
+    integer, intent(out) :: status
+    associate (sp => table(handle)%single, id => table(handle)%mumps)
+      sp%icntl = id%icntl
+      sp%cntl = real(id%cntl, kind(sp%cntl))
+      select case (job)
+      case (1)
+        call release_single(handle)
+        sp%n = id%n
+        sp%nnz = id%nnz
+        sp%nelt = id%nelt
+        sp%irn => id%irn
+        sp%jcn => id%jcn
+        sp%eltptr => id%eltptr
+        sp%eltvar => id%eltvar
+        sp%perm_in => id%perm_in
+        if (associated(id%a)) allocate(sp%a(size(id%a)), source=0.0)
+        if (associated(id%rhs)) allocate(sp%rhs(size(id%rhs)), source=0.0)
+      case (2)
+        if (associated(id%a) .and. associated(sp%a)) sp%a = real(id%a, kind(sp%a))
+      case (3)
+        if (associated(id%rhs) .and. associated(sp%rhs)) sp%rhs = real(id%rhs, kind(sp%rhs))
+      end select
+      sp%job = job
+      call smumps(sp)
+      status = sp%infog(1)
+      if (job == 3 .and. status >= 0 .and. associated(id%rhs) .and. associated(sp%rhs)) &
+        id%rhs = real(sp%rhs, wp)
+    end associate
+  end subroutine run_single
+
+  !> Drop the single instance's own arrays and its pointers to the double one's.
+  subroutine release_single(handle)
+    integer, intent(in) :: handle
+    if (.not. allocated(table(handle)%single)) return
+    associate (sp => table(handle)%single)
+      if (associated(sp%a)) deallocate (sp%a)
+      if (associated(sp%rhs)) deallocate (sp%rhs)
+      nullify (sp%irn, sp%jcn, sp%eltptr, sp%eltvar, sp%perm_in, sp%a, sp%rhs)
+    end associate
+  end subroutine release_single
 
   !> Numerical factorization (job 2); on a workspace shortage (INFO -8, -9) the relaxation
   !> is raised and the factorization retried, on every rank alike.
@@ -240,6 +323,21 @@ contains
     integer, intent(in) :: handle
     integer, intent(out) :: status
     integer :: attempt
+    if (allocated(table(handle)%single)) then
+      ! MUMPS's own workspace: the single factors are half the double ones' pages
+      do attempt = 1, 4
+        call run_job(handle, 2, status)
+        if (status /= -8 .and. status /= -9) exit
+        table(handle)%mumps%icntl(14) = 2*table(handle)%mumps%icntl(14)
+      end do
+      table(handle)%factorized = status >= 0
+      if (status >= 0 .and. table(handle)%single%sym == 1 .and. &
+          table(handle)%single%infog(12) > 0) then
+        status = status_not_positive_definite
+        table(handle)%factorized = .false.
+      end if
+      return
+    end if
     associate (id => table(handle)%mumps)
       ! The workspace of the last factorization kept for the next ones (MUMPS's user
       ! workspace, WK_USER): MUMPS frees its own at every factorization and allocates it
@@ -417,6 +515,11 @@ contains
       status = status_bad_handle
       return
     end if
+    if (allocated(table(handle)%single)) then
+      call single_info(handle, values, flops)
+      status = 0
+      return
+    end if
     associate (id => table(handle)%mumps)
       values(info_infog1) = id%infog(1)
       values(info_infog2) = id%infog(2)
@@ -437,6 +540,43 @@ contains
     end associate
     status = 0
   end subroutine solver_info
+
+  !> solver_info's values and flops of a single instance.
+  subroutine single_info(handle, values, flops)
+    integer, intent(in) :: handle
+    integer, intent(out) :: values(solver_info_values)
+    real(wp), intent(out) :: flops(solver_flops)
+    associate (sp => table(handle)%single)
+      values(info_infog1) = sp%infog(1)
+      values(info_infog2) = sp%infog(2)
+      values(info_ordering) = sp%infog(7)
+      values(info_factor_entries) = sp%infog(29)
+      values(info_estimated_factor_entries) = sp%infog(3)
+      values(info_estimated_memory_mb_max) = sp%infog(16)
+      values(info_estimated_memory_mb_total) = sp%infog(17)
+      values(info_memory_mb_max) = sp%infog(18)
+      values(info_memory_mb_total) = sp%infog(19)
+      values(info_memory_used_mb_max) = sp%infog(21)
+      values(info_memory_used_mb_total) = sp%infog(22)
+      values(info_processes) = world%size
+      values(info_negative_pivots) = sp%infog(12)
+      values(info_workspace_given) = sp%lwk_user
+      flops(flops_elimination) = real(sp%rinfog(3), wp)
+      flops(flops_estimate) = real(sp%rinfog(1), wp)
+    end associate
+  end subroutine single_info
+
+  !> Whether a handle's factors are single precision (precision_single) or not
+  !> (precision_double); status_bad_handle for a handle that is not a solver's.
+  subroutine solver_precision(handle, precision, status)
+    integer, intent(in) :: handle
+    integer, intent(out) :: precision, status
+    precision = precision_double
+    status = status_bad_handle
+    if (.not. valid_handle(handle)) return
+    status = 0
+    if (allocated(table(handle)%single)) precision = precision_single
+  end subroutine solver_precision
 
   !> Set MUMPS control ICNTL(index) = value (advanced use: ordering, refinement, memory).
   subroutine solver_set_control(handle, index, value, status)
@@ -508,11 +648,19 @@ contains
   subroutine destroy_instance(handle, status)
     integer, intent(in) :: handle
     integer, intent(out) :: status
+    integer :: single_status
     call release_arrays(handle)
     associate (id => table(handle)%mumps)
       if (associated(id%perm_in)) deallocate (id%perm_in)
     end associate
+    single_status = 0
+    if (allocated(table(handle)%single)) then
+      table(handle)%single%job = -2
+      call smumps(table(handle)%single)
+      single_status = table(handle)%single%infog(1)
+    end if
     call run_job(handle, -2, status)
+    if (status >= 0) status = single_status
     call drop_workspace(handle)
     call free_entry(handle)
   end subroutine destroy_instance
@@ -530,6 +678,7 @@ contains
 
   subroutine release_arrays(handle)
     integer, intent(in) :: handle
+    call release_single(handle)
     associate (id => table(handle)%mumps)
       if (associated(id%irn)) deallocate (id%irn)
       if (associated(id%jcn)) deallocate (id%jcn)

@@ -685,11 +685,13 @@ def test_bad_contact_input_is_refused_before_the_run() -> None:
                     gaps={"holder": ("die", 0.3, (0, 0, 1))})
 
 
-@pytest.mark.parametrize("linear_solver", ["auto", "reuse"])
-def test_springback_of_a_bent_strip_converges_quadratically(linear_solver: str) -> None:
-    # With "reuse" the forming's Newton solves by GMRES on older factors; springback solves exactly
-    # all the same (on the bending paper mesh the older factors made 16 iterations of each step, 3
-    # without them). A steel strip (half of a symmetric one: u_x = 0 at x = 0, u_y = 0 at y = 0, the
+@pytest.mark.parametrize("linear_solver, single", [("auto", 0), ("reuse", 0), ("reuse", 1)])
+def test_springback_of_a_bent_strip_converges_quadratically(linear_solver: str,
+                                                            single: int) -> None:
+    # With "reuse" the forming's Newton solves by GMRES on older factors; springback solves
+    # exactly all the same (on the bending paper mesh the older factors made 16 iterations of
+    # each step, 3 without them); with single-precision factors (``single``) by GMRES on
+    # them to 1e-8. A steel strip (half of a symmetric one: u_x = 0 at x = 0, u_y = 0 at y = 0, the
     # centre line held in z) bent as a cantilever by a tip load well into the plastic range, then
     # released. The unloading is elastic and its tangent exact, so Newton converges quadratically;
     # the residual norm is a poor measure of progress for it (a step that bends the strip right
@@ -698,8 +700,10 @@ def test_springback_of_a_bent_strip_converges_quadratically(linear_solver: str) 
     solid, bent, tip = _bent_strip()
     shapes = {}
     for increments in (1, 5):
-        problem = _released_strip(solid, bent, linear_solver)
+        problem = _released_strip(solid, bent, linear_solver, single)
         result = problem.springback(increments, NewtonSettings(1e-8, 1e-8))
+        # exact solves: with single factors by GMRES on them, else directly
+        assert (result.krylov_iterations > 0) == bool(single)
         assert problem.solid_state.ep.max() == bent.state.ep.max()  # elastic unloading
         shapes[increments] = problem.u
         assert max(result.iterations) <= (8 if increments == 1 else 5), result.iterations
@@ -739,15 +743,17 @@ def _bent_strip() -> tuple[_Solid, SolidResult, np.ndarray]:
     return solid, bent, tip
 
 
-def _released_strip(solid: _Solid, bent: SolidResult, linear_solver: str = "auto"
-                    ) -> FormingProblem:
-    """The bent strip as a forming problem with a tool far away, ready to spring back."""
+def _released_strip(solid: _Solid, bent: SolidResult, linear_solver: str = "auto",
+                    single_factors: int = 0) -> FormingProblem:
+    """The bent strip as a forming problem with a tool far away, ready to spring back
+    (``single_factors``: FormingTuning's)."""
     mesh = solid.mesh
     far = NagataSurface([[-5, -5, -50], [50, -5, -50], [50, 5, -50], [-5, 5, -50]],
                         [[0, 0, 1]] * 4, [[0, 1, 2, 3]])
     problem = FormingProblem(solid, [RigidTool("far", far, mesh.select(z=0.0),
                                                facing=(0, 0, -1))],
-                             linear_solver=linear_solver)
+                             linear_solver=linear_solver,
+                             tuning=FormingTuning(single_factors=single_factors))
     problem.u, problem.solid_state = bent.displacements[-1].copy(), bent.state
     problem.fix(mesh.select(x=0.0), "x")
     problem.fix(mesh.select(y=0.0), "y")

@@ -342,11 +342,13 @@ class FormingTuning:
     - ``search_memory``: 1, the contact search of an increment's evaluations starts from
       what the earlier ones found, where that provably gives the same answer (0: every
       evaluation searches afresh; docs/theory/contact.md, "Search memory");
-    - ``single_factors``: 1, the Jacobian factorized in single precision (MUMPS's SMUMPS:
-      half the factor memory and traffic), every correction then solved by GMRES in double
-      precision on those factors, also right after a factorization and in exact and careful
-      solves (docs/theory/linear-solver.md, "Single-precision factors"); 0: double-precision
-      factors, a factorization's correction solved with them directly.
+    - ``single_factors``: 1, where the loop solves with older factors (linear_solver
+      "reuse", or "auto" from reuse_from unknowns), the Jacobian factorized in single
+      precision (MUMPS's SMUMPS: half the factor memory and traffic), every correction then
+      solved by GMRES in double precision on those factors, also right after a
+      factorization and in exact and careful solves (docs/theory/linear-solver.md,
+      "Single-precision factors"); 0: double-precision factors, a factorization's
+      correction solved with them directly.
     """
 
     touching: float = 1e-6

@@ -515,7 +515,7 @@ class FormingProblem:
                                  & (np.arange(layout.n) < layout.n - layout.holds.size),
                                  last=np.arange(layout.n) >= layout.n - layout.holds.size,
                                  precision=("single" if self.tuning.single_factors
-                                            else "double"))
+                                            and self._reuses(layout) else "double"))
             solver.analyse(layout.n, *layout.entries())
             self._layout, self._solver = layout, solver
             self._factors = Factors(solver.handle)
@@ -664,6 +664,13 @@ class FormingProblem:
                 f"slave node {int(layout.node[worst])} is {depth[worst]:.3g} mm deep, more "
                 f"than the strain limit times the element size ({limits.strain:g} x "
                 f"{self.size:.3g} mm); move the tool out first")
+
+    def _reuses(self, layout: Layout) -> bool:
+        """Whether the Newton loop solves with older factors between factorizations (its
+        exact solves aside): linear_solver "reuse", or "auto" from tuning.reuse_from
+        unknowns. Only then are the factors single precision (tuning.single_factors)."""
+        return self.linear_solver == "reuse" or (
+            self.linear_solver == "auto" and layout.n >= self.tuning.reuse_from)
 
     def _attempt(self, run: _PhaseRun) -> _Attempt:
         """One increment trial of ``run``: its size limited ahead by first touch and the
@@ -1437,8 +1444,7 @@ class FormingProblem:
         that bends: a step that bends it right leaves a large membrane residual of second
         order (docs/theory/contact.md)."""
         tuning = self.tuning
-        reuse = not (careful or exact) and (self.linear_solver == "reuse" or (
-            self.linear_solver == "auto" and layout.n >= tuning.reuse_from))
+        reuse = not (careful or exact) and self._reuses(layout)
         max_iterations = newton.max_iterations
         if careful:
             max_iterations *= tuning.increment.careful_iterations

@@ -29,8 +29,8 @@ __all__ = ["MumpsSolver", "LinearSolverError", "RowStructure", "distinct", "row_
 INT32_MAX = 2**31 - 1
 _SYMMETRY = {"unsymmetric": 0, "spd": 1, "symmetric": 2}
 _ORDERING = {"amd": 0, "amf": 2, "scotch": 3, "pord": 4, "metis": 5, "qamd": 6, "auto": 7}
-_PRECISION = {"double": constant("solver_precision_double"),
-              "single": constant("solver_precision_single")}
+_PRECISION = {"double": constant("precision_double"),
+              "single": constant("precision_single")}
 _MESSAGES = {
     -6: "the matrix is structurally singular",
     -10: "the matrix is numerically singular",

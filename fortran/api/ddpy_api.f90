@@ -216,7 +216,7 @@ contains
     call solver_create(sym, ordering, precision, handle, status)
   end subroutine api_solver_create
 
-  !> The precision of a solver's factors (the constants solver_precision_*).
+  !> The precision of a solver's factors (the constants precision_*).
   subroutine api_solver_precision(handle, precision, status) &
     bind(C, name="ddpy_solver_precision")
     integer(c_int), value, intent(in) :: handle
@@ -456,8 +456,8 @@ contains
     call add('solver_not_host', status_not_host)
     call add('solver_not_positive_definite', status_not_positive_definite)
     call add('solver_bad_precision', status_bad_precision)
-    call add('solver_precision_double', precision_double)
-    call add('solver_precision_single', precision_single)
+    call add('precision_double', precision_double)
+    call add('precision_single', precision_single)
 
   contains
 

@@ -720,29 +720,15 @@ contains
       integer, intent(out) :: status
       real(wp), allocatable :: preconditioned(:), perturbed(:)
       integer(int64) :: t0, t1
-      integer :: count, p, i, k
+      integer :: p, i, k
       logical :: gmres_converged, rows_summed
       status = 0
       rows_summed = .false.
       if (newton%reuse .and. factored /= 0 .and. reuse_next /= 0) then
-        allocate(preconditioned(n))
-        call system_clock(t0)
-        if (have_hint) then
-          preconditioned = s%simplified
-        else
-          call mumps_solve(-s%residual, preconditioned, status)
-          if (status < 0) return
-        end if
-        call sum_entries(s%values, .false.)
-        rows_summed = .true.
-        call gmres(n, rows%row_start, size(rows%col), rows%col, summed, weight, solver, &
-                   -s%residual, preconditioned, forcing, newton%krylov_max, delta, count, &
-                   gmres_converged, status)
-        call system_clock(t1)
-        report%solve_time = report%solve_time + real(t1 - t0, wp)/real(clock_rate, wp)
+        call krylov(s, have_hint, forcing, newton%krylov_max, preconditioned, &
+                    gmres_converged, status)
         if (status < 0) return
-        report%krylov_iterations = report%krylov_iterations + count
-        reuse_next = merge(1, 0, count <= newton%krylov_keep)
+        rows_summed = .true.
         if (gmres_converged) then
           step_size = weighted_norm(preconditioned)
           return
@@ -784,25 +770,10 @@ contains
         ! The fresh single-precision factors solve only to about eps_single times the
         ! condition number: GMRES on them, to the loop's tolerance or, where the loop
         ! solves exactly, to single_exact_tolerance.
-        call system_clock(t0)
-        if (.not. allocated(preconditioned)) allocate(preconditioned(n))
-        call mumps_solve(-s%residual, preconditioned, status)
+        call krylov(s, .false., merge(forcing, single_exact_tolerance, newton%reuse), &
+                    merge(newton%krylov_max, single_exact_iterations, newton%reuse), &
+                    preconditioned, gmres_converged, status)
         if (status < 0) return
-        call sum_entries(s%values, .false.)
-        if (newton%reuse) then
-          call gmres(n, rows%row_start, size(rows%col), rows%col, summed, weight, solver, &
-                     -s%residual, preconditioned, forcing, newton%krylov_max, delta, count, &
-                     gmres_converged, status)
-        else
-          call gmres(n, rows%row_start, size(rows%col), rows%col, summed, weight, solver, &
-                     -s%residual, preconditioned, single_exact_tolerance, &
-                     single_exact_iterations, delta, count, gmres_converged, status)
-        end if
-        call system_clock(t1)
-        report%solve_time = report%solve_time + real(t1 - t0, wp)/real(clock_rate, wp)
-        if (status < 0) return
-        report%krylov_iterations = report%krylov_iterations + count
-        reuse_next = merge(1, 0, count <= newton%krylov_keep)
         step_size = weighted_norm(preconditioned)
         return
       end if
@@ -810,6 +781,41 @@ contains
       if (status < 0) return
       step_size = weighted_norm(delta)
     end subroutine direction
+
+    !> GMRES (into delta) on the present factors for the Jacobian and residual of slot s, to
+    !> the relative tolerance in at most ``most`` iterations, from the simplified correction
+    !> M^-1 r (into preconditioned: the line search's, s%simplified, where ``hinted``, else
+    !> solved here); its time counted as solves, its iterations counted, and whether the
+    !> same factors are tried again (reuse_next).
+    subroutine krylov(s, hinted, tolerance, most, preconditioned, converged, status)
+      type(evaluation), intent(in) :: s
+      logical, intent(in) :: hinted
+      real(wp), intent(in) :: tolerance
+      integer, intent(in) :: most
+      real(wp), allocatable, intent(inout) :: preconditioned(:)
+      logical, intent(out) :: converged
+      integer, intent(out) :: status
+      integer(int64) :: t0, t1
+      integer :: count
+      converged = .false.
+      if (.not. allocated(preconditioned)) allocate(preconditioned(n))
+      call system_clock(t0)
+      if (hinted) then
+        preconditioned = s%simplified
+      else
+        call mumps_solve(-s%residual, preconditioned, status)
+        if (status < 0) return
+      end if
+      call sum_entries(s%values, .false.)
+      call gmres(n, rows%row_start, size(rows%col), rows%col, summed, weight, solver, &
+                 -s%residual, preconditioned, tolerance, most, delta, count, converged, &
+                 status)
+      call system_clock(t1)
+      report%solve_time = report%solve_time + real(t1 - t0, wp)/real(clock_rate, wp)
+      if (status < 0) return
+      report%krylov_iterations = report%krylov_iterations + count
+      reuse_next = merge(1, 0, count <= newton%krylov_keep)
+    end subroutine krylov
 
     !> summed = the coordinate values summed into the entries of the rows (what GMRES
     !> multiplies with), or, for_solver, into those the solver was analysed with and

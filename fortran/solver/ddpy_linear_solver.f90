@@ -516,55 +516,41 @@ contains
       return
     end if
     if (allocated(table(handle)%single)) then
-      call single_info(handle, values, flops)
-      status = 0
-      return
+      associate (sp => table(handle)%single)
+        call info_of(sp%infog, real(sp%rinfog, wp), sp%lwk_user, values, flops)
+      end associate
+    else
+      associate (id => table(handle)%mumps)
+        call info_of(id%infog, id%rinfog, id%lwk_user, values, flops)
+      end associate
     end if
-    associate (id => table(handle)%mumps)
-      values(info_infog1) = id%infog(1)
-      values(info_infog2) = id%infog(2)
-      values(info_ordering) = id%infog(7)
-      values(info_factor_entries) = id%infog(29)
-      values(info_estimated_factor_entries) = id%infog(3)
-      values(info_estimated_memory_mb_max) = id%infog(16)
-      values(info_estimated_memory_mb_total) = id%infog(17)
-      values(info_memory_mb_max) = id%infog(18)
-      values(info_memory_mb_total) = id%infog(19)
-      values(info_memory_used_mb_max) = id%infog(21)
-      values(info_memory_used_mb_total) = id%infog(22)
-      values(info_processes) = world%size
-      values(info_negative_pivots) = id%infog(12)
-      values(info_workspace_given) = id%lwk_user
-      flops(flops_elimination) = id%rinfog(3)
-      flops(flops_estimate) = id%rinfog(1)
-    end associate
     status = 0
   end subroutine solver_info
 
-  !> solver_info's values and flops of a single instance.
-  subroutine single_info(handle, values, flops)
-    integer, intent(in) :: handle
+  !> solver_info's values and flops from an instance's INFOG, RINFOG and LWK_USER (either
+  !> precision's).
+  subroutine info_of(infog, rinfog, lwk_user, values, flops)
+    integer, intent(in) :: infog(:), lwk_user
+    real(wp), intent(in) :: rinfog(:)
     integer, intent(out) :: values(solver_info_values)
     real(wp), intent(out) :: flops(solver_flops)
-    associate (sp => table(handle)%single)
-      values(info_infog1) = sp%infog(1)
-      values(info_infog2) = sp%infog(2)
-      values(info_ordering) = sp%infog(7)
-      values(info_factor_entries) = sp%infog(29)
-      values(info_estimated_factor_entries) = sp%infog(3)
-      values(info_estimated_memory_mb_max) = sp%infog(16)
-      values(info_estimated_memory_mb_total) = sp%infog(17)
-      values(info_memory_mb_max) = sp%infog(18)
-      values(info_memory_mb_total) = sp%infog(19)
-      values(info_memory_used_mb_max) = sp%infog(21)
-      values(info_memory_used_mb_total) = sp%infog(22)
-      values(info_processes) = world%size
-      values(info_negative_pivots) = sp%infog(12)
-      values(info_workspace_given) = sp%lwk_user
-      flops(flops_elimination) = real(sp%rinfog(3), wp)
-      flops(flops_estimate) = real(sp%rinfog(1), wp)
-    end associate
-  end subroutine single_info
+    values(info_infog1) = infog(1)
+    values(info_infog2) = infog(2)
+    values(info_ordering) = infog(7)
+    values(info_factor_entries) = infog(29)
+    values(info_estimated_factor_entries) = infog(3)
+    values(info_estimated_memory_mb_max) = infog(16)
+    values(info_estimated_memory_mb_total) = infog(17)
+    values(info_memory_mb_max) = infog(18)
+    values(info_memory_mb_total) = infog(19)
+    values(info_memory_used_mb_max) = infog(21)
+    values(info_memory_used_mb_total) = infog(22)
+    values(info_processes) = world%size
+    values(info_negative_pivots) = infog(12)
+    values(info_workspace_given) = lwk_user
+    flops(flops_elimination) = rinfog(3)
+    flops(flops_estimate) = rinfog(1)
+  end subroutine info_of
 
   !> Whether a handle's factors are single precision (precision_single) or not
   !> (precision_double); status_bad_handle for a handle that is not a solver's.

@@ -290,9 +290,10 @@ def run_all(stop_after: int | None, ccx_limit: float | None) -> dict[str, Any]:
     """Write the decks, run the ccx decks beside the ddpy runs; the session's numbers."""
     paths = deck.prepare(WORK)
     ccx = shutil.which("ccx")
-    described = deck.describe(paths["facets_coarse"])
-    described["faces"] = {model: deck.describe(paths[model])["faces"]
-                          for model in deck.CCX_MODELS}
+    # the deck as the coarse facet case states it, with each facet model's faces
+    described = {model: deck.describe(paths[model]) for model in deck.CCX_MODELS}
+    described = {**described["facets_coarse"],
+                 "faces": {model: d["faces"] for model, d in described.items()}}
     session = {"date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
                "code": code_version(), "cores": cores(), "cpu": cpu_model(),
                "load_before": round(os.getloadavg()[0], 2),
@@ -502,15 +503,17 @@ def report(data: dict[str, Any]) -> str:
         met = "met" if cpu >= GOAL else "not met"
         if not complete and not formed:
             met = "not judged (CalculiX did not complete its forming)"
-        scope = ("the whole runs, forming and springback" if complete else
-                 f"to the {c['stroke'][-1]:.2f} mm of stroke CalculiX reached "
-                 f"({c['status']}; ddpy's CPU to there from its increments' times)")
-        if formed and not complete:
+        if complete:
+            scope = "the whole runs, forming and springback"
+        elif formed:
             scope = ("the forming, the whole stroke: CalculiX's springback failed "
                      f"({c['status']}), its CPU includes the failed attempts "
                      f"({c['all_iterations'] - c['iterations']} iterations of "
                      f"{c['all_iterations']} were attempts that were cut back); ddpy's CPU to "
                      "the end of its forming from its increments' times")
+        else:
+            scope = (f"to the {c['stroke'][-1]:.2f} mm of stroke CalculiX reached "
+                     f"({c['status']}; ddpy's CPU to there from its increments' times)")
         verdict = (f"**Goal {met}**: with Nagata tools ddpy used {cpu:.1f} times less CPU "
                    f"than CalculiX with {c['label'].split(', ')[1]} ({scope}); the goal is at "
                    f"least {GOAL:g} times. The reference is CalculiX's run on the fine "

@@ -314,7 +314,7 @@ class FormingTuning:
       rounding of the positions;
     - ``reuse_from``: unknowns from which linear_solver "auto" solves with older factors
       (GMRES) between factorizations: below, a factorization costs little more than a few
-      solves;
+      solves (docs/theory/linear-solver.md, "Where older factors pay");
     - ``krylov_loose``, ``krylov_tight``: bounds of GMRES's relative tolerance on the older
       factors (of the preconditioned, weighted residual: the correction's relative error);
       the loose bound holds where the residual is above a tenth of the force scale, in
@@ -352,7 +352,7 @@ class FormingTuning:
     """
 
     touching: float = 1e-6
-    reuse_from: int = 20_000
+    reuse_from: int = 2_000
     krylov_loose: float = 0.05
     krylov_tight: float = 1e-10
     krylov_max: int = 12

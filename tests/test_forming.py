@@ -725,6 +725,26 @@ def test_springback_of_a_bent_strip_converges_quadratically(linear_solver: str,
     assert springback.min() > 0.1
 
 
+def test_the_error_the_convergence_test_judges_bounds_the_true_error() -> None:
+    # The bent strip released in one step, the residual test loose (0.1) so that the
+    # displacement test decides: the accepted iterate's distance from the converged shape
+    # (the same step at 1e-10) is within the error the test estimated from its last two
+    # corrections, and that within the tolerance; the estimate is never above the last
+    # correction, and at 1e-2 it is what accepted an iterate whose correction was above.
+    solid, bent, _ = _bent_strip()
+    reference = _released_strip(solid, bent)
+    reference.springback(1, NewtonSettings(1e-10, 1e-10))
+    motion = np.linalg.norm(reference.u - bent.displacements[-1])
+    for tolerance in (1e-2, 1e-4):
+        problem = _released_strip(solid, bent)
+        last = problem.springback(1, NewtonSettings(0.1, tolerance)).convergence[-1][-1]
+        true_error = np.linalg.norm(problem.u - reference.u) / motion
+        assert true_error <= last.error <= tolerance, (true_error, last)
+        assert last.error <= last.correction
+        if tolerance == 1e-2:
+            assert last.correction > tolerance, last
+
+
 def _bent_strip() -> tuple[_Solid, SolidResult, np.ndarray]:
     """A steel strip (half of a symmetric one: u_x = 0 at x = 0, u_y = 0 at y = 0, the centre
     line held in z) bent as a cantilever by a tip load well into the plastic range: the solid,
@@ -763,25 +783,28 @@ def _released_strip(solid: _Solid, bent: SolidResult, linear_solver: str = "auto
 
 def test_a_springback_step_that_fails_is_halved() -> None:
     # The strip above released in one step needs up to 8 iterations (the test above): allowed 4,
-    # the step fails and is halved until its pieces converge; the steps grow back after each
-    # one, and the shape is that of 5 equal steps (elastic unloading). With no halving allowed
-    # the same step stops the springback, with its reason.
+    # the step fails and is halved until its pieces converge (twice: a quarter of the release
+    # takes 4); the steps grow back after each one, and the shape is that of 5 equal steps
+    # (elastic unloading). With no halving allowed the same step stops the springback, with
+    # its reason.
     solid, bent, _ = _bent_strip()
     reference = _released_strip(solid, bent)
     reference.springback(5, NewtonSettings(1e-8, 1e-8))
     problem = _released_strip(solid, bent)
-    # (3 halvings allowed: the step that converges is the smallest, and grows from there.)
-    result = problem.springback(1, NewtonSettings(1e-8, 1e-8, max_iterations=4), max_cuts=3)
-    assert result.cuts >= 3 and result.sizes[0] == 0.125
+    # (2 halvings allowed: the step that converges is the smallest, and grows from there.)
+    result = problem.springback(1, NewtonSettings(1e-8, 1e-8, max_iterations=4), max_cuts=2)
+    assert result.cuts == 2 and result.sizes[0] == 0.25
     assert result.factors[-1] == 1.0
     np.testing.assert_allclose(np.diff(result.factors, prepend=0.0), result.sizes)
     assert max(result.sizes[1:]) > min(result.sizes)  # grown back after the halvings
     np.testing.assert_allclose(problem.u, reference.u, atol=1e-6)
-    # The cut is the deck's cutback, the growth the increment policy's regrow (2): a
-    # quarter's cut lands on 1/16 where halving landed on 1/8, and grows by doubling.
-    quarter = _released_strip(solid, bent).springback(
-        1, NewtonSettings(1e-8, 1e-8, max_iterations=4, cutback=0.25), max_cuts=4)
-    np.testing.assert_array_equal(quarter.sizes, [0.0625, 0.125, 0.25, 0.5, 0.0625])
+    # The cut is the deck's cutback, the growth the increment policy's regrow (2): an
+    # eighth's cut lands on 1/8 in one cut where halving took two to 1/4, and grows by
+    # doubling.
+    eighth = _released_strip(solid, bent).springback(
+        1, NewtonSettings(1e-8, 1e-8, max_iterations=4, cutback=0.125), max_cuts=4)
+    assert eighth.cuts == 1
+    np.testing.assert_array_equal(eighth.sizes, [0.125, 0.25, 0.5, 0.125])
     with pytest.raises(FormingError, match="springback step to 1 of the release failed"):
         _released_strip(solid, bent).springback(1, NewtonSettings(1e-8, 1e-8, max_iterations=4),
                                          max_cuts=0)

@@ -240,7 +240,12 @@ def test_the_results_record_the_holders_force_and_position_per_increment(
         history = reader.history()
         holder = list(reader.tools).index("holder")
     draw = history["phase"] == 0
-    np.testing.assert_allclose(history["tool_force"][draw, holder, 2], 200.0, rtol=1e-3)
+    # The holder's balance is one row of the residual: within the Newton tolerance (1e-3)
+    # of the force scale, the norm of all pairs' forces (the punch's and the die's too),
+    # which the sum of the tools' forces exceeds.
+    tools = np.linalg.norm(history["tool_force"][draw], axis=2).sum(axis=1)
+    error = np.abs(history["tool_force"][draw, holder, 2] - 200.0)
+    assert np.all(error <= 1e-3 * tools), (error / tools).max()
     heights = history["tool_displacement"][draw, holder, 2]
     assert np.ptp(heights) > 0.0
     summary = read_case(case).summary()

@@ -129,17 +129,18 @@ def test_factorization_and_solve_times_apart(tmp_path: Path, mesh) -> None:
 
 
 def test_iteration_rows_keep_step_and_switches(tmp_path: Path, mesh) -> None:
-    """An iteration row holds its step and what switched (6 columns given), -1 for them
-    where only the residuals are given, and a file written before those columns existed
-    gets them, -1 for its rows, when a run continues in it."""
+    """An iteration row holds its step, what switched and the estimated error (7 columns
+    given), -1 for them where only the residuals are given, and a file written before those
+    columns existed gets them, -1 for its rows, when a run continues in it."""
     path = tmp_path / "run.h5"
-    full = [[1.0, np.inf, 0.0, 0, 0, 0], [1e-3, 1e-2, 0.5, 12, 3, 40], [1e-6, 1e-5, 1.0, 0, 0, 2]]
+    full = [[1.0, np.inf, 0.0, 0, 0, 0, np.inf], [1e-3, 1e-2, 0.5, 12, 3, 40, 1e-2],
+            [1e-6, 1e-5, 1.0, 0, 0, 2, 1e-7]]
     with ResultsWriter(path, mesh, TOOLS) as out:
         for history in (full, [row[:2] for row in full]):
             out.increment(phase=0, step=0.1, travel=0.1, tool_displacement=np.zeros((2, 3)),
                           tool_force=np.zeros((2, 3)), iterations=2, residual_force=1e-6,
                           residual_displacement=1e-5, residual_history=history)
-        with pytest.raises(ValueError, match="2 or 6 columns"):
+        with pytest.raises(ValueError, match="2 or 7 columns"):
             out.increment(phase=0, step=0.1, travel=0.1, tool_displacement=np.zeros((2, 3)),
                           tool_force=np.zeros((2, 3)), iterations=2, residual_force=1e-6,
                           residual_displacement=1e-5, residual_history=[[1.0, 1.0, 1.0]])
@@ -149,9 +150,11 @@ def test_iteration_rows_keep_step_and_switches(tmp_path: Path, mesh) -> None:
     np.testing.assert_array_equal(it["points_switched"], [0, 12, 0, -1, -1, -1])
     np.testing.assert_array_equal(it["pairs_switched"], [0, 3, 0, -1, -1, -1])
     np.testing.assert_array_equal(it["yield_switched"], [0, 40, 2, -1, -1, -1])
+    np.testing.assert_array_equal(it["displacement_error"], [np.inf, 1e-2, 1e-7, -1, -1, -1])
 
     with h5py.File(path, "r+") as f:  # as an older version wrote it
-        for name in ("step", "points_switched", "pairs_switched", "yield_switched"):
+        for name in ("step", "points_switched", "pairs_switched", "yield_switched",
+                     "displacement_error"):
             del f[f"iterations/{name}"]
     with ResultsWriter.reopen(path, increments=1, iterations=3, frames=1) as out:
         out.increment(phase=0, step=0.1, travel=0.2, tool_displacement=np.zeros((2, 3)),
@@ -162,6 +165,7 @@ def test_iteration_rows_keep_step_and_switches(tmp_path: Path, mesh) -> None:
     np.testing.assert_array_equal(it["increment"], [1, 1, 1, 2, 2, 2])
     np.testing.assert_array_equal(it["yield_switched"], [-1, -1, -1, 0, 40, 2])
     np.testing.assert_array_equal(it["step"], [-1, -1, -1, 0.0, 0.5, 1.0])
+    np.testing.assert_array_equal(it["displacement_error"], [-1, -1, -1, np.inf, 1e-2, 1e-7])
 
 
 def test_xdmf_read_by_meshio(tmp_path: Path, mesh) -> None:

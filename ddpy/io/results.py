@@ -92,7 +92,8 @@ _SCALARS: dict[str, tuple[str, str, str]] = {
     "evaluations": ("i4", "1", "residual and tangent evaluations of the increment (line-search "
                     "trials and rejected trials included)"),
     "residual_force": ("f8", "1", "relative residual force at convergence"),
-    "residual_displacement": ("f8", "1", "relative displacement correction at convergence"),
+    "residual_displacement": ("f8", "1", "relative displacement error at convergence, as the "
+                              "convergence test estimates it"),
     "rmin": ("f8", "1", "r_min factor applied to the trial increment"),
     "limit": ("i1", "1", "what limited the increment (attribute 'codes')"),
     "time_assembly": ("f8", "s", "wall time in assembly (internal forces, tangent)"),
@@ -116,6 +117,9 @@ _ITERATION_COLUMNS: dict[str, tuple[str, str, str]] = {
                        "the previous iterate"),
     "yield_switched": ("i4", "1", "integration points of the blank that turned from elastic "
                        "to plastic or back since the previous iterate"),
+    "displacement_error": ("f8", "1", "relative error of the iterate as the convergence test "
+                           "estimates it: the correction, or less once whole Newton steps "
+                           "contract"),
 }
 #: The columns of an increment's residual history, in its order (ddpy.model.newton.Iteration).
 _HISTORY_COLUMNS = list(_ITERATION_COLUMNS)[2:]
@@ -538,10 +542,11 @@ class ResultsWriter:
                   krylov_iterations: int = 0, newton_iterations: int = 0,
                   evaluations: int = 0, penetration: ArrayLike | None = None) -> int:
         """Append one converged increment; return its number (from 1). ``tool_displacement``
-        and ``tool_force`` are (tools, 3); ``residual_history`` (iterations, 2 or 6) holds the
+        and ``tool_force`` are (tools, 3); ``residual_history`` (iterations, 2 or 7) holds the
         force and displacement residuals of each Newton iteration, and may add the step's
-        length and the points switched, pairs switched and yield points switched
-        (ddpy.model.newton.Iteration; else those columns are written as -1);
+        length, the points switched, pairs switched and yield points switched and the
+        estimated displacement error (ddpy.model.newton.Iteration; else those columns are
+        written as -1);
         ``penetration`` (tools,) the deepest penetration of the blank into each tool
         (mm)."""
         t = len(self.tools)

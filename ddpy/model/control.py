@@ -145,7 +145,8 @@ DEFAULT_PENETRATION = 0.01
 class NewtonSettings:
     """Convergence of the Newton loop (deck ``newton_force``, ``newton_displacement``,
     ``max_iterations``, ``cutback``, ``penetration_limit``): converged when the residual is
-    below ``force_tolerance`` times the force scale and the correction below
+    below ``force_tolerance`` times the force scale and the iterate's error (the last
+    correction, or less once whole Newton steps contract) below
     ``displacement_tolerance`` times the increment's displacement, scaled up to that of an
     increment of the phase's largest size when it is smaller (cut or limited: a scale that
     does not vanish, docs/theory/contact.md, "The convergence test"); an increment that has not

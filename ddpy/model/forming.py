@@ -543,10 +543,10 @@ class FormingProblem:
         forces vanish). ``max_increment`` is the largest travel of the leading (longest
         moving) tool per increment, in mm. ``newton``: convergence (default
         NewtonSettings()): the free residual and the contact law below its force tolerance
-        times the force scale and the correction below its displacement tolerance times the
-        increment's motion, scaled up to an increment of size ``max_increment`` when it is
-        smaller (a cut does not tighten the test); an increment that fails is cut by its
-        ``cutback`` and retried, until a
+        times the force scale and the iterate's estimated error below its displacement
+        tolerance times the increment's motion, scaled up to an increment of size
+        ``max_increment`` when it is smaller (a cut does not tighten the test); an increment
+        that fails is cut by its ``cutback`` and retried, until a
         cut would go below ``limits.min_fraction``. ``limits``: the r_min control (default
         IncrementLimits(); the policy is ddpy.model.control.IncrementController's). Both
         defaults are those of a deck that sets nothing. ``gaps``:

@@ -46,16 +46,19 @@ PARTS = ("assembly", "contact", "factorization", "solve")
 #: The columns of the core's iteration history.
 _HISTORY = {name: constant(f"history_{name}_offset")
             for name in ("residual", "relative_residual", "relative_correction", "step",
-                         "points_switched", "pairs_switched", "yield_switched")}
+                         "points_switched", "pairs_switched", "yield_switched",
+                         "relative_error")}
 
 
 class Iteration(NamedTuple):
-    """One Newton iteration of an increment: what convergence is judged on (the residual
-    over the force scale, the correction over the increment's motion, inf before the
-    first), the length of the step that led to it (0 at the start), and what changed since
-    the previous iterate (0 at the start): the contact points whose pressure turned on or
-    off, the pairs whose contact state changed, and the blank's integration points that
-    turned from elastic to plastic or back."""
+    """One Newton iteration of an increment: the residual over the force scale, the
+    correction that led to the iterate over the increment's motion (inf before the first),
+    the length of its step (0 at the start), what changed since the previous iterate (0 at
+    the start: the contact points whose pressure turned on or off, the pairs whose contact
+    state changed, the blank's integration points that turned from elastic to plastic or
+    back), and the iterate's error over the motion as the convergence test estimates it
+    (the correction, or less once whole Newton steps contract; docs/theory/contact.md,
+    "The convergence test"). Convergence is judged on the residual and the error."""
 
     residual: float
     correction: float
@@ -63,6 +66,7 @@ class Iteration(NamedTuple):
     points_switched: int = 0
     pairs_switched: int = 0
     yield_switched: int = 0
+    error: float = float("nan")
 
 
 def _join(parts: Sequence[NDArray], dtype: type) -> NDArray:
@@ -564,7 +568,8 @@ def increment(solid: Solid, layout: Layout, factors: Factors, state: SolidState,
                                       float(row[_HISTORY["step"]]),
                                       int(row[_HISTORY["points_switched"]]),
                                       int(row[_HISTORY["pairs_switched"]]),
-                                      int(row[_HISTORY["yield_switched"]]))
+                                      int(row[_HISTORY["yield_switched"]]),
+                                      float(row[_HISTORY["relative_error"]]))
                             for row in history]}
     if outcome == CONVERGED:
         return _converged(solid, layout, problem, work)

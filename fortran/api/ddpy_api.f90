@@ -48,7 +48,7 @@ module ddpy_api
                                   outcome_not_finite, outcome_solver, outcome_stalled, &
                                   outcome_hold, hold_no_stiffness, hold_too_far, &
                                   history_width, history_residual, history_relative_residual, &
-                                  history_relative_correction, history_step, &
+                                  history_relative_correction, history_step, history_relative_error, &
                                   history_points_switched, history_pairs_switched, &
                                   history_yield_switched
   !$ use omp_lib, only: omp_get_max_threads, omp_set_num_threads
@@ -423,6 +423,7 @@ contains
     call add('history_points_switched_offset', history_points_switched - 1)
     call add('history_pairs_switched_offset', history_pairs_switched - 1)
     call add('history_yield_switched_offset', history_yield_switched - 1)
+    call add('history_relative_error_offset', history_relative_error - 1)
     call add('max_handles', max_handles)
     call add('refusal_handle', refusal_handle)
     call add('refusal_size', refusal_size)

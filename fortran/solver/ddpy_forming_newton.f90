@@ -24,7 +24,7 @@ module ddpy_forming_newton
                                   outcome_not_finite, outcome_solver, outcome_stalled, &
                                   outcome_hold, hold_no_stiffness, hold_too_far, &
                                   history_width, history_residual, history_relative_residual, &
-                                  history_relative_correction, history_step, &
+                                  history_relative_correction, history_step, history_relative_error, &
                                   history_points_switched, history_pairs_switched, &
                                   history_yield_switched
   use ddpy_forming, only: forming_contact
@@ -149,7 +149,12 @@ contains
     logical :: retouched
     real(wp) :: tol_force, tol_disp, yield_tol, floor, norm, scale, moved, correction, rel, &
                 forcing, alpha, step_size, du_norm, landing, t_norm, t_scale, t_moved, &
-                alpha_fallback, whole_step, size_ratio, element_size
+                alpha_fallback, whole_step, size_ratio, element_size, correction_before, &
+                infinity
+    ! Whether the step that led to the iterate (correction) and the one before it
+    ! (correction_before) were whole Newton steps: the error estimate (estimated_error)
+    ! needs both.
+    logical :: whole, whole_before
     integer :: max_iterations, cur, trial, fallback, buffer, iteration, ls, n, status, &
                element, last_status, last_element, hold_after, hold_count
     logical :: converged, have_previous, have_hint, accepted, t_converged, moving, &
@@ -243,7 +248,11 @@ contains
       slot(cur)%values(k_slots + 1:k_slots + n_coupling) = layout%coupling
       slot(cur)%shift = 0.0_wp
     end do
-    correction = ieee_value(1.0_wp, ieee_positive_inf)
+    infinity = ieee_value(1.0_wp, ieee_positive_inf)
+    correction = infinity
+    correction_before = infinity
+    whole = .false.
+    whole_before = .false.
     alpha = 0.0_wp
     have_hint = .false.
     have_previous = .false.
@@ -332,6 +341,7 @@ contains
       end do
       if (retouched) then
         retouches = retouches + 1
+        whole = .false.  ! the iterate moved without a Newton step
         alpha = 0.0_wp
         cycle
       end if
@@ -393,7 +403,8 @@ contains
             exit
           end if
           if (alpha == 1.0_wp) then
-            call measure(slot(trial), du_norm, t_norm, t_scale, t_moved, t_converged)
+            call measure(slot(trial), estimated_error(du_norm, merge(correction, infinity, &
+                         whole)), t_norm, t_scale, t_moved, t_converged)
             if (t_converged) then  ! converged: the next iteration returns it
               accepted = .true.
               exit
@@ -454,6 +465,9 @@ contains
         return
       end if
       cur = trial
+      correction_before = correction
+      whole_before = whole
+      whole = alpha == 1.0_wp
       correction = alpha*du_norm
       do k = 1, nhold
         if (abs(slot(cur)%shift(k)) > limits%reach) then
@@ -652,10 +666,14 @@ contains
     !> same previous iterate.
     subroutine record(s)
       type(evaluation), intent(in) :: s
-      call measure(s, correction, norm, scale, moved, converged)
+      real(wp) :: error
+      error = estimated_error(correction, merge(correction_before, infinity, &
+                                                whole .and. whole_before))
+      call measure(s, error, norm, scale, moved, converged)
       report%history(history_residual, report%niter) = norm
       report%history(history_relative_residual, report%niter) = norm/scale
       report%history(history_relative_correction, report%niter) = correction/moved
+      report%history(history_relative_error, report%niter) = error/moved
       if (report%niter > sets_niter) then
         if (sets_niter > 0) then
           on_before = on_last
@@ -676,23 +694,23 @@ contains
         real(count(yield_last .neqv. yield_before), wp)
     end subroutine record
 
-    !> Residual norm, force scale, motion, and whether converged with this correction:
-    !> the residual below tol_force times the force scale and the correction below
-    !> tol_disp times the motion. The motion is the increment's, |u - u_n|, scaled up to an
+    !> Residual norm, force scale, motion, and whether converged with this error of the
+    !> iterate (estimated_error): the residual below tol_force times the force scale and
+    !> the error below tol_disp times the motion. The motion is the increment's, |u - u_n|, scaled up to an
     !> increment of the phase's largest size (size_ratio): a scale that does not vanish as
     !> an increment is cut. Measured against its own motion, an increment cut to 1/500
     !> was held to 500 times the accuracy of a whole one, and examples/strip_draw stopped
     !> with its residual at 1.6e-6 of the force scale and a correction of 1.6e-7 mm
     !> (docs/theory/contact.md, "The convergence test").
-    subroutine measure(s, correction, norm, scale, moved, converged)
+    subroutine measure(s, error, norm, scale, moved, converged)
       type(evaluation), intent(in) :: s
-      real(wp), intent(in) :: correction
+      real(wp), intent(in) :: error
       real(wp), intent(out) :: norm, scale, moved
       logical, intent(out) :: converged
       norm = sqrt(dot_product(s%residual, s%residual))
       scale = max(sqrt(sum(s%force**2)), sqrt(sum(s%fint**2, mask=dofs%fixed)), floor)
       moved = max(size_ratio*sqrt(sum((s%u - u_n)**2)), 1.0e-9_wp*element_size)
-      converged = norm <= tol_force*scale .and. correction <= tol_disp*moved .and. &
+      converged = norm <= tol_force*scale .and. error <= tol_disp*moved .and. &
                   .not. s%moving
     end subroutine measure
 
@@ -982,6 +1000,21 @@ contains
     end subroutine finish
 
   end subroutine forming_increment
+
+  !> The error of a Newton iterate, estimated from the length of the step that led to it
+  !> (last) and of the step before (before; +inf unless both were whole Newton steps):
+  !> while the corrections contract at rho = last / before < 1/2, those still to come sum
+  !> to at most about rho / (1 - rho) last; else last itself, the plain test. So an
+  !> iterate one whole step past a contracting one is judged by what remains, not by the
+  !> step already taken (docs/theory/contact.md, "The convergence test").
+  pure real(wp) function estimated_error(last, before)
+    real(wp), intent(in) :: last, before
+    real(wp) :: rho
+    estimated_error = last
+    if (.not. (before > 0.0_wp .and. before < huge(before))) return
+    rho = last/before
+    if (rho < 0.5_wp) estimated_error = last*rho/(1.0_wp - rho)
+  end function estimated_error
 
   !> The equations of the force-controlled tools (see forming_increment) from the pairs'
   !> forces (lambda; F(x) for an eliminated Gauss-point pair, lambda + lumped = lambda +

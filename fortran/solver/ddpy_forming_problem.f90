@@ -31,12 +31,13 @@ module ddpy_forming_problem
   !> changed since the previous iterate (0 at the start): the contact points whose
   !> pressure turned on or off, the pairs whose contact state (open, stick, slip) changed,
   !> and the blank's integration points that turned from elastic to plastic or back
-  !> (plastic: a plastic strain above the increment's start).
-  integer, parameter, public :: history_width = 7, history_residual = 1, &
+  !> (plastic: a plastic strain above the increment's start); last, the relative error of
+  !> the iterate that the convergence test judges (ddpy_forming_newton's estimated_error).
+  integer, parameter, public :: history_width = 8, history_residual = 1, &
                                 history_relative_residual = 2, &
                                 history_relative_correction = 3, history_step = 4, &
                                 history_points_switched = 5, history_pairs_switched = 6, &
-                                history_yield_switched = 7
+                                history_yield_switched = 7, history_relative_error = 8
   !> Why a force-controlled tool lost the blank (increment_report%hold_reason): nothing
   !> holds it along its axis, or it moved farther than the search's reach in the increment.
   integer, parameter, public :: hold_no_stiffness = 1, hold_too_far = 2

@@ -48,9 +48,9 @@ module ddpy_api
                                   outcome_not_finite, outcome_solver, outcome_stalled, &
                                   outcome_hold, hold_no_stiffness, hold_too_far, &
                                   history_width, history_residual, history_relative_residual, &
-                                  history_relative_correction, history_step, history_relative_error, &
+                                  history_relative_correction, history_step, &
                                   history_points_switched, history_pairs_switched, &
-                                  history_yield_switched
+                                  history_yield_switched, history_relative_error
   !$ use omp_lib, only: omp_get_max_threads, omp_set_num_threads
   implicit none
   private

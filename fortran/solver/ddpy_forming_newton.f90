@@ -24,9 +24,9 @@ module ddpy_forming_newton
                                   outcome_not_finite, outcome_solver, outcome_stalled, &
                                   outcome_hold, hold_no_stiffness, hold_too_far, &
                                   history_width, history_residual, history_relative_residual, &
-                                  history_relative_correction, history_step, history_relative_error, &
+                                  history_relative_correction, history_step, &
                                   history_points_switched, history_pairs_switched, &
-                                  history_yield_switched
+                                  history_yield_switched, history_relative_error
   use ddpy_forming, only: forming_contact
   use ddpy_global_search, only: memory_rows
   use ddpy_contact, only: contact_inactive
@@ -696,12 +696,12 @@ contains
 
     !> Residual norm, force scale, motion, and whether converged with this error of the
     !> iterate (estimated_error): the residual below tol_force times the force scale and
-    !> the error below tol_disp times the motion. The motion is the increment's, |u - u_n|, scaled up to an
-    !> increment of the phase's largest size (size_ratio): a scale that does not vanish as
-    !> an increment is cut. Measured against its own motion, an increment cut to 1/500
-    !> was held to 500 times the accuracy of a whole one, and examples/strip_draw stopped
-    !> with its residual at 1.6e-6 of the force scale and a correction of 1.6e-7 mm
-    !> (docs/theory/contact.md, "The convergence test").
+    !> the error below tol_disp times the motion. The motion is the increment's,
+    !> |u - u_n|, scaled up to an increment of the phase's largest size (size_ratio): a
+    !> scale that does not vanish as an increment is cut. Measured against its own motion,
+    !> an increment cut to 1/500 was held to 500 times the accuracy of a whole one, and
+    !> examples/strip_draw stopped with its residual at 1.6e-6 of the force scale and a
+    !> correction of 1.6e-7 mm (docs/theory/contact.md, "The convergence test").
     subroutine measure(s, error, norm, scale, moved, converged)
       type(evaluation), intent(in) :: s
       real(wp), intent(in) :: error

@@ -388,7 +388,7 @@ class _Run:
         # the correction over the increment's displacement, scaled up to a whole
         # increment's when the increment is smaller; the step, what changed, and the
         # iterate's estimated error, which the convergence test judged with the residual.
-        history = np.asarray(result.convergence[-1], dtype=float)  # (iterations, 7)
+        history = result.convergence[-1]
         depth = [result.penetration[k][-1] if result.penetration.get(k) else 0.0
                  for k in self.names]
         self._warn_penetration(phase, depth)
@@ -397,8 +397,8 @@ class _Run:
             tool_displacement=np.array([self.problem.position[k] for k in self.names]),
             tool_force=np.array([result.tool_forces[k][-1] if result.tool_forces.get(k)
                                  else np.zeros(3) for k in self.names]),
-            iterations=len(history) - 1, residual_force=float(history[-1, 0]),
-            residual_displacement=float(history[-1, 6]), timings=timings,
+            iterations=len(history) - 1, residual_force=history[-1].residual,
+            residual_displacement=history[-1].error, timings=timings,
             nodes_in_contact=[result.contacts[k][-1] if result.contacts.get(k) else 0
                               for k in self.names],
             cutbacks=counts["cuts"], rmin=min(1.0, step / phase.max_increment)

@@ -151,10 +151,10 @@ contains
                 forcing, alpha, step_size, du_norm, landing, t_norm, t_scale, t_moved, &
                 alpha_fallback, whole_step, size_ratio, element_size, correction_before, &
                 infinity
-    ! Whether the step that led to the iterate (correction) and the one before it
-    ! (correction_before) were whole Newton steps: the error estimate (estimated_error)
-    ! needs both.
-    logical :: whole, whole_before
+    ! Whether the step that led to the iterate (correction) was a whole Newton step; the
+    ! step before it (correction_before) is kept only where it was one, else +inf: the
+    ! error estimate (estimated_error) needs both whole.
+    logical :: whole
     integer :: max_iterations, cur, trial, fallback, buffer, iteration, ls, n, status, &
                element, last_status, last_element, hold_after, hold_count
     logical :: converged, have_previous, have_hint, accepted, t_converged, moving, &
@@ -252,7 +252,6 @@ contains
     correction = infinity
     correction_before = infinity
     whole = .false.
-    whole_before = .false.
     alpha = 0.0_wp
     have_hint = .false.
     have_previous = .false.
@@ -465,8 +464,7 @@ contains
         return
       end if
       cur = trial
-      correction_before = correction
-      whole_before = whole
+      correction_before = merge(correction, infinity, whole)
       whole = alpha == 1.0_wp
       correction = alpha*du_norm
       do k = 1, nhold
@@ -667,8 +665,7 @@ contains
     subroutine record(s)
       type(evaluation), intent(in) :: s
       real(wp) :: error
-      error = estimated_error(correction, merge(correction_before, infinity, &
-                                                whole .and. whole_before))
+      error = estimated_error(correction, merge(correction_before, infinity, whole))
       call measure(s, error, norm, scale, moved, converged)
       report%history(history_residual, report%niter) = norm
       report%history(history_relative_residual, report%niter) = norm/scale

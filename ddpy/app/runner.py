@@ -238,7 +238,10 @@ def _carried(last: PhaseProgress, share: float, next_share: float,
         factor=0.0, step=step, reason=last.reason,
         last_du=None if last.last_du is None else last.last_du * scale,
         last_dp=None if last.last_dp is None else last.last_dp * scale,
-        last_size=None if last.last_size is None else last.last_size / scale)
+        last_size=None if last.last_size is None else last.last_size / scale,
+        before_du=None if last.before_du is None else last.before_du * scale,
+        before_size=None if last.before_size is None else last.before_size / scale,
+        start_weight=last.start_weight)
 
 
 class _Run:
@@ -288,10 +291,12 @@ class _Run:
         if progress is not None:
             meta["progress"] = {"factor": progress.factor, "step": progress.step,
                                 "reason": progress.reason, "last_size": progress.last_size,
+                                "before_size": progress.before_size,
+                                "start_weight": progress.start_weight,
                                 "offsets": {k: o for k, (o, _) in progress.offsets.items()}}
             arrays.update({f"start/{k}": v for k, v in progress.start.items()})
             arrays.update({f"offset/{k}": v for k, (_, v) in progress.offsets.items()})
-            for name in ("last_du", "last_dp"):
+            for name in ("last_du", "last_dp", "before_du"):
                 if getattr(progress, name) is not None:
                     arrays[name] = getattr(progress, name)
         write_checkpoint(self.output / CHECKPOINT, meta, arrays)
@@ -350,7 +355,9 @@ class _Run:
                 offsets={k: (o, arrays[f"offset/{k}"]) for k, o in prog["offsets"].items()},
                 factor=float(prog["factor"]), step=float(prog["step"]),
                 reason=str(prog["reason"]), last_du=arrays.get("last_du"),
-                last_dp=arrays.get("last_dp"), last_size=prog.get("last_size"))
+                last_dp=arrays.get("last_dp"), last_size=prog.get("last_size"),
+                before_du=arrays.get("before_du"), before_size=prog.get("before_size"),
+                start_weight=float(prog.get("start_weight", 0.0)))
         self._reopen_at = (int(meta["increments"]), int(meta["iterations"]),
                            int(meta["frames"]))
 

@@ -58,7 +58,7 @@ from ddpy.model.newton import (
     increment,
 )
 from ddpy.model.solid import Solid, SolidState, _components
-from ddpy.model.start import increment_start
+from ddpy.model.start import blended_start, increment_starts, start_weight
 from ddpy.model.tool import RigidTool
 from ddpy.model.work import Work
 
@@ -166,6 +166,11 @@ class PhaseProgress:
     increment: int = 0
     phase: str = ""
     travel: float = 0.0
+    #: the displacement rate and size of the increment before the last, and the weight of
+    #: the next start's blend (``ddpy.model.start``)
+    before_du: NDArray[np.float64] | None = None
+    before_size: float | None = None
+    start_weight: float = 0.0
 
 
 class FormingError(RuntimeError):
@@ -307,6 +312,8 @@ class _Attempt:
     size_ratio: float
     outcome: Trial
     depth: list[float] = field(default_factory=list)
+    #: the two starts it blended (``ddpy.model.start.increment_starts``), None at rest
+    starts: tuple[NDArray[np.float64], NDArray[np.float64] | None] | None = None
     strain: float = 0.0
     rotation: float = 0.0
 
@@ -336,6 +343,9 @@ class _PhaseRun:
     last_du: NDArray[np.float64] | None = None
     last_dp: NDArray[np.float64] | None = None
     last_size: float | None = None
+    before_du: NDArray[np.float64] | None = None
+    before_size: float | None = None
+    start_weight: float = 0.0
     initial: dict[str, NDArray[np.float64]] = field(default_factory=dict)
     released: tuple[list, list] = ([], [])
 
@@ -631,6 +641,8 @@ class FormingProblem:
             run.control.resume(resume.step, resume.reason)
             run.last_du, run.last_dp = resume.last_du, resume.last_dp
             run.last_size = resume.last_size
+            run.before_du, run.before_size = resume.before_du, resume.before_size
+            run.start_weight = resume.start_weight
         self._check_start(run)
         # Tools lifted off at the start of the phase let go of the blank gradually, before
         # the phase's first increment (docs/theory/contact.md): their iterations count as
@@ -695,16 +707,20 @@ class FormingProblem:
             positions[name] = self.position[name].copy()
         pressing = run.ramp[:, 0] + target * (run.ramp[:, 1] - run.ramp[:, 0])
         landing = control.landing()
-        # Start from the last increment's displacement rate and turn (docs/theory/contact.md).
-        guess = None if run.last_du is None else increment_start(
+        # Start from the last increment's displacement rate, and its turn or its change as
+        # the last increment preferred (docs/theory/contact.md, "Start").
+        starts = None if run.last_du is None else increment_starts(
             self.solid.mesh.nodes, self.solid.mesh.elements, self.u, run.last_du,
-            target - factor, run.last_size or target - factor)
+            target - factor, run.last_size or target - factor, run.before_du,
+            run.before_size)
+        guess = None if starts is None else \
+            self.u + blended_start(starts[0], starts[1], run.start_weight)
         careful = control.start(run.last_du is None)
         touching = _Touching(self.tuning.touching * self.size, resting=not careful)
         size_ratio = control.nominal / (target - factor)
         trial = _Attempt(target, positions, pressing, touching, size_ratio, self._increment(
             layout, positions, run.on, run.newton, run.result, landing, touching, guess,
-            careful=careful, size_ratio=size_ratio, hold_force=pressing))
+            careful=careful, size_ratio=size_ratio, hold_force=pressing), starts=starts)
         self._check_hold(trial.outcome, target, run.travel, pressing, layout, run.result)
         if trial.outcome.failure and run.last_du is None and not careful:
             # The first increment of a phase starts with the blank lying on its tools:
@@ -792,6 +808,9 @@ class FormingProblem:
             convergence = run.released[1] + list(convergence)[1:]
             run.released = ([], [])
         size = trial.target - run.factor
+        if trial.starts is not None:
+            run.start_weight = start_weight(outcome.u - self.u, *trial.starts)
+        run.before_du, run.before_size = run.last_du, run.last_size
         run.last_du = (outcome.u - self.u) / size
         run.last_size = size
         run.last_dp = np.einsum("ij,ij->i", outcome.force - self.force,
@@ -809,7 +828,8 @@ class FormingProblem:
         return PhaseProgress(run.start, run.offsets, run.factor, run.control.step,
                              run.control.reason, run.last_du, run.last_dp, size,
                              increment=len(result.factors), phase=run.phase,
-                             travel=run.factor * run.travel)
+                             travel=run.factor * run.travel, before_du=run.before_du,
+                             before_size=run.before_size, start_weight=run.start_weight)
 
     def _release(self, layout: Layout, on: NDArray[np.bool_],
                  positions: Mapping[str, NDArray[np.float64]], newton: NewtonSettings,

@@ -55,7 +55,52 @@ def increment_start(nodes: ArrayLike, elements: ArrayLike, u: ArrayLike, rate: A
     point turning at w accelerates by w x rate; so the start misses a rigid rotation at a
     constant rate by the third power of the increment's angle, the rate alone by the
     second."""
+    turned, _ = increment_starts(nodes, elements, u, rate, step, last_step)
+    return np.asarray(u, dtype=float) + turned
+
+
+def increment_starts(nodes: ArrayLike, elements: ArrayLike, u: ArrayLike, rate: ArrayLike,
+                     step: float, last_step: float, rate_before: ArrayLike | None = None,
+                     step_before: float | None = None
+                     ) -> tuple[NDArray[np.float64], NDArray[np.float64] | None]:
+    """Two starts of an increment of ``step``, as displacement increments (n, 3) from the
+    converged ``u``: the turn carried on (``increment_start``) and the rate's change
+    carried on, step rate + step (step + last_step) / 2 a with a = (rate - rate_before) /
+    ((last_step + step_before) / 2), the change between the midpoint rates of the last two
+    increments (None without ``rate_before``). Both take the same first-order term; they
+    differ in the acceleration: the spin's w x rate, or the one the path measured."""
     v = np.asarray(rate, dtype=float)
     omega = spin(nodes, elements, u, v)
-    return np.asarray(u, dtype=float) + step * v + \
-        0.5 * step * (step + last_step) * np.cross(omega, v)
+    half = 0.5 * step * (step + last_step)
+    turned = step * v + half * np.cross(omega, v)
+    if rate_before is None or step_before is None:
+        return turned, None
+    change = (v - np.asarray(rate_before, dtype=float)) / (0.5 * (last_step + step_before))
+    return turned, step * v + half * change
+
+
+def blended_start(turned: NDArray[np.float64], changed: NDArray[np.float64] | None,
+                  weight: float) -> NDArray[np.float64]:
+    """The start (a displacement increment) ``weight`` of the way from ``turned`` to
+    ``changed`` (``increment_starts``); ``turned`` where there is no ``changed``."""
+    if changed is None or weight <= 0.0:
+        return turned
+    return turned + weight * (changed - turned)
+
+
+def start_weight(actual: ArrayLike, turned: NDArray[np.float64],
+                 changed: NDArray[np.float64] | None) -> float:
+    """The weight in [0, 1] of the blend of the two starts (``blended_start``) nearest, in
+    the least-squares sense over all displacements, to the increment ``actual`` that the
+    Newton iterations converged to: the blend the next increment starts with. A smooth
+    path (a sheet bending, a flange sliding over a shoulder) gives about 1; a rough one,
+    whose rate changes from increment to increment as contact passes from node to node,
+    gives the turn (0) instead of extrapolating the roughness."""
+    if changed is None:
+        return 0.0
+    between = changed - turned
+    norm = float(np.vdot(between, between))
+    if not norm > 0.0:
+        return 0.0
+    weight = float(np.vdot(np.asarray(actual, dtype=float) - turned, between)) / norm
+    return min(max(weight, 0.0), 1.0)

@@ -231,13 +231,15 @@ def test_newton_converges_quadratically_while_sliding() -> None:
     assert rates[-1] > 1.6, (rates, history)
 
 
-def test_the_start_of_an_increment_is_first_order() -> None:
+def test_the_start_of_an_increment_is_second_order_on_a_smooth_path() -> None:
     # A compressible elastic block (nu = 0.3) clamped at its top, pressed 10 % by a
     # frictionless plane: every pair stays closed, and the large-strain path is smooth and
     # curved in the travel (the block bulges). The first Newton correction from the start
-    # measures the start's error: from the last increment's rate it is O(h^2), and relative
-    # to the increment's motion (O(h)) it halves as the increment halves (a start at the
-    # converged state, zeroth order, would leave it unchanged).
+    # measures the start's error. On this smooth path the start takes the rate's change
+    # (ddpy.model.start: the last increment's own starts fit its answer with the change),
+    # so it misses by O(h^3): relative to the increment's motion (O(h)) a quarter as the
+    # increment halves. The last rate alone would halve it (O(h^2)); a start at the
+    # converged state would leave it unchanged.
     material = Material(210e3, 0.3, Hill48.von_mises(), Swift(1e7, 0.01, 0.0))
     errors = []
     for h in (0.005, 0.0025):
@@ -248,7 +250,7 @@ def test_the_start_of_an_increment_is_first_order() -> None:
         result = problem.run({"plane": (0, 0, 0.1)}, max_increment=h)
         assert set(result.limited_by) == {"max"}
         errors.append(np.median([rel[1].correction for rel in result.convergence[3:]]))
-    assert 1.5 < errors[0] / errors[1] < 2.5, errors
+    assert 3.0 < errors[0] / errors[1] < 5.0, errors
 
 
 def test_first_touch_and_strain_limit_set_the_increments() -> None:

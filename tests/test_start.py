@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from ddpy.model import HexMesh
-from ddpy.model.start import increment_start, spin
+from ddpy.model.start import blended_start, increment_start, increment_starts, spin, start_weight
 
 AXIS = np.array([1.0, 2.0, 2.0]) / 3.0  # a unit axis not along a mesh direction
 CENTRE = np.array([0.3, -0.2, 4.0])  # off the block, as a die shoulder's centre is
@@ -66,3 +66,50 @@ def test_a_rigid_rotation_is_continued_to_third_order(block: HexMesh, ratio: flo
     for k in (1, 2):
         assert 7.0 < misses[k - 1] / misses[k] < 9.0, misses
         assert 3.5 < linear[k - 1] / linear[k] < 4.5, linear
+
+
+def test_a_path_of_constant_acceleration_is_continued_exactly_by_the_rate_change(
+        block: HexMesh) -> None:
+    # u(t) = b t + c t^2 / 2 at every node: the mean
+    # rate of an increment is the rate at its midpoint, so the change between the last two
+    # midpoint rates is c exactly, whatever the three steps are, and the start that carries
+    # it on lands on the path; the one that carries only the turn misses it.
+    rng = np.random.default_rng(3)
+    b = rng.normal(size=block.nodes.shape)
+    c = block.nodes @ np.array([[0.3, 0.1, 0.0], [0.1, -0.2, 0.05], [0.0, 0.05, 0.1]])
+
+    def path(t: float) -> np.ndarray:
+        return b * t + 0.5 * c * t * t
+
+    t, h, h1, h2 = 0.5, 0.03, 0.02, 0.05
+    rate = (path(t) - path(t - h1)) / h1
+    rate_before = (path(t - h1) - path(t - h1 - h2)) / h2
+    turned, changed = increment_starts(block.nodes, block.elements, path(t), rate, h, h1,
+                                       rate_before, h2)
+    assert changed is not None
+    exact = path(t + h) - path(t)
+    np.testing.assert_allclose(changed, exact, rtol=0.0, atol=1e-13)
+    assert np.abs(exact - turned).max() > 1e-4  # the turn alone misses the acceleration
+    # The last increment's own starts, fitted to what it converged to: the change wins.
+    assert start_weight(exact, turned, changed) == pytest.approx(1.0, abs=1e-12)
+    assert increment_starts(block.nodes, block.elements, path(t), rate, h, h1)[1] is None
+
+
+def test_the_start_weight_is_the_nearest_blend_clipped_to_the_two_starts() -> None:
+    rng = np.random.default_rng(5)
+    turned, changed = rng.normal(size=(7, 3)), rng.normal(size=(7, 3))
+    between = changed - turned
+    # A part of the increment that neither start has (orthogonal to their difference)
+    # does not move the weight.
+    other = rng.normal(size=(7, 3))
+    other -= np.vdot(other, between) / np.vdot(between, between) * between
+    for weight in (0.0, 0.3, 1.0):
+        actual = blended_start(turned, changed, weight) + other
+        assert start_weight(actual, turned, changed) == pytest.approx(weight, abs=1e-12)
+    # Beyond either start the weight stays at it: no extrapolation past the measured
+    # change, and no turn taken back.
+    assert start_weight(turned + 2.0 * between, turned, changed) == 1.0
+    assert start_weight(turned - 0.5 * between, turned, changed) == 0.0
+    assert start_weight(changed, turned, None) == 0.0
+    assert start_weight(changed, turned, turned.copy()) == 0.0
+    np.testing.assert_array_equal(blended_start(turned, None, 0.7), turned)

@@ -95,21 +95,27 @@ def test_a_path_of_constant_acceleration_is_continued_exactly_by_the_rate_change
     assert increment_starts(block.nodes, block.elements, path(t), rate, h, h1)[1] is None
 
 
-def test_the_start_weight_is_the_nearest_blend_clipped_to_the_two_starts() -> None:
+def test_the_start_weight_is_the_nearest_blend_shrunk_by_what_it_leaves() -> None:
     rng = np.random.default_rng(5)
     turned, changed = rng.normal(size=(7, 3)), rng.normal(size=(7, 3))
     between = changed - turned
+    for weight in (0.0, 0.3, 1.0):
+        actual = blended_start(turned, changed, weight)
+        assert start_weight(actual, turned, changed) == pytest.approx(weight, abs=1e-12)
     # A part of the increment that neither start has (orthogonal to their difference)
-    # does not move the weight.
+    # leaves the nearest blend where it was, and shrinks the weight by the share of the
+    # turn's miss it leaves unexplained: an equal part halves it.
     other = rng.normal(size=(7, 3))
     other -= np.vdot(other, between) / np.vdot(between, between) * between
-    for weight in (0.0, 0.3, 1.0):
-        actual = blended_start(turned, changed, weight) + other
-        assert start_weight(actual, turned, changed) == pytest.approx(weight, abs=1e-12)
-    # Beyond either start the weight stays at it: no extrapolation past the measured
-    # change, and no turn taken back.
-    assert start_weight(turned + 2.0 * between, turned, changed) == 1.0
+    other *= 0.6 * np.linalg.norm(between) / np.linalg.norm(other)
+    actual = blended_start(turned, changed, 0.6) + other
+    assert start_weight(actual, turned, changed) == pytest.approx(0.3, abs=1e-12)
+    # Beyond either start the blend stays at it: no extrapolation past the measured
+    # change (twice the change: clipped at 1, which leaves a quarter of the miss), and no
+    # turn taken back.
+    assert start_weight(turned + 2.0 * between, turned, changed) == pytest.approx(0.75)
     assert start_weight(turned - 0.5 * between, turned, changed) == 0.0
     assert start_weight(changed, turned, None) == 0.0
     assert start_weight(changed, turned, turned.copy()) == 0.0
+    assert start_weight(turned, turned, changed) == 0.0
     np.testing.assert_array_equal(blended_start(turned, None, 0.7), turned)

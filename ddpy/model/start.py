@@ -90,17 +90,25 @@ def blended_start(turned: NDArray[np.float64], changed: NDArray[np.float64] | No
 
 def start_weight(actual: ArrayLike, turned: NDArray[np.float64],
                  changed: NDArray[np.float64] | None) -> float:
-    """The weight in [0, 1] of the blend of the two starts (``blended_start``) nearest, in
-    the least-squares sense over all displacements, to the increment ``actual`` that the
-    Newton iterations converged to: the blend the next increment starts with. A smooth
-    path (a sheet bending, a flange sliding over a shoulder) gives about 1; a rough one,
-    whose rate changes from increment to increment as contact passes from node to node,
-    gives the turn (0) instead of extrapolating the roughness."""
+    """The weight in [0, 1] of the rate's change in the next increment's start
+    (``blended_start``), from the increment ``actual`` that the last one converged to and
+    its own two starts: the least-squares weight t of the blend nearest to ``actual``,
+    clipped to [0, 1], times the share of the turn's miss |actual - turned|^2 that the
+    blend at t removes. A smooth path (a sheet bending, a flange sliding over a shoulder)
+    gives about 1: the change explains nearly all of the miss. Where the rate changes
+    roughly from increment to increment (contact passing from node to node), the last
+    change says little about the next, explains little of the miss, and the start keeps
+    to the turn."""
     if changed is None:
         return 0.0
     between = changed - turned
     norm = float(np.vdot(between, between))
     if not norm > 0.0:
         return 0.0
-    weight = float(np.vdot(np.asarray(actual, dtype=float) - turned, between)) / norm
-    return min(max(weight, 0.0), 1.0)
+    miss = np.asarray(actual, dtype=float) - turned
+    miss_norm = float(np.vdot(miss, miss))
+    if not miss_norm > 0.0:
+        return 0.0
+    weight = min(max(float(np.vdot(miss, between)) / norm, 0.0), 1.0)
+    left = miss - weight * between
+    return weight * max(1.0 - float(np.vdot(left, left)) / miss_norm, 0.0)

@@ -46,29 +46,21 @@ def spin(nodes: ArrayLike, elements: ArrayLike, u: ArrayLike, rate: ArrayLike
                      for k in range(3)], axis=1)
 
 
-def increment_start(nodes: ArrayLike, elements: ArrayLike, u: ArrayLike, rate: ArrayLike,
-                    step: float, last_step: float) -> NDArray[np.float64]:
-    """The displacements (n, 3) an increment of ``step`` (phase factor) starts from, at the
-    converged ``u`` after an increment of ``last_step`` whose mean displacement rate was
-    ``rate`` (per unit factor): u + step rate + step (step + last_step) / 2 (w x rate), w
-    the rate's spin (``spin``). The rate of an increment is its rate at the midpoint, and a
-    point turning at w accelerates by w x rate; so the start misses a rigid rotation at a
-    constant rate by the third power of the increment's angle, the rate alone by the
-    second."""
-    turned, _ = increment_starts(nodes, elements, u, rate, step, last_step)
-    return np.asarray(u, dtype=float) + turned
-
-
 def increment_starts(nodes: ArrayLike, elements: ArrayLike, u: ArrayLike, rate: ArrayLike,
                      step: float, last_step: float, rate_before: ArrayLike | None = None,
                      step_before: float | None = None
                      ) -> tuple[NDArray[np.float64], NDArray[np.float64] | None]:
-    """Two starts of an increment of ``step``, as displacement increments (n, 3) from the
-    converged ``u``: the turn carried on (``increment_start``) and the rate's change
-    carried on, step rate + step (step + last_step) / 2 a with a = (rate - rate_before) /
-    ((last_step + step_before) / 2), the change between the midpoint rates of the last two
-    increments (None without ``rate_before``). Both take the same first-order term; they
-    differ in the acceleration: the spin's w x rate, or the one the path measured."""
+    """Two starts of an increment of ``step`` (phase factor), as displacement increments
+    (n, 3) from the converged ``u`` after an increment of ``last_step`` whose mean
+    displacement rate was ``rate`` (per unit factor). The turn carried on: step rate +
+    step (step + last_step) / 2 (w x rate), w the rate's spin (``spin``); the rate of an
+    increment is its rate at the midpoint, and a point turning at w accelerates by w x
+    rate, so this start misses a rigid rotation at a constant rate by the third power of
+    the increment's angle, the rate alone by the second. The rate's change carried on:
+    step rate + step (step + last_step) / 2 a with a = (rate - rate_before) / ((last_step
+    + step_before) / 2), the change between the midpoint rates of the last two increments
+    (None without ``rate_before``). Both take the same first-order term; they differ in
+    the acceleration: the spin's w x rate, or the one the path measured."""
     v = np.asarray(rate, dtype=float)
     omega = spin(nodes, elements, u, v)
     half = 0.5 * step * (step + last_step)

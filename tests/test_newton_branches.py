@@ -356,10 +356,11 @@ def test_gmres_that_does_not_converge_gives_way_to_a_factorization(monkeypatch) 
     # GMRES capped at one iteration and asked for an exact solution never converges: after
     # the first factorization every correction tries it once, then factorizes, and solves
     # with the new factors, so the run is the direct one, step for step.
+    # (Double-precision factors: the single ones' guard is the next test's.)
     direct, result_direct = slide("direct")
     default = FormingTuning()
     monkeypatch.setattr(forming, "FormingTuning", lambda: replace(
-        default, krylov_max=1, krylov_loose=0.0, krylov_tight=0.0))
+        default, krylov_max=1, krylov_loose=0.0, krylov_tight=0.0, single_factors=0))
     reuse, result = slide("reuse")
     assert result.newton_iterations == result_direct.newton_iterations
     assert result.factorizations == result.newton_iterations
@@ -368,3 +369,23 @@ def test_gmres_that_does_not_converge_gives_way_to_a_factorization(monkeypatch) 
     np.testing.assert_allclose(np.concatenate(result.residuals),
                                np.concatenate(result_direct.residuals), rtol=1e-9)
     np.testing.assert_allclose(reuse.u, direct.u, rtol=0, atol=1e-12 * np.abs(direct.u).max())
+
+
+def test_single_factors_too_coarse_give_way_to_double_ones(caplog, monkeypatch) -> None:
+    # The same GMRES, capped at one iteration to an exact solution, on single-precision
+    # factors: right after their first factorization it misses its tolerance, as it would
+    # on a Jacobian of condition number near 1/eps_single. The trial is done again on
+    # double factors and the run goes on with them: step for step the double run of the
+    # test above, the failed trial's work counted besides.
+    default = FormingTuning()
+    monkeypatch.setattr(forming, "FormingTuning", lambda: replace(
+        default, krylov_max=1, krylov_loose=0.0, krylov_tight=0.0, single_factors=0))
+    double, result_double = slide("reuse")
+    monkeypatch.setattr(forming, "FormingTuning", lambda: replace(
+        default, krylov_max=1, krylov_loose=0.0, krylov_tight=0.0, single_factors=1))
+    with caplog.at_level(logging.WARNING, logger="ddpy.model.forming"):
+        single, result = slide("reuse")
+    assert sum("double precision from here on" in r.getMessage() for r in caplog.records) == 1
+    assert result.cuts == 0 and result.iterations == result_double.iterations
+    assert result.factorizations == result_double.factorizations + 1
+    np.testing.assert_array_equal(single.u, double.u)

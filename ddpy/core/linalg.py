@@ -46,6 +46,9 @@ _MESSAGES = {
     constant("solver_not_host"): "only rank 0 drives the solver; ranks > 0 serve it "
                                  "(ddpy.core.mpi.serve)",
     constant("solver_bad_precision"): "the precision must be 'double' or 'single'",
+    constant("solver_single_too_coarse"): "GMRES on fresh single-precision factors did not "
+                                          "reach its tolerance: the matrix's condition "
+                                          "number is near 1/eps_single",
     constant("solver_not_positive_definite"): "the matrix is not positive definite (MUMPS "
                                               "found negative pivots, INFOG(12)); factorize it "
                                               "with symmetry='symmetric' if it is meant to be "

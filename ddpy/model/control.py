@@ -343,11 +343,13 @@ class FormingTuning:
     - ``search_memory``: 1, the contact search of an increment's evaluations starts from
       what the earlier ones found, where that provably gives the same answer (0: every
       evaluation searches afresh; docs/theory/contact.md, "Search memory");
-    - ``single_factors``: 1, where the loop solves with older factors (linear_solver
-      "reuse", or "auto" from reuse_from unknowns), the Jacobian factorized in single
-      precision (MUMPS's SMUMPS: half the factor memory and traffic), every correction then
-      solved by GMRES in double precision on those factors, also right after a
-      factorization and in exact and careful solves (docs/theory/linear-solver.md,
+    - ``single_factors``: 1 (the default), where the loop solves with older factors
+      (linear_solver "reuse", or "auto" from reuse_from unknowns), the Jacobian factorized
+      in single precision (MUMPS's SMUMPS: half the factor memory and traffic), every
+      correction then solved by GMRES in double precision on those factors, also right
+      after a factorization and in exact and careful solves; where GMRES on fresh single
+      factors misses its tolerance (a condition number near 1/eps_single), the problem
+      goes back to double factors for good (docs/theory/linear-solver.md,
       "Single-precision factors"); 0: double-precision factors, a factorization's
       correction solved with them directly.
     """
@@ -366,7 +368,7 @@ class FormingTuning:
     touch_depth: float = 1e-3
     hold_step: float = 0.5
     search_memory: int = 1
-    single_factors: int = 0
+    single_factors: int = 1
     increment: IncrementTuning = field(default_factory=IncrementTuning)
 
     def __post_init__(self) -> None:

@@ -26,6 +26,7 @@ import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
 
 from ddpy._validate import float_array, int_array
+from ddpy.core.constants import constant
 from ddpy.core.linalg import MumpsSolver
 from ddpy.core.ordering import mesh_solver
 from ddpy.geometry.search import INSIDE, NONE
@@ -63,6 +64,8 @@ from ddpy.model.tool import RigidTool
 from ddpy.model.work import Work
 
 _log = logging.getLogger(__name__)
+#: the core's status for single-precision factors too coarse to precondition a Jacobian
+_SINGLE_TOO_COARSE = constant("solver_single_too_coarse")
 
 __all__ = ["RigidTool", "FieldFrame", "FormingProblem", "FormingResult", "FormingError",
            "FormingState", "IncrementRecord",
@@ -429,6 +432,9 @@ class FormingProblem:
         self._layout: Layout | None = None
         self._solver: MumpsSolver | None = None
         self._factors = Factors(0)
+        #: single-precision factors failed to precondition a Jacobian of this problem
+        #: (its condition number near 1/eps_single): double ones from then on
+        self._single_too_coarse = False
 
     # -- set-up ------------------------------------------------------------------------
 
@@ -511,25 +517,32 @@ class FormingProblem:
             self._reset()
         if self._layout is None or self._solver is None:
             layout = Layout(self.solid, self.tools, self.fixed, holds=holds)
-            # The contact multipliers first: each couples to its own node only, and
-            # eliminated with it they would widen every separator's front (the paper's
-            # bending mesh: 5.8e10 flops per factorization with them, 4.4e10 first). A
-            # closed stick pair has a zero pivot there (its law does not involve lambda):
-            # MUMPS delays it to its node's front.
-            # A force-controlled tool's unknown couples to every node it touches: last.
-            solver = mesh_solver("unsymmetric", self.ordering, self.solid.node_order,
-                                 np.concatenate([np.flatnonzero(~self.fixed.ravel()) // 3,
-                                                 np.repeat(layout.node, 3),
-                                                 np.zeros(layout.holds.size, np.int64)]),
-                                 first=(np.arange(layout.n) >= layout.nf)
-                                 & (np.arange(layout.n) < layout.n - layout.holds.size),
-                                 last=np.arange(layout.n) >= layout.n - layout.holds.size,
-                                 precision=("single" if self.tuning.single_factors
-                                            and self._reuses(layout) else "double"))
-            solver.analyse(layout.n, *layout.entries())
-            self._layout, self._solver = layout, solver
-            self._factors = Factors(solver.handle)
+            self._layout, self._solver = layout, self._analysed_solver(layout)
+            self._factors = Factors(self._solver.handle)
         return self._layout
+
+    def _analysed_solver(self, layout: Layout) -> MumpsSolver:
+        """A MUMPS instance analysed for ``layout``: single precision where the loop solves
+        with older factors and tuning.single_factors asks for it, unless single factors
+        already failed this problem."""
+        # The contact multipliers first: each couples to its own node only, and
+        # eliminated with it they would widen every separator's front (the paper's
+        # bending mesh: 5.8e10 flops per factorization with them, 4.4e10 first). A
+        # closed stick pair has a zero pivot there (its law does not involve lambda):
+        # MUMPS delays it to its node's front.
+        # A force-controlled tool's unknown couples to every node it touches: last.
+        single = (self.tuning.single_factors and self._reuses(layout)
+                  and not self._single_too_coarse)
+        solver = mesh_solver("unsymmetric", self.ordering, self.solid.node_order,
+                             np.concatenate([np.flatnonzero(~self.fixed.ravel()) // 3,
+                                             np.repeat(layout.node, 3),
+                                             np.zeros(layout.holds.size, np.int64)]),
+                             first=(np.arange(layout.n) >= layout.nf)
+                             & (np.arange(layout.n) < layout.n - layout.holds.size),
+                             last=np.arange(layout.n) >= layout.n - layout.holds.size,
+                             precision="single" if single else "double")
+        solver.analyse(layout.n, *layout.entries())
+        return solver
 
     # -- the run -----------------------------------------------------------------------
 
@@ -1484,6 +1497,19 @@ class FormingProblem:
         trial = increment(self.solid, layout, self._factors, self.solid_state, self.u,
                           self.external, self.u, guess, loop, pairs)
         result.count(trial)
+        if trial.solver == _SINGLE_TOO_COARSE:
+            # The same trial again on double-precision factors, for the rest of the run.
+            _log.warning("single-precision factors do not precondition this problem's "
+                         "Jacobian (GMRES on fresh ones missed its tolerance): double "
+                         "precision from here on")
+            self._single_too_coarse = True
+            assert self._solver is not None
+            self._solver.close()
+            self._solver = self._analysed_solver(layout)
+            self._factors = Factors(self._solver.handle)
+            trial = increment(self.solid, layout, self._factors, self.solid_state, self.u,
+                              self.external, self.u, guess, loop, pairs)
+            result.count(trial)
         if _log.isEnabledFor(logging.DEBUG):
             for k, it in enumerate(trial.convergence):
                 _log.debug("iteration %d: residual %.3e of the force scale, correction %.3e "

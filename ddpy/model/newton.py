@@ -449,14 +449,14 @@ class Trial:
     """What one increment trial gives: converged (``failure`` empty and ``landing`` 1) with
     the new state, the internal forces, its residual history and the contact states, gaps
     and normals of the pairs; or the fraction of the increment at which the first elastic
-    point lands on the yield surface (``landing`` < 1); or why it failed (``solver``: a
-    factorization or solve failed). Always: the work done (``counters``: evaluations,
-    corrections, factorizations, Krylov iterations, line-search fallbacks) and its time per
-    part (PARTS)."""
+    point lands on the yield surface (``landing`` < 1); or why it failed (``solver``: the
+    status of the factorization or solve that failed, 0 where none did). Always: the work
+    done (``counters``: evaluations, corrections, factorizations, Krylov iterations,
+    line-search fallbacks) and its time per part (PARTS)."""
 
     failure: str = ""
     landing: float = 1.0
-    solver: bool = False
+    solver: int = 0
     u: NDArray[np.float64] | None = None
     state: SolidState | None = None
     force: NDArray[np.float64] | None = None
@@ -582,7 +582,7 @@ def increment(solid: Solid, layout: Layout, factors: Factors, state: SolidState,
     if outcome == SOLVER:
         factors.factored = False
         return Trial(str(LinearSolverError(int(solver_status), "factorization or solve")),
-                     solver=True, **work)
+                     solver=int(solver_status), **work)
     if outcome == HOLD:
         why = ("nothing holds it along its axis: no slave node is in contact with it"
                if hold_reason == constant("hold_no_stiffness") else

@@ -17,6 +17,7 @@ module ddpy_api
                                 status_no_free_handle, status_finished, status_not_host, &
                                 status_not_positive_definite, solver_info_values, &
                                 status_bad_precision, precision_double, precision_single, &
+                                status_single_too_coarse, &
                                 solver_precision, &
                                 solver_flops, info_infog1, info_infog2, info_ordering, &
                                 info_factor_entries, info_estimated_factor_entries, &
@@ -457,6 +458,7 @@ contains
     call add('solver_not_host', status_not_host)
     call add('solver_not_positive_definite', status_not_positive_definite)
     call add('solver_bad_precision', status_bad_precision)
+    call add('solver_single_too_coarse', status_single_too_coarse)
     call add('precision_double', precision_double)
     call add('precision_single', precision_single)
 

@@ -31,7 +31,7 @@ module ddpy_forming_newton
   use ddpy_global_search, only: memory_rows
   use ddpy_contact, only: contact_inactive
   use ddpy_linear_solver, only: solver_factorize, solver_solve, solver_precision, &
-                                precision_single
+                                precision_single, status_single_too_coarse
   use ddpy_sparse, only: sum_duplicates, row_structure
   use ddpy_jacobian_layout, only: jacobian_layout
   implicit none
@@ -789,6 +789,10 @@ contains
                     merge(newton%krylov_max, single_exact_iterations, newton%reuse), &
                     preconditioned, gmres_converged, status)
         if (status < 0) return
+        ! Factors of this very Jacobian that GMRES cannot bring to the tolerance: its
+        ! condition number is near 1/eps_single, and every later correction would be as
+        ! poor. The caller goes back to double-precision factors.
+        if (.not. gmres_converged) status = status_single_too_coarse
         step_size = weighted_norm(preconditioned)
         return
       end if

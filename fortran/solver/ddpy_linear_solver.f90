@@ -69,7 +69,8 @@ module ddpy_linear_solver
                                 status_size_mismatch = -1003, status_no_free_handle = -1004, &
                                 status_finished = -1005, status_not_host = -1006, &
                                 status_not_positive_definite = -1007, &
-                                status_bad_precision = -1008
+                                status_bad_precision = -1008, &
+                                status_single_too_coarse = -1009
 
   !> Commands rank 0 broadcasts to the ranks > 0: one integer message (command, handle,
   !> value, value, and a real value's bits or a third value in the last two: one type for

@@ -114,27 +114,43 @@ def _increments(folder: Path) -> tuple[dict[str, np.ndarray], dict[str, np.ndarr
 
 
 @needs_mpi_build
-def test_built_in_case_on_two_processes_gives_the_sequential_answers(tmp_path: Path) -> None:
-    """The first 40 increments of `ddpy run`: the same increments, steps and iterations,
-    forces and fields within the tolerances docs/mpi.md states (measured over the whole
-    run: 6e-10 relative in the punch force, 1e-14 in the displacements)."""
+@pytest.mark.parametrize("single_factors", [0, 1])
+def test_built_in_case_on_two_processes_gives_the_sequential_answers(
+        tmp_path: Path, single_factors: int) -> None:
+    """The first 40 increments of the built-in case: the same increments, steps and
+    iterations, forces and fields within the tolerances docs/mpi.md states. With double
+    factors (``tune single_factors 0``) a solve is exact to rounding, so the runs agree to
+    rounding (measured over the whole run: 6e-10 relative in the punch force, 1e-14 in the
+    displacements); with single ones (the default) every correction is GMRES's to its
+    Eisenstat-Walker tolerance on factors whose rounding differs with the processes, so the
+    runs agree to the Newton loop's tolerances (1e-3 of the force scale and of the motion)."""
+    from ddpy.app.runner import DEFAULT_CASE
+
+    case = tmp_path / "case"
+    shutil.copytree(DEFAULT_CASE, case)
+    if not single_factors:
+        with open(case / "control.dat", "a") as control:
+            control.write("tune single_factors 0\n")
     stop = ["--stop-after", "40", "--threads", "1"]
-    seq = subprocess.run([sys.executable, "-m", "ddpy", "run", "--output", tmp_path / "seq"]
-                         + stop, capture_output=True, text=True, timeout=TIMEOUT,
-                         cwd=tmp_path)
+    seq = subprocess.run([sys.executable, "-m", "ddpy", "run", case, "--output",
+                          tmp_path / "seq"] + stop, capture_output=True, text=True,
+                         timeout=TIMEOUT, cwd=tmp_path)
     assert seq.returncode == 0, seq.stderr
-    par = mpirun(2, MPI_PYTHON, "-m", "ddpy", "run", "--output", tmp_path / "mpi", *stop,
-                 cwd=tmp_path)
+    par = mpirun(2, MPI_PYTHON, "-m", "ddpy", "run", case, "--output", tmp_path / "mpi",
+                 *stop, cwd=tmp_path)
     assert par.returncode == 0, par.stderr
     (a, fa), (b, fb) = _increments(tmp_path / "seq"), _increments(tmp_path / "mpi")
     assert a["step"].size == b["step"].size == 40
     np.testing.assert_array_equal(a["cutbacks"], b["cutbacks"])
     assert np.abs(a["iterations"] - b["iterations"]).sum() <= 3
-    np.testing.assert_allclose(b["step"], a["step"], rtol=1e-8, atol=0)
+    # (single factors, measured: steps 4.2e-4, tool forces 1.4e-3 of the largest, fields
+    # 7e-6 apart: each run within 1e-3 of the force scale of equilibrium)
+    step, force, field = (1e-8, 1e-7, 1e-8) if not single_factors else (1e-3, 5e-3, 1e-4)
+    np.testing.assert_allclose(b["step"], a["step"], rtol=step, atol=0)
     scale = np.abs(a["tool_force"]).max()
-    assert np.abs(a["tool_force"] - b["tool_force"]).max() <= 1e-7 * scale
+    assert np.abs(a["tool_force"] - b["tool_force"]).max() <= force * scale
     for name in fa:
-        assert np.abs(fa[name] - fb[name]).max() <= 1e-8 * np.abs(fa[name]).max(), name
+        assert np.abs(fa[name] - fb[name]).max() <= field * np.abs(fa[name]).max(), name
 
 
 def test_elemental_analysis_gives_estimates_near_the_assembled_ones() -> None:

@@ -245,6 +245,7 @@ _FORMING_TUNING_RANGES = {
     "reuse_from": Range(0, integer=True),
     "krylov_loose": Range(0.0, 1.0, high_open=True),
     "krylov_tight": Range(0.0, 1.0, high_open=True),
+    "krylov_last": Range(0.0),
     "krylov_max": Range(1, integer=True),
     "krylov_keep": Range(0, integer=True),
     "whole_step": Range(0.0, 1.0),
@@ -322,6 +323,11 @@ class FormingTuning:
       practice an increment's first corrections (0.05: the deep drawing's paper blank takes
       24 to 28 % fewer factorizations than at 0.01, the bending's about the same count;
       docs/theory/linear-solver.md, "Tolerance");
+      ``krylov_last``: a correction that may be the last of its increment (the residual
+      near the tolerance) is solved until it leaves a linear residual of this many force
+      tolerances (Eisenstat and Walker's 0.1 keeps a tenth; 1 takes fewer factorizations
+      in as many Newton iterations; a phase's first increment keeps at most 0.1:
+      docs/theory/linear-solver.md, "Tolerance");
       ``krylov_max``: its iterations before it gives up (a factorization costs about 14 on
       the paper's bending blank, 15 on the deep drawing's: docs/theory/speed.md);
       ``krylov_keep``: the most after which the same factors are tried again;
@@ -358,6 +364,7 @@ class FormingTuning:
     reuse_from: int = 2_000
     krylov_loose: float = 0.05
     krylov_tight: float = 1e-10
+    krylov_last: float = 1.0
     krylov_max: int = 12
     krylov_keep: int = 8
     whole_step: float = 0.5

@@ -66,6 +66,11 @@ from ddpy.model.work import Work
 _log = logging.getLogger(__name__)
 #: the core's status for single-precision factors too coarse to precondition a Jacobian
 _SINGLE_TOO_COARSE = constant("solver_single_too_coarse")
+#: A phase's first increment starts from the blank lying on its tools, a degenerate
+#: contact set (pairs at g = 0, p = 0) whose path turns on small differences: its possibly
+#: last corrections keep Eisenstat and Walker's tenth of the tolerance (a looser one made
+#: the built-in case's first increment cut on one process and not on two).
+_FIRST_KRYLOV_LAST = 0.1
 
 __all__ = ["RigidTool", "FieldFrame", "FormingProblem", "FormingResult", "FormingError",
            "FormingState", "IncrementRecord",
@@ -733,7 +738,8 @@ class FormingProblem:
         size_ratio = control.nominal / (target - factor)
         trial = _Attempt(target, positions, pressing, touching, size_ratio, self._increment(
             layout, positions, run.on, run.newton, run.result, landing, touching, guess,
-            careful=careful, size_ratio=size_ratio, hold_force=pressing), starts=starts)
+            careful=careful, size_ratio=size_ratio, hold_force=pressing,
+            first=run.last_du is None), starts=starts)
         self._check_hold(trial.outcome, target, run.travel, pressing, layout, run.result)
         if trial.outcome.failure and run.last_du is None and not careful:
             # The first increment of a phase starts with the blank lying on its tools:
@@ -1449,7 +1455,8 @@ class FormingProblem:
                    careful: bool = False, exact: bool = False,
                    pressure: NDArray[np.float64] | None = None,
                    size_ratio: float = 1.0,
-                   hold_force: NDArray[np.float64] | None = None) -> Trial:
+                   hold_force: NDArray[np.float64] | None = None,
+                   first: bool = False) -> Trial:
         """One increment trial, the Newton iterations run by the core (forming_increment,
         fortran/solver/ddpy_forming_newton.f90): the new state, or (with
         ``yield_tolerance``) the fraction of the increment at which the first elastic Gauss
@@ -1468,6 +1475,9 @@ class FormingProblem:
         this one's size; the correction is judged against the increment's motion scaled up
         by it, the motion of a whole increment (Loop.size_ratio). ``hold_force``: the force
         each force-controlled tool of the layout presses with (N; default zero).
+        ``first``: a phase's first increment, from the blank lying on its tools: a
+        correction that may be the last leaves at most _FIRST_KRYLOV_LAST force tolerances
+        of linear residual (docs/theory/linear-solver.md, "Tolerance").
 
         The semi-smooth Newton step is globalized by backtracking until Deuflhard's natural
         monotonicity test holds (the simplified correction at the trial point, solved with
@@ -1483,8 +1493,11 @@ class FormingProblem:
             max_iterations *= tuning.increment.careful_iterations
         loop = Loop(newton.force_tolerance, newton.displacement_tolerance, max_iterations,
                     1e-8 * self.solid.props[0] * self.size**2, yield_tolerance,
-                    tuning.penetration, tuning.min_step, reuse, tuning.krylov_loose,
-                    tuning.krylov_tight, tuning.krylov_max, tuning.krylov_keep,
+                    tuning.penetration, tuning.min_step, reuse, krylov_loose=tuning.krylov_loose,
+                    krylov_tight=tuning.krylov_tight,
+                    krylov_last=min(tuning.krylov_last, _FIRST_KRYLOV_LAST) if first
+                    else tuning.krylov_last,
+                    krylov_max=tuning.krylov_max, krylov_keep=tuning.krylov_keep,
                     touching=0.0 if touching is None else touching.distance,
                     resting=touching is None or touching.resting,
                     search=SEARCH_NONE if careful else SEARCH_MONOTONICITY,

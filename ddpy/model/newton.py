@@ -414,8 +414,9 @@ class Loop:
     """How the core's loop runs an increment trial: the convergence tolerances and
     iterations, the force scale's floor (N), the yield landing's tolerance (None: off),
     the penetration limit (element sizes) and the shortest step it may leave, the linear
-    solver (reuse of older factors by GMRES: its tolerance bounds, iterations at most and
-    after which the next correction factorizes), the line search (SEARCH_*) with the
+    solver (reuse of older factors by GMRES: its tolerance bounds, the linear residual a
+    possibly last correction may leave in force tolerances, iterations at most and after
+    which the next correction factorizes), the line search (SEARCH_*) with the
     residual ratio under which a whole step that changed contact states stands although
     it fails the monotonicity test (0: off), the touching predictor's gap and resting
     flag, the size ratio: the largest increment over this one's size (at least 1), by
@@ -434,6 +435,7 @@ class Loop:
     reuse: bool = False
     krylov_loose: float = FormingTuning.krylov_loose
     krylov_tight: float = FormingTuning.krylov_tight
+    krylov_last: float = FormingTuning.krylov_last
     krylov_max: int = FormingTuning.krylov_max
     krylov_keep: int = FormingTuning.krylov_keep
     search: int = SEARCH_MONOTONICITY
@@ -529,7 +531,8 @@ def increment(solid: Solid, layout: Layout, factors: Factors, state: SolidState,
         displacement_tolerance=loop.displacement_tolerance,
         max_iterations=loop.max_iterations, floor=loop.floor, reuse=int(loop.reuse),
         krylov_loose=loop.krylov_loose, krylov_tight=loop.krylov_tight,
-        krylov_max=loop.krylov_max, krylov_keep=loop.krylov_keep, line_search=loop.search,
+        krylov_last=loop.krylov_last, krylov_max=loop.krylov_max,
+        krylov_keep=loop.krylov_keep, line_search=loop.search,
         whole_step=loop.whole_step, search_memory=int(loop.search_memory)),
         "the Newton loop's settings")
     problem.set_limits(

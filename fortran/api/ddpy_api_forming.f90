@@ -323,18 +323,19 @@ contains
   !> search_memory and the line search search_*).
   subroutine api_problem_set_newton(handle, force_tolerance, displacement_tolerance, &
                                     max_iterations, floor, reuse, krylov_loose, &
-                                    krylov_tight, krylov_max, krylov_keep, line_search, &
-                                    whole_step, search_memory, status) &
+                                    krylov_tight, krylov_last, krylov_max, krylov_keep, &
+                                    line_search, whole_step, search_memory, status) &
     bind(C, name="ddpy_problem_set_newton")
     integer(c_int), value, intent(in) :: handle, max_iterations, reuse, krylov_max, &
                                          krylov_keep, line_search, search_memory
     real(c_double), value, intent(in) :: force_tolerance, displacement_tolerance, floor, &
-                                         krylov_loose, krylov_tight, whole_step
+                                         krylov_loose, krylov_tight, krylov_last, &
+                                         whole_step
     integer(c_int), intent(out) :: status
     if (.not. problem_ok(handle, status)) return
     status = refusal_value
-    if (max_iterations < 0 .or. krylov_max < 1 .or. line_search < search_none .or. &
-        line_search > search_energy) return
+    if (max_iterations < 0 .or. krylov_max < 1 .or. .not. krylov_last >= 0.0_c_double .or. &
+        line_search < search_none .or. line_search > search_energy) return
     associate (n => table(handle)%problem%newton)
       n%force_tolerance = force_tolerance
       n%displacement_tolerance = displacement_tolerance
@@ -343,6 +344,7 @@ contains
       n%reuse = reuse /= 0
       n%krylov_loose = krylov_loose
       n%krylov_tight = krylov_tight
+      n%krylov_last = krylov_last
       n%krylov_max = krylov_max
       n%krylov_keep = krylov_keep
       n%line_search = line_search

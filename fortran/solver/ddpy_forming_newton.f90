@@ -318,7 +318,7 @@ contains
       end if
       ! Inexact Newton (Eisenstat and Walker): the correction's relative error may be a
       ! tenth of the relative residual (the rate stays quadratic), or as large as leaves
-      ! the next residual a tenth of the tolerance (the last iteration).
+      ! the next residual krylov_last times the tolerance (the last iteration).
       retouched = .false.
       do k = 1, nhold
         ! A tool that nothing holds along its axis would take a singular step, or one
@@ -346,7 +346,7 @@ contains
       end if
       rel = norm/scale
       forcing = min(newton%krylov_loose, max(newton%krylov_tight, 0.1_wp*rel, &
-                                     0.1_wp*tol_force/max(rel, 1.0e-300_wp)))
+                                     newton%krylov_last*tol_force/max(rel, 1.0e-300_wp)))
       report%corrections = report%corrections + 1
       call direction(slot(cur), forcing, step_size, status)
       if (status < 0) then

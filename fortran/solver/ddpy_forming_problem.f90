@@ -46,14 +46,16 @@ module ddpy_forming_problem
   !> the force scale (at least floor, N) and the correction below displacement_tolerance
   !> times the motion, in max_iterations at most; the reuse of older factors by GMRES
   !> (reuse), its relative tolerance between krylov_tight and krylov_loose, krylov_max
-  !> iterations at most and a factorization at the next correction after krylov_keep; the
-  !> line search (search_*) and the residual ratio under which a whole step that changed
+  !> iterations at most and a factorization at the next correction after krylov_keep, and
+  !> krylov_last: a correction that may be the last one leaves a linear residual of at most
+  !> krylov_last times the force tolerance (Eisenstat and Walker's 0.1; docs/theory/
+  !> linear-solver.md, "Tolerance"); the line search (search_*) and the residual ratio under which a whole step that changed
   !> contact states stands although it fails the monotonicity test (whole_step, <= 0: off).
   type :: newton_settings
     real(wp) :: force_tolerance = 0.0_wp, displacement_tolerance = 0.0_wp, floor = 0.0_wp
     integer :: max_iterations = 0
     logical :: reuse = .false.
-    real(wp) :: krylov_loose = 1.0e-2_wp, krylov_tight = 1.0e-10_wp
+    real(wp) :: krylov_loose = 1.0e-2_wp, krylov_tight = 1.0e-10_wp, krylov_last = 0.1_wp
     integer :: krylov_max = 12, krylov_keep = 8
     integer :: line_search = search_monotonicity
     real(wp) :: whole_step = 0.0_wp

@@ -272,6 +272,40 @@ def test_single_precision_factors_give_the_same_slide() -> None:
                                           strict=True))
 
 
+def test_a_phases_first_increment_keeps_a_tenth_of_the_tolerance_in_gmres() -> None:
+    # krylov_last: a correction that may be the last leaves a linear residual of that many
+    # force tolerances. A phase's first increment (the second press, one increment) keeps
+    # 0.1 whatever the tuning says (its contact set is degenerate: docs/theory/
+    # linear-solver.md, "Tolerance"), so at 0.1 and 10 it is the same to the bit; the
+    # slide after it takes the tuning's tolerance (another path) to the same answer within
+    # the Newton tolerance.
+    def run(krylov_last: float) -> list[tuple[int, list[int], np.ndarray]]:
+        mesh = HexMesh.box(2.0, 1.0, 0.5, 8, 2, 2, origin=(-1.0, -0.5, 0.0))
+        tool = RigidTool("cylinder", cylinder_crest("nagata", 8), mesh.select(z=0.0),
+                         friction=0.15, facing=(0, 0, -1))
+        problem = FormingProblem(Solid(mesh, ELASTIC), [tool], linear_solver="reuse",
+                                 tuning=FormingTuning(krylov_last=krylov_last))
+        problem.fix(mesh.select(z=0.5), "xyz")
+        result, phases = None, []
+        for move, size in (((0, 0, 0.01), 0.01), ((0, 0, 0.005), 0.01), ((0.2, 0, 0), 0.05)):
+            result = problem.run({"cylinder": move}, max_increment=size, result=result)
+            phases.append((result.krylov_iterations, list(result.iterations),
+                           problem.u.copy()))
+        return phases
+
+    tenth, ten = run(0.1), run(10.0)
+    assert len(tenth[1][1]) == len(tenth[0][1]) + 1  # the second press: one increment
+    assert tenth[1][2].tobytes() == ten[1][2].tobytes()
+    assert tenth[1][:2] == ten[1][:2]
+    assert tenth[2][0] > tenth[1][0]  # GMRES ran in the slide
+    assert tenth[2][:2] != ten[2][:2] or tenth[2][2].tobytes() != ten[2][2].tobytes()
+    # Within the Newton tolerance (1e-3 of each of the slide's increments' motion, at most
+    # that of the whole displacement; measured 2.3e-5 of it).
+    assert np.allclose(ten[2][2], tenth[2][2], rtol=0, atol=1e-3 * np.abs(tenth[2][2]).max())
+    with pytest.raises(ValueError, match="krylov_last"):
+        FormingTuning(krylov_last=-1.0)
+
+
 def test_linear_solver_choice_is_checked() -> None:
     mesh = HexMesh.box(1.0, 1.0, 0.5, 1, 1, 1)
     tool = RigidTool("cylinder", cylinder_crest("nagata", 4), mesh.select(z=0.0))

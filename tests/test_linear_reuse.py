@@ -211,9 +211,9 @@ def test_reused_factors_give_the_direct_solution_with_fewer_factorizations() -> 
     assert result_reuse.factorizations < sum(result_reuse.iterations) / 2
     assert result_reuse.krylov_iterations > 0
     # Still Newton: no more iterations than the direct run. GMRES solves each correction
-    # only as well as the residual needs (a tenth of it, or of the tolerance in the last
-    # iteration), so the last step is not quadratic by design; the quadratic rate of the
-    # tangent itself is tested with the direct solver (tests/test_forming.py).
+    # only as well as the residual needs (a tenth of it, or the tolerance in the last
+    # iteration: krylov_last), so the last step is not quadratic by design; the quadratic
+    # rate of the tangent itself is tested with the direct solver (tests/test_forming.py).
     assert sum(result_reuse.iterations) <= sum(result_direct.iterations) + 2
 
 

@@ -174,19 +174,25 @@ def test_gmres_on_an_operator_singular_on_its_krylov_space_does_not_converge() -
     assert status == 0 and k == 1 and converged == 0
 
 
+def block_on_crest(linear_solver: str, tuning: FormingTuning | None) -> FormingProblem:
+    """An elastic block held at its top, its bottom face on a cylinder crest (Nagata, 8
+    patches) with friction 0.15."""
+    mesh = HexMesh.box(2.0, 1.0, 0.5, 8, 2, 2, origin=(-1.0, -0.5, 0.0))
+    tool = RigidTool("cylinder", cylinder_crest("nagata", 8), mesh.select(z=0.0),
+                     friction=0.15, facing=(0, 0, -1))
+    problem = FormingProblem(Solid(mesh, ELASTIC), [tool], linear_solver=linear_solver,
+                             tuning=tuning)
+    problem.fix(mesh.select(z=0.5), "xyz")
+    return problem
+
+
 def slide(linear_solver: str, single_factors: int | None = None
           ) -> tuple[FormingProblem, object]:
     """A block pressed onto a cylinder crest, then slid over it with friction (nodes
     between stick and slip, the contact set changing); ``single_factors``: the tuning's
-    (None: the default tuning)."""
-    mesh = HexMesh.box(2.0, 1.0, 0.5, 8, 2, 2, origin=(-1.0, -0.5, 0.0))
-    tool = RigidTool("cylinder", cylinder_crest("nagata", 8), mesh.select(z=0.0),
-                     friction=0.15, facing=(0, 0, -1))
-    # (None: the default tuning, which tests/test_newton_branches.py patches)
-    problem = FormingProblem(Solid(mesh, ELASTIC), [tool], linear_solver=linear_solver,
-                             tuning=(None if single_factors is None
-                                     else FormingTuning(single_factors=single_factors)))
-    problem.fix(mesh.select(z=0.5), "xyz")
+    (None: the default tuning, which tests/test_newton_branches.py patches)."""
+    problem = block_on_crest(linear_solver, None if single_factors is None
+                             else FormingTuning(single_factors=single_factors))
     result = problem.run({"cylinder": (0, 0, 0.02)}, max_increment=0.02)
     result = problem.run({"cylinder": (0.2, 0, 0)}, max_increment=0.05, result=result,
                          newton=NewtonSettings(1e-10, 1e-6))
@@ -280,12 +286,7 @@ def test_a_phases_first_increment_keeps_a_tenth_of_the_tolerance_in_gmres() -> N
     # slide after it takes the tuning's tolerance (another path) to the same answer within
     # the Newton tolerance.
     def run(krylov_last: float) -> list[tuple[int, list[int], np.ndarray]]:
-        mesh = HexMesh.box(2.0, 1.0, 0.5, 8, 2, 2, origin=(-1.0, -0.5, 0.0))
-        tool = RigidTool("cylinder", cylinder_crest("nagata", 8), mesh.select(z=0.0),
-                         friction=0.15, facing=(0, 0, -1))
-        problem = FormingProblem(Solid(mesh, ELASTIC), [tool], linear_solver="reuse",
-                                 tuning=FormingTuning(krylov_last=krylov_last))
-        problem.fix(mesh.select(z=0.5), "xyz")
+        problem = block_on_crest("reuse", FormingTuning(krylov_last=krylov_last))
         result, phases = None, []
         for move, size in (((0, 0, 0.01), 0.01), ((0, 0, 0.005), 0.01), ((0.2, 0, 0), 0.05)):
             result = problem.run({"cylinder": move}, max_increment=size, result=result)

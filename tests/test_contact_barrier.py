@@ -223,3 +223,25 @@ def test_a_holder_pressed_with_a_force_settles_on_the_barrier(threads: int) -> N
     assert -result.tool_forces["pusher"][-1][0] == pytest.approx(2 * mu * force, rel=5e-3)
     assert result.penetration["holder"][-1] == pytest.approx(BARRIER_DEPTH * thickness,
                                                              rel=1e-6)
+
+
+@pytest.mark.parametrize(("size", "thickness", "expected"), [
+    (2.0, 0.5, 0.25**2 / 2.0),  # flat elements: E t^2 / h below E T / 10
+    (0.5, 1.0, 0.1 * 1.0),      # cubes of 0.5 mm: E t^2 / h = E / 2, capped at E T / 10
+])
+def test_the_barriers_augmentation_is_the_blank_stiffness_capped_at_a_tenth_of_e_t(
+        size: float, thickness: float, expected: float) -> None:
+    """A Gauss-point tool's barrier takes E t^2 / h, at most E T / 10 (docs/theory/contact.md,
+    "The barrier's augmentation"), a node-to-surface tool E t^2 / h, and a tool's own r
+    either way; the blanks' numbers by hand: elements size x size x T / 2."""
+    mesh = HexMesh.box(8 * size, 8 * size, thickness, 8, 8, 2)
+    bottom = mesh.select(z=0.0)
+    tools = [RigidTool("gauss", PLANE, bottom, facing=(0, 0, -1)),
+             RigidTool("node", PLANE, bottom, contact="node"),
+             RigidTool("own", PLANE, bottom, facing=(0, 0, -1), augmentation=123.0)]
+    problem = FormingProblem(Solid(mesh, ELASTIC), tools)
+    n = bottom.size
+    stiffness = ELASTIC.E * (thickness / 2) ** 2 / size
+    np.testing.assert_allclose(problem.r[:n], ELASTIC.E * expected, rtol=1e-12)
+    np.testing.assert_allclose(problem.r[n:2 * n], stiffness, rtol=1e-12)
+    np.testing.assert_allclose(problem.r[2 * n:], 123.0)

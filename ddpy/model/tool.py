@@ -69,7 +69,8 @@ class RigidTool:
     """A rigid tool: its surface, the blank nodes that may touch it (``slaves``), Coulomb
     friction, and optionally the outward normal of the blank face that meets it
     (``facing``: only patches facing the opposite way are contact candidates), the
-    augmentation parameter r of the contact law (default: ``default_augmentation``) and the
+    augmentation parameter r of the contact law (default: ``default_augmentation``; for a
+    Gauss-point tool's barrier ``barrier_augmentation``) and the
     contact discretization (``contact``, CONTACT_DISCRETIZATIONS: "surface" and "gauss"
     need ``facing``, which picks the blank faces that meet the tool; by default "gauss"
     where it is given, else "node") with, for "gauss", the

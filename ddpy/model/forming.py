@@ -389,8 +389,9 @@ class FormingProblem:
         self.fixed = np.zeros((n, 3), dtype=bool)
         mesh = solid.mesh
         self.size = mesh.element_size()
+        self.thickness = mesh.initial_thickness()
         default_r = default_augmentation(solid)
-        barrier_r = barrier_augmentation(solid)
+        barrier_r = capped_augmentation(default_r, float(solid.props[0]), self.thickness)
         self.r = np.concatenate([
             np.full(t.slaves.size, t.augmentation or (barrier_r if t.contact == "gauss"
                                                       else default_r))
@@ -401,7 +402,6 @@ class FormingProblem:
         self.penalty = [t.penalty or (default_penalty(solid, faces) if t.contact == "gauss"
                                       else 0.0)
                         for t, faces in zip(self.tools, self._faces, strict=True)]
-        self.thickness = mesh.initial_thickness()
         self._pack = ToolPack(self.tools, mesh, self.penalty,
                               [-1.0 if t.barrier is None or t.contact != "gauss"
                                else t.barrier * self.thickness for t in self.tools])
@@ -1578,8 +1578,14 @@ def barrier_augmentation(solid: Solid) -> float:
     blank (58,136 N/mm) each increment's first trials changed 50 to 150 pairs and were cut,
     and E T / 10 (20,580 N/mm) took a quarter fewer iterations and half the time per mm
     (docs/theory/contact.md, "The barrier's augmentation")."""
-    return min(default_augmentation(solid),
-               BARRIER_SHARE * float(solid.props[0]) * solid.mesh.initial_thickness())
+    return capped_augmentation(default_augmentation(solid), float(solid.props[0]),
+                               solid.mesh.initial_thickness())
+
+
+def capped_augmentation(stiffness: float, young: float, thickness: float) -> float:
+    """barrier_augmentation from the blank's E t^2 / h, E and thickness T: min(E t^2 / h,
+    BARRIER_SHARE E T)."""
+    return min(stiffness, BARRIER_SHARE * young * thickness)
 
 
 def default_penalty(solid: Solid, faces: NDArray[np.integer]) -> float:

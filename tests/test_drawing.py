@@ -199,4 +199,11 @@ def test_tensile_limit_is_the_largest_engineering_stress_of_the_swift_curve() ->
     e = np.linspace(0.0, 1.0, 200_001)
     engineering = k * (eps0 + e) ** n * np.exp(-e)
     assert tensile_limit(k, eps0, n) == pytest.approx(engineering.max(), rel=1e-9)
+    # A wall in plane strain, its major stress c times the equivalent one: the load per
+    # initial section c K (eps0 + e)^n exp(-e / c).
+    c = 1.32
+    plane = c * k * (eps0 + e) ** n * np.exp(-e / c)
+    assert tensile_limit(k, eps0, n, ratio=c) == pytest.approx(plane.max(), rel=1e-9)
+    with pytest.raises(ValueError, match="ratio"):
+        tensile_limit(k, eps0, n, ratio=0.0)
     assert swift_stress(0.0, k, eps0, n) == pytest.approx(k * eps0**n)

@@ -408,6 +408,37 @@ def test_r_values_back_out() -> None:
         assert DDQ.r_value(angle) == pytest.approx(hill_r_value(DDQ, angle), rel=1e-14)
 
 
+def test_plane_strain_ratio_by_direct_minimisation() -> None:
+    """The plane-strain state minimises the equivalent stress over the stress across the
+    load at a fixed stress along it (zero strain across by normality): found by a scalar
+    search on ``equivalent_stress`` instead of the closed form, at several angles, and the
+    two textbook values (von Mises 2 / sqrt(3), normal anisotropy (1 + r) / sqrt(1 + 2 r))."""
+    from scipy.optimize import minimize_scalar
+
+    def searched(h: Hill48, angle: float) -> float:
+        c, s = math.cos(angle), math.sin(angle)
+
+        def equivalent(across: float) -> float:
+            # 1 along (c, s), ``across`` along (-s, c); Voigt order 11 22 33 12 23 31.
+            stress = [c * c + across * s * s, s * s + across * c * c, 0.0,
+                      (1.0 - across) * s * c, 0.0, 0.0]
+            return float(h.equivalent_stress(np.array(stress)))
+
+        return 1.0 / minimize_scalar(equivalent, bounds=(-1.0, 2.0), method="bounded",
+                                     options={"xatol": 1e-12}).fun
+
+    for h in (DDQ, HSS):
+        for angle in (0.0, 0.3, math.pi / 4, 1.2, math.pi / 2):
+            assert h.plane_strain_ratio(angle) == pytest.approx(searched(h, angle), rel=1e-9)
+    angles = np.linspace(0.0, math.pi / 2, 7)
+    np.testing.assert_allclose(Hill48.von_mises().plane_strain_ratio(angles),
+                               2 / math.sqrt(3), rtol=1e-14)
+    r = 1.8
+    normal = Hill48(F=1 / (1 + r), G=1 / (1 + r), H=r / (1 + r), N=(1 + 2 * r) / (1 + r))
+    np.testing.assert_allclose(normal.plane_strain_ratio(angles), (1 + r) / math.sqrt(1 + 2 * r),
+                               rtol=1e-14)
+
+
 def test_from_r_values_round_trip() -> None:
     fitted = Hill48.from_r_values(1.73, 1.23, 2.02)
     np.testing.assert_allclose(fitted.coefficients, DDQ.coefficients, atol=2e-4)

@@ -126,11 +126,12 @@ class Dimensions:
     Changed from the first guess (punch 1's outer nose 6 mm, inner edge 4 mm, measured on the
     coarse blank with Nagata tools): the cup wall tore in stage 2 (0.10 mm thick, plastic
     strain 1.7, beside punch 2's nose) under 27 kN, above what the reversed wall carries in
-    plane strain (about 21 kN on the quarter): the sheet wraps 180 degrees around the outer
-    nose and 90 around the inner edge, and at friction 0.15 the two radii, 6 and 4 times the
-    thickness, nearly double the drawing stress. With 7 and 5 mm (die 2's radius still
-    smaller than die 1's 8 mm, as in the paper) stage 2 draws: 25 kN at the end, the wall no
-    thinner than 0.80 mm, plastic strain at most 0.96. End ring flat: 0.25 mm wide.
+    plane strain (about 26 kN on the quarter, run.wall_strength): the sheet wraps 180
+    degrees around the outer nose and 90 around the inner edge, and at friction 0.15 the
+    two radii, 6 and 4 times the thickness, nearly double the drawing stress. With 7 and
+    5 mm (die 2's radius still smaller than die 1's 8 mm, as in the paper) stage 2 draws:
+    25 kN at the end, the wall no thinner than 0.80 mm, plastic strain at most 0.96. End
+    ring flat: 0.25 mm wide.
 
     Die 1's bore wall reaches 50 mm below its shoulder, past the cup's bottom at the end of
     stage 1, so that the cup wall never meets its free lower edge.
@@ -188,6 +189,8 @@ DIMENSIONS = Dimensions()
 
 #: Swift's law of the DDQ steel (paper Table 4), as the material deck gives it.
 SWIFT = {"k": 568.3, "eps0": 0.0059, "n": 0.233}
+#: Hill'48's coefficients of the DDQ steel (paper Table 4), as the material deck gives them.
+HILL48 = {"F": 0.3137, "G": 0.3663, "H": 0.6337, "L": 1.5, "M": 1.5, "N": 1.1764}
 
 #: What each dimension is, and where its value comes from. The benchmark's drawing
 #: (Numisheet'99 benchmark C) is not in the paper, and no public copy of it was found, so
@@ -246,8 +249,8 @@ DIMENSION_SOURCES: dict[str, tuple[str, str]] = {
 CHANGES: tuple[tuple[str, str], ...] = (
     ("punch 1's outer nose 6 -> 7 mm and inner edge (die 2) 4 -> 5 mm",
      "stage 2 tore the cup wall beside punch 2's nose (0.10 mm thick, plastic strain 1.7) "
-     "under 27 kN, above what the reversed wall carries in plane strain (about 21 kN on "
-     "the quarter): the sheet wraps 180 and 90 degrees around the two radii"),
+     "under 27 kN, above what the reversed wall carries in plane strain (about 26 kN on "
+     "the quarter, run.wall_strength): the sheet wraps 180 and 90 degrees around the two radii"),
     ("blank-holder 1's flat moved 2 mm out from the shoulder's end, its inner edge rounded "
      "(3 mm)",
      "the medium blank's stage 1 failed at 39.77 mm, where the trough of an ear reached the "
@@ -393,10 +396,10 @@ MATERIAL = """\
 # ddpy material deck.  Units MPa.  Written by make_case.py
 # DDQ mild steel of the Numisheet'99 benchmark C (paper Table 4).
 elastic            E 210000  nu 0.3
-yield              hill48  F 0.3137  G 0.3663  H 0.6337  L 1.5  M 1.5  N 1.1764
-hardening          swift   K 568.3  eps0 0.0059  n 0.233
+yield              hill48  {hill48}
+hardening          swift   K {k:g}  eps0 {eps0:g}  n {n:g}
 rolling_direction  0          # along x
-"""
+""".format(hill48="  ".join(f"{c} {v:g}" for c, v in HILL48.items()), **SWIFT)
 
 TOOL = """\
 tool {tool}

@@ -39,6 +39,7 @@ import numpy as np
 
 from ddpy.model.control import DEFAULT_PENETRATION as PENETRATION_LIMIT
 from ddpy.model.control import IncrementLimits
+from ddpy.model.material import Hill48
 from ddpy.studies.bending import force_oscillation
 from ddpy.studies.drawing import (
     contact_force_balance,
@@ -1391,8 +1392,26 @@ def stage_estimates(holder_forces: dict[str, float]) -> dict[str, dict[str, floa
         out[stage] = {"draw_ratio": ratio, "siebel_N": siebel_force(*args, entry=entry) / 4.0,
                       "siebel_holder_N": siebel_force(*args, holder_force=holder,
                                                       entry=entry) / 4.0,
-                      "neck_N": np.pi * mean * t * tensile_limit(**make_case.SWIFT) / 4.0}
+                      "neck_N": np.pi * mean * t * wall_strength() / 4.0}
     return out
+
+
+def wall_strength() -> float:
+    """The load per initial section (MPa) at which the new cup's wall necks: the wall
+    beside the punch's nose cannot shrink around the punch, so it is drawn in plane strain,
+    whose Considere load lies above the uniaxial tensile strength by the ratio of the major
+    stress to the equivalent one (``Hill48.plane_strain_ratio``), taken in the weakest
+    direction of the sheet (the wall necks first where that ratio is least)."""
+    return tensile_limit(**make_case.SWIFT, ratio=wall_ratio()[0])
+
+
+def wall_ratio() -> tuple[float, float]:
+    """The DDQ steel's least plane-strain ratio of the major stress to the equivalent one
+    (``Hill48.plane_strain_ratio``) over the directions of the sheet, and its angle to the
+    rolling direction in degrees (every degree; the sheet's symmetry gives 0 to 90)."""
+    angles = np.radians(np.arange(91.0))
+    ratios = Hill48(**make_case.HILL48).plane_strain_ratio(angles)
+    return float(ratios.min()), float(np.degrees(angles[int(np.argmin(ratios))]))
 
 
 def soundness_section(numbers: dict[str, dict[str, Any]], models: list[str]) -> list[str]:
@@ -1418,9 +1437,17 @@ def soundness_section(numbers: dict[str, dict[str, Any]], models: list[str]) -> 
              "bending's stress, under its friction, into the drawing zone), bending over "
              "each radius, and the blank-holder's "
              "friction at the runs' mean holder reaction at the end of the stage), and the "
-             "force at which the new wall would neck (the steel's tensile strength, "
-             f"{tensile_limit(**make_case.SWIFT):.0f} MPa from its Swift law, times the "
-             "wall's section). A drawing is sound when its ratios are within practice (a "
+             "force at which the new wall would neck: the wall beside the punch's nose "
+             "cannot shrink around the punch, so it is pulled in plane strain, whose "
+             "Considere load per initial section, "
+             f"{wall_strength():.0f} MPa, lies above the uniaxial tensile strength "
+             f"{tensile_limit(**make_case.SWIFT):.0f} MPa of the steel's Swift law by "
+             "Hill'48's ratio of the major stress to the equivalent one in the sheet's "
+             "weakest direction (`Hill48.plane_strain_ratio`, "
+             f"{wall_ratio()[0]:.3f} at {wall_ratio()[1]:.0f} degrees to the rolling direction "
+             "here; 2/sqrt(3) for von "
+             "Mises, docs/theory/material.md), times the wall's section. A drawing is sound "
+             "when its ratios are within practice (a "
              "first draw below the limiting ratio of about 2 of a DDQ steel, a redraw of 1.2 "
              "to 1.4) and its force below the necking force; Siebel's estimate is good to "
              "10 or 20 %. A run that did not complete a stage has no computed force there "

@@ -319,6 +319,20 @@ class Hill48:
         return np.sqrt((G + H) / (F * s**4 + G * c**4 + H * np.cos(2 * angle) ** 2
                                   + 2 * N * s**2 * c**2))
 
+    def plane_strain_ratio(self, angle: ArrayLike) -> NDArray[np.float64]:
+        """In-plane tension at ``angle`` (radians) to RD with no strain across it (a cup's
+        wall held by the punch): the stress along the angle over the equivalent stress,
+        1 / sqrt(A11 - A12^2 / A22), where 2 f = A11 s1^2 + 2 A12 s1 s2 + A22 s2^2 in the
+        stresses along and across the angle; (1 + r) / sqrt(1 + 2 r) under normal
+        anisotropy r, 2 / sqrt(3) for von Mises (docs/theory/material.md)."""
+        s2, c2 = np.sin(angle) ** 2, np.cos(angle) ** 2
+        F, G, H, N = self.F, self.G, self.H, self.N
+        h, shear = H * np.cos(2 * np.asarray(angle)) ** 2, 2 * N * s2 * c2
+        a11 = F * s2**2 + G * c2**2 + h + shear
+        a12 = (F + G) * s2 * c2 - h - shear
+        a22 = F * c2**2 + G * s2**2 + h + shear
+        return 1.0 / np.sqrt(a11 - a12**2 / a22)
+
     def equivalent_stress(self, stress: ArrayLike) -> NDArray[np.float64]:
         """sqrt(2 f) of Voigt stresses (..., 6) in the material axes."""
         s = np.asarray(stress, dtype=float)

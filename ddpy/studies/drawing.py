@@ -210,12 +210,18 @@ def swift_stress(strain: float, k: float, eps0: float, n: float) -> float:
     return float(k * (eps0 + strain) ** n)
 
 
-def tensile_limit(k: float, eps0: float, n: float) -> float:
-    """The engineering tensile strength (MPa) of a Swift material: the largest of
-    K (eps0 + e)^n exp(-e) over the plastic strain e (elastic strain neglected), reached at
-    Considere's e = n - eps0 (at e = 0 when eps0 >= n)."""
-    e = max(0.0, n - eps0)
-    return swift_stress(e, k, eps0, n) * float(np.exp(-e))
+def tensile_limit(k: float, eps0: float, n: float, ratio: float = 1.0) -> float:
+    """The engineering tensile strength (MPa) of a Swift material: the largest load per
+    initial section, c K (eps0 + e)^n exp(-e / c), over the equivalent plastic strain e
+    (elastic strain neglected), where c is ``ratio``, the major stress over the
+    equivalent one: 1 in uniaxial tension, ``Hill48.plane_strain_ratio`` in a wall that
+    cannot shrink across the load (its major strain is then e / c, by equal plastic
+    work, and its section falls as exp(-e / c)). Reached at Considere's e = c n - eps0
+    (at e = 0 when eps0 >= c n)."""
+    if not ratio > 0.0:
+        raise ValueError(f"ratio must be positive, got {ratio}")
+    e = max(0.0, ratio * n - eps0)
+    return ratio * swift_stress(e, k, eps0, n) * float(np.exp(-e / ratio))
 
 
 def siebel_force(diameter: float, mean_diameter: float, thickness: float,

@@ -386,6 +386,47 @@ def test_claim_d_explains_itself_from_what_set_the_increments() -> None:
     assert "contact_touch +" in text
 
 
+def test_failing_effort_claims_name_the_increment_control_only_where_the_limits_show_it(
+) -> None:
+    """(d), (e), (g) failing: when the contact limits ended under CONTACT_SHARE of each
+    facet model's increments, the cause given is the increment control; when they ended
+    more, the cause is not computed. (e) splits its cause between the iterations and the
+    time per iteration by the runs' own numbers, and names the part of the split that grew."""
+    def limited(numbers: dict[str, Any], contact_share: float) -> None:
+        for n in numbers.values():
+            for s in n["stages"].values():
+                touch = int(contact_share * s["increments"])
+                s["limits"] = {"rotation": s["increments"] - touch, "contact_touch": touch}
+
+    claims = lambda numbers: {t[:3]: (v, d) for t, v, d in run.claims(numbers)}  # noqa: E731
+    numbers = {m: synthetic_run(m).numbers for m in run.MODELS}
+    for m in ("facets_coarse", "facets_fine"):
+        n = numbers[m]
+        for stage in run.STAGES:  # as many increments and iterations as Nagata
+            n["stages"][stage]["increments"] = numbers["nagata"]["stages"][stage]["increments"]
+            n["stages"][stage]["iterations"] = numbers["nagata"]["stages"][stage]["iterations"]
+        n["increments"], n["iterations"] = (numbers["nagata"]["increments"],
+                                            numbers["nagata"]["iterations"])
+        n["wall_s"] = numbers["nagata"]["wall_s"]
+    limited(numbers, 0.02)
+    got = claims(numbers)
+    for c in ("(d)", "(e)", "(g)"):
+        verdict, detail = got[c]
+        assert verdict == "does not hold", (c, detail)
+        assert "cause: the increment control" in detail, (c, detail)
+    assert "Faceted-coarse: the iterations" in got["(e)"][1]
+    limited(numbers, 0.3)
+    got = claims(numbers)
+    for c in ("(d)", "(g)"):
+        assert "cause not computed" in got[c][1] and "increment control (" not in got[c][1]
+    # The time per iteration as the cause: the coarse facets' contact search doubled.
+    numbers["facets_coarse"]["wall_s"] = 0.5 * numbers["nagata"]["wall_s"]
+    numbers["facets_coarse"]["per_iteration_s"]["contact"] = 0.03
+    detail = claims(numbers)["(e)"][1]
+    assert "Faceted-coarse: the time per iteration (0.5" in detail, detail
+    assert "most of the difference in contact" in detail, detail
+
+
 def test_the_shape_claim_reads_where_the_errors_sit() -> None:
     """(i): Nagata's largest positive error on die 1 and negative on punch 2, the fine
     facets' largest about twice Nagata's; moved to another tool, it does not hold."""

@@ -43,8 +43,10 @@ MODELS = ("bezier", "nagata", "facets_coarse", "facets_fine")
 #: the reports' fifth column, on the blanks of REFERENCE_MESHES, for comparison with ddpy's
 #: (the solid-shell, Gauss-point contact with its barrier).
 REFERENCE = "dd3imp"
-REFERENCE_MESHES = ("coarse", "paper")
 MESHES = ("coarse", "medium", "paper")
+#: Every blank: claims (c) and (f) weigh the contact's discretization against the tool
+#: model on the blank they are judged on (run.contact_cause).
+REFERENCE_MESHES = MESHES
 TOOLS = ("die1", "holder1", "punch1", "holder2", "punch2")
 #: The blank (paper): 170 mm in diameter, 0.98 mm thick, 2 layers; quarter model.
 RADIUS, THICKNESS, LAYERS = 85.0, 0.98, 2

@@ -126,6 +126,13 @@ DEFAULT_RMIN_YIELD = IncrementLimits().yield_tolerance
 #: Share of a run's increments at the largest size from which the size, not the contact,
 #: is what fixed their count (claim (d)'s explanation).
 AT_MAX_SHARE = 0.8
+#: Share of the facets' increments ended by a contact limit (first touch, release) below
+#: which the increment control, not the facets, is what fixed their count and size (claims
+#: (d), (g), (h)): DD3IMP's r_min ends an increment at every node's contact change.
+CONTACT_SHARE = 0.1
+#: Claim (e): the facets' time per iteration over the smooth models' counts as the same
+#: within this fraction (the cause of a failed ratio is then the iterations).
+SAME_PER_ITERATION = 0.1
 #: A run is stopped when its lead tool advances less than STALL_MM in STALL_INCREMENTS
 #: increments (each cut to a sliver of the smallest size), or by less than STALL_STEP mm in
 #: one increment, and reported as partial.
@@ -762,6 +769,8 @@ def claims(numbers: dict[str, dict[str, Any]]) -> list[tuple[str, str, str]]:
             f"{LABELS[m]} {numbers[m]['iterations'] / max(numbers[m]['increments'], 1):.2f}"
             for m in trio))
         parts.append(increment_cause(numbers, trio))
+        if not all(verdicts):
+            parts.append(control_cause(numbers, facets, STAGES))
     reached = [f"{stage} {what}: {v}" for stage in STAGES
                for what in ("increments", "iterations")
                if (v := _values(numbers, MODELS, stage, what, "d"))]
@@ -811,6 +820,8 @@ def effort_claims(numbers: dict[str, dict[str, Any]]) -> list[tuple[str, str, st
                      + " (the iterations do not depend on the load on the machine's cores, "
                      "the time per iteration does: the runs' wall times compare only as far "
                      "as they shared the cores alike)")
+        if not all(verdicts):
+            parts.append(cpu_cause(numbers, facets, split, ratios))
     elif checked:
         needs = "runs on equal threads"
         checked = False
@@ -849,6 +860,9 @@ def effort_claims(numbers: dict[str, dict[str, Any]]) -> list[tuple[str, str, st
                 f"{LABELS[m]} {size[m]:.4f} mm" for m in quad)
                 + f" (both facet models below both smooth ones by more than these differ, "
                 f"{spread:.4f} mm: {_yes(smaller)})")
+        failed = tuple(s for s, ok in zip(STAGES, verdicts, strict=True) if not ok)
+        if failed:
+            parts.append(control_cause(numbers, facets, failed))
     out.append(_claim("(g) Facets take smaller increments (Fig. 21)", parts, verdicts,
                       checked, needs, []))
     # (h) finer facets, fewer increments
@@ -861,6 +875,8 @@ def effort_claims(numbers: dict[str, dict[str, Any]]) -> list[tuple[str, str, st
         parts.append(f"increments: coarse facets {inc['facets_coarse']}, fine "
                      f"{inc['facets_fine']} (fewer by more than Bezier and Nagata differ, "
                      f"{spread}: {_yes(fewer)})")
+        if not fewer:
+            parts.append(control_cause(numbers, facets, STAGES))
     out.append(_claim("(h) Finer facets need slightly fewer increments (Table 6)", parts,
                       verdicts, checked, needs, []))
     return out
@@ -988,6 +1004,76 @@ def increment_cause(numbers: dict[str, dict[str, Any]], trio: tuple[str, ...]) -
         worst = min(share, key=share.get)
         text += (f"; {LABELS[worst]} ran {100 * (1 - share[worst]):.0f} % of its increments "
                  "below the largest size, set by the limits above")
+    return text
+
+
+def control_cause(numbers: dict[str, dict[str, Any]], facets: tuple[str, ...],
+                  stages: tuple[str, ...]) -> str:
+    """Why the facets' increments are not more, or not smaller, than the smooth models'
+    (claims (d), (g), (h)) over ``stages``, read off what ended each increment: the facets
+    multiply increments only through contact changes (a node riding over a facet edge
+    leaves and retouches the tool), and ddpy's r_min ends an increment at a contact change
+    only where a node opens a new contact zone or a loaded node is released (deck
+    ``rmin_touch new``, ``rmin_release``; docs/theory/contact.md, "Increment control"),
+    where DD3IMP's lands every node. When the contact limits ended fewer than
+    CONTACT_SHARE of each facet model's increments, that control is the cause the data
+    show; else it is not computed."""
+    contact = ("contact_touch", "contact_release")
+    counts = {}
+    for m in ("nagata", *facets):
+        limits = [numbers[m]["stages"][s].get("limits", {}) for s in stages]
+        total = sum(sum(lim.values()) for lim in limits)
+        by_contact = sum(lim.get(k, 0) for lim in limits for k in contact)
+        per = [numbers[m]["stages"][s]["iterations"] / max(numbers[m]["stages"][s]
+                                                           ["increments"], 1) for s in stages]
+        counts[m] = (by_contact, total, float(np.mean(per)))
+    where = " and ".join(stages)
+    listed = ", ".join(f"{LABELS[m]} {c} of {n} ({100 * c / max(n, 1):.0f} %)"
+                       for m, (c, n, _) in counts.items())
+    share = max(c / max(n, 1) for m, (c, n, _) in counts.items() if m in facets)
+    if share >= CONTACT_SHARE:
+        return (f"increments ended by a contact limit ({where}): {listed}; at least "
+                f"{100 * CONTACT_SHARE:.0f} % for a facet model, so the increment control's "
+                "contact limits do see the facets: cause not computed")
+    per_it = ", ".join(f"{LABELS[m]} {p:.2f}" for m, (_, _, p) in counts.items())
+    return (f"cause: the increment control (increments ended by a contact limit, {where}: "
+            f"{listed}, below {100 * CONTACT_SHARE:.0f} % for every facet model): ddpy's "
+            "r_min ends an increment at a contact change only where a node opens a new "
+            "contact zone or a loaded node is released, where DD3IMP's lands every node "
+            "(docs/theory/contact.md, \"Increment control\"), so the nodes that leave and "
+            "retouch the facets at their edges do not shorten the increments; what the "
+            f"facets cost shows in the iterations per increment instead ({per_it})")
+
+
+def cpu_cause(numbers: dict[str, dict[str, Any]], facets: tuple[str, ...],
+              split: dict[str, float], ratios: dict[str, float]) -> str:
+    """Why claim (e) fails, from its split of each facet model's time ratio into the
+    iterations' ratio and the time per iteration's: a time per iteration within
+    SAME_PER_ITERATION of the smooth models' leaves the iterations as the cause (then
+    claim (d)'s, the increment control, where control_cause finds it); else the time per
+    iteration (the code's contact search and assembly over more facets, or the load on
+    the machine's cores: the runs' own split says which part grew)."""
+    out = []
+    for m in facets:
+        per = ratios[m] / max(split[m], 1e-12)
+        if TWICE[0] <= ratios[m] <= TWICE[1]:
+            continue
+        if abs(per - 1.0) <= SAME_PER_ITERATION:
+            out.append(f"{LABELS[m]}: the iterations ({split[m]:.2f} times the smooth "
+                       f"models'; its time per iteration {per:.2f} times theirs, within "
+                       f"{100 * SAME_PER_ITERATION:.0f} %)")
+        else:
+            smooth = {p: 0.5 * sum(numbers[s]["per_iteration_s"].get(p, 0.0)
+                                   for s in ("bezier", "nagata")) for p in PARTS}
+            grew = {p: numbers[m]["per_iteration_s"].get(p, 0.0) - smooth[p] for p in PARTS}
+            most = max(grew, key=grew.get)
+            where = (f"most of the difference in {most}, {grew[most]:+.3g} s" if grew[most] > 0
+                     else "no part of its split grew: the load on the machine's cores")
+            out.append(f"{LABELS[m]}: the time per iteration ({per:.2f} times the smooth "
+                       f"models'; {where})")
+    text = "cause: " + "; ".join(out)
+    if any("the iterations" in o for o in out):
+        text += "; the iterations' " + control_cause(numbers, facets, STAGES)
     return text
 
 
@@ -2037,7 +2123,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--models", default=",".join(MODELS),
                         help="comma-separated among " + ", ".join(MODELS) + " and "
                         f"{make_case.REFERENCE} (the Nagata tools at DD3IMP's element and "
-                        "contact, on the " + " and ".join(make_case.REFERENCE_MESHES)
+                        "contact, on the " + ", ".join(make_case.REFERENCE_MESHES)
                         + " blanks)")
     parser.add_argument("--json", action="store_true", help="print the numbers only")
     parser.add_argument("--reuse", action="store_true",

@@ -1053,18 +1053,19 @@ def cpu_cause(numbers: dict[str, dict[str, Any]], facets: tuple[str, ...],
     claim (d)'s, the increment control, where control_cause finds it); else the time per
     iteration (the code's contact search and assembly over more facets, or the load on
     the machine's cores: the runs' own split says which part grew)."""
-    out = []
+    smooth = {p: 0.5 * sum(numbers[s]["per_iteration_s"].get(p, 0.0)
+                           for s in ("bezier", "nagata")) for p in PARTS}
+    out, by_iterations = [], False
     for m in facets:
         per = ratios[m] / max(split[m], 1e-12)
         if TWICE[0] <= ratios[m] <= TWICE[1]:
             continue
         if abs(per - 1.0) <= SAME_PER_ITERATION:
+            by_iterations = True
             out.append(f"{LABELS[m]}: the iterations ({split[m]:.2f} times the smooth "
                        f"models'; its time per iteration {per:.2f} times theirs, within "
                        f"{100 * SAME_PER_ITERATION:.0f} %)")
         else:
-            smooth = {p: 0.5 * sum(numbers[s]["per_iteration_s"].get(p, 0.0)
-                                   for s in ("bezier", "nagata")) for p in PARTS}
             grew = {p: numbers[m]["per_iteration_s"].get(p, 0.0) - smooth[p] for p in PARTS}
             most = max(grew, key=grew.get)
             where = (f"most of the difference in {most}, {grew[most]:+.3g} s" if grew[most] > 0
@@ -1072,7 +1073,7 @@ def cpu_cause(numbers: dict[str, dict[str, Any]], facets: tuple[str, ...],
             out.append(f"{LABELS[m]}: the time per iteration ({per:.2f} times the smooth "
                        f"models'; {where})")
     text = "cause: " + "; ".join(out)
-    if any("the iterations" in o for o in out):
+    if by_iterations:
         text += "; the iterations' " + control_cause(numbers, facets, STAGES)
     return text
 
@@ -1511,6 +1512,7 @@ def soundness_section(numbers: dict[str, dict[str, Any]], models: list[str]) -> 
         if values:
             reactions[stage] = float(np.mean(values))
     estimates = stage_estimates(reactions)
+    ratio, angle = wall_ratio()
     lines = ["### Is it a sound drawing?", "",
              "A hand check of the reconstruction (`stage_estimates`, quarter model): the draw "
              "ratio of each stage (blank over punch 1, punch 1 over punch 2), Siebel's "
@@ -1530,7 +1532,7 @@ def soundness_section(numbers: dict[str, dict[str, Any]], models: list[str]) -> 
              f"{tensile_limit(**make_case.SWIFT):.0f} MPa of the steel's Swift law by "
              "Hill'48's ratio of the major stress to the equivalent one in the sheet's "
              "weakest direction (`Hill48.plane_strain_ratio`, "
-             f"{wall_ratio()[0]:.3f} at {wall_ratio()[1]:.0f} degrees to the rolling direction "
+             f"{ratio:.3f} at {angle:.0f} degrees to the rolling direction "
              "here; 2/sqrt(3) for von "
              "Mises, docs/theory/material.md), times the wall's section. A drawing is sound "
              "when its ratios are within practice (a "

@@ -608,6 +608,10 @@ def test_the_timed_run_is_judged_against_the_target_and_its_column(tmp_path: Pat
         run.timing_section(unrecorded, numbers, "paper"))
     other = "\n".join(run.timing_section(_timed(limit, iterations=3000), numbers, "paper"))
     assert "another computation" in other and "3650 iterations" in other
+    assert "the code moved between them" in other
+    numbers["nagata"]["code"] = "def5678"  # the timed run's code, on other threads
+    other = "\n".join(run.timing_section(_timed(limit, iterations=3000), numbers, "paper"))
+    assert "the same code on another number of threads" in other, other
     # the record lives in the runs file beside the kept runs, which skip it
     path = tmp_path / "runs.json"
     run.keep_runs(path, {"nagata": synthetic_run("nagata")})

@@ -1761,8 +1761,12 @@ def timing_section(timing: dict[str, Any] | None, numbers: dict[str, dict[str, A
                if same else
                f"{kept['increments']} increments and {kept['iterations']} iterations "
                f"against this run's {timing['increments']} and {timing['iterations']}: "
-               "another computation (the code moved between them), whose answers the "
-               "report's claims use; this run says only how long the defaults take."),
+               "another computation ("
+               + ("the same code on another number of threads, which sums OpenMP's parts "
+                  "in another order" if kept.get("code") == timing.get("code") else
+                  "the code moved between them")
+               + "), whose answers the report's claims use; this run says only how long "
+               "the defaults take."),
             "",
         ]
     return lines

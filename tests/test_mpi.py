@@ -142,7 +142,14 @@ def test_built_in_case_on_two_processes_gives_the_sequential_answers(
     (a, fa), (b, fb) = _increments(tmp_path / "seq"), _increments(tmp_path / "mpi")
     assert a["step"].size == b["step"].size == 40
     np.testing.assert_array_equal(a["cutbacks"], b["cutbacks"])
-    assert np.abs(a["iterations"] - b["iterations"]).sum() <= 3
+    # With single factors the two runs' corrections differ by GMRES's tolerance, not by
+    # rounding, and the first increment (the punch closing on the blank: 19 iterations, its
+    # contact set switching in 18 of them, step lengths 0.125-1) follows another path with
+    # them: measured 19, 19 and 22 iterations on 2 processes. Its count is no rounding-stable
+    # quantity; that it converges with the same cut-backs and step is (asserted above and
+    # below). The later increments take 1-3 iterations each.
+    first = 1 if single_factors else 0
+    assert np.abs(a["iterations"][first:] - b["iterations"][first:]).sum() <= 3
     # (single factors, measured: steps 4.2e-4, tool forces 1.4e-3 of the largest, fields
     # 7e-6 apart: each run within 1e-3 of the force scale of equilibrium)
     step, force, field = (1e-8, 1e-7, 1e-8) if not single_factors else (1e-3, 5e-3, 1e-4)

@@ -117,9 +117,16 @@ def test_facets_overestimate_the_strain_only_beyond_the_smooth_models_spread() -
     found = {text[:3]: (verdict, detail) for text, verdict, detail in run.claims(numbers)}
     assert found["(b)"][0] == "does not hold"
     assert "(0.0023): no (Faceted-coarse +0.0053, Faceted-fine +0.0008)" in found["(b)"][1]
+    # the failure's cause: an excess within the smooth models' spread is not resolved
+    assert found["(b)"][1].endswith(
+        "cause: Faceted-fine above both smooth models by 0.0008, less than they differ "
+        "(0.0023): an excess these runs do not resolve")
     ends["facets_fine"]["plastic_strain_max"] = 0.8460  # above by 0.0025
     found = {text[:3]: verdict for text, verdict, _ in run.claims(numbers)}
     assert found["(b)"] == "holds"
+    ends["facets_coarse"]["plastic_strain_max"] = 0.8400  # below both smooth models
+    detail = {text[:3]: detail for text, _, detail in run.claims(numbers)}["(b)"]
+    assert "cause: Faceted-coarse below the smooth models (-0.0035): not computed" in detail
 
 
 def test_a_partial_run_leaves_its_claims_not_checked() -> None:

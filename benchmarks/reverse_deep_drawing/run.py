@@ -647,7 +647,7 @@ def claims(numbers: dict[str, dict[str, Any]]) -> list[tuple[str, str, str]]:
     facets = ("facets_coarse", "facets_fine")
     out = []
     # (a) oscillation of the punch force
-    parts, verdicts, ratio, own = [], [], {}, {}
+    parts, verdicts, ratio, own, noise = [], [], {}, {}, {}
     smooth = [m for m in ("bezier", "nagata") if _complete(numbers, m)]
     checked = bool(smooth) and all(_complete(numbers, m) for m in facets)
     for stage in STAGES if checked else ():
@@ -661,6 +661,8 @@ def claims(numbers: dict[str, dict[str, Any]]) -> list[tuple[str, str, str]]:
         coarse = numbers["facets_coarse"]["stages"][stage]
         mean = coarse["oscillation_N"] / max(coarse["oscillation_rel"], 1e-300)
         own[stage] = (osc["facets_coarse"] - top) / max(mean, 1e-300)
+        # The smooth models' own difference, in the same measure: the noise of the verdict.
+        noise[stage] = (top - min(osc[m] for m in smooth)) / max(mean, 1e-300)
         verdicts += [above, refined]
         parts.append(f"{stage}: " + ", ".join(f"{LABELS[m]} {osc[m]:.3g} N" for m in osc)
                      + f" (both facet models above the smooth: {_yes(above)}; fine below "
@@ -669,11 +671,13 @@ def claims(numbers: dict[str, dict[str, Any]]) -> list[tuple[str, str, str]]:
         # "More in stage 2" is about the facets' effect: the smooth models' own oscillation
         # (friction, contact changes of the blank's nodes) is no part of it, so the verdict
         # takes the facets' excess over it as a share of the force; the ratio is shown too.
-        more = own["stage2"] > own["stage1"]
+        spread = max(noise.values())
+        more = own["stage2"] - own["stage1"] > spread
         verdicts.append(more)
         parts.append(f"the coarse facets' excess over the smooth models' oscillation, as a "
-                     f"share of the mean force: {100 * own['stage1']:.2f} % in stage 1, "
-                     f"{100 * own['stage2']:.2f} % in stage 2 (larger in stage 2: "
+                     f"share of the mean force: {100 * own['stage1']:.3f} % in stage 1, "
+                     f"{100 * own['stage2']:.3f} % in stage 2 (larger in stage 2 by more "
+                     f"than the smooth models differ, {100 * spread:.3f} %: "
                      f"{_yes(more)}); as a ratio to the smooth models': "
                      f"{ratio['stage1']:.2f} times in stage 1, {ratio['stage2']:.2f} in stage 2, "
                      f"the smooth models' own oscillation growing too")
@@ -1043,9 +1047,10 @@ def control_cause(numbers: dict[str, dict[str, Any]], facets: tuple[str, ...],
         limits = [numbers[m]["stages"][s].get("limits", {}) for s in stages]
         total = sum(sum(lim.values()) for lim in limits)
         by_contact = sum(lim.get(k, 0) for lim in limits for k in contact)
-        per = [numbers[m]["stages"][s]["iterations"] / max(numbers[m]["stages"][s]
-                                                           ["increments"], 1) for s in stages]
-        counts[m] = (by_contact, total, float(np.mean(per)))
+        # Over the stages together, as claim (d)'s own iterations per increment.
+        its = sum(numbers[m]["stages"][s]["iterations"] for s in stages)
+        counts[m] = (by_contact, total,
+                     its / max(sum(numbers[m]["stages"][s]["increments"] for s in stages), 1))
     where = " and ".join(stages)
     listed = ", ".join(f"{LABELS[m]} {c} of {n} ({100 * c / max(n, 1):.0f} %)"
                        for m, (c, n, _) in counts.items())
@@ -1901,6 +1906,26 @@ def convergence_quantities(n: dict[str, Any]) -> dict[str, float | None]:
     return out
 
 
+def deck_difference(settings: dict[str, dict[str, float]], fine: str, finer: str,
+                    change: float) -> str:
+    """The end of the convergence verdict's sentence: what else than the blank differs
+    between the decks of ``fine`` and ``finer`` (``settings``: name -> blank -> value), and
+    whether a setting's measured effect (make_case.SETTING_MOVES) is below ``change``, the
+    smallest relative change not converged (then the blank's refinement is the cause)."""
+    differ = {k: v for k, v in settings.items() if v[fine] != v[finer]}
+    if not differ:
+        return ", so this is the blank's refinement"
+    listed = "; ".join(f"`{k}` {v[fine]:g} against {v[finer]:g}" for k, v in differ.items())
+    moved = {k: make_case.SETTING_MOVES.get(k) for k in differ}
+    if all(m is not None and m < change for m in moved.values()):
+        return (f"; their decks differ in {listed}, measured to move the tool forces by at "
+                f"most {100 * max(moved.values()):.2g} % (make_case.SETTING_MOVES), less "
+                f"than the {100 * change:.1f} % here, so this is the blank's refinement")
+    return (f"; their decks differ in {listed} too, whose effect on it is "
+            + ("not measured" if any(m is None for m in moved.values()) else
+               "as large as the change") + ": the blank's refinement or that setting")
+
+
 def convergence_trend(key: str, meshes: list[str], row: list[float | None],
                       runs: dict[str, dict[str, Any]]) -> str:
     """Why ``key`` (its values ``row`` on ``meshes``, coarse to fine) missed the mesh
@@ -1959,6 +1984,7 @@ def convergence_section(by_mesh: dict[str, dict[str, dict[str, Any]]], model: st
              _row(["", *meshes, f"{finer} against {fine}"]),
              _row(["---"] * (len(meshes) + 2))]
     missed, unknown, trends = [], [], []
+    least_miss = float("inf")
     for key in values[finer]:
         row = [values[m][key] for m in meshes]
         a, b = values[fine][key], values[finer][key]
@@ -1971,6 +1997,7 @@ def convergence_section(by_mesh: dict[str, dict[str, dict[str, Any]]], model: st
             verdict = f"{100 * change:+.1f} % ({'within' if ok else 'outside'})"
             if not ok:
                 missed.append(f"{key.split(' [')[0]} ({100 * change:+.1f} %)")
+                least_miss = min(least_miss, abs(change))
                 trends.append(convergence_trend(key, meshes, row, runs))
         lines.append(_row([key, *["-" if v is None else f"{v:.4g}" for v in row], verdict]))
     setups = {m: (runs[m].get("discretization", "not recorded"), runs[m].get("code") or "?")
@@ -1990,8 +2017,8 @@ def convergence_section(by_mesh: dict[str, dict[str, dict[str, Any]]], model: st
         same = setups[fine] == setups[finer]
         lines.append(
             f"Not converged between {fine} and {finer}: {', '.join(missed)}. " + (
-                "The two runs share their element, contact and code, so this is the blank's "
-                "refinement." if same else
+                "The two runs share their element, contact and code"
+                + deck_difference(settings, fine, finer, least_miss) + "." if same else
                 "The two runs differ in more than the blank ("
                 + " against ".join(f"{d}, {c}" for d, c in (setups[fine], setups[finer]))
                 + "), so this is no pure mesh effect: rerun both at one discretization and "

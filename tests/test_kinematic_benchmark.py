@@ -90,3 +90,20 @@ def test_verdict_flags_a_springback_that_differs(mixed: float, isotropic: float,
     assert flagged is differs
     assert text.startswith("differs" if differs else "same")
     assert f"{mixed - isotropic:+.2f} deg" in text
+
+
+def test_the_report_weighs_each_runs_deepest_node_against_the_limit(tmp_path: Path) -> None:
+    """The penetration section: the deepest node of each run over its blank's thickness
+    against the 1 % limit; a kept run without the record says so."""
+    run = {"status": "completed", "angles_deg": {"beta": [12.0, 25.0]}, "increments": 10,
+           "iterations": 20, "per_iteration_s": {"total": 0.02, "assembly": 0.01},
+           "threads": 1, "code": "abc1234", "thickness_mm": 1.0,
+           "penetration_mm": {"punch": 0.005, "die": 0.004}}
+    numbers = {"bending/mixed": run, "bending/isotropic": {
+        **run, "penetration_mm": {"punch": 0.0105, "die": 0.002}},
+               "strip_draw/mixed": {k: v for k, v in run.items() if k != "penetration_mm"}}
+    text = kinematic.report(numbers, kinematic.fitted_table(), (0.0, 0.0),
+                            tmp_path / "curves.png", "abc1234")
+    assert "| bending | mixed | 0.005 | punch | 0.50 % | yes |" in text
+    assert "| bending | isotropic | 0.0105 | punch | 1.05 % | **no** |" in text
+    assert "| strip_draw | mixed | not recorded (a run kept at code abc1234) |" in text

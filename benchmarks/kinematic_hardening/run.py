@@ -31,6 +31,7 @@ from typing import Any
 
 import numpy as np
 
+from ddpy.model.control import DEFAULT_PENETRATION as PENETRATION_LIMIT
 from ddpy.model.material import (
     ArmstrongFrederick,
     HardeningTable,
@@ -47,6 +48,7 @@ from bench_common import (  # noqa: E402
     ROOT,
     code_version,
     computed_at,
+    deepest_per_tool,
     load_module,
     record_code,
     recorded_code,
@@ -223,8 +225,11 @@ def read_run(case: str, results: Path) -> dict[str, Any]:
                          key=lambda f: f.increment)
             angles = strip_angles(r.nodes, r.field("coordinates", formed.index),
                                   r.field("coordinates", frames[-1].index))
+        deepest = deepest_per_tool(history, slice(None), r.tools)
+        thickness = float(np.ptp(np.asarray(r.nodes)[:, 2]))  # a flat blank's, at the start
     status = read_status(results.parent)
     return {"status": status.get("status", "unknown"),
+            "penetration_mm": deepest, "thickness_mm": round(thickness, 6),
             "angles_deg": {k: [round(float(a), 3) for a in v] for k, v in angles.items()},
             "increments": int(history["iterations"].size),
             "iterations": int(history["iterations"].sum()),
@@ -434,6 +439,27 @@ def report(numbers: dict[str, dict[str, Any]], table: HardeningTable, gap: tuple
                                f"{n['per_iteration_s']['total']:.4f}",
                                f"{n['per_iteration_s']['assembly']:.4f}", ratio,
                                n["threads"]]))
+    lines += ["", "## Penetration", "",
+              "The deepest slave node of the blank in any tool at any converged increment "
+              "(the solver's record, `increments/penetration` of the results), against the "
+              f"limit of {100 * PENETRATION_LIMIT:g} % of the blank's thickness "
+              "(docs/theory/contact.md, \"Penetration\"):", "",
+              _row(["case", "law", "deepest [mm]", "tool", "/ thickness", "within"]),
+              _row(["---"] * 6)]
+    for case in CASES:
+        for law in LAWS:
+            n = numbers.get(f"{case}/{law}")
+            if n is None:
+                continue
+            depth = n.get("penetration_mm")
+            if not depth:
+                lines.append(_row([case, law, "not recorded (a run kept at code "
+                                   f"{n.get('code') or 'unknown'})", "", "", ""]))
+                continue
+            tool = max(depth, key=depth.get)
+            share = depth[tool] / n["thickness_mm"]
+            lines.append(_row([case, law, f"{depth[tool]:.4g}", tool, f"{100 * share:.2f} %",
+                               "yes" if share <= PENETRATION_LIMIT else "**no**"]))
     mixed, iso = numbers.get("bending_paper/mixed"), numbers.get("bending_paper/isotropic")
     if mixed and iso:
         ratio = mixed["per_iteration_s"]["total"] / iso["per_iteration_s"]["total"]
@@ -475,8 +501,8 @@ def main(argv: list[str] | None = None) -> int:
     for case in cases:
         for law in laws:
             key, saved = f"{case}/{law}", HERE / "results" / case / law / "results.h5"
-            if args.reuse and saved.exists():
-                numbers[key] = read_run(case, saved)
+            if args.reuse and saved.exists():  # read again: kept with what is read now
+                numbers[key] = made[key] = read_run(case, saved)
             elif args.reuse and key in stored:
                 numbers[key] = stored[key]
             elif args.reuse:

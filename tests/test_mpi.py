@@ -150,10 +150,16 @@ def test_built_in_case_on_two_processes_gives_the_sequential_answers(
     # below). The later increments take 1-3 iterations each.
     first = 1 if single_factors else 0
     assert np.abs(a["iterations"][first:] - b["iterations"][first:]).sum() <= 3
-    # (single factors, measured: steps 4.2e-4, tool forces 1.4e-3 of the largest, fields
-    # 7e-6 apart: each run within 1e-3 of the force scale of equilibrium)
-    step, force, field = (1e-8, 1e-7, 1e-8) if not single_factors else (1e-3, 5e-3, 1e-4)
+    # (single factors, measured: tool forces 1.4e-3 of the largest, fields 7e-6 apart: each
+    # run within 1e-3 of the force scale of equilibrium). A step that r_min cuts short is
+    # scaled to a limit from the converged state, which the two runs hold only to that
+    # tolerance, and the scaling amplifies it (measured 4.2e-4 and 2.4e-3 in two CI runs);
+    # a step at the largest size is that size in both (to the rounding of the travel it is
+    # taken from).
+    step, force, field = (1e-8, 1e-7, 1e-8) if not single_factors else (1e-2, 5e-3, 1e-4)
     np.testing.assert_allclose(b["step"], a["step"], rtol=step, atol=0)
+    full = np.isclose(a["step"], a["step"].max(), rtol=1e-12, atol=0)
+    np.testing.assert_allclose(b["step"][full], a["step"][full], rtol=1e-12, atol=0)
     scale = np.abs(a["tool_force"]).max()
     assert np.abs(a["tool_force"] - b["tool_force"]).max() <= force * scale
     for name in fa:

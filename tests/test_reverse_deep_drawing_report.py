@@ -478,6 +478,7 @@ def test_the_convergence_table_names_what_does_not_converge_and_why() -> None:
             n["stages"][stage]["end"]["balance"] = {
                 h: {"reaction_N": 1000.0, "mismatch_N": 0.0, "relative": 0.0, "nodes": 5}
                 for h in ("holder1", "holder2")}
+            n["stages"][stage]["end"]["nodes_in_contact"]["holder1"] = 5
         if k == 2:
             n["stages"]["stage2"]["max_force_N"] *= 1.10
         by_mesh[mesh] = {"nagata": n}
@@ -524,11 +525,25 @@ def test_the_convergence_table_names_what_does_not_converge_and_why() -> None:
                 for m in make_case_meshes()]
     text = "\n".join(run.convergence_section(by_mesh))
     assert "- stage1: holder1's reaction: from blank to blank +0.0 % then -10.0 %" in text
-    assert ("Blank-holder 1 is held at a fixed gap of 1.13 mm: its reaction is the squeeze "
-            "of the flange where it thickened to the gap (the thickest sheet at the "
-            "stage's end " + " / ".join(f"{t:.4g}" for t in thickest) + " mm)") in text
-    by_mesh["paper"]["nagata"]["stages"]["stage1"]["end"]["balance"]["holder1"][
-        "reaction_N"] = 1000.0
+    assert "Blank-holder 1 is held at a fixed gap of 1.13 mm, so its reaction" in text
+    # The same squeeze on every blank, the reaction changing: the data do not show it.
+    assert ("It does not follow the squeeze from blank to blank (the thickest sheet at the "
+            "stage's end " + " / ".join(f"{t:.4g}" for t in thickest) + " mm, "
+            "70.0 / 70.0 / 70.0 um beyond the gap; nodes under it 5 / 5 / 5), so these runs "
+            "do not show what sets its size on each blank: not explained.") in text
+    # A reaction that grows and falls with the squeeze is shown set by it.
+    for mesh, thick, reaction in zip(make_case_meshes(), (1.14, 1.16, 1.135),
+                                     (1000.0, 1100.0, 900.0), strict=True):
+        end = by_mesh[mesh]["nagata"]["stages"]["stage1"]["end"]
+        end["thickness_mm"] = [0.8, thick]
+        end["balance"]["holder1"]["reaction_N"] = reaction
+    text = "\n".join(run.convergence_section(by_mesh))
+    assert "10.0 / 30.0 / 5.0 um beyond the gap" in text
+    assert "It follows the squeeze from blank to blank (" in text
+    for mesh in make_case_meshes():
+        end = by_mesh[mesh]["nagata"]["stages"]["stage1"]["end"]
+        end["thickness_mm"] = [0.8, 1.2]
+        end["balance"]["holder1"]["reaction_N"] = 1000.0
     by_mesh["coarse"]["nagata"]["stages"]["stage2"]["max_force_N"] = force
     # The decks' own settings per blank are stated, from make_case.
     assert ("Deck settings that differ between the blanks (coarse / medium / paper): "

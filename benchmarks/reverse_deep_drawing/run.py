@@ -1955,14 +1955,26 @@ def convergence_trend(key: str, meshes: list[str], row: list[float | None],
                  ("turned" if changes[-1] * changes[-2] < 0 else "grew") +
                  "): the quantity follows the blank's local resolution, not a limit.")
     if name == "stage1: holder1's reaction":
-        thickest = [runs[m]["stages"]["stage1"]["end"]["thickness_mm"][1] for m, _ in known]
-        text += (f" Blank-holder 1 is held at a fixed gap of {make_case.GAP1:g} mm: its "
-                 "reaction is the squeeze of the flange where it thickened to the gap "
-                 "(the thickest sheet at the stage's end " +
-                 " / ".join(f"{t:.4g}" for t in thickest) +
-                 " mm), a few micrometres that a small change of the thickness moves by "
-                 "a large share; a holder pressed with a force would carry that force on "
-                 "every blank.")
+        ends = [runs[m]["stages"]["stage1"]["end"] for m, _ in known]
+        squeeze = [1e3 * (e["thickness_mm"][1] - make_case.GAP1) for e in ends]
+        nodes = [e.get("nodes_in_contact", {}).get("holder1") for e in ends]
+        # Does the reaction follow the squeeze from blank to blank? Only then do the data
+        # show the fixed gap as what sets it.
+        follows = all((b - a) * (d - c) > 0 for a, b, c, d in zip(
+            values[:-1], values[1:], squeeze[:-1], squeeze[1:], strict=True))
+        data = ("the thickest sheet at the stage's end " +
+                " / ".join(f"{e['thickness_mm'][1]:.4g}" for e in ends) + " mm, " +
+                " / ".join(f"{q:.1f}" for q in squeeze) + " um beyond the gap"
+                + ("; nodes under it " + " / ".join(str(n) for n in nodes)
+                   if all(n is not None for n in nodes) else ""))
+        text += (f" Blank-holder 1 is held at a fixed gap of {make_case.GAP1:g} mm, so its "
+                 "reaction is what holds the flange's thickening at the gap, not a load "
+                 "(a holder pressed with a force would carry that force on every blank). " + (
+                     f"It follows the squeeze from blank to blank ({data}): a few "
+                     "micrometres of thickening, which a small change of the blank moves by "
+                     "a large share, set it." if follows else
+                     f"It does not follow the squeeze from blank to blank ({data}), so these "
+                     "runs do not show what sets its size on each blank: not explained."))
     return text
 
 

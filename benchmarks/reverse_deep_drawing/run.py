@@ -701,7 +701,7 @@ def claims(numbers: dict[str, dict[str, Any]]) -> list[tuple[str, str, str]]:
         over = min(above.values()) > spread
         coarse_more = ep["facets_coarse"] - ep["facets_fine"] > spread
         verdicts += [same, over, coarse_more]
-        cause = strain_cause(above, spread) if not all(verdicts[-3:]) else ""
+        cause = "" if same and over and coarse_more else strain_cause(above, spread)
         parts += ["largest at the end of stage 2: " + ", ".join(
                       f"{LABELS[m]} {v:.4f}" for m, v in ep.items()) + "; volume mean "
                   + ", ".join(f"{LABELS[m]} {e['plastic_strain_mean']:.3f}"

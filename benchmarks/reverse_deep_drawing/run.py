@@ -2149,7 +2149,9 @@ def findings(numbers: dict[str, dict[str, Any]], models: list[str]) -> list[str]
                 f"strain {end['element_volume_change_strain']:g}; the thickness down to "
                 f"{end['thickness_mm'][0]:.3g} mm), the blank's by "
                 f"{100 * end['volume_change']:+.3g} %: plastic flow keeps the volume, so the "
-                "elements there are too distorted for their solution to hold.")
+                "elements there are too coarse for their solution to hold (the solid-shell "
+                "loses volume where its elements are long against a tool radius they wrap: "
+                "docs/theory/solid_shell.md, \"Volume\").")
     if len(out) == 2:
         out.append("- Every run completed; the volume of every element is kept within "
                    f"{100 * ELEMENT_VOLUME:g} %.")

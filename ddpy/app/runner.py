@@ -100,6 +100,11 @@ CHECKPOINT = "checkpoint.npz"
 STATUS = "status.json"
 #: Checkpoint every this many increments by default (and at the end of every phase).
 CHECKPOINT_EVERY = 10
+#: The blank's volume change past which a run warns, once: plastic flow keeps the volume
+#: and the elastic change is the mean stress over the bulk modulus (0.2 % at 350 MPa for
+#: steel), so beyond 1 % the elements are wrong somewhere: a solid-shell blank too coarse
+#: for a tool radius it wraps (docs/theory/solid_shell.md, "Volume").
+VOLUME_LIMIT = 0.01
 #: What limited an increment in ddpy.model.forming -> the ``limit`` names of ddpy.io.results.
 _LIMITS = {"max": "max_increment", "touch": "contact_touch", "strain": "strain",
            "rotation": "rotation", "yield": "yield", "cut": "cutback", "regrow": "cutback",
@@ -272,6 +277,8 @@ class _Run:
         self._reopen_at = (0, 0, 0)
         self.halt = ""  # why the run stops early: "interrupted" or "stopped"
         self.warned: set[str] = set()  # tools whose penetration limit a warning named
+        self.volume_warned = False
+        self.initial_volume = self.problem.solid.mesh.volume()
         self._clock = time.perf_counter()
         self._since_checkpoint = 0
 
@@ -399,6 +406,8 @@ class _Run:
         depth = [result.penetration[k][-1] if result.penetration.get(k) else 0.0
                  for k in self.names]
         self._warn_penetration(phase, depth)
+        volume_change = self.problem.solid.mesh.volume(self.problem.u) / self.initial_volume - 1.0
+        self._warn_volume(phase, volume_change)
         self.writer.increment(
             phase=self.phase_index, step=step, travel=travel,
             tool_displacement=np.array([self.problem.position[k] for k in self.names]),
@@ -413,7 +422,7 @@ class _Run:
             factorizations=counts["factorizations"],
             krylov_iterations=counts["krylov_iterations"],
             newton_iterations=counts["newton_iterations"], evaluations=counts["evaluations"],
-            penetration=depth)
+            penetration=depth, volume_change=volume_change)
         self.phase_increments += 1
         self._since_checkpoint += 1
         if self.progress is not None:
@@ -439,6 +448,18 @@ class _Run:
                     "tool %s in phase %s, deeper than penetration_limit %g; the run goes on "
                     "(docs/theory/contact.md, \"Penetration\")", d, 100.0 * d / thickness,
                     thickness, name, phase.name, phase.newton.penetration)
+
+    def _warn_volume(self, phase: Phase, change: float) -> None:
+        """Warn, once per run, where the blank's volume has changed by more than
+        VOLUME_LIMIT since the start."""
+        if abs(change) > VOLUME_LIMIT and not self.volume_warned:
+            self.volume_warned = True
+            _log.warning(
+                "warning: the blank's volume changed by %+.3g %% since the start (phase %s, "
+                "increment %d), more than the elastic change plastic flow allows: its elements "
+                "are too coarse where they wrap a tool radius; refine the blank there "
+                "(docs/theory/solid_shell.md, \"Volume\"); the run goes on", 100.0 * change,
+                phase.name, self.writer.increments + 1 if self.writer else 0)
 
     def _should_halt(self) -> bool:
         if self.stop is not None and self.stop():

@@ -104,6 +104,9 @@ _SCALARS: dict[str, tuple[str, str, str]] = {
                    "older factors included"),
     "time_rest": ("f8", "s", "wall time in everything else"),
     "time_total": ("f8", "s", "wall time of the increment"),
+    "volume_change": ("f8", "1", "the blank's volume change since the start of the run, "
+                      "V / V0 - 1 (exact volumes of its hexahedra; plastic flow keeps the "
+                      "volume, so beyond the elastic part it is the elements' error)"),
 }
 _ITERATION_COLUMNS: dict[str, tuple[str, str, str]] = {
     "increment": ("i4", "1", "increment number"),
@@ -563,7 +566,8 @@ class ResultsWriter:
                   cutbacks: int = 0, rmin: float = 1.0, limit: int | str = 0,
                   residual_history: ArrayLike | None = None, factorizations: int = 0,
                   krylov_iterations: int = 0, newton_iterations: int = 0,
-                  evaluations: int = 0, penetration: ArrayLike | None = None) -> int:
+                  evaluations: int = 0, penetration: ArrayLike | None = None,
+                  volume_change: float = 0.0) -> int:
         """Append one converged increment; return its number (from 1). ``tool_displacement``
         and ``tool_force`` are (tools, 3); ``residual_history`` (iterations, 2 or 7) holds the
         force and displacement residuals of each Newton iteration, and may add the step's
@@ -571,7 +575,7 @@ class ResultsWriter:
         estimated displacement error (ddpy.model.newton.Iteration; else those columns are
         written as -1);
         ``penetration`` (tools,) the deepest penetration of the blank into each tool
-        (mm)."""
+        (mm); ``volume_change`` the blank's V / V0 - 1."""
         t = len(self.tools)
         u = _shaped(tool_displacement, (t, 3), "tool_displacement")
         force = _shaped(tool_force, (t, 3), "tool_force")
@@ -605,7 +609,7 @@ class ResultsWriter:
                "time_contact": timings.contact, "time_factorization": timings.factorization,
                "time_solve": timings.solve, "time_rest": timings.rest, "time_total": timings.total,
                "tool_displacement": u, "tool_force": force, "nodes_in_contact": contact,
-               "penetration": depth}
+               "penetration": depth, "volume_change": float(volume_change)}
         with self._writing():
             inc = self._increment_columns
             if k >= self._room:

@@ -371,16 +371,21 @@ class HexMesh:
     def n_elements(self) -> int:
         return int(self.elements.shape[0])
 
-    def jacobians(self) -> NDArray[np.float64]:
-        """det J of the reference map, (m, 16): 8 Gauss points, then 8 corners."""
-        detj, status, element = _core.solid_jacobians(self.nodes.ravel(), self.elements.ravel())
+    def jacobians(self, displacement: ArrayLike | None = None) -> NDArray[np.float64]:
+        """det J of the reference map, (m, 16): 8 Gauss points, then 8 corners; of the
+        nodes moved by ``displacement`` (n, 3) when it is given."""
+        x = self.nodes if displacement is None else \
+            self.nodes + float_array(displacement, "displacement", (self.n_nodes, 3))
+        detj, status, element = _core.solid_jacobians(np.ascontiguousarray(x).ravel(),
+                                                      self.elements.ravel())
         if status:
             raise ValueError(f"element {element - 1} has a node index out of range")
         return detj.reshape(-1, 16)
 
-    def volume(self) -> float:
-        """Total volume (2 x 2 x 2 Gauss points: exact for trilinear hexahedra)."""
-        return float(self.jacobians()[:, :8].sum())
+    def volume(self, displacement: ArrayLike | None = None) -> float:
+        """Total volume (2 x 2 x 2 Gauss points: exact for trilinear hexahedra), of the
+        nodes moved by ``displacement`` (n, 3) when it is given."""
+        return float(self.jacobians(displacement)[:, :8].sum())
 
     def element_size(self) -> float:
         """The mean element size: the cube root of the mean element volume (mm)."""

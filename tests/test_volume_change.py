@@ -5,6 +5,7 @@ change is the elements' error; docs/theory/solid_shell.md, "Volume")."""
 from __future__ import annotations
 
 import logging
+import re
 from pathlib import Path
 
 import h5py
@@ -40,6 +41,16 @@ def volume_by_faces(x: np.ndarray, elements: np.ndarray) -> float:
     return total
 
 
+def f_displacement(results: Path, increment: int) -> np.ndarray:
+    """The blank's displacement at ``increment``, from the frame written there (the test's
+    case writes one at every increment)."""
+    with h5py.File(results) as f:
+        for k in range(int(f["fields"].attrs["count"])):
+            if int(f[f"fields/{k:06d}"].attrs["increment"]) == increment:
+                return f[f"fields/{k:06d}/displacement"][()]
+    raise AssertionError(f"no frame at increment {increment}")
+
+
 def test_the_volume_of_a_moved_mesh_is_exact() -> None:
     """A 3 x 2 x 2 box moved by a random field of 10 % of its elements' size (warped faces)
     has the volume of the flux formula to rounding; a linear map scales it by its
@@ -66,12 +77,15 @@ def test_a_run_records_the_volume_change_and_warns_once(tmp_path: Path,
     elements wrap the punch, and exactly one warning names the change and the increment
     where it first went past."""
     case = tiny_case(tmp_path / "case")
+    control = case / "control.dat"
+    control.write_text(re.sub(r"(?m)^output_every\s+\d+", "output_every 1", control.read_text()))
     with caplog.at_level(logging.WARNING, logger="ddpy"):
         outcome = run_case(read_case(case), tmp_path / "out")
     assert outcome.status == "completed"
     with h5py.File(tmp_path / "out" / RESULTS) as f:
         change = f["increments/volume_change"][()]
         nodes, elements = f["mesh/nodes"][()], f["mesh/elements"][()]
+        labels = f["mesh/element_ids"][()]
         frames = [(int(f[f"fields/{k:06d}"].attrs["increment"]),
                    f[f"fields/{k:06d}/displacement"][()])
                   for k in range(int(f["fields"].attrs["count"]))]
@@ -90,3 +104,10 @@ def test_a_run_records_the_volume_change_and_warns_once(tmp_path: Path,
     assert len(warnings) == 1, warnings
     assert f"by {100 * change[past[0]]:+.3g} %" in warnings[0], (warnings, change[past[0]])
     assert f"increment {past[0] + 1})" in warnings[0], (warnings, past[0])
+    # the element that changed most by then, by its label, and where it started
+    u = f_displacement(tmp_path / "out" / RESULTS, past[0] + 1)
+    own = mesh.jacobians(u)[:, :8].sum(axis=1) / mesh.jacobians()[:, :8].sum(axis=1) - 1.0
+    worst = int(np.argmax(np.abs(own)))
+    centre = nodes[elements[worst]].mean(axis=0)
+    assert (f"element {labels[worst]} ({100 * own[worst]:+.3g} %, initially centred at "
+            f"{centre[0]:.4g}, {centre[1]:.4g}, {centre[2]:.4g} mm)") in warnings[0], warnings

@@ -278,7 +278,7 @@ class _Run:
         self.halt = ""  # why the run stops early: "interrupted" or "stopped"
         self.warned: set[str] = set()  # tools whose penetration limit a warning named
         self.volume_warned = False
-        self.initial_volume = self.problem.solid.mesh.volume()
+        self.element_volumes = self.problem.solid.mesh.jacobians()[:, :8].sum(axis=1)
         self._clock = time.perf_counter()
         self._since_checkpoint = 0
 
@@ -406,8 +406,11 @@ class _Run:
         depth = [result.penetration[k][-1] if result.penetration.get(k) else 0.0
                  for k in self.names]
         self._warn_penetration(phase, depth)
-        volume_change = self.problem.solid.mesh.volume(self.problem.u) / self.initial_volume - 1.0
-        self._warn_volume(phase, volume_change)
+        volumes = self.problem.solid.mesh.jacobians(self.problem.u)[:, :8].sum(axis=1)
+        volume_change = float(volumes.sum() / self.element_volumes.sum() - 1.0)
+        if abs(volume_change) > VOLUME_LIMIT and not self.volume_warned:
+            self.volume_warned = True
+            self._warn_volume(phase, volume_change, volumes / self.element_volumes - 1.0)
         self.writer.increment(
             phase=self.phase_index, step=step, travel=travel,
             tool_displacement=np.array([self.problem.position[k] for k in self.names]),
@@ -449,17 +452,21 @@ class _Run:
                     "(docs/theory/contact.md, \"Penetration\")", d, 100.0 * d / thickness,
                     thickness, name, phase.name, phase.newton.penetration)
 
-    def _warn_volume(self, phase: Phase, change: float) -> None:
-        """Warn, once per run, where the blank's volume has changed by more than
-        VOLUME_LIMIT since the start."""
-        if abs(change) > VOLUME_LIMIT and not self.volume_warned:
-            self.volume_warned = True
-            _log.warning(
-                "warning: the blank's volume changed by %+.3g %% since the start (phase %s, "
-                "increment %d), more than the elastic change plastic flow allows: its elements "
-                "are too coarse where they wrap a tool radius; refine the blank there "
-                "(docs/theory/solid_shell.md, \"Volume\"); the run goes on", 100.0 * change,
-                phase.name, self.writer.increments + 1 if self.writer else 0)
+    def _warn_volume(self, phase: Phase, change: float, elements: NDArray[np.float64]
+                     ) -> None:
+        """Warn that the blank's volume has changed by ``change`` since the start, more than
+        VOLUME_LIMIT, naming the element whose own change (``elements``) is the largest."""
+        mesh = self.problem.solid.mesh
+        worst = int(np.argmax(np.abs(elements)))
+        where = mesh.nodes[mesh.elements[worst]].mean(axis=0)
+        _log.warning(
+            "warning: the blank's volume changed by %+.3g %% since the start (phase %s, "
+            "increment %d), more than the elastic change plastic flow allows; most in element "
+            "%d (%+.3g %%, initially centred at %.4g, %.4g, %.4g mm): the elements are too long "
+            "where they wrap a tool radius, refine the blank there (docs/theory/solid_shell.md, "
+            "\"Volume\"); the run goes on", 100.0 * change, phase.name,
+            self.writer.increments + 1 if self.writer else 0, int(mesh.element_ids[worst]),
+            100.0 * elements[worst], *where)
 
     def _should_halt(self) -> bool:
         if self.stop is not None and self.stop():

@@ -173,6 +173,17 @@ def test_summary_gives_the_forming_quantities_and_the_springback(
     assert number(r"springback \(springback\), largest displacement of a node") == \
         pytest.approx(moved.max(), rel=1e-3)
     assert moved.max() > 0.0
+    # the blank's volume change, at the end and at most, and the deepest penetration per
+    # tool, as the results' columns have them
+    with ResultsReader(full / RESULTS) as r:
+        change, depth = r.curve("volume_change"), r.curve("penetration").max(axis=0)
+        tools = [str(t) for t in r.attribute("tools")]
+    assert number("the blank's volume") == pytest.approx(100 * change[-1], rel=1e-2)
+    k = int(np.argmax(np.abs(change)))
+    assert f"{100 * change[k]:+.3g} % at most (increment {k + 1})" in summary
+    for name, d in zip(tools, depth, strict=True):
+        assert f"{name} {d:.3g} mm" in summary, (name, d)
+    assert depth.max() > 0.0 and np.abs(change).max() > 0.0
     # A run stopped before its springback has no springback line.
     assert cli("post", str(part), "--output", str(tmp_path / "part")).returncode == 0
     text = (tmp_path / "part" / "summary.md").read_text()

@@ -613,6 +613,21 @@ def forming_summary(run: Run) -> str:
                                      where=t0 > 0)
             k = int(np.argmax(thinning))
             lines.append(f"- largest thinning: {thinning[k]:.3g} % (node {node_ids[k]})")
+        history = r.history()
+        if "volume_change" in history and history["volume_change"].size:
+            change = history["volume_change"]
+            k = int(np.argmax(np.abs(change)))
+            lines.append(f"- the blank's volume: {100 * change[-1]:+.3g} % at the end, "
+                         f"{100 * change[k]:+.3g} % at most (increment {k + 1}); plastic flow "
+                         "keeps it (docs/theory/solid_shell.md, \"Volume\")")
+        if "penetration" in history and history["penetration"].size:
+            depth = history["penetration"].max(axis=0)
+            t0 = r.field("thickness", 0).max() if "thickness" in last else 0.0
+            deepest = ", ".join(
+                f"{name} {d:.3g} mm" + (f" ({100 * d / t0:.2g} % of the thickness)"
+                                        if t0 > 0 else "")
+                for name, d in zip(r.attribute("tools"), depth, strict=True))
+            lines.append(f"- deepest in a tool over the run: {deepest}")
         springback = [p for p, lead in enumerate(run.leads) if not lead]
         for p in springback:
             after = [f for f in frames if f.phase == p and f.increment > 0]

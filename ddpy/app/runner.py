@@ -278,7 +278,7 @@ class _Run:
         self.halt = ""  # why the run stops early: "interrupted" or "stopped"
         self.warned: set[str] = set()  # tools whose penetration limit a warning named
         self.volume_warned = False
-        self.element_volumes = self.problem.solid.mesh.jacobians()[:, :8].sum(axis=1)
+        self.element_volumes = self.problem.solid.mesh.element_volumes()
         self._clock = time.perf_counter()
         self._since_checkpoint = 0
 
@@ -406,7 +406,7 @@ class _Run:
         depth = [result.penetration[k][-1] if result.penetration.get(k) else 0.0
                  for k in self.names]
         self._warn_penetration(phase, depth)
-        volumes = self.problem.solid.mesh.jacobians(self.problem.u)[:, :8].sum(axis=1)
+        volumes = self.problem.solid.mesh.element_volumes(self.problem.u)
         volume_change = float(volumes.sum() / self.element_volumes.sum() - 1.0)
         if abs(volume_change) > VOLUME_LIMIT and not self.volume_warned:
             self.volume_warned = True

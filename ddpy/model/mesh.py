@@ -382,10 +382,14 @@ class HexMesh:
             raise ValueError(f"element {element - 1} has a node index out of range")
         return detj.reshape(-1, 16)
 
+    def element_volumes(self, displacement: ArrayLike | None = None) -> NDArray[np.float64]:
+        """Each element's volume (m,) (2 x 2 x 2 Gauss points: exact for trilinear
+        hexahedra), of the nodes moved by ``displacement`` (n, 3) when it is given."""
+        return self.jacobians(displacement)[:, :8].sum(axis=1)
+
     def volume(self, displacement: ArrayLike | None = None) -> float:
-        """Total volume (2 x 2 x 2 Gauss points: exact for trilinear hexahedra), of the
-        nodes moved by ``displacement`` (n, 3) when it is given."""
-        return float(self.jacobians(displacement)[:, :8].sum())
+        """Total volume (element_volumes summed)."""
+        return float(self.element_volumes(displacement).sum())
 
     def element_size(self) -> float:
         """The mean element size: the cube root of the mean element volume (mm)."""

@@ -244,10 +244,13 @@ def blanks() -> list[dict[str, Any]]:
 def report(data: dict[str, Any]) -> str:
     row = bench_common.table_row
     runs = data["runs"]
+    run_code = {f"built-in case on the {e}": c for e, c in data["run_code"].items()}
+    run_code.update({f"deep drawing {b['blank']} {m}": b[m]["code"]
+                     for b in data["blanks"] for m in ("nagata", "bezier", "dd3imp")})
     lines = ["# Where the solid-shell blank loses volume", "",
              "Written by `benchmarks/solid_shell_volume/run.py`; every number below is computed "
              "by it (its kept numbers: `solid_shell_volume.json`). "
-             + bench_common.computed_at(data["code"], data["run_code"]),
+             + bench_common.computed_at(data["code"], run_code),
              "", "Plastic flow keeps the volume; the solid-shell keeps it for its material "
              "strain, not for the volume of its nodes (docs/theory/solid_shell.md, "
              "\"Volume\"). Volumes are the exact ones of the trilinear hexahedra.", "",
@@ -272,9 +275,7 @@ def report(data: dict[str, Any]) -> str:
                           f"{100 * b['dd3imp']['volume_change']:+.3g} %", order,
                           f"{b['size_mm'] / smallest:.2f}"]))
         previous = b
-    codes = sorted({b[m]["code"] for b in data["blanks"] for m in ("nagata", "bezier", "dd3imp")})
-    lines += ["", f"Those runs: at code {', '.join(f'`{c}`' for c in codes)}.", "",
-              "## The built-in coarse case, solid-shell against hexahedron", "",
+    lines += ["", "## The built-in coarse case, solid-shell against hexahedron", "",
               f"`ddpy run deep-drawing` with fields every {OUTPUT_EVERY} increments, on each "
               "element with the same Gauss-point contact, one thread each side by side. Per "
               "frame: the blank's volume change, and over the elements the correlation of "

@@ -91,12 +91,16 @@ def test_a_run_records_the_volume_change_and_warns_once(tmp_path: Path,
         nodes, elements = f["mesh/nodes"][()], f["mesh/elements"][()]
         labels = f["mesh/element_ids"][()]
         frames = [(int(f[f"fields/{k:06d}"].attrs["increment"]),
-                   f[f"fields/{k:06d}/displacement"][()])
+                   f[f"fields/{k:06d}/displacement"][()],
+                   f[f"fields/{k:06d}/volume_change"][()])
                   for k in range(int(f["fields"].attrs["count"]))]
     assert change.shape == (outcome.increments,)
     mesh = HexMesh(nodes, elements)
     checked = 0
-    for increment, u in frames:
+    for increment, u, each in frames:
+        # the frame's cell field: each element's own change
+        assert each == pytest.approx(mesh.element_volumes(u) / mesh.element_volumes() - 1.0,
+                                     abs=1e-14)
         if increment > 0:
             assert change[increment - 1] == pytest.approx(
                 mesh.volume(u) / mesh.volume() - 1.0, abs=1e-14)

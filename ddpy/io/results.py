@@ -43,6 +43,7 @@ from ddpy.geometry.tessellation import TRIANGLE, tessellate
 from ddpy.io.output_folder import RESULT_MODE, atomic_write
 from ddpy.model.forming_limits import FormingLimitCurve, hardening_exponent
 from ddpy.model.forming_quantities import SURFACES, FieldFrame, SheetMeasures, nodal_average
+from ddpy.model.mesh import element_volumes
 
 __all__ = ["CONTACT_STATES", "FORMAT", "LIMITS", "TENSOR6", "VOIGT", "Frame", "ResultsReader",
            "ResultsWriteError", "ResultsWriter", "Timings", "frame_bytes", "xdmf_frame",
@@ -181,6 +182,9 @@ _FIELDS: dict[str, tuple[str, int, str, str, str]] = {
         "Cell", 1, "f8", "1", f"{which} in-plane logarithmic strain of the {surface} face "
         "of the element's column through the thickness")
        for surface in SURFACES for which in ("major", "minor")},
+    "volume_change": ("Cell", 1, "f8", "1", "the element's volume over its initial one, "
+                      "minus 1 (plastic flow keeps the volume: beyond the elastic change it is "
+                      "the element's error)"),
     "increment": ("Cell", 1, "i4", "1", "the frame's increment number (the same in every "
                   "element: the XDMF time is the lead tools' travel)"),
 }
@@ -210,10 +214,10 @@ def _mesh_arrays(mesh: Any) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray
 
 def frame_bytes(n_nodes: int, n_elements: int, tool_points: int = 0) -> int:
     """Bytes one frame of fields takes in results.h5: 8 a number, 19 numbers per node
-    (displacement, contact force and state, thickness, thinning, pressure...), 17 per
-    element (stress, plastic strain, surface strains...) and 3 per tool point (the tools'
-    placed surfaces)."""
-    return 8 * (19 * n_nodes + 17 * n_elements + 3 * tool_points)
+    (displacement, contact force and state, thickness, thinning, pressure...), 18 per
+    element (stress, plastic strain, surface strains, volume change...) and 3 per tool point
+    (the tools' placed surfaces)."""
+    return 8 * (19 * n_nodes + 18 * n_elements + 3 * tool_points)
 
 
 class ResultsWriteError(OSError):
@@ -254,6 +258,7 @@ class ResultsWriter:
         if not self.tools:
             raise ValueError("tools must name at least one tool")
         self._measures = _measures(nodes, elements, normal)
+        self._volumes = element_volumes(nodes, elements)
         if surfaces is not None and len(surfaces) != len(self.tools):
             raise ValueError(f"{len(surfaces)} tool surfaces for {len(self.tools)} tools")
         self._tool_points = 0
@@ -480,6 +485,7 @@ class ResultsWriter:
         self.tools = tuple(str(t) for t in f.attrs["tools"])
         self.phases = tuple(str(p) for p in f.attrs["phases"])
         self._measures = _measures(self.nodes, self.elements, f["mesh"].attrs["normal"])
+        self._volumes = element_volumes(self.nodes, self.elements)
         self._tool_points = _tool_points(tools)
         self._count, self._iterations = increments, iterations
         self._keep_columns()
@@ -702,6 +708,7 @@ class ResultsWriter:
                 "stress": s[:, TENSOR6], "von_mises": mises,
                 "plastic_strain": ep.mean(axis=1) if ep.ndim == 2 else ep,
                 "plastic_strain_nodal": nodal_average(self.elements, ep, n),
+                "volume_change": element_volumes(x, self.elements) / self._volumes - 1.0,
                 "increment": np.full(m, self._count, dtype=np.int32)}
         if self._measures is not None:
             if thickness is None:

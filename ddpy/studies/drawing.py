@@ -32,6 +32,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ddpy._validate import float_array
 from ddpy.model.contact import check_friction
+from ddpy.model.mesh import element_volumes
 
 if TYPE_CHECKING:
     from ddpy.geometry.search import ContactSearch
@@ -40,27 +41,6 @@ __all__ = ["ForceBalance", "Penetration", "contact_force_balance", "cup_height",
            "element_centroids", "hexahedron_volumes", "penetration", "plane_section",
            "rim_nodes", "rim_radius", "siebel_force", "swift_stress", "tensile_limit",
            "volume_change"]
-
-#: Natural coordinates of the 8 nodes of a hexahedron (Gmsh / C3D8 order).
-_CORNERS = np.array([[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1],
-                     [-1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1]], dtype=float)
-_GAUSS = np.array([[a, b, c] for a in (-1, 1) for b in (-1, 1) for c in (-1, 1)],
-                  dtype=float) / np.sqrt(3.0)
-
-
-def _shape_derivatives() -> NDArray[np.float64]:
-    """dN_a/dxi_i at the 8 Gauss points: (8 points, 8 nodes, 3)."""
-    xi = _GAUSS[:, None, :]           # (g, 1, 3)
-    c = _CORNERS[None, :, :]          # (1, a, 3)
-    factors = 1.0 + c * xi            # (g, a, 3): (1 + xi_a xi), (1 + eta_a eta), ...
-    out = np.empty((8, 8, 3))
-    for i in range(3):
-        others = [j for j in range(3) if j != i]
-        out[:, :, i] = c[:, :, i] * factors[:, :, others[0]] * factors[:, :, others[1]] / 8.0
-    return out
-
-
-_DN = _shape_derivatives()
 
 
 def hexahedron_volumes(coordinates: ArrayLike, elements: ArrayLike) -> NDArray[np.float64]:
@@ -72,9 +52,7 @@ def hexahedron_volumes(coordinates: ArrayLike, elements: ArrayLike) -> NDArray[n
     connectivity = np.asarray(elements, dtype=np.int64)
     if connectivity.ndim != 2 or connectivity.shape[1] != 8:
         raise ValueError(f"elements must have shape (m, 8), got {connectivity.shape}")
-    xe = x[connectivity]                                  # (m, 8, 3)
-    jacobians = np.einsum("gai,maj->mgji", _DN, xe)       # dx_j/dxi_i, (m, g, 3, 3)
-    return np.linalg.det(jacobians).sum(axis=1)           # Gauss weights 1
+    return element_volumes(x, connectivity)
 
 
 def volume_change(initial: ArrayLike, current: ArrayLike, elements: ArrayLike) -> float:

@@ -324,16 +324,21 @@ def find_bad_elements(nodes: ArrayLike, elements: ArrayLike,
     return [bad[e] for e in sorted(bad)]
 
 
-def element_volumes(nodes: ArrayLike, elements: ArrayLike) -> NDArray[np.float64]:
-    """Each hexahedron's volume (m,): det J at 2 x 2 x 2 Gauss points, exact for trilinear
-    hexahedra (negative for an inverted one). Nodes (n, 3), elements (m, 8) of 0-based
-    indices; no other check (HexMesh checks its own)."""
+def _jacobians(nodes: ArrayLike, elements: ArrayLike) -> NDArray[np.float64]:
+    """det J of each hexahedron (m, 16): 8 Gauss points, then 8 corners (the core's)."""
     x = np.ascontiguousarray(nodes, dtype=np.float64).ravel()
     conn = np.ascontiguousarray(elements, dtype=np.int32).ravel()
     detj, status, element = _core.solid_jacobians(x, conn)
     if status:
         raise ValueError(f"element {element - 1} has a node index out of range")
-    return detj.reshape(-1, 16)[:, :8].sum(axis=1)
+    return detj.reshape(-1, 16)
+
+
+def element_volumes(nodes: ArrayLike, elements: ArrayLike) -> NDArray[np.float64]:
+    """Each hexahedron's volume (m,): det J at 2 x 2 x 2 Gauss points, exact for trilinear
+    hexahedra (negative for an inverted one). Nodes (n, 3), elements (m, 8) of 0-based
+    indices; no other check (HexMesh checks its own)."""
+    return _jacobians(nodes, elements)[:, :8].sum(axis=1)
 
 
 class HexMesh:
@@ -388,11 +393,7 @@ class HexMesh:
         nodes moved by ``displacement`` (n, 3) when it is given."""
         x = self.nodes if displacement is None else \
             self.nodes + float_array(displacement, "displacement", (self.n_nodes, 3))
-        detj, status, element = _core.solid_jacobians(np.ascontiguousarray(x).ravel(),
-                                                      self.elements.ravel())
-        if status:
-            raise ValueError(f"element {element - 1} has a node index out of range")
-        return detj.reshape(-1, 16)
+        return _jacobians(x, self.elements)
 
     def element_volumes(self, displacement: ArrayLike | None = None) -> NDArray[np.float64]:
         """Each element's volume (m,) (element_volumes), of the nodes moved by
